@@ -4,7 +4,6 @@ use serde::Serialize;
 
 /// A data point's type byte.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
 pub enum DpType {
     /// 0: raw bytes.
     Raw,

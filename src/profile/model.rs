@@ -1,0 +1,365 @@
+//! The shape of a device profile, as written in `assets/profiles/*.ron`.
+//!
+//! Every integer field's `range` and `default` are in raw (wire) units; `scale` turns a raw value
+//! into the displayed one (`display = raw × scale`), so `scale: 0.01` shows 275 as 2.75.
+
+use crate::protocol::tuya::dp::DpType;
+use serde::{Deserialize, Serialize};
+
+/// A name in English and in Chinese.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Text {
+    /// English.
+    pub en: String,
+    /// Simplified Chinese.
+    pub zh: String,
+}
+
+/// The wire protocol a profile speaks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Protocol {
+    /// The framed MSP protocol (window cleaner, solar cleanbot).
+    Msp,
+    /// The UART bus-servo protocol.
+    Servo,
+    /// The Tuya MCU protocol (botbench is the Wi-Fi module).
+    Tuya,
+}
+
+impl Protocol {
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Protocol::Msp => "msp",
+            Protocol::Servo => "servo",
+            Protocol::Tuya => "tuya",
+        }
+    }
+
+    /// The byte order of multi-byte fields.
+    pub fn byte_order(self) -> ByteOrder {
+        match self {
+            Protocol::Msp | Protocol::Servo => ByteOrder::Little,
+            Protocol::Tuya => ByteOrder::Big,
+        }
+    }
+}
+
+/// Byte order of multi-byte fields.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ByteOrder {
+    /// Least significant byte first (MSP, servo).
+    Little,
+    /// Most significant byte first (Tuya).
+    Big,
+}
+
+/// How an MSP device code is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum DeviceCode {
+    /// Learned from the `hw` byte of CMD_VERSION; the number is used until then.
+    Auto(u8),
+    /// Always this code.
+    Pinned(u8),
+}
+
+impl DeviceCode {
+    /// The code to use before (or instead of) learning it.
+    pub fn initial(self) -> u8 {
+        match self {
+            DeviceCode::Auto(c) | DeviceCode::Pinned(c) => c,
+        }
+    }
+}
+
+/// A device profile.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Profile {
+    /// The profile's name, e.g. `window-cleaner`; it is also the file name.
+    pub id: String,
+    /// What the device is.
+    pub name: Text,
+    /// Its protocol.
+    pub protocol: Protocol,
+    /// The usual baud rate.
+    pub baud: u32,
+    /// MSP only: the device code of requests.
+    #[serde(default)]
+    pub device_code: Option<DeviceCode>,
+    /// Groups that panels show commands under, in order.
+    #[serde(default)]
+    pub groups: Vec<Group>,
+    /// The command set.
+    pub commands: Vec<Command>,
+    /// Servo only: the parameters that READ_DATA / WRITE_DATA address by `data_id`.
+    #[serde(default)]
+    pub params: Vec<Param>,
+    /// Tuya only: the product's data points.
+    #[serde(default)]
+    pub data_points: Vec<DataPointDef>,
+    /// Live plots: which telemetry fields to draw together.
+    #[serde(default)]
+    pub plots: Vec<Plot>,
+}
+
+/// A group of commands on a panel (e.g. "Fan").
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Group {
+    /// Referenced by [`Command::group`].
+    pub id: String,
+    /// Shown as the group's heading.
+    pub name: Text,
+}
+
+/// What a command does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum CommandKind {
+    /// Reads a tunable parameter; `pair` names its Set.
+    Get,
+    /// Writes a tunable parameter; `pair` names its Get, whose reply layout it sends.
+    Set,
+    /// Reads live or read-only data.
+    Telemetry,
+    /// Makes the device do something.
+    Action,
+    /// A command whose payload layout is not published: bytes only.
+    Raw,
+}
+
+/// Who sends a command's first frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Initiator {
+    /// botbench asks, the device answers.
+    #[default]
+    Host,
+    /// The device asks (Tuya MCU requests), botbench answers.
+    Device,
+}
+
+/// One command of a profile.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Command {
+    /// The command number on the wire.
+    pub id: u8,
+    /// The canonical identifier from the protocol document, e.g. `MSP_GET_PWMVALUE`.
+    pub ident: String,
+    /// A readable name.
+    pub name: Text,
+    /// What it does.
+    pub kind: CommandKind,
+    /// Get↔Set partner's id.
+    #[serde(default)]
+    pub pair: Option<u8>,
+    /// The panel group.
+    #[serde(default)]
+    pub group: Option<String>,
+    /// Who sends first.
+    #[serde(default)]
+    pub initiator: Initiator,
+    /// MSP: a device code this command always uses (CMD_VERSION goes to 0x00).
+    #[serde(default)]
+    pub device: Option<u8>,
+    /// Tuya: the command word of the answer when it differs (0x06 and 0x08 are answered by 0x07).
+    #[serde(default)]
+    pub reply_command: Option<u8>,
+    /// Servo: the device answers only when its response switch is on.
+    #[serde(default)]
+    pub reply_optional: bool,
+    /// The robot moves: ask the operator first.
+    #[serde(default)]
+    pub confirm: bool,
+    /// The initiator's payload. A Set with none sends its Get's reply layout.
+    #[serde(default)]
+    pub request: Vec<Field>,
+    /// The answer's payload.
+    #[serde(default)]
+    pub reply: Vec<Field>,
+}
+
+/// The type of a payload field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum FieldType {
+    /// Unsigned 8-bit.
+    U8,
+    /// Signed 8-bit.
+    I8,
+    /// Unsigned 16-bit.
+    U16,
+    /// Signed 16-bit.
+    I16,
+    /// Unsigned 32-bit.
+    U32,
+    /// Signed 32-bit.
+    I32,
+    /// One byte, 0 or 1.
+    Bool,
+    /// Bytes: a fixed count, or the rest of the payload.
+    Bytes(Len),
+    /// Text (UTF-8): a fixed count of bytes, or the rest of the payload.
+    Str(Len),
+    /// Servo: a parameter id; the next field's layout is that parameter's.
+    ParamId,
+    /// Servo: the value of the parameter named by the preceding `ParamId` field.
+    ParamValue,
+    /// Servo: the 32-byte user block, i.e. the read-write parameters packed in id order.
+    ParamBlock,
+    /// Tuya: a list of data points, each named by the profile's `data_points`.
+    DataPoints,
+}
+
+/// The length of a bytes or text field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Len {
+    /// Exactly this many bytes.
+    Fixed(usize),
+    /// Everything left in the payload.
+    Rest,
+}
+
+impl FieldType {
+    /// The raw range an integer type can hold, or `None` for the other types.
+    pub fn int_bounds(self) -> Option<(i64, i64)> {
+        Some(match self {
+            FieldType::U8 => (0, u8::MAX as i64),
+            FieldType::I8 => (i8::MIN as i64, i8::MAX as i64),
+            FieldType::U16 => (0, u16::MAX as i64),
+            FieldType::I16 => (i16::MIN as i64, i16::MAX as i64),
+            FieldType::U32 => (0, u32::MAX as i64),
+            FieldType::I32 => (i32::MIN as i64, i32::MAX as i64),
+            FieldType::Bool => (0, 1),
+            _ => return None,
+        })
+    }
+
+    /// The width on the wire of a fixed-size type.
+    pub fn width(self) -> Option<usize> {
+        Some(match self {
+            FieldType::U8 | FieldType::I8 | FieldType::Bool | FieldType::ParamId => 1,
+            FieldType::U16 | FieldType::I16 => 2,
+            FieldType::U32 | FieldType::I32 => 4,
+            FieldType::Bytes(Len::Fixed(n)) | FieldType::Str(Len::Fixed(n)) => n,
+            FieldType::ParamBlock => 32,
+            _ => return None,
+        })
+    }
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn is_one(x: &f64) -> bool {
+    *x == 1.0
+}
+
+/// A payload field.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Field {
+    /// The canonical identifier from the protocol document, e.g. `pwmValue`.
+    pub ident: String,
+    /// A readable name.
+    pub name: Text,
+    /// The wire type.
+    #[serde(rename = "type")]
+    pub ty: FieldType,
+    /// display = raw × scale.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub scale: f64,
+    /// The displayed unit.
+    #[serde(default)]
+    pub unit: String,
+    /// The allowed raw range, inclusive; the type's range when absent.
+    #[serde(default)]
+    pub range: Option<(i64, i64)>,
+    /// Named values (an enum). With labels and no `range`, only labelled values can be written.
+    #[serde(default)]
+    pub labels: Vec<Label>,
+    /// Named bits (a bit field).
+    #[serde(default)]
+    pub bits: Vec<Bit>,
+    /// The raw value the firmware starts with, where known.
+    #[serde(default)]
+    pub default: Option<i64>,
+    /// The field may be missing at the end of a payload (older firmware).
+    #[serde(default)]
+    pub optional: bool,
+}
+
+/// A named value of an enum field.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Label {
+    /// The raw value.
+    pub value: i64,
+    /// The canonical identifier, e.g. `standby`.
+    pub ident: String,
+    /// A readable name.
+    pub name: Text,
+}
+
+/// A named bit of a bit field.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Bit {
+    /// The bit number, 0 = least significant.
+    pub bit: u8,
+    /// The canonical identifier.
+    pub ident: String,
+    /// A readable name.
+    pub name: Text,
+}
+
+/// Whether a parameter or data point can be written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Access {
+    /// Read or reported only.
+    ReadOnly,
+    /// Read and written.
+    ReadWrite,
+}
+
+/// A servo parameter (`data_id`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Param {
+    /// The `data_id`.
+    pub id: u8,
+    /// Read-only (1-8) or user (32-53).
+    pub access: Access,
+    /// Its layout, name, unit, range and labels.
+    pub field: Field,
+}
+
+/// A Tuya data point of the product.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DataPointDef {
+    /// The dpid.
+    pub id: u8,
+    /// Report-only or commandable.
+    pub access: Access,
+    /// The type on the wire.
+    pub dp_type: DpType,
+    /// Its name, range, unit, labels or bit names. The field type must suit `dp_type`:
+    /// Raw↔Bytes(Rest), Bool↔Bool, Value↔I32, String↔Str(Rest), Enum↔U8, Bitmap↔U8/U16/U32.
+    pub field: Field,
+}
+
+/// A live plot: fields of one telemetry command drawn together.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plot {
+    /// e.g. `attitude`, `battery`.
+    pub id: String,
+    /// The plot's title.
+    pub name: Text,
+    /// The telemetry command's ident.
+    pub command: String,
+    /// The field idents to draw.
+    pub fields: Vec<String>,
+}
