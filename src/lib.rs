@@ -1,2 +1,4 @@
+pub mod cli;
+pub mod packet;
 pub mod profile;
 pub mod protocol;

@@ -4,3 +4,12 @@
 pub mod model;
 
 pub use model::*;
+pub mod codec;
+pub mod locate;
+pub mod registry;
+pub mod validate;
+pub mod value;
+
+pub use codec::{Decoded, FieldValue, Input};
+pub use registry::{ProfileError, Registry, Source};
+pub use value::{FieldError, Value};

@@ -1,0 +1,442 @@
+//! `botbench frame decode|encode`: frames of the three protocols from and to hex.
+
+use super::{CliError, CliResult, registry};
+use crate::packet::{Header, Item, MspDirection, Packet, decode_all};
+use crate::profile::{Command, FieldValue, Initiator, Input, Profile, Protocol};
+use crate::protocol::{Direction, hex, msp, servo, tuya};
+use clap::{Subcommand, ValueEnum};
+use serde_json::{Value as Json, json};
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub(crate) enum Proto {
+    Msp,
+    Servo,
+    Tuya,
+}
+
+impl Proto {
+    fn protocol(self) -> Protocol {
+        match self {
+            Proto::Msp => Protocol::Msp,
+            Proto::Servo => Protocol::Servo,
+            Proto::Tuya => Protocol::Tuya,
+        }
+    }
+
+    fn default_profile(self) -> &'static str {
+        match self {
+            Proto::Msp => "window-cleaner",
+            Proto::Servo => "servo",
+            Proto::Tuya => "tuya-vacuum",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub(crate) enum MspDir {
+    Request,
+    Reply,
+    Auto,
+}
+
+#[derive(Debug, Subcommand)]
+pub(crate) enum FrameCmd {
+    /// Print every frame (and every frame error) found in hex bytes.
+    ///
+    /// Hex may be written `12 4c 01`, `0x12,0x4C,0x01` or `124c01`. Exit code 1 when a frame
+    /// error (bad checksum, junk, truncation) was found, 2 when the input is not hex.
+    Decode {
+        /// The protocol.
+        protocol: Proto,
+        /// The bytes, in one or more arguments.
+        #[arg(required = true, num_args = 1..)]
+        hex: Vec<String>,
+        /// The device profile that names commands and fields (default: the protocol's usual one).
+        #[arg(long)]
+        profile: Option<String>,
+        /// MSP only: read the bytes as requests, replies, or whichever fits (default).
+        #[arg(long, value_enum, default_value = "auto")]
+        msp_dir: MspDir,
+        /// One JSON document a line.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Build a frame from a command name or number and FIELD=VALUE pairs, and print its hex.
+    ///
+    /// Values are in display units (e.g. `angle=90.5` for 905 × 0.1°), or enum labels.
+    Encode {
+        /// The protocol.
+        protocol: Proto,
+        /// The command: canonical name (case-insensitive) or number.
+        command: String,
+        /// Field values, FIELD=VALUE.
+        #[arg(value_name = "FIELD=VALUE")]
+        fields: Vec<String>,
+        /// The device profile (default: the protocol's usual one).
+        #[arg(long)]
+        profile: Option<String>,
+        /// MSP: the device code (default: the command's, else the profile's).
+        #[arg(long, value_parser = parse_u8)]
+        device: Option<u8>,
+        /// Build the answer to the command instead of the command itself.
+        #[arg(long)]
+        reply: bool,
+        /// MSP replies: mark as an unsolicited (async) message.
+        #[arg(long = "async")]
+        is_async: bool,
+        /// MSP requests: ask the device to act without answering (option 0xFE).
+        #[arg(long)]
+        silent: bool,
+        /// The payload as hex, bypassing the fields (for commands the profile lacks).
+        #[arg(long, conflicts_with = "fields")]
+        payload: Option<String>,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+fn parse_u8(s: &str) -> Result<u8, String> {
+    crate::profile::codec::parse_id(s).ok_or_else(|| format!("'{s}' is not a number from 0 to 255"))
+}
+
+pub(crate) fn run(cmd: FrameCmd) -> CliResult {
+    match cmd {
+        FrameCmd::Decode {
+            protocol,
+            hex: parts,
+            profile,
+            msp_dir,
+            json,
+        } => {
+            let profile = load_profile(protocol, profile.as_deref())?;
+            let bytes = hex::parse(&parts.join(" ")).map_err(CliError::input)?;
+            let dir = match msp_dir {
+                MspDir::Request => MspDirection::Requests,
+                MspDir::Reply => MspDirection::Replies,
+                MspDir::Auto => MspDirection::Auto,
+            };
+            let items = decode_all(protocol.protocol(), dir, &bytes);
+            let mut errors = 0;
+            for item in &items {
+                if item.result.is_err() {
+                    errors += 1;
+                }
+                if json {
+                    println!("{}", item_json(&profile, item));
+                } else {
+                    print!("{}", item_text(&profile, item));
+                }
+            }
+            if items.is_empty() && !json {
+                println!("no bytes");
+            }
+            Ok(u8::from(errors > 0))
+        }
+        FrameCmd::Encode {
+            protocol,
+            command,
+            fields,
+            profile,
+            device,
+            reply,
+            is_async,
+            silent,
+            payload,
+            json,
+        } => {
+            let profile = load_profile(protocol, profile.as_deref())?;
+            let opts = EncodeOpts {
+                device,
+                reply,
+                is_async,
+                silent,
+            };
+            let (packet, cmd) = encode(
+                &profile,
+                protocol,
+                &command,
+                &fields,
+                payload.as_deref(),
+                opts,
+            )?;
+            if json {
+                let doc = json!({
+                    "protocol": protocol.protocol().name(),
+                    "direction": packet.direction,
+                    "command": packet.command,
+                    "name": cmd.map(|c| c.ident.clone()),
+                    "hex": hex::format(&packet.wire),
+                    "bytes": packet.wire,
+                });
+                println!("{doc}");
+            } else {
+                println!("{}", hex::format(&packet.wire));
+            }
+            Ok(0)
+        }
+    }
+}
+
+fn load_profile(p: Proto, name: Option<&str>) -> Result<std::sync::Arc<Profile>, CliError> {
+    let reg = registry()?;
+    let profile = reg
+        .get(name.unwrap_or(p.default_profile()))
+        .map_err(CliError::input)?;
+    if profile.protocol != p.protocol() {
+        return Err(CliError::input(format!(
+            "profile '{}' speaks {}, not {}",
+            profile.id,
+            profile.protocol.name(),
+            p.protocol().name()
+        )));
+    }
+    Ok(profile)
+}
+
+#[derive(Debug, Clone, Copy)]
+struct EncodeOpts {
+    device: Option<u8>,
+    reply: bool,
+    is_async: bool,
+    silent: bool,
+}
+
+fn encode<'p>(
+    profile: &'p Profile,
+    proto: Proto,
+    command: &str,
+    fields: &[String],
+    payload: Option<&str>,
+    opts: EncodeOpts,
+) -> Result<(Packet, Option<&'p Command>), CliError> {
+    let cmd = profile.command(command);
+    let (id, initiator) = match (cmd, payload) {
+        (Some(c), _) => (c.id, c.initiator),
+        (None, Some(_)) => (
+            crate::profile::codec::parse_id(command).ok_or_else(|| {
+                CliError::input(format!(
+                    "'{command}' is not a command of {} nor a number",
+                    profile.id
+                ))
+            })?,
+            Initiator::Host,
+        ),
+        (None, None) => {
+            return Err(CliError::input(format!(
+                "{} has no command '{command}' (use a name such as {}, or a number with --payload)",
+                profile.id,
+                profile.commands.first().map_or("", |c| c.ident.as_str())
+            )));
+        }
+    };
+    let forward = match initiator {
+        Initiator::Host => Direction::HostToDevice,
+        Initiator::Device => Direction::DeviceToHost,
+    };
+    let dir = match (opts.reply, forward) {
+        (false, d) => d,
+        (true, Direction::HostToDevice) => Direction::DeviceToHost,
+        (true, Direction::DeviceToHost) => Direction::HostToDevice,
+    };
+    let data = match (payload, cmd) {
+        (Some(h), _) => hex::parse(h).map_err(CliError::input)?,
+        (None, Some(c)) => {
+            let inputs = fields
+                .iter()
+                .map(|kv| {
+                    kv.split_once('=')
+                        .map(|(k, v)| (k.trim().to_string(), Input::Text(v.to_string())))
+                        .ok_or_else(|| CliError::input(format!("'{kv}' is not FIELD=VALUE")))
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            profile.encode(c, dir, &inputs).map_err(CliError::input)?
+        }
+        (None, None) => Vec::new(),
+    };
+    let encoded = match proto {
+        Proto::Msp if dir == Direction::HostToDevice => {
+            let device = opts
+                .device
+                .or(cmd.and_then(|c| c.device))
+                .or(profile.device_code.map(|d| d.initial()))
+                .unwrap_or(msp::DEVICE_CORE);
+            let mut r = msp::Request::new(device, id, data);
+            if opts.silent {
+                r.option = msp::OPTION_SILENT;
+            }
+            r.encode().map(|_| Packet::msp_request(r))
+        }
+        Proto::Msp => {
+            let mut r = msp::Reply::new(id, data);
+            if opts.is_async {
+                r.kind = msp::ReplyKind::Async;
+            }
+            r.encode().map(|_| Packet::msp_reply(r))
+        }
+        Proto::Servo => {
+            let f = match dir {
+                Direction::HostToDevice => servo::Frame::request(id, data),
+                Direction::DeviceToHost => servo::Frame::reply(id, data),
+            };
+            f.encode().map(|_| Packet::servo(f))
+        }
+        Proto::Tuya => {
+            let f = match dir {
+                Direction::HostToDevice => tuya::Frame::from_module(id, data),
+                Direction::DeviceToHost => tuya::Frame::from_mcu(id, data),
+            };
+            f.encode().map(|_| Packet::tuya(f))
+        }
+    };
+    let packet = match encoded {
+        Ok(p) => p,
+        Err(e) => return Err(CliError::input(e)),
+    };
+    Ok((packet, cmd))
+}
+
+fn header_json(h: &Header) -> Json {
+    match h {
+        Header::MspRequest { option, device } => json!({"option": option, "device": device}),
+        Header::MspReply { kind } => json!({"kind": kind}),
+        Header::Servo => json!({}),
+        Header::Tuya { version } => json!({"version": version}),
+    }
+}
+
+fn value_json(v: &FieldValue<'_>) -> Json {
+    json!({
+        "field": v.ident,
+        "value": v.value,
+        "display": v.display(),
+        "unit": v.field.unit,
+    })
+}
+
+fn item_json(profile: &Profile, item: &Item) -> Json {
+    match &item.result {
+        Ok(p) => {
+            let cmd = p.command_in(profile);
+            let (fields, field_error, trailing) = match p.decode(profile) {
+                Some(Ok(d)) => (
+                    d.values.iter().map(value_json).collect::<Vec<_>>(),
+                    Json::Null,
+                    if d.trailing.is_empty() {
+                        Json::Null
+                    } else {
+                        json!(hex::format(&d.trailing))
+                    },
+                ),
+                Some(Err(e)) => (Vec::new(), json!(e.to_string()), Json::Null),
+                None => (Vec::new(), Json::Null, Json::Null),
+            };
+            json!({
+                "offset": item.offset,
+                "len": item.len,
+                "ok": true,
+                "direction": p.direction,
+                "header": header_json(&p.header),
+                "command": p.command,
+                "name": cmd.map(|c| c.ident.clone()),
+                "name_en": cmd.map(|c| c.name.en.clone()),
+                "name_zh": cmd.map(|c| c.name.zh.clone()),
+                "payload": hex::format(&p.payload),
+                "fields": fields,
+                "field_error": field_error,
+                "trailing": trailing,
+                "hex": hex::format(&p.wire),
+            })
+        }
+        Err(e) => {
+            let mut doc = json!({
+                "offset": item.offset,
+                "len": item.len,
+                "ok": false,
+                "error": e.kind(),
+                "message": e.to_string(),
+                "hex": hex::format(e.bytes()),
+            });
+            if let crate::protocol::FrameError::Checksum {
+                expected, actual, ..
+            } = e
+            {
+                doc["expected"] = json!(expected);
+                doc["actual"] = json!(actual);
+            }
+            doc
+        }
+    }
+}
+
+fn item_text(profile: &Profile, item: &Item) -> String {
+    let mut s = String::new();
+    match &item.result {
+        Ok(p) => {
+            let cmd = p.command_in(profile);
+            let head = match &p.header {
+                Header::MspRequest { option, device } => {
+                    format!(
+                        "request device {device:#04x}{}",
+                        if *option == msp::OPTION_SILENT {
+                            " silent"
+                        } else {
+                            ""
+                        }
+                    )
+                }
+                Header::MspReply {
+                    kind: msp::ReplyKind::Reply,
+                } => "reply".into(),
+                Header::MspReply {
+                    kind: msp::ReplyKind::Async,
+                } => "async".into(),
+                Header::Servo if p.direction == Direction::HostToDevice => "request".into(),
+                Header::Servo => "reply".into(),
+                Header::Tuya { .. } if p.direction == Direction::HostToDevice => "module".into(),
+                Header::Tuya { .. } => "mcu".into(),
+            };
+            let name = cmd.map_or_else(
+                || "(not in profile; raw)".to_string(),
+                |c| format!("{} ({} / {})", c.ident, c.name.en, c.name.zh),
+            );
+            s.push_str(&format!(
+                "@{:<4} {} {head} {} {name}\n       {}\n",
+                item.offset,
+                p.direction.arrow(),
+                p.command,
+                hex::format(&p.wire)
+            ));
+            match p.decode(profile) {
+                Some(Ok(d)) => {
+                    for v in &d.values {
+                        s.push_str(&format!("       {} = {}\n", v.ident, v.display()));
+                    }
+                    if !d.trailing.is_empty() {
+                        s.push_str(&format!(
+                            "       + {} trailing byte(s): {}\n",
+                            d.trailing.len(),
+                            hex::format(&d.trailing)
+                        ));
+                    }
+                }
+                Some(Err(e)) => s.push_str(&format!(
+                    "       !! payload: {e}\n       payload = {}\n",
+                    hex::format(&p.payload)
+                )),
+                None if !p.payload.is_empty() => {
+                    s.push_str(&format!("       payload = {}\n", hex::format(&p.payload)))
+                }
+                None => {}
+            }
+        }
+        Err(e) => {
+            s.push_str(&format!(
+                "@{:<4} !! {e}\n       {}\n",
+                item.offset,
+                hex::format(e.bytes())
+            ));
+        }
+    }
+    s
+}

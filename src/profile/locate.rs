@@ -1,0 +1,310 @@
+//! Finds where a value sits in RON text, so that an inconsistency found after parsing can be
+//! reported with its line and column, as a syntax error is.
+
+/// One step of a path into a RON document.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Step {
+    /// A struct field by name.
+    Key(&'static str),
+    /// A list element by index.
+    Index(usize),
+}
+
+/// The 1-based line and column of the value at `path`, or of the deepest step found.
+pub fn locate(src: &str, path: &[Step]) -> (usize, usize) {
+    let mut c = Cursor {
+        s: src.as_bytes(),
+        pos: 0,
+    };
+    c.skip_ws();
+    let mut best = c.pos;
+    for step in path {
+        let found = match step {
+            Step::Key(k) => c.enter_struct() && c.find_key(k),
+            Step::Index(i) => c.find_index(*i),
+        };
+        if !found {
+            break;
+        }
+        best = c.pos;
+    }
+    line_col(src, best)
+}
+
+/// The 1-based line and column of a byte offset.
+pub fn line_col(src: &str, pos: usize) -> (usize, usize) {
+    let before = &src[..floor_char_boundary(src, pos)];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+fn floor_char_boundary(s: &str, mut i: usize) -> usize {
+    i = i.min(s.len());
+    while !s.is_char_boundary(i) {
+        i -= 1;
+    }
+    i
+}
+
+struct Cursor<'a> {
+    s: &'a [u8],
+    pos: usize,
+}
+
+impl Cursor<'_> {
+    fn peek(&self) -> Option<u8> {
+        self.s.get(self.pos).copied()
+    }
+
+    fn skip_ws(&mut self) {
+        loop {
+            match self.peek() {
+                Some(b) if b.is_ascii_whitespace() => self.pos += 1,
+                Some(b'/') if self.s.get(self.pos + 1) == Some(&b'/') => {
+                    while !matches!(self.peek(), None | Some(b'\n')) {
+                        self.pos += 1;
+                    }
+                }
+                Some(b'/') if self.s.get(self.pos + 1) == Some(&b'*') => {
+                    self.pos += 2;
+                    while self.pos < self.s.len() && !self.s[self.pos..].starts_with(b"*/") {
+                        self.pos += 1;
+                    }
+                    self.pos = (self.pos + 2).min(self.s.len());
+                }
+                _ => return,
+            }
+        }
+    }
+
+    fn ident(&mut self) -> &[u8] {
+        let start = self.pos;
+        while matches!(self.peek(), Some(b) if b.is_ascii_alphanumeric() || b == b'_' || b == b'#')
+        {
+            self.pos += 1;
+        }
+        &self.s[start..self.pos]
+    }
+
+    fn skip_string(&mut self) {
+        // at the opening quote
+        self.pos += 1;
+        while let Some(b) = self.peek() {
+            self.pos += 1;
+            match b {
+                b'\\' => self.pos += 1,
+                b'"' => return,
+                _ => {}
+            }
+        }
+    }
+
+    fn skip_raw_string(&mut self) {
+        // at `r`, then hashes, then quote
+        self.pos += 1;
+        let mut hashes = 0;
+        while self.peek() == Some(b'#') {
+            hashes += 1;
+            self.pos += 1;
+        }
+        self.pos += 1;
+        let mut close = vec![b'"'];
+        close.extend(std::iter::repeat_n(b'#', hashes));
+        while self.pos < self.s.len() && !self.s[self.pos..].starts_with(&close) {
+            self.pos += 1;
+        }
+        self.pos = (self.pos + close.len()).min(self.s.len());
+    }
+
+    /// Skips one value, whatever it is.
+    fn skip_value(&mut self) {
+        self.skip_ws();
+        match self.peek() {
+            None => {}
+            Some(b'"') => self.skip_string(),
+            Some(b'r') if matches!(self.s.get(self.pos + 1), Some(b'"' | b'#')) => {
+                self.skip_raw_string()
+            }
+            Some(b'\'') => {
+                self.pos += 1;
+                while let Some(b) = self.peek() {
+                    self.pos += 1;
+                    match b {
+                        b'\\' => self.pos += 1,
+                        b'\'' => break,
+                        _ => {}
+                    }
+                }
+            }
+            Some(b'(' | b'[' | b'{') => self.skip_group(),
+            Some(b) if b.is_ascii_alphabetic() || b == b'_' => {
+                self.ident();
+                self.skip_ws();
+                if self.peek() == Some(b'(') {
+                    self.skip_group();
+                }
+            }
+            Some(_) => {
+                while matches!(self.peek(), Some(b) if !b.is_ascii_whitespace() && !b",)]}".contains(&b))
+                {
+                    self.pos += 1;
+                }
+            }
+        }
+    }
+
+    fn skip_group(&mut self) {
+        let close = match self.peek() {
+            Some(b'(') => b')',
+            Some(b'[') => b']',
+            _ => b'}',
+        };
+        self.pos += 1;
+        loop {
+            self.skip_ws();
+            match self.peek() {
+                None => return,
+                Some(b) if b == close => {
+                    self.pos += 1;
+                    return;
+                }
+                Some(b',' | b':') => self.pos += 1,
+                Some(_) => {
+                    let before = self.pos;
+                    self.skip_value();
+                    if self.pos == before {
+                        self.pos += 1;
+                    }
+                }
+            }
+        }
+    }
+
+    /// At a struct value (`Name(`, `(` or `Some(Name(`): moves inside its parentheses.
+    fn enter_struct(&mut self) -> bool {
+        self.skip_ws();
+        let name = self.ident().to_vec();
+        self.skip_ws();
+        if self.peek() != Some(b'(') {
+            return false;
+        }
+        self.pos += 1;
+        if name == b"Some" {
+            return self.enter_struct();
+        }
+        true
+    }
+
+    /// Inside a struct: moves to the value of `key`.
+    fn find_key(&mut self, key: &str) -> bool {
+        loop {
+            self.skip_ws();
+            match self.peek() {
+                None | Some(b')') => return false,
+                Some(b',') => {
+                    self.pos += 1;
+                    continue;
+                }
+                _ => {}
+            }
+            let start = self.pos;
+            let name = self.ident().to_vec();
+            self.skip_ws();
+            if self.peek() == Some(b':') && !name.is_empty() {
+                self.pos += 1;
+                self.skip_ws();
+                if name == key.as_bytes() {
+                    return true;
+                }
+            } else {
+                self.pos = start;
+            }
+            let before = self.pos;
+            self.skip_value();
+            if self.pos == before {
+                return false;
+            }
+        }
+    }
+
+    /// At a list value (or `Some([`): moves to element `index`.
+    fn find_index(&mut self, index: usize) -> bool {
+        self.skip_ws();
+        if self.s[self.pos..].starts_with(b"Some") {
+            self.ident();
+            self.skip_ws();
+            if self.peek() != Some(b'(') {
+                return false;
+            }
+            self.pos += 1;
+            self.skip_ws();
+        }
+        if self.peek() != Some(b'[') {
+            return false;
+        }
+        self.pos += 1;
+        let mut n = 0;
+        loop {
+            self.skip_ws();
+            match self.peek() {
+                None | Some(b']') => return false,
+                Some(b',') => {
+                    self.pos += 1;
+                    continue;
+                }
+                _ => {}
+            }
+            if n == index {
+                return true;
+            }
+            let before = self.pos;
+            self.skip_value();
+            if self.pos == before {
+                return false;
+            }
+            n += 1;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SRC: &str = r#"// a comment with ( and [
+Profile(
+    id: "x",
+    commands: [
+        Command(id: 1, name: (en: "a, b", zh: ")"), reply: []),
+        /* block ( */ Command(
+            id: 2,
+            reply: [Field(ident: "f"), Field(ident: "g", range: Some((0, 300)))],
+        ),
+    ],
+)"#;
+
+    #[test]
+    fn finds_nested_keys_and_indices_past_strings_and_comments() {
+        use Step::*;
+        assert_eq!(locate(SRC, &[Key("id")]), (3, 9));
+        assert_eq!(
+            locate(SRC, &[Key("commands"), Index(1), Key("id")]),
+            (7, 17)
+        );
+        let range = [
+            Key("commands"),
+            Index(1),
+            Key("reply"),
+            Index(1),
+            Key("range"),
+        ];
+        assert_eq!(locate(SRC, &range), (8, 65));
+    }
+
+    #[test]
+    fn stops_at_the_deepest_step_found() {
+        use Step::*;
+        assert_eq!(locate(SRC, &[Key("commands"), Index(7)]), (4, 15));
+    }
+}

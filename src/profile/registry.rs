@@ -1,0 +1,209 @@
+//! Loading profiles: the built-in ones, a user's overrides, and files named on the command line.
+
+use super::locate::{Step, locate};
+use super::model::{Command, Profile};
+use super::validate::validate;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// The profiles built into the binary, as (file stem, RON text).
+pub const BUILTIN: &[(&str, &str)] = &[
+    (
+        "window-cleaner",
+        include_str!("../../assets/profiles/window-cleaner.ron"),
+    ),
+    (
+        "solar-cleanbot",
+        include_str!("../../assets/profiles/solar-cleanbot.ron"),
+    ),
+    ("servo", include_str!("../../assets/profiles/servo.ron")),
+    (
+        "tuya-vacuum",
+        include_str!("../../assets/profiles/tuya-vacuum.ron"),
+    ),
+];
+
+/// The environment variable naming a folder of profile overrides.
+pub const DIR_ENV: &str = "BOTBENCH_PROFILE_DIR";
+
+/// A profile that cannot be used, with where and why.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{file}:{line}:{col}: {message}")]
+pub struct ProfileError {
+    /// The file (or `builtin:<name>`).
+    pub file: String,
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column.
+    pub col: usize,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// Where a loaded profile came from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Source {
+    /// Built into the binary.
+    Builtin,
+    /// A file.
+    File(PathBuf),
+}
+
+/// Parses and checks a profile. `file` names it in errors; `expected_id`, where given, must be
+/// the profile's `id` (a file's stem).
+pub fn parse(file: &str, src: &str, expected_id: Option<&str>) -> Result<Profile, ProfileError> {
+    let mut profile: Profile = ron::Options::default()
+        .from_str(src)
+        .map_err(|e| ProfileError {
+            file: file.to_string(),
+            line: e.span.start.line,
+            col: e.span.start.col,
+            message: e.code.to_string(),
+        })?;
+    let at = |path: &[Step], message: String| {
+        let (line, col) = locate(src, path);
+        ProfileError {
+            file: file.to_string(),
+            line,
+            col,
+            message,
+        }
+    };
+    if let Some(id) = expected_id
+        && profile.id != id
+    {
+        return Err(at(
+            &[Step::Key("id")],
+            format!(
+                "the profile's id '{}' must match its file name '{id}'",
+                profile.id
+            ),
+        ));
+    }
+    validate(&mut profile).map_err(|issue| at(&issue.path, issue.message))?;
+    Ok(profile)
+}
+
+/// Reads and checks a profile file; its stem must be its id.
+pub fn load_file(path: &Path) -> Result<Profile, ProfileError> {
+    let file = path.display().to_string();
+    let src = std::fs::read_to_string(path).map_err(|e| ProfileError {
+        file: file.clone(),
+        line: 0,
+        col: 0,
+        message: format!("cannot read: {e}"),
+    })?;
+    let stem = path.file_stem().and_then(|s| s.to_str());
+    parse(&file, &src, stem)
+}
+
+/// A set of profiles by id.
+#[derive(Debug, Clone)]
+pub struct Registry {
+    entries: Vec<(Arc<Profile>, Source)>,
+}
+
+impl Registry {
+    /// The built-in profiles only.
+    pub fn builtin() -> Result<Self, ProfileError> {
+        let mut entries = Vec::new();
+        for (name, src) in BUILTIN {
+            let p = parse(
+                &format!("builtin:assets/profiles/{name}.ron"),
+                src,
+                Some(name),
+            )?;
+            entries.push((Arc::new(p), Source::Builtin));
+        }
+        Ok(Self { entries })
+    }
+
+    /// The built-in profiles, each overridden by a user's file of the same name in the folder
+    /// named by `BOTBENCH_PROFILE_DIR`, else `$XDG_CONFIG_HOME/botbench/profiles` or
+    /// `~/.config/botbench/profiles`. A user's file that is malformed is an error, not skipped.
+    pub fn load() -> Result<Self, ProfileError> {
+        let mut reg = Self::builtin()?;
+        if let Some(dir) = user_dir() {
+            reg.add_dir(&dir)?;
+        }
+        Ok(reg)
+    }
+
+    /// Adds or overrides profiles from every `*.ron` file in `dir` (a missing folder is fine).
+    pub fn add_dir(&mut self, dir: &Path) -> Result<(), ProfileError> {
+        let Ok(read) = std::fs::read_dir(dir) else {
+            return Ok(());
+        };
+        let mut paths: Vec<PathBuf> = read
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+            .collect();
+        paths.sort();
+        for path in paths {
+            let p = load_file(&path)?;
+            self.insert(p, Source::File(path));
+        }
+        Ok(())
+    }
+
+    /// Adds a profile, replacing one of the same id.
+    pub fn insert(&mut self, profile: Profile, source: Source) {
+        let p = Arc::new(profile);
+        match self.entries.iter_mut().find(|(x, _)| x.id == p.id) {
+            Some(slot) => *slot = (p, source),
+            None => self.entries.push((p, source)),
+        }
+    }
+
+    /// A profile by id, or a path to a `.ron` file.
+    pub fn get(&self, name: &str) -> Result<Arc<Profile>, ProfileError> {
+        if name.ends_with(".ron") || name.contains('/') {
+            return load_file(Path::new(name)).map(Arc::new);
+        }
+        self.entries
+            .iter()
+            .find(|(p, _)| p.id == name)
+            .map(|(p, _)| p.clone())
+            .ok_or_else(|| ProfileError {
+                file: name.to_string(),
+                line: 0,
+                col: 0,
+                message: format!("no profile '{name}'; known: {}", self.names().join(", ")),
+            })
+    }
+
+    /// Every profile and where it came from.
+    pub fn iter(&self) -> impl Iterator<Item = (&Arc<Profile>, &Source)> {
+        self.entries.iter().map(|(p, s)| (p, s))
+    }
+
+    /// The profile ids.
+    pub fn names(&self) -> Vec<String> {
+        self.entries.iter().map(|(p, _)| p.id.clone()).collect()
+    }
+}
+
+fn user_dir() -> Option<PathBuf> {
+    if let Some(dir) = std::env::var_os(DIR_ENV) {
+        return Some(PathBuf::from(dir));
+    }
+    let config = std::env::var_os("XDG_CONFIG_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".config")))?;
+    Some(config.join("botbench").join("profiles"))
+}
+
+impl Profile {
+    /// A command by canonical ident (case-insensitive) or number (`130`, `0x82`).
+    pub fn command(&self, name: &str) -> Option<&Command> {
+        let n = super::codec::parse_id(name);
+        self.commands
+            .iter()
+            .find(|c| c.ident.eq_ignore_ascii_case(name) || Some(c.id) == n)
+    }
+
+    /// A command by number.
+    pub fn command_by_id(&self, id: u8) -> Option<&Command> {
+        self.commands.iter().find(|c| c.id == id)
+    }
+}

@@ -1,0 +1,417 @@
+//! Field values: typed raw values, their display, and what a person types.
+
+use super::model::{Field, FieldType, Len};
+use crate::protocol::hex;
+use serde::Serialize;
+
+/// A field's value, raw: integers in wire units (before scaling).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(untagged)]
+pub enum Value {
+    /// Every integer, bool, enum and bit field.
+    Int(i64),
+    /// Text fields.
+    Text(String),
+    /// Byte fields.
+    Bytes(Vec<u8>),
+}
+
+/// Why a value cannot be read, written or shown.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FieldError {
+    /// A number outside the field's range.
+    #[error("{field}: {value} is out of range; allowed {min} to {max}{unit}")]
+    OutOfRange {
+        /// The field's ident.
+        field: String,
+        /// The value, as displayed.
+        value: String,
+        /// The smallest allowed, as displayed.
+        min: String,
+        /// The largest allowed, as displayed.
+        max: String,
+        /// The unit, with a leading space, or empty.
+        unit: String,
+    },
+    /// A value the field's labels do not name.
+    #[error("{field}: '{value}' is not one of {allowed}")]
+    NotALabel {
+        /// The field's ident.
+        field: String,
+        /// What was given.
+        value: String,
+        /// The allowed labels and numbers.
+        allowed: String,
+    },
+    /// Text that is not a number.
+    #[error("{field}: '{input}' is not a number")]
+    NotANumber {
+        /// The field's ident.
+        field: String,
+        /// What was typed.
+        input: String,
+    },
+    /// A number finer than the field's step (`2.755` where the step is 0.01).
+    #[error("{field}: {input} is not a multiple of the field's step {step}")]
+    NotOnStep {
+        /// The field's ident.
+        field: String,
+        /// What was typed.
+        input: String,
+        /// The step (the scale).
+        step: String,
+    },
+    /// A value of the wrong kind (text for a number...).
+    #[error("{field}: expected {expected}")]
+    WrongType {
+        /// The field's ident.
+        field: String,
+        /// What the field takes.
+        expected: String,
+    },
+    /// Text or bytes of the wrong length.
+    #[error("{field}: expected exactly {expected} bytes, got {actual}")]
+    WrongLength {
+        /// The field's ident.
+        field: String,
+        /// The field's length.
+        expected: usize,
+        /// The value's length.
+        actual: usize,
+    },
+    /// A payload that ends inside a field.
+    #[error("{field}: payload ends early: {need} more byte(s) needed, {have} left")]
+    ShortPayload {
+        /// The field's ident.
+        field: String,
+        /// Bytes the field needs.
+        need: usize,
+        /// Bytes left.
+        have: usize,
+    },
+    /// Text bytes that are not UTF-8.
+    #[error("{field}: text is not valid UTF-8")]
+    NotUtf8 {
+        /// The field's ident.
+        field: String,
+    },
+    /// A name that is not a field of the command.
+    #[error("{command} has no field '{field}'; its fields: {known}")]
+    UnknownField {
+        /// The command's ident.
+        command: String,
+        /// The unknown name.
+        field: String,
+        /// The fields it has.
+        known: String,
+    },
+    /// A field left out.
+    #[error("{command}: field '{field}' is missing")]
+    MissingField {
+        /// The command's ident.
+        command: String,
+        /// The field's ident.
+        field: String,
+    },
+    /// A parameter or data point that cannot be written.
+    #[error("{field} is read-only")]
+    ReadOnly {
+        /// Its ident.
+        field: String,
+    },
+    /// A parameter or data point the profile does not have.
+    #[error("{what} {id} is not in the profile")]
+    Unknown {
+        /// "parameter" or "data point".
+        what: &'static str,
+        /// Its id or name.
+        id: String,
+    },
+    /// A data point whose type differs from the profile's.
+    #[error("data point {field}: type {actual} on the wire, the profile says {expected}")]
+    DpType {
+        /// The DP's ident.
+        field: String,
+        /// The profile's type.
+        expected: &'static str,
+        /// The wire type.
+        actual: &'static str,
+    },
+    /// A malformed data-point list.
+    #[error("{0}")]
+    Dp(#[from] crate::protocol::tuya::dp::DpError),
+}
+
+impl Field {
+    /// The raw values that may be written: the explicit range, else the labels, else the type's.
+    pub fn allowed(&self) -> Allowed<'_> {
+        if let Some((lo, hi)) = self.range {
+            Allowed::Range(lo, hi)
+        } else if !self.labels.is_empty() {
+            Allowed::Labels(self)
+        } else {
+            let (lo, hi) = self.ty.int_bounds().unwrap_or((0, 0));
+            Allowed::Range(lo, hi)
+        }
+    }
+
+    /// Digits after the decimal point that the scale calls for.
+    pub fn decimals(&self) -> usize {
+        decimals_for(self.scale)
+    }
+
+    /// A raw integer as displayed, scaled, without labels or unit: `275` → `2.75`.
+    pub fn format_number(&self, raw: i64) -> String {
+        if self.scale == 1.0 {
+            raw.to_string()
+        } else {
+            format!("{:.*}", self.decimals(), raw as f64 * self.scale)
+        }
+    }
+
+    /// The label of a raw value, if it has one.
+    pub fn label(&self, raw: i64) -> Option<&super::model::Label> {
+        self.labels.iter().find(|l| l.value == raw)
+    }
+
+    /// A value as shown to a person: scaled number, label, set bits, text or hex.
+    pub fn format(&self, value: &Value) -> String {
+        match value {
+            Value::Int(raw) => {
+                if let Some(label) = self.label(*raw) {
+                    return label.ident.clone();
+                }
+                if !self.bits.is_empty() {
+                    let set: Vec<&str> = self
+                        .bits
+                        .iter()
+                        .filter(|b| b.bit < 64 && raw >> b.bit & 1 == 1)
+                        .map(|b| b.ident.as_str())
+                        .collect();
+                    return format!("{raw:#04x} [{}]", set.join(", "));
+                }
+                if self.ty == FieldType::Bool {
+                    return (*raw != 0).to_string();
+                }
+                self.format_number(*raw)
+            }
+            Value::Text(s) => s.clone(),
+            Value::Bytes(b) => hex::format(b),
+        }
+    }
+
+    /// The unit with a leading space, or empty.
+    pub fn unit_suffix(&self) -> String {
+        if self.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {}", self.unit)
+        }
+    }
+
+    /// Checks that a raw value may be written to this field.
+    pub fn check(&self, value: &Value) -> Result<(), FieldError> {
+        match (self.ty, value) {
+            (FieldType::Str(len), Value::Text(s)) => check_len(self, len, s.len()),
+            (FieldType::Bytes(len), Value::Bytes(b)) => check_len(self, len, b.len()),
+            (ty, Value::Int(raw)) if ty.int_bounds().is_some() => match self.allowed() {
+                Allowed::Range(lo, hi) if (lo..=hi).contains(raw) => Ok(()),
+                Allowed::Range(lo, hi) => Err(FieldError::OutOfRange {
+                    field: self.ident.clone(),
+                    value: self.format_number(*raw),
+                    min: self.format_number(lo),
+                    max: self.format_number(hi),
+                    unit: self.unit_suffix(),
+                }),
+                Allowed::Labels(_) if self.label(*raw).is_some() => Ok(()),
+                Allowed::Labels(_) => Err(FieldError::NotALabel {
+                    field: self.ident.clone(),
+                    value: raw.to_string(),
+                    allowed: self.label_list(),
+                }),
+            },
+            _ => Err(FieldError::WrongType {
+                field: self.ident.clone(),
+                expected: self.expected(),
+            }),
+        }
+    }
+
+    fn label_list(&self) -> String {
+        self.labels
+            .iter()
+            .map(|l| format!("{} ({})", l.ident, l.value))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    fn expected(&self) -> String {
+        match self.ty {
+            FieldType::Str(_) => "text".into(),
+            FieldType::Bytes(_) => "hex bytes".into(),
+            _ => "a number".into(),
+        }
+    }
+
+    /// Reads what a person typed, in display units, and checks it: `2.75` → raw 275.
+    ///
+    /// Integer fields take a number (scaled), a label's ident, `true`/`false`/`on`/`off` for
+    /// bools, bit idents joined by `|` for bit fields, or `0x..` raw hex where the scale is 1.
+    pub fn parse(&self, input: &str) -> Result<Value, FieldError> {
+        let text = input.trim();
+        let value = match self.ty {
+            FieldType::Str(_) => Value::Text(input.to_string()),
+            FieldType::Bytes(_) => {
+                Value::Bytes(hex::parse(text).map_err(|e| FieldError::WrongType {
+                    field: self.ident.clone(),
+                    expected: format!("hex bytes ({e})"),
+                })?)
+            }
+            _ => Value::Int(self.parse_int(text)?),
+        };
+        self.check(&value)?;
+        Ok(value)
+    }
+
+    fn parse_int(&self, text: &str) -> Result<i64, FieldError> {
+        if let Some(label) = self
+            .labels
+            .iter()
+            .find(|l| l.ident.eq_ignore_ascii_case(text))
+        {
+            return Ok(label.value);
+        }
+        if self.ty == FieldType::Bool {
+            match text.to_ascii_lowercase().as_str() {
+                "true" | "on" | "yes" => return Ok(1),
+                "false" | "off" | "no" => return Ok(0),
+                _ => {}
+            }
+        }
+        if !self.bits.is_empty()
+            && text.chars().any(|c| c.is_alphabetic())
+            && !text.starts_with("0x")
+        {
+            let mut raw = 0i64;
+            for part in text
+                .split(['|', '+', ','])
+                .map(str::trim)
+                .filter(|p| !p.is_empty())
+            {
+                let bit = self
+                    .bits
+                    .iter()
+                    .find(|b| b.ident.eq_ignore_ascii_case(part))
+                    .ok_or_else(|| FieldError::NotALabel {
+                        field: self.ident.clone(),
+                        value: part.to_string(),
+                        allowed: self
+                            .bits
+                            .iter()
+                            .map(|b| b.ident.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", "),
+                    })?;
+                raw |= 1i64 << bit.bit;
+            }
+            return Ok(raw);
+        }
+        let hex = text.strip_prefix("0x").or_else(|| text.strip_prefix("0X"));
+        if let (Some(digits), true) = (hex, self.scale == 1.0) {
+            return i64::from_str_radix(digits, 16).map_err(|_| self.not_a_number(text));
+        }
+        if !self.labels.is_empty() && text.parse::<f64>().is_err() {
+            return Err(FieldError::NotALabel {
+                field: self.ident.clone(),
+                value: text.to_string(),
+                allowed: self.label_list(),
+            });
+        }
+        parse_scaled(text, self.scale).map_err(|e| match e {
+            ScaledError::NotANumber => self.not_a_number(text),
+            ScaledError::NotOnStep => FieldError::NotOnStep {
+                field: self.ident.clone(),
+                input: text.to_string(),
+                step: format!("{:.*}", self.decimals(), self.scale),
+            },
+            ScaledError::Huge => FieldError::OutOfRange {
+                field: self.ident.clone(),
+                value: text.to_string(),
+                min: self.format_number(self.ty.int_bounds().map_or(0, |b| b.0)),
+                max: self.format_number(self.ty.int_bounds().map_or(0, |b| b.1)),
+                unit: self.unit_suffix(),
+            },
+        })
+    }
+
+    fn not_a_number(&self, text: &str) -> FieldError {
+        FieldError::NotANumber {
+            field: self.ident.clone(),
+            input: text.to_string(),
+        }
+    }
+}
+
+/// The raw values a field accepts.
+#[derive(Debug, Clone, Copy)]
+pub enum Allowed<'a> {
+    /// An inclusive range.
+    Range(i64, i64),
+    /// Only the field's labelled values.
+    Labels(&'a Field),
+}
+
+fn check_len(field: &Field, len: Len, actual: usize) -> Result<(), FieldError> {
+    match len {
+        Len::Fixed(n) if n != actual => Err(FieldError::WrongLength {
+            field: field.ident.clone(),
+            expected: n,
+            actual,
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// Digits after the decimal point for a scale: 1 → 0, 0.1 → 1, 0.01 → 2, 0.25 → 2.
+pub fn decimals_for(scale: f64) -> usize {
+    if !(scale.is_finite() && scale > 0.0) {
+        return 0;
+    }
+    (0..=9)
+        .find(|&d| {
+            let x = scale * 10f64.powi(d as i32);
+            (x - x.round()).abs() < 1e-9 * x.max(1.0)
+        })
+        .unwrap_or(9)
+}
+
+enum ScaledError {
+    NotANumber,
+    NotOnStep,
+    Huge,
+}
+
+/// `display / scale`, exactly: refuses values between steps rather than rounding them.
+fn parse_scaled(text: &str, scale: f64) -> Result<i64, ScaledError> {
+    if text.is_empty() {
+        return Err(ScaledError::NotANumber);
+    }
+    if scale == 1.0
+        && let Ok(v) = text.parse::<i64>()
+    {
+        return Ok(v);
+    }
+    let x: f64 = text.parse().map_err(|_| ScaledError::NotANumber)?;
+    if !x.is_finite() {
+        return Err(ScaledError::NotANumber);
+    }
+    let raw = x / scale;
+    let rounded = raw.round();
+    if (raw - rounded).abs() > 1e-6 * rounded.abs().max(1.0) {
+        return Err(ScaledError::NotOnStep);
+    }
+    if rounded.abs() > 9.0e15 {
+        return Err(ScaledError::Huge);
+    }
+    Ok(rounded as i64)
+}

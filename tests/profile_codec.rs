@@ -1,0 +1,348 @@
+//! Every command of every built-in profile: random in-range values round-trip through the field
+//! codec, and out-of-range values are refused with the field, the value and the range named.
+
+use botbench::profile::model::{Access, Field, FieldType, Len};
+use botbench::profile::{FieldError, Input, Profile, Registry, Value};
+use botbench::protocol::Direction;
+use proptest::prelude::*;
+use proptest::test_runner::{Config, TestRunner};
+
+fn registry() -> Registry {
+    Registry::builtin().expect("built-in profiles load")
+}
+
+/// A strategy for a value the field accepts.
+fn valid_value(f: &Field) -> BoxedStrategy<Value> {
+    match f.ty {
+        FieldType::Str(len) => {
+            let n = match len {
+                Len::Fixed(n) => n..=n,
+                Len::Rest => 0..=20,
+            };
+            proptest::collection::vec(proptest::char::range('0', 'z'), n)
+                .prop_map(|c| Value::Text(c.into_iter().collect()))
+                .boxed()
+        }
+        FieldType::Bytes(len) => {
+            let n = match len {
+                Len::Fixed(n) => n..=n,
+                Len::Rest => 0..=20,
+            };
+            proptest::collection::vec(any::<u8>(), n)
+                .prop_map(Value::Bytes)
+                .boxed()
+        }
+        _ => match f.allowed() {
+            botbench::profile::value::Allowed::Range(lo, hi) => {
+                (lo..=hi).prop_map(Value::Int).boxed()
+            }
+            botbench::profile::value::Allowed::Labels(_) => {
+                let values: Vec<i64> = f.labels.iter().map(|l| l.value).collect();
+                proptest::sample::select(values)
+                    .prop_map(Value::Int)
+                    .boxed()
+            }
+        },
+    }
+}
+
+/// Named inputs for every field of a frame, chosen at random, and the values expected back.
+fn frame_inputs(
+    p: &Profile,
+    fields: &[Field],
+    to_device: bool,
+) -> BoxedStrategy<Vec<(String, Value)>> {
+    let mut parts: Vec<BoxedStrategy<Vec<(String, Value)>>> = Vec::new();
+    let mut i = 0;
+    while i < fields.len() {
+        let f = &fields[i];
+        match f.ty {
+            FieldType::ParamId => {
+                let params: Vec<_> = p
+                    .params
+                    .iter()
+                    .filter(|x| {
+                        !to_device || x.access == Access::ReadWrite || fields.len() == i + 1
+                    })
+                    .cloned()
+                    .collect();
+                let id_ident = f.ident.clone();
+                let has_value = fields
+                    .get(i + 1)
+                    .is_some_and(|n| n.ty == FieldType::ParamValue);
+                parts.push(
+                    proptest::sample::select(params)
+                        .prop_flat_map(move |prm| {
+                            let id = (id_ident.clone(), Value::Int(prm.id as i64));
+                            let ident = prm.field.ident.clone();
+                            valid_value(&prm.field).prop_map(move |v| {
+                                let mut out = vec![id.clone()];
+                                if has_value {
+                                    out.push((ident.clone(), v));
+                                }
+                                out
+                            })
+                        })
+                        .boxed(),
+                );
+                if has_value {
+                    i += 1;
+                }
+            }
+            FieldType::ParamBlock => {
+                for prm in p.block_params() {
+                    let ident = prm.field.ident.clone();
+                    parts.push(
+                        valid_value(&prm.field)
+                            .prop_map(move |v| vec![(ident.clone(), v)])
+                            .boxed(),
+                    );
+                }
+            }
+            FieldType::DataPoints => {
+                let dps: Vec<_> = p
+                    .data_points
+                    .iter()
+                    .filter(|d| !to_device || d.access == Access::ReadWrite)
+                    .cloned()
+                    .collect();
+                let n = dps.len();
+                parts.push(
+                    proptest::sample::subsequence(dps, 1..=n)
+                        .prop_flat_map(|chosen| {
+                            chosen
+                                .into_iter()
+                                .map(|d| {
+                                    let ident = d.field.ident.clone();
+                                    valid_value(&d.field).prop_map(move |v| (ident.clone(), v))
+                                })
+                                .collect::<Vec<_>>()
+                        })
+                        .boxed(),
+                );
+            }
+            _ => {
+                let ident = f.ident.clone();
+                parts.push(
+                    valid_value(f)
+                        .prop_map(move |v| vec![(ident.clone(), v)])
+                        .boxed(),
+                );
+            }
+        }
+        i += 1;
+    }
+    parts
+        .prop_map(|v| v.into_iter().flatten().collect::<Vec<_>>())
+        .boxed()
+}
+
+#[test]
+fn every_command_round_trips_random_in_range_values() {
+    let reg = registry();
+    let mut frames = 0;
+    for (p, _) in reg.iter() {
+        for cmd in &p.commands {
+            for dir in [Direction::HostToDevice, Direction::DeviceToHost] {
+                let fields = p.fields(cmd, dir);
+                if fields.is_empty() {
+                    continue;
+                }
+                frames += 1;
+                let to_device = dir == Direction::HostToDevice;
+                let strategy = frame_inputs(p, fields, to_device);
+                let mut runner = TestRunner::new(Config {
+                    cases: 24,
+                    failure_persistence: None,
+                    ..Config::default()
+                });
+                runner
+                    .run(&strategy, |inputs| {
+                        let named: Vec<(String, Input)> = inputs
+                            .iter()
+                            .map(|(k, v)| (k.clone(), Input::Raw(v.clone())))
+                            .collect();
+                        let bytes = p.encode(cmd, dir, &named).map_err(|e| {
+                            TestCaseError::fail(format!("{}/{}: {e}", p.id, cmd.ident))
+                        })?;
+                        let decoded = p.decode(cmd, dir, &bytes).map_err(|e| {
+                            TestCaseError::fail(format!("{}/{}: {e}", p.id, cmd.ident))
+                        })?;
+                        let got: Vec<(String, Value)> = decoded
+                            .values
+                            .iter()
+                            .map(|v| (v.ident.to_ascii_lowercase(), v.value.clone()))
+                            .collect();
+                        let want: Vec<(String, Value)> = inputs
+                            .iter()
+                            .map(|(k, v)| (k.to_ascii_lowercase(), v.clone()))
+                            .collect();
+                        prop_assert_eq!(got, want, "{} {}", p.id, cmd.ident);
+                        prop_assert!(decoded.trailing.is_empty());
+                        Ok(())
+                    })
+                    .unwrap_or_else(|e| panic!("{} {} {dir:?}: {e}", p.id, cmd.ident));
+            }
+        }
+    }
+    assert!(frames > 60, "only {frames} frame layouts were exercised");
+}
+
+/// Integer fields of every command, parameter and data point.
+fn all_int_fields(p: &Profile) -> Vec<&Field> {
+    let mut out: Vec<&Field> = p
+        .commands
+        .iter()
+        .flat_map(|c| c.request.iter().chain(&c.reply))
+        .collect();
+    out.extend(p.params.iter().map(|x| &x.field));
+    out.extend(p.data_points.iter().map(|d| &d.field));
+    out.retain(|f| f.ty.int_bounds().is_some());
+    out
+}
+
+#[test]
+fn every_field_refuses_values_outside_its_range() {
+    let reg = registry();
+    let mut checked = 0;
+    for (p, _) in reg.iter() {
+        for f in all_int_fields(p) {
+            let (tlo, thi) = f.ty.int_bounds().unwrap();
+            let (lo, hi) = match f.allowed() {
+                botbench::profile::value::Allowed::Range(lo, hi) => (lo, hi),
+                botbench::profile::value::Allowed::Labels(_) => {
+                    let vals: Vec<i64> = f.labels.iter().map(|l| l.value).collect();
+                    (*vals.iter().min().unwrap(), *vals.iter().max().unwrap())
+                }
+            };
+            for bad in [lo - 1, hi + 1, tlo - 1, thi + 1] {
+                if (lo..=hi).contains(&bad) {
+                    continue;
+                }
+                let err = f
+                    .check(&Value::Int(bad))
+                    .expect_err("out of range is refused");
+                match &err {
+                    FieldError::OutOfRange {
+                        field, min, max, ..
+                    } => {
+                        assert_eq!(field, &f.ident);
+                        assert_eq!(min, &f.format_number(lo));
+                        assert_eq!(max, &f.format_number(hi));
+                    }
+                    FieldError::NotALabel { field, .. } => assert_eq!(field, &f.ident),
+                    other => panic!("{}: unexpected {other}", f.ident),
+                }
+                // The same refusal for what a person types.
+                let typed = f.format_number(bad);
+                assert!(f.parse(&typed).is_err(), "{}: '{typed}' accepted", f.ident);
+                checked += 1;
+            }
+        }
+    }
+    assert!(
+        checked > 200,
+        "only {checked} out-of-range values were tried"
+    );
+}
+
+#[test]
+fn typed_values_use_display_units_labels_and_bits() {
+    let reg = registry();
+    let wc = reg.get("window-cleaner").unwrap();
+    let pid = wc.command("MSP_SET_USE_FAN_OUTPUT_PID").unwrap();
+    let target = pid
+        .request
+        .iter()
+        .find(|f| f.ident == "defaultTarget")
+        .unwrap();
+    assert_eq!(target.parse("2.75").unwrap(), Value::Int(275));
+    assert!(matches!(
+        target.parse("2.755"),
+        Err(FieldError::NotOnStep { .. })
+    ));
+    assert!(matches!(
+        target.parse("two"),
+        Err(FieldError::NotANumber { .. })
+    ));
+    assert_eq!(target.format(&Value::Int(275)), "2.75");
+
+    let tuya = reg.get("tuya-vacuum").unwrap();
+    let mode = &tuya.find_data_point("mode").unwrap().field;
+    assert_eq!(mode.parse("SMART").unwrap(), Value::Int(2));
+    assert!(matches!(
+        mode.parse("fly"),
+        Err(FieldError::NotALabel { .. })
+    ));
+    let fault = &tuya.find_data_point("fault").unwrap().field;
+    assert_eq!(
+        fault.parse("edge_sweep_fault|collision_fault").unwrap(),
+        Value::Int(0b100_0001)
+    );
+    let power = &tuya.find_data_point("power").unwrap().field;
+    assert_eq!(power.parse("on").unwrap(), Value::Int(1));
+}
+
+#[test]
+fn writing_read_only_parameters_and_report_only_data_points_is_refused() {
+    let reg = registry();
+    let servo = reg.get("servo").unwrap();
+    let write = servo.command("WRITE_DATA").unwrap();
+    let inputs = vec![
+        ("servo_id".to_string(), Input::from("1")),
+        ("data_id".to_string(), Input::from("voltage")),
+        ("data".to_string(), Input::from("5000")),
+    ];
+    let err = servo
+        .encode(write, Direction::HostToDevice, &inputs)
+        .unwrap_err();
+    assert!(matches!(err, FieldError::ReadOnly { .. }), "{err}");
+
+    let tuya = reg.get("tuya-vacuum").unwrap();
+    let dp_cmd = tuya.command("6").unwrap();
+    let err = tuya
+        .encode(
+            dp_cmd,
+            Direction::HostToDevice,
+            &[("battery".into(), Input::from("50"))],
+        )
+        .unwrap_err();
+    assert!(matches!(err, FieldError::ReadOnly { .. }), "{err}");
+    let err = tuya
+        .encode(
+            dp_cmd,
+            Direction::HostToDevice,
+            &[("nonsense".into(), Input::from("1"))],
+        )
+        .unwrap_err();
+    assert!(matches!(err, FieldError::UnknownField { .. }), "{err}");
+}
+
+#[test]
+fn commands_are_found_by_canonical_name_in_any_case_and_by_number() {
+    let reg = registry();
+    let wc = reg.get("window-cleaner").unwrap();
+    let by_name = wc.command("msp_get_pwmvalue").unwrap();
+    assert_eq!(by_name.id, 130);
+    assert_eq!(wc.command("130").unwrap().ident, by_name.ident);
+    assert_eq!(wc.command("0x82").unwrap().ident, by_name.ident);
+    assert!(wc.command("MSP_NOPE").is_none());
+    // 130 means something else on the solar cleanbot: commands belong to a profile.
+    let solar = reg.get("solar-cleanbot").unwrap();
+    assert_ne!(solar.command("130").unwrap().ident, by_name.ident);
+}
+
+#[test]
+fn a_set_sends_the_layout_of_its_get() {
+    let reg = registry();
+    let wc = reg.get("window-cleaner").unwrap();
+    for get in 130..=136u8 {
+        let g = wc.command_by_id(get).unwrap();
+        let s = wc.command_by_id(get + 90).unwrap();
+        assert_eq!(g.pair, Some(s.id));
+        let a: Vec<_> = g.reply.iter().map(|f| (&f.ident, f.ty)).collect();
+        let b: Vec<_> = s.request.iter().map(|f| (&f.ident, f.ty)).collect();
+        assert_eq!(a, b, "{} / {}", g.ident, s.ident);
+        assert!(!a.is_empty());
+    }
+}
