@@ -5,13 +5,20 @@ use botbench::profile::registry::{BUILTIN, parse};
 use botbench::profile::{Registry, Source};
 
 fn builtin(name: &str) -> &'static str {
-    BUILTIN.iter().find(|(n, _)| *n == name).expect("built-in").1
+    BUILTIN
+        .iter()
+        .find(|(n, _)| *n == name)
+        .expect("built-in")
+        .1
 }
 
 /// The built-in window-cleaner profile with `from` replaced by `to` (once, checked).
 fn edited(from: &str, to: &str) -> String {
     let src = builtin("window-cleaner");
-    assert!(src.contains(from), "test setup: '{from}' not in the profile");
+    assert!(
+        src.contains(from),
+        "test setup: '{from}' not in the profile"
+    );
     src.replacen(from, to, 1)
 }
 
@@ -36,7 +43,10 @@ fn a_syntax_error_names_file_line_and_column() {
     assert_eq!(err.file, "wc.ron");
     let (line, _) = line_col_of(&src, "oops", 0);
     assert_eq!(err.line, line, "{err}");
-    assert!(err.to_string().starts_with(&format!("wc.ron:{line}:")), "{err}");
+    assert!(
+        err.to_string().starts_with(&format!("wc.ron:{line}:")),
+        "{err}"
+    );
 }
 
 #[test]

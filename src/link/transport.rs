@@ -1,0 +1,46 @@
+//! The byte pipe under a session: a serial port, a pseudo-terminal, or an in-process simulator.
+
+use std::time::{Duration, Instant};
+
+/// Why the link failed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum LinkError {
+    /// The port could not be opened (missing, not a serial port, in use, no permission).
+    #[error("cannot open {path}: {reason}")]
+    Open {
+        /// The port's path.
+        path: String,
+        /// What the OS said.
+        reason: String,
+    },
+    /// The port went away (an adapter unplugged, a pty closed).
+    #[error("port disconnected: {0}")]
+    Disconnected(String),
+    /// The port refused a setting.
+    #[error("port setting refused: {0}")]
+    Setting(String),
+}
+
+/// A byte pipe with deadlines. Implementations: [`super::serial::SerialTransport`] and the
+/// in-process simulator transport of `sim`.
+pub trait Transport: Send {
+    /// Writes all bytes.
+    fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError>;
+    /// Reads what arrives, waiting until `deadline` at most for the first byte; `Ok(0)` when
+    /// nothing arrived in time.
+    fn read(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError>;
+    /// Changes the baud rate.
+    fn set_baud(&mut self, baud: u32) -> Result<(), LinkError>;
+    /// The current baud rate.
+    fn baud(&self) -> u32;
+    /// Drops bytes received and not yet read.
+    fn clear_input(&mut self) -> Result<(), LinkError>;
+    /// A short description for the status bar: the path, or `simulated window cleaner`.
+    fn describe(&self) -> String;
+}
+
+/// How long `bytes` bytes take on the wire at `baud` (8N1: 10 bits a byte).
+pub fn wire_time(bytes: usize, baud: u32) -> Duration {
+    let baud = u64::from(baud.max(1));
+    Duration::from_nanos(bytes as u64 * 10 * 1_000_000_000 / baud)
+}
