@@ -167,13 +167,13 @@ pub struct Item {
     pub result: Result<Packet, FrameError>,
 }
 
-fn drain<F: protocol::Framing>(
-    mut dec: protocol::Decoder<F>,
-    bytes: &[u8],
-    wrap: impl Fn(F::Frame) -> Packet,
-) -> Vec<Item> {
-    dec.push(bytes);
-    let mut out = Vec::new();
+fn pull<F: protocol::Framing>(
+    dec: &mut protocol::Decoder<F>,
+    wrap: &impl Fn(F::Frame) -> Packet,
+    out: &mut Vec<Item>,
+) {
+    // `while let` rather than `for`: each item's offset is read from the decoder as it comes.
+    #[allow(clippy::while_let_on_iterator)]
     while let Some(r) = dec.next() {
         let offset = dec.last_start();
         out.push(match r {
@@ -192,6 +192,19 @@ fn drain<F: protocol::Framing>(
             },
         });
     }
+}
+
+fn drain<F: protocol::Framing>(
+    mut dec: protocol::Decoder<F>,
+    bytes: &[u8],
+    wrap: impl Fn(F::Frame) -> Packet,
+) -> Vec<Item> {
+    dec.push(bytes);
+    let mut out = Vec::new();
+    pull(&mut dec, &wrap, &mut out);
+    // The input is complete: a partial frame at the end will not grow, so look behind it.
+    dec.flush();
+    pull(&mut dec, &wrap, &mut out);
     if let Some(e) = dec.finish() {
         out.push(Item {
             offset: dec.last_start(),

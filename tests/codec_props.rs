@@ -986,3 +986,45 @@ fn dp_value_is_signed_big_endian() {
     let points = dp::decode(&[16, 2, 0, 4, 0xFF, 0xFF, 0xFF, 0xFE]).unwrap();
     assert_eq!(points[0].value, DpValue::Value(-2));
 }
+
+#[test]
+fn flush_rescues_a_frame_held_back_by_a_false_header() {
+    // The same stream as above, on a line that then goes quiet: after `flush()` the false
+    // header's bytes are junk and the heartbeat behind them comes out.
+    let heartbeat = tuya::Frame::from_module(0, vec![]).encode().unwrap();
+    let stream = [vec![0x55, 0xaa, 0x00, 0x00, 0x00, 0x40], heartbeat.clone()].concat();
+    let mut dec = tuya::TuyaDecoder::new();
+    dec.push(&stream);
+    assert_eq!(dec.next(), None, "waits for the announced 64 bytes");
+    dec.flush();
+    assert_eq!(
+        dec.next(),
+        Some(Err(FrameError::Junk {
+            len: 6,
+            sample: stream[..6].to_vec()
+        }))
+    );
+    assert_eq!(dec.next(), Some(Ok(tuya::Frame::from_module(0, vec![]))));
+    assert_eq!(dec.next(), None);
+    assert_eq!(dec.finish(), None);
+}
+
+#[test]
+fn flush_reports_a_partial_frame_with_nothing_behind_it_as_truncated() {
+    let mut dec = servo::ServoDecoder::new();
+    dec.push(&[0x05, 0x1c, 0x01, 0x01]);
+    assert_eq!(dec.next(), None);
+    dec.flush();
+    assert_eq!(
+        dec.next(),
+        Some(Err(FrameError::Truncated {
+            have: 4,
+            need: Some(6),
+            bytes: vec![0x05, 0x1c, 0x01, 0x01]
+        }))
+    );
+    assert_eq!(dec.buffered(), 0);
+    // A reply that then arrives whole decodes as usual.
+    dec.push(&[0x05, 0x1c, 0x01, 0x01, 0x03, 0x26]);
+    assert!(matches!(dec.next(), Some(Ok(_))));
+}

@@ -49,6 +49,8 @@ pub struct Decoder<P: Framing> {
     junk_start: u64,
     junk_sample: Vec<u8>,
     last_start: u64,
+    /// The line went quiet: a partial frame at the head will not complete.
+    stale: bool,
 }
 
 impl<P: Framing> Decoder<P> {
@@ -64,11 +66,15 @@ impl<P: Framing> Decoder<P> {
             junk_start: 0,
             junk_sample: Vec::new(),
             last_start: 0,
+            stale: false,
         }
     }
 
     /// Appends received bytes.
     pub fn push(&mut self, bytes: &[u8]) {
+        if !bytes.is_empty() {
+            self.stale = false;
+        }
         if self.pos == self.buf.len() {
             self.base += self.pos as u64;
             self.buf.clear();
@@ -81,7 +87,18 @@ impl<P: Framing> Decoder<P> {
         self.buf.extend_from_slice(bytes);
     }
 
-    /// The stream offset of the next byte not yet consumed: just past the item last returned.
+    /// Says that the line has gone quiet (no byte for longer than a frame's bytes are ever
+    /// apart), so a partial frame at the head will not complete. The iterator then treats it as
+    /// a false header: it searches the buffered bytes behind it for a frame, reports the bytes
+    /// before that frame as junk, and reports a partial frame with nothing behind it as
+    /// [`FrameError::Truncated`]. Without this, junk that looks like a header announcing a long
+    /// length would hold back a real reply until more bytes arrive.
+    pub fn flush(&mut self) {
+        self.stale = true;
+    }
+
+    /// The stream offset where decoding resumes: just past the last frame returned, or one byte
+    /// past the start of the last bad frame (the decoder re-synchronises from there).
     pub fn stream_offset(&self) -> u64 {
         self.base + self.pos as u64
     }
@@ -106,6 +123,10 @@ impl<P: Framing> Decoder<P> {
     }
 
     /// Ends the stream: reports a trailing partial frame or junk, and empties the buffer.
+    ///
+    /// Drain the iterator first: complete frames still buffered would be reported as junk. To
+    /// rescue frames hidden behind a false header at the end of input, call [`flush`](Self::flush)
+    /// and drain the iterator again before this.
     pub fn finish(&mut self) -> Option<FrameError> {
         if let Some(junk) = self.take_junk() {
             return Some(junk);
@@ -190,6 +211,31 @@ impl<P: Framing> Iterator for Decoder<P> {
             }
             match self.framing.scan(rest) {
                 Scan::NoHeader => self.skip(1),
+                Scan::NeedMore { need } if self.stale => {
+                    let framing = &self.framing;
+                    let behind = (1..rest.len()).find(|&i| {
+                        framing.is_start(rest[i])
+                            && matches!(framing.scan(&rest[i..]), Scan::Frame(..) | Scan::Bad(_))
+                    });
+                    match behind {
+                        Some(i) => self.skip(i),
+                        None => {
+                            let err = FrameError::Truncated {
+                                have: rest.len(),
+                                need,
+                                bytes: rest.to_vec(),
+                            };
+                            if let Some(junk) = self.take_junk() {
+                                return Some(Err(junk));
+                            }
+                            self.last_start = self.stream_offset();
+                            self.pos = self.buf.len();
+                            self.shadow_end = self.shadow_end.max(self.stream_offset());
+                            self.stale = false;
+                            return Some(Err(err));
+                        }
+                    }
+                }
                 Scan::NeedMore { .. } => return self.take_junk().map(Err),
                 Scan::Frame(frame, len) => {
                     if let Some(junk) = self.take_junk() {
