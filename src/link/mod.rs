@@ -1,5 +1,278 @@
 //! The link: one named worker thread per open port owns the transport and a protocol session.
+//! Callers never block on I/O: [`LinkCommand`]s go in and [`LinkEvent`]s come out over
+//! crossbeam channels, and a waker callback tells the UI to repaint. Threads that may block (the
+//! command line, long jobs) use a [`Client`], whose requests carry their own reply channel.
 
+mod decoder;
+pub mod request;
+pub mod serial;
+pub mod session;
 pub mod transport;
+pub mod tuya_module;
+mod worker;
 
+pub use request::{ExchangeError, Match, Reply, ReplySpec, Request};
+pub use session::DeviceInfo;
 pub use transport::{LinkError, Transport, wire_time};
+pub use tuya_module::{TuyaEvent, TuyaModuleOptions};
+
+use crate::packet::Packet;
+use crate::profile::Profile;
+use crate::protocol::{Direction, FrameError};
+use crossbeam_channel::{Receiver, Sender};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant, SystemTime};
+
+/// Opens (and, after a loss, reopens) the transport.
+pub type Opener = Box<dyn FnMut() -> Result<Box<dyn Transport>, LinkError> + Send>;
+
+/// Called after events are sent, to wake the UI.
+pub type Waker = Arc<dyn Fn() + Send + Sync>;
+
+/// Where a request's result goes.
+#[derive(Debug, Clone)]
+pub enum ReplyTo {
+    /// As a [`LinkEvent::Reply`] with this id.
+    Event(u64),
+    /// Into this channel (blocking callers).
+    Channel(Sender<Result<Reply, ExchangeError>>),
+}
+
+/// A telemetry command the worker polls on its own.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Poll {
+    /// What to send.
+    pub request: Request,
+    /// How often; `None` for as fast as the wire allows.
+    pub interval: Option<Duration>,
+}
+
+/// What the worker is told.
+#[derive(Debug, Clone)]
+pub enum LinkCommand {
+    /// One exchange.
+    Request {
+        /// The request.
+        request: Request,
+        /// Where its result goes.
+        reply_to: ReplyTo,
+    },
+    /// Replaces the set of polled telemetry commands (empty: stop polling).
+    SetPolls(Vec<Poll>),
+    /// Switches the port's baud rate.
+    SetBaud(u32),
+    /// MSP: asks CMD_VERSION again.
+    Identify,
+    /// Tuya: runs the start-up handshake again.
+    Handshake,
+    /// Tuya: changes what the module answers the MCU.
+    TuyaOptions(TuyaModuleOptions),
+    /// Closes the port and ends the worker.
+    Shutdown,
+}
+
+/// The state of the link.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LinkState {
+    /// Open and working.
+    Connected {
+        /// The port (or simulator) description.
+        port: String,
+        /// Its baud rate.
+        baud: u32,
+    },
+    /// The port went away.
+    Lost {
+        /// Why.
+        reason: String,
+    },
+    /// Trying to reopen a lost port.
+    Reconnecting {
+        /// Attempts so far.
+        attempt: u32,
+    },
+    /// Closed for good.
+    Closed,
+}
+
+/// One frame sent or received, for the packet monitor.
+#[derive(Debug, Clone)]
+pub struct LogEntry {
+    /// When.
+    pub at: SystemTime,
+    /// Out or in.
+    pub direction: Direction,
+    /// The frame, or what was wrong with the bytes.
+    pub frame: Result<Packet, FrameError>,
+}
+
+/// Counters for the status bar.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LinkStats {
+    /// Round trip of the last answered exchange.
+    pub rtt: Option<Duration>,
+    /// Frames sent.
+    pub sent: u64,
+    /// Valid frames received.
+    pub received: u64,
+    /// Exchanges that timed out (each attempt).
+    pub timeouts: u64,
+    /// Frame errors (bad checksums, junk, truncation).
+    pub frame_errors: u64,
+    /// Attempts beyond the first.
+    pub retries: u64,
+    /// Events dropped because nobody read them.
+    pub dropped_events: u64,
+}
+
+/// What the worker reports.
+#[derive(Debug, Clone)]
+pub enum LinkEvent {
+    /// The link's state changed.
+    State(LinkState),
+    /// The result of a request sent with [`ReplyTo::Event`].
+    Reply {
+        /// The request's id.
+        id: u64,
+        /// Its result.
+        result: Result<Reply, ExchangeError>,
+    },
+    /// A polled telemetry answer (or why it failed).
+    Telemetry {
+        /// The command polled.
+        command: u8,
+        /// When the answer came.
+        at: Instant,
+        /// The answer.
+        result: Result<Packet, ExchangeError>,
+    },
+    /// A frame the device sent on its own: an MSP async message, a Tuya data-point report (also
+    /// every report that answers a query or a command), a servo reply that came late.
+    Report(Packet),
+    /// A frame for the packet monitor.
+    Frame(LogEntry),
+    /// MSP: what CMD_VERSION said.
+    Identified(Result<DeviceInfo, ExchangeError>),
+    /// Tuya: handshake steps, MCU requests answered, restarts.
+    Tuya(TuyaEvent),
+    /// Counters, sent when they change (at most a few times a second).
+    Stats(LinkStats),
+}
+
+/// How the link behaves.
+#[derive(Debug, Clone)]
+pub struct LinkOptions {
+    /// How long the device may take to start answering, beyond the wire time. Default: MSP
+    /// 20 ms, servo 3 ms, Tuya 300 ms.
+    pub margin: Option<Duration>,
+    /// Reopen a lost port, with backoff.
+    pub reconnect: bool,
+    /// MSP: ask CMD_VERSION on connect. Tuya: run the handshake on connect.
+    pub start_session: bool,
+    /// Tuya: what the module answers the MCU.
+    pub tuya: TuyaModuleOptions,
+    /// Capacity of the event channel.
+    pub event_capacity: usize,
+}
+
+impl Default for LinkOptions {
+    fn default() -> Self {
+        Self {
+            margin: None,
+            reconnect: true,
+            start_session: true,
+            tuya: TuyaModuleOptions::default(),
+            event_capacity: 65_536,
+        }
+    }
+}
+
+/// An open link: the worker thread and its channels. Dropping it closes the port.
+pub struct Link {
+    commands: Sender<LinkCommand>,
+    events: Receiver<LinkEvent>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl std::fmt::Debug for Link {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Link").finish_non_exhaustive()
+    }
+}
+
+impl Link {
+    /// Opens the transport now (so that a bad path is an immediate error), then starts the
+    /// worker thread `botbench-link`.
+    pub fn open(
+        mut opener: Opener,
+        profile: Arc<Profile>,
+        options: LinkOptions,
+        waker: Option<Waker>,
+    ) -> Result<Self, LinkError> {
+        let transport = opener()?;
+        let (cmd_tx, cmd_rx) = crossbeam_channel::unbounded();
+        let (ev_tx, ev_rx) = crossbeam_channel::bounded(options.event_capacity.max(16));
+        let worker = worker::Worker::new(transport, opener, profile, options, cmd_rx, ev_tx, waker);
+        let thread = std::thread::Builder::new()
+            .name("botbench-link".into())
+            .spawn(move || worker.run())
+            .map_err(|e| LinkError::Setting(format!("cannot start the link thread: {e}")))?;
+        Ok(Self {
+            commands: cmd_tx,
+            events: ev_rx,
+            thread: Some(thread),
+        })
+    }
+
+    /// Sends a command to the worker.
+    pub fn send(&self, cmd: LinkCommand) {
+        let _ = self.commands.send(cmd);
+    }
+
+    /// The events the worker reports.
+    pub fn events(&self) -> &Receiver<LinkEvent> {
+        &self.events
+    }
+
+    /// A blocking client for another thread.
+    pub fn client(&self) -> Client {
+        Client {
+            commands: self.commands.clone(),
+        }
+    }
+}
+
+impl Drop for Link {
+    fn drop(&mut self) {
+        let _ = self.commands.send(LinkCommand::Shutdown);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// A handle for threads that may block: each request waits for its own answer.
+#[derive(Debug, Clone)]
+pub struct Client {
+    commands: Sender<LinkCommand>,
+}
+
+impl Client {
+    /// Sends `request` and waits for its result.
+    pub fn request(&self, request: Request) -> Result<Reply, ExchangeError> {
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        self.commands
+            .send(LinkCommand::Request {
+                request,
+                reply_to: ReplyTo::Channel(tx),
+            })
+            .map_err(|_| ExchangeError::Cancelled)?;
+        rx.recv().unwrap_or(Err(ExchangeError::Cancelled))
+    }
+
+    /// Sends a command without waiting.
+    pub fn send(&self, cmd: LinkCommand) {
+        let _ = self.commands.send(cmd);
+    }
+}

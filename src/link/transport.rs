@@ -37,6 +37,10 @@ pub trait Transport: Send {
     fn clear_input(&mut self) -> Result<(), LinkError>;
     /// A short description for the status bar: the path, or `simulated window cleaner`.
     fn describe(&self) -> String;
+    /// Checks, while idle, that the port is still there (a USB adapter unplugged).
+    fn check(&mut self) -> Result<(), LinkError> {
+        Ok(())
+    }
 }
 
 /// How long `bytes` bytes take on the wire at `baud` (8N1: 10 bits a byte).

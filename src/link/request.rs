@@ -1,0 +1,183 @@
+//! What a caller asks of the link, and what comes back.
+
+use crate::packet::Packet;
+use crate::protocol::FrameError;
+use std::time::Duration;
+
+/// One exchange: a frame to send and the answer to wait for.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Request {
+    /// The command number.
+    pub command: u8,
+    /// The payload (for servo frames, starting with the servo id).
+    pub payload: Vec<u8>,
+    /// MSP: the device code, when it is not the session's (CMD_VERSION goes to 0x00).
+    pub device: Option<u8>,
+    /// What answer to wait for.
+    pub reply: ReplySpec,
+    /// Attempts before giving up (at least 1).
+    pub attempts: u8,
+    /// How long the device may take to start answering, beyond the wire time; `None` for the
+    /// link's default.
+    pub margin: Option<Duration>,
+}
+
+impl Request {
+    /// A request answered by a frame of the same command.
+    pub fn new(command: u8, payload: Vec<u8>) -> Self {
+        Self {
+            command,
+            payload,
+            device: None,
+            reply: ReplySpec::Required(Match::command(command)),
+            attempts: 3,
+            margin: None,
+        }
+    }
+
+    /// A request that expects no answer.
+    pub fn send_only(command: u8, payload: Vec<u8>) -> Self {
+        Self {
+            reply: ReplySpec::None,
+            attempts: 1,
+            ..Self::new(command, payload)
+        }
+    }
+
+    /// Sets the number of attempts.
+    pub fn attempts(mut self, n: u8) -> Self {
+        self.attempts = n.max(1);
+        self
+    }
+
+    /// Sets the answer to wait for.
+    pub fn reply(mut self, spec: ReplySpec) -> Self {
+        self.reply = spec;
+        self
+    }
+
+    /// Sends to this MSP device code.
+    pub fn device(mut self, code: u8) -> Self {
+        self.device = Some(code);
+        self
+    }
+
+    /// Sets the device's answer margin.
+    pub fn margin(mut self, margin: Duration) -> Self {
+        self.margin = Some(margin);
+        self
+    }
+}
+
+/// Which incoming frame answers a request.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Match {
+    /// The answer's command.
+    pub command: u8,
+    /// Servo: the ids an answer may come from (after an id change, the new one too). Empty: any.
+    pub from: Vec<u8>,
+}
+
+impl Match {
+    /// An answer with this command, from anyone.
+    pub fn command(command: u8) -> Self {
+        Self {
+            command,
+            from: Vec::new(),
+        }
+    }
+
+    /// A servo answer with this command from one of `ids`.
+    pub fn servo(command: u8, ids: &[u8]) -> Self {
+        Self {
+            command,
+            from: ids.to_vec(),
+        }
+    }
+
+    /// Whether `p` (an incoming frame) is the answer.
+    pub fn accepts(&self, p: &Packet) -> bool {
+        p.direction == crate::protocol::Direction::DeviceToHost
+            && p.command == self.command
+            && (self.from.is_empty() || p.payload.first().is_some_and(|id| self.from.contains(id)))
+    }
+}
+
+/// What answer a request waits for.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ReplySpec {
+    /// None: the request is only sent.
+    None,
+    /// Exactly one matching frame; none is an error.
+    Required(Match),
+    /// One matching frame if the device sends one (a servo with its response switch off does
+    /// not); none is not an error.
+    Optional(Match),
+    /// Every matching frame until the line is quiet for `quiet` (Tuya's query burst), at least
+    /// one.
+    Burst {
+        /// What each frame of the burst matches.
+        each: Match,
+        /// How long a pause ends the burst.
+        quiet: Duration,
+    },
+}
+
+/// A successful exchange.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Reply {
+    /// The answering frames (one, or a burst; none for a send-only or unanswered optional).
+    pub packets: Vec<Packet>,
+    /// From the request's first byte written to the answer's last byte read.
+    pub rtt: Duration,
+    /// Attempts used.
+    pub attempts: u8,
+}
+
+impl Reply {
+    /// The payload of the (first) answer.
+    pub fn payload(&self) -> Option<&[u8]> {
+        self.packets.first().map(|p| p.payload.as_slice())
+    }
+}
+
+/// Why an exchange failed. Nothing stale is ever returned in place of an answer.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ExchangeError {
+    /// No answer within the deadline, after every attempt.
+    #[error("no answer to command {command} after {attempts} attempt(s) of {waited_ms} ms")]
+    Timeout {
+        /// The command.
+        command: u8,
+        /// Attempts made.
+        attempts: u8,
+        /// How long each attempt waited, in ms.
+        waited_ms: u64,
+    },
+    /// Answers came back damaged (bad checksum, junk, cut short) on every attempt. On a servo bus,
+    /// the sign of two servos sharing an id.
+    #[error("garbled answer to command {command}: {error}")]
+    Garbled {
+        /// The command.
+        command: u8,
+        /// The last frame error seen.
+        error: FrameError,
+    },
+    /// Only frames that answer something else came back.
+    #[error("expected an answer to command {expected}, got command {got}")]
+    Mismatch {
+        /// The command asked.
+        expected: u8,
+        /// The command that answered.
+        got: u8,
+    },
+    /// The request could not be built (payload too long).
+    #[error("cannot send: {0}")]
+    Encode(String),
+    /// The port went away.
+    #[error("link lost: {0}")]
+    Disconnected(String),
+    /// The link was closed or the request cancelled.
+    #[error("cancelled")]
+    Cancelled,
+}

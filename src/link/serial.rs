@@ -1,0 +1,235 @@
+//! Real serial ports (and pseudo-terminals) through the serialport crate.
+
+use super::transport::{LinkError, Transport};
+use serialport::{SerialPort, SerialPortType};
+use std::io::{ErrorKind, Read, Write};
+use std::time::{Duration, Instant};
+
+/// A port as the OS lists it.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct PortInfo {
+    /// The path to open.
+    pub path: String,
+    /// `usb`, `pci`, `bluetooth` or `unknown`.
+    pub kind: &'static str,
+    /// USB vendor id.
+    pub vid: Option<u16>,
+    /// USB product id.
+    pub pid: Option<u16>,
+    /// USB serial number, where the OS gives one.
+    pub serial_number: Option<String>,
+    /// USB manufacturer.
+    pub manufacturer: Option<String>,
+    /// USB product name.
+    pub product: Option<String>,
+}
+
+impl PortInfo {
+    /// One line for a picker: `/dev/ttyUSB0  USB 1a86:7523 CH340 (sn 1234)`.
+    pub fn label(&self) -> String {
+        let mut s = self.path.clone();
+        if let (Some(v), Some(p)) = (self.vid, self.pid) {
+            s.push_str(&format!("  USB {v:04x}:{p:04x}"));
+        }
+        if let Some(prod) = &self.product {
+            s.push_str(&format!(" {prod}"));
+        }
+        if let Some(sn) = &self.serial_number {
+            s.push_str(&format!(" (sn {sn})"));
+        }
+        s
+    }
+}
+
+/// The serial ports the OS knows of (without libudev this reads sysfs; pseudo-terminals are not
+/// listed but can be opened by path).
+pub fn list_ports() -> Vec<PortInfo> {
+    let Ok(ports) = serialport::available_ports() else {
+        return Vec::new();
+    };
+    ports
+        .into_iter()
+        .map(|p| {
+            let mut info = PortInfo {
+                path: p.port_name,
+                kind: "unknown",
+                vid: None,
+                pid: None,
+                serial_number: None,
+                manufacturer: None,
+                product: None,
+            };
+            match p.port_type {
+                SerialPortType::UsbPort(u) => {
+                    info.kind = "usb";
+                    info.vid = Some(u.vid);
+                    info.pid = Some(u.pid);
+                    info.serial_number = u.serial_number;
+                    info.manufacturer = u.manufacturer;
+                    info.product = u.product;
+                }
+                SerialPortType::PciPort => info.kind = "pci",
+                SerialPortType::BluetoothPort => info.kind = "bluetooth",
+                SerialPortType::Unknown => {}
+            }
+            info
+        })
+        .collect()
+}
+
+/// A serial port or pseudo-terminal.
+pub struct SerialTransport {
+    port: Box<dyn SerialPort>,
+    path: String,
+    baud: u32,
+}
+
+impl std::fmt::Debug for SerialTransport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SerialTransport")
+            .field("path", &self.path)
+            .field("baud", &self.baud)
+            .finish()
+    }
+}
+
+impl SerialTransport {
+    /// Opens `path` at `baud`, 8N1, exclusively.
+    pub fn open(path: &str, baud: u32) -> Result<Self, LinkError> {
+        let open_err = |reason: String| LinkError::Open {
+            path: path.to_string(),
+            reason,
+        };
+        let meta = std::fs::metadata(path).map_err(|e| open_err(e.to_string()))?;
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::FileTypeExt;
+            if !meta.file_type().is_char_device() {
+                return Err(open_err(
+                    "not a serial port (not a character device)".into(),
+                ));
+            }
+        }
+        #[cfg(not(unix))]
+        let _ = meta;
+        let port = serialport::new(path, baud)
+            .timeout(Duration::from_millis(10))
+            .open()
+            .map_err(|e| {
+                let reason = match e.kind {
+                    serialport::ErrorKind::NoDevice => format!("no such device ({e})"),
+                    _ if e.to_string().contains("Device or resource busy") => {
+                        "in use by another program".to_string()
+                    }
+                    _ => e.to_string(),
+                };
+                open_err(reason)
+            })?;
+        Ok(Self {
+            port,
+            path: path.to_string(),
+            baud,
+        })
+    }
+
+    /// The USB serial number of the adapter at `path`, where the OS gives one.
+    pub fn usb_serial_of(path: &str) -> Option<String> {
+        list_ports()
+            .into_iter()
+            .find(|p| p.path == path)
+            .and_then(|p| p.serial_number)
+    }
+
+    /// The path of the port whose USB serial number is `sn`.
+    pub fn path_of_usb_serial(sn: &str) -> Option<String> {
+        list_ports()
+            .into_iter()
+            .find(|p| p.serial_number.as_deref() == Some(sn))
+            .map(|p| p.path)
+    }
+
+    fn lost(&self, e: &std::io::Error) -> LinkError {
+        LinkError::Disconnected(format!("{}: {e}", self.path))
+    }
+}
+
+impl Transport for SerialTransport {
+    fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        self.port.write_all(bytes).map_err(|e| self.lost(&e))?;
+        self.port.flush().map_err(|e| self.lost(&e))
+    }
+
+    fn read(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
+        let now = Instant::now();
+        let wait = deadline
+            .saturating_duration_since(now)
+            .max(Duration::from_micros(100));
+        if self.port.timeout() != wait {
+            self.port
+                .set_timeout(wait)
+                .map_err(|e| LinkError::Setting(e.to_string()))?;
+        }
+        match self.port.read(buf) {
+            Ok(0) => Err(LinkError::Disconnected(format!(
+                "{}: end of file",
+                self.path
+            ))),
+            Ok(n) => Ok(n),
+            Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::WouldBlock => Ok(0),
+            Err(e) if e.kind() == ErrorKind::Interrupted => Ok(0),
+            Err(e) => Err(self.lost(&e)),
+        }
+    }
+
+    fn set_baud(&mut self, baud: u32) -> Result<(), LinkError> {
+        self.port
+            .set_baud_rate(baud)
+            .map_err(|e| LinkError::Setting(format!("baud {baud}: {e}")))?;
+        self.baud = baud;
+        Ok(())
+    }
+
+    fn baud(&self) -> u32 {
+        self.baud
+    }
+
+    fn clear_input(&mut self) -> Result<(), LinkError> {
+        self.port
+            .clear(serialport::ClearBuffer::Input)
+            .map_err(|e| LinkError::Disconnected(format!("{}: {e}", self.path)))
+    }
+
+    fn describe(&self) -> String {
+        self.path.clone()
+    }
+
+    fn check(&mut self) -> Result<(), LinkError> {
+        if std::path::Path::new(&self.path).exists() {
+            Ok(())
+        } else {
+            Err(LinkError::Disconnected(format!(
+                "{}: the port is gone",
+                self.path
+            )))
+        }
+    }
+}
+
+/// Opens `path`, and after a loss reopens it by path, or by the adapter's USB serial number when
+/// the OS gave the port a new path.
+pub fn opener(path: &str, baud: u32) -> super::Opener {
+    let path = path.to_string();
+    let usb_serial = SerialTransport::usb_serial_of(&path);
+    Box::new(move || {
+        let first = SerialTransport::open(&path, baud);
+        let t = match (first, &usb_serial) {
+            (Ok(t), _) => t,
+            (Err(e), Some(sn)) => match SerialTransport::path_of_usb_serial(sn) {
+                Some(p) => SerialTransport::open(&p, baud)?,
+                None => return Err(e),
+            },
+            (Err(e), None) => return Err(e),
+        };
+        Ok(Box::new(t) as Box<dyn Transport>)
+    })
+}
