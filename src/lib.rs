@@ -1,5 +1,6 @@
 pub mod cli;
 pub mod link;
+pub mod ops;
 pub mod packet;
 pub mod profile;
 pub mod protocol;

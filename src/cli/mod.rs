@@ -4,6 +4,10 @@
 //! 2 bad input (usage, out-of-range value, malformed file).
 
 mod frame;
+mod msp;
+mod port;
+mod servo;
+mod tuya;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -57,6 +61,18 @@ enum Cmd {
         #[arg(long)]
         json: bool,
     },
+    /// List the serial ports (USB VID:PID, serial number and product where known).
+    Ports {
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Window cleaner and solar cleanbot (MSP).
+    Msp(msp::MspArgs),
+    /// UART bus servos.
+    Servo(servo::ServoArgs),
+    /// Tuya MCU, with botbench as the Wi-Fi module.
+    Tuya(tuya::TuyaArgs),
 }
 
 /// Runs the command line with the process's arguments.
@@ -81,6 +97,10 @@ fn run(cli: Cli) -> CliResult {
     match cli.command {
         Some(Cmd::Frame(cmd)) => frame::run(cmd),
         Some(Cmd::Profiles { json }) => profiles(json),
+        Some(Cmd::Ports { json }) => ports(json),
+        Some(Cmd::Msp(args)) => msp::run(args),
+        Some(Cmd::Servo(args)) => servo::run(args),
+        Some(Cmd::Tuya(args)) => tuya::run(args),
         None => {
             use clap::CommandFactory;
             let _ = Cli::command().print_help();
@@ -117,6 +137,20 @@ fn profiles(json: bool) -> CliResult {
                 p.name.en,
                 p.name.zh
             );
+        }
+    }
+    Ok(0)
+}
+
+fn ports(json: bool) -> CliResult {
+    let ports = crate::link::serial::list_ports();
+    if json {
+        println!("{}", serde_json::json!({ "ports": ports }));
+    } else if ports.is_empty() {
+        println!("no serial ports found (pseudo-terminals are not listed; open them by path)");
+    } else {
+        for p in &ports {
+            println!("{}", p.label());
         }
     }
     Ok(0)

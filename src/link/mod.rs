@@ -60,8 +60,13 @@ pub enum LinkCommand {
     },
     /// Replaces the set of polled telemetry commands (empty: stop polling).
     SetPolls(Vec<Poll>),
-    /// Switches the port's baud rate.
-    SetBaud(u32),
+    /// Switches the port's baud rate, in order with the requests around it.
+    SetBaud {
+        /// The new rate.
+        baud: u32,
+        /// Told when the port has switched (or could not).
+        ack: Option<Sender<Result<(), LinkError>>>,
+    },
     /// MSP: asks CMD_VERSION again.
     Identify,
     /// Tuya: runs the start-up handshake again.
@@ -269,6 +274,19 @@ impl Client {
             })
             .map_err(|_| ExchangeError::Cancelled)?;
         rx.recv().unwrap_or(Err(ExchangeError::Cancelled))
+    }
+
+    /// Switches the port's baud rate after the requests before it, and waits until it has.
+    pub fn set_baud(&self, baud: u32) -> Result<(), LinkError> {
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        self.commands
+            .send(LinkCommand::SetBaud {
+                baud,
+                ack: Some(tx),
+            })
+            .map_err(|_| LinkError::Disconnected("link closed".into()))?;
+        rx.recv()
+            .unwrap_or(Err(LinkError::Disconnected("link closed".into())))
     }
 
     /// Sends a command without waiting.

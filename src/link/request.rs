@@ -181,3 +181,46 @@ pub enum ExchangeError {
     #[error("cancelled")]
     Cancelled,
 }
+
+impl Request {
+    /// The request for a profile command with an encoded payload: the answer it waits for
+    /// follows the command's definition (MSP: the same command, sent to the command's device
+    /// code if it has one; servo: the same command from the addressed servo, optional where the
+    /// servo answers only with its response switch on, none for broadcast; Tuya: the reply
+    /// command, a burst of reports for a query or a data-point command).
+    pub fn for_command(
+        profile: &crate::profile::Profile,
+        cmd: &crate::profile::Command,
+        payload: Vec<u8>,
+    ) -> Self {
+        use crate::profile::Protocol;
+        let mut r = Request::new(cmd.id, payload);
+        r.device = cmd.device;
+        match profile.protocol {
+            Protocol::Msp => {}
+            Protocol::Servo => {
+                let id = r.payload.first().copied().unwrap_or(0);
+                let m = Match::servo(cmd.id, &[id]);
+                r.reply = if id == crate::protocol::servo::BROADCAST_ID {
+                    ReplySpec::None
+                } else if cmd.reply_optional {
+                    ReplySpec::Optional(m)
+                } else {
+                    ReplySpec::Required(m)
+                };
+            }
+            Protocol::Tuya => {
+                let answer = cmd.reply_command.unwrap_or(cmd.id);
+                r.reply = if answer == crate::protocol::tuya::cmd::DP_REPORT {
+                    ReplySpec::Burst {
+                        each: Match::command(answer),
+                        quiet: Duration::from_millis(300),
+                    }
+                } else {
+                    ReplySpec::Required(Match::command(answer))
+                };
+            }
+        }
+        r
+    }
+}

@@ -57,7 +57,7 @@ pub(super) struct Worker {
     events: Sender<LinkEvent>,
     waker: Option<Waker>,
     decoder: AnyDecoder,
-    queue: VecDeque<(Request, ReplyTo)>,
+    queue: VecDeque<Queued>,
     deferred: VecDeque<LinkCommand>,
     polls: Vec<(Poll, Instant)>,
     poll_cursor: usize,
@@ -71,6 +71,12 @@ pub(super) struct Worker {
     identify_pending: bool,
     shutdown: bool,
     wake: bool,
+}
+
+/// Work done in order.
+enum Queued {
+    Exchange(Request, ReplyTo),
+    Baud(u32, Option<Sender<Result<(), super::LinkError>>>),
 }
 
 enum Outcome {
@@ -136,9 +142,14 @@ impl Worker {
             if self.shutdown {
                 break;
             }
-            if let Some((req, to)) = self.queue.pop_front() {
-                let result = self.exchange(&req);
-                self.deliver(to, result);
+            if let Some(item) = self.queue.pop_front() {
+                match item {
+                    Queued::Exchange(req, to) => {
+                        let result = self.exchange(&req);
+                        self.deliver(to, result);
+                    }
+                    Queued::Baud(baud, ack) => self.switch_baud(baud, ack),
+                }
             } else if self.identify_pending && self.profile.protocol == Protocol::Msp {
                 self.identify_pending = false;
                 self.identify();
@@ -151,9 +162,7 @@ impl Worker {
             }
             self.housekeeping();
         }
-        for (_, to) in std::mem::take(&mut self.queue) {
-            self.deliver(to, Err(ExchangeError::Cancelled));
-        }
+        self.fail_queue(|| ExchangeError::Cancelled);
         self.emit(LinkEvent::State(LinkState::Closed));
         self.flush_wake();
     }
@@ -178,7 +187,7 @@ impl Worker {
                         Err(ExchangeError::Disconnected("port lost".into())),
                     );
                 } else {
-                    self.queue.push_back((request, reply_to));
+                    self.queue.push_back(Queued::Exchange(request, reply_to));
                 }
             }
             LinkCommand::SetPolls(polls) => {
@@ -186,19 +195,7 @@ impl Worker {
                 self.polls = polls.into_iter().map(|p| (p, now)).collect();
                 self.poll_cursor = 0;
             }
-            LinkCommand::SetBaud(baud) => {
-                self.baud = baud;
-                if let Some(t) = self.transport.as_mut() {
-                    match t.set_baud(baud) {
-                        Ok(()) => {
-                            let _ = t.clear_input();
-                            self.decoder.clear();
-                            self.emit_connected();
-                        }
-                        Err(e) => self.lost(e.to_string()),
-                    }
-                }
-            }
+            LinkCommand::SetBaud { baud, ack } => self.queue.push_back(Queued::Baud(baud, ack)),
             LinkCommand::Identify => self.identify_pending = true,
             LinkCommand::Handshake => {
                 self.tuya.handshake_done = false;
@@ -206,6 +203,40 @@ impl Worker {
             }
             LinkCommand::TuyaOptions(o) => self.tuya.opts = o,
             LinkCommand::Shutdown => self.shutdown = true,
+        }
+    }
+
+    fn switch_baud(&mut self, baud: u32, ack: Option<Sender<Result<(), super::LinkError>>>) {
+        self.baud = baud;
+        let result = match self.transport.as_mut() {
+            Some(t) => t.set_baud(baud).map(|()| {
+                let _ = t.clear_input();
+            }),
+            None => Err(super::LinkError::Disconnected("port lost".into())),
+        };
+        match &result {
+            Ok(()) => {
+                self.decoder.clear();
+                self.emit_connected();
+            }
+            Err(e) => self.emit(LinkEvent::State(LinkState::Lost {
+                reason: e.to_string(),
+            })),
+        }
+        if let Some(tx) = ack {
+            let _ = tx.send(result);
+        }
+    }
+
+    fn fail_queue(&mut self, err: impl Fn() -> ExchangeError) {
+        for item in std::mem::take(&mut self.queue) {
+            match item {
+                Queued::Exchange(_, to) => self.deliver(to, Err(err())),
+                Queued::Baud(_, Some(tx)) => {
+                    let _ = tx.send(Err(super::LinkError::Disconnected(err().to_string())));
+                }
+                Queued::Baud(_, None) => {}
+            }
         }
     }
 
@@ -287,9 +318,7 @@ impl Worker {
         self.emit(LinkEvent::State(LinkState::Lost {
             reason: reason.clone(),
         }));
-        for (_, to) in std::mem::take(&mut self.queue) {
-            self.deliver(to, Err(ExchangeError::Disconnected(reason.clone())));
-        }
+        self.fail_queue(|| ExchangeError::Disconnected(reason.clone()));
         self.flush_wake();
     }
 

@@ -1,0 +1,239 @@
+//! `botbench msp`: the window cleaner and the solar cleanbot from the command line.
+
+use super::port::{PortArgs, exchange_error, op_error, parse_assignments, print_checks};
+use super::{CliError, CliResult};
+use crate::link::{LinkCommand, LinkEvent, Poll, Request};
+use crate::ops::msp as ops;
+use crate::profile::{Command, Profile, Protocol};
+use crate::protocol::{Direction, msp};
+use clap::Subcommand;
+use std::time::{Duration, Instant};
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct MspArgs {
+    #[command(flatten)]
+    port: PortArgs,
+    #[command(subcommand)]
+    cmd: MspCmd,
+}
+
+#[derive(Debug, Subcommand)]
+enum MspCmd {
+    /// Hardware, firmware, API, build and capability flags (CMD_VERSION, CMD_BUILD_INFO).
+    Version,
+    /// CMD_PING, with the round-trip time.
+    Ping,
+    /// Send a Get or Telemetry command and print its fields.
+    Get {
+        /// Command name or number.
+        command: String,
+    },
+    /// Send a Set (or Action) command; a Set is read back through its Get, exit 1 on a mismatch.
+    Set {
+        /// Command name or number.
+        command: String,
+        /// FIELD=VALUE in display units.
+        #[arg(value_name = "FIELD=VALUE")]
+        fields: Vec<String>,
+    },
+    /// Poll telemetry commands and print each answer as a line.
+    Watch {
+        /// Command names or numbers.
+        #[arg(required = true)]
+        commands: Vec<String>,
+        /// Polls per second for each command (default: as fast as the wire allows).
+        #[arg(long)]
+        rate: Option<f64>,
+        /// Stop after this many answers.
+        #[arg(long)]
+        count: Option<u64>,
+    },
+}
+
+fn command<'p>(profile: &'p Profile, name: &str) -> Result<&'p Command, CliError> {
+    profile
+        .command(name)
+        .ok_or_else(|| CliError::input(format!("{} has no command '{name}'", profile.id)))
+}
+
+fn print_fields(
+    profile: &Profile,
+    cmd: &Command,
+    payload: &[u8],
+    json: bool,
+) -> Result<(), CliError> {
+    let d = profile
+        .decode(cmd, Direction::DeviceToHost, payload)
+        .map_err(|e| {
+            CliError::device(format!(
+                "{}: the answer does not fit the profile: {e}",
+                cmd.ident
+            ))
+        })?;
+    if json {
+        let doc = serde_json::json!({
+            "command": cmd.ident,
+            "fields": d.values.iter().map(|v| serde_json::json!({
+                "field": v.ident, "value": v.value, "display": v.display(), "unit": v.field.unit,
+            })).collect::<Vec<_>>(),
+        });
+        println!("{doc}");
+    } else {
+        for v in &d.values {
+            println!("{:<24} {}", v.ident, v.display());
+        }
+    }
+    Ok(())
+}
+
+pub(crate) fn run(args: MspArgs) -> CliResult {
+    let json = args.port.json;
+    let (link, profile) = args.port.open("window-cleaner", Protocol::Msp, true)?;
+    // The session asks CMD_VERSION first, to learn the device code.
+    let deadline = Instant::now() + Duration::from_secs(3);
+    let mut identified = None;
+    while identified.is_none() && Instant::now() < deadline {
+        match link
+            .events()
+            .recv_timeout(deadline.saturating_duration_since(Instant::now()))
+        {
+            Ok(LinkEvent::Identified(r)) => identified = Some(r),
+            Ok(LinkEvent::State(crate::link::LinkState::Lost { reason })) => {
+                return Err(CliError::device(format!("link lost: {reason}")));
+            }
+            Ok(_) => {}
+            Err(_) => break,
+        }
+    }
+    let client = link.client();
+    match args.cmd {
+        MspCmd::Version => match identified {
+            Some(Ok(info)) => {
+                if json {
+                    println!("{}", serde_json::to_string(&info).unwrap_or_default());
+                } else {
+                    println!("hardware   {:#04x}", info.hw);
+                    println!("firmware   {}", info.firmware);
+                    println!("api        {}", info.api);
+                    println!("build      {}", info.build);
+                    println!("build date {}", info.build_date.as_deref().unwrap_or("-"));
+                    match info.flags {
+                        Some(f) => println!(
+                            "flags      {f:#04x}: config page {}, PID page {}, charging module {}, collision switches {}",
+                            yes(info.supports(0)),
+                            yes(info.supports(1)),
+                            yes(info.supports(2)),
+                            yes(info.supports(3))
+                        ),
+                        None => println!("flags      none (older firmware)"),
+                    }
+                }
+                Ok(0)
+            }
+            Some(Err(e)) => Err(exchange_error(e)),
+            None => Err(CliError::device("no answer to CMD_VERSION")),
+        },
+        MspCmd::Ping => {
+            let r = client
+                .request(Request::new(msp::CMD_PING, Vec::new()))
+                .map_err(exchange_error)?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::json!({"rtt_ms": r.rtt.as_secs_f64() * 1e3, "attempts": r.attempts})
+                );
+            } else {
+                println!("answered in {:.2} ms", r.rtt.as_secs_f64() * 1e3);
+            }
+            Ok(0)
+        }
+        MspCmd::Get { command: name } => {
+            let cmd = command(&profile, &name)?;
+            let reply = ops::send(&client, &profile, cmd, &[]).map_err(op_error)?;
+            print_fields(&profile, cmd, reply.payload().unwrap_or_default(), json)?;
+            Ok(0)
+        }
+        MspCmd::Set {
+            command: name,
+            fields,
+        } => {
+            let cmd = command(&profile, &name)?;
+            let inputs = parse_assignments(&fields)?;
+            let checks = ops::write_verified(&client, &profile, cmd, &inputs).map_err(op_error)?;
+            let field_of = |ident: &str| cmd.request.iter().find(|f| f.ident == ident).cloned();
+            Ok(print_checks(&checks, field_of, json))
+        }
+        MspCmd::Watch {
+            commands,
+            rate,
+            count,
+        } => {
+            let cmds: Vec<&Command> = commands
+                .iter()
+                .map(|c| command(&profile, c))
+                .collect::<Result<_, _>>()?;
+            let interval = match rate {
+                Some(r) if r > 0.0 && r.is_finite() => Some(Duration::from_secs_f64(1.0 / r)),
+                Some(r) => {
+                    return Err(CliError::input(format!(
+                        "--rate {r}: give polls per second above 0"
+                    )));
+                }
+                None => None,
+            };
+            let polls = cmds
+                .iter()
+                .map(|c| Poll {
+                    request: Request::for_command(&profile, c, Vec::new()).attempts(1),
+                    interval,
+                })
+                .collect();
+            link.send(LinkCommand::SetPolls(polls));
+            let started = Instant::now();
+            let mut seen = 0u64;
+            let mut failures = 0u64;
+            while count.is_none_or(|n| seen < n) {
+                let Ok(ev) = link.events().recv() else { break };
+                match ev {
+                    LinkEvent::Telemetry {
+                        command: id,
+                        at,
+                        result,
+                    } => {
+                        seen += 1;
+                        let t = at.duration_since(started).as_secs_f64();
+                        let Some(cmd) = profile.command_by_id(id) else {
+                            continue;
+                        };
+                        match result {
+                            Ok(p) => {
+                                let line = p.summary(&profile);
+                                if json {
+                                    println!(
+                                        "{}",
+                                        serde_json::json!({"t": t, "command": cmd.ident, "summary": line})
+                                    );
+                                } else {
+                                    println!("{t:9.3} {line}");
+                                }
+                            }
+                            Err(e) => {
+                                failures += 1;
+                                println!("{t:9.3} {} !{e}", cmd.ident);
+                            }
+                        }
+                    }
+                    LinkEvent::State(crate::link::LinkState::Lost { reason }) => {
+                        return Err(CliError::device(format!("link lost: {reason}")));
+                    }
+                    _ => {}
+                }
+            }
+            Ok(u8::from(failures > 0 && failures == seen))
+        }
+    }
+}
+
+fn yes(b: bool) -> &'static str {
+    if b { "yes" } else { "no" }
+}

@@ -1,0 +1,131 @@
+//! What the device subcommands share: the port options, opening a link, printing checks.
+
+use super::{CliError, registry};
+use crate::link::{ExchangeError, Link, LinkOptions, serial};
+use crate::ops::msp::{Check, OpError};
+use crate::profile::{Field, Profile, Protocol};
+use clap::Args;
+use std::sync::Arc;
+
+/// Port options of every device subcommand.
+#[derive(Debug, Args)]
+pub(crate) struct PortArgs {
+    /// The serial port (e.g. /dev/ttyUSB0, or a /dev/pts path from `botbench sim`).
+    #[arg(long, short)]
+    pub port: String,
+    /// Baud rate (default: the profile's).
+    #[arg(long, short)]
+    pub baud: Option<u32>,
+    /// Device profile name or .ron file.
+    #[arg(long)]
+    pub profile: Option<String>,
+    /// How long the device may take to answer beyond the wire time, in ms (default: the
+    /// protocol's: MSP 20, servo 3, Tuya 300).
+    #[arg(long, value_name = "MS")]
+    pub margin_ms: Option<u64>,
+    /// Print JSON.
+    #[arg(long, global = true)]
+    pub json: bool,
+}
+
+impl PortArgs {
+    /// Loads the profile, checks its protocol, and opens the port.
+    pub fn open(
+        &self,
+        default_profile: &str,
+        protocol: Protocol,
+        start_session: bool,
+    ) -> Result<(Link, Arc<Profile>), CliError> {
+        let profile = registry()?
+            .get(self.profile.as_deref().unwrap_or(default_profile))
+            .map_err(CliError::input)?;
+        if profile.protocol != protocol {
+            return Err(CliError::input(format!(
+                "profile '{}' speaks {}, not {}",
+                profile.id,
+                profile.protocol.name(),
+                protocol.name()
+            )));
+        }
+        let baud = self.baud.unwrap_or(profile.baud);
+        let options = LinkOptions {
+            margin: self.margin_ms.map(std::time::Duration::from_millis),
+            reconnect: false,
+            start_session,
+            ..LinkOptions::default()
+        };
+        let link = Link::open(
+            serial::opener(&self.port, baud),
+            profile.clone(),
+            options,
+            None,
+        )
+        .map_err(|e| CliError::input(e.to_string()))?;
+        Ok((link, profile))
+    }
+}
+
+/// Maps an operation's error to an exit code: bad input 2, everything else 1.
+pub(crate) fn op_error(e: OpError) -> CliError {
+    match e {
+        OpError::Input(m) => CliError::input(m),
+        other => CliError::device(other),
+    }
+}
+
+/// Maps a failed exchange to exit code 1.
+pub(crate) fn exchange_error(e: ExchangeError) -> CliError {
+    CliError::device(e)
+}
+
+/// Prints read-back checks; returns exit code 1 if any mismatched.
+pub(crate) fn print_checks(
+    checks: &[Check],
+    field_of: impl Fn(&str) -> Option<Field>,
+    json: bool,
+) -> u8 {
+    let bad = checks.iter().filter(|c| !c.ok()).count();
+    if json {
+        let doc = serde_json::json!({
+            "verified": bad == 0,
+            "fields": checks.iter().map(|c| serde_json::json!({
+                "field": c.field, "written": c.written, "read": c.read, "ok": c.ok(),
+            })).collect::<Vec<_>>(),
+        });
+        println!("{doc}");
+    } else {
+        for c in checks {
+            let (w, r) = match field_of(&c.field) {
+                Some(f) => (f.format(&c.written), f.format(&c.read)),
+                None => (format!("{:?}", c.written), format!("{:?}", c.read)),
+            };
+            if c.ok() {
+                println!("{:<24} {w:>12}  verified", c.field);
+            } else {
+                println!("{:<24} {w:>12}  MISMATCH: device holds {r}", c.field);
+            }
+        }
+        if checks.is_empty() {
+            println!("sent and acknowledged (no read-back for this command)");
+        }
+    }
+    u8::from(bad > 0)
+}
+
+/// `FIELD=VALUE` arguments as named text inputs.
+pub(crate) fn parse_assignments(
+    args: &[String],
+) -> Result<Vec<(String, crate::profile::Input)>, CliError> {
+    args.iter()
+        .map(|kv| {
+            kv.split_once('=')
+                .map(|(k, v)| {
+                    (
+                        k.trim().to_string(),
+                        crate::profile::Input::Text(v.to_string()),
+                    )
+                })
+                .ok_or_else(|| CliError::input(format!("'{kv}' is not FIELD=VALUE")))
+        })
+        .collect()
+}

@@ -1,0 +1,314 @@
+//! `botbench servo`: scan, parameters, id and baud provisioning, motion.
+
+use super::port::{PortArgs, op_error, print_checks};
+use super::{CliError, CliResult};
+use crate::ops::servo::{self as ops, BAUDS, Presence};
+use crate::ops::{Cancel, msp::OpError};
+use crate::profile::{Input, Profile, Protocol, Value};
+use clap::Subcommand;
+
+#[derive(Debug, clap::Args)]
+pub(crate) struct ServoArgs {
+    #[command(flatten)]
+    port: PortArgs,
+    #[command(subcommand)]
+    cmd: ServoCmd,
+}
+
+#[derive(Debug, Subcommand)]
+enum ServoCmd {
+    /// Find the servos on the bus.
+    Scan {
+        /// Ids to try: `0-254`, `3`, `0-10`.
+        #[arg(long, default_value = "0-254")]
+        ids: String,
+        /// Baud rates: `all`, or a list such as `115200,9600` (default: the port's).
+        #[arg(long)]
+        bauds: Option<String>,
+    },
+    /// Is servo ID there?
+    Ping {
+        /// Servo id.
+        id: u8,
+    },
+    /// Read one parameter, or all of them.
+    Read {
+        /// Servo id.
+        id: u8,
+        /// Parameter name or data_id (default: all).
+        param: Option<String>,
+    },
+    /// Write one user parameter and read it back.
+    Write {
+        /// Servo id.
+        id: u8,
+        /// Parameter name or data_id.
+        param: String,
+        /// Value in display units, or a label.
+        value: String,
+    },
+    /// Give servo OLD the id NEW (refuses 255 and ids in use; a fresh servo must be alone).
+    SetId {
+        /// Its id now.
+        old: u8,
+        /// The id to give it.
+        new: u8,
+    },
+    /// Set servo ID's baud rate (a rate such as 57600, or option 1-8), follow it and verify.
+    SetBaud {
+        /// Servo id.
+        id: u8,
+        /// The new rate or option.
+        baud: u32,
+    },
+    /// Turn servo ID to DEG degrees over --ms milliseconds.
+    Angle {
+        /// Servo id.
+        id: u8,
+        /// Target angle in degrees (0.1° steps).
+        #[arg(allow_hyphen_values = true)]
+        deg: String,
+        /// Time to get there.
+        #[arg(long, default_value_t = 500)]
+        ms: u16,
+        /// Power in mW (0: the servo's limit).
+        #[arg(long, default_value_t = 0)]
+        power: u16,
+    },
+}
+
+fn parse_ids(s: &str) -> Result<std::ops::RangeInclusive<u8>, CliError> {
+    let bad = || {
+        CliError::input(format!(
+            "--ids '{s}': give an id or a range such as 0-254 (ids 0-254)"
+        ))
+    };
+    let (a, b) = match s.split_once('-') {
+        Some((a, b)) => (
+            a.trim().parse::<u8>().map_err(|_| bad())?,
+            b.trim().parse::<u8>().map_err(|_| bad())?,
+        ),
+        None => {
+            let v = s.trim().parse::<u8>().map_err(|_| bad())?;
+            (v, v)
+        }
+    };
+    if a > b || b == 255 {
+        return Err(bad());
+    }
+    Ok(a..=b)
+}
+
+fn parse_bauds(s: Option<&str>, current: u32) -> Result<Vec<u32>, CliError> {
+    match s {
+        None => Ok(vec![current]),
+        Some("all") => Ok(BAUDS.to_vec()),
+        Some(list) => list
+            .split(',')
+            .map(|b| {
+                let v: u32 = b
+                    .trim()
+                    .parse()
+                    .map_err(|_| CliError::input(format!("'{b}' is not a baud rate")))?;
+                if BAUDS.contains(&v) {
+                    Ok(v)
+                } else {
+                    Err(CliError::input(format!(
+                        "{v} is not a servo baud rate; allowed: {BAUDS:?}"
+                    )))
+                }
+            })
+            .collect(),
+    }
+}
+
+fn param<'p>(profile: &'p Profile, name: &str) -> Result<&'p crate::profile::Param, CliError> {
+    profile.find_param(name).ok_or_else(|| {
+        let known: Vec<&str> = profile
+            .params
+            .iter()
+            .map(|p| p.field.ident.as_str())
+            .collect();
+        CliError::input(format!(
+            "no servo parameter '{name}'; known: {}",
+            known.join(", ")
+        ))
+    })
+}
+
+pub(crate) fn run(args: ServoArgs) -> CliResult {
+    let json = args.port.json;
+    // Check what can be checked before touching the port.
+    if let ServoCmd::SetId { new: 255, .. } = args.cmd {
+        return Err(CliError::input(
+            "id 255 is the broadcast address and cannot be assigned",
+        ));
+    }
+    if let ServoCmd::SetBaud { baud, .. } = args.cmd {
+        if baud > 8 && ops::option_of_baud(baud).is_none() {
+            return Err(CliError::input(format!(
+                "{baud} is not a servo baud rate; allowed: {BAUDS:?} or options 1-8"
+            )));
+        }
+        if baud == 0 {
+            return Err(CliError::input(
+                "baud option 0 is out of range; allowed 1 to 8",
+            ));
+        }
+    }
+    let (link, profile) = args.port.open("servo", Protocol::Servo, false)?;
+    let client = link.client();
+    let home = args.port.baud.unwrap_or(profile.baud);
+    let cancel = Cancel::new();
+    match args.cmd {
+        ServoCmd::Scan { ids, bauds } => {
+            let ids = parse_ids(&ids)?;
+            let bauds = parse_bauds(bauds.as_deref(), home)?;
+            let started = std::time::Instant::now();
+            let rows = ops::scan(
+                &client,
+                &profile,
+                ids,
+                &bauds,
+                home,
+                &cancel,
+                &mut |_| {},
+                &mut |_| {},
+            )
+            .map_err(op_error)?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::json!({"servos": rows, "seconds": started.elapsed().as_secs_f64()})
+                );
+            } else {
+                println!(
+                    "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>5} {:>6}  presence",
+                    "id", "baud", "type", "firmware", "serial", "mV", "temp", "status"
+                );
+                for r in &rows {
+                    let o = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
+                    let presence = match &r.presence {
+                        Presence::Present => "ok".to_string(),
+                        Presence::PossibleDuplicate(e) => format!("possible duplicate id ({e})"),
+                        Presence::Absent => "absent".to_string(),
+                    };
+                    println!(
+                        "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>5} {:>6}  {presence}",
+                        r.id,
+                        r.baud,
+                        o(r.servo_type),
+                        o(r.firmware),
+                        o(r.serial),
+                        o(r.voltage_mv),
+                        o(r.temperature),
+                        r.status_hex()
+                    );
+                }
+                println!(
+                    "{} found in {:.2} s",
+                    rows.len(),
+                    started.elapsed().as_secs_f64()
+                );
+            }
+            Ok(0)
+        }
+        ServoCmd::Ping { id } => {
+            let p = ops::ping(&client, id, 3).map_err(op_error)?;
+            if json {
+                println!("{}", serde_json::json!({"id": id, "presence": p}));
+            } else {
+                println!("servo {id}: {p:?}");
+            }
+            Ok(u8::from(p != Presence::Present))
+        }
+        ServoCmd::Read { id, param: name } => {
+            let params: Vec<&crate::profile::Param> = match &name {
+                Some(n) => vec![param(&profile, n)?],
+                None => profile.params.iter().collect(),
+            };
+            let mut out = Vec::new();
+            for p in params {
+                let v = ops::read_param(&client, &profile, id, p).map_err(op_error)?;
+                out.push((p, v));
+            }
+            if json {
+                let doc: Vec<_> = out.iter().map(|(p, v)| serde_json::json!({
+                    "param": p.field.ident, "id": p.id, "value": v, "display": p.field.format(&Value::Int(*v)), "unit": p.field.unit,
+                })).collect();
+                println!("{}", serde_json::json!({"servo": id, "params": doc}));
+            } else {
+                for (p, v) in out {
+                    println!(
+                        "{:>3} {:<22} {}{}",
+                        p.id,
+                        p.field.ident,
+                        p.field.format(&Value::Int(v)),
+                        p.field.unit_suffix()
+                    );
+                }
+            }
+            Ok(0)
+        }
+        ServoCmd::Write {
+            id,
+            param: name,
+            value,
+        } => {
+            let p = param(&profile, &name)?;
+            p.field.parse(&value).map_err(CliError::input)?;
+            let check =
+                ops::write_param(&client, &profile, id, p, Input::Text(value)).map_err(op_error)?;
+            let field = p.field.clone();
+            Ok(print_checks(&[check], |_| Some(field.clone()), json))
+        }
+        ServoCmd::SetId { old, new } => {
+            ops::set_id(&client, &profile, old, new, &cancel).map_err(op_error)?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::json!({"old": old, "new": new, "verified": true})
+                );
+            } else {
+                println!("servo {old} is now {new}: verified at the new id");
+            }
+            Ok(0)
+        }
+        ServoCmd::SetBaud { id, baud } => {
+            let option = if baud <= 8 {
+                baud as u8
+            } else {
+                ops::option_of_baud(baud).unwrap_or(0)
+            };
+            let rate = ops::set_baud(&client, &profile, id, option).map_err(|e| match e {
+                OpError::Input(m) => CliError::input(m),
+                other => CliError::device(other),
+            })?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::json!({"id": id, "baud": rate, "verified": true})
+                );
+            } else {
+                println!("servo {id} now talks at {rate} baud: verified");
+            }
+            Ok(0)
+        }
+        ServoCmd::Angle { id, deg, ms, power } => {
+            let rotate = profile
+                .command("ROTATE")
+                .ok_or_else(|| CliError::input("the profile has no ROTATE"))?;
+            let inputs = vec![
+                ("servo_id".to_string(), Input::Raw(Value::Int(id.into()))),
+                ("angle".to_string(), Input::Text(deg)),
+                ("interval".to_string(), Input::Raw(Value::Int(ms.into()))),
+                ("power".to_string(), Input::Raw(Value::Int(power.into()))),
+            ];
+            crate::ops::msp::send(&client, &profile, rotate, &inputs).map_err(op_error)?;
+            if !json {
+                println!("servo {id}: turning over {ms} ms");
+            }
+            Ok(0)
+        }
+    }
+}

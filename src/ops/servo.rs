@@ -1,0 +1,398 @@
+//! Bus-servo operations: ping, scan, parameters, id and baud provisioning, motion.
+
+use super::msp::{Check, OpError};
+use super::{Cancel, Progress};
+use crate::link::{Client, ExchangeError, Match, ReplySpec, Request};
+use crate::profile::model::Access;
+use crate::profile::{Input, Param, Profile, Value};
+use crate::protocol::Direction;
+use crate::protocol::servo::cmd;
+use serde::Serialize;
+use std::ops::RangeInclusive;
+
+/// Baud rates by option number 1-8 (option 8 on newer servos only).
+pub const BAUDS: [u32; 8] = [
+    9600, 19200, 38400, 57600, 115_200, 250_000, 500_000, 1_000_000,
+];
+
+/// The `data_id` of the servo id parameter.
+pub const PARAM_ID: u8 = 34;
+/// The `data_id` of the baud-rate option parameter.
+pub const PARAM_BAUD: u8 = 36;
+
+/// The baud rate of option 1-8.
+pub fn baud_of_option(option: u8) -> Option<u32> {
+    BAUDS.get(usize::from(option).checked_sub(1)?).copied()
+}
+
+/// The option 1-8 of a baud rate.
+pub fn option_of_baud(baud: u32) -> Option<u8> {
+    BAUDS.iter().position(|&b| b == baud).map(|i| i as u8 + 1)
+}
+
+/// What answers at one id.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(tag = "status", content = "detail", rename_all = "snake_case")]
+pub enum Presence {
+    /// One servo answered cleanly.
+    Present,
+    /// Nothing answered.
+    Absent,
+    /// Answers came back garbled: possibly two servos on one id.
+    PossibleDuplicate(String),
+}
+
+/// Pings `id` once (a scan) or with retries.
+pub fn ping(client: &Client, id: u8, attempts: u8) -> Result<Presence, OpError> {
+    let req = Request::new(cmd::PING, vec![id])
+        .reply(ReplySpec::Required(Match::servo(cmd::PING, &[id])))
+        .attempts(attempts);
+    match client.request(req) {
+        Ok(_) => Ok(Presence::Present),
+        Err(ExchangeError::Timeout { .. }) => Ok(Presence::Absent),
+        Err(ExchangeError::Garbled { error, .. }) => {
+            Ok(Presence::PossibleDuplicate(error.to_string()))
+        }
+        Err(ExchangeError::Mismatch { got, .. }) => Ok(Presence::PossibleDuplicate(format!(
+            "answered with command {got}"
+        ))),
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// One servo found by a scan.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ScanRow {
+    /// Its id.
+    pub id: u8,
+    /// The baud rate it answered at.
+    pub baud: u32,
+    /// Present, or a possible duplicate.
+    pub presence: Presence,
+    /// Servo type (parameter 6).
+    pub servo_type: Option<i64>,
+    /// Firmware version (parameter 7).
+    pub firmware: Option<i64>,
+    /// Serial number (parameter 8).
+    pub serial: Option<i64>,
+    /// Voltage in mV (parameter 1).
+    pub voltage_mv: Option<i64>,
+    /// Temperature (parameter 4).
+    pub temperature: Option<i64>,
+    /// The raw status byte (parameter 5); its bit order is published inconsistently.
+    pub status: Option<i64>,
+}
+
+impl ScanRow {
+    /// The status byte as hex, e.g. `0x00`.
+    pub fn status_hex(&self) -> String {
+        self.status.map_or("-".into(), |s| format!("{s:#04x}"))
+    }
+}
+
+/// Reads one parameter of servo `id`.
+pub fn read_param(
+    client: &Client,
+    profile: &Profile,
+    id: u8,
+    param: &Param,
+) -> Result<i64, OpError> {
+    let read = profile
+        .command_by_id(cmd::READ_DATA)
+        .ok_or_else(|| OpError::Input("the profile has no READ_DATA".into()))?;
+    let req = Request::for_command(profile, read, vec![id, param.id]).attempts(2);
+    let reply = client.request(req)?;
+    let payload = reply.payload().unwrap_or_default();
+    if payload.get(1) != Some(&param.id) {
+        return Err(OpError::Verify(format!(
+            "servo {id} answered parameter {:?} for {}",
+            payload.get(1),
+            param.id
+        )));
+    }
+    let d = profile
+        .decode(read, Direction::DeviceToHost, payload)
+        .map_err(|error| OpError::Answer {
+            command: read.ident.clone(),
+            error,
+        })?;
+    match d.values.get(2).map(|v| &v.value) {
+        Some(Value::Int(v)) => Ok(*v),
+        _ => Err(OpError::Verify(format!(
+            "servo {id}: no value for {}",
+            param.field.ident
+        ))),
+    }
+}
+
+fn param_by_id(profile: &Profile, id: u8) -> Result<&Param, OpError> {
+    profile
+        .param(id)
+        .ok_or_else(|| OpError::Input(format!("the profile has no parameter {id}")))
+}
+
+fn details(client: &Client, profile: &Profile, row: &mut ScanRow) {
+    let get = |pid: u8| {
+        param_by_id(profile, pid)
+            .ok()
+            .and_then(|p| read_param(client, profile, row.id, p).ok())
+    };
+    row.servo_type = get(6);
+    row.firmware = get(7);
+    row.serial = get(8);
+    row.voltage_mv = get(1);
+    row.temperature = get(4);
+    row.status = get(5);
+}
+
+/// Scans `ids` at each of `bauds`, reading each found servo's details, then returns the port to
+/// `home_baud`. `found` sees each row as it is found.
+pub fn scan(
+    client: &Client,
+    profile: &Profile,
+    ids: RangeInclusive<u8>,
+    bauds: &[u32],
+    home_baud: u32,
+    cancel: &Cancel,
+    progress: &mut dyn FnMut(Progress),
+    found: &mut dyn FnMut(&ScanRow),
+) -> Result<Vec<ScanRow>, OpError> {
+    let ids: Vec<u8> = ids
+        .filter(|&i| i != crate::protocol::servo::BROADCAST_ID)
+        .collect();
+    let total = (ids.len() * bauds.len()) as u64;
+    let mut rows = Vec::new();
+    let mut done = 0;
+    let result = (|| {
+        for &baud in bauds {
+            client
+                .set_baud(baud)
+                .map_err(|e| OpError::Verify(e.to_string()))?;
+            for &id in &ids {
+                if cancel.is_cancelled() {
+                    return Err(OpError::Cancelled);
+                }
+                let presence = ping(client, id, 1)?;
+                if presence != Presence::Absent {
+                    let mut row = ScanRow {
+                        id,
+                        baud,
+                        presence: presence.clone(),
+                        servo_type: None,
+                        firmware: None,
+                        serial: None,
+                        voltage_mv: None,
+                        temperature: None,
+                        status: None,
+                    };
+                    if presence == Presence::Present {
+                        details(client, profile, &mut row);
+                    }
+                    found(&row);
+                    rows.push(row);
+                }
+                done += 1;
+                if done % 8 == 0 || done == total {
+                    progress(Progress {
+                        done,
+                        total,
+                        message: format!("id {id} at {baud} baud"),
+                    });
+                }
+            }
+        }
+        Ok(())
+    })();
+    let _ = client.set_baud(home_baud);
+    result.map(|()| rows)
+}
+
+/// Writes one user parameter of servo `id` and reads it back.
+pub fn write_param(
+    client: &Client,
+    profile: &Profile,
+    id: u8,
+    param: &Param,
+    input: Input,
+) -> Result<Check, OpError> {
+    if param.access == Access::ReadOnly {
+        return Err(OpError::Input(format!(
+            "{} is read-only",
+            param.field.ident
+        )));
+    }
+    let write = profile
+        .command_by_id(cmd::WRITE_DATA)
+        .ok_or_else(|| OpError::Input("the profile has no WRITE_DATA".into()))?;
+    let inputs = vec![
+        ("servo_id".to_string(), Input::Raw(Value::Int(id.into()))),
+        (
+            "data_id".to_string(),
+            Input::Raw(Value::Int(param.id.into())),
+        ),
+        ("data".to_string(), input),
+    ];
+    let payload = profile.encode(write, Direction::HostToDevice, &inputs)?;
+    let written = profile
+        .decode(write, Direction::HostToDevice, &payload)
+        .ok()
+        .and_then(|d| d.values.get(2).map(|v| v.value.clone()))
+        .unwrap_or(Value::Bytes(Vec::new()));
+    let reply = client.request(Request::for_command(profile, write, payload))?;
+    if reply.payload().and_then(|p| p.get(2)) != Some(&1) {
+        return Err(OpError::Verify(format!(
+            "servo {id} refused {} = {}",
+            param.field.ident,
+            param.field.format(&written)
+        )));
+    }
+    let read = read_param(client, profile, id, param)?;
+    Ok(Check {
+        field: param.field.ident.clone(),
+        written,
+        read: Value::Int(read),
+    })
+}
+
+/// Gives servo `old` the id `new`, refusing 255 and any id that already answers; a fresh servo
+/// (id 0) must be alone on the bus. Verified at the new id afterwards.
+pub fn set_id(
+    client: &Client,
+    profile: &Profile,
+    old: u8,
+    new: u8,
+    cancel: &Cancel,
+) -> Result<(), OpError> {
+    if new == crate::protocol::servo::BROADCAST_ID {
+        return Err(OpError::Input(
+            "id 255 is the broadcast address and cannot be assigned".into(),
+        ));
+    }
+    if new == old {
+        return Err(OpError::Input(format!("servo {old} already has id {new}")));
+    }
+    match ping(client, new, 2)? {
+        Presence::Absent => {}
+        Presence::Present => {
+            return Err(OpError::Input(format!(
+                "id {new} already answers on the bus"
+            )));
+        }
+        Presence::PossibleDuplicate(e) => {
+            return Err(OpError::Input(format!(
+                "id {new} already answers on the bus (garbled: {e})"
+            )));
+        }
+    }
+    if old == 0 {
+        let found = ids_on_bus(client, cancel)?;
+        if found != [0] {
+            return Err(OpError::Input(format!(
+                "a fresh servo (id 0) is given an id only when it is alone on the bus; ids answering: {found:?}"
+            )));
+        }
+    }
+    match ping(client, old, 2)? {
+        Presence::Present => {}
+        Presence::Absent => return Err(OpError::Verify(format!("no servo answers at id {old}"))),
+        Presence::PossibleDuplicate(e) => {
+            return Err(OpError::Verify(format!(
+                "more than one servo may share id {old}: {e}"
+            )));
+        }
+    }
+    let write = profile
+        .command_by_id(cmd::WRITE_DATA)
+        .ok_or_else(|| OpError::Input("the profile has no WRITE_DATA".into()))?;
+    let req = Request::new(cmd::WRITE_DATA, vec![old, PARAM_ID, new])
+        .reply(ReplySpec::Required(Match::servo(write.id, &[old, new])));
+    let reply = client.request(req)?;
+    if reply.payload().and_then(|p| p.get(2)) != Some(&1) {
+        return Err(OpError::Verify(format!("servo {old} refused the id {new}")));
+    }
+    let id_param = param_by_id(profile, PARAM_ID)?;
+    let now = read_param(client, profile, new, id_param)
+        .map_err(|e| OpError::Verify(format!("no answer at the new id {new}: {e}")))?;
+    if now != i64::from(new) {
+        return Err(OpError::Verify(format!("servo at {new} reports id {now}")));
+    }
+    if ping(client, old, 1)? != Presence::Absent {
+        return Err(OpError::Verify(format!(
+            "something still answers at the old id {old}"
+        )));
+    }
+    Ok(())
+}
+
+/// The ids that answer at the current baud rate.
+fn ids_on_bus(client: &Client, cancel: &Cancel) -> Result<Vec<u8>, OpError> {
+    let mut out = Vec::new();
+    for id in 0..crate::protocol::servo::BROADCAST_ID {
+        if cancel.is_cancelled() {
+            return Err(OpError::Cancelled);
+        }
+        if ping(client, id, 1)? != Presence::Absent {
+            out.push(id);
+        }
+    }
+    Ok(out)
+}
+
+/// Where a servo was found after a baud change that could not be verified.
+fn recover(client: &Client, id: u8) -> Result<Option<u32>, OpError> {
+    for &b in &BAUDS {
+        client
+            .set_baud(b)
+            .map_err(|e| OpError::Verify(e.to_string()))?;
+        if ping(client, id, 2)? == Presence::Present {
+            return Ok(Some(b));
+        }
+    }
+    Ok(None)
+}
+
+/// Sets servo `id`'s baud option (1-8), switches the port to the new rate and verifies there.
+/// If the servo is not found at the new rate, every rate is scanned for it: the error says where
+/// it is, and the port is left at that rate.
+pub fn set_baud(client: &Client, profile: &Profile, id: u8, option: u8) -> Result<u32, OpError> {
+    let Some(baud) = baud_of_option(option) else {
+        return Err(OpError::Input(format!(
+            "baud option {option} is out of range; allowed 1 to 8 ({})",
+            BAUDS.map(|b| b.to_string()).join(", ")
+        )));
+    };
+    let baud_param = param_by_id(profile, PARAM_BAUD)?;
+    baud_param.field.check(&Value::Int(option.into()))?;
+    match ping(client, id, 2)? {
+        Presence::Present => {}
+        other => {
+            return Err(OpError::Verify(format!(
+                "servo {id} is not answering cleanly: {other:?}"
+            )));
+        }
+    }
+    // The servo switches at once and may answer at the new rate: its answer is not awaited here.
+    let req = Request::new(cmd::WRITE_DATA, vec![id, PARAM_BAUD, option])
+        .reply(ReplySpec::Optional(Match::servo(cmd::WRITE_DATA, &[id])))
+        .attempts(1);
+    match client.request(req) {
+        Ok(_) | Err(ExchangeError::Garbled { .. } | ExchangeError::Timeout { .. }) => {}
+        Err(e) => return Err(e.into()),
+    }
+    client
+        .set_baud(baud)
+        .map_err(|e| OpError::Verify(e.to_string()))?;
+    let verified = ping(client, id, 3)? == Presence::Present
+        && read_param(client, profile, id, baud_param).ok() == Some(i64::from(option));
+    if verified {
+        return Ok(baud);
+    }
+    match recover(client, id)? {
+        Some(b) => Err(OpError::Verify(format!(
+            "servo {id} did not answer at {baud} baud; it was found at {b} baud (the port is now at {b})"
+        ))),
+        None => Err(OpError::Verify(format!(
+            "servo {id} did not answer at {baud} baud, nor at any other rate"
+        ))),
+    }
+}
