@@ -123,12 +123,7 @@ fn serve(mut master: TTYPort, mut wire: Wire, flags: &Flags) {
             return;
         }
         let now = Instant::now();
-        if let Ok(baud) = master.baud_rate()
-            && baud != wire.baud()
-            && baud > 0
-        {
-            wire.set_baud(baud);
-        }
+        follow_baud(&master, &mut wire);
         wire.pump(now);
         while let Some(frame) = wire.pop_due(now) {
             if !write_frame(&mut master, &frame) {
@@ -144,7 +139,11 @@ fn serve(mut master: TTYPort, mut wire: Wire, flags: &Flags) {
         }
         match master.read(&mut buf) {
             Ok(0) => {}
-            Ok(n) => wire.host_wrote(&buf[..n], Instant::now()),
+            Ok(n) => {
+                // The client sets its baud before it writes: read it after the bytes.
+                follow_baud(&master, &mut wire);
+                wire.host_wrote(&buf[..n], Instant::now());
+            }
             Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::Interrupted) => {}
             Err(e) if e.kind() == ErrorKind::WouldBlock => {}
             Err(_) => return,
@@ -152,6 +151,16 @@ fn serve(mut master: TTYPort, mut wire: Wire, flags: &Flags) {
         if next > Instant::now() && next - Instant::now() < Duration::from_micros(200) {
             sleep_until(next);
         }
+    }
+}
+
+/// Takes the baud rate the client has set on the port.
+fn follow_baud(master: &TTYPort, wire: &mut Wire) {
+    if let Ok(baud) = master.baud_rate()
+        && baud != wire.baud()
+        && baud > 0
+    {
+        wire.set_baud(baud);
     }
 }
 
