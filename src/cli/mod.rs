@@ -4,6 +4,7 @@
 //! 2 bad input (usage, out-of-range value, malformed file).
 
 mod frame;
+mod sim;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -51,6 +52,8 @@ enum Cmd {
     /// Decode or build frames of the three protocols.
     #[command(subcommand)]
     Frame(frame::FrameCmd),
+    /// Serve a simulated device on a pseudo-terminal; prints its path, then serves until killed.
+    Sim(sim::SimArgs),
     /// List the device profiles and where each comes from.
     Profiles {
         /// Print JSON.
@@ -81,6 +84,7 @@ fn run(cli: Cli) -> CliResult {
     match cli.command {
         Some(Cmd::Frame(cmd)) => frame::run(cmd),
         Some(Cmd::Profiles { json }) => profiles(json),
+        Some(Cmd::Sim(args)) => sim::run(args),
         None => {
             use clap::CommandFactory;
             let _ = Cli::command().print_help();
