@@ -450,3 +450,22 @@ fn cli_sim_rejects_bad_options_with_exit_code_2() {
         assert!(o.stdout.is_empty(), "{args:?}");
     }
 }
+
+#[test]
+fn a_transport_by_kind_describes_itself_and_answers() {
+    let mut t = SimTransport::of_kind(
+        SimKind::SolarCleanbot,
+        &SimOptions::default(),
+        Faults::default(),
+    )
+    .expect("builds");
+    assert_eq!(t.describe(), "simulated solar cleanbot");
+    assert_eq!(t.baud(), 115_200);
+    let v = reply(exchange(&mut t, &Request::new(0, 2, vec![]), PATIENCE));
+    assert_eq!(v.data.first(), Some(&SOLAR));
+    let bad = Faults {
+        drop: 2.0,
+        ..Faults::default()
+    };
+    assert!(SimTransport::of_kind(SimKind::WindowCleaner, &SimOptions::default(), bad).is_err());
+}

@@ -1,7 +1,7 @@
 //! A simulated device served on a pseudo-terminal: a client opens [`PtyServer::path`] as it
 //! would open a USB serial adapter.
 
-use super::runner::{Faults, SharedDevice, Wire, sleep_until};
+use super::runner::{Faults, SharedDevice, VanishHandle, Wire, sleep_until};
 use crate::link::LinkError;
 use serialport::{SerialPort, TTYPort};
 use std::io::{ErrorKind, Read, Write};
@@ -18,7 +18,7 @@ const WRITE_TIMEOUT: Duration = Duration::from_millis(50);
 #[derive(Default)]
 struct Flags {
     stop: AtomicBool,
-    vanish: AtomicBool,
+    vanish: VanishHandle,
     exited: AtomicBool,
 }
 
@@ -92,8 +92,13 @@ impl PtyServer {
     /// Makes the port vanish, as an unplugged adapter: the pty's master side is closed, and the
     /// client's reads fail (`BrokenPipe`). Returns once it is closed.
     pub fn vanish(&mut self) {
-        self.flags.vanish.store(true, Ordering::SeqCst);
+        self.flags.vanish.vanish();
         self.join();
+    }
+
+    /// A handle that makes the port vanish from another thread (within a few milliseconds).
+    pub fn vanish_handle(&self) -> VanishHandle {
+        self.flags.vanish.clone()
     }
 
     /// Stops serving and waits for the thread to end.
@@ -119,7 +124,7 @@ impl Drop for PtyServer {
 fn serve(mut master: TTYPort, mut wire: Wire, flags: &Flags) {
     let mut buf = [0u8; 4096];
     loop {
-        if flags.stop.load(Ordering::SeqCst) || flags.vanish.load(Ordering::SeqCst) {
+        if flags.stop.load(Ordering::SeqCst) || flags.vanish.is_vanished() {
             return;
         }
         let now = Instant::now();

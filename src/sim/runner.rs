@@ -263,8 +263,9 @@ impl VanishHandle {
     }
 }
 
-/// A [`Transport`] to a simulated device in the same process: no port, no thread; time passes
-/// while the host reads.
+/// A [`Transport`] to a simulated device in the same process: no port, no thread. The device
+/// is fed and ticked (every [`TICK`]) while the host calls in, mostly while it waits in `read`;
+/// its state catches up with the clock on the next call.
 pub struct SimTransport {
     wire: Wire,
     name: String,
@@ -285,6 +286,19 @@ impl SimTransport {
             name: description.into(),
             vanished: VanishHandle::default(),
         }
+    }
+
+    /// A transport to a new simulator of `kind`, at its UART's baud rate, described as
+    /// [`super::SimKind::describe`] says.
+    pub fn of_kind(
+        kind: super::SimKind,
+        opts: &super::SimOptions,
+        faults: Faults,
+    ) -> Result<Self, String> {
+        faults.check()?;
+        let device = super::build(kind, opts)?;
+        let baud = opts.baud.unwrap_or_else(|| kind.default_baud());
+        Ok(Self::new(device, baud, faults, kind.describe()))
     }
 
     /// The simulated device, to read or change its state.
