@@ -7,6 +7,7 @@ mod frame;
 mod msp;
 mod port;
 mod servo;
+mod sim;
 mod tuya;
 
 use clap::{Parser, Subcommand};
@@ -55,6 +56,8 @@ enum Cmd {
     /// Decode or build frames of the three protocols.
     #[command(subcommand)]
     Frame(frame::FrameCmd),
+    /// Serve a simulated device on a pseudo-terminal; prints its path, then serves until killed.
+    Sim(sim::SimArgs),
     /// List the device profiles and where each comes from.
     Profiles {
         /// Print JSON.
@@ -101,6 +104,7 @@ fn run(cli: Cli) -> CliResult {
         Some(Cmd::Msp(args)) => msp::run(args),
         Some(Cmd::Servo(args)) => servo::run(args),
         Some(Cmd::Tuya(args)) => tuya::run(args),
+        Some(Cmd::Sim(args)) => sim::run(args),
         None => {
             use clap::CommandFactory;
             let _ = Cli::command().print_help();

@@ -4,6 +4,17 @@
 
 use std::time::{Duration, Instant};
 
+mod kind;
+pub mod msp_device;
+pub mod pty;
+pub mod runner;
+pub mod solar_cleanbot;
+pub mod window_cleaner;
+
+pub use kind::{SimKind, SimOptions, build};
+pub use pty::PtyServer;
+pub use runner::{Faults, SharedDevice, SimTransport, VanishHandle};
+
 /// A frame a device sends: `after` its cause has fully arrived (device latency), or, from
 /// [`Device::tick`], after now.
 #[derive(Debug, Clone, PartialEq, Eq)]

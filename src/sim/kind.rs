@@ -1,0 +1,137 @@
+//! Simulators by kind: the names `botbench sim` takes, and one constructor for all of them.
+
+use super::runner::SharedDevice;
+use super::solar_cleanbot::SolarCleanbot;
+use super::window_cleaner::WindowCleaner;
+use std::str::FromStr;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+/// The simulated devices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SimKind {
+    /// The MSP window-cleaning robot.
+    WindowCleaner,
+    /// The MSP solar-panel cleaning robot.
+    SolarCleanbot,
+    /// A bus of UART servos.
+    ServoBus,
+    /// The Tuya robot-vacuum MCU.
+    TuyaVacuum,
+}
+
+impl SimKind {
+    /// Every kind, in the order help lists them.
+    pub const ALL: [SimKind; 4] = [
+        SimKind::WindowCleaner,
+        SimKind::SolarCleanbot,
+        SimKind::ServoBus,
+        SimKind::TuyaVacuum,
+    ];
+
+    /// The command-line name: `window-cleaner`, `solar-cleanbot`, `servo-bus`, `tuya-vacuum`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SimKind::WindowCleaner => "window-cleaner",
+            SimKind::SolarCleanbot => "solar-cleanbot",
+            SimKind::ServoBus => "servo-bus",
+            SimKind::TuyaVacuum => "tuya-vacuum",
+        }
+    }
+
+    /// The id of the device profile it answers by.
+    pub fn profile_id(self) -> &'static str {
+        match self {
+            SimKind::WindowCleaner => "window-cleaner",
+            SimKind::SolarCleanbot => "solar-cleanbot",
+            SimKind::ServoBus => "servo",
+            SimKind::TuyaVacuum => "tuya-vacuum",
+        }
+    }
+
+    /// What a transport to it calls itself: `simulated window cleaner`.
+    pub fn describe(self) -> &'static str {
+        match self {
+            SimKind::WindowCleaner => "simulated window cleaner",
+            SimKind::SolarCleanbot => "simulated solar cleanbot",
+            SimKind::ServoBus => "simulated servo bus",
+            SimKind::TuyaVacuum => "simulated Tuya vacuum",
+        }
+    }
+
+    /// The baud rate it runs at unless told otherwise (its profile's).
+    pub fn default_baud(self) -> u32 {
+        super::msp_device::builtin_profile(self.profile_id())
+            .map(|p| p.baud)
+            .unwrap_or(115_200)
+    }
+}
+
+impl std::fmt::Display for SimKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for SimKind {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        SimKind::ALL
+            .into_iter()
+            .find(|k| k.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| {
+                let names: Vec<&str> = SimKind::ALL.iter().map(|k| k.name()).collect();
+                format!("unknown simulator '{s}'; known: {}", names.join(", "))
+            })
+    }
+}
+
+/// How to build a simulator. `Default` is the device as it leaves the factory.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SimOptions {
+    /// The baud rate of the device's UART; `None` is its profile's.
+    pub baud: Option<u32>,
+    /// How long after a request's last byte the device starts answering; `None` is the device's
+    /// default (100 µs for MSP).
+    pub latency: Option<Duration>,
+    /// Seed of the device's sensor noise.
+    pub seed: u64,
+    /// Servo bus only: the IDs of the servos on the bus (empty = the simulator's default).
+    pub servos: Vec<u8>,
+}
+
+/// Builds a simulator of `kind`.
+pub fn build(kind: SimKind, opts: &SimOptions) -> Result<SharedDevice, String> {
+    Ok(match kind {
+        SimKind::WindowCleaner => Arc::new(Mutex::new(WindowCleaner::new(opts)?)),
+        SimKind::SolarCleanbot => Arc::new(Mutex::new(SolarCleanbot::new(opts)?)),
+        SimKind::ServoBus | SimKind::TuyaVacuum => {
+            return Err(format!("the {kind} simulator is not yet built"));
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_unknown_names_list_the_known() {
+        for k in SimKind::ALL {
+            assert_eq!(k.name().parse::<SimKind>(), Ok(k));
+        }
+        let err = "toaster".parse::<SimKind>().unwrap_err();
+        assert!(
+            err.contains("window-cleaner") && err.contains("tuya-vacuum"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn builds_the_msp_kinds() {
+        assert!(build(SimKind::WindowCleaner, &SimOptions::default()).is_ok());
+        assert!(build(SimKind::SolarCleanbot, &SimOptions::default()).is_ok());
+        assert_eq!(SimKind::WindowCleaner.default_baud(), 115_200);
+    }
+}

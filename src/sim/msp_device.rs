@@ -1,0 +1,294 @@
+//! What the two MSP simulators share: request decoding, device-code filtering, the core commands
+//! (PING, VERSION, BUILD_INFO), and replies encoded with the profile's own field codec, so that a
+//! reply is exactly what the profile says.
+
+use super::Outgoing;
+use crate::profile::{Command, Decoded, Input, Profile, Registry, Value};
+use crate::protocol::Direction;
+use crate::protocol::msp::{
+    CMD_BUILD_INFO, CMD_PING, CMD_VERSION, DEVICE_CORE, Reply, Request, RequestDecoder,
+};
+use std::sync::{Arc, OnceLock};
+use std::time::Duration;
+
+/// A device's default answer latency: how long after a request's last byte its reply starts.
+pub const DEFAULT_LATENCY: Duration = Duration::from_micros(100);
+
+/// A built-in profile by id, parsed once.
+pub fn builtin_profile(id: &str) -> Result<Arc<Profile>, String> {
+    static REGISTRY: OnceLock<Result<Registry, String>> = OnceLock::new();
+    let reg = REGISTRY
+        .get_or_init(|| Registry::builtin().map_err(|e| e.to_string()))
+        .as_ref()
+        .map_err(Clone::clone)?;
+    reg.get(id).map_err(|e| e.to_string())
+}
+
+/// What CMD_VERSION and CMD_BUILD_INFO answer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Identity {
+    /// Firmware major, minor, patch.
+    pub fw: (u8, u8, u8),
+    /// API major, minor.
+    pub api: (u8, u8),
+    /// Build number.
+    pub build: u8,
+    /// Capability flags (the 8th byte); `None` answers 7 bytes, as older firmware does.
+    pub flags: Option<u8>,
+    /// Build date, 10 characters (`2024-05-17`).
+    pub date: String,
+    /// Build time, 8 characters (`14:03:52`).
+    pub time: String,
+}
+
+impl Default for Identity {
+    fn default() -> Self {
+        Self {
+            fw: (1, 4, 2),
+            api: (1, 2),
+            build: 37,
+            flags: Some(0x0F),
+            date: "2024-05-17".into(),
+            time: "14:03:52".into(),
+        }
+    }
+}
+
+/// What a model answers a request with.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Answer {
+    /// A reply whose payload is built from these values by the profile's reply layout.
+    Fields(Vec<(String, Input)>),
+    /// A simple response (an ack with no data).
+    Ack,
+    /// No answer (unknown command, refused value).
+    Nothing,
+}
+
+impl Answer {
+    /// A reply from raw integers, by field ident.
+    pub fn ints<'a>(pairs: impl IntoIterator<Item = (&'a str, i64)>) -> Self {
+        Answer::Fields(
+            pairs
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), Input::Raw(Value::Int(v))))
+                .collect(),
+        )
+    }
+
+    /// A one-field reply of bytes.
+    pub fn bytes(ident: &str, bytes: Vec<u8>) -> Self {
+        Answer::Fields(vec![(ident.to_string(), Input::Raw(Value::Bytes(bytes)))])
+    }
+}
+
+/// The MSP plumbing of one simulated device.
+#[derive(Debug, Clone)]
+pub struct MspCore {
+    /// The profile whose layouts replies follow.
+    pub profile: Arc<Profile>,
+    /// The device code this device answers (besides 0x00, the core code).
+    pub code: u8,
+    /// The baud rate the device's UART runs at; bytes sent at another rate are garbage to it.
+    pub baud: u32,
+    /// The answer latency.
+    pub latency: Duration,
+    /// VERSION and BUILD_INFO contents.
+    pub identity: Identity,
+    /// The last reply the profile could not encode (a simulator bug): for tests.
+    pub last_error: Option<String>,
+    decoder: RequestDecoder,
+}
+
+impl MspCore {
+    /// Plumbing for `profile`, answering device `code` at `baud`.
+    pub fn new(profile: Arc<Profile>, code: u8, baud: u32) -> Self {
+        Self {
+            profile,
+            code,
+            baud,
+            latency: DEFAULT_LATENCY,
+            identity: Identity::default(),
+            last_error: None,
+            decoder: RequestDecoder::new(),
+        }
+    }
+
+    /// The requests addressed to this device in `bytes` (received at `baud`). Bytes at another
+    /// baud rate are noise to the UART: they are dropped, with any partial frame.
+    pub fn requests(&mut self, bytes: &[u8], baud: u32) -> Vec<Request> {
+        if baud != self.baud {
+            self.decoder.clear();
+            return Vec::new();
+        }
+        self.decoder.push(bytes);
+        let mut out = Vec::new();
+        for item in self.decoder.by_ref() {
+            if let Ok(req) = item
+                && (req.device == self.code || req.device == DEVICE_CORE)
+            {
+                out.push(req);
+            }
+        }
+        out
+    }
+
+    /// The answer when the core settles `req`: a core command, or nothing for any other command
+    /// sent to device 0x00. `None` when the device's own model must answer.
+    pub fn core_answer(&self, req: &Request) -> Option<Answer> {
+        let id = &self.identity;
+        Some(match req.command {
+            CMD_PING => Answer::Ack,
+            CMD_VERSION => {
+                let mut a = vec![
+                    ("hw", i64::from(self.code)),
+                    ("fwMajor", i64::from(id.fw.0)),
+                    ("fwMinor", i64::from(id.fw.1)),
+                    ("fwPatch", i64::from(id.fw.2)),
+                    ("apiMajor", i64::from(id.api.0)),
+                    ("apiMinor", i64::from(id.api.1)),
+                    ("build", i64::from(id.build)),
+                ];
+                if let Some(flags) = id.flags {
+                    a.push(("flags", i64::from(flags)));
+                }
+                Answer::ints(a)
+            }
+            CMD_BUILD_INFO => Answer::Fields(vec![
+                ("date".into(), Input::Raw(Value::Text(fixed(&id.date, 10)))),
+                ("time".into(), Input::Raw(Value::Text(fixed(&id.time, 8)))),
+            ]),
+            _ if req.device == DEVICE_CORE => Answer::Nothing,
+            _ => return None,
+        })
+    }
+
+    /// The command of the profile with this number.
+    pub fn command(&self, id: u8) -> Option<&Command> {
+        self.profile.command_by_id(id)
+    }
+
+    /// Decodes a request's payload by the profile (a Set's payload is its Get's reply layout).
+    pub fn decode_request<'p>(&'p self, req: &Request) -> Option<Decoded<'p>> {
+        let cmd = self.command(req.command)?;
+        self.profile
+            .decode(cmd, Direction::HostToDevice, &req.data)
+            .ok()
+    }
+
+    /// Turns an answer into the frame to send, honouring option 0xFE (act, no answer).
+    pub fn respond(&mut self, req: &Request, answer: Answer, out: &mut Vec<Outgoing>) {
+        if !req.wants_answer() {
+            return;
+        }
+        let data = match answer {
+            Answer::Nothing => return,
+            Answer::Ack => Vec::new(),
+            Answer::Fields(inputs) => {
+                let Some(cmd) = self.profile.command_by_id(req.command) else {
+                    self.last_error =
+                        Some(format!("command {} is not in the profile", req.command));
+                    return;
+                };
+                match self.profile.encode(cmd, Direction::DeviceToHost, &inputs) {
+                    Ok(data) => data,
+                    Err(e) => {
+                        self.last_error = Some(format!("{}: {e}", cmd.ident));
+                        return;
+                    }
+                }
+            }
+        };
+        match Reply::new(req.command, data).encode() {
+            Ok(bytes) => out.push(Outgoing::new(self.latency, bytes)),
+            Err(e) => self.last_error = Some(e.to_string()),
+        }
+    }
+}
+
+/// `text` cut or space-padded to exactly `n` bytes (ASCII expected).
+fn fixed(text: &str, n: usize) -> String {
+    let mut s: String = text.chars().filter(char::is_ascii).take(n).collect();
+    while s.len() < n {
+        s.push(' ');
+    }
+    s
+}
+
+/// The raw default of every field of `cmd`'s reply, by ident (`fallback` where none is given).
+pub fn reply_defaults(cmd: &Command, fallback: i64) -> Vec<(String, i64)> {
+    cmd.reply
+        .iter()
+        .map(|f| (f.ident.clone(), f.default.unwrap_or(fallback)))
+        .collect()
+}
+
+/// Clamps a float to a field's integer type range and rounds it.
+pub fn clamp_i(x: f64, lo: i64, hi: i64) -> i64 {
+    if x.is_nan() {
+        return lo.max(0).min(hi);
+    }
+    (x.round() as i64).clamp(lo, hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::msp::{OPTION_SILENT, ReplyDecoder};
+
+    fn core() -> MspCore {
+        MspCore::new(builtin_profile("window-cleaner").unwrap(), 3, 115200)
+    }
+
+    fn answer(core: &mut MspCore, req: Request) -> Vec<Outgoing> {
+        let bytes = req.encode().unwrap();
+        let mut out = Vec::new();
+        for r in core.requests(&bytes, 115200) {
+            let a = core.core_answer(&r).unwrap_or(Answer::Nothing);
+            core.respond(&r, a, &mut out);
+        }
+        out
+    }
+
+    fn reply(out: &[Outgoing]) -> Reply {
+        let mut d = ReplyDecoder::new();
+        d.push(&out[0].bytes);
+        d.next().unwrap().unwrap()
+    }
+
+    #[test]
+    fn version_to_the_core_code_names_the_device_code() {
+        let mut c = core();
+        let out = answer(&mut c, Request::new(0, CMD_VERSION, vec![]));
+        assert_eq!(out.len(), 1);
+        let r = reply(&out);
+        assert_eq!(r.command, CMD_VERSION);
+        assert_eq!(r.data, vec![3, 1, 4, 2, 1, 2, 37, 0x0F]);
+        assert_eq!(c.last_error, None);
+    }
+
+    #[test]
+    fn build_info_is_ten_and_eight_characters() {
+        let mut c = core();
+        c.identity.date = "2024-1-2".into();
+        let out = answer(&mut c, Request::new(3, CMD_BUILD_INFO, vec![]));
+        let r = reply(&out);
+        assert_eq!(r.data.len(), 18);
+        assert_eq!(&r.data[..10], b"2024-1-2  ");
+    }
+
+    #[test]
+    fn other_devices_wrong_baud_and_silent_option_get_nothing() {
+        let mut c = core();
+        assert!(answer(&mut c, Request::new(4, CMD_PING, vec![])).is_empty());
+        let silent = Request {
+            option: OPTION_SILENT,
+            ..Request::new(3, CMD_PING, vec![])
+        };
+        assert!(answer(&mut c, silent).is_empty());
+        let bytes = Request::new(3, CMD_PING, vec![]).encode().unwrap();
+        assert!(c.requests(&bytes, 9600).is_empty());
+        let ping = answer(&mut c, Request::new(3, CMD_PING, vec![]));
+        assert_eq!(reply(&ping).data, Vec::<u8>::new());
+    }
+}

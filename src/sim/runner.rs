@@ -1,0 +1,492 @@
+//! How a [`Device`] meets a host: wire timing, faults, and the in-process [`SimTransport`].
+//!
+//! Timing model (8N1, 10 bits a byte, see [`wire_time`]):
+//! - a chunk the host writes reaches the device when its last byte has crossed the wire, i.e.
+//!   `max(write time, end of the previous chunk) + wire_time(len, baud)`;
+//! - the device answers [`Outgoing::after`] later (plus [`Faults::extra_latency`]), once the
+//!   device-to-host line is free;
+//! - the host has the reply when its last byte has crossed the wire: `wire_time(reply len)` later.
+//!   A reply is handed over whole at that instant.
+//!
+//! An [`Outgoing`] sent at another baud rate than the host's arrives as pseudo-random garbage of
+//! about `len × host_baud / device_baud` bytes (at least one).
+
+use super::{Device, Outgoing};
+use crate::link::{LinkError, Transport, wire_time};
+use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+
+/// A device shared between a runner and whoever pokes at its state (tests, the GUI).
+pub type SharedDevice = Arc<Mutex<dyn Device>>;
+
+/// How often a runner calls [`Device::tick`].
+pub const TICK: Duration = Duration::from_millis(3);
+
+/// Faults applied to every frame the device sends. `Default` is no fault at all.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Faults {
+    /// Probability (0..=1) that a frame is lost.
+    pub drop: f64,
+    /// Probability (0..=1) that a frame that is not lost has one bit flipped in its last byte.
+    ///
+    /// The last byte is the checksum in all three protocols, so the frame keeps its framing and
+    /// fails its checksum, exactly as a host sees any single-bit error in the data or checksum.
+    pub corrupt: f64,
+    /// Added to the device's own answer latency.
+    pub extra_latency: Duration,
+    /// The device answers nothing (a dead device on a live port).
+    pub silent: bool,
+    /// Seed of the fault dice, for repeatable runs.
+    pub seed: u64,
+}
+
+impl Faults {
+    /// Checks the probabilities are in 0..=1.
+    pub fn check(&self) -> Result<(), String> {
+        for (name, p) in [("drop", self.drop), ("corrupt", self.corrupt)] {
+            if !(0.0..=1.0).contains(&p) {
+                return Err(format!("{name} probability {p} is not between 0 and 1"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Locks a shared device, taking it over even if a previous holder panicked.
+pub fn lock(device: &SharedDevice) -> MutexGuard<'_, dyn Device + 'static> {
+    device.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+struct Inbound {
+    at: Instant,
+    bytes: Vec<u8>,
+    baud: u32,
+}
+
+struct Delivery {
+    at: Instant,
+    bytes: Vec<u8>,
+}
+
+/// The two directions of a simulated wire with a device at the far end. Shared by
+/// [`SimTransport`] and [`super::pty::PtyServer`]; it never sleeps.
+pub(crate) struct Wire {
+    device: SharedDevice,
+    faults: Faults,
+    rng: fastrand::Rng,
+    baud: u32,
+    inbound: VecDeque<Inbound>,
+    outbound: VecDeque<Delivery>,
+    /// Bytes of the front delivery already handed to the host.
+    taken: usize,
+    rx_free: Instant,
+    tx_free: Instant,
+    next_tick: Instant,
+}
+
+impl Wire {
+    pub(crate) fn new(device: SharedDevice, baud: u32, faults: Faults) -> Self {
+        let now = Instant::now();
+        Self {
+            device,
+            rng: fastrand::Rng::with_seed(faults.seed),
+            faults,
+            baud: baud.max(1),
+            inbound: VecDeque::new(),
+            outbound: VecDeque::new(),
+            taken: 0,
+            rx_free: now,
+            tx_free: now,
+            next_tick: now,
+        }
+    }
+
+    pub(crate) fn baud(&self) -> u32 {
+        self.baud
+    }
+
+    pub(crate) fn set_baud(&mut self, baud: u32) {
+        self.baud = baud.max(1);
+    }
+
+    pub(crate) fn device(&self) -> SharedDevice {
+        self.device.clone()
+    }
+
+    /// The host has written `bytes` at `now`.
+    pub(crate) fn host_wrote(&mut self, bytes: &[u8], now: Instant) {
+        if bytes.is_empty() {
+            return;
+        }
+        let start = now.max(self.rx_free);
+        let at = start + wire_time(bytes.len(), self.baud);
+        self.rx_free = at;
+        self.inbound.push_back(Inbound {
+            at,
+            bytes: bytes.to_vec(),
+            baud: self.baud,
+        });
+    }
+
+    /// Feeds the device what has arrived by `now`, and ticks it when due.
+    pub(crate) fn pump(&mut self, now: Instant) {
+        while self.inbound.front().is_some_and(|i| i.at <= now) {
+            let Some(input) = self.inbound.pop_front() else {
+                break;
+            };
+            let out = lock(&self.device).receive(&input.bytes, input.baud, input.at);
+            self.schedule(out, input.at);
+        }
+        if now >= self.next_tick {
+            let out = lock(&self.device).tick(now);
+            self.schedule(out, now);
+            self.next_tick = now + TICK;
+        }
+    }
+
+    fn schedule(&mut self, out: Vec<Outgoing>, cause: Instant) {
+        for o in out {
+            if self.faults.silent || o.bytes.is_empty() {
+                continue;
+            }
+            if self.faults.drop > 0.0 && self.rng.f64() < self.faults.drop {
+                continue;
+            }
+            let sent_baud = o.baud.unwrap_or(self.baud).max(1);
+            let duration = wire_time(o.bytes.len(), sent_baud);
+            let mut bytes = if sent_baud == self.baud {
+                o.bytes
+            } else {
+                let n = (o.bytes.len() as u64 * u64::from(self.baud) / u64::from(sent_baud)).max(1)
+                    as usize;
+                (0..n).map(|_| self.rng.u8(..)).collect()
+            };
+            if self.faults.corrupt > 0.0
+                && self.rng.f64() < self.faults.corrupt
+                && let Some(last) = bytes.last_mut()
+            {
+                *last ^= 1 << self.rng.u8(0..8);
+            }
+            let start = (cause + o.after + self.faults.extra_latency).max(self.tx_free);
+            let at = start + duration;
+            self.tx_free = at;
+            self.outbound.push_back(Delivery { at, bytes });
+        }
+    }
+
+    /// Copies bytes that have reached the host by `now` into `buf`.
+    pub(crate) fn take_due(&mut self, now: Instant, buf: &mut [u8]) -> usize {
+        let mut n = 0;
+        while n < buf.len() {
+            let Some(front) = self.outbound.front() else {
+                break;
+            };
+            if front.at > now {
+                break;
+            }
+            let rest = &front.bytes[self.taken..];
+            let k = rest.len().min(buf.len() - n);
+            buf[n..n + k].copy_from_slice(&rest[..k]);
+            n += k;
+            self.taken += k;
+            if self.taken == front.bytes.len() {
+                self.outbound.pop_front();
+                self.taken = 0;
+            }
+        }
+        n
+    }
+
+    /// The next frame whose last byte has reached the host by `now`, whole.
+    pub(crate) fn pop_due(&mut self, now: Instant) -> Option<Vec<u8>> {
+        if self.outbound.front()?.at > now {
+            return None;
+        }
+        let d = self.outbound.pop_front()?;
+        let taken = std::mem::take(&mut self.taken);
+        Some(d.bytes[taken..].to_vec())
+    }
+
+    /// Drops the bytes that have reached the host and not been read.
+    pub(crate) fn clear_arrived(&mut self, now: Instant) {
+        while self.outbound.front().is_some_and(|d| d.at <= now) {
+            self.outbound.pop_front();
+            self.taken = 0;
+        }
+    }
+
+    /// When something happens next: a chunk reaches the device, a frame reaches the host, or
+    /// the device is due a tick.
+    pub(crate) fn next_event(&self) -> Instant {
+        let mut t = self.next_tick;
+        if let Some(i) = self.inbound.front() {
+            t = t.min(i.at);
+        }
+        if let Some(d) = self.outbound.front() {
+            t = t.min(d.at);
+        }
+        t
+    }
+}
+
+/// Sleeps until `t`: a plain sleep for most of it, then a short spin for the last ~100 µs.
+pub(crate) fn sleep_until(t: Instant) {
+    const SPIN: Duration = Duration::from_micros(100);
+    let now = Instant::now();
+    if t <= now {
+        return;
+    }
+    let left = t - now;
+    if left > SPIN {
+        std::thread::sleep(left - SPIN);
+    }
+    while Instant::now() < t {
+        std::hint::spin_loop();
+    }
+}
+
+/// Makes a simulated port vanish (as an unplugged adapter) from another thread.
+#[derive(Debug, Clone, Default)]
+pub struct VanishHandle(Arc<AtomicBool>);
+
+impl VanishHandle {
+    /// Every later call on the port fails with [`LinkError::Disconnected`].
+    pub fn vanish(&self) {
+        self.0.store(true, Ordering::SeqCst);
+    }
+
+    /// Whether the port has vanished.
+    pub fn is_vanished(&self) -> bool {
+        self.0.load(Ordering::SeqCst)
+    }
+}
+
+/// A [`Transport`] to a simulated device in the same process: no port, no thread. The device
+/// is fed and ticked (every [`TICK`]) while the host calls in, mostly while it waits in `read`;
+/// its state catches up with the clock on the next call.
+pub struct SimTransport {
+    wire: Wire,
+    name: String,
+    vanished: VanishHandle,
+}
+
+impl SimTransport {
+    /// A transport to `device`, starting at `baud`; `describe()` returns `description`
+    /// (e.g. `simulated window cleaner`).
+    pub fn new(
+        device: SharedDevice,
+        baud: u32,
+        faults: Faults,
+        description: impl Into<String>,
+    ) -> Self {
+        Self {
+            wire: Wire::new(device, baud, faults),
+            name: description.into(),
+            vanished: VanishHandle::default(),
+        }
+    }
+
+    /// A transport to a new simulator of `kind`, at its UART's baud rate, described as
+    /// [`super::SimKind::describe`] says.
+    pub fn of_kind(
+        kind: super::SimKind,
+        opts: &super::SimOptions,
+        faults: Faults,
+    ) -> Result<Self, String> {
+        faults.check()?;
+        let device = super::build(kind, opts)?;
+        let baud = opts.baud.unwrap_or_else(|| kind.default_baud());
+        Ok(Self::new(device, baud, faults, kind.describe()))
+    }
+
+    /// The simulated device, to read or change its state.
+    pub fn device(&self) -> SharedDevice {
+        self.wire.device()
+    }
+
+    /// A handle that makes this port vanish, usable from another thread.
+    pub fn vanish_handle(&self) -> VanishHandle {
+        self.vanished.clone()
+    }
+
+    /// Makes the port vanish now.
+    pub fn vanish(&self) {
+        self.vanished.vanish();
+    }
+
+    fn alive(&self) -> Result<(), LinkError> {
+        if self.vanished.is_vanished() {
+            Err(LinkError::Disconnected(format!("{} vanished", self.name)))
+        } else {
+            Ok(())
+        }
+    }
+}
+
+impl std::fmt::Debug for SimTransport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SimTransport")
+            .field("name", &self.name)
+            .field("baud", &self.wire.baud())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Transport for SimTransport {
+    fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        self.alive()?;
+        let now = Instant::now();
+        self.wire.pump(now);
+        self.wire.host_wrote(bytes, now);
+        Ok(())
+    }
+
+    fn read(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
+        loop {
+            self.alive()?;
+            let now = Instant::now();
+            self.wire.pump(now);
+            let n = self.wire.take_due(now, buf);
+            if n > 0 || buf.is_empty() || now >= deadline {
+                return Ok(n);
+            }
+            sleep_until(self.wire.next_event().min(deadline));
+        }
+    }
+
+    fn set_baud(&mut self, baud: u32) -> Result<(), LinkError> {
+        self.alive()?;
+        if baud == 0 {
+            return Err(LinkError::Setting("baud rate 0".into()));
+        }
+        self.wire.set_baud(baud);
+        Ok(())
+    }
+
+    fn baud(&self) -> u32 {
+        self.wire.baud()
+    }
+
+    fn clear_input(&mut self) -> Result<(), LinkError> {
+        self.alive()?;
+        let now = Instant::now();
+        self.wire.pump(now);
+        self.wire.clear_arrived(now);
+        Ok(())
+    }
+
+    fn describe(&self) -> String {
+        self.name.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Echoes every chunk after 1 ms, optionally at another baud.
+    struct Echo(Option<u32>);
+
+    impl Device for Echo {
+        fn receive(&mut self, bytes: &[u8], _baud: u32, _now: Instant) -> Vec<Outgoing> {
+            vec![Outgoing {
+                after: Duration::from_millis(1),
+                bytes: bytes.to_vec(),
+                baud: self.0,
+            }]
+        }
+    }
+
+    fn echo(baud: Option<u32>, faults: Faults) -> SimTransport {
+        SimTransport::new(Arc::new(Mutex::new(Echo(baud))), 9600, faults, "echo")
+    }
+
+    fn read_all(t: &mut SimTransport, within: Duration) -> Vec<u8> {
+        let deadline = Instant::now() + within;
+        let mut out = Vec::new();
+        let mut buf = [0u8; 64];
+        while let Ok(n) = t.read(&mut buf, deadline) {
+            if n == 0 {
+                break;
+            }
+            out.extend_from_slice(&buf[..n]);
+        }
+        out
+    }
+
+    #[test]
+    fn echo_arrives_after_both_wire_times_and_the_latency() {
+        let mut t = echo(None, Faults::default());
+        let start = Instant::now();
+        t.write(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10]).unwrap();
+        let mut buf = [0u8; 64];
+        let n = t.read(&mut buf, start + Duration::from_secs(5)).unwrap();
+        let took = start.elapsed();
+        assert_eq!(&buf[..n], &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10]);
+        // 10 bytes each way at 9600 baud: 2 × 10.4 ms, plus 1 ms.
+        assert!(took >= Duration::from_micros(21_800), "{took:?}");
+    }
+
+    #[test]
+    fn nothing_arrives_before_the_deadline_when_dropped() {
+        let faults = Faults {
+            drop: 1.0,
+            ..Faults::default()
+        };
+        let mut t = echo(None, faults);
+        t.write(&[1, 2, 3]).unwrap();
+        assert!(read_all(&mut t, Duration::from_millis(50)).is_empty());
+    }
+
+    #[test]
+    fn another_baud_arrives_as_garbage_of_the_scaled_length() {
+        let mut t = echo(Some(9600 * 4), Faults::default());
+        t.write(&[0x55; 40]).unwrap();
+        let got = read_all(&mut t, Duration::from_millis(200));
+        assert_eq!(got.len(), 10);
+        assert_ne!(got, vec![0x55; 10]);
+    }
+
+    #[test]
+    fn corrupt_flips_one_bit_of_the_last_byte() {
+        let faults = Faults {
+            corrupt: 1.0,
+            seed: 7,
+            ..Faults::default()
+        };
+        let mut t = echo(None, faults);
+        t.write(&[0, 0, 0, 0]).unwrap();
+        let got = read_all(&mut t, Duration::from_millis(100));
+        assert_eq!(&got[..3], &[0, 0, 0]);
+        assert_eq!(got[3].count_ones(), 1);
+    }
+
+    #[test]
+    fn clear_input_drops_what_arrived_and_vanish_disconnects() {
+        let mut t = echo(None, Faults::default());
+        t.write(&[9]).unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+        t.clear_input().unwrap();
+        assert!(read_all(&mut t, Duration::from_millis(10)).is_empty());
+        let h = t.vanish_handle();
+        h.vanish();
+        assert!(matches!(t.write(&[1]), Err(LinkError::Disconnected(_))));
+        let mut buf = [0u8; 4];
+        assert!(matches!(
+            t.read(&mut buf, Instant::now()),
+            Err(LinkError::Disconnected(_))
+        ));
+    }
+
+    #[test]
+    fn checks_fault_probabilities() {
+        let bad = Faults {
+            drop: 1.5,
+            ..Faults::default()
+        };
+        assert!(bad.check().is_err());
+        assert!(Faults::default().check().is_ok());
+    }
+}
