@@ -118,6 +118,9 @@ impl SerialTransport {
             .map_err(|e| {
                 let reason = match e.kind {
                     serialport::ErrorKind::NoDevice => format!("no such device ({e})"),
+                    _ if e.to_string().contains("Not a typewriter") => {
+                        "not a serial port (not a terminal device)".to_string()
+                    }
                     _ if e.to_string().contains("Device or resource busy") => {
                         "in use by another program".to_string()
                     }

@@ -1,0 +1,271 @@
+//! The link worker against the MSP simulators through real pseudo-terminals.
+
+use botbench::link::{
+    ExchangeError, Link, LinkCommand, LinkEvent, LinkOptions, LinkState, Poll, Request, serial,
+};
+use botbench::ops::msp::{self as ops, OpError};
+use botbench::profile::{Input, Profile, Registry, Value};
+use botbench::sim::window_cleaner::WindowCleaner;
+use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+fn profile(name: &str) -> Arc<Profile> {
+    Registry::builtin().unwrap().get(name).unwrap()
+}
+
+fn window_cleaner(faults: Faults) -> (PtyServer, Arc<Mutex<WindowCleaner>>) {
+    let wc = Arc::new(Mutex::new(
+        WindowCleaner::new(&SimOptions::default()).unwrap(),
+    ));
+    let shared: SharedDevice = wc.clone();
+    (PtyServer::start(shared, faults).unwrap(), wc)
+}
+
+fn open(path: &str, profile: Arc<Profile>, options: LinkOptions) -> Link {
+    Link::open(serial::opener(path, 115_200), profile, options, None).expect("opens the pty")
+}
+
+/// Waits for an event that `pick` accepts, draining the rest.
+fn wait_for<T>(
+    link: &Link,
+    within: Duration,
+    mut pick: impl FnMut(LinkEvent) -> Option<T>,
+) -> Option<T> {
+    let deadline = Instant::now() + within;
+    while let Ok(ev) = link
+        .events()
+        .recv_timeout(deadline.saturating_duration_since(Instant::now()))
+    {
+        if let Some(t) = pick(ev) {
+            return Some(t);
+        }
+    }
+    None
+}
+
+#[test]
+fn the_session_learns_the_device_and_reads_and_writes_parameters() {
+    let p = profile("window-cleaner");
+    let (server, wc) = window_cleaner(Faults::default());
+    let link = open(server.path(), p.clone(), LinkOptions::default());
+    let info = wait_for(&link, Duration::from_secs(5), |ev| match ev {
+        LinkEvent::Identified(r) => Some(r),
+        _ => None,
+    })
+    .expect("identified")
+    .expect("CMD_VERSION answered");
+    assert_eq!(info.hw, 0x03);
+    assert_eq!(info.flags, Some(0x0f));
+
+    let client = link.client();
+    let set = p.command("MSP_SET_USE_FAN_OUTPUT_PID").unwrap();
+    let inputs: Vec<(String, Input)> = [
+        ("fanPwmvalueAtIdle", "55"),
+        ("fanPwmvalueMin", "72"),
+        ("fanPwmvalueMax", "99"),
+        ("defaultTarget", "2.80"),
+        ("maxTarget", "3.10"),
+        ("minTarget", "2.40"),
+    ]
+    .iter()
+    .map(|(k, v)| (k.to_string(), Input::from(*v)))
+    .collect();
+    let checks = ops::write_verified(&client, &p, set, &inputs).unwrap();
+    assert_eq!(checks.len(), 6);
+    assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
+    let sim = wc.lock().unwrap();
+    assert_eq!(sim.param("defaultTarget"), Some(280));
+    assert_eq!(sim.param("minTarget"), Some(240));
+}
+
+#[test]
+fn an_out_of_range_value_is_refused_before_anything_is_sent() {
+    let p = profile("window-cleaner");
+    let (server, wc) = window_cleaner(Faults::default());
+    let link = open(server.path(), p.clone(), LinkOptions::default());
+    let before = wc.lock().unwrap().param("pwmValue");
+    let set = p.command("MSP_SET_PWMVALUE").unwrap();
+    let err = ops::write_verified(
+        &link.client(),
+        &p,
+        set,
+        &[("pwmValue".into(), Input::from("101"))],
+    )
+    .unwrap_err();
+    assert!(
+        matches!(err, OpError::Input(ref m) if m.contains("out of range")),
+        "{err}"
+    );
+    assert_eq!(wc.lock().unwrap().param("pwmValue"), before);
+}
+
+#[test]
+fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_typed_errors() {
+    let p = profile("window-cleaner");
+    let faults = Faults {
+        drop: 0.01,
+        corrupt: 0.01,
+        seed: 7,
+        ..Faults::default()
+    };
+    let (server, wc) = window_cleaner(faults);
+    let link = open(server.path(), p.clone(), LinkOptions::default());
+    let client = link.client();
+    let get = p.command("MSP_GET_PWMVALUE").unwrap();
+    let set = p.command("MSP_SET_PWMVALUE").unwrap();
+    let mut rng = fastrand::Rng::with_seed(11);
+    let (mut ok, mut errors) = (0, 0);
+    for i in 0..1000 {
+        if i % 2 == 0 {
+            let v = rng.i64(0..=100);
+            match ops::write_verified(
+                &client,
+                &p,
+                set,
+                &[("pwmValue".into(), Input::Raw(Value::Int(v)))],
+            ) {
+                Ok(checks) => {
+                    assert!(checks.iter().all(|c| c.ok()), "op {i}: {checks:?}");
+                    assert_eq!(wc.lock().unwrap().param("pwmValue"), Some(v), "op {i}");
+                    ok += 1;
+                }
+                Err(OpError::Exchange(
+                    ExchangeError::Timeout { .. }
+                    | ExchangeError::Garbled { .. }
+                    | ExchangeError::Mismatch { .. },
+                )) => errors += 1,
+                Err(e) => panic!("op {i}: untyped failure {e}"),
+            }
+        } else {
+            match ops::read(&client, &p, get, &[]) {
+                Ok(values) => {
+                    let held = wc.lock().unwrap().param("pwmValue").unwrap();
+                    assert_eq!(
+                        values,
+                        vec![("pwmValue".to_string(), Value::Int(held))],
+                        "op {i}"
+                    );
+                    ok += 1;
+                }
+                Err(OpError::Exchange(
+                    ExchangeError::Timeout { .. }
+                    | ExchangeError::Garbled { .. }
+                    | ExchangeError::Mismatch { .. },
+                )) => errors += 1,
+                Err(e) => panic!("op {i}: untyped failure {e}"),
+            }
+        }
+    }
+    assert_eq!(ok + errors, 1000);
+    assert!(
+        ok > 950,
+        "retries should hide most single faults: {ok} ok, {errors} errors"
+    );
+}
+
+#[test]
+fn polled_telemetry_arrives_as_events() {
+    let p = profile("window-cleaner");
+    let (server, _wc) = window_cleaner(Faults::default());
+    let link = open(server.path(), p.clone(), LinkOptions::default());
+    let attitude = p.command("MSP_ATTITUDE").unwrap();
+    link.send(LinkCommand::SetPolls(vec![Poll {
+        request: Request::for_command(&p, attitude, Vec::new()).attempts(1),
+        interval: None,
+    }]));
+    let mut answers = 0;
+    let _ = wait_for(&link, Duration::from_secs(5), |ev| {
+        if let LinkEvent::Telemetry {
+            command,
+            result: Ok(packet),
+            ..
+        } = ev
+        {
+            assert_eq!(command, attitude.id);
+            assert_eq!(packet.payload.len(), 6);
+            answers += 1;
+        }
+        (answers >= 50).then_some(())
+    });
+    assert!(answers >= 50, "{answers} attitude answers");
+}
+
+#[test]
+fn a_vanished_port_gives_disconnected_and_the_link_reconnects_when_it_returns() {
+    let p = profile("window-cleaner");
+    let (mut server, _wc) = window_cleaner(Faults::default());
+    let path = Arc::new(Mutex::new(server.path().to_string()));
+    let opener_path = path.clone();
+    let opener: botbench::link::Opener = Box::new(move || {
+        let p = opener_path.lock().unwrap().clone();
+        serial::opener(&p, 115_200)()
+    });
+    let link = Link::open(opener, p.clone(), LinkOptions::default(), None).unwrap();
+    let client = link.client();
+    let ping = || client.request(Request::new(1, Vec::new()));
+    assert!(ping().is_ok());
+
+    let t0 = Instant::now();
+    server.vanish();
+    // The next exchange (or the idle check) notices.
+    let _ = ping();
+    let reason = wait_for(&link, Duration::from_secs(2), |ev| match ev {
+        LinkEvent::State(LinkState::Lost { reason }) => Some(reason),
+        _ => None,
+    })
+    .expect("Lost reported");
+    assert!(
+        t0.elapsed() < Duration::from_secs(1),
+        "lost after {:?}: {reason}",
+        t0.elapsed()
+    );
+    assert!(matches!(ping(), Err(ExchangeError::Disconnected(_))));
+
+    // The device comes back (a new pty stands in for the re-plugged adapter).
+    let (server2, _wc2) = window_cleaner(Faults::default());
+    *path.lock().unwrap() = server2.path().to_string();
+    let back = wait_for(&link, Duration::from_secs(10), |ev| match ev {
+        LinkEvent::State(LinkState::Connected { port, .. }) => Some(port),
+        _ => None,
+    });
+    assert_eq!(back.as_deref(), Some(server2.path()));
+    assert!(ping().is_ok());
+}
+
+#[test]
+fn a_silent_device_gives_a_typed_timeout_after_bounded_attempts() {
+    let p = profile("window-cleaner");
+    let (server, _wc) = window_cleaner(Faults {
+        silent: true,
+        ..Faults::default()
+    });
+    let link = open(
+        server.path(),
+        p,
+        LinkOptions {
+            start_session: false,
+            ..LinkOptions::default()
+        },
+    );
+    let t0 = Instant::now();
+    let err = link
+        .client()
+        .request(Request::new(130, Vec::new()).attempts(3))
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            ExchangeError::Timeout {
+                command: 130,
+                attempts: 3,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(
+        t0.elapsed() >= Duration::from_millis(60),
+        "three attempts of at least 20 ms"
+    );
+}
