@@ -37,3 +37,5 @@ pub trait Device: Send {
         Vec::new()
     }
 }
+
+pub mod servo_bus;
