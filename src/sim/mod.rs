@@ -39,3 +39,4 @@ pub trait Device: Send {
 }
 
 pub mod servo_bus;
+pub mod tuya_mcu;
