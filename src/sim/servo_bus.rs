@@ -1064,14 +1064,16 @@ impl ServoBus {
                 replies.push(r);
             }
         }
-        collide(replies, baud)
+        collide(replies, baud, &mut self.rng)
     }
 }
 
 /// Frames that leave at the same moment at the same rate share the open-drain line: the host
-/// sees their byte-wise AND (the shorter padded with idle 0xFF).
-fn collide(replies: Vec<Reply>, request_baud: u32) -> Vec<Outgoing> {
-    let mut groups: Vec<(Duration, u32, Vec<u8>)> = Vec::new();
+/// sees their wired AND. Two servos never start in step to the bit (their latencies differ by a
+/// few bit times), so each later frame is skewed by 2-5 bits; identical replies (a PING answered
+/// by two servos on one id) come out garbled too, never as a clean frame.
+fn collide(replies: Vec<Reply>, request_baud: u32, rng: &mut fastrand::Rng) -> Vec<Outgoing> {
+    let mut groups: Vec<(Duration, u32, Vec<Vec<u8>>)> = Vec::new();
     for r in replies {
         let Ok(bytes) = Frame::reply(r.command, r.content).encode() else {
             continue;
@@ -1080,26 +1082,67 @@ fn collide(replies: Vec<Reply>, request_baud: u32) -> Vec<Outgoing> {
             .iter_mut()
             .find(|(after, baud, _)| *after == r.after && *baud == r.baud)
         {
-            Some((_, _, line)) => {
-                if bytes.len() > line.len() {
-                    line.resize(bytes.len(), 0xFF);
-                }
-                for (i, b) in line.iter_mut().enumerate() {
-                    *b &= bytes.get(i).copied().unwrap_or(0xFF);
-                }
-            }
-            None => groups.push((r.after, r.baud, bytes)),
+            Some((_, _, frames)) => frames.push(bytes),
+            None => groups.push((r.after, r.baud, vec![bytes])),
         }
     }
     groups.sort_by_key(|(after, _, _)| *after);
     groups
         .into_iter()
-        .map(|(after, baud, bytes)| Outgoing {
+        .map(|(after, baud, frames)| Outgoing {
             after,
-            bytes,
+            bytes: wired_and(&frames, rng),
             baud: (baud != request_baud).then_some(baud),
         })
         .collect()
+}
+
+/// The bytes a UART receives from frames driven onto one open-drain line together, each after
+/// the first starting a few bit times later than the one before.
+fn wired_and(frames: &[Vec<u8>], rng: &mut fastrand::Rng) -> Vec<u8> {
+    match frames {
+        [] => return Vec::new(),
+        [one] => return one.clone(),
+        _ => {}
+    }
+    // 8N1: start bit 0, data LSB first, stop bit 1; the idle line is 1.
+    let mut line: Vec<bool> = Vec::new();
+    let mut offset = 0usize;
+    for (i, frame) in frames.iter().enumerate() {
+        if i > 0 {
+            offset += rng.usize(2..=5);
+        }
+        let bits = frame.iter().flat_map(|&b| {
+            std::iter::once(false)
+                .chain((0..8).map(move |k| b >> k & 1 == 1))
+                .chain(std::iter::once(true))
+        });
+        for (k, bit) in bits.enumerate() {
+            let at = offset + k;
+            if at >= line.len() {
+                line.resize(at + 1, true);
+            }
+            line[at] &= bit;
+        }
+    }
+    // A receiver: wait for a start bit, sample eight data bits, skip the stop bit.
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < line.len() {
+        if line[i] {
+            i += 1;
+            continue;
+        }
+        let mut byte = 0u8;
+        for k in 0..8 {
+            if line.get(i + 1 + k).copied().unwrap_or(true) {
+                byte |= 1 << k;
+            }
+        }
+        out.push(byte);
+        i += 10;
+    }
+    out
 }
 
 impl Device for ServoBus {
