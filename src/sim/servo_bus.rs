@@ -984,11 +984,7 @@ impl ServoBus {
         Self::new(
             ids.iter()
                 .enumerate()
-                .map(|(i, &id)| {
-                    SimServo::fresh(1001 + i as u32)
-                        .with_id(id)
-                        .with_baud(baud)
-                })
+                .map(|(i, &id)| SimServo::fresh(1001 + i as u32).with_id(id).with_baud(baud))
                 .collect(),
         )
     }

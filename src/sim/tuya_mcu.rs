@@ -122,6 +122,9 @@ pub struct TuyaConfig {
     pub stop_acking_at: Option<u32>,
     /// Delay before each answer.
     pub latency: Duration,
+    /// The MCU's UART rate: bytes sent at another rate are garbage to it and ignored. `None`
+    /// hears every rate.
+    pub baud: Option<u32>,
     /// While cleaning, the battery drops 1 % this often.
     pub battery_drain_every: Duration,
     /// Seed of the random source.
@@ -139,6 +142,7 @@ impl Default for TuyaConfig {
             ota_packet: OtaPacketAnswer::Option(0),
             stop_acking_at: None,
             latency: DEFAULT_LATENCY,
+            baud: Some(9600),
             battery_drain_every: Duration::from_secs(30),
             seed: 0,
         }
@@ -700,7 +704,9 @@ impl TuyaMcu {
             cmd::WIFI_STATE => match data.as_slice() {
                 [s] => {
                     self.wifi_state = Some(*s);
-                    self.frame(cmd::WIFI_STATE, Vec::new()).into_iter().collect()
+                    self.frame(cmd::WIFI_STATE, Vec::new())
+                        .into_iter()
+                        .collect()
                 }
                 _ => Vec::new(),
             },
@@ -731,7 +737,10 @@ impl TuyaMcu {
             self.last_drain = None;
             return None;
         }
-        let every = self.config.battery_drain_every.max(Duration::from_millis(1));
+        let every = self
+            .config
+            .battery_drain_every
+            .max(Duration::from_millis(1));
         let last = *self.last_drain.get_or_insert(now);
         if now.saturating_duration_since(last) < every {
             return None;
@@ -748,7 +757,12 @@ impl TuyaMcu {
 }
 
 impl Device for TuyaMcu {
-    fn receive(&mut self, bytes: &[u8], _baud: u32, now: Instant) -> Vec<Outgoing> {
+    fn receive(&mut self, bytes: &[u8], baud: u32, now: Instant) -> Vec<Outgoing> {
+        if self.config.baud.is_some_and(|b| b != baud) {
+            // Framing errors at the wrong rate: whatever was half-received is lost too.
+            self.decoder.clear();
+            return Vec::new();
+        }
         self.decoder.push(bytes);
         let frames: Vec<Frame> = self
             .decoder
