@@ -48,3 +48,6 @@ pub trait Device: Send {
         Vec::new()
     }
 }
+
+pub mod servo_bus;
+pub mod tuya_mcu;
