@@ -1,7 +1,9 @@
 //! Simulators by kind: the names `botbench sim` takes, and one constructor for all of them.
 
 use super::runner::SharedDevice;
+use super::servo_bus::ServoBus;
 use super::solar_cleanbot::SolarCleanbot;
+use super::tuya_mcu::{TuyaConfig, TuyaMcu};
 use super::window_cleaner::WindowCleaner;
 use std::str::FromStr;
 use std::sync::{Arc, Mutex};
@@ -106,8 +108,34 @@ pub fn build(kind: SimKind, opts: &SimOptions) -> Result<SharedDevice, String> {
     Ok(match kind {
         SimKind::WindowCleaner => Arc::new(Mutex::new(WindowCleaner::new(opts)?)),
         SimKind::SolarCleanbot => Arc::new(Mutex::new(SolarCleanbot::new(opts)?)),
-        SimKind::ServoBus | SimKind::TuyaVacuum => {
-            return Err(format!("the {kind} simulator is not yet built"));
+        SimKind::ServoBus => {
+            let ids: &[u8] = if opts.servos.is_empty() {
+                &[1]
+            } else {
+                &opts.servos
+            };
+            if ids.contains(&crate::protocol::servo::BROADCAST_ID) {
+                return Err("servo id 255 is the broadcast address; ids are 0-254".into());
+            }
+            let baud = opts.baud.unwrap_or(kind.default_baud());
+            let mut bus = ServoBus::with_ids(ids, baud).with_seed(opts.seed);
+            if let Some(l) = opts.latency {
+                bus = bus.with_latency(l);
+            }
+            Arc::new(Mutex::new(bus))
+        }
+        SimKind::TuyaVacuum => {
+            let mut cfg = TuyaConfig {
+                seed: opts.seed,
+                ..TuyaConfig::default()
+            };
+            if let Some(l) = opts.latency {
+                cfg.latency = l;
+            }
+            if let Some(b) = opts.baud {
+                cfg.baud = Some(b);
+            }
+            Arc::new(Mutex::new(TuyaMcu::new(cfg)))
         }
     })
 }
