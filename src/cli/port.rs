@@ -20,7 +20,7 @@ pub(crate) struct PortArgs {
     #[arg(long)]
     pub profile: Option<String>,
     /// How long the device may take to answer beyond the wire time, in ms (default: the
-    /// protocol's: MSP 20, servo 3, Tuya 300).
+    /// protocol's: MSP 20, servo 1.5, Tuya 300).
     #[arg(long, value_name = "MS")]
     pub margin_ms: Option<u64>,
     /// Print JSON.

@@ -165,17 +165,13 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
             let ids = parse_ids(&ids)?;
             let bauds = parse_bauds(bauds.as_deref(), home)?;
             let started = std::time::Instant::now();
-            let rows = ops::scan(
-                &client,
-                &profile,
+            let plan = ops::ScanPlan {
                 ids,
-                &bauds,
-                home,
-                &cancel,
-                &mut |_| {},
-                &mut |_| {},
-            )
-            .map_err(op_error)?;
+                bauds,
+                home_baud: home,
+            };
+            let rows = ops::scan(&client, &profile, &plan, &cancel, &mut |_| {}, &mut |_| {})
+                .map_err(op_error)?;
             if json {
                 println!(
                     "{}",

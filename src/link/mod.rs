@@ -169,7 +169,7 @@ pub enum LinkEvent {
 #[derive(Debug, Clone)]
 pub struct LinkOptions {
     /// How long the device may take to start answering, beyond the wire time. Default: MSP
-    /// 20 ms, servo 3 ms, Tuya 300 ms.
+    /// 20 ms, servo 1.5 ms, Tuya 300 ms.
     pub margin: Option<Duration>,
     /// Reopen a lost port, with backoff.
     pub reconnect: bool,

@@ -36,7 +36,7 @@ const HEARTBEAT_RETRY: Duration = Duration::from_secs(3);
 pub fn default_margin(protocol: Protocol) -> Duration {
     match protocol {
         Protocol::Msp => Duration::from_millis(20),
-        Protocol::Servo => Duration::from_millis(3),
+        Protocol::Servo => Duration::from_micros(1500),
         Protocol::Tuya => Duration::from_millis(300),
     }
 }
@@ -409,7 +409,11 @@ impl Worker {
             wait = wait.min(due.saturating_duration_since(now));
         }
         match self.cmds.recv_timeout(wait) {
-            Ok(c) => self.handle(c),
+            Ok(c) => {
+                // Work arrived: do it first; the port is read while waiting for its answer.
+                self.handle(c);
+                return;
+            }
             Err(RecvTimeoutError::Timeout) => {}
             Err(RecvTimeoutError::Disconnected) => self.shutdown = true,
         }

@@ -20,7 +20,7 @@ pub enum OpError {
         /// The command.
         command: String,
         /// What does not fit.
-        error: FieldError,
+        error: Box<FieldError>,
     },
     /// The device does not hold what was written, or is not where it should be.
     #[error("{0}")]
@@ -28,6 +28,16 @@ pub enum OpError {
     /// Cancelled by the operator.
     #[error("cancelled")]
     Cancelled,
+}
+
+impl OpError {
+    /// The device's answer to `command` does not fit the profile.
+    pub fn answer(command: &str, error: FieldError) -> Self {
+        OpError::Answer {
+            command: command.to_string(),
+            error: Box::new(error),
+        }
+    }
 }
 
 impl From<FieldError> for OpError {
@@ -83,10 +93,7 @@ fn decode_answer(
 ) -> Result<Vec<(String, Value)>, OpError> {
     let d = profile
         .decode(cmd, Direction::DeviceToHost, payload)
-        .map_err(|error| OpError::Answer {
-            command: cmd.ident.clone(),
-            error,
-        })?;
+        .map_err(|e| OpError::answer(&cmd.ident, e))?;
     Ok(d.values.into_iter().map(|v| (v.ident, v.value)).collect())
 }
 
@@ -102,10 +109,7 @@ pub fn write_verified(
     let payload = profile.encode(set, Direction::HostToDevice, inputs)?;
     let written = profile
         .decode(set, Direction::HostToDevice, &payload)
-        .map_err(|error| OpError::Answer {
-            command: set.ident.clone(),
-            error,
-        })?;
+        .map_err(|e| OpError::answer(&set.ident, e))?;
     client.request(Request::for_command(profile, set, payload.clone()))?;
     let get = match (set.kind, set.pair) {
         (CommandKind::Set, Some(pair)) => profile.command_by_id(pair),

@@ -112,10 +112,7 @@ pub fn read_param(
     }
     let d = profile
         .decode(read, Direction::DeviceToHost, payload)
-        .map_err(|error| OpError::Answer {
-            command: read.ident.clone(),
-            error,
-        })?;
+        .map_err(|e| OpError::answer(&read.ident, e))?;
     match d.values.get(2).map(|v| &v.value) {
         Some(Value::Int(v)) => Ok(*v),
         _ => Err(OpError::Verify(format!(
@@ -145,26 +142,38 @@ fn details(client: &Client, profile: &Profile, row: &mut ScanRow) {
     row.status = get(5);
 }
 
-/// Scans `ids` at each of `bauds`, reading each found servo's details, then returns the port to
-/// `home_baud`. `found` sees each row as it is found.
+/// What a scan covers.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ScanPlan {
+    /// The ids to ping (255, broadcast, is skipped).
+    pub ids: RangeInclusive<u8>,
+    /// The baud rates to try, in order.
+    pub bauds: Vec<u32>,
+    /// The rate to leave the port at afterwards.
+    pub home_baud: u32,
+}
+
+/// Scans the plan's ids at each of its bauds, reading each found servo's details, then returns
+/// the port to the plan's home rate. `found` sees each row as it is found.
 pub fn scan(
     client: &Client,
     profile: &Profile,
-    ids: RangeInclusive<u8>,
-    bauds: &[u32],
-    home_baud: u32,
+    plan: &ScanPlan,
     cancel: &Cancel,
     progress: &mut dyn FnMut(Progress),
     found: &mut dyn FnMut(&ScanRow),
 ) -> Result<Vec<ScanRow>, OpError> {
-    let ids: Vec<u8> = ids
+    let (bauds, home_baud) = (&plan.bauds, plan.home_baud);
+    let ids: Vec<u8> = plan
+        .ids
+        .clone()
         .filter(|&i| i != crate::protocol::servo::BROADCAST_ID)
         .collect();
     let total = (ids.len() * bauds.len()) as u64;
     let mut rows = Vec::new();
     let mut done = 0;
     let result = (|| {
-        for &baud in bauds {
+        for &baud in bauds.iter() {
             client
                 .set_baud(baud)
                 .map_err(|e| OpError::Verify(e.to_string()))?;

@@ -58,10 +58,7 @@ pub fn set_dps(
     let payload = profile.encode(command, Direction::HostToDevice, inputs)?;
     let written = profile
         .decode(command, Direction::HostToDevice, &payload)
-        .map_err(|error| OpError::Answer {
-            command: command.ident.clone(),
-            error,
-        })?;
+        .map_err(|e| OpError::answer(&command.ident, e))?;
     let req = Request::new(cmd::DP_COMMAND, payload).reply(ReplySpec::Burst {
         each: Match::command(cmd::DP_REPORT),
         quiet: REPORT_QUIET,

@@ -130,8 +130,13 @@ fn serve(mut master: TTYPort, mut wire: Wire, flags: &Flags) {
         let now = Instant::now();
         follow_baud(&master, &mut wire);
         wire.pump(now);
-        while let Some(frame) = wire.pop_due(now) {
-            if !write_frame(&mut master, &frame) {
+        let mut out = [0u8; 4096];
+        loop {
+            let n = wire.take_due(now, &mut out);
+            if n == 0 {
+                break;
+            }
+            if !write_frame(&mut master, &out[..n]) {
                 return;
             }
         }
@@ -169,7 +174,7 @@ fn follow_baud(master: &TTYPort, wire: &mut Wire) {
     }
 }
 
-/// Writes one frame; `false` when the port is gone. A frame nobody makes room for is dropped.
+/// Writes bytes that have arrived; `false` when the port is gone. A frame nobody makes room for is dropped.
 fn write_frame(master: &mut TTYPort, frame: &[u8]) -> bool {
     if master.set_timeout(WRITE_TIMEOUT).is_err() {
         return false;

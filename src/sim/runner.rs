@@ -65,10 +65,35 @@ struct Inbound {
     baud: u32,
 }
 
+/// A frame on its way to the host, byte by byte as a UART delivers it.
 struct Delivery {
-    at: Instant,
+    /// When its first byte starts.
+    start: Instant,
+    /// One byte's time on the wire.
+    byte: Duration,
     bytes: Vec<u8>,
 }
+
+impl Delivery {
+    /// When its last byte has arrived.
+    fn end(&self) -> Instant {
+        self.start + self.byte * self.bytes.len() as u32
+    }
+
+    /// How many of its bytes have arrived by `now`.
+    fn arrived(&self, now: Instant) -> usize {
+        if now >= self.end() {
+            return self.bytes.len();
+        }
+        let since = now.saturating_duration_since(self.start).as_nanos();
+        let byte = self.byte.as_nanos().max(1);
+        ((since / byte) as usize).min(self.bytes.len())
+    }
+}
+
+/// The host is woken for arriving bytes at most this often (bytes come in chunks, as from a
+/// USB adapter).
+const DELIVERY_CHUNK: Duration = Duration::from_micros(250);
 
 /// The two directions of a simulated wire with a device at the far end. Shared by
 /// [`SimTransport`] and [`super::pty::PtyServer`]; it never sleeps.
@@ -170,9 +195,9 @@ impl Wire {
                 *last ^= 1 << self.rng.u8(0..8);
             }
             let start = (cause + o.after + self.faults.extra_latency).max(self.tx_free);
-            let at = start + duration;
-            self.tx_free = at;
-            self.outbound.push_back(Delivery { at, bytes });
+            self.tx_free = start + duration;
+            let byte = duration / bytes.len().max(1) as u32;
+            self.outbound.push_back(Delivery { start, byte, bytes });
         }
     }
 
@@ -183,12 +208,12 @@ impl Wire {
             let Some(front) = self.outbound.front() else {
                 break;
             };
-            if front.at > now {
+            let due = front.arrived(now);
+            if due <= self.taken {
                 break;
             }
-            let rest = &front.bytes[self.taken..];
-            let k = rest.len().min(buf.len() - n);
-            buf[n..n + k].copy_from_slice(&rest[..k]);
+            let k = (due - self.taken).min(buf.len() - n);
+            buf[n..n + k].copy_from_slice(&front.bytes[self.taken..self.taken + k]);
             n += k;
             self.taken += k;
             if self.taken == front.bytes.len() {
@@ -199,21 +224,17 @@ impl Wire {
         n
     }
 
-    /// The next frame whose last byte has reached the host by `now`, whole.
-    pub(crate) fn pop_due(&mut self, now: Instant) -> Option<Vec<u8>> {
-        if self.outbound.front()?.at > now {
-            return None;
-        }
-        let d = self.outbound.pop_front()?;
-        let taken = std::mem::take(&mut self.taken);
-        Some(d.bytes[taken..].to_vec())
-    }
-
     /// Drops the bytes that have reached the host and not been read.
     pub(crate) fn clear_arrived(&mut self, now: Instant) {
-        while self.outbound.front().is_some_and(|d| d.at <= now) {
-            self.outbound.pop_front();
-            self.taken = 0;
+        while let Some(front) = self.outbound.front() {
+            let due = front.arrived(now);
+            if due == front.bytes.len() {
+                self.outbound.pop_front();
+                self.taken = 0;
+            } else {
+                self.taken = self.taken.max(due);
+                break;
+            }
         }
     }
 
@@ -225,7 +246,10 @@ impl Wire {
             t = t.min(i.at);
         }
         if let Some(d) = self.outbound.front() {
-            t = t.min(d.at);
+            // The next chunk of bytes: at least one byte, at most the rest of the frame.
+            let per_chunk = (DELIVERY_CHUNK.as_nanos() / d.byte.as_nanos().max(1)).max(1) as usize;
+            let upto = (self.taken + per_chunk).min(d.bytes.len());
+            t = t.min(d.start + d.byte * upto as u32);
         }
         t
     }
@@ -417,16 +441,31 @@ mod tests {
     }
 
     #[test]
-    fn echo_arrives_after_both_wire_times_and_the_latency() {
+    fn echo_arrives_byte_by_byte_after_the_request_and_the_latency() {
         let mut t = echo(None, Faults::default());
         let start = Instant::now();
         t.write(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10]).unwrap();
         let mut buf = [0u8; 64];
-        let n = t.read(&mut buf, start + Duration::from_secs(5)).unwrap();
+        let mut got = Vec::new();
+        let mut first = None;
+        while got.len() < 10 {
+            let n = t.read(&mut buf, start + Duration::from_secs(5)).unwrap();
+            assert!(n > 0, "timed out with {got:?}");
+            first.get_or_insert(start.elapsed());
+            got.extend_from_slice(&buf[..n]);
+        }
         let took = start.elapsed();
-        assert_eq!(&buf[..n], &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10]);
-        // 10 bytes each way at 9600 baud: 2 × 10.4 ms, plus 1 ms.
-        assert!(took >= Duration::from_micros(21_800), "{took:?}");
+        assert_eq!(got, [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]);
+        // The request takes 10.4 ms at 9600 baud, the device 1 ms, each echoed byte 1.04 ms.
+        let first = first.unwrap();
+        assert!(
+            first >= Duration::from_micros(12_400),
+            "first byte after {first:?}"
+        );
+        assert!(
+            took >= Duration::from_micros(21_800),
+            "last byte after {took:?}"
+        );
     }
 
     #[test]
