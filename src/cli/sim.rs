@@ -4,9 +4,13 @@
 //! port: `port=$(botbench sim window-cleaner | head -1)`.
 
 use super::{CliError, CliResult};
-use crate::sim::{Faults, PtyServer, SimKind, SimOptions, build};
+use crate::sim::tuya_mcu::TuyaMcu;
+use crate::sim::window_cleaner::WindowCleaner;
+use crate::sim::{Faults, PtyServer, SharedDevice, SimKind, SimOptions, build};
 use clap::Args;
+use std::io::BufRead;
 use std::io::Write;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 #[derive(Debug, Args)]
@@ -53,7 +57,21 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         seed: args.seed,
         servos: args.servos,
     };
-    let device = build(kind, &opts).map_err(CliError::input)?;
+    // The Tuya MCU and the window cleaner take commands on stdin (see `control`), so keep a
+    // typed handle to them.
+    let (device, control): (SharedDevice, Option<Control>) = match kind {
+        SimKind::TuyaVacuum => {
+            let mcu = Arc::new(Mutex::new(crate::sim::tuya_mcu(&opts)));
+            (mcu.clone(), Some(Control::Tuya(mcu)))
+        }
+        SimKind::WindowCleaner => {
+            let wc = Arc::new(Mutex::new(
+                WindowCleaner::new(&opts).map_err(CliError::input)?,
+            ));
+            (wc.clone(), Some(Control::WindowCleaner(wc)))
+        }
+        _ => (build(kind, &opts).map_err(CliError::input)?, None),
+    };
     let server = PtyServer::start(device, faults).map_err(CliError::device)?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", server.path())
@@ -66,10 +84,88 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         opts.baud.unwrap_or_else(|| kind.default_baud()),
         server.path()
     );
+    if let Some(control) = control {
+        eprintln!("botbench: {}", control.help());
+        let spawned = std::thread::Builder::new()
+            .name("sim-control".into())
+            .spawn(move || control.serve_stdin());
+        if let Err(e) = spawned {
+            eprintln!("botbench: no stdin control: {e}");
+        }
+    }
     while server.is_running() {
         std::thread::sleep(Duration::from_millis(200));
     }
     Err(CliError::device(
         "the simulator stopped: the pseudo-terminal failed",
     ))
+}
+
+/// Commands typed on the simulator's stdin, for what a device does on its own.
+enum Control {
+    Tuya(Arc<Mutex<TuyaMcu>>),
+    WindowCleaner(Arc<Mutex<WindowCleaner>>),
+}
+
+impl Control {
+    fn help(&self) -> &'static str {
+        match self {
+            Control::Tuya(_) => {
+                "stdin commands: time | wifi-test | reset-wifi | reset-wifi-mode 0|1 | net-status | mac | restart"
+            }
+            Control::WindowCleaner(_) => {
+                "stdin commands: fault NAME | clear | corners BITS | battery VOLTS"
+            }
+        }
+    }
+
+    fn serve_stdin(self) {
+        for line in std::io::stdin().lock().lines() {
+            let Ok(line) = line else { return };
+            let words: Vec<&str> = line.split_whitespace().collect();
+            if words.is_empty() {
+                continue;
+            }
+            match self.apply(&words) {
+                Ok(()) => eprintln!("botbench: ok: {line}"),
+                Err(e) => eprintln!("botbench: {e}; {}", self.help()),
+            }
+        }
+    }
+
+    fn apply(&self, words: &[&str]) -> Result<(), String> {
+        let arg = |i: usize| words.get(i).copied().ok_or("missing argument");
+        match self {
+            Control::Tuya(m) => {
+                let mut m = m.lock().map_err(|_| "simulator poisoned")?;
+                match words[0] {
+                    "time" => m.request_local_time(),
+                    "wifi-test" => m.request_wifi_test(),
+                    "reset-wifi" => m.reset_wifi(),
+                    "reset-wifi-mode" => {
+                        m.reset_wifi_mode(arg(1)?.parse().map_err(|_| "mode is 0 or 1")?)
+                    }
+                    "net-status" => m.request_net_status(),
+                    "mac" => m.request_mac(),
+                    "restart" => m.restart(),
+                    other => return Err(format!("unknown command '{other}'")),
+                }
+            }
+            Control::WindowCleaner(w) => {
+                let mut w = w.lock().map_err(|_| "simulator poisoned")?;
+                match words[0] {
+                    "fault" => w.inject_named(arg(1)?)?,
+                    "clear" => {
+                        for f in w.faults() {
+                            w.clear_fault(f);
+                        }
+                    }
+                    "corners" => w.set_corners(arg(1)?.parse().map_err(|_| "BITS is 0-15")?),
+                    "battery" => w.set_battery(arg(1)?.parse().map_err(|_| "VOLTS is a number")?),
+                    other => return Err(format!("unknown command '{other}'")),
+                }
+            }
+        }
+        Ok(())
+    }
 }

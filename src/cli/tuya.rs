@@ -143,13 +143,19 @@ pub(crate) fn run(args: TuyaArgs) -> CliResult {
             let image = std::fs::read(&file)
                 .map_err(|e| CliError::input(format!("{}: {e}", file.display())))?;
             let mut last_pct = 0;
-            let report = ops::ota(&client, &image, &Cancel::new(), &mut |p| {
-                let pct = (p.fraction() * 100.0) as u32;
-                if !json && pct >= last_pct + 10 {
-                    last_pct = pct;
-                    eprintln!("{pct:3}%  {}", p.message);
-                }
-            })
+            let report = ops::ota(
+                &client,
+                &image,
+                ops::OtaTiming::default(),
+                &Cancel::new(),
+                &mut |p| {
+                    let pct = (p.fraction() * 100.0) as u32;
+                    if !json && pct >= last_pct + 10 {
+                        last_pct = pct;
+                        eprintln!("{pct:3}%  {}", p.message);
+                    }
+                },
+            )
             .map_err(op_error)?;
             if json {
                 println!("{}", serde_json::to_string(&report).unwrap_or_default());

@@ -111,15 +111,36 @@ pub fn packet_size(answer: &[u8]) -> Result<usize, OpError> {
     }
 }
 
+/// How an upload waits for acks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OtaTiming {
+    /// How long the MCU may take to ack a packet.
+    pub ack_wait: Duration,
+    /// How many times a packet is sent again when its ack does not come.
+    pub retries: u8,
+}
+
+impl Default for OtaTiming {
+    /// 5 s and 3 retries, as the Tuya MCU SDK expects.
+    fn default() -> Self {
+        Self {
+            ack_wait: OTA_ACK_WAIT,
+            retries: OTA_RETRIES,
+        }
+    }
+}
+
 /// Uploads `image` to the MCU: 0x0a with the size, then 0x0b packets of the size the MCU asked
-/// for (never larger), each acked within 5 s and sent up to 3 more times, then the final empty
-/// packet at offset == size.
+/// for (never larger), each acked within `timing.ack_wait` and sent up to `timing.retries` more
+/// times, then the final empty packet at offset == size.
 pub fn ota(
     client: &Client,
     image: &[u8],
+    timing: OtaTiming,
     cancel: &Cancel,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<OtaReport, OpError> {
+    let attempts = timing.retries.saturating_add(1);
     if image.is_empty() {
         return Err(OpError::Input("the firmware image is empty".into()));
     }
@@ -127,8 +148,8 @@ pub fn ota(
         .map_err(|_| OpError::Input(format!("the image is {} bytes, over 4 GiB", image.len())))?;
     let started = Instant::now();
     let start = Request::new(cmd::OTA_START, size.to_be_bytes().to_vec())
-        .margin(OTA_ACK_WAIT)
-        .attempts(1 + OTA_RETRIES);
+        .margin(timing.ack_wait)
+        .attempts(attempts);
     let answer = client
         .request(start)
         .map_err(|e| OpError::Verify(format!("the MCU did not accept the update: {e}")))?;
@@ -144,13 +165,12 @@ pub fn ota(
         let mut payload = offset.to_be_bytes().to_vec();
         payload.extend_from_slice(data);
         let req = Request::new(cmd::OTA_PACKET, payload)
-            .margin(OTA_ACK_WAIT)
-            .attempts(1 + OTA_RETRIES);
+            .margin(timing.ack_wait)
+            .attempts(attempts);
         let reply = client.request(req).map_err(|e| match e {
             ExchangeError::Disconnected(r) => OpError::Verify(format!("link lost at offset {offset}: {r}")),
             e => OpError::Verify(format!(
-                "the MCU stopped acking at offset {offset} (of {size} bytes) after {} attempts: {e}",
-                1 + OTA_RETRIES
+                "the MCU stopped acking at offset {offset} (of {size} bytes) after {attempts} attempts: {e}"
             )),
         })?;
         retries += u32::from(reply.attempts - 1);

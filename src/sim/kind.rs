@@ -103,6 +103,21 @@ pub struct SimOptions {
     pub servos: Vec<u8>,
 }
 
+/// The Tuya vacuum MCU with these options.
+pub fn tuya_mcu(opts: &SimOptions) -> TuyaMcu {
+    let mut cfg = TuyaConfig {
+        seed: opts.seed,
+        ..TuyaConfig::default()
+    };
+    if let Some(l) = opts.latency {
+        cfg.latency = l;
+    }
+    if let Some(b) = opts.baud {
+        cfg.baud = Some(b);
+    }
+    TuyaMcu::new(cfg)
+}
+
 /// Builds a simulator of `kind`.
 pub fn build(kind: SimKind, opts: &SimOptions) -> Result<SharedDevice, String> {
     Ok(match kind {
@@ -124,19 +139,7 @@ pub fn build(kind: SimKind, opts: &SimOptions) -> Result<SharedDevice, String> {
             }
             Arc::new(Mutex::new(bus))
         }
-        SimKind::TuyaVacuum => {
-            let mut cfg = TuyaConfig {
-                seed: opts.seed,
-                ..TuyaConfig::default()
-            };
-            if let Some(l) = opts.latency {
-                cfg.latency = l;
-            }
-            if let Some(b) = opts.baud {
-                cfg.baud = Some(b);
-            }
-            Arc::new(Mutex::new(TuyaMcu::new(cfg)))
-        }
+        SimKind::TuyaVacuum => Arc::new(Mutex::new(tuya_mcu(opts))),
     })
 }
 

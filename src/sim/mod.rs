@@ -11,7 +11,7 @@ pub mod runner;
 pub mod solar_cleanbot;
 pub mod window_cleaner;
 
-pub use kind::{SimKind, SimOptions, build};
+pub use kind::{SimKind, SimOptions, build, tuya_mcu};
 pub use pty::PtyServer;
 pub use runner::{Faults, SharedDevice, SimTransport, VanishHandle};
 
