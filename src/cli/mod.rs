@@ -76,6 +76,16 @@ enum Cmd {
     Servo(servo::ServoArgs),
     /// Tuya MCU, with botbench as the Wi-Fi module.
     Tuya(tuya::TuyaArgs),
+    /// Measure speed against the simulators through pseudo-terminals, as ratios to the wire
+    /// limit (run on a release build).
+    Bench {
+        /// Also the 8-baud scan and the 9600-baud firmware upload (about 90 s more).
+        #[arg(long)]
+        long: bool,
+        /// One JSON document a line.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 /// Runs the command line with the process's arguments.
@@ -104,6 +114,7 @@ fn run(cli: Cli) -> CliResult {
         Some(Cmd::Msp(args)) => msp::run(args),
         Some(Cmd::Servo(args)) => servo::run(args),
         Some(Cmd::Tuya(args)) => tuya::run(args),
+        Some(Cmd::Bench { long, json }) => bench(long, json),
         Some(Cmd::Sim(args)) => sim::run(args),
         None => {
             use clap::CommandFactory;
@@ -157,5 +168,25 @@ fn ports(json: bool) -> CliResult {
             println!("{}", p.label());
         }
     }
+    Ok(0)
+}
+
+fn bench(long: bool, json: bool) -> CliResult {
+    if cfg!(debug_assertions) {
+        eprintln!(
+            "botbench: this is a debug build; run `cargo run --release -- bench` for real figures"
+        );
+    }
+    crate::bench::run_all(long, &mut |f| {
+        if json {
+            println!("{}", serde_json::to_string(f).unwrap_or_default());
+        } else {
+            println!(
+                "{:<48} {:>8.3} s  wire {:>8.3} s  ratio {:>5.2}  {}",
+                f.name, f.seconds, f.wire_seconds, f.wire_ratio, f.notes
+            );
+        }
+    })
+    .map_err(CliError::device)?;
     Ok(0)
 }

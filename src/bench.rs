@@ -1,0 +1,245 @@
+//! `botbench bench`: end-to-end speed through real pseudo-terminals against the simulators,
+//! reported against the wire limit (the time the bytes themselves take at the port's baud rate).
+//! Run it on a release build: `cargo run --release -- bench --json`.
+
+use crate::link::{Link, LinkCommand, LinkEvent, LinkOptions, Poll, Request, serial, wire_time};
+use crate::ops::Cancel;
+use crate::ops::servo::{self, ScanPlan};
+use crate::ops::tuya::{self as tuya_ops, OtaTiming};
+use crate::profile::{Profile, Registry};
+use crate::sim::servo_bus::{ServoBus, SimServo};
+use crate::sim::tuya_mcu::{OtaPacketAnswer, TuyaConfig, TuyaMcu};
+use crate::sim::window_cleaner::WindowCleaner;
+use crate::sim::{Faults, PtyServer, SharedDevice, SimOptions};
+use serde::Serialize;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// One measurement.
+#[derive(Debug, Clone, Serialize)]
+pub struct Figure {
+    /// What was measured.
+    pub name: String,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// Seconds the bytes alone take on the wire.
+    pub wire_seconds: f64,
+    /// wire_seconds / seconds: 1.0 is the wire limit.
+    pub wire_ratio: f64,
+    /// Other numbers (a limit the issue sets, a rate, the vendor SDK's time).
+    pub notes: String,
+}
+
+impl Figure {
+    fn new(name: &str, seconds: f64, wire_seconds: f64, notes: String) -> Self {
+        Self {
+            name: name.to_string(),
+            seconds,
+            wire_seconds,
+            wire_ratio: if seconds > 0.0 {
+                wire_seconds / seconds
+            } else {
+                0.0
+            },
+            notes,
+        }
+    }
+}
+
+fn profile(name: &str) -> Result<Arc<Profile>, String> {
+    Registry::builtin()
+        .and_then(|r| r.get(name))
+        .map_err(|e| e.to_string())
+}
+
+fn open(
+    server: &PtyServer,
+    profile: Arc<Profile>,
+    baud: u32,
+    options: LinkOptions,
+) -> Result<Link, String> {
+    Link::open(serial::opener(server.path(), baud), profile, options, None)
+        .map_err(|e| e.to_string())
+}
+
+/// Polls the window cleaner's attitude as fast as the wire allows for `secs`.
+pub fn msp_polling(secs: f64) -> Result<Figure, String> {
+    let p = profile("window-cleaner")?;
+    let wc: SharedDevice = Arc::new(Mutex::new(WindowCleaner::new(&SimOptions::default())?));
+    let server = PtyServer::start(wc, Faults::default()).map_err(|e| e.to_string())?;
+    let opts = LinkOptions {
+        start_session: false,
+        ..LinkOptions::default()
+    };
+    let link = open(&server, p.clone(), 115_200, opts)?;
+    let attitude = p.command("MSP_ATTITUDE").ok_or("no MSP_ATTITUDE")?;
+    let request = Request::for_command(&p, attitude, Vec::new()).attempts(1);
+    link.send(LinkCommand::SetPolls(vec![Poll {
+        request,
+        interval: None,
+    }]));
+    let mut answers = 0u64;
+    let mut first: Option<Instant> = None;
+    let mut last = Instant::now();
+    let end = Instant::now() + Duration::from_secs_f64(secs);
+    while Instant::now() < end {
+        if let Ok(LinkEvent::Telemetry {
+            result: Ok(_), at, ..
+        }) = link.events().recv_timeout(Duration::from_millis(100))
+        {
+            match first {
+                None => first = Some(at),
+                Some(_) => answers += 1,
+            }
+            last = at;
+        }
+    }
+    let elapsed = first.map_or(0.0, |f| last.duration_since(f).as_secs_f64());
+    // Request: FF opt dev cmd size crc = 6 bytes; reply: FF kind cmd size 6 data crc = 11.
+    let per_poll = wire_time(6 + 11, 115_200).as_secs_f64();
+    Ok(Figure::new(
+        "msp attitude polling, 115200 baud, pty",
+        elapsed,
+        answers as f64 * per_poll,
+        format!(
+            "{answers} polls, {:.0} Hz; target ≥ 0.90 of the wire limit",
+            answers as f64 / elapsed.max(1e-9)
+        ),
+    ))
+}
+
+fn servo_scan(
+    name: &str,
+    servos: Vec<SimServo>,
+    bauds: Vec<u32>,
+    limit: &str,
+) -> Result<Figure, String> {
+    let p = profile("servo")?;
+    let bus: SharedDevice = Arc::new(Mutex::new(ServoBus::new(servos)));
+    let server = PtyServer::start(bus, Faults::default()).map_err(|e| e.to_string())?;
+    let link = open(&server, p.clone(), 115_200, LinkOptions::default())?;
+    let plan = ScanPlan {
+        ids: 0..=254,
+        bauds: bauds.clone(),
+        home_baud: 115_200,
+    };
+    let started = Instant::now();
+    let rows = servo::scan(
+        &link.client(),
+        &p,
+        &plan,
+        &Cancel::new(),
+        &mut |_| {},
+        &mut |_| {},
+    )
+    .map_err(|e| e.to_string())?;
+    let secs = started.elapsed().as_secs_f64();
+    // Each absent id costs a 6-byte ping; each found servo a ping and 6 parameter reads
+    // (7-byte request, 8-9 byte answer) and its 6-byte reply.
+    let wire: f64 = bauds
+        .iter()
+        .map(|&b| wire_time(6, b).as_secs_f64() * 254.0)
+        .sum::<f64>()
+        + rows.len() as f64 * wire_time(6 + 6 * (7 + 9), 115_200).as_secs_f64();
+    let sdk = 0.1 * 254.0 * bauds.len() as f64;
+    Ok(Figure::new(
+        name,
+        secs,
+        wire,
+        format!(
+            "{} found; vendor SDK {sdk:.1} s ({:.0}× faster); {limit}",
+            rows.len(),
+            sdk / secs.max(1e-9)
+        ),
+    ))
+}
+
+/// Scans ids 0-254 at 115200 with no servo, and with ten.
+pub fn servo_scans(all_bauds: bool) -> Result<Vec<Figure>, String> {
+    let mut out = vec![
+        servo_scan(
+            "servo scan 0-254, 1 baud, none present",
+            Vec::new(),
+            vec![115_200],
+            "target ≤ 1 s",
+        )?,
+        servo_scan(
+            "servo scan 0-254, 1 baud, 10 present",
+            (0..10)
+                .map(|i| SimServo::fresh(100 + i).with_id(i as u8 * 20 + 1))
+                .collect(),
+            vec![115_200],
+            "target ≤ 1.1 s",
+        )?,
+    ];
+    if all_bauds {
+        out.push(servo_scan(
+            "servo scan 0-254, all 8 bauds, 10 present",
+            (0..10)
+                .map(|i| SimServo::fresh(100 + i).with_id(i as u8 * 20 + 1))
+                .collect(),
+            servo::BAUDS.to_vec(),
+            "target ≤ 8 s",
+        )?);
+    }
+    Ok(out)
+}
+
+/// A 64 KiB OTA at `baud` with `packet`-byte packets.
+pub fn tuya_ota(baud: u32, packet: u8) -> Result<Figure, String> {
+    let p = profile("tuya-vacuum")?;
+    let mcu: SharedDevice = Arc::new(Mutex::new(TuyaMcu::new(TuyaConfig {
+        baud: Some(baud),
+        ota_packet: OtaPacketAnswer::Option(packet),
+        ..TuyaConfig::default()
+    })));
+    let server = PtyServer::start(mcu, Faults::default()).map_err(|e| e.to_string())?;
+    let opts = LinkOptions {
+        start_session: false,
+        ..LinkOptions::default()
+    };
+    let link = open(&server, p, baud, opts)?;
+    let image: Vec<u8> = (0..65_536u32).map(|i| (i * 31 % 251) as u8).collect();
+    let started = Instant::now();
+    let report = tuya_ops::ota(
+        &link.client(),
+        &image,
+        OtaTiming::default(),
+        &Cancel::new(),
+        &mut |_| {},
+    )
+    .map_err(|e| e.to_string())?;
+    let secs = started.elapsed().as_secs_f64();
+    let size = report.packet_size;
+    let packets = image.len().div_ceil(size);
+    // Start: 11 bytes out, 8 back. Each packet: 7 + 4 + data out, 7 back. Final: 11 out, 7 back.
+    let bytes = 11 + 8 + packets * (7 + 4 + 7) + image.len() + 11 + 7;
+    let wire = wire_time(bytes, baud).as_secs_f64();
+    Ok(Figure::new(
+        &format!("tuya ota 64 KiB, {baud} baud, {size}-byte packets"),
+        secs,
+        wire,
+        format!(
+            "{} retries; target ≥ 0.85 of the wire limit",
+            report.retries
+        ),
+    ))
+}
+
+/// Everything; `long` adds the 8-baud scan and the 9600-baud OTA (about 80 s).
+pub fn run_all(long: bool, report: &mut dyn FnMut(&Figure)) -> Result<Vec<Figure>, String> {
+    let mut out = Vec::new();
+    let mut add = |f: Figure, out: &mut Vec<Figure>| {
+        report(&f);
+        out.push(f);
+    };
+    add(msp_polling(3.0)?, &mut out);
+    for f in servo_scans(long)? {
+        add(f, &mut out);
+    }
+    add(tuya_ota(115_200, 2)?, &mut out);
+    if long {
+        add(tuya_ota(9600, 2)?, &mut out);
+    }
+    Ok(out)
+}
