@@ -1,8 +1,11 @@
 pub mod bench;
 pub mod cli;
+pub mod i18n;
 pub mod link;
 pub mod ops;
 pub mod packet;
 pub mod profile;
 pub mod protocol;
+pub mod series;
 pub mod sim;
+pub mod ui;

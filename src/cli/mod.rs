@@ -53,6 +53,18 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Cmd {
+    /// Open the window (the default): on the built-in demo device unless --port is given.
+    Gui {
+        /// A serial port to connect to.
+        #[arg(long, short)]
+        port: Option<String>,
+        /// Baud rate.
+        #[arg(long, short)]
+        baud: Option<u32>,
+        /// Device profile.
+        #[arg(long)]
+        profile: Option<String>,
+    },
     /// Decode or build frames of the three protocols.
     #[command(subcommand)]
     Frame(frame::FrameCmd),
@@ -116,11 +128,8 @@ fn run(cli: Cli) -> CliResult {
         Some(Cmd::Tuya(args)) => tuya::run(args),
         Some(Cmd::Bench { long, json }) => bench(long, json),
         Some(Cmd::Sim(args)) => sim::run(args),
-        None => {
-            use clap::CommandFactory;
-            let _ = Cli::command().print_help();
-            Ok(0)
-        }
+        Some(Cmd::Gui { port, baud, profile }) => gui(port, baud, profile),
+        None => gui(None, None, None),
     }
 }
 
@@ -188,5 +197,14 @@ fn bench(long: bool, json: bool) -> CliResult {
         }
     })
     .map_err(CliError::device)?;
+    Ok(0)
+}
+
+fn gui(port: Option<String>, baud: Option<u32>, profile: Option<String>) -> CliResult {
+    if let Some(p) = &profile {
+        registry()?.get(p).map_err(CliError::input)?;
+    }
+    let target = port.map(crate::ui::Target::Port);
+    crate::ui::run(target, baud, profile).map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
     Ok(0)
 }

@@ -1,0 +1,228 @@
+//! The app shell: saved settings kept apart from runtime state, a top bar, a left navigation, one
+//! panel at a time, a status line. Panels return actions; the app applies them once per frame.
+
+use super::runtime::{Runtime, Target};
+use super::{Action, connection, monitor, status_bar, telemetry, tuning};
+use crate::i18n::Lang;
+use crate::link::LinkCommand;
+use crate::profile::Protocol;
+use eframe::egui;
+use serde::{Deserialize, Serialize};
+
+/// The panels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PanelId {
+    /// Window cleaner parameters.
+    Tuning,
+    /// Live plots and telemetry.
+    Telemetry,
+    /// Frames sent and received.
+    Monitor,
+}
+
+impl PanelId {
+    /// The panel's name.
+    pub fn name(self, lang: Lang) -> &'static str {
+        match self {
+            PanelId::Tuning => lang.tr("Tuning", "参数调校"),
+            PanelId::Telemetry => lang.tr("Telemetry", "实时数据"),
+            PanelId::Monitor => lang.tr("Packet monitor", "报文监视"),
+        }
+    }
+}
+
+/// What is kept between runs (eframe storage).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Saved {
+    /// The last target.
+    pub target: Target,
+    /// The last baud rate.
+    pub baud: u32,
+    /// The last profile.
+    pub profile: String,
+    /// The panel shown.
+    pub panel: PanelId,
+    /// The UI language.
+    pub lang: Lang,
+    /// Telemetry: polls a second (`None`: as fast as the wire allows).
+    pub poll_hz: Option<f64>,
+    /// Telemetry: the plotted time window, seconds.
+    pub window_secs: f64,
+    /// The navigation is shown.
+    pub nav_open: bool,
+}
+
+impl Default for Saved {
+    fn default() -> Self {
+        Self {
+            target: Target::Demo("window-cleaner".into()),
+            baud: 115_200,
+            profile: "window-cleaner".into(),
+            panel: PanelId::Tuning,
+            lang: Lang::En,
+            poll_hz: Some(50.0),
+            window_secs: 60.0,
+            nav_open: true,
+        }
+    }
+}
+
+/// The application.
+pub struct App {
+    /// Kept between runs.
+    pub saved: Saved,
+    /// Not kept.
+    pub rt: Runtime,
+    /// The tuning panel's edits.
+    pub tuning: tuning::TuningPanel,
+    /// The telemetry panel's view state.
+    pub telemetry: telemetry::TelemetryPanel,
+    /// The packet monitor's view state.
+    pub monitor: monitor::MonitorPanel,
+    /// The connection bar's fields.
+    pub connection: connection::ConnectionBar,
+}
+
+impl App {
+    /// An app with `saved` settings, connected to its target.
+    pub fn new(ctx: &egui::Context, saved: Saved) -> Result<Self, String> {
+        crate::i18n::install_fonts(ctx);
+        let rt = Runtime::new(ctx, &saved.profile)?;
+        let mut app = Self {
+            connection: connection::ConnectionBar::new(&saved),
+            saved,
+            rt,
+            tuning: tuning::TuningPanel::default(),
+            telemetry: telemetry::TelemetryPanel::default(),
+            monitor: monitor::MonitorPanel::default(),
+        };
+        let (target, baud, profile) = (app.saved.target.clone(), app.saved.baud, app.saved.profile.clone());
+        app.apply(Action::Connect { target, baud, profile });
+        Ok(app)
+    }
+
+    /// Work that is not drawing: worker events (within a time budget) and job output.
+    pub fn logic(&mut self, ctx: &egui::Context) {
+        if self.rt.drain_events() {
+            ctx.request_repaint();
+        }
+        self.rt.drain_job();
+        self.rt.refresh_ports();
+        let title = match &self.rt.conn {
+            Some(c) => format!("botbench — {} — {}", c.target.label(), self.rt.profile.name.en),
+            None => "botbench — not connected".to_string(),
+        };
+        ctx.send_viewport_cmd(egui::ViewportCommand::Title(title));
+        // Repaint while a plot follows live data or a job runs; otherwise only on events.
+        let live = self.saved.panel == PanelId::Telemetry && !self.rt.paused && self.rt.connected();
+        if live || self.rt.job_progress().is_some() {
+            ctx.request_repaint_after(std::time::Duration::from_millis(33));
+        }
+    }
+
+    /// Draws the window and applies what the panels asked for.
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        let lang = self.saved.lang;
+        let mut actions = Vec::new();
+        egui::Panel::top("connection").show(ui, |ui| {
+            actions.extend(self.connection.show(ui, &mut self.saved, &self.rt));
+        });
+        egui::Panel::bottom("status").show(ui, |ui| {
+            actions.extend(status_bar::show(ui, lang, &self.rt));
+        });
+        egui::Panel::left("nav").resizable(false).show(ui, |ui| {
+            ui.add_space(4.0);
+            for panel in self.panels() {
+                if ui
+                    .selectable_label(self.saved.panel == panel, panel.name(lang))
+                    .clicked()
+                {
+                    self.saved.panel = panel;
+                }
+            }
+        });
+        egui::CentralPanel::default().show(ui, |ui| match self.saved.panel {
+            PanelId::Tuning => actions.extend(self.tuning.show(ui, lang, &self.rt)),
+            PanelId::Telemetry => actions.extend(self.telemetry.show(ui, &mut self.saved, &self.rt)),
+            PanelId::Monitor => actions.extend(self.monitor.show(ui, lang, &mut self.rt)),
+        });
+        for a in actions {
+            self.apply(a);
+        }
+    }
+
+    /// The panels the profile has.
+    pub fn panels(&self) -> Vec<PanelId> {
+        let mut v = Vec::new();
+        if self.rt.profile.protocol == Protocol::Msp
+            && self.rt.profile.commands.iter().any(|c| c.kind == crate::profile::CommandKind::Set)
+        {
+            v.push(PanelId::Tuning);
+        }
+        if !self.rt.profile.plots.is_empty() {
+            v.push(PanelId::Telemetry);
+        }
+        v.push(PanelId::Monitor);
+        v
+    }
+
+    /// Carries out one action.
+    pub fn apply(&mut self, action: Action) {
+        match action {
+            Action::Connect { target, baud, profile } => {
+                match self.rt.connect(target.clone(), baud, &profile) {
+                    Ok(()) => {
+                        self.saved.target = target;
+                        self.saved.baud = baud;
+                        self.saved.profile = profile;
+                        self.tuning = tuning::TuningPanel::default();
+                        if !self.panels().contains(&self.saved.panel) {
+                            self.saved.panel = self.panels()[0];
+                        }
+                        self.restart_polls();
+                    }
+                    Err(e) => self.rt.say(format!("cannot connect: {e}"), true),
+                }
+            }
+            Action::Disconnect => {
+                self.rt.disconnect();
+                self.rt.say("disconnected", false);
+            }
+            Action::Job(job) => job.start(&mut self.rt),
+            Action::SetPollRate(hz) => {
+                self.saved.poll_hz = hz;
+                self.restart_polls();
+            }
+            Action::PausePolling(paused) => {
+                self.rt.paused = paused;
+                self.restart_polls();
+            }
+            Action::CancelJob => {
+                if let Some(j) = &self.rt.job {
+                    j.cancel.cancel();
+                }
+            }
+            Action::Say(text, error) => self.rt.say(text, error),
+        }
+    }
+
+    fn restart_polls(&mut self) {
+        let polls = if self.rt.paused { Vec::new() } else { self.rt.polls(self.saved.poll_hz) };
+        self.rt.send(LinkCommand::SetPolls(polls));
+    }
+}
+
+impl eframe::App for App {
+    fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+        App::logic(self, ctx);
+    }
+
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        App::ui(self, ui);
+    }
+
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        eframe::set_value(storage, eframe::APP_KEY, &self.saved);
+    }
+}

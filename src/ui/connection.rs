@@ -1,0 +1,158 @@
+//! The top bar: port picker, baud, profile, connect/disconnect, link state, language.
+
+use super::Action;
+use super::app::Saved;
+use super::runtime::{Runtime, Target};
+use crate::i18n::Lang;
+use crate::link::LinkState;
+use crate::sim::SimKind;
+use eframe::egui;
+
+const BAUDS: [u32; 11] = [9600, 19_200, 38_400, 57_600, 115_200, 230_400, 250_000, 460_800, 500_000, 921_600, 1_000_000];
+
+/// The bar's fields before Connect is pressed.
+pub struct ConnectionBar {
+    target: Target,
+    baud: u32,
+    profile: String,
+    /// A path typed by hand (a pseudo-terminal is not listed by the OS).
+    typed: String,
+}
+
+impl ConnectionBar {
+    /// Fields from the saved settings.
+    pub fn new(saved: &Saved) -> Self {
+        Self {
+            target: saved.target.clone(),
+            baud: saved.baud,
+            profile: saved.profile.clone(),
+            typed: match &saved.target {
+                Target::Port(p) => p.clone(),
+                Target::Demo(_) => String::new(),
+            },
+        }
+    }
+
+    /// Draws the bar.
+    pub fn show(&mut self, ui: &mut egui::Ui, saved: &mut Saved, rt: &Runtime) -> Vec<Action> {
+        let lang = saved.lang;
+        let mut actions = Vec::new();
+        ui.horizontal_wrapped(|ui| {
+            ui.label(lang.tr("Port", "端口"));
+            egui::ComboBox::from_id_salt("port")
+                .width(260.0)
+                .selected_text(self.target.label())
+                .show_ui(ui, |ui| {
+                    for kind in SimKind::ALL {
+                        let t = Target::Demo(kind.name().to_string());
+                        let label = format!("{} ({})", lang.tr("Demo", "演示"), kind.describe());
+                        if ui.selectable_label(self.target == t, label).clicked() {
+                            self.profile = kind.profile_id().to_string();
+                            self.baud = kind.default_baud();
+                            self.target = t;
+                        }
+                    }
+                    ui.separator();
+                    if rt.ports.is_empty() {
+                        ui.weak(lang.tr("no serial ports found", "未找到串口"));
+                    }
+                    for p in &rt.ports {
+                        let t = Target::Port(p.path.clone());
+                        if ui.selectable_label(self.target == t, p.label()).clicked() {
+                            self.typed = p.path.clone();
+                            self.target = t;
+                        }
+                    }
+                });
+            let typed = ui.add(
+                egui::TextEdit::singleline(&mut self.typed)
+                    .hint_text(lang.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3"))
+                    .desired_width(150.0),
+            );
+            if typed.changed() && !self.typed.trim().is_empty() {
+                self.target = Target::Port(self.typed.trim().to_string());
+            }
+            ui.label(lang.tr("Baud", "波特率"));
+            egui::ComboBox::from_id_salt("baud")
+                .selected_text(self.baud.to_string())
+                .show_ui(ui, |ui| {
+                    for b in BAUDS {
+                        ui.selectable_value(&mut self.baud, b, b.to_string());
+                    }
+                });
+            ui.label(lang.tr("Profile", "设备配置"));
+            egui::ComboBox::from_id_salt("profile")
+                .selected_text(&self.profile)
+                .show_ui(ui, |ui| {
+                    for (p, _) in rt.registry.iter() {
+                        let label = format!("{} — {}", p.id, lang.tr(&p.name.en, &p.name.zh));
+                        ui.selectable_value(&mut self.profile, p.id.clone(), label);
+                    }
+                });
+            if rt.conn.is_some() {
+                if ui.button(lang.tr("Disconnect", "断开")).clicked() {
+                    actions.push(Action::Disconnect);
+                }
+            } else if ui.button(lang.tr("Connect", "连接")).clicked() {
+                actions.push(Action::Connect {
+                    target: self.target.clone(),
+                    baud: self.baud,
+                    profile: self.profile.clone(),
+                });
+            }
+            if rt.conn.is_some()
+                && (self.target != saved.target || self.baud != saved.baud || self.profile != saved.profile)
+                && ui.button(lang.tr("Reconnect", "重新连接")).clicked()
+            {
+                actions.push(Action::Connect {
+                    target: self.target.clone(),
+                    baud: self.baud,
+                    profile: self.profile.clone(),
+                });
+            }
+            ui.separator();
+            state_badge(ui, lang, rt);
+            ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                let next = match lang {
+                    Lang::En => Lang::Zh,
+                    Lang::Zh => Lang::En,
+                };
+                let label = match lang {
+                    Lang::En => "中文",
+                    Lang::Zh => "English",
+                };
+                if ui.button(label).on_hover_text("Language / 语言").clicked() {
+                    saved.lang = next;
+                }
+            });
+        });
+        actions
+    }
+}
+
+fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
+    let (text, color) = match (&rt.conn, &rt.state) {
+        (None, _) => (lang.tr("not connected", "未连接").to_string(), egui::Color32::GRAY),
+        (Some(_), Some(LinkState::Connected { .. })) => {
+            (lang.tr("● connected", "● 已连接").to_string(), egui::Color32::from_rgb(40, 160, 60))
+        }
+        (Some(_), Some(LinkState::Reconnecting { attempt })) => (
+            format!("{} ({attempt})", lang.tr("● reconnecting", "● 重连中")),
+            egui::Color32::from_rgb(220, 150, 0),
+        ),
+        (Some(_), Some(LinkState::Lost { .. })) => (lang.tr("● lost", "● 连接丢失").to_string(), egui::Color32::RED),
+        (Some(_), Some(LinkState::Closed)) => (lang.tr("closed", "已关闭").to_string(), egui::Color32::GRAY),
+        (Some(_), None) => (lang.tr("opening…", "打开中…").to_string(), egui::Color32::GRAY),
+    };
+    ui.colored_label(color, text);
+    if let Some(rtt) = rt.stats.rtt {
+        ui.label(format!("{} {:.1} ms", lang.tr("round trip", "往返"), rtt.as_secs_f64() * 1e3));
+    }
+    let errors = rt.stats.timeouts + rt.stats.frame_errors;
+    let color = if errors > 0 { egui::Color32::from_rgb(220, 150, 0) } else { ui.visuals().weak_text_color() };
+    ui.colored_label(color, format!("{} {errors}", lang.tr("errors", "错误")))
+        .on_hover_text(format!(
+            "timeouts {}, frame errors {}, retries {}, frames sent {}, received {}",
+            rt.stats.timeouts, rt.stats.frame_errors, rt.stats.retries, rt.stats.sent, rt.stats.received
+        ));
+}

@@ -1,0 +1,156 @@
+//! The desktop window (eframe/egui): one file per panel. Panels draw from the runtime state and
+//! return [`Action`]s; the app applies them once per frame. The UI never touches the port.
+
+pub mod app;
+mod connection;
+pub mod jobs;
+mod monitor;
+pub mod runtime;
+mod status_bar;
+mod telemetry;
+mod tuning;
+
+pub use app::{App, PanelId, Saved};
+pub use runtime::Target;
+
+use crate::ops::msp as ops;
+use crate::profile::{Input, Value};
+use runtime::Runtime;
+
+/// Something a panel asks the app to do.
+#[derive(Debug)]
+pub enum Action {
+    /// Open a link.
+    Connect {
+        /// To what.
+        target: Target,
+        /// At what rate.
+        baud: u32,
+        /// With which profile.
+        profile: String,
+    },
+    /// Close the link.
+    Disconnect,
+    /// Start a job.
+    Job(JobSpec),
+    /// Cancel the running job.
+    CancelJob,
+    /// Telemetry polls a second (`None`: as fast as the wire allows).
+    SetPollRate(Option<f64>),
+    /// Pause or resume telemetry polling.
+    PausePolling(bool),
+    /// A status-bar message.
+    Say(String, bool),
+}
+
+/// A job a panel can ask for.
+#[derive(Debug, Clone)]
+pub enum JobSpec {
+    /// Read these commands (Get or Telemetry), one after another.
+    Read(Vec<u8>),
+    /// Write these Set commands with their full payloads, each read back through its Get.
+    Write(Vec<(u8, Vec<(String, Input)>)>),
+    /// Send one command (an action) with these inputs.
+    Send(u8, Vec<(String, Input)>),
+}
+
+impl JobSpec {
+    /// Starts the job on the runtime's link.
+    pub fn start(self, rt: &mut Runtime) {
+        let profile = rt.profile.clone();
+        match self {
+            JobSpec::Read(ids) => rt.start_job("read", move |client, cancel, sink| {
+                let total = ids.len() as u64;
+                let mut failed = 0;
+                for (i, id) in ids.iter().enumerate() {
+                    if cancel.is_cancelled() {
+                        return Err("cancelled".into());
+                    }
+                    let Some(cmd) = profile.command_by_id(*id) else { continue };
+                    let r = ops::read(client, &profile, cmd, &[]).map_err(|e| e.to_string());
+                    failed += usize::from(r.is_err());
+                    sink.send(jobs::JobOutput::Read(*id, r));
+                    sink.send(jobs::JobOutput::Progress(crate::ops::Progress {
+                        done: i as u64 + 1,
+                        total,
+                        message: cmd.ident.clone(),
+                    }));
+                }
+                if failed == 0 {
+                    Ok(format!("{total} read"))
+                } else {
+                    Err(format!("{failed} of {total} reads failed"))
+                }
+            }),
+            JobSpec::Write(items) => rt.start_job("write", move |client, cancel, sink| {
+                let total = items.len() as u64;
+                let (mut verified, mut bad) = (0, 0);
+                for (i, (set, inputs)) in items.iter().enumerate() {
+                    if cancel.is_cancelled() {
+                        return Err(format!("cancelled after {i} of {total} commands"));
+                    }
+                    let Some(cmd) = profile.command_by_id(*set) else { continue };
+                    let r = ops::write_verified(client, &profile, cmd, inputs).map_err(|e| e.to_string());
+                    match &r {
+                        Ok(checks) if checks.iter().all(|c| c.ok()) => verified += 1,
+                        _ => bad += 1,
+                    }
+                    sink.send(jobs::JobOutput::Wrote(*set, r));
+                    sink.send(jobs::JobOutput::Progress(crate::ops::Progress {
+                        done: i as u64 + 1,
+                        total,
+                        message: cmd.ident.clone(),
+                    }));
+                }
+                if bad == 0 {
+                    Ok(format!("{verified} command(s) written and verified"))
+                } else {
+                    Err(format!("{bad} of {total} command(s) not verified"))
+                }
+            }),
+            JobSpec::Send(id, inputs) => rt.start_job("send", move |client, _cancel, _sink| {
+                let cmd = profile.command_by_id(id).ok_or("unknown command")?;
+                ops::send(client, &profile, cmd, &inputs).map_err(|e| e.to_string())?;
+                Ok(format!("{} acknowledged", cmd.ident))
+            }),
+        }
+    }
+}
+
+/// A value as a person reads it, by the field's format.
+pub fn shown(field: &crate::profile::Field, v: &Value) -> String {
+    field.format(v)
+}
+
+/// Opens the window. `target`, `baud` and `profile` override the saved settings.
+pub fn run(target: Option<Target>, baud: Option<u32>, profile: Option<String>) -> Result<(), String> {
+    let options = eframe::NativeOptions {
+        viewport: eframe::egui::ViewportBuilder::default()
+            .with_inner_size([1200.0, 780.0])
+            .with_min_inner_size([800.0, 500.0])
+            .with_title("botbench"),
+        ..Default::default()
+    };
+    eframe::run_native(
+        "botbench",
+        options,
+        Box::new(move |cc| {
+            let mut saved: Saved = cc
+                .storage
+                .and_then(|s| eframe::get_value(s, eframe::APP_KEY))
+                .unwrap_or_default();
+            if let Some(t) = target {
+                saved.target = t;
+            }
+            if let Some(b) = baud {
+                saved.baud = b;
+            }
+            if let Some(p) = profile {
+                saved.profile = p;
+            }
+            let app = App::new(&cc.egui_ctx, saved).map_err(|e| -> Box<dyn std::error::Error + Send + Sync> { e.into() })?;
+            Ok(Box::new(app))
+        }),
+    )
+    .map_err(|e| e.to_string())
+}

@@ -1,0 +1,338 @@
+//! The tuning panel, generated from the profile: every Get/Set pair in its group, each field with
+//! the device's value, the edited value, unit and range. Edits are checked as typed; "Write
+//! changes" shows the diff, writes only the changed commands (each with its full payload) and
+//! reads them back.
+
+use super::runtime::{Mark, Reading, Runtime};
+use super::{Action, JobSpec};
+use crate::i18n::Lang;
+use crate::profile::value::Allowed;
+use crate::profile::{Command, CommandKind, Field, Input, Value};
+use eframe::egui;
+use std::collections::HashMap;
+
+/// One pending change, for the confirmation table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Change {
+    /// The Set command's ident.
+    pub command: String,
+    /// The field's ident.
+    pub field: String,
+    /// The device's value, as shown.
+    pub device: String,
+    /// The new value, as shown.
+    pub new: String,
+}
+
+/// The panel's own state: what the technician typed.
+#[derive(Default)]
+pub struct TuningPanel {
+    /// Edited text by (Get command id, field ident).
+    pub edits: HashMap<(u8, String), String>,
+    /// The changes awaiting confirmation, and the writes they make.
+    confirm: Option<(Vec<Change>, Vec<(u8, Vec<(String, Input)>)>)>,
+}
+
+/// The device's value of a field, if a reply has brought one.
+fn device_value<'a>(rt: &'a Runtime, get: u8, field: &str) -> Option<&'a Value> {
+    match rt.readings.get(&get) {
+        Some(Reading::Values(values, _)) => values.iter().find(|(k, _)| k == field).map(|(_, v)| v),
+        _ => None,
+    }
+}
+
+/// The Get/Set pairs of the profile, grouped: (group id or "", name, pairs).
+fn groups<'p>(rt: &'p Runtime, lang: Lang) -> Vec<(String, String, Vec<(&'p Command, &'p Command)>)> {
+    let p = &rt.profile;
+    let pairs: Vec<(&Command, &Command)> = p
+        .commands
+        .iter()
+        .filter(|c| c.kind == CommandKind::Get)
+        .filter_map(|g| Some((g, p.command_by_id(g.pair?)?)))
+        .collect();
+    let mut out: Vec<(String, String, Vec<(&Command, &Command)>)> = p
+        .groups
+        .iter()
+        .map(|g| {
+            let members = pairs
+                .iter()
+                .filter(|(get, _)| get.group.as_deref() == Some(&g.id))
+                .copied()
+                .collect();
+            (g.id.clone(), lang.tr(&g.name.en, &g.name.zh).to_string(), members)
+        })
+        .collect();
+    let other: Vec<_> = pairs
+        .iter()
+        .filter(|(get, _)| get.group.is_none())
+        .copied()
+        .collect();
+    if !other.is_empty() {
+        out.push((String::new(), lang.tr("Other", "其他").to_string(), other));
+    }
+    out.retain(|(_, _, members)| !members.is_empty());
+    out
+}
+
+/// The allowed values, as shown: `0 – 100 %` or the labels.
+pub fn range_text(field: &Field) -> String {
+    match field.allowed() {
+        Allowed::Range(lo, hi) => {
+            format!("{} – {}{}", field.format_number(lo), field.format_number(hi), field.unit_suffix())
+        }
+        Allowed::Labels(f) => f.labels.iter().map(|l| l.ident.as_str()).collect::<Vec<_>>().join(" / "),
+    }
+}
+
+impl TuningPanel {
+    /// What an edit parses to, if there is an edit.
+    fn edited(&self, get: u8, field: &Field) -> Option<Result<Value, String>> {
+        let text = self.edits.get(&(get, field.ident.clone()))?;
+        Some(field.parse(text).map_err(|e| e.to_string()))
+    }
+
+    /// Drops edits that now equal the device's value (after a verified write, or typed back).
+    fn prune(&mut self, rt: &Runtime) {
+        let profile = &rt.profile;
+        self.edits.retain(|(get, ident), text| {
+            let Some(field) = profile.command_by_id(*get).and_then(|c| c.reply.iter().find(|f| &f.ident == ident)) else {
+                return false;
+            };
+            match (field.parse(text), device_value(rt, *get, ident)) {
+                (Ok(v), Some(d)) => &v != d,
+                _ => true,
+            }
+        });
+    }
+
+    /// The writes the edits call for, or why they cannot be made.
+    pub fn pending(&self, rt: &Runtime) -> Result<(Vec<Change>, Vec<(u8, Vec<(String, Input)>)>), String> {
+        let mut changes = Vec::new();
+        let mut writes = Vec::new();
+        for (get, set) in rt.profile.commands.iter().filter(|c| c.kind == CommandKind::Get).filter_map(|g| {
+            Some((g, rt.profile.command_by_id(g.pair?)?))
+        }) {
+            let touched = get.reply.iter().any(|f| self.edits.contains_key(&(get.id, f.ident.clone())));
+            if !touched {
+                continue;
+            }
+            let mut inputs = Vec::new();
+            for f in &get.reply {
+                let device = device_value(rt, get.id, &f.ident);
+                let value = match self.edited(get.id, f) {
+                    Some(Ok(v)) => {
+                        if device != Some(&v) {
+                            changes.push(Change {
+                                command: set.ident.clone(),
+                                field: f.ident.clone(),
+                                device: device.map_or("—".into(), |d| f.format(d)),
+                                new: f.format(&v),
+                            });
+                        }
+                        v
+                    }
+                    Some(Err(e)) => return Err(e),
+                    None => match device {
+                        Some(d) => d.clone(),
+                        None => {
+                            return Err(format!(
+                                "{}: {} has not been read; read it first so that the whole command can be written",
+                                set.ident, f.ident
+                            ));
+                        }
+                    },
+                };
+                inputs.push((f.ident.clone(), Input::Raw(value)));
+            }
+            writes.push((set.id, inputs));
+        }
+        Ok((changes, writes))
+    }
+
+    /// Draws the panel.
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+        let mut actions = Vec::new();
+        self.prune(rt);
+        let pending = self.pending(rt);
+        let busy = rt.job_progress().is_some();
+        ui.horizontal(|ui| {
+            let gets: Vec<u8> = rt
+                .profile
+                .commands
+                .iter()
+                .filter(|c| c.kind == CommandKind::Get && c.pair.is_some())
+                .map(|c| c.id)
+                .collect();
+            if ui.add_enabled(rt.connected() && !busy, egui::Button::new(lang.tr("Read all", "全部读取"))).clicked() {
+                actions.push(Action::Job(JobSpec::Read(gets)));
+            }
+            let n_changes = pending.as_ref().map_or(0, |(c, _)| c.len());
+            let can_write = rt.connected() && !busy && matches!(&pending, Ok((c, _)) if !c.is_empty());
+            let write = ui.add_enabled(
+                can_write,
+                egui::Button::new(format!("{} ({n_changes})", lang.tr("Write changes", "写入修改"))),
+            );
+            if write.clicked() {
+                if let Ok(p) = &pending {
+                    self.confirm = Some(p.clone());
+                }
+            }
+            if ui.add_enabled(!self.edits.is_empty(), egui::Button::new(lang.tr("Revert", "撤销修改"))).clicked() {
+                self.edits.clear();
+            }
+            if let Err(e) = &pending {
+                ui.colored_label(egui::Color32::RED, e);
+            }
+        });
+        ui.separator();
+        egui::ScrollArea::vertical().auto_shrink(false).show(ui, |ui| {
+            for (gid, name, members) in groups(rt, lang) {
+                egui::CollapsingHeader::new(egui::RichText::new(&name).strong())
+                    .id_salt(("group", gid))
+                    .default_open(true)
+                    .show(ui, |ui| {
+                        for (get, set) in members {
+                            self.command_rows(ui, lang, rt, get, set);
+                        }
+                    });
+            }
+        });
+        if let Some(action) = self.confirm_dialog(ui, lang) {
+            actions.push(action);
+        }
+        actions
+    }
+
+    fn command_rows(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, get: &Command, set: &Command) {
+        ui.horizontal(|ui| {
+            ui.label(egui::RichText::new(lang.tr(&get.name.en, &get.name.zh)).italics());
+            ui.weak(format!("{} {} / {} {}", get.ident, get.id, set.ident, set.id));
+        });
+        if let Some(Reading::Failed(e)) = rt.readings.get(&get.id) {
+            ui.colored_label(egui::Color32::RED, format!("{}: {e}", lang.tr("read failed", "读取失败")));
+        }
+        egui::Grid::new(("fields", get.id))
+            .num_columns(6)
+            .striped(true)
+            .min_col_width(60.0)
+            .show(ui, |ui| {
+                ui.weak(lang.tr("Field", "字段"));
+                ui.weak(lang.tr("Device", "设备值"));
+                ui.weak(lang.tr("Edited", "修改值"));
+                ui.weak(lang.tr("Unit", "单位"));
+                ui.weak(lang.tr("Range", "范围"));
+                ui.weak("");
+                ui.end_row();
+                for f in &get.reply {
+                    self.field_row(ui, lang, rt, get.id, f);
+                    ui.end_row();
+                }
+            });
+        ui.add_space(6.0);
+    }
+
+    fn field_row(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, get: u8, f: &Field) {
+        let key = (get, f.ident.clone());
+        ui.label(lang.tr(&f.name.en, &f.name.zh)).on_hover_text(&f.ident);
+        let device = device_value(rt, get, &f.ident);
+        match device {
+            Some(v) => ui.monospace(f.format(v)),
+            None => ui.weak(lang.tr("not read yet", "尚未读取")),
+        };
+        let mut text = self
+            .edits
+            .get(&key)
+            .cloned()
+            .unwrap_or_else(|| device.map(|v| f.format(v)).unwrap_or_default());
+        let parsed = self.edits.get(&key).map(|t| f.parse(t));
+        let invalid = matches!(parsed, Some(Err(_)));
+        let changed = matches!(&parsed, Some(Ok(v)) if device != Some(v));
+        let mut edit = egui::TextEdit::singleline(&mut text).desired_width(90.0);
+        if invalid {
+            edit = edit.text_color(egui::Color32::RED);
+        }
+        let resp = ui.add(edit);
+        let resp = if invalid {
+            ui.painter().rect_stroke(resp.rect, 2.0, egui::Stroke::new(1.5, egui::Color32::RED), egui::StrokeKind::Outside);
+            resp
+        } else {
+            resp
+        };
+        if resp.changed() {
+            self.edits.insert(key.clone(), text);
+        }
+        ui.label(&f.unit);
+        ui.weak(range_text(f));
+        match (&parsed, rt.marks.get(&key)) {
+            (Some(Err(e)), _) => {
+                ui.colored_label(egui::Color32::RED, format!("✗ {}", lang.tr("invalid", "无效")))
+                    .on_hover_text(format!("{e}\n{}: {}", lang.tr("allowed", "允许"), range_text(f)));
+            }
+            _ if changed => {
+                ui.colored_label(egui::Color32::from_rgb(220, 150, 0), format!("● {}", lang.tr("changed", "已修改")));
+            }
+            (_, Some(Mark::Verified)) => {
+                ui.colored_label(egui::Color32::from_rgb(40, 160, 60), format!("✓ {}", lang.tr("verified", "已校验")));
+            }
+            (_, Some(Mark::Mismatch(read))) => {
+                ui.colored_label(
+                    egui::Color32::RED,
+                    format!("✗ {} {}", lang.tr("mismatch: device holds", "不一致:设备为"), f.format(read)),
+                );
+            }
+            _ => {
+                ui.label("");
+            }
+        }
+    }
+
+    fn confirm_dialog(&mut self, ui: &mut egui::Ui, lang: Lang) -> Option<Action> {
+        let (changes, writes) = self.confirm.as_ref()?;
+        let mut decision = None;
+        let modal = egui::Modal::new(egui::Id::unique("confirm-write")).show(ui.ctx(), |ui| {
+            ui.heading(lang.tr("Write these changes?", "写入以下修改?"));
+            egui::Grid::new("diff").striped(true).num_columns(4).show(ui, |ui| {
+                ui.strong(lang.tr("Command", "命令"));
+                ui.strong(lang.tr("Field", "字段"));
+                ui.strong(lang.tr("Device", "设备值"));
+                ui.strong(lang.tr("New", "新值"));
+                ui.end_row();
+                for c in changes {
+                    ui.monospace(&c.command);
+                    ui.label(&c.field);
+                    ui.label(&c.device);
+                    ui.strong(&c.new);
+                    ui.end_row();
+                }
+            });
+            ui.label(format!(
+                "{} {} {}",
+                writes.len(),
+                lang.tr("command(s) will be written, then read back.", "条命令将被写入并回读校验。"),
+                ""
+            ));
+            ui.horizontal(|ui| {
+                if ui.button(lang.tr("Write", "写入")).clicked() {
+                    decision = Some(true);
+                }
+                if ui.button(lang.tr("Cancel", "取消")).clicked() {
+                    decision = Some(false);
+                }
+            });
+        });
+        if modal.should_close() && decision.is_none() {
+            decision = Some(false);
+        }
+        match decision {
+            Some(true) => {
+                let (_, writes) = self.confirm.take()?;
+                Some(Action::Job(JobSpec::Write(writes)))
+            }
+            Some(false) => {
+                self.confirm = None;
+                None
+            }
+            None => None,
+        }
+    }
+}
