@@ -2,6 +2,7 @@ pub mod cli;
 pub mod link;
 pub mod ops;
 pub mod packet;
+pub mod preset;
 pub mod profile;
 pub mod protocol;
 pub mod sim;
