@@ -274,7 +274,9 @@ impl Preset {
 
     /// Parses preset text, checking its syntax and version only.
     pub fn parse_unchecked(name: &str, text: &str) -> Result<Preset, PresetError> {
-        let options = ron::Options::default();
+        // `device: "..."` and `device: Some("...")` both read.
+        let options = ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
         let doc: Doc = match options.from_str(text) {
             Ok(doc) => doc,
             Err(e) => {
@@ -438,14 +440,12 @@ impl Preset {
                     );
                     continue;
                 }
+                // FieldError's messages name the field, the value and what is allowed.
                 match field.parse(text_value) {
                     Ok(v) => inputs.push((field.ident.clone(), Input::Raw(v))),
                     Err(e) => {
                         ok = false;
-                        problem(
-                            at,
-                            format!("{} {} = \"{text_value}\": {e}", set.ident, field.ident),
-                        );
+                        problem(at, format!("{}: {e}", set.ident));
                     }
                 }
             }
@@ -572,7 +572,9 @@ impl Preset {
         Ok(all)
     }
 
-    /// [`Preset::apply`], telling `written` each command's checks as it is written.
+    /// [`Preset::apply`], telling `written` each command's checks as it is written. Progress is
+    /// reported before the first command and after each; a cancel raised then stops before the
+    /// next command.
     pub fn apply_each(
         &self,
         client: &Client,
@@ -585,26 +587,26 @@ impl Preset {
             .validate(profile)
             .map_err(|e| OpError::Input(e.to_string()))?;
         let total = writes.len() as u64;
+        progress(Progress {
+            done: 0,
+            total,
+            message: "checked; writing".into(),
+        });
         for (i, w) in writes.iter().enumerate() {
             if cancel.is_cancelled() {
                 break;
             }
-            progress(Progress {
-                done: i as u64,
-                total,
-                message: format!("writing {}", w.command),
-            });
             let set = profile.command(&w.command).ok_or_else(|| {
                 OpError::Input(format!("{} has no command '{}'", profile.id, w.command))
             })?;
             let checks = ops::write_verified(client, profile, set, &w.inputs)?;
             written(&set.ident, &checks);
+            progress(Progress {
+                done: i as u64 + 1,
+                total,
+                message: format!("wrote {}", set.ident),
+            });
         }
-        progress(Progress {
-            done: total,
-            total,
-            message: "done".into(),
-        });
         Ok(())
     }
 
@@ -680,11 +682,6 @@ pub fn read_device(
         if cancel.is_cancelled() {
             return Err(OpError::Cancelled);
         }
-        progress(Progress {
-            done: i as u64,
-            total,
-            message: format!("reading {}", get.ident),
-        });
         let read = ops::read(client, profile, get, &[])?;
         let fields = set
             .request
@@ -699,12 +696,12 @@ pub fn read_device(
             command: set.ident.clone(),
             fields,
         });
+        progress(Progress {
+            done: i as u64 + 1,
+            total,
+            message: format!("read {}", get.ident),
+        });
     }
-    progress(Progress {
-        done: total,
-        total,
-        message: "done".into(),
-    });
     Ok(values)
 }
 
@@ -844,7 +841,7 @@ fn find_outside_comments(
 
 /// The document as written; `version` is optional here so that its absence gets a clear message.
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "preset")]
 struct Doc {
     #[serde(default)]
     version: Option<u32>,
