@@ -6,6 +6,7 @@
 mod frame;
 mod msp;
 mod port;
+mod preset;
 mod servo;
 mod sim;
 mod tuya;
@@ -76,6 +77,9 @@ enum Cmd {
     Servo(servo::ServoArgs),
     /// Tuya MCU, with botbench as the Wi-Fi module.
     Tuya(tuya::TuyaArgs),
+    /// Save, compare and apply presets of a device's tunable parameters.
+    #[command(subcommand)]
+    Preset(preset::PresetCmd),
 }
 
 /// Runs the command line with the process's arguments.
@@ -104,6 +108,7 @@ fn run(cli: Cli) -> CliResult {
         Some(Cmd::Msp(args)) => msp::run(args),
         Some(Cmd::Servo(args)) => servo::run(args),
         Some(Cmd::Tuya(args)) => tuya::run(args),
+        Some(Cmd::Preset(cmd)) => preset::run(cmd),
         Some(Cmd::Sim(args)) => sim::run(args),
         None => {
             use clap::CommandFactory;
