@@ -4,6 +4,7 @@ pub mod i18n;
 pub mod link;
 pub mod ops;
 pub mod packet;
+pub mod preset;
 pub mod profile;
 pub mod protocol;
 pub mod series;

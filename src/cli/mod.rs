@@ -6,6 +6,7 @@
 mod frame;
 mod msp;
 mod port;
+mod preset;
 mod servo;
 mod sim;
 mod tuya;
@@ -98,6 +99,9 @@ enum Cmd {
         #[arg(long)]
         json: bool,
     },
+    /// Save, compare and apply presets of a device's tunable parameters.
+    #[command(subcommand)]
+    Preset(preset::PresetCmd),
 }
 
 /// Runs the command line with the process's arguments.
@@ -127,8 +131,13 @@ fn run(cli: Cli) -> CliResult {
         Some(Cmd::Servo(args)) => servo::run(args),
         Some(Cmd::Tuya(args)) => tuya::run(args),
         Some(Cmd::Bench { long, json }) => bench(long, json),
+        Some(Cmd::Preset(cmd)) => preset::run(cmd),
         Some(Cmd::Sim(args)) => sim::run(args),
-        Some(Cmd::Gui { port, baud, profile }) => gui(port, baud, profile),
+        Some(Cmd::Gui {
+            port,
+            baud,
+            profile,
+        }) => gui(port, baud, profile),
         None => gui(None, None, None),
     }
 }
@@ -205,6 +214,7 @@ fn gui(port: Option<String>, baud: Option<u32>, profile: Option<String>) -> CliR
         registry()?.get(p).map_err(CliError::input)?;
     }
     let target = port.map(crate::ui::Target::Port);
-    crate::ui::run(target, baud, profile).map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
+    crate::ui::run(target, baud, profile)
+        .map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
     Ok(0)
 }

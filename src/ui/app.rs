@@ -97,8 +97,16 @@ impl App {
             telemetry: telemetry::TelemetryPanel::default(),
             monitor: monitor::MonitorPanel::default(),
         };
-        let (target, baud, profile) = (app.saved.target.clone(), app.saved.baud, app.saved.profile.clone());
-        app.apply(Action::Connect { target, baud, profile });
+        let (target, baud, profile) = (
+            app.saved.target.clone(),
+            app.saved.baud,
+            app.saved.profile.clone(),
+        );
+        app.apply(Action::Connect {
+            target,
+            baud,
+            profile,
+        });
         Ok(app)
     }
 
@@ -110,7 +118,11 @@ impl App {
         self.rt.drain_job();
         self.rt.refresh_ports();
         let title = match &self.rt.conn {
-            Some(c) => format!("botbench — {} — {}", c.target.label(), self.rt.profile.name.en),
+            Some(c) => format!(
+                "botbench — {} — {}",
+                c.target.label(),
+                self.rt.profile.name.en
+            ),
             None => "botbench — not connected".to_string(),
         };
         ctx.send_viewport_cmd(egui::ViewportCommand::Title(title));
@@ -144,7 +156,9 @@ impl App {
         });
         egui::CentralPanel::default().show(ui, |ui| match self.saved.panel {
             PanelId::Tuning => actions.extend(self.tuning.show(ui, lang, &self.rt)),
-            PanelId::Telemetry => actions.extend(self.telemetry.show(ui, &mut self.saved, &self.rt)),
+            PanelId::Telemetry => {
+                actions.extend(self.telemetry.show(ui, &mut self.saved, &self.rt))
+            }
             PanelId::Monitor => actions.extend(self.monitor.show(ui, lang, &mut self.rt)),
         });
         for a in actions {
@@ -156,7 +170,12 @@ impl App {
     pub fn panels(&self) -> Vec<PanelId> {
         let mut v = Vec::new();
         if self.rt.profile.protocol == Protocol::Msp
-            && self.rt.profile.commands.iter().any(|c| c.kind == crate::profile::CommandKind::Set)
+            && self
+                .rt
+                .profile
+                .commands
+                .iter()
+                .any(|c| c.kind == crate::profile::CommandKind::Set)
         {
             v.push(PanelId::Tuning);
         }
@@ -170,21 +189,23 @@ impl App {
     /// Carries out one action.
     pub fn apply(&mut self, action: Action) {
         match action {
-            Action::Connect { target, baud, profile } => {
-                match self.rt.connect(target.clone(), baud, &profile) {
-                    Ok(()) => {
-                        self.saved.target = target;
-                        self.saved.baud = baud;
-                        self.saved.profile = profile;
-                        self.tuning = tuning::TuningPanel::default();
-                        if !self.panels().contains(&self.saved.panel) {
-                            self.saved.panel = self.panels()[0];
-                        }
-                        self.restart_polls();
+            Action::Connect {
+                target,
+                baud,
+                profile,
+            } => match self.rt.connect(target.clone(), baud, &profile) {
+                Ok(()) => {
+                    self.saved.target = target;
+                    self.saved.baud = baud;
+                    self.saved.profile = profile;
+                    self.tuning = tuning::TuningPanel::default();
+                    if !self.panels().contains(&self.saved.panel) {
+                        self.saved.panel = self.panels()[0];
                     }
-                    Err(e) => self.rt.say(format!("cannot connect: {e}"), true),
+                    self.restart_polls();
                 }
-            }
+                Err(e) => self.rt.say(format!("cannot connect: {e}"), true),
+            },
             Action::Disconnect => {
                 self.rt.disconnect();
                 self.rt.say("disconnected", false);
@@ -208,7 +229,11 @@ impl App {
     }
 
     fn restart_polls(&mut self) {
-        let polls = if self.rt.paused { Vec::new() } else { self.rt.polls(self.saved.poll_hz) };
+        let polls = if self.rt.paused {
+            Vec::new()
+        } else {
+            self.rt.polls(self.saved.poll_hz)
+        };
         self.rt.send(LinkCommand::SetPolls(polls));
     }
 }

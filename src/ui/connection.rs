@@ -8,7 +8,9 @@ use crate::link::LinkState;
 use crate::sim::SimKind;
 use eframe::egui;
 
-const BAUDS: [u32; 11] = [9600, 19_200, 38_400, 57_600, 115_200, 230_400, 250_000, 460_800, 500_000, 921_600, 1_000_000];
+const BAUDS: [u32; 11] = [
+    9600, 19_200, 38_400, 57_600, 115_200, 230_400, 250_000, 460_800, 500_000, 921_600, 1_000_000,
+];
 
 /// The bar's fields before Connect is pressed.
 pub struct ConnectionBar {
@@ -101,7 +103,9 @@ impl ConnectionBar {
                 });
             }
             if rt.conn.is_some()
-                && (self.target != saved.target || self.baud != saved.baud || self.profile != saved.profile)
+                && (self.target != saved.target
+                    || self.baud != saved.baud
+                    || self.profile != saved.profile)
                 && ui.button(lang.tr("Reconnect", "重新连接")).clicked()
             {
                 actions.push(Action::Connect {
@@ -132,27 +136,51 @@ impl ConnectionBar {
 
 fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
     let (text, color) = match (&rt.conn, &rt.state) {
-        (None, _) => (lang.tr("not connected", "未连接").to_string(), egui::Color32::GRAY),
-        (Some(_), Some(LinkState::Connected { .. })) => {
-            (lang.tr("● connected", "● 已连接").to_string(), egui::Color32::from_rgb(40, 160, 60))
-        }
+        (None, _) => (
+            lang.tr("not connected", "未连接").to_string(),
+            egui::Color32::GRAY,
+        ),
+        (Some(_), Some(LinkState::Connected { .. })) => (
+            lang.tr("● connected", "● 已连接").to_string(),
+            egui::Color32::from_rgb(40, 160, 60),
+        ),
         (Some(_), Some(LinkState::Reconnecting { attempt })) => (
             format!("{} ({attempt})", lang.tr("● reconnecting", "● 重连中")),
             egui::Color32::from_rgb(220, 150, 0),
         ),
-        (Some(_), Some(LinkState::Lost { .. })) => (lang.tr("● lost", "● 连接丢失").to_string(), egui::Color32::RED),
-        (Some(_), Some(LinkState::Closed)) => (lang.tr("closed", "已关闭").to_string(), egui::Color32::GRAY),
-        (Some(_), None) => (lang.tr("opening…", "打开中…").to_string(), egui::Color32::GRAY),
+        (Some(_), Some(LinkState::Lost { .. })) => (
+            lang.tr("● lost", "● 连接丢失").to_string(),
+            egui::Color32::RED,
+        ),
+        (Some(_), Some(LinkState::Closed)) => {
+            (lang.tr("closed", "已关闭").to_string(), egui::Color32::GRAY)
+        }
+        (Some(_), None) => (
+            lang.tr("opening…", "打开中…").to_string(),
+            egui::Color32::GRAY,
+        ),
     };
     ui.colored_label(color, text);
     if let Some(rtt) = rt.stats.rtt {
-        ui.label(format!("{} {:.1} ms", lang.tr("round trip", "往返"), rtt.as_secs_f64() * 1e3));
+        ui.label(format!(
+            "{} {:.1} ms",
+            lang.tr("round trip", "往返"),
+            rtt.as_secs_f64() * 1e3
+        ));
     }
     let errors = rt.stats.timeouts + rt.stats.frame_errors;
-    let color = if errors > 0 { egui::Color32::from_rgb(220, 150, 0) } else { ui.visuals().weak_text_color() };
+    let color = if errors > 0 {
+        egui::Color32::from_rgb(220, 150, 0)
+    } else {
+        ui.visuals().weak_text_color()
+    };
     ui.colored_label(color, format!("{} {errors}", lang.tr("errors", "错误")))
         .on_hover_text(format!(
             "timeouts {}, frame errors {}, retries {}, frames sent {}, received {}",
-            rt.stats.timeouts, rt.stats.frame_errors, rt.stats.retries, rt.stats.sent, rt.stats.received
+            rt.stats.timeouts,
+            rt.stats.frame_errors,
+            rt.stats.retries,
+            rt.stats.sent,
+            rt.stats.received
         ));
 }

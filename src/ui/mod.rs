@@ -66,7 +66,9 @@ impl JobSpec {
                     if cancel.is_cancelled() {
                         return Err("cancelled".into());
                     }
-                    let Some(cmd) = profile.command_by_id(*id) else { continue };
+                    let Some(cmd) = profile.command_by_id(*id) else {
+                        continue;
+                    };
                     let r = ops::read(client, &profile, cmd, &[]).map_err(|e| e.to_string());
                     failed += usize::from(r.is_err());
                     sink.send(jobs::JobOutput::Read(*id, r));
@@ -89,8 +91,11 @@ impl JobSpec {
                     if cancel.is_cancelled() {
                         return Err(format!("cancelled after {i} of {total} commands"));
                     }
-                    let Some(cmd) = profile.command_by_id(*set) else { continue };
-                    let r = ops::write_verified(client, &profile, cmd, inputs).map_err(|e| e.to_string());
+                    let Some(cmd) = profile.command_by_id(*set) else {
+                        continue;
+                    };
+                    let r = ops::write_verified(client, &profile, cmd, inputs)
+                        .map_err(|e| e.to_string());
                     match &r {
                         Ok(checks) if checks.iter().all(|c| c.ok()) => verified += 1,
                         _ => bad += 1,
@@ -123,7 +128,11 @@ pub fn shown(field: &crate::profile::Field, v: &Value) -> String {
 }
 
 /// Opens the window. `target`, `baud` and `profile` override the saved settings.
-pub fn run(target: Option<Target>, baud: Option<u32>, profile: Option<String>) -> Result<(), String> {
+pub fn run(
+    target: Option<Target>,
+    baud: Option<u32>,
+    profile: Option<String>,
+) -> Result<(), String> {
     let options = eframe::NativeOptions {
         viewport: eframe::egui::ViewportBuilder::default()
             .with_inner_size([1200.0, 780.0])
@@ -148,7 +157,8 @@ pub fn run(target: Option<Target>, baud: Option<u32>, profile: Option<String>) -
             if let Some(p) = profile {
                 saved.profile = p;
             }
-            let app = App::new(&cc.egui_ctx, saved).map_err(|e| -> Box<dyn std::error::Error + Send + Sync> { e.into() })?;
+            let app = App::new(&cc.egui_ctx, saved)
+                .map_err(|e| -> Box<dyn std::error::Error + Send + Sync> { e.into() })?;
             Ok(Box::new(app))
         }),
     )

@@ -22,8 +22,17 @@ pub struct MonitorPanel {
 pub fn line(profile: &Profile, e: &LogEntry) -> String {
     let time = chrono::DateTime::<chrono::Local>::from(e.at).format("%H:%M:%S%.3f");
     match &e.frame {
-        Ok(p) => format!("{time} {} {:<40} {}", e.direction.arrow(), hex::format(&p.wire), p.summary(profile)),
-        Err(err) => format!("{time} {} {:<40} !! {err}", e.direction.arrow(), hex::format(err.bytes())),
+        Ok(p) => format!(
+            "{time} {} {:<40} {}",
+            e.direction.arrow(),
+            hex::format(&p.wire),
+            p.summary(profile)
+        ),
+        Err(err) => format!(
+            "{time} {} {:<40} !! {err}",
+            e.direction.arrow(),
+            hex::format(err.bytes())
+        ),
     }
 }
 
@@ -38,8 +47,11 @@ impl MonitorPanel {
         }
         match &e.frame {
             Ok(p) => {
-                let name = profile.command_by_id(p.command).map_or("", |c| c.ident.as_str());
-                p.command.to_string() == f || name.to_ascii_lowercase().contains(&f.to_ascii_lowercase())
+                let name = profile
+                    .command_by_id(p.command)
+                    .map_or("", |c| c.ident.as_str());
+                p.command.to_string() == f
+                    || name.to_ascii_lowercase().contains(&f.to_ascii_lowercase())
             }
             Err(_) => false,
         }
@@ -51,9 +63,17 @@ impl MonitorPanel {
         let profile = rt.profile.clone();
         ui.horizontal_wrapped(|ui| {
             ui.label(lang.tr("Filter", "筛选"));
-            ui.add(egui::TextEdit::singleline(&mut self.filter).hint_text(lang.tr("command name or number", "命令名或编号")).desired_width(180.0));
+            ui.add(
+                egui::TextEdit::singleline(&mut self.filter)
+                    .hint_text(lang.tr("command name or number", "命令名或编号"))
+                    .desired_width(180.0),
+            );
             ui.checkbox(&mut self.errors_only, lang.tr("errors only", "仅错误"));
-            let pause = if rt.log_paused { lang.tr("Resume", "继续") } else { lang.tr("Pause", "暂停") };
+            let pause = if rt.log_paused {
+                lang.tr("Resume", "继续")
+            } else {
+                lang.tr("Pause", "暂停")
+            };
             if ui.button(pause).clicked() {
                 rt.log_paused = !rt.log_paused;
             }
@@ -64,10 +84,18 @@ impl MonitorPanel {
             let copy = ui.button(lang.tr("Copy", "复制")).clicked();
             let save_clicked = ui.button(lang.tr("Save…", "保存…")).clicked();
             if copy || save_clicked {
-                let shown: Vec<String> = rt.log.iter().filter(|e| self.matches(&profile, e)).map(|e| line(&profile, e)).collect();
+                let shown: Vec<String> = rt
+                    .log
+                    .iter()
+                    .filter(|e| self.matches(&profile, e))
+                    .map(|e| line(&profile, e))
+                    .collect();
                 if copy {
                     ui.ctx().copy_text(shown.join("\n"));
-                    actions.push(Action::Say(format!("{} line(s) copied", shown.len()), false));
+                    actions.push(Action::Say(
+                        format!("{} line(s) copied", shown.len()),
+                        false,
+                    ));
                 } else {
                     actions.push(save(&shown));
                 }
@@ -78,11 +106,23 @@ impl MonitorPanel {
                 shown,
                 lang.tr("shown", "条显示"),
                 rt.log.len(),
-                if rt.log_dropped > 0 { format!(", {} {}", rt.log_dropped, lang.tr("not kept while paused", "暂停期间未记录")) } else { String::new() }
+                if rt.log_dropped > 0 {
+                    format!(
+                        ", {} {}",
+                        rt.log_dropped,
+                        lang.tr("not kept while paused", "暂停期间未记录")
+                    )
+                } else {
+                    String::new()
+                }
             ));
         });
         ui.separator();
-        let rows: Vec<&LogEntry> = rt.log.iter().filter(|e| self.matches(&profile, e)).collect();
+        let rows: Vec<&LogEntry> = rt
+            .log
+            .iter()
+            .filter(|e| self.matches(&profile, e))
+            .collect();
         let row_h = ui.text_style_height(&egui::TextStyle::Monospace) + 2.0;
         egui::ScrollArea::both()
             .auto_shrink(false)
@@ -95,7 +135,10 @@ impl MonitorPanel {
                         (Ok(_), Direction::HostToDevice) => ui.visuals().text_color(),
                         (Ok(_), Direction::DeviceToHost) => egui::Color32::from_rgb(40, 140, 200),
                     };
-                    ui.add(egui::Label::new(egui::RichText::new(text).monospace().color(color)).wrap_mode(egui::TextWrapMode::Extend));
+                    ui.add(
+                        egui::Label::new(egui::RichText::new(text).monospace().color(color))
+                            .wrap_mode(egui::TextWrapMode::Extend),
+                    );
                 }
             });
         actions
@@ -103,13 +146,23 @@ impl MonitorPanel {
 }
 
 fn save(lines: &[String]) -> Action {
-    let Some(path) = rfd::FileDialog::new().set_file_name("packets.txt").save_file() else {
-        return Action::Say("save cancelled (no file chosen, or no file dialog on this system)".into(), false);
+    let Some(path) = rfd::FileDialog::new()
+        .set_file_name("packets.txt")
+        .save_file()
+    else {
+        return Action::Say(
+            "save cancelled (no file chosen, or no file dialog on this system)".into(),
+            false,
+        );
     };
     let tmp = path.with_extension("tmp");
-    let result = std::fs::write(&tmp, lines.join("\n") + "\n").and_then(|()| std::fs::rename(&tmp, &path));
+    let result =
+        std::fs::write(&tmp, lines.join("\n") + "\n").and_then(|()| std::fs::rename(&tmp, &path));
     match result {
-        Ok(()) => Action::Say(format!("{} line(s) saved to {}", lines.len(), path.display()), false),
+        Ok(()) => Action::Say(
+            format!("{} line(s) saved to {}", lines.len(), path.display()),
+            false,
+        ),
         Err(e) => Action::Say(format!("cannot write {}: {e}", path.display()), true),
     }
 }

@@ -4,7 +4,8 @@
 use super::jobs::{Job, JobOutput};
 use crate::link::{
     DeviceInfo, Link, LinkCommand, LinkEvent, LinkOptions, LinkState, LinkStats, LogEntry, Opener,
-    Poll, Request, serial::{self, PortInfo},
+    Poll, Request,
+    serial::{self, PortInfo},
 };
 use crate::ops::msp::Check;
 use crate::packet::Packet;
@@ -167,7 +168,10 @@ impl Runtime {
 
     /// Re-lists the serial ports at most once a second.
     pub fn refresh_ports(&mut self) {
-        if self.ports_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1)) {
+        if self
+            .ports_at
+            .is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
+        {
             self.ports = serial::list_ports();
             self.ports_at = Some(Instant::now());
         }
@@ -272,7 +276,9 @@ impl Runtime {
             LinkEvent::State(s) => {
                 match &s {
                     LinkState::Lost { reason } => self.say(format!("link lost: {reason}"), true),
-                    LinkState::Connected { port, baud } => self.say(format!("connected to {port} at {baud} baud"), false),
+                    LinkState::Connected { port, baud } => {
+                        self.say(format!("connected to {port} at {baud} baud"), false)
+                    }
                     _ => {}
                 }
                 self.state = Some(s);
@@ -286,10 +292,15 @@ impl Runtime {
                 }
                 self.reports.push_back((Instant::now(), p));
             }
-            LinkEvent::Telemetry { command, at, result } => match result {
+            LinkEvent::Telemetry {
+                command,
+                at,
+                result,
+            } => match result {
                 Ok(p) => self.on_telemetry(command, at, &p),
                 Err(e) => {
-                    self.readings.insert(command, Reading::Failed(e.to_string()));
+                    self.readings
+                        .insert(command, Reading::Failed(e.to_string()));
                 }
             },
             LinkEvent::Reply { .. } | LinkEvent::Tuya(_) => {}
@@ -308,12 +319,21 @@ impl Runtime {
     }
 
     fn on_telemetry(&mut self, command: u8, at: Instant, p: &Packet) {
-        let Some(cmd) = self.profile.command_by_id(command) else { return };
-        let Ok(d) = self.profile.decode(cmd, p.direction, &p.payload) else {
-            self.readings.insert(command, Reading::Failed("the answer does not fit the profile".into()));
+        let Some(cmd) = self.profile.command_by_id(command) else {
             return;
         };
-        let values: Vec<(String, Value)> = d.values.iter().map(|v| (v.ident.clone(), v.value.clone())).collect();
+        let Ok(d) = self.profile.decode(cmd, p.direction, &p.payload) else {
+            self.readings.insert(
+                command,
+                Reading::Failed("the answer does not fit the profile".into()),
+            );
+            return;
+        };
+        let values: Vec<(String, Value)> = d
+            .values
+            .iter()
+            .map(|v| (v.ident.clone(), v.value.clone()))
+            .collect();
         let t = at.saturating_duration_since(self.t0).as_secs_f64();
         for plot in &self.profile.plots {
             if !plot.command.eq_ignore_ascii_case(&cmd.ident) {
@@ -335,7 +355,11 @@ impl Runtime {
     pub fn start_job(
         &mut self,
         title: &str,
-        work: impl FnOnce(&crate::link::Client, &crate::ops::Cancel, &super::jobs::JobSink) -> Result<String, String>
+        work: impl FnOnce(
+            &crate::link::Client,
+            &crate::ops::Cancel,
+            &super::jobs::JobSink,
+        ) -> Result<String, String>
         + Send
         + 'static,
     ) {
@@ -361,7 +385,8 @@ impl Runtime {
         for out in outputs {
             match out {
                 JobOutput::Read(id, Ok(values)) => {
-                    self.readings.insert(id, Reading::Values(values, Instant::now()));
+                    self.readings
+                        .insert(id, Reading::Values(values, Instant::now()));
                 }
                 JobOutput::Read(id, Err(e)) => {
                     self.readings.insert(id, Reading::Failed(e));
@@ -376,19 +401,32 @@ impl Runtime {
     }
 
     fn on_written(&mut self, set: u8, result: Result<Vec<Check>, String>) {
-        let Some(get) = self.profile.command_by_id(set).and_then(|s| s.pair) else { return };
+        let Some(get) = self.profile.command_by_id(set).and_then(|s| s.pair) else {
+            return;
+        };
         match result {
             Ok(checks) => {
-                let values: Vec<(String, Value)> = checks.iter().map(|c| (c.field.clone(), c.read.clone())).collect();
+                let values: Vec<(String, Value)> = checks
+                    .iter()
+                    .map(|c| (c.field.clone(), c.read.clone()))
+                    .collect();
                 for c in &checks {
-                    let mark = if c.ok() { Mark::Verified } else { Mark::Mismatch(c.read.clone()) };
+                    let mark = if c.ok() {
+                        Mark::Verified
+                    } else {
+                        Mark::Mismatch(c.read.clone())
+                    };
                     self.marks.insert((get, c.field.clone()), mark);
                 }
-                self.readings.insert(get, Reading::Values(values, Instant::now()));
+                self.readings
+                    .insert(get, Reading::Values(values, Instant::now()));
             }
             Err(e) => {
                 // Nothing is known of what the device holds now: read it again before trusting it.
-                self.readings.insert(get, Reading::Failed(format!("write failed: {e}; read again")));
+                self.readings.insert(
+                    get,
+                    Reading::Failed(format!("write failed: {e}; read again")),
+                );
             }
         }
     }

@@ -14,7 +14,10 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
                 ui.label(c.target.label());
                 if let Some(Ok(info)) = &rt.info {
                     ui.separator();
-                    ui.label(format!("hw {:#04x} fw {} api {}", info.hw, info.firmware, info.api));
+                    ui.label(format!(
+                        "hw {:#04x} fw {} api {}",
+                        info.hw, info.firmware, info.api
+                    ));
                 }
             }
             None => {
@@ -24,7 +27,11 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
         if let Some((title, fraction, msg)) = rt.job_progress() {
             ui.separator();
             ui.label(title);
-            ui.add(egui::ProgressBar::new(fraction).desired_width(160.0).show_percentage());
+            ui.add(
+                egui::ProgressBar::new(fraction)
+                    .desired_width(160.0)
+                    .show_percentage(),
+            );
             ui.weak(msg);
             if ui.button(lang.tr("Cancel", "取消")).clicked() {
                 actions.push(Action::CancelJob);
@@ -32,7 +39,11 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
         }
         if let Some(s) = &rt.status {
             ui.separator();
-            let color = if s.error { egui::Color32::RED } else { ui.visuals().text_color() };
+            let color = if s.error {
+                egui::Color32::RED
+            } else {
+                ui.visuals().text_color()
+            };
             ui.colored_label(color, &s.text);
         }
     });

@@ -3,16 +3,25 @@
 //! readout, the other telemetry listed with live values, and CSV export.
 
 use super::Action;
+use super::JobSpec;
 use super::app::Saved;
 use super::runtime::{Reading, Runtime};
-use super::JobSpec;
 use crate::i18n::Lang;
 use crate::profile::CommandKind;
 use eframe::egui;
 use egui_plot::{Legend, Line, Plot, PlotPoints, VLine};
 
 /// Poll rates offered, polls a second (`None`: as fast as the wire allows).
-pub const RATES: [Option<f64>; 8] = [Some(1.0), Some(2.0), Some(5.0), Some(10.0), Some(20.0), Some(50.0), Some(100.0), None];
+pub const RATES: [Option<f64>; 8] = [
+    Some(1.0),
+    Some(2.0),
+    Some(5.0),
+    Some(10.0),
+    Some(20.0),
+    Some(50.0),
+    Some(100.0),
+    None,
+];
 /// Time windows offered, seconds.
 pub const WINDOWS: [f64; 6] = [10.0, 30.0, 60.0, 120.0, 300.0, 600.0];
 
@@ -54,12 +63,19 @@ impl TelemetryPanel {
                 .selected_text(rate_label(saved.poll_hz, lang))
                 .show_ui(ui, |ui| {
                     for r in RATES {
-                        if ui.selectable_label(saved.poll_hz == r, rate_label(r, lang)).clicked() {
+                        if ui
+                            .selectable_label(saved.poll_hz == r, rate_label(r, lang))
+                            .clicked()
+                        {
                             actions.push(Action::SetPollRate(r));
                         }
                     }
                 });
-            let pause = if rt.paused { lang.tr("Resume", "继续") } else { lang.tr("Pause", "暂停") };
+            let pause = if rt.paused {
+                lang.tr("Resume", "继续")
+            } else {
+                lang.tr("Pause", "暂停")
+            };
             if ui.button(pause).clicked() {
                 actions.push(Action::PausePolling(!rt.paused));
             }
@@ -86,7 +102,11 @@ impl TelemetryPanel {
         for plot in plots {
             ui.label(egui::RichText::new(lang.tr(&plot.name.en, &plot.name.zh)).strong());
             let set = rt.plots.get(&plot.id);
-            let end = if self.follow { now } else { set.and_then(|s| s.span()).map_or(now, |s| s.1) };
+            let end = if self.follow {
+                now
+            } else {
+                set.and_then(|s| s.span()).map_or(now, |s| s.1)
+            };
             let width_px = ui.available_width().max(100.0) as usize;
             let cursor = self.cursor;
             let points = &mut self.points;
@@ -106,7 +126,9 @@ impl TelemetryPanel {
                     let (t0, t1) = (bounds.min()[0], bounds.max()[0]);
                     if let Some(set) = set {
                         for name in &plot.fields {
-                            let Some(series) = set.get(name) else { continue };
+                            let Some(series) = set.get(name) else {
+                                continue;
+                            };
                             points.clear();
                             series.decimate(t0, t1, width_px, points);
                             pui.line(Line::new(name.clone(), PlotPoints::from(points.clone())));
@@ -150,42 +172,59 @@ impl TelemetryPanel {
             ui.strong(lang.tr("Other telemetry", "其他数据"));
             let busy = rt.job_progress().is_some();
             if ui
-                .add_enabled(rt.connected() && !busy, egui::Button::new(lang.tr("Read all", "全部读取")))
+                .add_enabled(
+                    rt.connected() && !busy,
+                    egui::Button::new(lang.tr("Read all", "全部读取")),
+                )
                 .clicked()
             {
-                actions.push(Action::Job(JobSpec::Read(cmds.iter().map(|c| c.id).collect())));
+                actions.push(Action::Job(JobSpec::Read(
+                    cmds.iter().map(|c| c.id).collect(),
+                )));
             }
         });
-        egui::ScrollArea::vertical().id_salt("other").max_height(150.0).show(ui, |ui| {
-            egui::Grid::new("other-grid").striped(true).num_columns(2).show(ui, |ui| {
-                for cmd in cmds {
-                    ui.label(lang.tr(&cmd.name.en, &cmd.name.zh)).on_hover_text(&cmd.ident);
-                    match rt.readings.get(&cmd.id) {
-                        Some(Reading::Values(values, at)) => {
-                            let text: Vec<String> = values
-                                .iter()
-                                .map(|(k, v)| {
-                                    let shown = cmd
-                                        .reply
+        egui::ScrollArea::vertical()
+            .id_salt("other")
+            .max_height(150.0)
+            .show(ui, |ui| {
+                egui::Grid::new("other-grid")
+                    .striped(true)
+                    .num_columns(2)
+                    .show(ui, |ui| {
+                        for cmd in cmds {
+                            ui.label(lang.tr(&cmd.name.en, &cmd.name.zh))
+                                .on_hover_text(&cmd.ident);
+                            match rt.readings.get(&cmd.id) {
+                                Some(Reading::Values(values, at)) => {
+                                    let text: Vec<String> = values
                                         .iter()
-                                        .find(|f| &f.ident == k)
-                                        .map_or(format!("{v:?}"), |f| format!("{}{}", f.format(v), f.unit_suffix()));
-                                    format!("{k}={shown}")
-                                })
-                                .collect();
-                            ui.monospace(text.join("  ")).on_hover_text(format!("{:.1} s ago", at.elapsed().as_secs_f64()));
+                                        .map(|(k, v)| {
+                                            let shown = cmd
+                                                .reply
+                                                .iter()
+                                                .find(|f| &f.ident == k)
+                                                .map_or(format!("{v:?}"), |f| {
+                                                    format!("{}{}", f.format(v), f.unit_suffix())
+                                                });
+                                            format!("{k}={shown}")
+                                        })
+                                        .collect();
+                                    ui.monospace(text.join("  ")).on_hover_text(format!(
+                                        "{:.1} s ago",
+                                        at.elapsed().as_secs_f64()
+                                    ));
+                                }
+                                Some(Reading::Failed(e)) => {
+                                    ui.colored_label(egui::Color32::RED, e);
+                                }
+                                None => {
+                                    ui.weak(lang.tr("not read yet", "尚未读取"));
+                                }
+                            }
+                            ui.end_row();
                         }
-                        Some(Reading::Failed(e)) => {
-                            ui.colored_label(egui::Color32::RED, e);
-                        }
-                        None => {
-                            ui.weak(lang.tr("not read yet", "尚未读取"));
-                        }
-                    }
-                    ui.end_row();
-                }
+                    });
             });
-        });
         actions
     }
 }
@@ -197,7 +236,10 @@ fn export_csv(rt: &Runtime) -> Action {
         .add_filter("CSV", &["csv"])
         .save_file()
     else {
-        return Action::Say("export cancelled (no file chosen, or no file dialog on this system)".into(), false);
+        return Action::Say(
+            "export cancelled (no file chosen, or no file dialog on this system)".into(),
+            false,
+        );
     };
     match write_csv(rt, &path) {
         Ok(n) => Action::Say(format!("{n} plot(s) written to {}", path.display()), false),
@@ -210,7 +252,9 @@ pub fn write_csv(rt: &Runtime, path: &std::path::Path) -> std::io::Result<usize>
     let mut all = crate::series::SeriesSet::new(crate::series::DEFAULT_CAPACITY);
     let mut n = 0;
     for plot in &rt.profile.plots {
-        let Some(set) = rt.plots.get(&plot.id) else { continue };
+        let Some(set) = rt.plots.get(&plot.id) else {
+            continue;
+        };
         n += 1;
         for (name, series) in set.iter() {
             let column = format!("{}.{name}", plot.id);

@@ -42,7 +42,10 @@ fn device_value<'a>(rt: &'a Runtime, get: u8, field: &str) -> Option<&'a Value> 
 }
 
 /// The Get/Set pairs of the profile, grouped: (group id or "", name, pairs).
-fn groups<'p>(rt: &'p Runtime, lang: Lang) -> Vec<(String, String, Vec<(&'p Command, &'p Command)>)> {
+fn groups<'p>(
+    rt: &'p Runtime,
+    lang: Lang,
+) -> Vec<(String, String, Vec<(&'p Command, &'p Command)>)> {
     let p = &rt.profile;
     let pairs: Vec<(&Command, &Command)> = p
         .commands
@@ -59,7 +62,11 @@ fn groups<'p>(rt: &'p Runtime, lang: Lang) -> Vec<(String, String, Vec<(&'p Comm
                 .filter(|(get, _)| get.group.as_deref() == Some(&g.id))
                 .copied()
                 .collect();
-            (g.id.clone(), lang.tr(&g.name.en, &g.name.zh).to_string(), members)
+            (
+                g.id.clone(),
+                lang.tr(&g.name.en, &g.name.zh).to_string(),
+                members,
+            )
         })
         .collect();
     let other: Vec<_> = pairs
@@ -78,9 +85,19 @@ fn groups<'p>(rt: &'p Runtime, lang: Lang) -> Vec<(String, String, Vec<(&'p Comm
 pub fn range_text(field: &Field) -> String {
     match field.allowed() {
         Allowed::Range(lo, hi) => {
-            format!("{} – {}{}", field.format_number(lo), field.format_number(hi), field.unit_suffix())
+            format!(
+                "{} – {}{}",
+                field.format_number(lo),
+                field.format_number(hi),
+                field.unit_suffix()
+            )
         }
-        Allowed::Labels(f) => f.labels.iter().map(|l| l.ident.as_str()).collect::<Vec<_>>().join(" / "),
+        Allowed::Labels(f) => f
+            .labels
+            .iter()
+            .map(|l| l.ident.as_str())
+            .collect::<Vec<_>>()
+            .join(" / "),
     }
 }
 
@@ -95,7 +112,10 @@ impl TuningPanel {
     fn prune(&mut self, rt: &Runtime) {
         let profile = &rt.profile;
         self.edits.retain(|(get, ident), text| {
-            let Some(field) = profile.command_by_id(*get).and_then(|c| c.reply.iter().find(|f| &f.ident == ident)) else {
+            let Some(field) = profile
+                .command_by_id(*get)
+                .and_then(|c| c.reply.iter().find(|f| &f.ident == ident))
+            else {
                 return false;
             };
             match (field.parse(text), device_value(rt, *get, ident)) {
@@ -106,13 +126,23 @@ impl TuningPanel {
     }
 
     /// The writes the edits call for, or why they cannot be made.
-    pub fn pending(&self, rt: &Runtime) -> Result<(Vec<Change>, Vec<(u8, Vec<(String, Input)>)>), String> {
+    pub fn pending(
+        &self,
+        rt: &Runtime,
+    ) -> Result<(Vec<Change>, Vec<(u8, Vec<(String, Input)>)>), String> {
         let mut changes = Vec::new();
         let mut writes = Vec::new();
-        for (get, set) in rt.profile.commands.iter().filter(|c| c.kind == CommandKind::Get).filter_map(|g| {
-            Some((g, rt.profile.command_by_id(g.pair?)?))
-        }) {
-            let touched = get.reply.iter().any(|f| self.edits.contains_key(&(get.id, f.ident.clone())));
+        for (get, set) in rt
+            .profile
+            .commands
+            .iter()
+            .filter(|c| c.kind == CommandKind::Get)
+            .filter_map(|g| Some((g, rt.profile.command_by_id(g.pair?)?)))
+        {
+            let touched = get
+                .reply
+                .iter()
+                .any(|f| self.edits.contains_key(&(get.id, f.ident.clone())));
             if !touched {
                 continue;
             }
@@ -163,21 +193,37 @@ impl TuningPanel {
                 .filter(|c| c.kind == CommandKind::Get && c.pair.is_some())
                 .map(|c| c.id)
                 .collect();
-            if ui.add_enabled(rt.connected() && !busy, egui::Button::new(lang.tr("Read all", "全部读取"))).clicked() {
+            if ui
+                .add_enabled(
+                    rt.connected() && !busy,
+                    egui::Button::new(lang.tr("Read all", "全部读取")),
+                )
+                .clicked()
+            {
                 actions.push(Action::Job(JobSpec::Read(gets)));
             }
             let n_changes = pending.as_ref().map_or(0, |(c, _)| c.len());
-            let can_write = rt.connected() && !busy && matches!(&pending, Ok((c, _)) if !c.is_empty());
+            let can_write =
+                rt.connected() && !busy && matches!(&pending, Ok((c, _)) if !c.is_empty());
             let write = ui.add_enabled(
                 can_write,
-                egui::Button::new(format!("{} ({n_changes})", lang.tr("Write changes", "写入修改"))),
+                egui::Button::new(format!(
+                    "{} ({n_changes})",
+                    lang.tr("Write changes", "写入修改")
+                )),
             );
             if write.clicked() {
                 if let Ok(p) = &pending {
                     self.confirm = Some(p.clone());
                 }
             }
-            if ui.add_enabled(!self.edits.is_empty(), egui::Button::new(lang.tr("Revert", "撤销修改"))).clicked() {
+            if ui
+                .add_enabled(
+                    !self.edits.is_empty(),
+                    egui::Button::new(lang.tr("Revert", "撤销修改")),
+                )
+                .clicked()
+            {
                 self.edits.clear();
             }
             if let Err(e) = &pending {
@@ -185,31 +231,46 @@ impl TuningPanel {
             }
         });
         ui.separator();
-        egui::ScrollArea::vertical().auto_shrink(false).show(ui, |ui| {
-            for (gid, name, members) in groups(rt, lang) {
-                egui::CollapsingHeader::new(egui::RichText::new(&name).strong())
-                    .id_salt(("group", gid))
-                    .default_open(true)
-                    .show(ui, |ui| {
-                        for (get, set) in members {
-                            self.command_rows(ui, lang, rt, get, set);
-                        }
-                    });
-            }
-        });
+        egui::ScrollArea::vertical()
+            .auto_shrink(false)
+            .show(ui, |ui| {
+                for (gid, name, members) in groups(rt, lang) {
+                    egui::CollapsingHeader::new(egui::RichText::new(&name).strong())
+                        .id_salt(("group", gid))
+                        .default_open(true)
+                        .show(ui, |ui| {
+                            for (get, set) in members {
+                                self.command_rows(ui, lang, rt, get, set);
+                            }
+                        });
+                }
+            });
         if let Some(action) = self.confirm_dialog(ui, lang) {
             actions.push(action);
         }
         actions
     }
 
-    fn command_rows(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, get: &Command, set: &Command) {
+    fn command_rows(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &Runtime,
+        get: &Command,
+        set: &Command,
+    ) {
         ui.horizontal(|ui| {
             ui.label(egui::RichText::new(lang.tr(&get.name.en, &get.name.zh)).italics());
-            ui.weak(format!("{} {} / {} {}", get.ident, get.id, set.ident, set.id));
+            ui.weak(format!(
+                "{} {} / {} {}",
+                get.ident, get.id, set.ident, set.id
+            ));
         });
         if let Some(Reading::Failed(e)) = rt.readings.get(&get.id) {
-            ui.colored_label(egui::Color32::RED, format!("{}: {e}", lang.tr("read failed", "读取失败")));
+            ui.colored_label(
+                egui::Color32::RED,
+                format!("{}: {e}", lang.tr("read failed", "读取失败")),
+            );
         }
         egui::Grid::new(("fields", get.id))
             .num_columns(6)
@@ -233,7 +294,8 @@ impl TuningPanel {
 
     fn field_row(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, get: u8, f: &Field) {
         let key = (get, f.ident.clone());
-        ui.label(lang.tr(&f.name.en, &f.name.zh)).on_hover_text(&f.ident);
+        ui.label(lang.tr(&f.name.en, &f.name.zh))
+            .on_hover_text(&f.ident);
         let device = device_value(rt, get, &f.ident);
         match device {
             Some(v) => ui.monospace(f.format(v)),
@@ -253,7 +315,12 @@ impl TuningPanel {
         }
         let resp = ui.add(edit);
         let resp = if invalid {
-            ui.painter().rect_stroke(resp.rect, 2.0, egui::Stroke::new(1.5, egui::Color32::RED), egui::StrokeKind::Outside);
+            ui.painter().rect_stroke(
+                resp.rect,
+                2.0,
+                egui::Stroke::new(1.5, egui::Color32::RED),
+                egui::StrokeKind::Outside,
+            );
             resp
         } else {
             resp
@@ -265,19 +332,36 @@ impl TuningPanel {
         ui.weak(range_text(f));
         match (&parsed, rt.marks.get(&key)) {
             (Some(Err(e)), _) => {
-                ui.colored_label(egui::Color32::RED, format!("✗ {}", lang.tr("invalid", "无效")))
-                    .on_hover_text(format!("{e}\n{}: {}", lang.tr("allowed", "允许"), range_text(f)));
+                ui.colored_label(
+                    egui::Color32::RED,
+                    format!("✗ {}", lang.tr("invalid", "无效")),
+                )
+                .on_hover_text(format!(
+                    "{e}\n{}: {}",
+                    lang.tr("allowed", "允许"),
+                    range_text(f)
+                ));
             }
             _ if changed => {
-                ui.colored_label(egui::Color32::from_rgb(220, 150, 0), format!("● {}", lang.tr("changed", "已修改")));
+                ui.colored_label(
+                    egui::Color32::from_rgb(220, 150, 0),
+                    format!("● {}", lang.tr("changed", "已修改")),
+                );
             }
             (_, Some(Mark::Verified)) => {
-                ui.colored_label(egui::Color32::from_rgb(40, 160, 60), format!("✓ {}", lang.tr("verified", "已校验")));
+                ui.colored_label(
+                    egui::Color32::from_rgb(40, 160, 60),
+                    format!("✓ {}", lang.tr("verified", "已校验")),
+                );
             }
             (_, Some(Mark::Mismatch(read))) => {
                 ui.colored_label(
                     egui::Color32::RED,
-                    format!("✗ {} {}", lang.tr("mismatch: device holds", "不一致:设备为"), f.format(read)),
+                    format!(
+                        "✗ {} {}",
+                        lang.tr("mismatch: device holds", "不一致:设备为"),
+                        f.format(read)
+                    ),
                 );
             }
             _ => {
@@ -291,24 +375,30 @@ impl TuningPanel {
         let mut decision = None;
         let modal = egui::Modal::new(egui::Id::unique("confirm-write")).show(ui.ctx(), |ui| {
             ui.heading(lang.tr("Write these changes?", "写入以下修改?"));
-            egui::Grid::new("diff").striped(true).num_columns(4).show(ui, |ui| {
-                ui.strong(lang.tr("Command", "命令"));
-                ui.strong(lang.tr("Field", "字段"));
-                ui.strong(lang.tr("Device", "设备值"));
-                ui.strong(lang.tr("New", "新值"));
-                ui.end_row();
-                for c in changes {
-                    ui.monospace(&c.command);
-                    ui.label(&c.field);
-                    ui.label(&c.device);
-                    ui.strong(&c.new);
+            egui::Grid::new("diff")
+                .striped(true)
+                .num_columns(4)
+                .show(ui, |ui| {
+                    ui.strong(lang.tr("Command", "命令"));
+                    ui.strong(lang.tr("Field", "字段"));
+                    ui.strong(lang.tr("Device", "设备值"));
+                    ui.strong(lang.tr("New", "新值"));
                     ui.end_row();
-                }
-            });
+                    for c in changes {
+                        ui.monospace(&c.command);
+                        ui.label(&c.field);
+                        ui.label(&c.device);
+                        ui.strong(&c.new);
+                        ui.end_row();
+                    }
+                });
             ui.label(format!(
                 "{} {} {}",
                 writes.len(),
-                lang.tr("command(s) will be written, then read back.", "条命令将被写入并回读校验。"),
+                lang.tr(
+                    "command(s) will be written, then read back.",
+                    "条命令将被写入并回读校验。"
+                ),
                 ""
             ));
             ui.horizontal(|ui| {

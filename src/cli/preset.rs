@@ -1,0 +1,203 @@
+//! `botbench preset`: save a device's tunable parameters to a file, compare, and write them back.
+
+use super::port::{PortArgs, op_error, print_checks};
+use super::{CliError, CliResult, registry};
+use crate::link::{DeviceInfo, Link, LinkEvent, LinkState};
+use crate::ops::{Cancel, Progress};
+use crate::preset::{self, Preset};
+use crate::profile::{Profile, Protocol};
+use clap::Subcommand;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// The profile used when `--profile` is not given.
+const DEFAULT_PROFILE: &str = "window-cleaner";
+
+#[derive(Debug, Subcommand)]
+pub(crate) enum PresetCmd {
+    /// Read every tunable parameter from the device and write them to FILE.
+    Save {
+        /// The preset file to write (.ron); replaced if it exists.
+        file: PathBuf,
+        /// A note stored in the file (what it is for, who made it).
+        #[arg(long, default_value = "")]
+        note: String,
+        #[command(flatten)]
+        port: PortArgs,
+    },
+    /// Compare FILE with the device; exit 1 if anything differs.
+    Diff {
+        /// The preset file.
+        file: PathBuf,
+        #[command(flatten)]
+        port: PortArgs,
+    },
+    /// Check FILE, then write it to the device and read every value back; exit 1 on a mismatch.
+    Apply {
+        /// The preset file.
+        file: PathBuf,
+        #[command(flatten)]
+        port: PortArgs,
+    },
+}
+
+pub(crate) fn run(cmd: PresetCmd) -> CliResult {
+    match cmd {
+        PresetCmd::Save { file, note, port } => save(&file, &note, &port),
+        PresetCmd::Diff { file, port } => diff(&file, &port),
+        PresetCmd::Apply { file, port } => apply(&file, &port),
+    }
+}
+
+/// Loads and checks the preset before the port is opened: a bad file is exit 2.
+fn load(file: &std::path::Path, port: &PortArgs) -> Result<(Preset, Profile), CliError> {
+    let profile = registry()?
+        .get(port.profile.as_deref().unwrap_or(DEFAULT_PROFILE))
+        .map_err(CliError::input)?;
+    let loaded = Preset::load(file, &profile).map_err(CliError::input)?;
+    Ok((loaded.preset, (*profile).clone()))
+}
+
+/// Opens the port and waits for the session to learn the device (its code) from CMD_VERSION.
+fn connect(port: &PortArgs) -> Result<(Link, std::sync::Arc<Profile>, DeviceInfo), CliError> {
+    let (link, profile) = port.open(DEFAULT_PROFILE, Protocol::Msp, true)?;
+    let deadline = Instant::now() + Duration::from_secs(3);
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        match link.events().recv_timeout(left) {
+            Ok(LinkEvent::Identified(Ok(info))) => return Ok((link, profile, info)),
+            Ok(LinkEvent::Identified(Err(e))) => {
+                return Err(CliError::device(format!("no answer to CMD_VERSION: {e}")));
+            }
+            Ok(LinkEvent::State(LinkState::Lost { reason })) => {
+                return Err(CliError::device(format!("link lost: {reason}")));
+            }
+            Ok(_) => {}
+            Err(_) => return Err(CliError::device("no answer to CMD_VERSION")),
+        }
+    }
+}
+
+fn no_progress(_: Progress) {}
+
+fn save(file: &std::path::Path, note: &str, port: &PortArgs) -> CliResult {
+    let (link, profile, info) = connect(port)?;
+    if preset::preset_commands(&profile).is_empty() {
+        return Err(CliError::input(format!(
+            "profile '{}' has no Set commands with a Get to read them back: nothing to save",
+            profile.id
+        )));
+    }
+    let mut captured = Preset::capture(&link.client(), &profile, &Cancel::new(), &mut no_progress)
+        .map_err(op_error)?;
+    captured.note = note.to_string();
+    captured.device = Some(preset::describe_device(&info));
+    captured
+        .save_annotated(file, &profile)
+        .map_err(CliError::device)?;
+    let fields: usize = captured.values.iter().map(|c| c.fields.len()).sum();
+    if port.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "file": file.display().to_string(), "profile": profile.id,
+                "device": captured.device, "commands": captured.values.len(), "fields": fields,
+            })
+        );
+    } else {
+        println!(
+            "saved {} commands ({fields} fields) from {} to {}",
+            captured.values.len(),
+            captured.device.as_deref().unwrap_or("the device"),
+            file.display()
+        );
+    }
+    Ok(0)
+}
+
+fn diff(file: &std::path::Path, port: &PortArgs) -> CliResult {
+    let (preset, _) = load(file, port)?;
+    let (link, profile, _) = connect(port)?;
+    let device = preset::read_device(&link.client(), &profile, &Cancel::new(), &mut no_progress)
+        .map_err(op_error)?;
+    let rows = preset.diff(&profile, &device);
+    let differing = rows.iter().filter(|r| r.differs).count();
+    if port.json {
+        println!(
+            "{}",
+            serde_json::json!({ "same": differing == 0, "differing": differing, "rows": rows })
+        );
+    } else {
+        println!(
+            "{:<36} {:<22} {:>10} {:>10}",
+            "command", "field", "preset", "device"
+        );
+        for r in &rows {
+            println!(
+                "{:<36} {:<22} {:>10} {:>10}{}",
+                r.command,
+                r.field,
+                r.preset,
+                r.device.as_deref().unwrap_or("-"),
+                if r.differs { "  DIFFERS" } else { "" }
+            );
+        }
+        if differing == 0 {
+            println!("the device holds the preset ({} fields)", rows.len());
+        } else {
+            println!("{differing} of {} fields differ", rows.len());
+        }
+    }
+    Ok(u8::from(differing > 0))
+}
+
+fn apply(file: &std::path::Path, port: &PortArgs) -> CliResult {
+    let (preset, _) = load(file, port)?;
+    let (link, profile, _) = connect(port)?;
+    let mut results = Vec::new();
+    let json = port.json;
+    let outcome = preset.apply_each(
+        &link.client(),
+        &profile,
+        &Cancel::new(),
+        &mut no_progress,
+        &mut |command, checks| {
+            if !json {
+                println!("{command}");
+                let set = profile.command(command);
+                let field_of = |ident: &str| {
+                    set.and_then(|s| s.request.iter().find(|f| f.ident == ident))
+                        .cloned()
+                };
+                print_checks(checks, field_of, false);
+            }
+            results.push((command.to_string(), checks.to_vec()));
+        },
+    );
+    let bad = results
+        .iter()
+        .flat_map(|(_, c)| c)
+        .filter(|c| !c.ok())
+        .count();
+    if json {
+        let doc = serde_json::json!({
+            "verified": bad == 0 && outcome.is_ok(),
+            "commands": results.iter().map(|(command, checks)| serde_json::json!({
+                "command": command,
+                "fields": checks.iter().map(|c| serde_json::json!({
+                    "field": c.field, "written": c.written, "read": c.read, "ok": c.ok(),
+                })).collect::<Vec<_>>(),
+            })).collect::<Vec<_>>(),
+        });
+        println!("{doc}");
+    }
+    outcome.map_err(op_error)?;
+    if !json {
+        if bad == 0 {
+            println!("applied {}: every field verified", file.display());
+        } else {
+            println!("{bad} field(s) MISMATCH: the device does not hold the preset");
+        }
+    }
+    Ok(u8::from(bad > 0))
+}
