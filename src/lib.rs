@@ -1,4 +1,5 @@
 pub mod cli;
+pub mod i18n;
 pub mod link;
 pub mod ops;
 pub mod packet;
