@@ -1,9 +1,31 @@
-//! UI language. (Placeholder until the string table lands.)
+//! The GUI's two languages: a typed table of UI strings in English and Simplified Chinese, the
+//! language choice, and the bundled CJK font that lets egui draw the Chinese.
+//!
+//! Strings are looked up by [`Key`], an enum, so a misspelt key fails to compile:
+//!
+//! ```
+//! use botbench::i18n::{tr, Key, Lang};
+//! assert_eq!(tr(Lang::En, Key::Connect), "Connect");
+//! assert_eq!(tr(Lang::Zh, Key::Connect), "连接");
+//! assert_eq!(Key::Connect.get(Lang::Zh), "连接");
+//! ```
+//!
+//! Profile names (`name: (en: "...", zh: "...")` in `assets/profiles/*.ron`) carry their own two
+//! languages; [`Text::get`] picks one.
+//!
+//! Every Chinese character in `src/` and `assets/profiles/` must have a glyph in the bundled font
+//! (`assets/fonts/`); `tests/i18n.rs` checks it, and `assets/fonts/make-subset.sh` regenerates
+//! the font when it fails.
 
+use crate::link::LinkState;
+use crate::link::tuya_module::{HandshakeStep, TuyaEvent};
+use crate::profile::Text;
+use eframe::egui;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// The UI language.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 pub enum Lang {
     /// English.
     #[default]
@@ -13,14 +35,486 @@ pub enum Lang {
 }
 
 impl Lang {
-    /// The text for this language.
+    /// One of two texts by language: for words said once, inline where they are used. Words
+    /// shared across panels are [`Key`]s.
     pub fn tr<'a>(self, en: &'a str, zh: &'a str) -> &'a str {
         match self {
             Lang::En => en,
             Lang::Zh => zh,
         }
     }
+
+    /// Both languages, in the order the switch shows them.
+    pub const ALL: [Lang; 2] = [Lang::En, Lang::Zh];
+
+    /// The language's name in itself, for the switch: "English", "中文".
+    pub fn native_name(self) -> &'static str {
+        match self {
+            Lang::En => "English",
+            Lang::Zh => "中文",
+        }
+    }
+
+    /// The other language.
+    pub fn toggled(self) -> Lang {
+        match self {
+            Lang::En => Lang::Zh,
+            Lang::Zh => Lang::En,
+        }
+    }
 }
 
-/// Installs the bundled CJK font as a fallback (placeholder: none bundled yet).
-pub fn install_fonts(_ctx: &eframe::egui::Context) {}
+/// Defines [`Key`] with its English and Chinese texts in one table.
+macro_rules! keys {
+    ($( $(#[$doc:meta])* $key:ident => $en:literal, $zh:literal; )*) => {
+        /// A UI string. Its texts: [`Key::en`], [`Key::zh`], [`Key::get`] or [`tr`].
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum Key {
+            $( $(#[$doc])* $key, )*
+        }
+
+        impl Key {
+            /// Every key, in table order.
+            pub const ALL: &'static [Key] = &[ $( Key::$key, )* ];
+
+            /// The English text.
+            pub fn en(self) -> &'static str {
+                match self {
+                    $( Key::$key => $en, )*
+                }
+            }
+
+            /// The Simplified Chinese text.
+            pub fn zh(self) -> &'static str {
+                match self {
+                    $( Key::$key => $zh, )*
+                }
+            }
+        }
+    };
+}
+
+keys! {
+    // ---- The shell and the connection bar ----
+    /// The window title.
+    AppTitle => "botbench — robot bench", "botbench 机器人调试台";
+    /// Opens the port.
+    Connect => "Connect", "连接";
+    /// Closes the port.
+    Disconnect => "Disconnect", "断开";
+    /// The serial port picker.
+    Port => "Port", "串口";
+    /// The baud-rate picker.
+    Baud => "Baud", "波特率";
+    /// The device-profile picker.
+    Profile => "Profile", "设备配置";
+    /// Re-lists ports, or re-reads values.
+    Refresh => "Refresh", "刷新";
+    /// The built-in simulated device.
+    DemoDevice => "Demo device", "演示设备";
+    /// The UI-language switch.
+    Language => "Language", "语言";
+
+    // ---- Link states (LinkState) ----
+    /// `LinkState::Connected`.
+    Connected => "Connected", "已连接";
+    /// `LinkState::Reconnecting`.
+    Reconnecting => "Reconnecting", "正在重连";
+    /// `LinkState::Lost`.
+    Lost => "Lost", "连接丢失";
+    /// `LinkState::Closed`, or no port open.
+    Disconnected => "Disconnected", "未连接";
+    /// Reconnection attempts so far.
+    Attempt => "attempt", "尝试次数";
+
+    // ---- The status bar (LinkStats) ----
+    /// Round trip of the last exchange.
+    RoundTrip => "round trip", "往返时间";
+    /// Frame errors.
+    Errors => "errors", "错误";
+    /// Frames sent.
+    Sent => "sent", "已发送";
+    /// Frames received.
+    Received => "received", "已接收";
+    /// Exchanges that timed out.
+    Timeouts => "timeouts", "超时";
+    /// Attempts beyond the first.
+    Retries => "retries", "重试";
+
+    // ---- Panels ----
+    /// The window-cleaner tuning panel.
+    Tuning => "Tuning", "参数调节";
+    /// The telemetry plots.
+    Telemetry => "Telemetry", "遥测";
+    /// The presets panel.
+    Presets => "Presets", "预设";
+    /// The raw-frame monitor.
+    PacketMonitor => "Packet monitor", "数据包监视";
+    /// Action commands.
+    Actions => "Actions", "操作";
+    /// The bus-servo panel.
+    ServoBench => "Servo bench", "舵机调试台";
+    /// The Tuya MCU panel.
+    TuyaConsole => "Tuya console", "涂鸦控制台";
+    /// The solar cleanbot panel.
+    SolarCleanbot => "Solar cleanbot", "光伏清洁机器人";
+    /// A device self-test.
+    SelfTest => "Self-test", "自检";
+
+    // ---- Tuning: the parameter table ----
+    /// Reads every parameter.
+    ReadAll => "Read all", "全部读取";
+    /// Writes the edited parameters.
+    WriteChanges => "Write changes", "写入修改";
+    /// Drops the edits.
+    Revert => "Revert", "还原";
+    /// Column: the value on the device.
+    Device => "Device", "设备值";
+    /// Column: the value as edited.
+    Edited => "Edited", "修改值";
+    /// Column: the unit.
+    Unit => "Unit", "单位";
+    /// Column: the allowed range.
+    Range => "Range", "范围";
+    /// Column: a parameter's name.
+    Name => "Name", "名称";
+    /// Column or field: a value.
+    Value => "Value", "数值";
+    /// Read-back matched what was written.
+    Verified => "Verified", "已校验";
+    /// Read-back differed from what was written.
+    Mismatch => "Mismatch", "不一致";
+    /// No value read from the device yet.
+    NotReadYet => "Not read yet", "尚未读取";
+    /// A value outside the field's range.
+    OutOfRange => "Out of range", "超出范围";
+    /// Reads one value.
+    Read => "Read", "读取";
+    /// Writes one value.
+    Write => "Write", "写入";
+    /// Sends a command.
+    Send => "Send", "发送";
+
+    // ---- Telemetry ----
+    /// Stops the plots.
+    Pause => "Pause", "暂停";
+    /// Restarts the plots.
+    Resume => "Resume", "继续";
+    /// Keeps the newest samples in view.
+    Follow => "Follow", "跟随";
+    /// The time window shown.
+    Window => "Window", "时间窗口";
+    /// How often telemetry is polled.
+    PollRate => "Poll rate", "轮询频率";
+    /// Saves samples as CSV.
+    ExportCsv => "Export CSV", "导出 CSV";
+
+    // ---- Presets ----
+    /// Saves the device's values as a preset.
+    SavePreset => "Save preset", "保存预设";
+    /// Opens a preset file.
+    OpenPreset => "Open preset", "打开预设";
+    /// Compares a preset with the device.
+    CompareWithDevice => "Compare with device", "与设备对比";
+    /// Applies (a preset, a change).
+    Apply => "Apply", "应用";
+
+    // ---- General ----
+    /// Cancels a dialog.
+    Cancel => "Cancel", "取消";
+    /// Confirms a dialog.
+    Confirm => "Confirm", "确认";
+    /// A filter box.
+    Filter => "Filter", "过滤";
+    /// Copies to the clipboard.
+    Copy => "Copy", "复制";
+    /// Saves to a file.
+    Save => "Save", "保存";
+    /// Clears a list.
+    Clear => "Clear", "清除";
+    /// Starts a run.
+    Start => "Start", "开始";
+    /// A check passed.
+    Pass => "Pass", "通过";
+    /// A check failed.
+    Fail => "Fail", "失败";
+
+    // ---- Servo bench ----
+    /// Scans the bus for servos.
+    Scan => "Scan", "扫描";
+    /// Stops every servo.
+    StopAll => "Stop all", "全部停止";
+    /// Provisions the next servo on the line.
+    ProvisionNext => "Provision next", "配置下一个";
+    /// The servo's id.
+    ServoId => "Servo ID", "舵机 ID";
+    /// A servo answered.
+    Present => "Present", "在线";
+    /// Nothing answered.
+    Absent => "Absent", "无应答";
+    /// Garbled answers: maybe two servos share an id.
+    PossibleDuplicate => "Possible duplicate ID", "可能存在重复 ID";
+
+    // ---- Tuya console ----
+    /// The start-up handshake.
+    Handshake => "Handshake", "握手";
+    /// The MCU's data points.
+    DataPoints => "Data points", "数据点";
+    /// An OTA update.
+    FirmwareUpdate => "Firmware update", "固件升级";
+    /// Handshake step 0x00.
+    StepHeartbeat => "Heartbeat", "心跳检测";
+    /// Handshake step 0x01.
+    StepProductInfo => "Product info", "查询产品信息";
+    /// Handshake step 0x02.
+    StepWorkMode => "Working mode", "查询工作模式";
+    /// Handshake step 0x03.
+    StepWifiState => "Report Wi-Fi state", "报告 Wi-Fi 状态";
+    /// Handshake step 0x08.
+    StepQueryStatus => "Query status", "查询设备状态";
+    /// Every step done.
+    HandshakeDone => "Handshake complete", "握手完成";
+    /// The MCU restarted; the handshake runs again.
+    McuRestarted => "MCU restarted", "MCU 已重启";
+    /// The MCU stopped answering heartbeats.
+    HeartbeatLost => "Heartbeat lost", "心跳丢失";
+    /// Wi-Fi state 0: SmartConfig (EZ) pairing.
+    WifiSmartConfig => "SmartConfig pairing", "SmartConfig 配网中";
+    /// Wi-Fi state 1: access-point pairing.
+    WifiApConfig => "AP pairing", "AP 配网中";
+    /// Wi-Fi state 2: configured, router not connected.
+    WifiNotConnected => "Wi-Fi set up, router not connected", "已配网，未连上路由器";
+    /// Wi-Fi state 3: connected to the router.
+    WifiRouter => "Connected to router", "已连上路由器";
+    /// Wi-Fi state 4: connected to the cloud.
+    WifiCloud => "Connected to cloud", "已连上云端";
+    /// Wi-Fi state 5: low-power mode.
+    WifiLowPower => "Low-power mode", "低功耗模式";
+    /// Wi-Fi state 6: SmartConfig and AP pairing at once.
+    WifiSmartConfigAndAp => "SmartConfig and AP pairing", "SmartConfig 与 AP 同时配网";
+}
+
+impl Key {
+    /// The text in `lang`.
+    pub fn get(self, lang: Lang) -> &'static str {
+        match lang {
+            Lang::En => self.en(),
+            Lang::Zh => self.zh(),
+        }
+    }
+
+    /// The key naming a handshake step.
+    pub fn handshake_step(step: HandshakeStep) -> Key {
+        match step {
+            HandshakeStep::Heartbeat => Key::StepHeartbeat,
+            HandshakeStep::ProductInfo => Key::StepProductInfo,
+            HandshakeStep::WorkMode => Key::StepWorkMode,
+            HandshakeStep::WifiState => Key::StepWifiState,
+            HandshakeStep::QueryStatus => Key::StepQueryStatus,
+        }
+    }
+
+    /// The key naming a link state (its details, port or reason, are shown beside it).
+    pub fn link_state(state: &LinkState) -> Key {
+        match state {
+            LinkState::Connected { .. } => Key::Connected,
+            LinkState::Lost { .. } => Key::Lost,
+            LinkState::Reconnecting { .. } => Key::Reconnecting,
+            LinkState::Closed => Key::Disconnected,
+        }
+    }
+
+    /// The key naming a Tuya Wi-Fi state (command 0x03, 0-6); `None` outside that range.
+    pub fn wifi_state(state: u8) -> Option<Key> {
+        Some(match state {
+            0 => Key::WifiSmartConfig,
+            1 => Key::WifiApConfig,
+            2 => Key::WifiNotConnected,
+            3 => Key::WifiRouter,
+            4 => Key::WifiCloud,
+            5 => Key::WifiLowPower,
+            6 => Key::WifiSmartConfigAndAp,
+            _ => return None,
+        })
+    }
+
+    /// The key for a Tuya event that is a plain status line; `None` for events with data
+    /// (a step, product info, work mode, an MCU request), which a panel lays out itself.
+    pub fn tuya_event(event: &TuyaEvent) -> Option<Key> {
+        match event {
+            TuyaEvent::HandshakeDone => Some(Key::HandshakeDone),
+            TuyaEvent::McuRestarted => Some(Key::McuRestarted),
+            TuyaEvent::HeartbeatLost => Some(Key::HeartbeatLost),
+            TuyaEvent::Step { .. }
+            | TuyaEvent::ProductInfo(_)
+            | TuyaEvent::WorkMode { .. }
+            | TuyaEvent::McuRequest { .. } => None,
+        }
+    }
+}
+
+/// The text of `key` in `lang`.
+pub fn tr(lang: Lang, key: Key) -> &'static str {
+    key.get(lang)
+}
+
+impl Text {
+    /// The name in `lang`; falls back to the other language when this one is empty.
+    pub fn get(&self, lang: Lang) -> &str {
+        let (first, second) = match lang {
+            Lang::En => (&self.en, &self.zh),
+            Lang::Zh => (&self.zh, &self.en),
+        };
+        if first.is_empty() { second } else { first }
+    }
+}
+
+/// The bundled subset of Noto Sans CJK SC (OpenType/CFF). Licence: SIL OFL 1.1, see
+/// `assets/fonts/LICENSE-OFL.txt`; how it was made: `assets/fonts/README.md`.
+pub const CJK_FONT: &[u8] = include_bytes!("../assets/fonts/NotoSansCJKsc-Regular-subset.otf");
+
+/// The name the bundled font goes by in egui's font definitions.
+pub const CJK_FONT_NAME: &str = "noto-sans-cjk-sc-subset";
+
+/// egui's default fonts with the bundled CJK font appended as the last fallback of the
+/// proportional and monospace families (so Latin text keeps egui's own fonts).
+pub fn cjk_font_definitions() -> egui::FontDefinitions {
+    let mut fonts = egui::FontDefinitions::default();
+    fonts.font_data.insert(
+        CJK_FONT_NAME.to_owned(),
+        Arc::new(egui::FontData::from_static(CJK_FONT)),
+    );
+    for family in [egui::FontFamily::Proportional, egui::FontFamily::Monospace] {
+        fonts
+            .families
+            .entry(family)
+            .or_default()
+            .push(CJK_FONT_NAME.to_owned());
+    }
+    fonts
+}
+
+/// Installs [`cjk_font_definitions`] into `ctx`, replacing its fonts. Call it once at start-up
+/// (eframe's creation context, or a test harness); it takes effect on the next pass, or at once
+/// if nothing has been laid out yet.
+pub fn install_cjk_font(ctx: &egui::Context) {
+    ctx.set_fonts(cjk_font_definitions());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashSet;
+
+    fn is_cjk(c: char) -> bool {
+        matches!(c as u32, 0x3000..=0x9FFF | 0xFF00..=0xFFEF)
+    }
+
+    /// Keys whose Chinese text may equal the English one (acronyms, product names). None yet.
+    const SAME_IN_BOTH: &[Key] = &[];
+
+    #[test]
+    fn every_key_has_both_texts() {
+        for &key in Key::ALL {
+            assert!(!key.en().trim().is_empty(), "{key:?} has no English");
+            assert!(!key.zh().trim().is_empty(), "{key:?} has no Chinese");
+            assert_eq!(key.en(), key.en().trim(), "{key:?}: stray spaces");
+            assert_eq!(key.zh(), key.zh().trim(), "{key:?}: stray spaces");
+        }
+    }
+
+    #[test]
+    fn chinese_texts_are_translated() {
+        for &key in Key::ALL {
+            if SAME_IN_BOTH.contains(&key) {
+                continue;
+            }
+            assert_ne!(key.en(), key.zh(), "{key:?} is not translated");
+            assert!(
+                key.zh().chars().any(is_cjk),
+                "{key:?}: no Chinese in {:?}",
+                key.zh()
+            );
+            assert!(
+                !key.en().chars().any(is_cjk),
+                "{key:?}: Chinese in the English text"
+            );
+        }
+    }
+
+    #[test]
+    fn all_lists_every_key_once() {
+        let set: HashSet<Key> = Key::ALL.iter().copied().collect();
+        assert_eq!(set.len(), Key::ALL.len());
+        // `Key::ALL` comes from the same table as the enum, so this also pins its size.
+        assert!(Key::ALL.len() >= 60);
+    }
+
+    #[test]
+    fn lookups_agree() {
+        for &key in Key::ALL {
+            assert_eq!(tr(Lang::En, key), key.en());
+            assert_eq!(tr(Lang::Zh, key), key.zh());
+            assert_eq!(key.get(Lang::Zh), key.zh());
+        }
+        assert_eq!(tr(Lang::default(), Key::Connect), "Connect");
+        assert_eq!(tr(Lang::Zh, Key::Connect), "连接");
+    }
+
+    #[test]
+    fn lang_basics() {
+        assert_eq!(Lang::default(), Lang::En);
+        assert_eq!(Lang::En.toggled(), Lang::Zh);
+        assert_eq!(Lang::Zh.toggled(), Lang::En);
+        assert_eq!(Lang::Zh.native_name(), "中文");
+        let ron = ron::to_string(&Lang::Zh).expect("serialize");
+        assert_eq!(ron::from_str::<Lang>(&ron).expect("deserialize"), Lang::Zh);
+    }
+
+    #[test]
+    fn text_picks_the_language_and_falls_back() {
+        let t = Text {
+            en: "Servo ID".into(),
+            zh: "舵机ID".into(),
+        };
+        assert_eq!(t.get(Lang::En), "Servo ID");
+        assert_eq!(t.get(Lang::Zh), "舵机ID");
+        let only_en = Text {
+            en: "Ping".into(),
+            zh: String::new(),
+        };
+        assert_eq!(only_en.get(Lang::Zh), "Ping");
+    }
+
+    #[test]
+    fn state_mappings() {
+        let steps: HashSet<Key> = HandshakeStep::ALL
+            .iter()
+            .map(|&s| Key::handshake_step(s))
+            .collect();
+        assert_eq!(steps.len(), HandshakeStep::ALL.len());
+        assert_eq!(Key::link_state(&LinkState::Closed), Key::Disconnected);
+        assert_eq!(
+            Key::link_state(&LinkState::Reconnecting { attempt: 2 }),
+            Key::Reconnecting
+        );
+        let wifi: HashSet<Key> = (0..=6).filter_map(Key::wifi_state).collect();
+        assert_eq!(wifi.len(), 7);
+        assert_eq!(Key::wifi_state(7), None);
+        assert_eq!(
+            Key::tuya_event(&TuyaEvent::HeartbeatLost),
+            Some(Key::HeartbeatLost)
+        );
+    }
+
+    #[test]
+    fn font_definitions_append_the_cjk_fallback() {
+        let fonts = cjk_font_definitions();
+        assert!(fonts.font_data.contains_key(CJK_FONT_NAME));
+        for family in [egui::FontFamily::Proportional, egui::FontFamily::Monospace] {
+            let list = &fonts.families[&family];
+            assert_eq!(list.last().map(String::as_str), Some(CJK_FONT_NAME));
+            assert!(list.len() > 1, "egui's default fonts stay first");
+        }
+    }
+}

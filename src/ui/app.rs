@@ -87,7 +87,7 @@ pub struct App {
 impl App {
     /// An app with `saved` settings, connected to its target.
     pub fn new(ctx: &egui::Context, saved: Saved) -> Result<Self, String> {
-        crate::i18n::install_fonts(ctx);
+        crate::i18n::install_cjk_font(ctx);
         let rt = Runtime::new(ctx, &saved.profile)?;
         let mut app = Self {
             connection: connection::ConnectionBar::new(&saved),
