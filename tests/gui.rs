@@ -8,7 +8,7 @@ use botbench::ui::runtime::Reading;
 use botbench::ui::{App, PanelId, Saved, Target};
 use eframe::egui;
 use egui_kittest::Harness;
-use egui_kittest::kittest::{NodeT, Queryable};
+use egui_kittest::kittest::Queryable;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -18,7 +18,9 @@ struct Bench {
 }
 
 fn bench() -> Bench {
-    let sim = Arc::new(Mutex::new(WindowCleaner::new(&SimOptions::default()).unwrap()));
+    let sim = Arc::new(Mutex::new(
+        WindowCleaner::new(&SimOptions::default()).unwrap(),
+    ));
     let shared: SharedDevice = sim.clone();
     Bench {
         _server: PtyServer::start(shared, Faults::default()).unwrap(),
@@ -39,7 +41,8 @@ fn harness(path: &str, panel: PanelId) -> Harness<'static, Option<App>> {
         .with_size(egui::vec2(1300.0, 900.0))
         .build_ui_state(
             move |ui, app: &mut Option<App>| {
-                let app = app.get_or_insert_with(|| App::new(ui.ctx(), saved.clone()).expect("app starts"));
+                let app = app
+                    .get_or_insert_with(|| App::new(ui.ctx(), saved.clone()).expect("app starts"));
                 app.logic(ui.ctx());
                 app.ui(ui);
             },
@@ -80,24 +83,40 @@ fn read_all_brings_every_parameter_from_the_device() {
     let mut h = harness(b._server.path(), PanelId::Tuning);
     step_until(&mut h, "the link", |a| a.rt.connected());
     // Nothing is shown before a reply has brought it.
-    assert!(!h.query_all_by_label("not read yet").collect::<Vec<_>>().is_empty());
+    assert!(
+        !h.query_all_by_label("not read yet")
+            .collect::<Vec<_>>()
+            .is_empty()
+    );
     read_all(&mut h);
     let want = b.sim.lock().unwrap().param("waterPumpDuration").unwrap();
     let got = match app(&h).rt.readings.get(&135) {
-        Some(Reading::Values(v, _)) => v.iter().find(|(k, _)| k == "waterPumpDuration").map(|(_, v)| v.clone()),
+        Some(Reading::Values(v, _)) => v
+            .iter()
+            .find(|(k, _)| k == "waterPumpDuration")
+            .map(|(_, v)| v.clone()),
         _ => None,
     };
     assert_eq!(got, Some(Value::Int(want)));
     h.step();
-    assert!(h.query_all_by_label("not read yet").next().is_none(), "every field now has a device value");
+    assert!(
+        h.query_all_by_label("not read yet").next().is_none(),
+        "every field now has a device value"
+    );
+}
+
+fn is_text_input(n: &egui_kittest::kittest::AccessKitNode<'_>) -> bool {
+    n.role() == egui::accesskit::Role::TextInput
 }
 
 fn edit(h: &mut Harness<'static, Option<App>>, current: &str, new: &str) {
-    h.get_by(|n| n.value().as_deref() == Some(current)).focus();
+    h.get_by(|n| is_text_input(n) && n.value().as_deref() == Some(current))
+        .focus();
     h.step();
     h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
     h.step();
-    h.get_by(|n| n.value().as_deref() == Some(current)).type_text(new);
+    h.get_by(|n| is_text_input(n) && n.value().as_deref() == Some(current))
+        .type_text(new);
     h.step();
     h.step();
 }
@@ -111,10 +130,19 @@ fn an_out_of_range_edit_is_refused_for_writing() {
     h.step();
     edit(&mut h, "33", "101");
     let a = app(&h);
-    assert_eq!(a.tuning.edits.values().cloned().collect::<Vec<_>>(), vec!["101".to_string()]);
-    assert!(a.tuning.pending(&a.rt).is_err(), "an invalid edit blocks writing");
-    assert!(h.query_by_label_contains("0 – 100 %").is_some(), "the allowed range is shown");
-    assert!(h.query_by_label_contains("invalid").is_some());
+    assert_eq!(
+        a.tuning.edits.values().cloned().collect::<Vec<_>>(),
+        vec!["101".to_string()]
+    );
+    assert!(
+        a.tuning.pending(&a.rt).is_err(),
+        "an invalid edit blocks writing"
+    );
+    assert!(
+        h.query_all_by_label_contains("0 – 100 %").next().is_some(),
+        "the allowed range is shown"
+    );
+    assert!(h.query_all_by_label_contains("invalid").next().is_some());
     // The button is there but disabled: clicking it writes nothing.
     h.get_by_label_contains("Write changes").click();
     h.run_steps(5);
@@ -135,11 +163,12 @@ fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
     assert!(h.query_by_label("Write these changes?").is_some());
     h.get_by_label("Write").click();
     step_until(&mut h, "the write to be verified", |a| {
-        a.rt.marks.get(&(130, "pwmValue".to_string())) == Some(&botbench::ui::runtime::Mark::Verified)
+        a.rt.marks.get(&(130, "pwmValue".to_string()))
+            == Some(&botbench::ui::runtime::Mark::Verified)
     });
     assert_eq!(b.sim.lock().unwrap().param("pwmValue"), Some(64));
     h.step();
-    assert!(h.query_by_label_contains("verified").is_some());
+    assert!(h.query_all_by_label_contains("verified").next().is_some());
 }
 
 #[test]
@@ -147,7 +176,12 @@ fn the_plots_receive_points() {
     let b = bench();
     let mut h = harness(b._server.path(), PanelId::Telemetry);
     step_until(&mut h, "attitude and battery points", |a| {
-        let n = |id: &str, f: &str| a.rt.plots.get(id).and_then(|s| s.get(f)).map_or(0, |s| s.len());
+        let n = |id: &str, f: &str| {
+            a.rt.plots
+                .get(id)
+                .and_then(|s| s.get(f))
+                .map_or(0, |s| s.len())
+        };
         n("attitude", "eulerX") > 20 && n("battery", "batteryVoltage") > 20
     });
 }

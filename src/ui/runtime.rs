@@ -237,10 +237,10 @@ impl Runtime {
     pub fn polls(&self, rate: Option<f64>) -> Vec<Poll> {
         let mut ids: Vec<u8> = Vec::new();
         for plot in &self.profile.plots {
-            if let Some(cmd) = self.profile.command(&plot.command) {
-                if !ids.contains(&cmd.id) {
-                    ids.push(cmd.id);
-                }
+            if let Some(cmd) = self.profile.command(&plot.command)
+                && !ids.contains(&cmd.id)
+            {
+                ids.push(cmd.id);
             }
         }
         ids.iter()
@@ -341,10 +341,10 @@ impl Runtime {
             }
             let set = self.plots.entry(plot.id.clone()).or_default();
             for name in &plot.fields {
-                if let Some(v) = d.values.iter().find(|v| v.ident.eq_ignore_ascii_case(name)) {
-                    if let Value::Int(raw) = v.value {
-                        let _ = set.push(name, t, raw as f64 * v.field.scale);
-                    }
+                if let Some(v) = d.values.iter().find(|v| v.ident.eq_ignore_ascii_case(name))
+                    && let Value::Int(raw) = v.value
+                {
+                    let _ = set.push(name, t, raw as f64 * v.field.scale);
                 }
             }
         }

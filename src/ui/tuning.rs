@@ -24,13 +24,16 @@ pub struct Change {
     pub new: String,
 }
 
+/// The writes of a "Write changes": each Set command with its full payload.
+pub type Writes = Vec<(u8, Vec<(String, Input)>)>;
+
 /// The panel's own state: what the technician typed.
 #[derive(Default)]
 pub struct TuningPanel {
     /// Edited text by (Get command id, field ident).
     pub edits: HashMap<(u8, String), String>,
     /// The changes awaiting confirmation, and the writes they make.
-    confirm: Option<(Vec<Change>, Vec<(u8, Vec<(String, Input)>)>)>,
+    confirm: Option<(Vec<Change>, Writes)>,
 }
 
 /// The device's value of a field, if a reply has brought one.
@@ -41,11 +44,15 @@ fn device_value<'a>(rt: &'a Runtime, get: u8, field: &str) -> Option<&'a Value> 
     }
 }
 
-/// The Get/Set pairs of the profile, grouped: (group id or "", name, pairs).
-fn groups<'p>(
-    rt: &'p Runtime,
-    lang: Lang,
-) -> Vec<(String, String, Vec<(&'p Command, &'p Command)>)> {
+/// A panel group: its id ("" for the commands without one), its name, its Get/Set pairs.
+struct Group<'p> {
+    id: String,
+    name: String,
+    pairs: Vec<(&'p Command, &'p Command)>,
+}
+
+/// The Get/Set pairs of the profile, grouped.
+fn groups(rt: &Runtime, lang: Lang) -> Vec<Group<'_>> {
     let p = &rt.profile;
     let pairs: Vec<(&Command, &Command)> = p
         .commands
@@ -53,7 +60,7 @@ fn groups<'p>(
         .filter(|c| c.kind == CommandKind::Get)
         .filter_map(|g| Some((g, p.command_by_id(g.pair?)?)))
         .collect();
-    let mut out: Vec<(String, String, Vec<(&Command, &Command)>)> = p
+    let mut out: Vec<Group<'_>> = p
         .groups
         .iter()
         .map(|g| {
@@ -62,11 +69,11 @@ fn groups<'p>(
                 .filter(|(get, _)| get.group.as_deref() == Some(&g.id))
                 .copied()
                 .collect();
-            (
-                g.id.clone(),
-                lang.tr(&g.name.en, &g.name.zh).to_string(),
-                members,
-            )
+            Group {
+                id: g.id.clone(),
+                name: lang.tr(&g.name.en, &g.name.zh).to_string(),
+                pairs: members,
+            }
         })
         .collect();
     let other: Vec<_> = pairs
@@ -75,9 +82,13 @@ fn groups<'p>(
         .copied()
         .collect();
     if !other.is_empty() {
-        out.push((String::new(), lang.tr("Other", "其他").to_string(), other));
+        out.push(Group {
+            id: String::new(),
+            name: lang.tr("Other", "其他").to_string(),
+            pairs: other,
+        });
     }
-    out.retain(|(_, _, members)| !members.is_empty());
+    out.retain(|g| !g.pairs.is_empty());
     out
 }
 
@@ -126,10 +137,7 @@ impl TuningPanel {
     }
 
     /// The writes the edits call for, or why they cannot be made.
-    pub fn pending(
-        &self,
-        rt: &Runtime,
-    ) -> Result<(Vec<Change>, Vec<(u8, Vec<(String, Input)>)>), String> {
+    pub fn pending(&self, rt: &Runtime) -> Result<(Vec<Change>, Writes), String> {
         let mut changes = Vec::new();
         let mut writes = Vec::new();
         for (get, set) in rt
@@ -212,10 +220,10 @@ impl TuningPanel {
                     lang.tr("Write changes", "写入修改")
                 )),
             );
-            if write.clicked() {
-                if let Ok(p) = &pending {
-                    self.confirm = Some(p.clone());
-                }
+            if write.clicked()
+                && let Ok(p) = &pending
+            {
+                self.confirm = Some(p.clone());
             }
             if ui
                 .add_enabled(
@@ -234,12 +242,12 @@ impl TuningPanel {
         egui::ScrollArea::vertical()
             .auto_shrink(false)
             .show(ui, |ui| {
-                for (gid, name, members) in groups(rt, lang) {
-                    egui::CollapsingHeader::new(egui::RichText::new(&name).strong())
-                        .id_salt(("group", gid))
+                for group in groups(rt, lang) {
+                    egui::CollapsingHeader::new(egui::RichText::new(&group.name).strong())
+                        .id_salt(("group", group.id))
                         .default_open(true)
                         .show(ui, |ui| {
-                            for (get, set) in members {
+                            for (get, set) in group.pairs {
                                 self.command_rows(ui, lang, rt, get, set);
                             }
                         });
@@ -334,7 +342,7 @@ impl TuningPanel {
             (Some(Err(e)), _) => {
                 ui.colored_label(
                     egui::Color32::RED,
-                    format!("✗ {}", lang.tr("invalid", "无效")),
+                    format!("× {}", lang.tr("invalid", "无效")),
                 )
                 .on_hover_text(format!(
                     "{e}\n{}: {}",
@@ -358,7 +366,7 @@ impl TuningPanel {
                 ui.colored_label(
                     egui::Color32::RED,
                     format!(
-                        "✗ {} {}",
+                        "× {} {}",
                         lang.tr("mismatch: device holds", "不一致:设备为"),
                         f.format(read)
                     ),
