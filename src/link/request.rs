@@ -163,13 +163,16 @@ pub enum ExchangeError {
         /// The last frame error seen.
         error: FrameError,
     },
-    /// Only frames that answer something else came back.
-    #[error("expected an answer to command {expected}, got command {got}")]
+    /// Only frames that answer something else came back (a late answer to an earlier request,
+    /// or a servo answering from another id).
+    #[error("expected an answer to command {expected}, got command {got}{}", from.map_or(String::new(), |id| format!(" from servo {id}")))]
     Mismatch {
         /// The command asked.
         expected: u8,
         /// The command that answered.
         got: u8,
+        /// Servo: the id it came from.
+        from: Option<u8>,
     },
     /// The request could not be built (payload too long).
     #[error("cannot send: {0}")]

@@ -577,10 +577,11 @@ impl Worker {
                     command: req.command,
                     error,
                 }
-            } else if let Some(got) = mismatch {
+            } else if let Some((got, from)) = mismatch {
                 ExchangeError::Mismatch {
                     expected: each.command,
                     got,
+                    from,
                 }
             } else {
                 self.stats.timeouts += 1;
@@ -595,14 +596,14 @@ impl Worker {
     }
 
     /// Reads until the answer (or the end of a burst) or the deadline. Returns what came, the
-    /// last frame error and the last mismatching command seen.
+    /// last frame error and the last mismatching command seen (with the servo id it came from).
     fn wait_for(
         &mut self,
         each: &Match,
         burst: Option<Duration>,
         first_deadline: Instant,
         baud: u32,
-    ) -> Result<(Outcome, Option<FrameError>, Option<u8>), ExchangeError> {
+    ) -> Result<(Outcome, Option<FrameError>, Option<(u8, Option<u8>)>), ExchangeError> {
         let mut deadline = first_deadline;
         let mut got: Vec<Packet> = Vec::new();
         let mut frame_err = None;
@@ -640,7 +641,10 @@ impl Worker {
                                 && !(matches!(p.header, Header::Tuya { .. })
                                     && p.command == tuya::cmd::DP_REPORT);
                             if answers_other {
-                                mismatch = Some(p.command);
+                                let from = matches!(p.header, Header::Servo)
+                                    .then(|| p.payload.first().copied())
+                                    .flatten();
+                                mismatch = Some((p.command, from));
                             }
                             self.on_incoming(p)?;
                         }

@@ -44,18 +44,32 @@ pub enum Presence {
 
 /// Pings `id` once (a scan) or with retries.
 pub fn ping(client: &Client, id: u8, attempts: u8) -> Result<Presence, OpError> {
+    Ok(ping_detail(client, id, attempts)?.0)
+}
+
+/// Pings `id`; also returns the id of another servo whose late answer turned up meanwhile (on a
+/// loaded machine an answer can miss its deadline and arrive during the next ping).
+fn ping_detail(client: &Client, id: u8, attempts: u8) -> Result<(Presence, Option<u8>), OpError> {
     let req = Request::new(cmd::PING, vec![id])
         .reply(ReplySpec::Required(Match::servo(cmd::PING, &[id])))
         .attempts(attempts);
     match client.request(req) {
-        Ok(_) => Ok(Presence::Present),
-        Err(ExchangeError::Timeout { .. }) => Ok(Presence::Absent),
+        Ok(_) => Ok((Presence::Present, None)),
+        Err(ExchangeError::Timeout { .. }) => Ok((Presence::Absent, None)),
         Err(ExchangeError::Garbled { error, .. }) => {
-            Ok(Presence::PossibleDuplicate(error.to_string()))
+            Ok((Presence::PossibleDuplicate(error.to_string()), None))
         }
-        Err(ExchangeError::Mismatch { got, .. }) => Ok(Presence::PossibleDuplicate(format!(
-            "answered with command {got}"
-        ))),
+        // A clean answer from another servo is that servo's late answer, not a sign of trouble at
+        // this id.
+        Err(ExchangeError::Mismatch {
+            got: cmd::PING,
+            from: Some(other),
+            ..
+        }) if other != id => Ok((Presence::Absent, Some(other))),
+        Err(ExchangeError::Mismatch { got, .. }) => Ok((
+            Presence::PossibleDuplicate(format!("answered with command {got}")),
+            None,
+        )),
         Err(e) => Err(e.into()),
     }
 }
@@ -181,8 +195,22 @@ pub fn scan(
                 if cancel.is_cancelled() {
                     return Err(OpError::Cancelled);
                 }
-                let presence = ping(client, id, 1)?;
-                if presence != Presence::Absent {
+                let (mut presence, late) = ping_detail(client, id, 1)?;
+                // A glitch is not a duplicate: an id is reported as one only when it answers
+                // garbled again.
+                if matches!(presence, Presence::PossibleDuplicate(_)) {
+                    presence = ping(client, id, 2)?;
+                }
+                let mut here = vec![(id, presence)];
+                if let Some(other) =
+                    late.filter(|o| !rows.iter().any(|r: &ScanRow| r.id == *o && r.baud == baud))
+                {
+                    here.push((other, ping(client, other, 3)?));
+                }
+                for (id, presence) in here {
+                    if presence == Presence::Absent {
+                        continue;
+                    }
                     let mut row = ScanRow {
                         id,
                         baud,
@@ -213,6 +241,7 @@ pub fn scan(
         Ok(())
     })();
     let _ = client.set_baud(home_baud);
+    rows.sort_by_key(|r| (bauds.iter().position(|&b| b == r.baud), r.id));
     result.map(|()| rows)
 }
 
@@ -340,10 +369,16 @@ fn ids_on_bus(client: &Client, cancel: &Cancel) -> Result<Vec<u8>, OpError> {
         if cancel.is_cancelled() {
             return Err(OpError::Cancelled);
         }
-        if ping(client, id, 1)? != Presence::Absent {
+        let (presence, late) = ping_detail(client, id, 1)?;
+        if presence != Presence::Absent {
             out.push(id);
         }
+        // A late answer still proves that servo is there.
+        if let Some(other) = late.filter(|o| !out.contains(o)) {
+            out.push(other);
+        }
     }
+    out.sort_unstable();
     Ok(out)
 }
 
