@@ -79,6 +79,15 @@ enum Queued {
     Baud(u32, Option<Sender<Result<(), super::LinkError>>>),
 }
 
+/// What a wait for an answer saw.
+struct Waited {
+    outcome: Outcome,
+    /// The last frame error.
+    frame_err: Option<FrameError>,
+    /// The last frame that answered something else: its command, and its servo id.
+    mismatch: Option<(u8, Option<u8>)>,
+}
+
 enum Outcome {
     Answered(Vec<Packet>),
     Nothing,
@@ -552,7 +561,11 @@ impl Worker {
             };
             let baud = self.baud;
             let first = t0 + wire_time(bytes.len() + 1, baud) + margin;
-            let (outcome, frame_err, mismatch) = self.wait_for(&each, burst, first, baud)?;
+            let Waited {
+                outcome,
+                frame_err,
+                mismatch,
+            } = self.wait_for(&each, burst, first, baud)?;
             match outcome {
                 Outcome::Answered(packets) => {
                     let rtt = t0.elapsed();
@@ -603,7 +616,7 @@ impl Worker {
         burst: Option<Duration>,
         first_deadline: Instant,
         baud: u32,
-    ) -> Result<(Outcome, Option<FrameError>, Option<(u8, Option<u8>)>), ExchangeError> {
+    ) -> Result<Waited, ExchangeError> {
         let mut deadline = first_deadline;
         let mut got: Vec<Packet> = Vec::new();
         let mut frame_err = None;
@@ -626,7 +639,13 @@ impl Worker {
                                     got.push(p);
                                     deadline = Instant::now() + quiet;
                                 }
-                                None => return Ok((Outcome::Answered(vec![p]), None, None)),
+                                None => {
+                                    return Ok(Waited {
+                                        outcome: Outcome::Answered(vec![p]),
+                                        frame_err: None,
+                                        mismatch: None,
+                                    });
+                                }
                             }
                         } else {
                             let answers_other = p.direction == Direction::DeviceToHost
@@ -668,7 +687,11 @@ impl Worker {
                 } else {
                     Outcome::Answered(got)
                 };
-                return Ok((outcome, frame_err, mismatch));
+                return Ok(Waited {
+                    outcome,
+                    frame_err,
+                    mismatch,
+                });
             }
             self.commands_during_exchange()?;
             let slice = deadline.min(now + Duration::from_millis(50));
