@@ -185,3 +185,92 @@ fn the_plots_receive_points() {
         n("attitude", "eulerX") > 20 && n("battery", "batteryVoltage") > 20
     });
 }
+
+#[test]
+fn a_preset_saves_and_applies_in_a_round_trip() {
+    let b = bench();
+    let path = std::env::temp_dir().join(format!("botbench-gui-preset-{}.ron", std::process::id()));
+    let mut h = harness(b._server.path(), PanelId::Presets);
+    step_until(&mut h, "the link", |a| a.rt.connected());
+    h.state_mut().as_mut().unwrap().presets.path = path.display().to_string();
+    h.step();
+    h.get_by_label("Save device to file").click();
+    step_until(&mut h, "the preset saved", |_| path.exists());
+    step_until(&mut h, "the job to end", |a| a.rt.job_progress().is_none());
+    let saved_pwm = b.sim.lock().unwrap().param("pwmValue").unwrap();
+    let saved_target = b.sim.lock().unwrap().param("defaultTarget").unwrap();
+    // The device drifts from the preset.
+    b.sim
+        .lock()
+        .unwrap()
+        .set_param("pwmValue", (saved_pwm + 7) % 100)
+        .unwrap();
+    b.sim
+        .lock()
+        .unwrap()
+        .set_param("defaultTarget", saved_target - 5)
+        .unwrap();
+    h.get_by_label("Open").click();
+    h.run_steps(2);
+    h.get_by_label("Compare with device").click();
+    step_until(&mut h, "the device read", |a| {
+        a.rt.job_progress().is_none()
+            && matches!(a.rt.readings.get(&130), Some(Reading::Values(..)))
+    });
+    h.step();
+    assert!(
+        h.query_by_label_contains("Apply (2)").is_some(),
+        "two fields differ"
+    );
+    h.get_by_label_contains("Apply (").click();
+    step_until(&mut h, "the preset applied", |a| {
+        a.rt.job_progress().is_none() && a.rt.marks.get(&(130, "pwmValue".to_string())).is_some()
+    });
+    assert_eq!(b.sim.lock().unwrap().param("pwmValue"), Some(saved_pwm));
+    assert_eq!(
+        b.sim.lock().unwrap().param("defaultTarget"),
+        Some(saved_target)
+    );
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn a_malformed_preset_is_shown_with_its_line_and_column() {
+    let b = bench();
+    let path = std::env::temp_dir().join(format!("botbench-gui-bad-{}.ron", std::process::id()));
+    std::fs::write(&path, "(\n  version: 1,\n  profile: \"window-cleaner\",\n  values: {\n    \"MSP_SET_PWMVALUE\": { \"pwmValue\": \"101\" },\n  },\n)\n").unwrap();
+    let mut h = harness(b._server.path(), PanelId::Presets);
+    step_until(&mut h, "the link", |a| a.rt.connected());
+    h.state_mut().as_mut().unwrap().presets.path = path.display().to_string();
+    h.step();
+    h.get_by_label("Open").click();
+    h.run_steps(2);
+    let err = app(&h).presets.error.clone().expect("refused");
+    assert!(err.contains(":5:") && err.contains("out of range"), "{err}");
+    assert!(app(&h).presets.loaded.is_none());
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn every_panel_renders_in_english_and_chinese() {
+    // A glyph missing from the bundled fonts panics while drawing, so drawing every panel in both
+    // languages checks the font as well as the layout.
+    let b = bench();
+    let mut h = harness(b._server.path(), PanelId::Tuning);
+    step_until(&mut h, "the link", |a| a.rt.connected());
+    let panels = app(&h).panels();
+    assert!(panels.len() >= 5, "{panels:?}");
+    for lang in [Lang::En, Lang::Zh] {
+        for panel in &panels {
+            {
+                let a = h.state_mut().as_mut().unwrap();
+                a.saved.lang = lang;
+                a.saved.panel = *panel;
+            }
+            h.run_steps(3);
+        }
+    }
+    h.get_by_label("English").click();
+    h.run_steps(2);
+    assert_eq!(app(&h).saved.lang, Lang::En);
+}

@@ -2,7 +2,7 @@
 //! panel at a time, a status line. Panels return actions; the app applies them once per frame.
 
 use super::runtime::{Runtime, Target};
-use super::{Action, connection, monitor, status_bar, telemetry, tuning};
+use super::{Action, actions, connection, monitor, presets, status_bar, telemetry, tuning};
 use crate::i18n::Lang;
 use crate::link::LinkCommand;
 use crate::profile::Protocol;
@@ -18,6 +18,10 @@ pub enum PanelId {
     Telemetry,
     /// Frames sent and received.
     Monitor,
+    /// Presets: save, compare, apply.
+    Presets,
+    /// The device's actions (motor, fan, spray…).
+    Actions,
 }
 
 impl PanelId {
@@ -27,6 +31,8 @@ impl PanelId {
             PanelId::Tuning => lang.tr("Tuning", "参数调校"),
             PanelId::Telemetry => lang.tr("Telemetry", "实时数据"),
             PanelId::Monitor => lang.tr("Packet monitor", "报文监视"),
+            PanelId::Presets => lang.tr("Presets", "预设"),
+            PanelId::Actions => lang.tr("Actions", "动作测试"),
         }
     }
 }
@@ -82,6 +88,10 @@ pub struct App {
     pub monitor: monitor::MonitorPanel,
     /// The connection bar's fields.
     pub connection: connection::ConnectionBar,
+    /// The presets panel.
+    pub presets: presets::PresetsPanel,
+    /// The actions panel.
+    pub actions: actions::ActionsPanel,
 }
 
 impl App {
@@ -96,6 +106,8 @@ impl App {
             tuning: tuning::TuningPanel::default(),
             telemetry: telemetry::TelemetryPanel::default(),
             monitor: monitor::MonitorPanel::default(),
+            presets: presets::PresetsPanel::default(),
+            actions: actions::ActionsPanel::default(),
         };
         let (target, baud, profile) = (
             app.saved.target.clone(),
@@ -160,6 +172,8 @@ impl App {
                 actions.extend(self.telemetry.show(ui, &mut self.saved, &self.rt))
             }
             PanelId::Monitor => actions.extend(self.monitor.show(ui, lang, &mut self.rt)),
+            PanelId::Presets => actions.extend(self.presets.show(ui, lang, &self.rt)),
+            PanelId::Actions => actions.extend(self.actions.show(ui, lang, &self.rt)),
         });
         for a in actions {
             self.apply(a);
@@ -181,6 +195,19 @@ impl App {
         }
         if !self.rt.profile.plots.is_empty() {
             v.push(PanelId::Telemetry);
+        }
+        if !crate::preset::preset_commands(&self.rt.profile).is_empty() {
+            v.push(PanelId::Presets);
+        }
+        if self.rt.profile.protocol == Protocol::Msp
+            && self
+                .rt
+                .profile
+                .commands
+                .iter()
+                .any(|c| c.kind == crate::profile::CommandKind::Action)
+        {
+            v.push(PanelId::Actions);
         }
         v.push(PanelId::Monitor);
         v

@@ -1,10 +1,12 @@
 //! The desktop window (eframe/egui): one file per panel. Panels draw from the runtime state and
 //! return [`Action`]s; the app applies them once per frame. The UI never touches the port.
 
+mod actions;
 pub mod app;
 mod connection;
 pub mod jobs;
 mod monitor;
+mod presets;
 pub mod runtime;
 mod status_bar;
 mod telemetry;
@@ -52,6 +54,10 @@ pub enum JobSpec {
     Write(Vec<(u8, Vec<(String, Input)>)>),
     /// Send one command (an action) with these inputs.
     Send(u8, Vec<(String, Input)>),
+    /// Read the device's parameters and save them as a preset at this path, with a note.
+    SavePreset(std::path::PathBuf, String),
+    /// Write a (checked) preset, each command read back.
+    ApplyPreset(Box<crate::preset::Preset>),
 }
 
 impl JobSpec {
@@ -113,6 +119,48 @@ impl JobSpec {
                     Err(format!("{bad} of {total} command(s) not verified"))
                 }
             }),
+            JobSpec::SavePreset(path, note) => {
+                rt.start_job("save preset", move |client, cancel, sink| {
+                    let mut preset =
+                        crate::preset::Preset::capture(client, &profile, cancel, &mut |p| {
+                            sink.send(jobs::JobOutput::Progress(p))
+                        })
+                        .map_err(|e| e.to_string())?;
+                    preset.note = note;
+                    preset
+                        .save_annotated(&path, &profile)
+                        .map_err(|e| e.to_string())?;
+                    Ok(format!("saved to {}", path.display()))
+                })
+            }
+            JobSpec::ApplyPreset(preset) => {
+                rt.start_job("apply preset", move |client, cancel, sink| {
+                    let mut total = 0;
+                    let mut bad = 0;
+                    preset
+                        .apply_each(
+                            client,
+                            &profile,
+                            cancel,
+                            &mut |p| sink.send(jobs::JobOutput::Progress(p)),
+                            &mut |command, checks| {
+                                total += checks.len();
+                                bad += checks.iter().filter(|c| !c.ok()).count();
+                                if let Some(cmd) = profile.command(command) {
+                                    sink.send(jobs::JobOutput::Wrote(cmd.id, Ok(checks.to_vec())));
+                                }
+                            },
+                        )
+                        .map_err(|e| e.to_string())?;
+                    if bad == 0 {
+                        Ok(format!("{total} field(s) written and verified"))
+                    } else {
+                        Err(format!(
+                            "{bad} of {total} field(s) do not hold the preset's value"
+                        ))
+                    }
+                })
+            }
             JobSpec::Send(id, inputs) => rt.start_job("send", move |client, _cancel, _sink| {
                 let cmd = profile.command_by_id(id).ok_or("unknown command")?;
                 ops::send(client, &profile, cmd, &inputs).map_err(|e| e.to_string())?;

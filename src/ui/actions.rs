@@ -1,0 +1,174 @@
+//! The device's actions (motor, fan, spray, voice, calibration, Wi-Fi test…), generated from the
+//! profile's Action commands. Each field is range-checked as typed; a command that makes the
+//! robot move asks for confirmation first.
+
+use super::runtime::Runtime;
+use super::{Action, JobSpec};
+use crate::i18n::Lang;
+use crate::profile::{Command, CommandKind, Input};
+use eframe::egui;
+use std::collections::HashMap;
+
+/// The panel's state: typed values, and a command awaiting confirmation.
+#[derive(Default)]
+pub struct ActionsPanel {
+    /// Typed text by (command id, field ident).
+    pub inputs: HashMap<(u8, String), String>,
+    /// A command that moves the robot, waiting for the operator's yes.
+    confirm: Option<(u8, Vec<(String, Input)>)>,
+}
+
+impl ActionsPanel {
+    fn inputs_of(&self, cmd: &Command) -> Result<Vec<(String, Input)>, String> {
+        cmd.request
+            .iter()
+            .map(|f| {
+                let text = self
+                    .inputs
+                    .get(&(cmd.id, f.ident.clone()))
+                    .cloned()
+                    .unwrap_or_default();
+                if text.trim().is_empty() {
+                    return Err(format!(
+                        "{}: give a value ({})",
+                        f.ident,
+                        super::tuning::range_text(f)
+                    ));
+                }
+                f.parse(&text).map_err(|e| e.to_string())?;
+                Ok((f.ident.clone(), Input::Text(text)))
+            })
+            .collect()
+    }
+
+    /// Draws the panel.
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+        let mut actions = Vec::new();
+        let ready = rt.connected() && rt.job_progress().is_none();
+        let cmds: Vec<&Command> = rt
+            .profile
+            .commands
+            .iter()
+            .filter(|c| c.kind == CommandKind::Action)
+            .collect();
+        egui::ScrollArea::vertical()
+            .auto_shrink(false)
+            .show(ui, |ui| {
+                egui::Grid::new("actions")
+                    .striped(true)
+                    .num_columns(3)
+                    .show(ui, |ui| {
+                        for cmd in cmds {
+                            ui.label(lang.tr(&cmd.name.en, &cmd.name.zh))
+                                .on_hover_text(format!("{} ({})", cmd.ident, cmd.id));
+                            ui.horizontal(|ui| {
+                                for f in &cmd.request {
+                                    let key = (cmd.id, f.ident.clone());
+                                    let text = self.inputs.entry(key).or_default();
+                                    if f.labels.is_empty() {
+                                        ui.label(lang.tr(&f.name.en, &f.name.zh));
+                                        let bad = !text.is_empty() && f.parse(text).is_err();
+                                        let mut edit = egui::TextEdit::singleline(text)
+                                            .desired_width(70.0)
+                                            .hint_text(super::tuning::range_text(f));
+                                        if bad {
+                                            edit = edit.text_color(egui::Color32::RED);
+                                        }
+                                        ui.add(edit);
+                                    } else {
+                                        egui::ComboBox::from_id_salt(("act", cmd.id, &f.ident))
+                                            .selected_text(if text.is_empty() {
+                                                lang.tr(&f.name.en, &f.name.zh).to_string()
+                                            } else {
+                                                text.clone()
+                                            })
+                                            .show_ui(ui, |ui| {
+                                                for l in &f.labels {
+                                                    let label = format!(
+                                                        "{} ({})",
+                                                        lang.tr(&l.name.en, &l.name.zh),
+                                                        l.ident
+                                                    );
+                                                    if ui
+                                                        .selectable_label(*text == l.ident, label)
+                                                        .clicked()
+                                                    {
+                                                        *text = l.ident.clone();
+                                                    }
+                                                }
+                                            });
+                                    }
+                                }
+                            });
+                            let inputs = self.inputs_of(cmd);
+                            let label = if cmd.confirm {
+                                format!("⚠ {}", lang.tr("Send…", "发送…"))
+                            } else {
+                                lang.tr("Send", "发送").to_string()
+                            };
+                            let resp =
+                                ui.add_enabled(ready && inputs.is_ok(), egui::Button::new(label));
+                            let resp = match &inputs {
+                                Err(e) => resp.on_disabled_hover_text(e),
+                                Ok(_) => resp,
+                            };
+                            if resp.clicked()
+                                && let Ok(inputs) = inputs
+                            {
+                                if cmd.confirm {
+                                    self.confirm = Some((cmd.id, inputs));
+                                } else {
+                                    actions.push(Action::Job(JobSpec::Send(cmd.id, inputs)));
+                                }
+                            }
+                            ui.end_row();
+                        }
+                    });
+            });
+        if let Some((id, inputs)) = &self.confirm {
+            let name = rt.profile.command_by_id(*id).map_or(String::new(), |c| {
+                lang.tr(&c.name.en, &c.name.zh).to_string()
+            });
+            let mut decision = None;
+            let modal = egui::Modal::new(egui::Id::unique("confirm-action")).show(ui.ctx(), |ui| {
+                ui.heading(lang.tr("The robot will move", "机器人将会动作"));
+                ui.label(format!(
+                    "{name}: {}",
+                    inputs
+                        .iter()
+                        .map(|(k, v)| match v {
+                            Input::Text(t) => format!("{k}={t}"),
+                            Input::Raw(r) => format!("{k}={r:?}"),
+                        })
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+                ui.label(lang.tr(
+                    "Make sure it is safe, then confirm.",
+                    "请确认安全后再执行。",
+                ));
+                ui.horizontal(|ui| {
+                    if ui.button(lang.tr("Confirm", "确认")).clicked() {
+                        decision = Some(true);
+                    }
+                    if ui.button(lang.tr("Cancel", "取消")).clicked() {
+                        decision = Some(false);
+                    }
+                });
+            });
+            if modal.should_close() && decision.is_none() {
+                decision = Some(false);
+            }
+            match decision {
+                Some(true) => {
+                    if let Some((id, inputs)) = self.confirm.take() {
+                        actions.push(Action::Job(JobSpec::Send(id, inputs)));
+                    }
+                }
+                Some(false) => self.confirm = None,
+                None => {}
+            }
+        }
+        actions
+    }
+}

@@ -1,0 +1,196 @@
+//! Presets: save the device's parameters to a RON file, open one and compare it with the device
+//! in a diff table, apply it with read-back verification and a progress bar.
+
+use super::runtime::{Reading, Runtime};
+use super::{Action, JobSpec};
+use crate::i18n::Lang;
+use crate::preset::{CommandValues, Loaded, Preset, display_value, preset_commands};
+use eframe::egui;
+use std::path::PathBuf;
+
+/// The panel's state: the file, and the preset opened from it.
+#[derive(Default)]
+pub struct PresetsPanel {
+    /// The preset file's path.
+    pub path: String,
+    /// A note saved with the preset.
+    pub note: String,
+    /// The preset opened (checked against the profile).
+    pub loaded: Option<Loaded>,
+    /// Why the last open failed, with line and column.
+    pub error: Option<String>,
+}
+
+/// The device's values of the preset commands, from the readings replies brought.
+fn device_values(rt: &Runtime) -> Vec<CommandValues> {
+    preset_commands(&rt.profile)
+        .into_iter()
+        .filter_map(|(set, get)| {
+            let Some(Reading::Values(values, _)) = rt.readings.get(&get.id) else {
+                return None;
+            };
+            let fields = set
+                .request
+                .iter()
+                .filter_map(|f| {
+                    let (_, v) = values.iter().find(|(k, _)| k == &f.ident)?;
+                    Some((f.ident.clone(), display_value(f, v)))
+                })
+                .collect();
+            Some(CommandValues {
+                command: set.ident.clone(),
+                fields,
+            })
+        })
+        .collect()
+}
+
+impl PresetsPanel {
+    /// Opens the preset at `path`, checking it against the profile.
+    pub fn open(&mut self, rt: &Runtime) {
+        match Preset::load(&PathBuf::from(self.path.trim()), &rt.profile) {
+            Ok(l) => {
+                self.loaded = Some(l);
+                self.error = None;
+            }
+            Err(e) => {
+                self.loaded = None;
+                self.error = Some(e.to_string());
+            }
+        }
+    }
+
+    /// Draws the panel.
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+        let mut actions = Vec::new();
+        let busy = rt.job_progress().is_some();
+        let ready = rt.connected() && !busy;
+        ui.horizontal_wrapped(|ui| {
+            ui.label(lang.tr("File", "文件"));
+            ui.add(
+                egui::TextEdit::singleline(&mut self.path)
+                    .hint_text("window-cleaner.ron")
+                    .desired_width(320.0),
+            );
+            if ui.button(lang.tr("Browse…", "浏览…")).clicked()
+                && let Some(p) = rfd::FileDialog::new()
+                    .add_filter("RON", &["ron"])
+                    .pick_file()
+            {
+                self.path = p.display().to_string();
+                self.open(rt);
+            }
+            if ui.button(lang.tr("Open", "打开")).clicked() {
+                self.open(rt);
+            }
+        });
+        ui.horizontal_wrapped(|ui| {
+            ui.label(lang.tr("Note", "备注"));
+            ui.add(egui::TextEdit::singleline(&mut self.note).desired_width(240.0));
+            let can_save = ready && !self.path.trim().is_empty();
+            if ui
+                .add_enabled(
+                    can_save,
+                    egui::Button::new(lang.tr("Save device to file", "保存设备参数到文件")),
+                )
+                .clicked()
+            {
+                actions.push(Action::Job(JobSpec::SavePreset(
+                    PathBuf::from(self.path.trim()),
+                    self.note.clone(),
+                )));
+            }
+            if ui
+                .button(lang.tr("Factory defaults", "出厂默认值"))
+                .clicked()
+            {
+                let preset = Preset::defaults(&rt.profile, "factory defaults from the profile");
+                match preset.validate(&rt.profile) {
+                    Ok(writes) => {
+                        self.loaded = Some(Loaded { preset, writes });
+                        self.error = None;
+                    }
+                    Err(e) => self.error = Some(e.to_string()),
+                }
+            }
+        });
+        if let Some(e) = &self.error {
+            ui.colored_label(egui::Color32::RED, e);
+        }
+        ui.separator();
+        let Some(loaded) = &self.loaded else {
+            ui.weak(lang.tr(
+                "Open a preset to compare it with the device and apply it.",
+                "打开一个预设,与设备比较并写入。",
+            ));
+            return actions;
+        };
+        let p = &loaded.preset;
+        ui.label(format!(
+            "{}: {}  {}: {}  {}: {}",
+            lang.tr("profile", "配置"),
+            p.profile,
+            lang.tr("created", "创建于"),
+            p.created,
+            lang.tr("device", "设备"),
+            p.device.as_deref().unwrap_or("-")
+        ));
+        if !p.note.is_empty() {
+            ui.label(&p.note);
+        }
+        let device = device_values(rt);
+        let rows = p.diff(&rt.profile, &device);
+        let differing = rows.iter().filter(|r| r.differs).count();
+        ui.horizontal(|ui| {
+            let gets: Vec<u8> = preset_commands(&rt.profile)
+                .iter()
+                .map(|(_, g)| g.id)
+                .collect();
+            if ui
+                .add_enabled(
+                    ready,
+                    egui::Button::new(lang.tr("Compare with device", "与设备比较")),
+                )
+                .clicked()
+            {
+                actions.push(Action::Job(JobSpec::Read(gets)));
+            }
+            let apply = ui.add_enabled(
+                ready,
+                egui::Button::new(format!("{} ({differing})", lang.tr("Apply", "写入预设"))),
+            );
+            if apply.clicked() {
+                actions.push(Action::Job(JobSpec::ApplyPreset(Box::new(p.clone()))));
+            }
+        });
+        egui::ScrollArea::vertical()
+            .auto_shrink(false)
+            .show(ui, |ui| {
+                egui::Grid::new("preset-diff")
+                    .striped(true)
+                    .num_columns(4)
+                    .show(ui, |ui| {
+                        ui.strong(lang.tr("Command", "命令"));
+                        ui.strong(lang.tr("Field", "字段"));
+                        ui.strong(lang.tr("Preset", "预设值"));
+                        ui.strong(lang.tr("Device", "设备值"));
+                        ui.end_row();
+                        for r in &rows {
+                            ui.monospace(&r.command);
+                            ui.label(&r.field);
+                            if r.differs {
+                                ui.colored_label(egui::Color32::from_rgb(220, 150, 0), &r.preset);
+                            } else {
+                                ui.label(&r.preset);
+                            }
+                            match &r.device {
+                                Some(d) => ui.label(d),
+                                None => ui.weak(lang.tr("not read yet", "尚未读取")),
+                            };
+                            ui.end_row();
+                        }
+                    });
+            });
+        actions
+    }
+}
