@@ -224,7 +224,7 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
     );
     h.get_by_label_contains("Apply (").click();
     step_until(&mut h, "the preset applied", |a| {
-        a.rt.job_progress().is_none() && a.rt.marks.get(&(130, "pwmValue".to_string())).is_some()
+        a.rt.job_progress().is_none() && a.rt.marks.contains_key(&(130, "pwmValue".to_string()))
     });
     assert_eq!(b.sim.lock().unwrap().param("pwmValue"), Some(saved_pwm));
     assert_eq!(
