@@ -4,4 +4,5 @@ pub mod ops;
 pub mod packet;
 pub mod profile;
 pub mod protocol;
+pub mod series;
 pub mod sim;
