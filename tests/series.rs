@@ -5,8 +5,8 @@ use botbench::series::{Sample, Series, SeriesSet};
 use proptest::collection::vec;
 use proptest::prelude::*;
 
-/// Time steps (0 allowed, so equal times happen) and values (some NaN, few distinct so ties
-/// happen).
+/// Time steps (0 allowed, so equal times happen) and values (some NaN, some ±∞, few distinct so
+/// ties happen).
 fn samples(max: usize) -> impl Strategy<Value = Vec<(f64, f64)>> {
     vec(
         (
@@ -15,6 +15,7 @@ fn samples(max: usize) -> impl Strategy<Value = Vec<(f64, f64)>> {
                 8 => -100.0..100.0f64,
                 2 => (-3i32..3).prop_map(f64::from),
                 1 => Just(f64::NAN),
+                1 => prop_oneof![Just(f64::INFINITY), Just(f64::NEG_INFINITY)],
             ],
         ),
         0..max,
@@ -55,12 +56,13 @@ fn reference(held: &[Sample], t0: f64, t1: f64, buckets: usize) -> Vec<[f64; 2]>
     if window.len() < 2 * buckets {
         out.extend(window.iter().filter(|s| !s.v.is_nan()).map(p));
     } else {
-        let scale = if t1 > t0 {
-            buckets as f64 / (t1 - t0)
-        } else {
-            0.0
+        // Bucket b holds e(b) <= t < e(b + 1), e(k) = t0 + k * width; the last takes the rest.
+        let width = (t1 - t0) / buckets as f64;
+        let bucket_of = |s: &Sample| {
+            (1..buckets)
+                .filter(|&k| s.t >= t0 + k as f64 * width)
+                .count()
         };
-        let bucket_of = |s: &Sample| (((s.t - t0) * scale) as usize).min(buckets - 1);
         for b in 0..buckets {
             let idx: Vec<usize> = (0..window.len())
                 .filter(|&i| !window[i].v.is_nan() && bucket_of(&window[i]) == b)
