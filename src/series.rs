@@ -20,7 +20,6 @@
 //!   is left out of the pass-through of small windows and is not used as an edge sample. ±∞
 //!   values are ordinary values.
 
-use std::collections::VecDeque;
 use std::io::{self, Write};
 
 /// Default capacity: 10 minutes at 100 Hz.
@@ -53,10 +52,16 @@ pub enum Rejected {
 }
 
 /// A bounded ring buffer of time-sorted samples.
+///
+/// Times and values live in two separate fixed-size arrays (a struct-of-arrays ring), so the
+/// decimation scan reads them as plain contiguous `f64` slices.
 #[derive(Debug, Clone)]
 pub struct Series {
-    buf: VecDeque<Sample>,
-    cap: usize,
+    t: Vec<f64>,
+    v: Vec<f64>,
+    /// Physical index of the oldest sample.
+    head: usize,
+    len: usize,
 }
 
 impl Default for Series {
@@ -70,35 +75,38 @@ impl Series {
     pub fn new(capacity: usize) -> Self {
         let cap = capacity.max(1);
         Self {
-            buf: VecDeque::with_capacity(cap),
-            cap,
+            t: vec![0.0; cap],
+            v: vec![0.0; cap],
+            head: 0,
+            len: 0,
         }
     }
 
     /// The most samples the series holds; older ones are dropped past it.
     pub fn capacity(&self) -> usize {
-        self.cap
+        self.t.len()
     }
 
-    /// The capacity of the underlying allocation (at least [`Self::capacity`]); it does not
-    /// change after construction.
+    /// The capacity of the underlying allocation, in samples (at least [`Self::capacity`]); it
+    /// does not change after construction.
     pub fn allocated(&self) -> usize {
-        self.buf.capacity()
+        self.t.capacity().min(self.v.capacity())
     }
 
     /// The number of samples held.
     pub fn len(&self) -> usize {
-        self.buf.len()
+        self.len
     }
 
     /// Whether no sample is held.
     pub fn is_empty(&self) -> bool {
-        self.buf.is_empty()
+        self.len == 0
     }
 
     /// Drops every sample, keeping the allocation.
     pub fn clear(&mut self) {
-        self.buf.clear();
+        self.head = 0;
+        self.len = 0;
     }
 
     /// Appends a sample, dropping the oldest when full. An earlier time than the last is clamped
@@ -107,51 +115,103 @@ impl Series {
         if !t.is_finite() {
             return Err(Rejected::NonFiniteTime);
         }
-        let (t, pushed) = match self.buf.back() {
+        let (t, pushed) = match self.latest() {
             Some(last) if t < last.t => (last.t, Pushed::Clamped),
             _ => (t, Pushed::Appended),
         };
-        if self.buf.len() == self.cap {
-            self.buf.pop_front();
-        }
-        self.buf.push_back(Sample { t, v });
+        let cap = self.capacity();
+        let i = if self.len < cap {
+            self.len += 1;
+            self.phys(self.len - 1)
+        } else {
+            let i = self.head;
+            self.head = if i + 1 == cap { 0 } else { i + 1 };
+            i
+        };
+        self.t[i] = t;
+        self.v[i] = v;
         Ok(pushed)
+    }
+
+    /// Physical index of logical index `i < len`.
+    fn phys(&self, i: usize) -> usize {
+        let p = self.head + i;
+        if p >= self.capacity() {
+            p - self.capacity()
+        } else {
+            p
+        }
+    }
+
+    /// The physical ranges of logical `[from, to)`, oldest first (the second may be empty).
+    fn ranges(&self, from: usize, to: usize) -> [std::ops::Range<usize>; 2] {
+        let cap = self.capacity();
+        let (a, b) = (self.head + from, self.head + to);
+        if b <= cap {
+            [a..b, 0..0]
+        } else if a >= cap {
+            [a - cap..b - cap, 0..0]
+        } else {
+            [a..cap, 0..b - cap]
+        }
+    }
+
+    /// The number of oldest samples whose time satisfies `pred` (which must hold for a prefix).
+    fn partition_point(&self, pred: impl Fn(f64) -> bool) -> usize {
+        let [a, b] = self.ranges(0, self.len);
+        let n = a.len();
+        let i = self.t[a].partition_point(|&x| pred(x));
+        if i < n {
+            i
+        } else {
+            n + self.t[b].partition_point(|&x| pred(x))
+        }
     }
 
     /// The sample at `index` (0 is the oldest held).
     pub fn get(&self, index: usize) -> Option<Sample> {
-        self.buf.get(index).copied()
+        (index < self.len).then(|| {
+            let i = self.phys(index);
+            Sample {
+                t: self.t[i],
+                v: self.v[i],
+            }
+        })
     }
 
     /// The oldest sample held.
     pub fn first(&self) -> Option<Sample> {
-        self.buf.front().copied()
+        self.get(0)
     }
 
     /// The newest sample.
     pub fn latest(&self) -> Option<Sample> {
-        self.buf.back().copied()
+        self.get(self.len.checked_sub(1)?)
     }
 
     /// The samples, oldest first.
-    pub fn iter(&self) -> impl DoubleEndedIterator<Item = Sample> + ExactSizeIterator + '_ {
-        self.buf.iter().copied()
+    pub fn iter(&self) -> impl DoubleEndedIterator<Item = Sample> + '_ {
+        let [a, b] = self.ranges(0, self.len);
+        a.chain(b).map(|i| Sample {
+            t: self.t[i],
+            v: self.v[i],
+        })
     }
 
     /// First and last time held.
     pub fn span(&self) -> Option<(f64, f64)> {
-        Some((self.buf.front()?.t, self.buf.back()?.t))
+        Some((self.first()?.t, self.latest()?.t))
     }
 
     /// The sample nearest in time to `t` (the earlier one on a tie), NaN value or not; `None`
     /// when empty or `t` is NaN. O(log n).
     pub fn value_at(&self, t: f64) -> Option<Sample> {
-        if t.is_nan() || self.buf.is_empty() {
+        if t.is_nan() || self.is_empty() {
             return None;
         }
-        let i = self.buf.partition_point(|s| s.t < t);
-        let after = self.buf.get(i).copied();
-        let before = i.checked_sub(1).and_then(|j| self.buf.get(j)).copied();
+        let i = self.partition_point(|x| x < t);
+        let after = self.get(i);
+        let before = i.checked_sub(1).and_then(|j| self.get(j));
         match (before, after) {
             (Some(b), Some(a)) => Some(if a.t - t < t - b.t { a } else { b }),
             (b, a) => b.or(a),
@@ -168,123 +228,167 @@ impl Series {
     ///   (one point when they are the same sample; the first occurrence on ties);
     /// - the first sample after `t1`, if any.
     ///
-    /// At most `2 × buckets + 2` points. Sample `i` at time `t` falls in bucket
-    /// `floor((t - t0) × (buckets / (t1 - t0)))`, clamped to the last bucket (the whole window
-    /// is one bucket when `t0 == t1`). NaN values are skipped everywhere (module notes).
-    /// `t0 > t1`, non-finite bounds, `buckets == 0` or an empty series give an empty `out`.
+    /// At most `2 × buckets + 2` points. With edges `e(k) = t0 + k × ((t1 - t0) / buckets)`,
+    /// bucket `b` holds the samples with `e(b) ≤ t < e(b + 1)`, the last bucket everything from
+    /// `e(buckets - 1)` on (the whole window is one bucket when `t0 == t1`). NaN values are
+    /// skipped everywhere (module notes). `t0 > t1`, non-finite bounds, `buckets == 0` or an
+    /// empty series give an empty `out`.
     ///
-    /// O(log n + samples in window); no allocation when `out` has room for `2 × buckets + 2`.
+    /// O(log n + samples in window + buckets); no allocation when `out` has room for
+    /// `2 × buckets + 2`.
     pub fn decimate(&self, t0: f64, t1: f64, buckets: usize, out: &mut Vec<[f64; 2]>) {
         out.clear();
-        if buckets == 0 || !t0.is_finite() || !t1.is_finite() || t0 > t1 || self.buf.is_empty() {
+        if buckets == 0 || !t0.is_finite() || !t1.is_finite() || t0 > t1 || self.is_empty() {
             return;
         }
-        let start = self.buf.partition_point(|s| s.t < t0);
-        let end = self.buf.partition_point(|s| s.t <= t1);
+        let start = self.partition_point(|t| t < t0);
+        let end = self.partition_point(|t| t <= t1);
 
-        if let Some(s) = start.checked_sub(1).map(|i| self.buf[i])
+        if let Some(s) = start.checked_sub(1).and_then(|i| self.get(i))
             && !s.v.is_nan()
         {
             out.push([s.t, s.v]);
         }
 
-        let (a, b) = self.buf.as_slices();
-        // The window as (up to) two contiguous pieces of the ring.
-        let (p1, p2) = if end <= a.len() {
-            (&a[start..end], &b[..0])
-        } else if start >= a.len() {
-            (&b[start - a.len()..end - a.len()], &b[..0])
-        } else {
-            (&a[start..], &b[..end - a.len()])
-        };
-
+        let ranges = self.ranges(start, end);
         if end - start < 2 * buckets {
-            out.extend(
-                p1.iter()
-                    .chain(p2)
-                    .filter(|s| !s.v.is_nan())
-                    .map(|s| [s.t, s.v]),
-            );
+            for r in ranges {
+                let (ts, vs) = (&self.t[r.clone()], &self.v[r]);
+                out.extend(
+                    ts.iter()
+                        .zip(vs)
+                        .filter(|(_, v)| !v.is_nan())
+                        .map(|(&t, &v)| [t, v]),
+                );
+            }
         } else {
-            let scale = if t1 > t0 {
-                buckets as f64 / (t1 - t0)
-            } else {
-                0.0
-            };
-            let mut acc = Buckets::new(t0, scale, buckets - 1);
-            acc.feed(p1, 0, out);
-            acc.feed(p2, p1.len(), out);
+            let mut acc = Buckets::new(t0, (t1 - t0) / buckets as f64, buckets - 1);
+            for r in ranges {
+                acc.feed(&self.t[r.clone()], &self.v[r], out);
+            }
             acc.flush(out);
         }
 
-        if let Some(s) = self.buf.get(end)
+        if let Some(s) = self.get(end)
             && !s.v.is_nan()
         {
             out.push([s.t, s.v]);
         }
     }
 }
+
+/// No sample (an index never reached).
+const NONE: usize = usize::MAX;
 
 /// The running state of one decimation pass.
 struct Buckets {
     t0: f64,
-    scale: f64,
+    width: f64,
     last: usize,
-    /// The bucket being filled; `usize::MAX` before the first finite sample.
+    /// The bucket being filled.
     current: usize,
-    /// (index in window, sample) of the current bucket's min and max.
-    min: (usize, Sample),
-    max: (usize, Sample),
+    /// Where the current bucket ends (`+∞` for the last bucket).
+    edge: f64,
+    /// Samples fed before the current piece, so indices count in order of occurrence.
+    base: usize,
+    /// (index, t, v) of the current bucket's first minimum and first maximum; the index is
+    /// [`NONE`] until one is seen. Starting from v = +∞ / −∞, NaN never compares in.
+    min: (usize, f64, f64),
+    max: (usize, f64, f64),
 }
 
 impl Buckets {
-    fn new(t0: f64, scale: f64, last: usize) -> Self {
-        let none = (0, Sample { t: 0.0, v: 0.0 });
-        Self {
+    const EMPTY_MIN: (usize, f64, f64) = (NONE, 0.0, f64::INFINITY);
+    const EMPTY_MAX: (usize, f64, f64) = (NONE, 0.0, f64::NEG_INFINITY);
+
+    fn new(t0: f64, width: f64, last: usize) -> Self {
+        let mut b = Self {
             t0,
-            scale,
+            width,
             last,
-            current: usize::MAX,
-            min: none,
-            max: none,
+            current: 0,
+            edge: 0.0,
+            base: 0,
+            min: Self::EMPTY_MIN,
+            max: Self::EMPTY_MAX,
+        };
+        b.edge = b.edge_after(0);
+        b
+    }
+
+    fn edge_after(&self, bucket: usize) -> f64 {
+        if bucket == self.last {
+            f64::INFINITY
+        } else {
+            self.t0 + (bucket + 1) as f64 * self.width
         }
     }
 
-    fn feed(&mut self, samples: &[Sample], offset: usize, out: &mut Vec<[f64; 2]>) {
-        for (i, s) in samples.iter().enumerate() {
-            if s.v.is_nan() {
-                continue;
-            }
-            // `as` saturates; t >= t0 in the window, so this is never negative.
-            let bucket = (((s.t - self.t0) * self.scale) as usize).min(self.last);
-            let i = i + offset;
-            if bucket != self.current {
+    /// Feeds the next contiguous piece of the window: bucket by bucket, a galloping search of
+    /// the times for where the bucket ends (O(log) in the bucket's size, so cheap for both few
+    /// and many samples per bucket), then a tight min/max scan over its values alone, the
+    /// sample's place and time looked up only for the winners.
+    fn feed(&mut self, ts: &[f64], vs: &[f64], out: &mut Vec<[f64; 2]>) {
+        let mut i = 0;
+        while i < ts.len() {
+            if ts[i] >= self.edge {
                 self.flush(out);
-                self.current = bucket;
-                self.min = (i, *s);
-                self.max = (i, *s);
-            } else if s.v < self.min.1.v {
-                self.min = (i, *s);
-            } else if s.v > self.max.1.v {
-                self.max = (i, *s);
+                while ts[i] >= self.edge {
+                    self.current += 1;
+                    self.edge = self.edge_after(self.current);
+                }
             }
+            let mut j = i + 1;
+            let edge = self.edge;
+            let mut step = 1;
+            while j + step < ts.len() && ts[j + step] < edge {
+                j += step;
+                step *= 2;
+            }
+            let hi = (j + step).min(ts.len());
+            j += ts[j..hi].partition_point(|&t| t < edge);
+            let (mut mn, mut mx) = (self.min.2, self.max.2);
+            let (mut a, mut b) = (usize::MAX, usize::MAX);
+            for (k, &v) in vs[i..j].iter().enumerate() {
+                if v < mn {
+                    mn = v;
+                    a = k;
+                }
+                if v > mx {
+                    mx = v;
+                    b = k;
+                }
+            }
+            if a != usize::MAX {
+                self.min = (self.base + i + a, ts[i + a], mn);
+            }
+            if b != usize::MAX {
+                self.max = (self.base + i + b, ts[i + b], mx);
+            }
+            i = j;
         }
+        self.base += ts.len();
     }
 
     fn flush(&mut self, out: &mut Vec<[f64; 2]>) {
-        if self.current == usize::MAX {
-            return;
+        let (mut min, mut max) = (self.min, self.max);
+        (self.min, self.max) = (Self::EMPTY_MIN, Self::EMPTY_MAX);
+        // Only ±∞ values: +∞ never beats the starting min, −∞ never the starting max.
+        match (min.0, max.0) {
+            (NONE, NONE) => return,
+            (NONE, _) => min = max,
+            (_, NONE) => max = min,
+            _ => {}
         }
-        let (first, second) = if self.min.0 <= self.max.0 {
-            (self.min, self.max)
+        let (first, second) = if min.0 <= max.0 {
+            (min, max)
         } else {
-            (self.max, self.min)
+            (max, min)
         };
-        out.push([first.1.t, first.1.v]);
+        out.push([first.1, first.2]);
         if second.0 != first.0 {
-            out.push([second.1.t, second.1.v]);
+            out.push([second.1, second.2]);
         }
-        self.current = usize::MAX;
     }
 }
 
@@ -392,7 +496,7 @@ impl SeriesSet {
         let mut iters: Vec<_> = self
             .series
             .iter()
-            .map(|(_, s)| s.buf.iter().peekable())
+            .map(|(_, s)| s.iter().peekable())
             .collect();
         loop {
             let Some(key) = iters
