@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Starts the release binary under Xvfb on its built-in demo device, takes a screenshot, and
 # fails if the window did not come up or the shot is blank.
-# Usage: .ci/screenshot.sh [OUT.png]   (default: target/screenshot.png)
+# Usage: .ci/screenshot.sh [OUT.png]   (default: target/screenshot.png; a second shot of the
+# telemetry panel goes beside it as OUT-telemetry.png)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-target/screenshot.png}
+out2=${out%.png}-telemetry.png
 bin=target/release/botbench
 
 need=()
@@ -39,6 +41,10 @@ fi
 # Let it connect to the demo device, read and plot for a moment.
 sleep 6
 import -window root "$PWD/$out"
+# The telemetry panel: second in the navigation on the left.
+xdotool mousemove 45 64 click 1
+sleep 5
+import -window root "$PWD/$out2"
 kill \$app
 wait \$app 2>/dev/null || true
 SCRIPT
@@ -47,6 +53,8 @@ mkdir -p "$(dirname "$out")"
 xvfb-run -a -s "-screen 0 1280x800x24" "$home/run.sh"
 
 # Blank means a single colour: its standard deviation is (about) zero.
-sd=$(/usr/bin/convert "$out" -format "%[fx:standard_deviation]" info:)
-echo "screenshot $out: standard deviation $sd"
-awk -v sd="$sd" 'BEGIN { exit !(sd > 0.02) }' || { echo "the screenshot is blank"; exit 1; }
+for shot in "$out" "$out2"; do
+    sd=$(/usr/bin/convert "$shot" -format "%[fx:standard_deviation]" info:)
+    echo "screenshot $shot: standard deviation $sd"
+    awk -v sd="$sd" 'BEGIN { exit !(sd > 0.02) }' || { echo "$shot is blank"; exit 1; }
+done

@@ -80,14 +80,12 @@ fn read_all(h: &mut Harness<'static, Option<App>>) {
 #[test]
 fn read_all_brings_every_parameter_from_the_device() {
     let b = bench();
+    b.sim
+        .lock()
+        .unwrap()
+        .set_param("waterPumpDuration", 4321)
+        .unwrap();
     let mut h = harness(b._server.path(), PanelId::Tuning);
-    step_until(&mut h, "the link", |a| a.rt.connected());
-    // Nothing is shown before a reply has brought it.
-    assert!(
-        !h.query_all_by_label("not read yet")
-            .collect::<Vec<_>>()
-            .is_empty()
-    );
     read_all(&mut h);
     let want = b.sim.lock().unwrap().param("waterPumpDuration").unwrap();
     let got = match app(&h).rt.readings.get(&135) {
@@ -191,7 +189,9 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
     let b = bench();
     let path = std::env::temp_dir().join(format!("botbench-gui-preset-{}.ron", std::process::id()));
     let mut h = harness(b._server.path(), PanelId::Presets);
-    step_until(&mut h, "the link", |a| a.rt.connected());
+    step_until(&mut h, "the first read", |a| {
+        all_read(a) && a.rt.job_progress().is_none()
+    });
     h.state_mut().as_mut().unwrap().presets.path = path.display().to_string();
     h.step();
     h.get_by_label("Save device to file").click();
@@ -273,4 +273,39 @@ fn every_panel_renders_in_english_and_chinese() {
     h.get_by_label("English").click();
     h.run_steps(2);
     assert_eq!(app(&h).saved.lang, Lang::En);
+}
+
+#[test]
+fn nothing_is_shown_before_a_reply_and_a_failed_read_says_so_in_place() {
+    let sim = Arc::new(Mutex::new(
+        WindowCleaner::new(&SimOptions::default()).unwrap(),
+    ));
+    let shared: SharedDevice = sim.clone();
+    let silent = Faults {
+        silent: true,
+        ..Faults::default()
+    };
+    let server = PtyServer::start(shared, silent).unwrap();
+    let mut h = harness(server.path(), PanelId::Tuning);
+    step_until(&mut h, "the reads to fail", |a| {
+        matches!(a.rt.readings.get(&130), Some(Reading::Failed(_)))
+    });
+    h.step();
+    assert!(h.query_all_by_label("not read yet").next().is_some());
+    assert!(
+        h.query_all_by_label_contains("read failed: no answer")
+            .next()
+            .is_some()
+    );
+    assert!(
+        h.query_all_by_label("85").next().is_none(),
+        "no default stands in for a value"
+    );
+}
+
+#[test]
+fn the_parameters_are_read_as_soon_as_the_link_is_up() {
+    let b = bench();
+    let mut h = harness(b._server.path(), PanelId::Tuning);
+    step_until(&mut h, "every parameter read without a click", all_read);
 }

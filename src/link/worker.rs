@@ -151,7 +151,11 @@ impl Worker {
             if self.shutdown {
                 break;
             }
-            if let Some(item) = self.queue.pop_front() {
+            // The session learns the device before anything else is sent to it.
+            if self.identify_pending && self.profile.protocol == Protocol::Msp {
+                self.identify_pending = false;
+                self.identify();
+            } else if let Some(item) = self.queue.pop_front() {
                 match item {
                     Queued::Exchange(req, to) => {
                         let result = self.exchange(&req);
@@ -159,9 +163,6 @@ impl Worker {
                     }
                     Queued::Baud(baud, ack) => self.switch_baud(baud, ack),
                 }
-            } else if self.identify_pending && self.profile.protocol == Protocol::Msp {
-                self.identify_pending = false;
-                self.identify();
             } else if self.tuya_due() {
                 self.tuya_tick();
             } else if let Some(i) = self.due_poll() {

@@ -129,6 +129,18 @@ impl App {
         }
         self.rt.drain_job();
         self.rt.refresh_ports();
+        if std::mem::take(&mut self.rt.just_connected) && self.panels().contains(&PanelId::Tuning) {
+            // What the device holds is shown as soon as it is known; nothing is shown before.
+            let gets: Vec<u8> = self
+                .rt
+                .profile
+                .commands
+                .iter()
+                .filter(|c| c.kind == crate::profile::CommandKind::Get && c.pair.is_some())
+                .map(|c| c.id)
+                .collect();
+            self.apply(Action::Job(super::JobSpec::Read(gets)));
+        }
         let title = match &self.rt.conn {
             Some(c) => format!(
                 "botbench — {} — {}",

@@ -118,6 +118,8 @@ pub struct Runtime {
     ports_at: Option<Instant>,
     /// Wakes the UI from the worker.
     pub ctx: eframe::egui::Context,
+    /// The link has just come up (first connect or a reconnect): the app reads the device.
+    pub just_connected: bool,
 }
 
 impl Runtime {
@@ -149,6 +151,7 @@ impl Runtime {
             ports: Vec::new(),
             ports_at: None,
             ctx: ctx.clone(),
+            just_connected: false,
         })
     }
 
@@ -277,6 +280,9 @@ impl Runtime {
                 match &s {
                     LinkState::Lost { reason } => self.say(format!("link lost: {reason}"), true),
                     LinkState::Connected { port, baud } => {
+                        if !self.connected() {
+                            self.just_connected = true;
+                        }
                         self.say(format!("connected to {port} at {baud} baud"), false)
                     }
                     _ => {}

@@ -244,13 +244,9 @@ impl TuningPanel {
             .show(ui, |ui| {
                 for group in groups(rt, lang) {
                     egui::CollapsingHeader::new(egui::RichText::new(&group.name).strong())
-                        .id_salt(("group", group.id))
+                        .id_salt(("group", &group.id))
                         .default_open(true)
-                        .show(ui, |ui| {
-                            for (get, set) in group.pairs {
-                                self.command_rows(ui, lang, rt, get, set);
-                            }
-                        });
+                        .show(ui, |ui| self.group_grid(ui, lang, rt, &group));
                 }
             });
         if let Some(action) = self.confirm_dialog(ui, lang) {
@@ -259,28 +255,10 @@ impl TuningPanel {
         actions
     }
 
-    fn command_rows(
-        &mut self,
-        ui: &mut egui::Ui,
-        lang: Lang,
-        rt: &Runtime,
-        get: &Command,
-        set: &Command,
-    ) {
-        ui.horizontal(|ui| {
-            ui.label(egui::RichText::new(lang.tr(&get.name.en, &get.name.zh)).italics());
-            ui.weak(format!(
-                "{} {} / {} {}",
-                get.ident, get.id, set.ident, set.id
-            ));
-        });
-        if let Some(Reading::Failed(e)) = rt.readings.get(&get.id) {
-            ui.colored_label(
-                egui::Color32::RED,
-                format!("{}: {e}", lang.tr("read failed", "读取失败")),
-            );
-        }
-        egui::Grid::new(("fields", get.id))
+    /// One grid per group, so that its columns line up: a header row per command, then its
+    /// fields.
+    fn group_grid(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, group: &Group<'_>) {
+        egui::Grid::new(("fields", &group.id))
             .num_columns(6)
             .striped(true)
             .min_col_width(60.0)
@@ -292,12 +270,30 @@ impl TuningPanel {
                 ui.weak(lang.tr("Range", "范围"));
                 ui.weak("");
                 ui.end_row();
-                for f in &get.reply {
-                    self.field_row(ui, lang, rt, get.id, f);
+                for (get, set) in &group.pairs {
+                    ui.label(egui::RichText::new(lang.tr(&get.name.en, &get.name.zh)).italics())
+                        .on_hover_text(format!(
+                            "{} {} / {} {}",
+                            get.ident, get.id, set.ident, set.id
+                        ));
+                    match rt.readings.get(&get.id) {
+                        Some(Reading::Failed(e)) => {
+                            ui.colored_label(
+                                egui::Color32::RED,
+                                format!("{}: {e}", lang.tr("read failed", "读取失败")),
+                            );
+                        }
+                        _ => {
+                            ui.weak(format!("{} / {}", get.id, set.id));
+                        }
+                    }
                     ui.end_row();
+                    for f in &get.reply {
+                        self.field_row(ui, lang, rt, get.id, f);
+                        ui.end_row();
+                    }
                 }
             });
-        ui.add_space(6.0);
     }
 
     fn field_row(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, get: u8, f: &Field) {
