@@ -91,9 +91,9 @@ impl Delivery {
     }
 }
 
-/// The host is woken for arriving bytes at most this often (bytes come in chunks, as from a
-/// USB adapter).
-const DELIVERY_CHUNK: Duration = Duration::from_micros(250);
+/// After a frame's first byte (delivered at once, so that a host sees an answer start), the rest
+/// arrives in chunks of at most this long, as from a USB adapter.
+const DELIVERY_CHUNK: Duration = Duration::from_millis(1);
 
 /// The two directions of a simulated wire with a device at the far end. Shared by
 /// [`SimTransport`] and [`super::pty::PtyServer`]; it never sleeps.
@@ -246,8 +246,12 @@ impl Wire {
             t = t.min(i.at);
         }
         if let Some(d) = self.outbound.front() {
-            // The next chunk of bytes: at least one byte, at most the rest of the frame.
-            let per_chunk = (DELIVERY_CHUNK.as_nanos() / d.byte.as_nanos().max(1)).max(1) as usize;
+            // The next chunk of bytes: the first byte alone, then up to DELIVERY_CHUNK's worth.
+            let per_chunk = if self.taken == 0 {
+                1
+            } else {
+                (DELIVERY_CHUNK.as_nanos() / d.byte.as_nanos().max(1)).max(1) as usize
+            };
             let upto = (self.taken + per_chunk).min(d.bytes.len());
             t = t.min(d.start + d.byte * upto as u32);
         }
