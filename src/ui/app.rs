@@ -92,6 +92,8 @@ pub struct App {
     pub presets: presets::PresetsPanel,
     /// The actions panel.
     pub actions: actions::ActionsPanel,
+    /// The window title last set.
+    title: String,
 }
 
 impl App {
@@ -108,6 +110,7 @@ impl App {
             monitor: monitor::MonitorPanel::default(),
             presets: presets::PresetsPanel::default(),
             actions: actions::ActionsPanel::default(),
+            title: String::new(),
         };
         let (target, baud, profile) = (
             app.saved.target.clone(),
@@ -149,7 +152,11 @@ impl App {
             ),
             None => "botbench — not connected".to_string(),
         };
-        ctx.send_viewport_cmd(egui::ViewportCommand::Title(title));
+        // Only on a change: a viewport command every frame would keep the window repainting.
+        if self.title != title {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
+            self.title = title;
+        }
         // Repaint while a plot follows live data or a job runs; otherwise only on events.
         let live = self.saved.panel == PanelId::Telemetry && !self.rt.paused && self.rt.connected();
         if live || self.rt.job_progress().is_some() {
