@@ -203,7 +203,10 @@ impl Runtime {
             Target::Port(path) => serial::opener(path, baud),
         };
         let ctx = self.ctx.clone();
-        let waker: crate::link::Waker = Arc::new(move || ctx.request_repaint());
+        // Background events (polled telemetry, the packet log) repaint at most 5 times a second;
+        // a live plot asks for its own frame rate, and jobs wake the UI at once.
+        let waker: crate::link::Waker =
+            Arc::new(move || ctx.request_repaint_after(Duration::from_millis(200)));
         let link = Link::open(opener, profile.clone(), LinkOptions::default(), Some(waker))
             .map_err(|e| e.to_string())?;
         self.profile = profile;
