@@ -66,7 +66,7 @@ impl ActionsPanel {
                                     let key = (cmd.id, f.ident.clone());
                                     let text = self.inputs.entry(key).or_default();
                                     if f.labels.is_empty() {
-                                        ui.label(lang.tr(&f.name.en, &f.name.zh));
+                                        let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
                                         let bad = !text.is_empty() && f.parse(text).is_err();
                                         let mut edit = egui::TextEdit::singleline(text)
                                             .desired_width(70.0)
@@ -74,11 +74,12 @@ impl ActionsPanel {
                                         if bad {
                                             edit = edit.text_color(egui::Color32::RED);
                                         }
-                                        ui.add(edit);
+                                        ui.add(edit).labelled_by(name.id);
                                     } else {
+                                        let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
                                         egui::ComboBox::from_id_salt(("act", cmd.id, &f.ident))
                                             .selected_text(if text.is_empty() {
-                                                lang.tr(&f.name.en, &f.name.zh).to_string()
+                                                "—".to_string()
                                             } else {
                                                 text.clone()
                                             })
@@ -96,7 +97,9 @@ impl ActionsPanel {
                                                         *text = l.ident.clone();
                                                     }
                                                 }
-                                            });
+                                            })
+                                            .response
+                                            .labelled_by(name.id);
                                     }
                                 }
                             });

@@ -40,7 +40,7 @@ impl ConnectionBar {
         let lang = saved.lang;
         let mut actions = Vec::new();
         ui.horizontal_wrapped(|ui| {
-            ui.label(lang.tr("Port", "端口"));
+            let port_label = ui.label(lang.tr("Port", "端口"));
             egui::ComboBox::from_id_salt("port")
                 .width(260.0)
                 .selected_text(self.target.label())
@@ -65,24 +65,32 @@ impl ConnectionBar {
                             self.target = t;
                         }
                     }
-                });
-            let typed = ui.add(
-                egui::TextEdit::singleline(&mut self.typed)
-                    .hint_text(lang.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3"))
-                    .desired_width(150.0),
-            );
+                })
+                .response
+                .labelled_by(port_label.id);
+            let typed = ui
+                .add(
+                    egui::TextEdit::singleline(&mut self.typed)
+                        .hint_text(
+                            lang.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3"),
+                        )
+                        .desired_width(150.0),
+                )
+                .labelled_by(port_label.id);
             if typed.changed() && !self.typed.trim().is_empty() {
                 self.target = Target::Port(self.typed.trim().to_string());
             }
-            ui.label(lang.tr("Baud", "波特率"));
+            let baud_label = ui.label(lang.tr("Baud", "波特率"));
             egui::ComboBox::from_id_salt("baud")
                 .selected_text(self.baud.to_string())
                 .show_ui(ui, |ui| {
                     for b in BAUDS {
                         ui.selectable_value(&mut self.baud, b, b.to_string());
                     }
-                });
-            ui.label(lang.tr("Profile", "设备配置"));
+                })
+                .response
+                .labelled_by(baud_label.id);
+            let profile_label = ui.label(lang.tr("Profile", "设备配置"));
             egui::ComboBox::from_id_salt("profile")
                 .selected_text(&self.profile)
                 .show_ui(ui, |ui| {
@@ -90,7 +98,9 @@ impl ConnectionBar {
                         let label = format!("{} — {}", p.id, lang.tr(&p.name.en, &p.name.zh));
                         ui.selectable_value(&mut self.profile, p.id.clone(), label);
                     }
-                });
+                })
+                .response
+                .labelled_by(profile_label.id);
             if rt.conn.is_some() {
                 if ui.button(lang.tr("Disconnect", "断开")).clicked() {
                     actions.push(Action::Disconnect);

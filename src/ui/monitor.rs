@@ -62,12 +62,13 @@ impl MonitorPanel {
         let mut actions = Vec::new();
         let profile = rt.profile.clone();
         ui.horizontal_wrapped(|ui| {
-            ui.label(lang.tr("Filter", "筛选"));
+            let label = ui.label(lang.tr("Filter", "筛选"));
             ui.add(
                 egui::TextEdit::singleline(&mut self.filter)
                     .hint_text(lang.tr("command name or number", "命令名或编号"))
                     .desired_width(180.0),
-            );
+            )
+            .labelled_by(label.id);
             ui.checkbox(&mut self.errors_only, lang.tr("errors only", "仅错误"));
             let pause = if rt.log_paused {
                 lang.tr("Resume", "继续")

@@ -66,12 +66,13 @@ impl PresetsPanel {
         let busy = rt.job_progress().is_some();
         let ready = rt.connected() && !busy;
         ui.horizontal_wrapped(|ui| {
-            ui.label(lang.tr("File", "文件"));
+            let label = ui.label(lang.tr("File", "文件"));
             ui.add(
                 egui::TextEdit::singleline(&mut self.path)
                     .hint_text("window-cleaner.ron")
                     .desired_width(320.0),
-            );
+            )
+            .labelled_by(label.id);
             if ui.button(lang.tr("Browse…", "浏览…")).clicked()
                 && let Some(p) = rfd::FileDialog::new()
                     .add_filter("RON", &["ron"])
@@ -85,8 +86,9 @@ impl PresetsPanel {
             }
         });
         ui.horizontal_wrapped(|ui| {
-            ui.label(lang.tr("Note", "备注"));
-            ui.add(egui::TextEdit::singleline(&mut self.note).desired_width(240.0));
+            let label = ui.label(lang.tr("Note", "备注"));
+            ui.add(egui::TextEdit::singleline(&mut self.note).desired_width(240.0))
+                .labelled_by(label.id);
             let can_save = ready && !self.path.trim().is_empty();
             if ui
                 .add_enabled(

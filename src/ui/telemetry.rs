@@ -58,7 +58,7 @@ impl TelemetryPanel {
         let lang = saved.lang;
         let mut actions = Vec::new();
         ui.horizontal_wrapped(|ui| {
-            ui.label(lang.tr("Poll rate", "采样率"));
+            let label = ui.label(lang.tr("Poll rate", "采样率"));
             egui::ComboBox::from_id_salt("rate")
                 .selected_text(rate_label(saved.poll_hz, lang))
                 .show_ui(ui, |ui| {
@@ -70,7 +70,9 @@ impl TelemetryPanel {
                             actions.push(Action::SetPollRate(r));
                         }
                     }
-                });
+                })
+                .response
+                .labelled_by(label.id);
             let pause = if rt.paused {
                 lang.tr("Resume", "继续")
             } else {
@@ -79,14 +81,16 @@ impl TelemetryPanel {
             if ui.button(pause).clicked() {
                 actions.push(Action::PausePolling(!rt.paused));
             }
-            ui.label(lang.tr("Window", "时间窗"));
+            let label = ui.label(lang.tr("Window", "时间窗"));
             egui::ComboBox::from_id_salt("window")
                 .selected_text(format!("{} s", saved.window_secs))
                 .show_ui(ui, |ui| {
                     for w in WINDOWS {
                         ui.selectable_value(&mut saved.window_secs, w, format!("{w} s"));
                     }
-                });
+                })
+                .response
+                .labelled_by(label.id);
             ui.checkbox(&mut self.follow, lang.tr("Follow", "跟随"));
             if ui.button(lang.tr("Export CSV", "导出 CSV")).clicked() {
                 actions.push(export_csv(rt));

@@ -298,7 +298,8 @@ impl TuningPanel {
 
     fn field_row(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, get: u8, f: &Field) {
         let key = (get, f.ident.clone());
-        ui.label(lang.tr(&f.name.en, &f.name.zh))
+        let name = ui
+            .label(format!("   {}", lang.tr(&f.name.en, &f.name.zh)))
             .on_hover_text(&f.ident);
         let device = device_value(rt, get, &f.ident);
         match device {
@@ -317,7 +318,7 @@ impl TuningPanel {
         if invalid {
             edit = edit.text_color(egui::Color32::RED);
         }
-        let resp = ui.add(edit);
+        let resp = ui.add(edit).labelled_by(name.id);
         let resp = if invalid {
             ui.painter().rect_stroke(
                 resp.rect,
