@@ -92,6 +92,20 @@ impl PresetsPanel {
             let can_save = ready && !self.path.trim().is_empty();
             if ui
                 .add_enabled(
+                    ready,
+                    egui::Button::new(lang.tr("Save device as…", "另存设备参数…")),
+                )
+                .clicked()
+                && let Some(p) = rfd::FileDialog::new()
+                    .add_filter("RON", &["ron"])
+                    .set_file_name(format!("{}.ron", rt.profile.id))
+                    .save_file()
+            {
+                self.path = p.display().to_string();
+                actions.push(Action::Job(JobSpec::SavePreset(p, self.note.clone())));
+            }
+            if ui
+                .add_enabled(
                     can_save,
                     egui::Button::new(lang.tr("Save device to file", "保存设备参数到文件")),
                 )

@@ -217,7 +217,6 @@ impl Runtime {
         self.t0 = Instant::now();
         self.conn = Some(Conn { link, target });
         self.state = None;
-        self.start_polls();
         Ok(())
     }
 
@@ -238,28 +237,38 @@ impl Runtime {
         }
     }
 
-    /// The telemetry commands to poll: the profile's plotted commands, at `rate` Hz (`None`:
-    /// as fast as the wire allows).
+    /// The telemetry commands to poll: the profile's plotted commands at `rate` Hz (`None`: as
+    /// fast as the wire allows), and its other telemetry at 1 Hz, so that every value is live.
     pub fn polls(&self, rate: Option<f64>) -> Vec<Poll> {
-        let mut ids: Vec<u8> = Vec::new();
+        let mut plotted: Vec<u8> = Vec::new();
         for plot in &self.profile.plots {
             if let Some(cmd) = self.profile.command(&plot.command)
-                && !ids.contains(&cmd.id)
+                && !plotted.contains(&cmd.id)
             {
-                ids.push(cmd.id);
+                plotted.push(cmd.id);
             }
         }
-        ids.iter()
+        let poll = |cmd: &crate::profile::Command, interval| Poll {
+            request: Request::for_command(&self.profile, cmd, Vec::new()).attempts(1),
+            interval,
+        };
+        let plot_interval = rate.map(|r| Duration::from_secs_f64(1.0 / r.max(0.1)));
+        let mut polls: Vec<Poll> = plotted
+            .iter()
             .filter_map(|id| self.profile.command_by_id(*id))
-            .map(|cmd| Poll {
-                request: Request::for_command(&self.profile, cmd, Vec::new()).attempts(1),
-                interval: rate.map(|r| Duration::from_secs_f64(1.0 / r.max(0.1))),
-            })
-            .collect()
-    }
-
-    fn start_polls(&mut self) {
-        // Polling starts from the telemetry panel's settings; see `App::apply`.
+            .map(|cmd| poll(cmd, plot_interval))
+            .collect();
+        // The other telemetry: commands that take no payload and answer values. MSP's core
+        // commands (identity, power state) are read once by the session, not polled.
+        let others = self.profile.commands.iter().filter(|c| {
+            c.kind == crate::profile::CommandKind::Telemetry
+                && c.request.is_empty()
+                && !c.reply.is_empty()
+                && !plotted.contains(&c.id)
+                && !(self.profile.protocol == crate::profile::Protocol::Msp && c.id <= 9)
+        });
+        polls.extend(others.map(|cmd| poll(cmd, Some(Duration::from_secs(1)))));
+        polls
     }
 
     /// Drains worker events for at most `EVENT_BUDGET`; returns whether more are waiting.
