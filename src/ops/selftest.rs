@@ -1225,14 +1225,15 @@ fn sleep(d: Duration, cancel: &Cancel) -> bool {
     }
 }
 
-/// A value in display units, with the field's decimals (one more for means) and unit.
+/// A value in display units, with the field's decimals (one more for means; at most 4) and unit.
 fn show(f: &Field, x: f64) -> String {
     let d = f.decimals();
-    let text = if (x / f.scale - (x / f.scale).round()).abs() < 1e-6 {
-        format!("{x:.d$}")
+    let d = if (x / f.scale - (x / f.scale).round()).abs() < 1e-6 {
+        d
     } else {
-        format!("{x:.*}", d + 1)
+        d + 1
     };
+    let text = format!("{x:.*}", d.min(4));
     format!("{text}{}", f.unit_suffix())
 }
 
