@@ -3,10 +3,13 @@
 use super::port::{PortArgs, exchange_error, op_error, parse_assignments, print_checks};
 use super::{CliError, CliResult};
 use crate::link::{LinkCommand, LinkEvent, Poll, Request};
+use crate::ops::Cancel;
 use crate::ops::msp as ops;
+use crate::ops::selftest::{self, Operator, Plan};
 use crate::profile::{Command, Profile, Protocol};
 use crate::protocol::{Direction, msp};
 use clap::Subcommand;
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 #[derive(Debug, clap::Args)]
@@ -48,6 +51,18 @@ enum MspCmd {
         #[arg(long)]
         count: Option<u64>,
     },
+    /// Run a production self-test plan (RON); exit 1 on FAIL. The plan is checked first.
+    Selftest {
+        /// The plan, e.g. presets/window-cleaner-selftest.ron.
+        plan: PathBuf,
+        /// Append the report to this JSON-lines file (one JSON document per run).
+        #[arg(long, value_name = "FILE")]
+        log: Option<PathBuf>,
+        /// Answer operator prompts without waiting (unattended runs, e.g. a fixture that
+        /// presses the switches).
+        #[arg(long)]
+        yes: bool,
+    },
 }
 
 fn command<'p>(profile: &'p Profile, name: &str) -> Result<&'p Command, CliError> {
@@ -88,7 +103,26 @@ fn print_fields(
 
 pub(crate) fn run(args: MspArgs) -> CliResult {
     let json = args.port.json;
-    let (link, profile) = args.port.open("window-cleaner", Protocol::Msp, true)?;
+    // A self-test plan (and its log) is checked before the port is opened.
+    let selftest = match &args.cmd {
+        MspCmd::Selftest { plan, log, yes } => {
+            let profile = args.port.profile("window-cleaner", Protocol::Msp)?;
+            let plan = Plan::load(plan, &profile).map_err(CliError::input)?;
+            if let Some(log) = log {
+                std::fs::OpenOptions::new()
+                    .create(true)
+                    .append(true)
+                    .open(log)
+                    .map_err(|e| CliError::input(format!("{}: {e}", log.display())))?;
+            }
+            Some((profile, plan, log.clone(), *yes))
+        }
+        _ => None,
+    };
+    let (link, profile) = match &selftest {
+        Some((profile, ..)) => (args.port.open_with(profile.clone(), true)?, profile.clone()),
+        None => args.port.open("window-cleaner", Protocol::Msp, true)?,
+    };
     // The session asks CMD_VERSION first, to learn the device code.
     let deadline = Instant::now() + Duration::from_secs(3);
     let mut identified = None;
@@ -231,7 +265,105 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
             }
             Ok(u8::from(failures > 0 && failures == seen))
         }
+        MspCmd::Selftest { .. } => {
+            let Some((_, plan, log, yes)) = selftest else {
+                return Err(CliError::input("no plan"));
+            };
+            selftest_run(&client, &profile, &plan, log.as_deref(), yes, json)
+        }
     }
+}
+
+/// The operator at a terminal: prompts on stderr, Enter on stdin.
+struct Console {
+    yes: bool,
+}
+
+impl Operator for Console {
+    fn prompt(&mut self, text: &str) -> bool {
+        use std::io::{BufRead, Write};
+        if self.yes {
+            eprintln!("OPERATOR: {text} (--yes: not waiting)");
+            return true;
+        }
+        eprint!("OPERATOR: {text}. Press Enter to start, or q and Enter to abort: ");
+        let _ = std::io::stderr().flush();
+        let mut line = String::new();
+        match std::io::stdin().lock().read_line(&mut line) {
+            Ok(0) | Err(_) => {
+                eprintln!("\nno operator (stdin closed): aborting; use --yes for unattended runs");
+                false
+            }
+            Ok(_) => !line.trim().eq_ignore_ascii_case("q"),
+        }
+    }
+}
+
+fn selftest_run(
+    client: &crate::link::Client,
+    profile: &Profile,
+    plan: &Plan,
+    log: Option<&std::path::Path>,
+    yes: bool,
+    json: bool,
+) -> CliResult {
+    let cancel = Cancel::new();
+    let mut operator = Console { yes };
+    if !json {
+        println!(
+            "self-test: {} ({} steps)",
+            if plan.name.is_empty() {
+                "plan"
+            } else {
+                &plan.name
+            },
+            plan.steps.len()
+        );
+    }
+    let report = selftest::run_each(
+        client,
+        profile,
+        plan,
+        &mut operator,
+        &cancel,
+        &mut |_| {},
+        &mut |r| {
+            if !json {
+                println!(
+                    "{}  {:<26} {}",
+                    if r.pass { "PASS" } else { "FAIL" },
+                    r.name,
+                    r.detail
+                );
+            }
+        },
+    );
+    let logged = log.map(|path| {
+        selftest::append_log(path, &report)
+            .map_err(|e| format!("cannot append to {}: {e}", path.display()))
+    });
+    if json {
+        println!("{}", serde_json::to_string(&report).unwrap_or_default());
+    } else {
+        let device = report.device.as_deref().unwrap_or("unknown device");
+        let failed: Vec<&str> = report.failed().map(|r| r.name.as_str()).collect();
+        if report.pass {
+            println!("PASS: all {} steps passed ({device})", report.results.len());
+        } else if let Some(why) = &report.aborted {
+            println!("FAIL: stopped at {why} ({device})");
+        } else {
+            println!(
+                "FAIL: {} of {} steps failed: {} ({device})",
+                failed.len(),
+                report.results.len(),
+                failed.join(", ")
+            );
+        }
+    }
+    if let Some(Err(e)) = logged {
+        return Err(CliError::device(e));
+    }
+    Ok(u8::from(!report.pass))
 }
 
 fn yes(b: bool) -> &'static str {

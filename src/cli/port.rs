@@ -36,6 +36,17 @@ impl PortArgs {
         protocol: Protocol,
         start_session: bool,
     ) -> Result<(Link, Arc<Profile>), CliError> {
+        let profile = self.profile(default_profile, protocol)?;
+        let link = self.open_with(profile.clone(), start_session)?;
+        Ok((link, profile))
+    }
+
+    /// Loads the profile (`--profile`, else `default_profile`) and checks its protocol.
+    pub fn profile(
+        &self,
+        default_profile: &str,
+        protocol: Protocol,
+    ) -> Result<Arc<Profile>, CliError> {
         let profile = registry()?
             .get(self.profile.as_deref().unwrap_or(default_profile))
             .map_err(CliError::input)?;
@@ -47,6 +58,11 @@ impl PortArgs {
                 protocol.name()
             )));
         }
+        Ok(profile)
+    }
+
+    /// Opens the port with a profile already loaded.
+    pub fn open_with(&self, profile: Arc<Profile>, start_session: bool) -> Result<Link, CliError> {
         let baud = self.baud.unwrap_or(profile.baud);
         let options = LinkOptions {
             margin: self.margin_ms.map(std::time::Duration::from_millis),
@@ -61,7 +77,7 @@ impl PortArgs {
             None,
         )
         .map_err(|e| CliError::input(e.to_string()))?;
-        Ok((link, profile))
+        Ok(link)
     }
 }
 
