@@ -3,7 +3,7 @@
 use super::port::{PortArgs, exchange_error, op_error, parse_assignments, print_checks};
 use super::{CliError, CliResult};
 use crate::link::{LinkCommand, LinkEvent, Poll, Request};
-use crate::ops::Cancel;
+
 use crate::ops::msp as ops;
 use crate::ops::selftest::{self, Operator, Plan};
 use crate::profile::{Command, Profile, Protocol};
@@ -307,7 +307,7 @@ fn selftest_run(
     yes: bool,
     json: bool,
 ) -> CliResult {
-    let cancel = Cancel::new();
+    let cancel = super::port::cancel_on_ctrl_c();
     let mut operator = Console { yes };
     if !json {
         println!(

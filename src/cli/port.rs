@@ -145,3 +145,21 @@ pub(crate) fn parse_assignments(
         })
         .collect()
 }
+
+/// A cancel flag raised by Ctrl-C, so that a long operation stops safely (a motor is stopped, a
+/// write is not left half-done and unreported). A second Ctrl-C exits at once.
+pub(crate) fn cancel_on_ctrl_c() -> crate::ops::Cancel {
+    let cancel = crate::ops::Cancel::new();
+    let flag = cancel.clone();
+    let result = ctrlc::set_handler(move || {
+        if flag.is_cancelled() {
+            std::process::exit(130);
+        }
+        eprintln!("botbench: stopping safely (Ctrl-C again to quit at once)");
+        flag.cancel();
+    });
+    if let Err(e) = result {
+        eprintln!("botbench: Ctrl-C will not stop safely: {e}");
+    }
+    cancel
+}

@@ -159,7 +159,7 @@ fn apply(file: &std::path::Path, port: &PortArgs) -> CliResult {
     let outcome = preset.apply_each(
         &link.client(),
         &profile,
-        &Cancel::new(),
+        &super::port::cancel_on_ctrl_c(),
         &mut no_progress,
         &mut |command, checks| {
             if !json {

@@ -2,8 +2,8 @@
 
 use super::port::{PortArgs, op_error, print_checks};
 use super::{CliError, CliResult};
+use crate::ops::msp::OpError;
 use crate::ops::servo::{self as ops, BAUDS, Presence};
-use crate::ops::{Cancel, msp::OpError};
 use crate::profile::{Input, Profile, Protocol, Value};
 use clap::Subcommand;
 
@@ -159,7 +159,7 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
     let (link, profile) = args.port.open("servo", Protocol::Servo, false)?;
     let client = link.client();
     let home = args.port.baud.unwrap_or(profile.baud);
-    let cancel = Cancel::new();
+    let cancel = super::port::cancel_on_ctrl_c();
     match args.cmd {
         ServoCmd::Scan { ids, bauds } => {
             let ids = parse_ids(&ids)?;

@@ -4,7 +4,7 @@ use super::port::{PortArgs, op_error, parse_assignments, print_checks};
 use super::{CliError, CliResult};
 use crate::link::tuya_module::TuyaEvent;
 use crate::link::{LinkEvent, LinkState};
-use crate::ops::{Cancel, tuya as ops};
+use crate::ops::tuya as ops;
 use crate::profile::{Profile, Protocol};
 use clap::Subcommand;
 use std::path::PathBuf;
@@ -147,7 +147,7 @@ pub(crate) fn run(args: TuyaArgs) -> CliResult {
                 &client,
                 &image,
                 ops::OtaTiming::default(),
-                &Cancel::new(),
+                &super::port::cancel_on_ctrl_c(),
                 &mut |p| {
                     let pct = (p.fraction() * 100.0) as u32;
                     if !json && pct >= last_pct + 10 {
