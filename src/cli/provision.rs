@@ -38,9 +38,8 @@ pub(crate) fn run(
     }
     let plan = Plan::load(plan_path, &profile).map_err(CliError::input)?;
     if let Some(log) = log {
-        ops::check_log(log).map_err(|e| {
-            CliError::input(format!("cannot open the log {}: {e}", log.display()))
-        })?;
+        ops::check_log(log)
+            .map_err(|e| CliError::input(format!("cannot open the log {}: {e}", log.display())))?;
     }
     let (link, profile) = port.open("servo", Protocol::Servo, false)?;
     let client = link.client();
@@ -65,18 +64,11 @@ pub(crate) fn run(
                 break;
             }
         }
-        let record = ops::provision_next(
-            &client,
-            &profile,
-            &plan,
-            &mut state,
-            &cancel,
-            &mut |p| {
-                if !port.json {
-                    eprintln!("  {}", p.message);
-                }
-            },
-        );
+        let record = ops::provision_next(&client, &profile, &plan, &mut state, &cancel, &mut |p| {
+            if !port.json {
+                eprintln!("  {}", p.message);
+            }
+        });
         if record.result.is_pass() {
             passed += 1;
         } else {

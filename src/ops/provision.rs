@@ -105,7 +105,11 @@ impl fmt::Display for PlanError {
         if self.line == 0 {
             write!(f, "{}: {}", self.file, self.message)
         } else {
-            write!(f, "{}:{}:{}: {}", self.file, self.line, self.col, self.message)
+            write!(
+                f,
+                "{}:{}:{}: {}",
+                self.file, self.line, self.col, self.message
+            )
         }
     }
 }
@@ -159,12 +163,14 @@ impl Plan {
 
     /// Parses plan text (`name` names it in errors) and checks it against `profile`.
     pub fn parse(name: &str, text: &str, profile: &Profile) -> Result<Plan, PlanError> {
-        let doc: Doc = ron::Options::default().from_str(text).map_err(|e| PlanError {
-            file: name.to_string(),
-            line: e.span.start.line,
-            col: e.span.start.col,
-            message: e.code.to_string(),
-        })?;
+        let doc: Doc = ron::Options::default()
+            .from_str(text)
+            .map_err(|e| PlanError {
+                file: name.to_string(),
+                line: e.span.start.line,
+                col: e.span.start.col,
+                message: e.code.to_string(),
+            })?;
         let plan = Plan {
             target_baud: doc.target_baud,
             ids: doc.ids,
@@ -537,7 +543,8 @@ fn run(
     };
     record.serial = Some(serial);
 
-    // The next free id: not given out before, silent at the target rate and at this one.
+    // The next free id: not given out before, and silent at every rate (a servo at another
+    // rate is still on the bus, and would share the id once moved).
     at(step::ASSIGN_ID, String::new(), &mut done);
     check_cancel!(step::ASSIGN_ID);
     let candidates = plan.ids.candidates();
@@ -550,7 +557,7 @@ fn run(
             state.next = i + 1;
             continue;
         }
-        match id_is_free(client, id, &[target, baud]) {
+        match id_is_free(client, id, &search_order(target)) {
             Ok(true) => {
                 chosen = Some((i, id));
                 break;
@@ -587,7 +594,9 @@ fn run(
                 return fail(
                     record,
                     step::SET_BAUD,
-                    format!("servo {id} did not answer at {baud} baud before the change ({other:?})"),
+                    format!(
+                        "servo {id} did not answer at {baud} baud before the change ({other:?})"
+                    ),
                 );
             }
             Err(e) => return fail(record, step::SET_BAUD, reason(&e, id, baud)),
@@ -717,12 +726,7 @@ fn read(client: &Client, profile: &Profile, id: u8, pid: u8) -> Result<i64, OpEr
 
 /// Whether `id` is silent at every one of `bauds`.
 fn id_is_free(client: &Client, id: u8, bauds: &[u32]) -> Result<bool, String> {
-    let mut seen = Vec::new();
     for &b in bauds {
-        if seen.contains(&b) {
-            continue;
-        }
-        seen.push(b);
         switch(client, b)?;
         if servo::ping(client, id, 2).map_err(|e| e.to_string())? != Presence::Absent {
             return Ok(false);
