@@ -585,3 +585,50 @@ fn the_cli_refuses_a_bad_plan_before_opening_the_port() {
     );
     assert!(!stderr.contains("nonexistent"), "{stderr}");
 }
+
+#[test]
+fn the_cli_asks_for_the_next_servo_and_stops_when_told() {
+    use std::io::{BufRead, Write};
+    let exe = env!("CARGO_BIN_EXE_botbench");
+    let mut sim = std::process::Command::new(exe)
+        .args(["sim", "servo-bus", "--servos", "0"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut path = String::new();
+    std::io::BufReader::new(sim.stdout.take().unwrap())
+        .read_line(&mut path)
+        .unwrap();
+    let mut run = std::process::Command::new(exe)
+        .args([
+            "servo",
+            "--port",
+            path.trim(),
+            "--margin-ms",
+            "5",
+            "provision",
+        ])
+        .arg(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/presets/servo-provision-plan.ron"
+        ))
+        .args(["--count", "3"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The operator has no second servo and types q at the prompt.
+    run.stdin.take().unwrap().write_all(b"q\n").unwrap();
+    let out = run.wait_with_output().unwrap();
+    let _ = sim.kill();
+    let _ = sim.wait();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stdout}{stderr}");
+    assert!(stderr.contains("plug in servo 2 of 3"), "{stderr}");
+    assert!(stderr.contains("stopped by the operator"), "{stderr}");
+    assert_eq!(stdout.matches("PASS ====").count(), 1, "{stdout}");
+    assert!(stdout.contains("1 PASS, 0 FAIL"), "{stdout}");
+}
