@@ -4,6 +4,7 @@
 
 use crate::link::{Link, LinkCommand, LinkEvent, LinkOptions, Poll, Request, serial, wire_time};
 use crate::ops::Cancel;
+use crate::ops::provision;
 use crate::ops::servo::{self, ScanPlan};
 use crate::ops::tuya::{self as tuya_ops, OtaTiming};
 use crate::profile::{Profile, Registry};
@@ -185,6 +186,56 @@ pub fn servo_scans(all_bauds: bool) -> Result<Vec<Figure>, String> {
     Ok(out)
 }
 
+/// Provisions one fresh servo found at 57600 baud (not the factory rate) with the example
+/// 10-parameter plan: detect at every rate, id (with the whole-bus check), baud change to the
+/// plan's 500000, 10 verified writes, the full read-back and the recorded parameters.
+pub fn servo_provision() -> Result<Figure, String> {
+    let p = profile("servo")?;
+    let plan = provision::Plan::parse(
+        "presets/servo-provision-plan.ron",
+        include_str!("../presets/servo-provision-plan.ron"),
+        &p,
+    )
+    .map_err(|e| e.to_string())?;
+    let found_at = 57_600;
+    let bus = Arc::new(Mutex::new(ServoBus::new(vec![
+        SimServo::fresh(1).with_baud(found_at),
+    ])));
+    let shared: SharedDevice = bus.clone();
+    let server = PtyServer::start(shared, Faults::default()).map_err(|e| e.to_string())?;
+    let link = open(&server, p.clone(), 115_200, LinkOptions::default())?;
+    let started = Instant::now();
+    let record = provision::provision_next(
+        &link.client(),
+        &p,
+        &plan,
+        &mut provision::ProvisionState::new(),
+        &Cancel::new(),
+        &mut |_| {},
+    );
+    let secs = started.elapsed().as_secs_f64();
+    if let provision::Outcome::Fail { step, reason } = &record.result {
+        return Err(format!("servo provisioning failed at {step}: {reason}"));
+    }
+    // The bytes, roughly: id 0 and the new id pinged twice at each of the 8 rates (6 bytes
+    // each way; silent rates send only); the whole-bus check before the id is written, 255 pings
+    // at the rate found; at the plan's rate, each write (8 out, 6 back) and its read-back
+    // (7 out, 8-10 back), then the 13 reads of the verification and the 3 recorded ones.
+    let ping = |b: u32| wire_time(6, b).as_secs_f64();
+    let sweeps: f64 = servo::BAUDS.iter().map(|&b| 4.0 * ping(b)).sum();
+    let reads = (plan.params.len() + 13 + plan.record.len()) as f64;
+    let wire = sweeps
+        + 255.0 * ping(found_at)
+        + plan.params.len() as f64 * wire_time(8 + 6, plan.target_baud).as_secs_f64()
+        + reads * wire_time(7 + 9, plan.target_baud).as_secs_f64();
+    Ok(Figure::new(
+        "servo provision, found at 57600 → 500000, 10 params",
+        secs,
+        wire,
+        "target ≤ 2 s".into(),
+    ))
+}
+
 /// A 64 KiB OTA at `baud` with `packet`-byte packets.
 pub fn tuya_ota(baud: u32, packet: u8) -> Result<Figure, String> {
     let p = profile("tuya-vacuum")?;
@@ -237,6 +288,7 @@ pub fn run_all(long: bool, report: &mut dyn FnMut(&Figure)) -> Result<Vec<Figure
     for f in servo_scans(long)? {
         add(f, &mut out);
     }
+    add(servo_provision()?, &mut out);
     add(tuya_ota(115_200, 2)?, &mut out);
     if long {
         add(tuya_ota(9600, 2)?, &mut out);

@@ -7,6 +7,7 @@ mod frame;
 mod msp;
 mod port;
 mod preset;
+mod provision;
 mod servo;
 mod sim;
 mod tuya;

@@ -6,6 +6,7 @@ use crate::ops::msp::OpError;
 use crate::ops::servo::{self as ops, BAUDS, Presence};
 use crate::profile::{Input, Profile, Protocol, Value};
 use clap::Subcommand;
+use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
 pub(crate) struct ServoArgs {
@@ -74,6 +75,21 @@ enum ServoCmd {
         /// Power in mW (0: the servo's limit).
         #[arg(long, default_value_t = 0)]
         power: u16,
+    },
+    /// Provision fresh servos by a plan: find each (id 0, at any baud rate), give it the next
+    /// free id, the plan's baud rate and parameters, verify everything, and log it.
+    Provision {
+        /// The plan (RON), e.g. presets/servo-provision-plan.ron.
+        plan: PathBuf,
+        /// Append one CSV line per servo to this file.
+        #[arg(long)]
+        log: Option<PathBuf>,
+        /// How many servos; between them the operator swaps the servo and presses Enter.
+        #[arg(long, default_value_t = 1)]
+        count: u32,
+        /// Between servos, instead of waiting for Enter, look for a new fresh servo every MS ms.
+        #[arg(long, value_name = "MS")]
+        wait_ms: Option<u64>,
     },
 }
 
@@ -155,6 +171,15 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
                 "baud option 0 is out of range; allowed 1 to 8",
             ));
         }
+    }
+    if let ServoCmd::Provision {
+        plan,
+        log,
+        count,
+        wait_ms,
+    } = &args.cmd
+    {
+        return super::provision::run(&args.port, plan, log.as_deref(), *count, *wait_ms);
     }
     let (link, profile) = args.port.open("servo", Protocol::Servo, false)?;
     let client = link.client();
@@ -306,5 +331,6 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
             }
             Ok(0)
         }
+        ServoCmd::Provision { .. } => Err(CliError::input("provision is handled above")),
     }
 }

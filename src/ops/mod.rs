@@ -3,6 +3,7 @@
 //! stop when cancelled, so the command line runs them directly and the GUI on a job thread.
 
 pub mod msp;
+pub mod provision;
 pub mod selftest;
 pub mod servo;
 pub mod tuya;

@@ -354,7 +354,8 @@ pub fn set_id(
     if now != i64::from(new) {
         return Err(OpError::Verify(format!("servo at {new} reports id {now}")));
     }
-    if ping(client, old, 1)? != Presence::Absent {
+    // Two attempts: one garbled tail of a late answer is not a servo.
+    if ping(client, old, 2)? != Presence::Absent {
         return Err(OpError::Verify(format!(
             "something still answers at the old id {old}"
         )));

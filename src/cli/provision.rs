@@ -1,0 +1,166 @@
+//! `botbench servo provision PLAN`: production provisioning, one fresh servo after another, with
+//! a PASS or FAIL line for each and a CSV log.
+
+use super::port::PortArgs;
+use super::{CliError, CliResult, registry};
+use crate::link::Client;
+use crate::ops::provision::{self as ops, Outcome, Plan, ProvisionState, Record};
+use crate::ops::servo::{self as servo_ops, BAUDS, Presence};
+use crate::profile::{Profile, Protocol};
+use std::io::BufRead;
+use std::path::Path;
+use std::time::Duration;
+
+pub(crate) fn run(
+    port: &PortArgs,
+    plan_path: &Path,
+    log: Option<&Path>,
+    count: u32,
+    wait_ms: Option<u64>,
+) -> CliResult {
+    // Everything that can be checked is checked before the port is opened.
+    if count == 0 {
+        return Err(CliError::input("--count 0: give at least 1"));
+    }
+    if wait_ms == Some(0) {
+        return Err(CliError::input("--wait-ms 0: give at least 1 ms"));
+    }
+    let profile = registry()?
+        .get(port.profile.as_deref().unwrap_or("servo"))
+        .map_err(CliError::input)?;
+    if profile.protocol != Protocol::Servo {
+        return Err(CliError::input(format!(
+            "profile '{}' speaks {}, not servo",
+            profile.id,
+            profile.protocol.name()
+        )));
+    }
+    let plan = Plan::load(plan_path, &profile).map_err(CliError::input)?;
+    if let Some(log) = log {
+        ops::check_log(log)
+            .map_err(|e| CliError::input(format!("cannot open the log {}: {e}", log.display())))?;
+    }
+    let (link, profile) = port.open("servo", Protocol::Servo, false)?;
+    let client = link.client();
+    let cancel = super::port::cancel_on_ctrl_c();
+    let mut state = ProvisionState::new();
+    let (mut passed, mut failed) = (0u32, 0u32);
+    let mut last: Option<Record> = None;
+    for n in 1..=count {
+        if let Some(prev) = &last {
+            let go_on = match wait_ms {
+                Some(ms) => {
+                    eprintln!(
+                        "Swap the servo: waiting for a new fresh servo (id 0) for servo {n} of {count}…"
+                    );
+                    wait_for_new(&client, &profile, prev.serial, Duration::from_millis(ms));
+                    true
+                }
+                None => prompt(n, count),
+            };
+            if !go_on {
+                eprintln!("stopped by the operator before servo {n} of {count}");
+                break;
+            }
+        }
+        let record = ops::provision_next(&client, &profile, &plan, &mut state, &cancel, &mut |p| {
+            if !port.json {
+                eprintln!("  {}", p.message);
+            }
+        });
+        if record.result.is_pass() {
+            passed += 1;
+        } else {
+            failed += 1;
+        }
+        print_record(&record, n, count, plan.params.len(), port.json);
+        if let Some(log) = log {
+            ops::append_csv(log, &record).map_err(|e| {
+                CliError::device(format!(
+                    "the servo was not logged: cannot append to {}: {e}",
+                    log.display()
+                ))
+            })?;
+        }
+        last = Some(record);
+    }
+    if !port.json && count > 1 {
+        println!("{passed} PASS, {failed} FAIL");
+    }
+    Ok(u8::from(failed > 0))
+}
+
+/// Asks the operator to swap the servo; false when they stop (q, or end of input).
+fn prompt(n: u32, count: u32) -> bool {
+    eprintln!(
+        "Swap the servo: plug in servo {n} of {count} (fresh, id 0), then press Enter (q then Enter to stop)."
+    );
+    let mut line = String::new();
+    match std::io::stdin().lock().read_line(&mut line) {
+        Ok(0) | Err(_) => false,
+        Ok(_) => !line.trim().eq_ignore_ascii_case("q"),
+    }
+}
+
+/// Waits until one fresh servo answers whose serial number is not `previous` (when the previous
+/// servo's serial is unknown, until the bus has held no fresh servo once). Polls until then.
+fn wait_for_new(client: &Client, profile: &Profile, previous: Option<u32>, every: Duration) {
+    let serial = profile.param(ops::PARAM_SERIAL);
+    let mut emptied = previous.is_some();
+    loop {
+        std::thread::sleep(every);
+        let Ok(found) = ops::find_fresh(client, &BAUDS) else {
+            continue;
+        };
+        match found.as_slice() {
+            [] => emptied = true,
+            [(baud, Presence::Present)] if emptied => {
+                let Some(param) = serial else { return };
+                if client.set_baud(*baud).is_err() {
+                    continue;
+                }
+                match servo_ops::read_param(client, profile, 0, param) {
+                    Ok(s) if previous.is_some_and(|p| i64::from(p) == s) => {}
+                    Ok(_) => return,
+                    Err(_) => {}
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+fn print_record(r: &Record, n: u32, count: u32, params: usize, json: bool) {
+    if json {
+        match serde_json::to_string(r) {
+            Ok(s) => println!("{s}"),
+            Err(e) => eprintln!("botbench: cannot print the record as JSON: {e}"),
+        }
+        return;
+    }
+    let opt = |v: Option<String>| v.unwrap_or_else(|| "?".into());
+    let serial = opt(r.serial.map(|s| s.to_string()));
+    let recorded: Vec<String> = r
+        .recorded
+        .iter()
+        .map(|(k, v)| format!("{k}={}", v.as_deref().unwrap_or("?")))
+        .collect();
+    match &r.result {
+        Outcome::Pass => println!(
+            "==== PASS ==== servo {n}/{count}  serial {serial}  id {}  {} baud  {params} params verified  {}",
+            opt(r.id.map(|i| i.to_string())),
+            opt(r.baud.map(|b| b.to_string())),
+            recorded.join(" ")
+        ),
+        Outcome::Fail { step, reason } => {
+            println!(
+                "#### FAIL #### servo {n}/{count}  serial {serial}  id {}  baud {}  at step \"{step}\": {reason}",
+                opt(r.id.map(|i| i.to_string())),
+                opt(r.baud.map(|b| b.to_string())),
+            );
+            for m in &r.mismatches {
+                println!("               mismatch: {m}");
+            }
+        }
+    }
+}
