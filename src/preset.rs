@@ -25,6 +25,7 @@ use crate::link::{Client, DeviceInfo};
 use crate::ops::msp::{self as ops, Check, OpError};
 use crate::ops::{Cancel, Progress};
 use crate::profile::locate::line_col;
+use crate::profile::value::Typed as Text;
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Profile, Value};
 use crate::protocol::msp;
 use serde::Deserialize;
@@ -918,39 +919,5 @@ impl<'de> Deserialize<'de> for Fields {
             }
         }
         d.deserialize_map(V)
-    }
-}
-
-/// A value: text, or a bare number or bool a person typed without quotes.
-struct Text(String);
-
-impl<'de> Deserialize<'de> for Text {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl Visitor<'_> for V {
-            type Value = Text;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str(r#"a value as displayed, e.g. "2.75" or "on""#)
-            }
-            fn visit_str<E: de::Error>(self, v: &str) -> Result<Text, E> {
-                Ok(Text(v.to_string()))
-            }
-            fn visit_string<E: de::Error>(self, v: String) -> Result<Text, E> {
-                Ok(Text(v))
-            }
-            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Text, E> {
-                Ok(Text(v.to_string()))
-            }
-            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Text, E> {
-                Ok(Text(v.to_string()))
-            }
-            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Text, E> {
-                Ok(Text(v.to_string()))
-            }
-            fn visit_bool<E: de::Error>(self, v: bool) -> Result<Text, E> {
-                Ok(Text(v.to_string()))
-            }
-        }
-        d.deserialize_any(V)
     }
 }

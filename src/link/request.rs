@@ -76,6 +76,9 @@ pub struct Match {
     pub command: u8,
     /// Servo: the ids an answer may come from (after an id change, the new one too). Empty: any.
     pub from: Vec<u8>,
+    /// Bytes the answer's payload must start with (a servo READ_DATA answer names its
+    /// parameter), so that a late answer to an earlier request is never taken for this one.
+    pub prefix: Vec<u8>,
 }
 
 impl Match {
@@ -84,6 +87,7 @@ impl Match {
         Self {
             command,
             from: Vec::new(),
+            prefix: Vec::new(),
         }
     }
 
@@ -92,7 +96,14 @@ impl Match {
         Self {
             command,
             from: ids.to_vec(),
+            prefix: Vec::new(),
         }
+    }
+
+    /// Also requires the answer's payload to start with `prefix`.
+    pub fn with_prefix(mut self, prefix: Vec<u8>) -> Self {
+        self.prefix = prefix;
+        self
     }
 
     /// Whether `p` (an incoming frame) is the answer.
@@ -225,5 +236,25 @@ impl Request {
             }
         }
         r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::servo;
+
+    #[test]
+    fn a_late_answer_naming_another_parameter_is_not_taken() {
+        let want = Match::servo(servo::cmd::READ_DATA, &[1]).with_prefix(vec![1, 36]);
+        let late = Packet::servo(servo::Frame::reply(servo::cmd::READ_DATA, vec![1, 34, 7]));
+        let right = Packet::servo(servo::Frame::reply(servo::cmd::READ_DATA, vec![1, 36, 5]));
+        let other_servo = Packet::servo(servo::Frame::reply(servo::cmd::READ_DATA, vec![2, 36, 5]));
+        assert!(!want.accepts(&late));
+        assert!(want.accepts(&right));
+        assert!(!want.accepts(&other_servo));
+        // A request from the host (an echo on a one-wire bus) is never an answer.
+        let echo = Packet::servo(servo::Frame::request(servo::cmd::READ_DATA, vec![1, 36]));
+        assert!(!want.accepts(&echo));
     }
 }

@@ -25,8 +25,8 @@ use super::servo::{self, BAUDS, PARAM_BAUD, PARAM_ID, Presence};
 use super::{Cancel, Progress};
 use crate::link::{Client, ExchangeError};
 use crate::profile::locate::{Step, locate};
+use crate::profile::value::Typed as DisplayText;
 use crate::profile::{Access, Input, Param, Profile, Value};
-use serde::de::{self, Deserializer, Visitor};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::io::{BufRead, Write};
@@ -848,38 +848,4 @@ pub fn check_log(path: &Path) -> std::io::Result<()> {
         .append(true)
         .open(path)
         .map(drop)
-}
-
-/// A parameter value in a plan: a string, or a bare number or bool.
-struct DisplayText(String);
-
-impl<'de> Deserialize<'de> for DisplayText {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl Visitor<'_> for V {
-            type Value = DisplayText;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str(r#"a value as displayed, e.g. "70" or "limit_power""#)
-            }
-            fn visit_str<E: de::Error>(self, v: &str) -> Result<DisplayText, E> {
-                Ok(DisplayText(v.to_string()))
-            }
-            fn visit_string<E: de::Error>(self, v: String) -> Result<DisplayText, E> {
-                Ok(DisplayText(v))
-            }
-            fn visit_i64<E: de::Error>(self, v: i64) -> Result<DisplayText, E> {
-                Ok(DisplayText(v.to_string()))
-            }
-            fn visit_u64<E: de::Error>(self, v: u64) -> Result<DisplayText, E> {
-                Ok(DisplayText(v.to_string()))
-            }
-            fn visit_f64<E: de::Error>(self, v: f64) -> Result<DisplayText, E> {
-                Ok(DisplayText(v.to_string()))
-            }
-            fn visit_bool<E: de::Error>(self, v: bool) -> Result<DisplayText, E> {
-                Ok(DisplayText(v.to_string()))
-            }
-        }
-        d.deserialize_any(V)
-    }
 }

@@ -40,9 +40,9 @@ use crate::ops::msp::{self as ops, OpError};
 use crate::ops::{Cancel, Progress};
 use crate::preset::Problem;
 use crate::profile::locate::{Step as At, locate};
+use crate::profile::value::Typed as Text;
 use crate::profile::{Command, CommandKind, Field, Input, Profile, Value};
 use crate::protocol::{Direction, msp};
-use serde::de::{self, Deserializer, Visitor};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt;
@@ -1430,40 +1430,6 @@ impl DocStep {
 /// `("MSP_SET_MOTOR", {"motor": "forward"})`
 #[derive(Deserialize)]
 struct DocAction(String, #[serde(default)] BTreeMap<String, Text>);
-
-/// A value: text, or a bare number or bool a person typed without quotes.
-struct Text(String);
-
-impl<'de> Deserialize<'de> for Text {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl Visitor<'_> for V {
-            type Value = Text;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str(r#"a value in display units, e.g. "11.5" or "forward""#)
-            }
-            fn visit_str<E: de::Error>(self, v: &str) -> Result<Text, E> {
-                Ok(Text(v.to_string()))
-            }
-            fn visit_string<E: de::Error>(self, v: String) -> Result<Text, E> {
-                Ok(Text(v))
-            }
-            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Text, E> {
-                Ok(Text(v.to_string()))
-            }
-            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Text, E> {
-                Ok(Text(v.to_string()))
-            }
-            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Text, E> {
-                Ok(Text(v.to_string()))
-            }
-            fn visit_bool<E: de::Error>(self, v: bool) -> Result<Text, E> {
-                Ok(Text(v.to_string()))
-            }
-        }
-        d.deserialize_any(V)
-    }
-}
 
 #[cfg(test)]
 mod tests {

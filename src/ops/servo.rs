@@ -114,7 +114,11 @@ pub fn read_param(
     let read = profile
         .command_by_id(cmd::READ_DATA)
         .ok_or_else(|| OpError::Input("the profile has no READ_DATA".into()))?;
-    let req = Request::for_command(profile, read, vec![id, param.id]).attempts(2);
+    // The answer must name this parameter: a late answer to an earlier read is not this one.
+    let answer = Match::servo(cmd::READ_DATA, &[id]).with_prefix(vec![id, param.id]);
+    let req = Request::for_command(profile, read, vec![id, param.id])
+        .reply(ReplySpec::Required(answer))
+        .attempts(2);
     let reply = client.request(req)?;
     let payload = reply.payload().unwrap_or_default();
     if payload.get(1) != Some(&param.id) {
@@ -276,7 +280,9 @@ pub fn write_param(
         .ok()
         .and_then(|d| d.values.get(2).map(|v| v.value.clone()))
         .unwrap_or(Value::Bytes(Vec::new()));
-    let reply = client.request(Request::for_command(profile, write, payload))?;
+    let answer = Match::servo(cmd::WRITE_DATA, &[id]).with_prefix(vec![id, param.id]);
+    let req = Request::for_command(profile, write, payload).reply(ReplySpec::Required(answer));
+    let reply = client.request(req)?;
     if reply.payload().and_then(|p| p.get(2)) != Some(&1) {
         return Err(OpError::Verify(format!(
             "servo {id} refused {} = {}",

@@ -415,3 +415,40 @@ fn parse_scaled(text: &str, scale: f64) -> Result<i64, ScaledError> {
     }
     Ok(rounded as i64)
 }
+
+/// A value as a person writes it in a RON file (a preset, a plan): text, or a bare number or
+/// bool typed without quotes. It is read later by [`Field::parse`], in display units.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Typed(pub String);
+
+impl<'de> serde::Deserialize<'de> for Typed {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::{Error, Visitor};
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = Typed;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(r#"a value as displayed, e.g. "2.75", "on" or 70"#)
+            }
+            fn visit_str<E: Error>(self, v: &str) -> Result<Typed, E> {
+                Ok(Typed(v.to_string()))
+            }
+            fn visit_string<E: Error>(self, v: String) -> Result<Typed, E> {
+                Ok(Typed(v))
+            }
+            fn visit_i64<E: Error>(self, v: i64) -> Result<Typed, E> {
+                Ok(Typed(v.to_string()))
+            }
+            fn visit_u64<E: Error>(self, v: u64) -> Result<Typed, E> {
+                Ok(Typed(v.to_string()))
+            }
+            fn visit_f64<E: Error>(self, v: f64) -> Result<Typed, E> {
+                Ok(Typed(v.to_string()))
+            }
+            fn visit_bool<E: Error>(self, v: bool) -> Result<Typed, E> {
+                Ok(Typed(v.to_string()))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
