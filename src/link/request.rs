@@ -111,6 +111,7 @@ impl Match {
         p.direction == crate::protocol::Direction::DeviceToHost
             && p.command == self.command
             && (self.from.is_empty() || p.payload.first().is_some_and(|id| self.from.contains(id)))
+            && p.payload.starts_with(&self.prefix)
     }
 }
 
