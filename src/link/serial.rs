@@ -164,9 +164,8 @@ impl Transport for SerialTransport {
 
     fn read(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
         let now = Instant::now();
-        let wait = deadline
-            .saturating_duration_since(now)
-            .max(Duration::from_micros(100));
+        // Zero is a poll: what has already arrived, without waiting.
+        let wait = deadline.saturating_duration_since(now);
         if self.port.timeout() != wait {
             self.port
                 .set_timeout(wait)

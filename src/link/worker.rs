@@ -538,6 +538,10 @@ impl Worker {
             .or(self.opts.margin)
             .unwrap_or(default_margin(self.profile.protocol));
         let attempts = req.attempts.max(1);
+        // What has already arrived (a late answer to an earlier request) is dealt with before
+        // this request is sent, so that it cannot be taken for this request's answer.
+        self.read_some(Instant::now())?;
+        self.drain_unsolicited();
         let mut last = ExchangeError::Timeout {
             command: req.command,
             attempts,
