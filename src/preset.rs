@@ -105,16 +105,7 @@ pub enum ErrorKind {
     Value,
 }
 
-/// One problem, where it is.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Problem {
-    /// 1-based line, 0 when unknown.
-    pub line: usize,
-    /// 1-based column, 0 when unknown.
-    pub col: usize,
-    /// What is wrong.
-    pub message: String,
-}
+pub use crate::profile::locate::Problem;
 
 /// Why a preset cannot be used. Nothing has been written when this is returned.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -144,23 +135,7 @@ impl PresetError {
 
 impl fmt::Display for PresetError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let at = |p: &Problem| {
-            if p.line == 0 {
-                format!("{}: {}", self.file, p.message)
-            } else {
-                format!("{}:{}:{}: {}", self.file, p.line, p.col, p.message)
-            }
-        };
-        match self.problems.as_slice() {
-            [one] => write!(f, "{}", at(one)),
-            many => {
-                write!(f, "{}: {} problems:", self.file, many.len())?;
-                for p in many {
-                    write!(f, "\n  {}", at(p))?;
-                }
-                Ok(())
-            }
-        }
+        crate::profile::locate::write_problems(f, &self.file, &self.problems)
     }
 }
 

@@ -1,51 +1,15 @@
 //! Servo operations through the link worker against the simulated bus on a pseudo-terminal.
 
-use botbench::link::{Client, Link, LinkOptions, serial};
 use botbench::ops::Cancel;
 use botbench::ops::msp::OpError;
 use botbench::ops::servo::{self as ops, Presence, ScanPlan};
-use botbench::profile::{Input, Profile, Registry};
-use botbench::sim::servo_bus::{ServoBus, SimServo};
-use botbench::sim::{Faults, PtyServer, SharedDevice};
-use std::sync::{Arc, Mutex};
+use botbench::profile::Input;
+use botbench::sim::servo_bus::SimServo;
 
-struct Bench {
-    _server: PtyServer,
-    bus: Arc<Mutex<ServoBus>>,
-    link: Link,
-    profile: Arc<Profile>,
-}
+mod common;
+use common::Bench;
 
 impl Bench {
-    fn new(servos: Vec<SimServo>) -> Self {
-        let profile = Registry::builtin().unwrap().get("servo").unwrap();
-        let bus = Arc::new(Mutex::new(ServoBus::new(servos)));
-        let shared: SharedDevice = bus.clone();
-        let server = PtyServer::start(shared, Faults::default()).unwrap();
-        let options = LinkOptions {
-            // Generous for a loaded test machine; the benchmark uses the default.
-            margin: Some(std::time::Duration::from_millis(5)),
-            ..LinkOptions::default()
-        };
-        let link = Link::open(
-            serial::opener(server.path(), 115_200),
-            profile.clone(),
-            options,
-            None,
-        )
-        .unwrap();
-        Self {
-            _server: server,
-            bus,
-            link,
-            profile,
-        }
-    }
-
-    fn client(&self) -> Client {
-        self.link.client()
-    }
-
     fn scan(&self, bauds: &[u32]) -> Vec<(u8, u32, Presence)> {
         let plan = ScanPlan {
             ids: 0..=254,

@@ -1,52 +1,16 @@
 //! Production provisioning against the simulated servo bus on a pseudo-terminal.
 
-use botbench::link::{Client, Link, LinkOptions, serial};
 use botbench::ops::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
 use botbench::ops::{Cancel, Progress};
 use botbench::profile::{Profile, Registry};
-use botbench::sim::servo_bus::{ServoBus, SimServo};
-use botbench::sim::{Faults, PtyServer, SharedDevice};
+use botbench::sim::servo_bus::SimServo;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
 
-struct Bench {
-    _server: PtyServer,
-    bus: Arc<Mutex<ServoBus>>,
-    link: Link,
-    profile: Arc<Profile>,
-}
+mod common;
+use common::Bench;
 
 impl Bench {
-    fn new(servos: Vec<SimServo>) -> Self {
-        let profile = Registry::builtin().unwrap().get("servo").unwrap();
-        let bus = Arc::new(Mutex::new(ServoBus::new(servos)));
-        let shared: SharedDevice = bus.clone();
-        let server = PtyServer::start(shared, Faults::default()).unwrap();
-        let options = LinkOptions {
-            // Generous for a loaded test machine.
-            margin: Some(std::time::Duration::from_millis(5)),
-            ..LinkOptions::default()
-        };
-        let link = Link::open(
-            serial::opener(server.path(), 115_200),
-            profile.clone(),
-            options,
-            None,
-        )
-        .unwrap();
-        Self {
-            _server: server,
-            bus,
-            link,
-            profile,
-        }
-    }
-
-    fn client(&self) -> Client {
-        self.link.client()
-    }
-
     fn provision_with(
         &self,
         plan: &Plan,

@@ -38,7 +38,7 @@
 use crate::link::{Client, DeviceInfo, session};
 use crate::ops::msp::{self as ops, OpError};
 use crate::ops::{Cancel, Progress};
-use crate::preset::Problem;
+use crate::profile::locate::Problem;
 use crate::profile::locate::{Step as At, locate};
 use crate::profile::value::Typed as Text;
 use crate::profile::{Command, CommandKind, Field, Input, Profile, Value};
@@ -193,23 +193,7 @@ impl PlanError {
 
 impl fmt::Display for PlanError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let at = |p: &Problem| {
-            if p.line == 0 {
-                format!("{}: {}", self.file, p.message)
-            } else {
-                format!("{}:{}:{}: {}", self.file, p.line, p.col, p.message)
-            }
-        };
-        match self.problems.as_slice() {
-            [one] => write!(f, "{}", at(one)),
-            many => {
-                write!(f, "{}: {} problems:", self.file, many.len())?;
-                for p in many {
-                    write!(f, "\n  {}", at(p))?;
-                }
-                Ok(())
-            }
-        }
+        crate::profile::locate::write_problems(f, &self.file, &self.problems)
     }
 }
 

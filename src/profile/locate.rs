@@ -268,6 +268,42 @@ impl Cursor<'_> {
     }
 }
 
+/// One problem in a RON document (a preset, a test plan), where it is.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Problem {
+    /// 1-based line, 0 when unknown.
+    pub line: usize,
+    /// 1-based column, 0 when unknown.
+    pub col: usize,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// Writes the problems of `file` as `file:line:col: message`, one, or a count then one a line.
+pub fn write_problems(
+    f: &mut std::fmt::Formatter<'_>,
+    file: &str,
+    problems: &[Problem],
+) -> std::fmt::Result {
+    let at = |p: &Problem| {
+        if p.line == 0 {
+            format!("{file}: {}", p.message)
+        } else {
+            format!("{file}:{}:{}: {}", p.line, p.col, p.message)
+        }
+    };
+    match problems {
+        [one] => write!(f, "{}", at(one)),
+        many => {
+            write!(f, "{file}: {} problems:", many.len())?;
+            for p in many {
+                write!(f, "\n  {}", at(p))?;
+            }
+            Ok(())
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
