@@ -1,8 +1,12 @@
 //! The app shell: saved settings kept apart from runtime state, a top bar, a left navigation, one
 //! panel at a time, a status line. Panels return actions; the app applies them once per frame.
 
+use super::jobs::JobOutput;
 use super::runtime::{Runtime, Target};
-use super::{Action, actions, connection, monitor, presets, status_bar, telemetry, tuning};
+use super::{
+    Action, actions, connection, device, monitor, presets, selftest, servo_bench, solar,
+    status_bar, telemetry, tuning, tuya_console,
+};
 use crate::i18n::Lang;
 use crate::link::LinkCommand;
 use crate::profile::Protocol;
@@ -22,6 +26,16 @@ pub enum PanelId {
     Presets,
     /// The device's actions (motor, fan, spray…).
     Actions,
+    /// MSP core commands: ping, version, power state.
+    Device,
+    /// The solar cleanbot's readouts and controls.
+    Solar,
+    /// The window cleaner's production self-test.
+    SelfTest,
+    /// Bus servos: scan, parameters, provisioning, motion.
+    ServoBench,
+    /// Tuya: the module side, data points, OTA.
+    TuyaConsole,
 }
 
 impl PanelId {
@@ -33,6 +47,11 @@ impl PanelId {
             PanelId::Monitor => lang.tr("Packet monitor", "报文监视"),
             PanelId::Presets => lang.tr("Presets", "预设"),
             PanelId::Actions => lang.tr("Actions", "动作测试"),
+            PanelId::Device => lang.tr("Device", "设备信息"),
+            PanelId::Solar => lang.tr("Solar cleanbot", "光伏清扫机器人"),
+            PanelId::SelfTest => lang.tr("Self-test", "产线自检"),
+            PanelId::ServoBench => lang.tr("Servo bench", "舵机调试"),
+            PanelId::TuyaConsole => lang.tr("Tuya console", "涂鸦控制台"),
         }
     }
 }
@@ -92,6 +111,16 @@ pub struct App {
     pub presets: presets::PresetsPanel,
     /// The actions panel.
     pub actions: actions::ActionsPanel,
+    /// The device panel.
+    pub device: device::DevicePanel,
+    /// The solar cleanbot panel.
+    pub solar: solar::SolarPanel,
+    /// The self-test panel.
+    pub selftest: selftest::SelfTestPanel,
+    /// The servo bench.
+    pub servo: servo_bench::ServoBenchPanel,
+    /// The Tuya console.
+    pub tuya: tuya_console::TuyaConsolePanel,
     /// The window title last set.
     title: String,
 }
@@ -110,6 +139,11 @@ impl App {
             monitor: monitor::MonitorPanel::default(),
             presets: presets::PresetsPanel::default(),
             actions: actions::ActionsPanel::default(),
+            device: device::DevicePanel::default(),
+            solar: solar::SolarPanel::default(),
+            selftest: selftest::SelfTestPanel::default(),
+            servo: servo_bench::ServoBenchPanel::default(),
+            tuya: tuya_console::TuyaConsolePanel::default(),
             title: String::new(),
         };
         let (target, baud, profile) = (
@@ -130,7 +164,16 @@ impl App {
         if self.rt.drain_events() {
             ctx.request_repaint();
         }
-        self.rt.drain_job();
+        for out in self.rt.drain_job() {
+            match out {
+                JobOutput::Servo(o) => self.servo.on_output(o),
+                JobOutput::Tuya(o) => self.tuya.on_output(o),
+                JobOutput::Device(o) => self.device.on_output(o),
+                JobOutput::SelfTest(o) => self.selftest.on_output(o),
+                JobOutput::Solar(o) => self.solar.on_output(o),
+                _ => {}
+            }
+        }
         self.rt.refresh_ports();
         if std::mem::take(&mut self.rt.just_connected) && self.panels().contains(&PanelId::Tuning) {
             // What the device holds is shown as soon as it is known; nothing is shown before.
@@ -193,6 +236,11 @@ impl App {
             PanelId::Monitor => actions.extend(self.monitor.show(ui, lang, &mut self.rt)),
             PanelId::Presets => actions.extend(self.presets.show(ui, lang, &self.rt)),
             PanelId::Actions => actions.extend(self.actions.show(ui, lang, &self.rt)),
+            PanelId::Device => actions.extend(self.device.show(ui, lang, &self.rt)),
+            PanelId::Solar => actions.extend(self.solar.show(ui, lang, &self.rt)),
+            PanelId::SelfTest => actions.extend(self.selftest.show(ui, lang, &self.rt)),
+            PanelId::ServoBench => actions.extend(self.servo.show(ui, lang, &self.rt)),
+            PanelId::TuyaConsole => actions.extend(self.tuya.show(ui, lang, &self.rt)),
         });
         for a in actions {
             self.apply(a);
@@ -202,6 +250,11 @@ impl App {
     /// The panels the profile has.
     pub fn panels(&self) -> Vec<PanelId> {
         let mut v = Vec::new();
+        match self.rt.profile.protocol {
+            Protocol::Servo => return vec![PanelId::ServoBench, PanelId::Monitor],
+            Protocol::Tuya => return vec![PanelId::TuyaConsole, PanelId::Monitor],
+            Protocol::Msp => v.push(PanelId::Device),
+        }
         if self.rt.profile.protocol == Protocol::Msp
             && self
                 .rt
@@ -271,6 +324,8 @@ impl App {
                 }
             }
             Action::Say(text, error) => self.rt.say(text, error),
+            Action::Link(cmd) => self.rt.send(cmd),
+            Action::StartJob(job) => self.rt.start_job(&job.title, job.work),
         }
     }
 

@@ -18,6 +18,16 @@ pub enum JobOutput {
     Wrote(u8, Result<Vec<Check>, String>),
     /// A line for the status bar.
     Note(String),
+    /// For the servo bench panel.
+    Servo(super::servo_bench::Output),
+    /// For the Tuya console panel.
+    Tuya(super::tuya_console::Output),
+    /// For the device panel (ping, version, power state).
+    Device(super::device::Output),
+    /// For the self-test panel.
+    SelfTest(super::selftest::Output),
+    /// For the solar cleanbot panel.
+    Solar(super::solar::Output),
     /// The job ended: a summary, or the error that ended it.
     Done(Result<String, String>),
 }

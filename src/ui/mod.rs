@@ -4,13 +4,18 @@
 mod actions;
 pub mod app;
 mod connection;
+mod device;
 pub mod jobs;
 mod monitor;
 mod presets;
 pub mod runtime;
+mod selftest;
+mod servo_bench;
+mod solar;
 mod status_bar;
 mod telemetry;
 mod tuning;
+mod tuya_console;
 
 pub use app::{App, PanelId, Saved};
 pub use runtime::Target;
@@ -43,6 +48,52 @@ pub enum Action {
     PausePolling(bool),
     /// A status-bar message.
     Say(String, bool),
+    /// A command for the worker that needs no answer on this thread (stop all, Tuya options…).
+    Link(crate::link::LinkCommand),
+    /// Start a panel's own job.
+    StartJob(JobWork),
+}
+
+/// What a job runs: on the job thread, with a link client, a cancel flag and a sink for output.
+pub type Work = Box<
+    dyn FnOnce(&crate::link::Client, &crate::ops::Cancel, &jobs::JobSink) -> Result<String, String>
+        + Send,
+>;
+
+/// Work a panel runs as a job: on the job thread, with a link client, a cancel flag and a sink
+/// for its output.
+pub struct JobWork {
+    /// What it does, for the status bar.
+    pub title: String,
+    /// The work.
+    pub work: Work,
+}
+
+impl JobWork {
+    /// Work titled `title`.
+    pub fn new(
+        title: impl Into<String>,
+        work: impl FnOnce(
+            &crate::link::Client,
+            &crate::ops::Cancel,
+            &jobs::JobSink,
+        ) -> Result<String, String>
+        + Send
+        + 'static,
+    ) -> Self {
+        Self {
+            title: title.into(),
+            work: Box::new(work),
+        }
+    }
+}
+
+impl std::fmt::Debug for JobWork {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("JobWork")
+            .field("title", &self.title)
+            .finish_non_exhaustive()
+    }
 }
 
 /// A job a panel can ask for.

@@ -395,9 +395,12 @@ impl Runtime {
         }
     }
 
-    /// Takes what the running job has reported.
-    pub fn drain_job(&mut self) {
-        let Some(job) = &mut self.job else { return };
+    /// Takes what the running job has reported; returns the output meant for a panel.
+    pub fn drain_job(&mut self) -> Vec<JobOutput> {
+        let mut for_panels = Vec::new();
+        let Some(job) = &mut self.job else {
+            return for_panels;
+        };
         let title = job.title.clone();
         let outputs = job.drain();
         for out in outputs {
@@ -414,8 +417,14 @@ impl Runtime {
                 JobOutput::Done(Ok(summary)) => self.say(format!("{title}: {summary}"), false),
                 JobOutput::Done(Err(e)) => self.say(format!("{title}: {e}"), true),
                 JobOutput::Progress(_) => {}
+                JobOutput::Servo(_)
+                | JobOutput::Tuya(_)
+                | JobOutput::Device(_)
+                | JobOutput::SelfTest(_)
+                | JobOutput::Solar(_) => for_panels.push(out),
             }
         }
+        for_panels
     }
 
     fn on_written(&mut self, set: u8, result: Result<Vec<Check>, String>) {
