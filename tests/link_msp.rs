@@ -192,6 +192,75 @@ fn polled_telemetry_arrives_as_events() {
 }
 
 #[test]
+fn pipelined_polls_under_faults_never_mix_answers_with_each_other_or_with_writes() {
+    let p = profile("window-cleaner");
+    let faults = Faults {
+        drop: 0.01,
+        corrupt: 0.01,
+        seed: 3,
+        ..Faults::default()
+    };
+    let (server, wc) = window_cleaner(faults);
+    let options = LinkOptions {
+        poll_pipeline: 2,
+        ..LinkOptions::default()
+    };
+    let link = open(server.path(), p.clone(), options);
+    let attitude = p.command("MSP_ATTITUDE").unwrap();
+    let get = p.command("MSP_GET_PWMVALUE").unwrap();
+    let set = p.command("MSP_SET_PWMVALUE").unwrap();
+    let poll = |cmd| Poll {
+        request: Request::for_command(&p, cmd, Vec::new()).attempts(1),
+        interval: None,
+    };
+    link.send(LinkCommand::SetPolls(vec![poll(attitude), poll(get)]));
+    let client = link.client();
+    let mut written = vec![wc.lock().unwrap().param("pwmValue").unwrap()];
+    let (mut attitudes, mut pwms) = (0, 0);
+    let mut check = |ev: LinkEvent, written: &[i64]| {
+        if let LinkEvent::Telemetry {
+            command,
+            result: Ok(packet),
+            ..
+        } = ev
+        {
+            assert_eq!(packet.command, command, "an answer reported as another's");
+            if command == attitude.id {
+                assert_eq!(packet.payload.len(), 6);
+                attitudes += 1;
+            } else {
+                assert_eq!(command, get.id);
+                let v = i64::from(packet.payload[0]);
+                assert!(written.contains(&v), "polled {v}, never written");
+                pwms += 1;
+            }
+        }
+    };
+    for i in 0..40 {
+        let v = (i * 7 % 101) as i64;
+        if let Ok(checks) = ops::write_verified(
+            &client,
+            &p,
+            set,
+            &[("pwmValue".into(), Input::Raw(Value::Int(v)))],
+        ) {
+            assert!(checks.iter().all(|c| c.ok()), "write {i}: {checks:?}");
+            assert_eq!(wc.lock().unwrap().param("pwmValue"), Some(v));
+        }
+        written.push(v);
+        while let Ok(ev) = link.events().try_recv() {
+            check(ev, &written);
+        }
+    }
+    let _ = wait_for(&link, Duration::from_millis(500), |ev| {
+        check(ev, &written);
+        None::<()>
+    });
+    assert!(attitudes > 100, "{attitudes} attitude answers");
+    assert!(pwms > 100, "{pwms} parameter answers");
+}
+
+#[test]
 fn a_vanished_port_gives_disconnected_and_the_link_reconnects_when_it_returns() {
     let p = profile("window-cleaner");
     let (mut server, _wc) = window_cleaner(Faults::default());

@@ -23,6 +23,11 @@ pub(crate) struct PortArgs {
     /// protocol's: MSP 20, servo 1.5, Tuya 300).
     #[arg(long, value_name = "MS")]
     pub margin_ms: Option<u64>,
+    /// MSP polling at the wire's maximum (`watch --rate max`): requests in flight at once. 2
+    /// sends the next request while the device still answers; 1 waits for each answer, for
+    /// firmware that cannot take a request while it answers.
+    #[arg(long, value_name = "N", default_value_t = 2, value_parser = clap::value_parser!(u8).range(1..=4))]
+    pub poll_pipeline: u8,
     /// Print JSON.
     #[arg(long, global = true)]
     pub json: bool,
@@ -68,6 +73,7 @@ impl PortArgs {
             margin: self.margin_ms.map(std::time::Duration::from_millis),
             reconnect: false,
             start_session,
+            poll_pipeline: usize::from(self.poll_pipeline),
             ..LinkOptions::default()
         };
         let link = Link::open(

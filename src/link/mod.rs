@@ -179,6 +179,11 @@ pub struct LinkOptions {
     pub tuya: TuyaModuleOptions,
     /// Capacity of the event channel.
     pub event_capacity: usize,
+    /// MSP polls at the wire's maximum: how many requests may be in flight at once. With 2 the
+    /// next request is sent while the device still answers the last one (the line is full
+    /// duplex), so the device never waits for the host; 1 sends each request after the last
+    /// answer, for firmware that cannot take a request while it answers.
+    pub poll_pipeline: usize,
 }
 
 impl Default for LinkOptions {
@@ -189,6 +194,7 @@ impl Default for LinkOptions {
             start_session: true,
             tuya: TuyaModuleOptions::default(),
             event_capacity: 65_536,
+            poll_pipeline: 2,
         }
     }
 }

@@ -61,6 +61,8 @@ pub(super) struct Worker {
     deferred: VecDeque<LinkCommand>,
     polls: Vec<(Poll, Instant)>,
     poll_cursor: usize,
+    /// Polls sent ahead of their answers (MSP polls at the wire's maximum), oldest first.
+    in_flight: VecDeque<InFlight>,
     device_code: u8,
     baud: u32,
     stats: LinkStats,
@@ -71,6 +73,16 @@ pub(super) struct Worker {
     identify_pending: bool,
     shutdown: bool,
     wake: bool,
+}
+
+/// A polled request whose answer has not come yet.
+struct InFlight {
+    /// Its place in the poll list when it was sent.
+    index: usize,
+    request: Request,
+    sent: Instant,
+    /// When its answer is due at the latest, counted from its own write.
+    deadline: Instant,
 }
 
 /// Work done in order.
@@ -128,6 +140,7 @@ impl Worker {
             deferred: VecDeque::new(),
             polls: Vec::new(),
             poll_cursor: 0,
+            in_flight: VecDeque::new(),
             device_code,
             baud,
             stats: LinkStats::default(),
@@ -154,8 +167,11 @@ impl Worker {
             // The session learns the device before anything else is sent to it.
             if self.identify_pending && self.profile.protocol == Protocol::Msp {
                 self.identify_pending = false;
+                self.settle_polls();
                 self.identify();
             } else if let Some(item) = self.queue.pop_front() {
+                // Polls in flight are answered first: no answer can be taken for another's.
+                self.settle_polls();
                 match item {
                     Queued::Exchange(req, to) => {
                         let result = self.exchange(&req);
@@ -166,7 +182,14 @@ impl Worker {
             } else if self.tuya_due() {
                 self.tuya_tick();
             } else if let Some(i) = self.due_poll() {
-                self.run_poll(i);
+                if self.pipelined(i) {
+                    self.send_poll_ahead(i);
+                } else {
+                    self.settle_polls();
+                    self.run_poll(i);
+                }
+            } else if !self.in_flight.is_empty() {
+                self.settle_polls();
             } else {
                 self.idle();
             }
@@ -324,6 +347,13 @@ impl Worker {
     fn lost(&mut self, reason: String) {
         self.transport = None;
         self.decoder.clear();
+        for f in std::mem::take(&mut self.in_flight) {
+            self.emit(LinkEvent::Telemetry {
+                command: f.request.command,
+                at: Instant::now(),
+                result: Err(ExchangeError::Disconnected(reason.clone())),
+            });
+        }
         self.tuya.handshake_done = false;
         self.emit(LinkEvent::State(LinkState::Lost {
             reason: reason.clone(),
@@ -716,6 +746,129 @@ impl Worker {
         (0..n)
             .map(|k| (self.poll_cursor + k) % n)
             .find(|&i| self.polls[i].1 <= now)
+    }
+
+    /// Whether poll `i` is sent ahead of the answers still to come: MSP polls at the wire's
+    /// maximum, while fewer than [`super::LinkOptions::poll_pipeline`] are in flight. The
+    /// request of the next poll then crosses the host-to-device line while the device is still
+    /// sending the previous answer (full duplex), so that the device-to-host line never waits
+    /// for the host.
+    fn pipelined(&self, i: usize) -> bool {
+        self.profile.protocol == Protocol::Msp
+            && self.opts.poll_pipeline > 1
+            && self.polls[i].0.interval.is_none()
+            && matches!(self.polls[i].0.request.reply, ReplySpec::Required(_))
+    }
+
+    /// Sends poll `i` without waiting for its answer; waits for the oldest answer once the
+    /// pipeline is full.
+    fn send_poll_ahead(&mut self, i: usize) {
+        if self.in_flight.len() >= self.opts.poll_pipeline {
+            self.await_oldest_poll();
+            return;
+        }
+        let request = self.polls[i].0.request.clone();
+        self.poll_cursor = (i + 1) % self.polls.len().max(1);
+        let Ok((bytes, sent)) = self.encode(&request) else {
+            // Not encodable: report it as the sequential path would.
+            self.run_poll(i);
+            return;
+        };
+        if self.in_flight.is_empty() {
+            // As in an exchange: what has already arrived is dealt with before sending.
+            if self.read_some(Instant::now()).is_err() {
+                return;
+            }
+            self.drain_unsolicited();
+        }
+        let margin = request
+            .margin
+            .or(self.opts.margin)
+            .unwrap_or(default_margin(self.profile.protocol));
+        let t0 = Instant::now();
+        if self.write(&bytes, sent).is_err() {
+            return;
+        }
+        self.in_flight.push_back(InFlight {
+            index: i,
+            deadline: t0 + wire_time(bytes.len() + 1, self.baud) + margin,
+            request,
+            sent: t0,
+        });
+    }
+
+    /// Waits for every poll in flight.
+    fn settle_polls(&mut self) {
+        while !self.in_flight.is_empty() && self.transport.is_some() {
+            self.await_oldest_poll();
+        }
+    }
+
+    /// Waits for the answer to the oldest poll in flight and reports it. The device answers in
+    /// order, so the answer can come no sooner than the ones before it: its deadline runs at
+    /// least one device margin from now.
+    fn await_oldest_poll(&mut self) {
+        let Some(f) = self.in_flight.pop_front() else {
+            return;
+        };
+        let ReplySpec::Required(each) = f.request.reply.clone() else {
+            return;
+        };
+        let margin = f
+            .request
+            .margin
+            .or(self.opts.margin)
+            .unwrap_or(default_margin(self.profile.protocol));
+        let deadline = f.deadline.max(Instant::now() + margin);
+        let baud = self.baud;
+        let result = match self.wait_for(&each, None, deadline, baud) {
+            Err(e) => Err(e),
+            Ok(Waited {
+                outcome: Outcome::Answered(packets),
+                ..
+            }) => {
+                self.stats.rtt = Some(f.sent.elapsed());
+                packets.into_iter().next().ok_or(ExchangeError::Timeout {
+                    command: f.request.command,
+                    attempts: 1,
+                    waited_ms: 0,
+                })
+            }
+            Ok(Waited {
+                frame_err: Some(error),
+                ..
+            }) => Err(ExchangeError::Garbled {
+                command: f.request.command,
+                error,
+            }),
+            Ok(Waited {
+                mismatch: Some((got, from)),
+                ..
+            }) => Err(ExchangeError::Mismatch {
+                expected: each.command,
+                got,
+                from,
+            }),
+            Ok(_) => {
+                self.stats.timeouts += 1;
+                Err(ExchangeError::Timeout {
+                    command: f.request.command,
+                    attempts: 1,
+                    waited_ms: f.sent.elapsed().as_millis() as u64,
+                })
+            }
+        };
+        let at = Instant::now();
+        if let Some(slot) = self.polls.get_mut(f.index)
+            && slot.0.request == f.request
+        {
+            slot.1 = at;
+        }
+        self.emit(LinkEvent::Telemetry {
+            command: f.request.command,
+            at,
+            result,
+        });
     }
 
     fn run_poll(&mut self, i: usize) {
