@@ -620,27 +620,38 @@ impl Worker {
                     attempts: attempt,
                 });
             }
-            last = if let Some(error) = frame_err {
-                ExchangeError::Garbled {
-                    command: req.command,
-                    error,
-                }
-            } else if let Some((got, from)) = mismatch {
-                ExchangeError::Mismatch {
-                    expected: each.command,
-                    got,
-                    from,
-                }
-            } else {
-                self.stats.timeouts += 1;
-                ExchangeError::Timeout {
-                    command: req.command,
-                    attempts,
-                    waited_ms: t0.elapsed().as_millis() as u64,
-                }
-            };
+            last = self.unanswered(req.command, each.command, frame_err, mismatch, attempts, t0);
         }
         Err(last)
+    }
+
+    /// Why a request sent at `sent` got no answer: a garbled frame, an answer to something
+    /// else, or nothing at all.
+    fn unanswered(
+        &mut self,
+        command: u8,
+        expected: u8,
+        frame_err: Option<FrameError>,
+        mismatch: Option<(u8, Option<u8>)>,
+        attempts: u8,
+        sent: Instant,
+    ) -> ExchangeError {
+        if let Some(error) = frame_err {
+            ExchangeError::Garbled { command, error }
+        } else if let Some((got, from)) = mismatch {
+            ExchangeError::Mismatch {
+                expected,
+                got,
+                from,
+            }
+        } else {
+            self.stats.timeouts += 1;
+            ExchangeError::Timeout {
+                command,
+                attempts,
+                waited_ms: sent.elapsed().as_millis() as u64,
+            }
+        }
     }
 
     /// Reads until the answer (or the end of a burst) or the deadline. Returns what came, the
@@ -834,29 +845,14 @@ impl Worker {
                     waited_ms: 0,
                 })
             }
-            Ok(Waited {
-                frame_err: Some(error),
-                ..
-            }) => Err(ExchangeError::Garbled {
-                command: f.request.command,
-                error,
-            }),
-            Ok(Waited {
-                mismatch: Some((got, from)),
-                ..
-            }) => Err(ExchangeError::Mismatch {
-                expected: each.command,
-                got,
-                from,
-            }),
-            Ok(_) => {
-                self.stats.timeouts += 1;
-                Err(ExchangeError::Timeout {
-                    command: f.request.command,
-                    attempts: 1,
-                    waited_ms: f.sent.elapsed().as_millis() as u64,
-                })
-            }
+            Ok(w) => Err(self.unanswered(
+                f.request.command,
+                each.command,
+                w.frame_err,
+                w.mismatch,
+                1,
+                f.sent,
+            )),
         };
         let at = Instant::now();
         if let Some(slot) = self.polls.get_mut(f.index)
