@@ -473,3 +473,84 @@ fn an_empty_or_missing_firmware_file_is_refused_with_a_clear_message() {
     assert_eq!(*b.mcu.lock().unwrap().ota_state(), OtaState::Idle);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn an_update_can_be_cancelled_and_says_where_it_stopped() {
+    let dir = temp_dir("cancel");
+    let file = dir.join("firmware.bin");
+    std::fs::write(&file, image(65_536)).unwrap();
+    let b = bench();
+    let mut h = harness(b.server.path(), "tuya-vacuum");
+    handshake(&mut h);
+    tab(&mut h, "Firmware update");
+    app_mut(&mut h).tuya.ota.path = file.display().to_string();
+    h.step();
+    h.get_by_label("Start update").click();
+    h.run_steps(2);
+    h.get_by_label("Update").click();
+    step_until(&mut h, "some progress", |a| {
+        a.tuya.ota.progress.as_ref().is_some_and(|p| p.done >= 1024)
+    });
+    h.run_steps(1);
+    assert!(has_label(&h, "B/s"), "the rate is shown");
+    assert!(has_label(&h, "left"), "the time left is shown");
+    assert!(has_label(&h, "packets of 256 bytes (asked by the MCU)"));
+    h.get_by_label("Cancel update").click();
+    step_until(&mut h, "the update to end", |a| a.tuya.ota.result.is_some());
+    let err = app(&h).tuya.ota.result.clone().unwrap().unwrap_err();
+    assert!(err.contains("cancelled after offset"), "{err}");
+    assert!(!matches!(
+        b.mcu.lock().unwrap().ota_state(),
+        OtaState::Complete { .. }
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn every_section_renders_in_english_and_chinese() {
+    // A glyph missing from the bundled fonts panics while drawing: draw every section with
+    // something in it, in both languages.
+    let dir = temp_dir("render");
+    let (profile, b) = writable_profile(&dir);
+    let mut h = harness(b.server.path(), &profile);
+    handshake(&mut h);
+    {
+        let mut m = b.mcu.lock().unwrap();
+        m.set_dp(
+            18,
+            DpValue::Bitmap {
+                bits: 0x7f,
+                width: 1,
+            },
+        );
+        m.request_local_time();
+        m.reset_wifi_mode(1);
+        m.request_wifi_test();
+        m.request_net_status();
+        m.request_mac();
+    }
+    step_until(&mut h, "the requests", |a| a.rt.tuya.requests.len() == 5);
+    tab(&mut h, "Data points");
+    type_into(&mut h, "16 Clean area", "-5");
+    app_mut(&mut h).tuya.ota.error = Some("firmware.bin: the firmware file is empty".into());
+    for (lang, tabs) in [
+        (Lang::Zh, ["握手", "数据点", "MCU请求", "固件升级"]),
+        (
+            Lang::En,
+            [
+                "Handshake",
+                "Data points",
+                "MCU requests",
+                "Firmware update",
+            ],
+        ),
+    ] {
+        app_mut(&mut h).saved.lang = lang;
+        h.run_steps(2);
+        for t in tabs {
+            tab(&mut h, t);
+        }
+    }
+    assert!(has_label(&h, "firmware file is empty"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

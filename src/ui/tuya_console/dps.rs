@@ -52,6 +52,8 @@ pub struct DpView {
     pub marks: HashMap<u8, Mark>,
     /// The report log is shown from this line on ("Clear").
     log_from: u64,
+    /// The connection the sends and marks belong to.
+    generation: u64,
 }
 
 /// A value as shown, with its unit: labels by name, bools as on/off, raw as hex.
@@ -154,6 +156,13 @@ impl DpView {
     /// Draws the section. `ota` is true while a firmware update holds the link.
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, ota: bool) -> Vec<Action> {
         let mut actions = Vec::new();
+        if self.generation != rt.tuya.generation {
+            // A new connection: what was sent on the last one says nothing of this one.
+            self.generation = rt.tuya.generation;
+            self.pending.clear();
+            self.marks.clear();
+            self.log_from = 0;
+        }
         self.settle(rt);
         if !self.pending.is_empty() {
             ui.ctx().request_repaint_after(Duration::from_millis(200));
