@@ -105,8 +105,11 @@ pub fn show(
     });
     ui.add_space(4.0);
     // Where the current attempt is: the first step without a result, unless one failed.
-    let failed =
-        s.steps.iter().flatten().any(|r| !r.ok) && s.stopped.is_some() && s.done_at.is_none();
+    let failed = s.done_at.is_none()
+        && HandshakeStep::ALL
+            .iter()
+            .zip(&s.steps)
+            .any(|(step, r)| r.as_ref().is_some_and(|r| !r.ok && !s.shown_raw(*step)));
     let waiting_at = (!failed && s.done_at.is_none() && s.attempts > 0 && rt.connected())
         .then(|| s.steps.iter().position(Option::is_none))
         .flatten();
@@ -125,7 +128,7 @@ pub fn show(
                     Some(r) if r.ok => {
                         ui.colored_label(GREEN, format!("✓ {}", lang.tr("ok", "成功")));
                     }
-                    Some(_) if *step == HandshakeStep::ProductInfo => {
+                    Some(_) if s.shown_raw(*step) => {
                         ui.colored_label(ORANGE, lang.tr("shown raw", "原样显示"));
                     }
                     Some(_) => {

@@ -79,6 +79,9 @@ pub struct Session {
     pub done_at: Option<DateTime<Local>>,
     /// The product info of the last handshake.
     pub product: Option<ProductInfo>,
+    /// The current attempt received product info (a failed product-info step then means JSON
+    /// that is shown raw, and the handshake goes on; without it, no answer).
+    pub product_in_attempt: bool,
     /// The working mode: `None` the MCU drives the LED, or the module's GPIOs.
     pub work_mode: Option<Option<(u8, u8)>>,
     /// MCU restarts seen by the heartbeat, and the last one.
@@ -133,6 +136,12 @@ impl Session {
         }
     }
 
+    /// Whether `step` failed only because its product info is not JSON: it is shown raw and the
+    /// handshake goes on.
+    pub fn shown_raw(&self, step: HandshakeStep) -> bool {
+        step == HandshakeStep::ProductInfo && self.product_in_attempt
+    }
+
     /// Takes a Tuya event from the worker.
     pub fn on_event(&mut self, ev: TuyaEvent) {
         let now = Local::now();
@@ -143,6 +152,7 @@ impl Session {
                     self.steps = Default::default();
                     self.attempts += 1;
                     self.done_at = None;
+                    self.product_in_attempt = false;
                 }
                 let result = StepResult {
                     ok,
@@ -150,12 +160,15 @@ impl Session {
                     at: now,
                 };
                 // A product info that is not JSON is shown raw and the handshake goes on.
-                if !ok && step != HandshakeStep::ProductInfo {
+                if !ok && !self.shown_raw(step) {
                     self.stopped = Some((step, result.clone()));
                 }
                 self.steps[step_index(step)] = Some(result);
             }
-            TuyaEvent::ProductInfo(p) => self.product = Some(p),
+            TuyaEvent::ProductInfo(p) => {
+                self.product = Some(p);
+                self.product_in_attempt = true;
+            }
             TuyaEvent::WorkMode { gpio } => self.work_mode = Some(gpio),
             TuyaEvent::HandshakeDone => {
                 self.done_at = Some(now);
@@ -269,5 +282,69 @@ impl Session {
             item,
         });
         self.log_seq += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::tuya_module::parse_product_info;
+
+    fn step(step: HandshakeStep, ok: bool) -> TuyaEvent {
+        TuyaEvent::Step {
+            step,
+            ok,
+            detail: String::new(),
+        }
+    }
+
+    #[test]
+    fn product_info_that_is_not_json_does_not_stop_the_handshake_but_no_answer_does() {
+        let mut s = Session::default();
+        s.on_event(step(HandshakeStep::Heartbeat, true));
+        s.on_event(TuyaEvent::ProductInfo(parse_product_info(b"{\"p\":")));
+        s.on_event(step(HandshakeStep::ProductInfo, false));
+        assert!(s.stopped.is_none());
+        assert!(s.shown_raw(HandshakeStep::ProductInfo));
+        // The next attempt gets no answer at all.
+        s.on_event(step(HandshakeStep::Heartbeat, true));
+        s.on_event(step(HandshakeStep::ProductInfo, false));
+        assert_eq!(s.attempts, 2);
+        assert_eq!(
+            s.stopped.as_ref().map(|(st, _)| *st),
+            Some(HandshakeStep::ProductInfo)
+        );
+        assert!(s.steps[2].is_none(), "a new attempt clears the later steps");
+        s.on_event(TuyaEvent::HandshakeDone);
+        assert!(s.stopped.is_none() && s.done_at.is_some());
+    }
+
+    #[test]
+    fn the_logs_are_bounded_and_a_wrong_typed_report_is_logged_not_shown() {
+        let profile = crate::sim::tuya_mcu::builtin_vacuum_profile();
+        let mut s = Session::default();
+        let frame = |data: Vec<u8>| {
+            Packet::tuya(crate::protocol::tuya::Frame::from_mcu(cmd::DP_REPORT, data))
+        };
+        // DP 6 (battery) is a value; reported as a bool it is refused.
+        s.on_report(&profile, &frame(vec![6, 1, 0, 1, 1]));
+        assert!(s.dps.is_empty());
+        assert!(s.log[0].item.is_err());
+        s.on_report(&profile, &frame(vec![6, 2, 0, 4, 0, 0, 0, 42]));
+        for _ in 0..LOG_CAPACITY {
+            s.on_report(&profile, &frame(vec![1, 1, 0, 1, 1]));
+        }
+        assert_eq!(s.log.len(), LOG_CAPACITY);
+        assert_eq!(s.dps.get(&1).map(|d| d.value.clone()), Some(Value::Int(1)));
+        assert_eq!(s.dps.get(&6).map(|d| d.value.clone()), Some(Value::Int(42)));
+        for _ in 0..REQUESTS_CAPACITY + 5 {
+            s.on_event(TuyaEvent::McuRequest {
+                command: cmd::RESET_WIFI,
+                name: "reset Wi-Fi".into(),
+                answer: Vec::new(),
+            });
+        }
+        assert_eq!(s.requests.len(), REQUESTS_CAPACITY);
+        assert_eq!(s.resets.0, REQUESTS_CAPACITY as u32 + 5);
     }
 }
