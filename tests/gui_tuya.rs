@@ -267,6 +267,11 @@ fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_
     assert!(h.query_by_label("Spot cleaning").is_some());
     assert!(has_label(&h, "3 mode = Spot clean"));
     assert!(has_label(&h, "✓ reported back"));
+    // Query status (0x08): every data point is reported again.
+    let before = app(&h).rt.tuya.log_seq;
+    h.get_by_label("Query status").click();
+    step_until(&mut h, "19 reports", |a| a.rt.tuya.log_seq >= before + 19);
+    assert!(app(&h).rt.tuya.last_query.is_some());
 }
 
 /// Types `text` into the empty text field labelled `label`.
