@@ -2,14 +2,18 @@
 //! reported against the wire limit (the time the bytes themselves take at the port's baud rate).
 //! Run it on a release build: `cargo run --release -- bench --json`.
 
-use crate::link::{Link, LinkCommand, LinkEvent, LinkOptions, Poll, Request, serial, wire_time};
+use crate::link::{
+    Link, LinkCommand, LinkEvent, LinkOptions, Match, Poll, ReplySpec, Request, serial, wire_time,
+};
 use crate::ops::Cancel;
 use crate::ops::provision;
 use crate::ops::servo::{self, ScanPlan};
 use crate::ops::tuya::{self as tuya_ops, OtaTiming};
-use crate::profile::{Profile, Registry};
+use crate::profile::{Input, Profile, Registry, Value};
+use crate::protocol::Direction;
+use crate::protocol::tuya::cmd as tuya_cmd;
 use crate::sim::servo_bus::{ServoBus, SimServo};
-use crate::sim::tuya_mcu::{OtaPacketAnswer, TuyaConfig, TuyaMcu};
+use crate::sim::tuya_mcu::{DEFAULT_LATENCY, OtaPacketAnswer, TuyaConfig, TuyaMcu};
 use crate::sim::window_cleaner::WindowCleaner;
 use crate::sim::{Faults, PtyServer, SharedDevice, SimOptions};
 use serde::Serialize;
@@ -292,6 +296,79 @@ pub fn tuya_ota(baud: u32, packet: u8) -> Result<Figure, String> {
     ))
 }
 
+/// A data-point command (0x06) to its report (0x07): `find_robot` switched `rounds` times at
+/// `baud`, each timed from the request to the report of that data point. The limit is
+/// the two frames' wire time plus the MCU's latency.
+pub fn tuya_dp_report(baud: u32, rounds: usize) -> Result<Figure, String> {
+    let p = profile("tuya-vacuum")?;
+    let latency = DEFAULT_LATENCY;
+    let mcu: SharedDevice = Arc::new(Mutex::new(TuyaMcu::new(TuyaConfig {
+        baud: Some(baud),
+        latency,
+        ..TuyaConfig::default()
+    })));
+    let server = PtyServer::start(mcu, Faults::default()).map_err(|e| e.to_string())?;
+    // No handshake or heartbeat: nothing else on the wire while the exchanges are timed.
+    let opts = LinkOptions {
+        start_session: false,
+        ..LinkOptions::default()
+    };
+    let link = open(&server, p.clone(), baud, opts)?;
+    let client = link.client();
+    let command = p
+        .command_by_id(tuya_cmd::DP_COMMAND)
+        .ok_or("the profile has no data-point command")?;
+    let dp = p
+        .find_data_point("find_robot")
+        .ok_or("the profile has no find_robot data point")?;
+    let rounds = rounds.max(1);
+    let (mut total, mut worst, mut rtt) = (0.0f64, 0.0f64, 0.0f64);
+    let mut frame_bytes = 0;
+    for i in 0..rounds {
+        let on = i64::from(i % 2 == 0);
+        let inputs = [(dp.field.ident.clone(), Input::Raw(Value::Int(on)))];
+        let payload = p
+            .encode(command, Direction::HostToDevice, &inputs)
+            .map_err(|e| e.to_string())?;
+        let report = Match::command(tuya_cmd::DP_REPORT).with_prefix(vec![dp.id]);
+        let request = Request::new(tuya_cmd::DP_COMMAND, payload.clone())
+            .reply(ReplySpec::Required(report))
+            .attempts(1);
+        let started = Instant::now();
+        let reply = client.request(request).map_err(|e| e.to_string())?;
+        let secs = started.elapsed().as_secs_f64();
+        let answer = reply.payload().unwrap_or_default();
+        if answer.last().map(|b| i64::from(*b)) != Some(on) {
+            return Err(format!(
+                "the MCU reported {answer:02x?} for find_robot = {on}"
+            ));
+        }
+        total += secs;
+        worst = worst.max(secs);
+        rtt += reply.rtt.as_secs_f64();
+        // Each frame: 55 AA, version, command, length (2), data, checksum.
+        frame_bytes = (7 + payload.len()) + (7 + answer.len());
+    }
+    let mean = total / rounds as f64;
+    let wire = wire_time(frame_bytes, baud).as_secs_f64();
+    let limit = wire + latency.as_secs_f64();
+    Ok(Figure::new(
+        &format!("tuya dp command to its report, {baud} baud"),
+        mean,
+        wire,
+        format!(
+            "mean of {rounds}; worst {:.2} ms, link rtt {:.2} ms; limit {:.2} ms (wire {:.2} ms + MCU latency {:.1} ms): mean {:.2}× the limit, {}",
+            worst * 1e3,
+            rtt / rounds as f64 * 1e3,
+            limit * 1e3,
+            wire * 1e3,
+            latency.as_secs_f64() * 1e3,
+            mean / limit,
+            if mean <= limit { "within" } else { "over" }
+        ),
+    ))
+}
+
 /// Everything; `long` adds the 8-baud scan and the 9600-baud OTA (about 80 s).
 pub fn run_all(long: bool, report: &mut dyn FnMut(&Figure)) -> Result<Vec<Figure>, String> {
     let mut out = Vec::new();
@@ -306,6 +383,8 @@ pub fn run_all(long: bool, report: &mut dyn FnMut(&Figure)) -> Result<Vec<Figure
     }
     add(servo_provision()?, &mut out);
     add(tuya_ota(115_200, 2)?, &mut out);
+    add(tuya_dp_report(115_200, 50)?, &mut out);
+    add(tuya_dp_report(9600, 20)?, &mut out);
     if long {
         add(tuya_ota(9600, 2)?, &mut out);
     }

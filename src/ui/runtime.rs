@@ -120,6 +120,8 @@ pub struct Runtime {
     pub ctx: eframe::egui::Context,
     /// The link has just come up (first connect or a reconnect): the app reads the device.
     pub just_connected: bool,
+    /// Tuya: what the module session has reported (handshake, data points, MCU requests).
+    pub tuya: super::tuya_console::Session,
 }
 
 impl Runtime {
@@ -152,6 +154,7 @@ impl Runtime {
             ports_at: None,
             ctx: ctx.clone(),
             just_connected: false,
+            tuya: Default::default(),
         })
     }
 
@@ -214,6 +217,7 @@ impl Runtime {
         self.marks.clear();
         self.plots.clear();
         self.info = None;
+        self.tuya = self.tuya.next();
         self.t0 = Instant::now();
         self.conn = Some(Conn { link, target });
         self.state = None;
@@ -240,6 +244,11 @@ impl Runtime {
     /// The telemetry commands to poll: the profile's plotted commands at `rate` Hz (`None`: as
     /// fast as the wire allows), and its other telemetry at 1 Hz, so that every value is live.
     pub fn polls(&self, rate: Option<f64>) -> Vec<Poll> {
+        // Tuya: the module session sends the heartbeat itself and the MCU reports its data
+        // points; polling 0x00/0x01/0x08 would take the restart heartbeat's 0 from the session.
+        if self.profile.protocol == crate::profile::Protocol::Tuya {
+            return Vec::new();
+        }
         let mut plotted: Vec<u8> = Vec::new();
         for plot in &self.profile.plots {
             if let Some(cmd) = self.profile.command(&plot.command)
@@ -303,8 +312,12 @@ impl Runtime {
             }
             LinkEvent::Stats(s) => self.stats = s,
             LinkEvent::Identified(r) => self.info = Some(r.map_err(|e| e.to_string())),
-            LinkEvent::Frame(entry) => self.log_frame(entry),
+            LinkEvent::Frame(entry) => {
+                self.tuya.on_frame(&entry);
+                self.log_frame(entry)
+            }
             LinkEvent::Report(p) => {
+                self.tuya.on_report(&self.profile, &p);
                 if self.reports.len() >= 2000 {
                     self.reports.pop_front();
                 }
@@ -321,7 +334,8 @@ impl Runtime {
                         .insert(command, Reading::Failed(e.to_string()));
                 }
             },
-            LinkEvent::Reply { .. } | LinkEvent::Tuya(_) => {}
+            LinkEvent::Tuya(ev) => self.tuya.on_event(ev),
+            LinkEvent::Reply { .. } => {}
         }
     }
 

@@ -1,0 +1,500 @@
+//! Data points, generated from the profile: a control by type (bool toggle, enum selector, value
+//! with range and unit, string, bitmap with its named bits lit, raw as hex). Commands go out as
+//! 0x06; only the MCU's 0x07 reports change what is shown, with the time of the last report.
+
+use super::{Action, Runtime, clock, fire};
+use crate::i18n::Lang;
+use crate::link::Request;
+use crate::profile::{Access, DataPointDef, Input, Value};
+use crate::protocol::Direction;
+use crate::protocol::tuya::cmd;
+use crate::protocol::tuya::dp::DpType;
+use eframe::egui;
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+/// How long a command waits for its report before it is marked unanswered.
+pub const REPORT_WAIT: Duration = Duration::from_secs(3);
+
+const GREEN: egui::Color32 = egui::Color32::from_rgb(40, 160, 60);
+const ORANGE: egui::Color32 = egui::Color32::from_rgb(220, 150, 0);
+
+/// A command sent and not yet reported back.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pending {
+    /// What was sent.
+    pub value: Value,
+    /// When.
+    pub sent: Instant,
+}
+
+/// What the last command of a data point came to.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Mark {
+    /// The MCU reported the value sent.
+    Confirmed,
+    /// The MCU reported another value.
+    Mismatch(Value),
+    /// No report came.
+    NoReport(Value),
+    /// Refused before sending.
+    Refused(String),
+}
+
+/// The data points' edits and sends.
+#[derive(Debug, Default)]
+pub struct DpView {
+    /// Text typed for value, string, bitmap and raw data points, by id.
+    pub edits: HashMap<u8, String>,
+    /// Commands awaiting their report, by id.
+    pub pending: HashMap<u8, Pending>,
+    /// The outcome of each data point's last command, by id.
+    pub marks: HashMap<u8, Mark>,
+    /// The report log is shown from this line on ("Clear").
+    log_from: u64,
+    /// The connection the sends and marks belong to.
+    generation: u64,
+}
+
+/// A value as shown, with its unit: labels by name, bools as on/off, raw as hex.
+fn shown(lang: Lang, def: &DataPointDef, v: &Value) -> String {
+    let f = &def.field;
+    match (def.dp_type, v) {
+        (DpType::Bool, Value::Int(b)) => {
+            if *b != 0 {
+                lang.tr("on", "开").into()
+            } else {
+                lang.tr("off", "关").into()
+            }
+        }
+        (DpType::Enum, Value::Int(x)) => match f.label(*x) {
+            Some(l) => lang.tr(&l.name.en, &l.name.zh).into(),
+            None => format!("{x} ({})", lang.tr("not in the profile", "不在配置中")),
+        },
+        (DpType::String, Value::Text(s)) => format!("\"{s}\""),
+        _ => format!("{}{}", f.format(v), f.unit_suffix()),
+    }
+}
+
+fn allowed(lang: Lang, def: &DataPointDef) -> String {
+    match def.dp_type {
+        DpType::Bool => lang.tr("on / off", "开 / 关").into(),
+        DpType::Enum => format!(
+            "{} {}",
+            def.field.labels.len(),
+            lang.tr("choices", "个选项")
+        ),
+        DpType::Value => super::super::tuning::range_text(&def.field),
+        DpType::String => lang.tr("text", "文本").into(),
+        DpType::Bitmap => lang
+            .tr("bit names joined by | or 0x..", "位名称用 | 连接,或 0x..")
+            .into(),
+        DpType::Raw => lang.tr("hex bytes", "十六进制字节").into(),
+    }
+}
+
+impl DpView {
+    /// Sends `value` to data point `def` as a 0x06 command, checked against the profile first.
+    fn send(&mut self, rt: &Runtime, def: &DataPointDef, value: Value) -> Option<Action> {
+        let payload = rt
+            .profile
+            .command_by_id(cmd::DP_COMMAND)
+            .ok_or_else(|| "the profile has no data-point command".to_string())
+            .and_then(|c| {
+                rt.profile
+                    .encode(
+                        c,
+                        Direction::HostToDevice,
+                        &[(def.field.ident.clone(), Input::Raw(value.clone()))],
+                    )
+                    .map_err(|e| e.to_string())
+            });
+        match payload {
+            Ok(payload) => {
+                self.marks.remove(&def.id);
+                self.pending.insert(
+                    def.id,
+                    Pending {
+                        value,
+                        sent: Instant::now(),
+                    },
+                );
+                Some(fire(Request::send_only(cmd::DP_COMMAND, payload)))
+            }
+            Err(e) => {
+                self.marks.insert(def.id, Mark::Refused(e));
+                None
+            }
+        }
+    }
+
+    /// Settles commands whose report came, or whose wait is over.
+    fn settle(&mut self, rt: &Runtime) {
+        let mut settled = Vec::new();
+        for (id, p) in &self.pending {
+            match rt.tuya.dps.get(id) {
+                Some(st) if st.at >= p.sent => {
+                    let mark = if st.value == p.value {
+                        Mark::Confirmed
+                    } else {
+                        Mark::Mismatch(st.value.clone())
+                    };
+                    settled.push((*id, mark));
+                }
+                _ if p.sent.elapsed() >= REPORT_WAIT => {
+                    settled.push((*id, Mark::NoReport(p.value.clone())));
+                }
+                _ => {}
+            }
+        }
+        for (id, mark) in settled {
+            self.pending.remove(&id);
+            self.marks.insert(id, mark);
+        }
+    }
+
+    /// Draws the section. `ota` is true while a firmware update holds the link.
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, ota: bool) -> Vec<Action> {
+        let mut actions = Vec::new();
+        if self.generation != rt.tuya.generation {
+            // A new connection: what was sent on the last one says nothing of this one.
+            self.generation = rt.tuya.generation;
+            self.pending.clear();
+            self.marks.clear();
+            self.log_from = 0;
+        }
+        self.settle(rt);
+        if !self.pending.is_empty() {
+            ui.ctx().request_repaint_after(Duration::from_millis(200));
+        }
+        let can_send = rt.connected() && !ota;
+        ui.horizontal_wrapped(|ui| {
+            if ui
+                .add_enabled(
+                    can_send,
+                    egui::Button::new(lang.tr("Query status", "查询状态")),
+                )
+                .on_hover_text(lang.tr(
+                    "0x08: the MCU reports every data point",
+                    "0x08:MCU上报全部数据点",
+                ))
+                .clicked()
+            {
+                actions.push(fire(Request::new(cmd::QUERY_STATUS, Vec::new()).reply(
+                    crate::link::ReplySpec::Burst {
+                        each: crate::link::Match::command(cmd::DP_REPORT),
+                        quiet: crate::ops::tuya::REPORT_QUIET,
+                    },
+                )));
+            }
+            if let Some(t) = &rt.tuya.last_query {
+                ui.weak(format!(
+                    "{} {}",
+                    lang.tr("last query at", "最近查询于"),
+                    clock(t)
+                ));
+            }
+            if ota {
+                ui.colored_label(
+                    ORANGE,
+                    lang.tr(
+                        "A firmware update is running: commands wait until it ends.",
+                        "固件升级进行中:升级结束后才能下发命令。",
+                    ),
+                );
+            }
+        });
+        ui.weak(lang.tr(
+            "Commands go out as 0x06. Values are shown only as the MCU reports them (0x07).",
+            "命令以0x06下发。只显示MCU上报(0x07)的值。",
+        ));
+        ui.add_space(4.0);
+        let defs = rt.profile.data_points.clone();
+        egui::Grid::new("tuya-dps")
+            .num_columns(6)
+            .striped(true)
+            .min_col_width(40.0)
+            .show(ui, |ui| {
+                ui.strong(lang.tr("Data point", "数据点"));
+                ui.strong(lang.tr("Reported", "上报值"));
+                ui.strong(lang.tr("Last report", "最近上报"));
+                ui.strong(lang.tr("Command", "下发"));
+                ui.strong(lang.tr("Allowed", "允许值"));
+                ui.strong("");
+                ui.end_row();
+                for def in &defs {
+                    if let Some(a) = self.row(ui, lang, rt, def, can_send) {
+                        actions.push(a);
+                    }
+                    ui.end_row();
+                }
+            });
+        ui.separator();
+        self.log(ui, lang, rt);
+        actions
+    }
+
+    fn row(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &Runtime,
+        def: &DataPointDef,
+        can_send: bool,
+    ) -> Option<Action> {
+        let f = &def.field;
+        let name = ui
+            .label(format!("{} {}", def.id, lang.tr(&f.name.en, &f.name.zh)))
+            .on_hover_text(format!("{} ({})", f.ident, def.dp_type.name()));
+        let reported = rt.tuya.dps.get(&def.id);
+        match reported {
+            Some(st) if def.dp_type == DpType::Bitmap => bits(ui, lang, def, &st.value),
+            Some(st) => {
+                ui.monospace(shown(lang, def, &st.value));
+            }
+            None => {
+                ui.weak(lang.tr("not reported yet", "尚未上报"));
+            }
+        }
+        match reported {
+            Some(st) => ui.monospace(clock(&st.clock)),
+            None => ui.label(""),
+        };
+        let mut action = None;
+        let writable = def.access == Access::ReadWrite;
+        if !writable {
+            ui.weak(lang.tr("report only", "仅上报"));
+        } else {
+            match def.dp_type {
+                DpType::Bool => {
+                    let current = reported.map(|st| st.value == Value::Int(1));
+                    let mut on = current.unwrap_or(false);
+                    let resp = ui
+                        .add_enabled(
+                            can_send && current.is_some(),
+                            egui::Checkbox::new(&mut on, ""),
+                        )
+                        .labelled_by(name.id);
+                    if resp.changed() {
+                        action = self.send(rt, def, Value::Int(i64::from(on)));
+                    }
+                }
+                DpType::Enum => {
+                    let current = reported.and_then(|st| match st.value {
+                        Value::Int(x) => Some(x),
+                        _ => None,
+                    });
+                    let selected = reported.map_or_else(
+                        || lang.tr("choose…", "选择…").to_string(),
+                        |st| shown(lang, def, &st.value),
+                    );
+                    let mut chosen = None;
+                    ui.add_enabled_ui(can_send, |ui| {
+                        egui::ComboBox::from_id_salt(("tuya-dp", def.id))
+                            .selected_text(selected)
+                            .width(160.0)
+                            .show_ui(ui, |ui| {
+                                for l in &f.labels {
+                                    if ui
+                                        .selectable_label(
+                                            current == Some(l.value),
+                                            lang.tr(&l.name.en, &l.name.zh),
+                                        )
+                                        .clicked()
+                                    {
+                                        chosen = Some(l.value);
+                                    }
+                                }
+                            })
+                            .response
+                            .labelled_by(name.id);
+                    });
+                    if let Some(v) = chosen {
+                        action = self.send(rt, def, Value::Int(v));
+                    }
+                }
+                _ => action = self.typed(ui, lang, rt, def, name.id, can_send),
+            }
+        }
+        ui.weak(allowed(lang, def));
+        self.mark(ui, lang, def);
+        action
+    }
+
+    /// A text field for value, string, bitmap and raw data points, checked as typed; Send (or
+    /// Enter) only when it is valid.
+    fn typed(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &Runtime,
+        def: &DataPointDef,
+        label: egui::Id,
+        can_send: bool,
+    ) -> Option<Action> {
+        let mut action = None;
+        ui.horizontal(|ui| {
+            let mut text = self.edits.get(&def.id).cloned().unwrap_or_default();
+            let parsed = (!text.is_empty()).then(|| def.field.parse(&text));
+            let invalid = matches!(parsed, Some(Err(_)));
+            let mut edit = egui::TextEdit::singleline(&mut text)
+                .desired_width(140.0)
+                .hint_text(lang.tr("new value", "新值"));
+            if invalid {
+                edit = edit.text_color(egui::Color32::RED);
+            }
+            let resp = ui.add(edit).labelled_by(label);
+            if resp.changed() {
+                if text.is_empty() {
+                    self.edits.remove(&def.id);
+                } else {
+                    self.edits.insert(def.id, text.clone());
+                }
+            }
+            let entered = resp.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+            match def.field.parse(&text) {
+                _ if text.is_empty() => {}
+                Ok(v) => {
+                    let clicked = ui
+                        .add_enabled(can_send, egui::Button::new(lang.tr("Send", "下发")))
+                        .clicked();
+                    if (clicked || entered) && can_send {
+                        self.edits.remove(&def.id);
+                        action = self.send(rt, def, v);
+                    }
+                }
+                Err(e) => {
+                    ui.colored_label(
+                        egui::Color32::RED,
+                        format!("× {}: {e}", lang.tr("not sent", "不下发")),
+                    );
+                }
+            }
+        });
+        action
+    }
+
+    fn mark(&self, ui: &mut egui::Ui, lang: Lang, def: &DataPointDef) {
+        if let Some(p) = self.pending.get(&def.id) {
+            ui.colored_label(
+                ORANGE,
+                format!(
+                    "{} {}, {}",
+                    lang.tr("sent", "已下发"),
+                    shown(lang, def, &p.value),
+                    lang.tr("waiting for the report", "等待上报")
+                ),
+            );
+            return;
+        }
+        match self.marks.get(&def.id) {
+            Some(Mark::Confirmed) => {
+                ui.colored_label(
+                    GREEN,
+                    format!("✓ {}", lang.tr("reported back", "已上报确认")),
+                );
+            }
+            Some(Mark::Mismatch(v)) => {
+                ui.colored_label(
+                    egui::Color32::RED,
+                    format!(
+                        "× {} {}",
+                        lang.tr("the MCU reports", "MCU上报为"),
+                        shown(lang, def, v)
+                    ),
+                );
+            }
+            Some(Mark::NoReport(v)) => {
+                ui.colored_label(
+                    egui::Color32::RED,
+                    format!(
+                        "× {} {} {}",
+                        lang.tr("no report for", "未收到上报:"),
+                        shown(lang, def, v),
+                        lang.tr("(the MCU did not take it)", "(MCU未接受)")
+                    ),
+                );
+            }
+            Some(Mark::Refused(e)) => {
+                ui.colored_label(
+                    egui::Color32::RED,
+                    format!("× {}: {e}", lang.tr("not sent", "不下发")),
+                );
+            }
+            None => {
+                ui.label("");
+            }
+        }
+    }
+
+    /// The report log, newest last.
+    fn log(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
+        let lines: Vec<_> = rt
+            .tuya
+            .log
+            .iter()
+            .filter(|l| l.seq >= self.log_from)
+            .collect();
+        ui.horizontal(|ui| {
+            ui.strong(format!(
+                "{} ({})",
+                lang.tr("Report log", "上报记录"),
+                lines.len()
+            ));
+            if ui.button(lang.tr("Clear log", "清空记录")).clicked() {
+                self.log_from = rt.tuya.log_seq;
+            }
+            ui.weak(format!(
+                "{} {}",
+                lang.tr("keeps the last", "保留最近"),
+                super::session::LOG_CAPACITY
+            ));
+        });
+        egui::ScrollArea::vertical()
+            .id_salt("tuya-report-log")
+            .max_height(220.0)
+            .stick_to_bottom(true)
+            .show(ui, |ui| {
+                for l in lines {
+                    match &l.item {
+                        Ok((id, ident, v)) => {
+                            let text = match rt.profile.data_point(*id) {
+                                Some(def) => shown(lang, def, v),
+                                None => format!("{v:?}"),
+                            };
+                            ui.monospace(format!("{}  {id:>3} {ident} = {text}", clock(&l.clock)));
+                        }
+                        Err(e) => {
+                            ui.colored_label(
+                                egui::Color32::RED,
+                                format!("{}  {e}", clock(&l.clock)),
+                            );
+                        }
+                    }
+                }
+            });
+    }
+}
+
+/// A bitmap: its value and each named bit, lit when set.
+fn bits(ui: &mut egui::Ui, lang: Lang, def: &DataPointDef, v: &Value) {
+    let Value::Int(raw) = v else {
+        ui.monospace(format!("{v:?}"));
+        return;
+    };
+    ui.horizontal_wrapped(|ui| {
+        ui.monospace(format!("{raw:#04x}"));
+        for b in &def.field.bits {
+            let name = lang.tr(&b.name.en, &b.name.zh);
+            if b.bit < 64 && raw >> b.bit & 1 == 1 {
+                ui.label(
+                    egui::RichText::new(name)
+                        .color(egui::Color32::WHITE)
+                        .background_color(egui::Color32::from_rgb(200, 40, 40)),
+                );
+            } else {
+                ui.weak(name);
+            }
+        }
+    });
+}

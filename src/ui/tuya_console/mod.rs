@@ -1,0 +1,143 @@
+//! The Tuya console: botbench as the Wi-Fi module. The handshake step by step, the data points
+//! generated from the profile, the MCU's own requests and the module's answers, and the MCU
+//! firmware update (OTA). What the link reported is kept by the runtime ([`Session`]); this
+//! panel keeps only what the technician chose and typed.
+
+mod dps;
+mod handshake;
+mod mcu_requests;
+mod ota;
+mod session;
+
+pub use session::Session;
+
+use super::Action;
+use super::runtime::Runtime;
+use crate::i18n::Lang;
+use crate::link::{LinkCommand, ReplyTo, Request, TuyaModuleOptions};
+use crate::ops::tuya::OtaReport;
+use chrono::{DateTime, Local};
+use eframe::egui;
+
+/// The console's sections.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Tab {
+    /// Start-up handshake, heartbeat, Wi-Fi state.
+    #[default]
+    Handshake,
+    /// Data points.
+    DataPoints,
+    /// The MCU's own requests.
+    Requests,
+    /// Firmware update.
+    Ota,
+}
+
+impl Tab {
+    const ALL: [Tab; 4] = [Tab::Handshake, Tab::DataPoints, Tab::Requests, Tab::Ota];
+
+    fn name(self, lang: Lang) -> &'static str {
+        match self {
+            Tab::Handshake => lang.tr("Handshake", "握手"),
+            Tab::DataPoints => lang.tr("Data points", "数据点"),
+            Tab::Requests => lang.tr("MCU requests", "MCU请求"),
+            Tab::Ota => lang.tr("Firmware update", "固件升级"),
+        }
+    }
+}
+
+/// The panel's state.
+#[derive(Default)]
+pub struct TuyaConsolePanel {
+    /// The section shown.
+    pub tab: Tab,
+    /// What the module answers the MCU (sent to the worker on each change and on connecting).
+    pub opts: TuyaModuleOptions,
+    /// The connection (session generation) the options were last sent to; `None` sends them
+    /// again on the next frame.
+    pub synced: Option<u64>,
+    /// The data points' edits and sends.
+    pub dps: dps::DpView,
+    /// The MCU-request settings being typed.
+    pub requests: mcu_requests::RequestsView,
+    /// The firmware update.
+    pub ota: ota::OtaView,
+}
+
+/// What this panel's jobs report.
+#[derive(Debug, Clone)]
+pub enum Output {
+    /// How far the firmware update is.
+    OtaProgress(ota::OtaProgress),
+    /// The firmware update ended.
+    OtaDone(Result<OtaReport, String>),
+}
+
+/// A time as shown: `12:03:04.512`.
+pub(crate) fn clock(t: &DateTime<Local>) -> String {
+    t.format("%H:%M:%S%.3f").to_string()
+}
+
+/// A request for the worker whose answer nobody waits for (what it brings is seen in the
+/// session: reports, acks).
+pub(crate) fn fire(request: Request) -> Action {
+    Action::Link(LinkCommand::Request {
+        request,
+        reply_to: ReplyTo::Event(0),
+    })
+}
+
+/// The label of a state 0-6 (Wi-Fi state, network status), from the profile's Wi-Fi command.
+pub(crate) fn wifi_state_name(rt: &Runtime, lang: Lang, state: u8) -> String {
+    rt.profile
+        .command_by_id(crate::protocol::tuya::cmd::WIFI_STATE)
+        .and_then(|c| c.request.first())
+        .and_then(|f| f.label(i64::from(state)))
+        .map_or_else(
+            || format!("{state}"),
+            |l| format!("{state}: {}", lang.tr(&l.name.en, &l.name.zh)),
+        )
+}
+
+impl TuyaConsolePanel {
+    /// Draws the panel.
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+        let mut actions = Vec::new();
+        // A new connection has a new worker with default answers: give it ours.
+        if rt.connected() && self.synced != Some(rt.tuya.generation) {
+            self.synced = Some(rt.tuya.generation);
+            actions.push(Action::Link(LinkCommand::TuyaOptions(self.opts.clone())));
+        }
+        handshake::summary(ui, lang, rt);
+        ui.horizontal(|ui| {
+            for tab in Tab::ALL {
+                if ui
+                    .selectable_label(self.tab == tab, tab.name(lang))
+                    .clicked()
+                {
+                    self.tab = tab;
+                }
+            }
+        });
+        ui.separator();
+        let before = self.opts.clone();
+        egui::ScrollArea::vertical()
+            .auto_shrink(false)
+            .show(ui, |ui| match self.tab {
+                Tab::Handshake => actions.extend(handshake::show(ui, lang, rt, &mut self.opts)),
+                Tab::DataPoints => actions.extend(self.dps.show(ui, lang, rt, self.ota.active(rt))),
+                Tab::Requests => self.requests.show(ui, lang, rt, &mut self.opts),
+                Tab::Ota => actions.extend(self.ota.show(ui, lang, rt)),
+            });
+        if self.opts != before {
+            // Options go before anything the section asked for (the Wi-Fi state report).
+            actions.insert(0, Action::Link(LinkCommand::TuyaOptions(self.opts.clone())));
+        }
+        actions
+    }
+
+    /// Takes what one of its jobs reported.
+    pub fn on_output(&mut self, out: Output) {
+        self.ota.on_output(out);
+    }
+}

@@ -1,0 +1,291 @@
+//! The MCU firmware update: choose a file, check it, confirm, send it in packets of the size the
+//! MCU asks for, with a progress bar, rate and time left, cancel, and the result.
+
+use super::{Action, Output, Runtime};
+use crate::i18n::Lang;
+use crate::ops::msp::OpError;
+use crate::ops::tuya::{self as ops, OtaTiming};
+use crate::ui::JobWork;
+use crate::ui::jobs::JobOutput;
+use eframe::egui;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+const GREEN: egui::Color32 = egui::Color32::from_rgb(40, 160, 60);
+
+/// How far an update is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OtaProgress {
+    /// Bytes acked.
+    pub done: u64,
+    /// Image size.
+    pub total: u64,
+    /// Bytes a second so far.
+    pub rate: f64,
+    /// Seconds left at that rate.
+    pub left: f64,
+    /// The packet size the MCU asked for, once known.
+    pub packet: Option<usize>,
+}
+
+/// The firmware update's state.
+#[derive(Debug, Default)]
+pub struct OtaView {
+    /// The firmware file's path.
+    pub path: String,
+    /// Why the file cannot be sent.
+    pub error: Option<String>,
+    /// The file checked and awaiting confirmation, with its size.
+    confirm: Option<(PathBuf, u64)>,
+    /// The running update's progress.
+    pub progress: Option<OtaProgress>,
+    /// The last update's result.
+    pub result: Option<Result<ops::OtaReport, String>>,
+    /// An update was started and has not ended.
+    pub running: bool,
+}
+
+/// The size of a firmware file that can be sent, or why it cannot.
+pub fn check_file(path: &Path) -> Result<u64, String> {
+    if path.as_os_str().is_empty() {
+        return Err("choose a firmware file first".into());
+    }
+    let meta = std::fs::metadata(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    if !meta.is_file() {
+        return Err(format!("{}: not a file", path.display()));
+    }
+    match meta.len() {
+        0 => Err(format!(
+            "{}: the firmware file is empty; nothing to send",
+            path.display()
+        )),
+        n if n > u64::from(u32::MAX) => Err(format!(
+            "{}: {n} bytes is over the 4 GiB the update can announce",
+            path.display()
+        )),
+        n => Ok(n),
+    }
+}
+
+/// Seconds as `1 min 05 s` or `12 s`.
+fn duration(secs: f64) -> String {
+    let s = secs.max(0.0).round() as u64;
+    if s >= 60 {
+        format!("{} min {:02} s", s / 60, s % 60)
+    } else {
+        format!("{s} s")
+    }
+}
+
+fn work(path: PathBuf) -> JobWork {
+    JobWork::new("OTA", move |client, cancel, sink| {
+        let done = |r: Result<ops::OtaReport, String>| {
+            sink.send(JobOutput::Tuya(Output::OtaDone(r.clone())));
+            r.map(|rep| {
+                format!(
+                    "{} bytes sent in {} packets of {} bytes",
+                    rep.size, rep.packets, rep.packet_size
+                )
+            })
+        };
+        let image = match std::fs::read(&path) {
+            Ok(i) => i,
+            Err(e) => return done(Err(format!("{}: {e}", path.display()))),
+        };
+        let started = Instant::now();
+        let mut packet = None;
+        let mut acked = 0u64;
+        let result = ops::ota(client, &image, OtaTiming::default(), cancel, &mut |p| {
+            if packet.is_none() && p.done < p.total {
+                packet = Some(p.done as usize);
+            }
+            acked = p.done;
+            let rate = p.done as f64 / started.elapsed().as_secs_f64().max(1e-3);
+            sink.send(JobOutput::Tuya(Output::OtaProgress(OtaProgress {
+                done: p.done,
+                total: p.total,
+                rate,
+                left: p.total.saturating_sub(p.done) as f64 / rate.max(1.0),
+                packet,
+            })));
+            sink.send(JobOutput::Progress(p));
+        });
+        done(result.map_err(|e| match e {
+            OpError::Cancelled => format!(
+                "cancelled after offset {acked} of {} bytes: the MCU holds an incomplete image",
+                image.len()
+            ),
+            e => e.to_string(),
+        }))
+    })
+}
+
+impl OtaView {
+    /// Whether an update holds the link now.
+    pub fn active(&self, rt: &Runtime) -> bool {
+        self.running && rt.job_progress().is_some()
+    }
+
+    /// Takes what the update job reported.
+    pub fn on_output(&mut self, out: Output) {
+        match out {
+            Output::OtaProgress(p) => self.progress = Some(p),
+            Output::OtaDone(r) => {
+                self.running = false;
+                self.result = Some(r);
+            }
+        }
+    }
+
+    /// Draws the section.
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+        let mut actions = Vec::new();
+        let busy = rt.job_progress().is_some();
+        let active = self.active(rt);
+        ui.weak(lang.tr(
+            "The image goes in packets of the size the MCU asks for (256, 512 or 1024 bytes); each packet waits up to 5 s for its ack and is sent up to 3 more times.",
+            "固件按MCU要求的包大小(256、512或1024字节)分包发送;每包最多等待5秒应答,最多重发3次。",
+        ));
+        ui.horizontal_wrapped(|ui| {
+            let label = ui.label(lang.tr("Firmware file", "固件文件"));
+            let resp = ui
+                .add_enabled(
+                    !active,
+                    egui::TextEdit::singleline(&mut self.path)
+                        .hint_text("firmware.bin")
+                        .desired_width(360.0),
+                )
+                .labelled_by(label.id);
+            if resp.changed() {
+                self.error = None;
+            }
+            if ui
+                .add_enabled(!active, egui::Button::new(lang.tr("Choose…", "选择…")))
+                .clicked()
+                && let Some(p) = rfd::FileDialog::new()
+                    .set_title(lang.tr("Firmware file", "固件文件"))
+                    .pick_file()
+            {
+                self.path = p.display().to_string();
+                self.error = check_file(&p).err();
+            }
+            if ui
+                .add_enabled(
+                    rt.connected() && !busy,
+                    egui::Button::new(lang.tr("Start update", "开始升级")),
+                )
+                .clicked()
+            {
+                let path = PathBuf::from(self.path.trim());
+                match check_file(&path) {
+                    Ok(size) => {
+                        self.error = None;
+                        self.confirm = Some((path, size));
+                    }
+                    Err(e) => self.error = Some(e),
+                }
+            }
+        });
+        if let Some(e) = &self.error {
+            ui.colored_label(
+                egui::Color32::RED,
+                format!("× {}: {e}", lang.tr("cannot update", "无法升级")),
+            );
+        }
+        if let Some(p) = &self.progress
+            && (active || self.result.is_none())
+        {
+            ui.add(
+                egui::ProgressBar::new((p.done as f32 / p.total.max(1) as f32).min(1.0))
+                    .text(format!("{} / {} B", p.done, p.total))
+                    .desired_width(420.0),
+            );
+            ui.horizontal_wrapped(|ui| {
+                ui.label(format!(
+                    "{:.0} B/s, {} {}",
+                    p.rate,
+                    duration(p.left),
+                    lang.tr("left", "剩余")
+                ));
+                if let Some(n) = p.packet {
+                    ui.label(format!(
+                        "{} {n} {}",
+                        lang.tr("packets of", "每包"),
+                        lang.tr("bytes (asked by the MCU)", "字节(MCU要求)")
+                    ));
+                }
+                if active && ui.button(lang.tr("Cancel update", "取消升级")).clicked() {
+                    actions.push(Action::CancelJob);
+                }
+            });
+        } else if active {
+            ui.label(lang.tr("Starting the update…", "正在启动升级…"));
+        }
+        match &self.result {
+            Some(Ok(r)) if !active => {
+                ui.colored_label(
+                    GREEN,
+                    format!(
+                        "✓ {}: {} B, {} × {} B {}, {}, {} {}",
+                        lang.tr("Update complete", "升级完成"),
+                        r.size,
+                        r.packets,
+                        r.packet_size,
+                        lang.tr("packets", "包"),
+                        duration(r.seconds),
+                        r.retries,
+                        lang.tr("retries", "次重发")
+                    ),
+                );
+            }
+            Some(Err(e)) if !active => {
+                ui.colored_label(
+                    egui::Color32::RED,
+                    format!("× {}: {e}", lang.tr("Update failed", "升级失败")),
+                );
+            }
+            _ => {}
+        }
+        if let Some(a) = self.confirm_dialog(ui, lang) {
+            actions.push(a);
+        }
+        actions
+    }
+
+    fn confirm_dialog(&mut self, ui: &mut egui::Ui, lang: Lang) -> Option<Action> {
+        let (path, size) = self.confirm.clone()?;
+        let mut decision = None;
+        let modal = egui::Modal::new(egui::Id::unique("tuya-ota-confirm")).show(ui.ctx(), |ui| {
+            ui.heading(lang.tr("Update the MCU firmware?", "升级MCU固件?"));
+            ui.label(format!("{} ({size} B)", path.display()));
+            ui.label(lang.tr(
+                "Keep the MCU powered until the update ends.",
+                "升级结束前请勿断开MCU电源。",
+            ));
+            ui.horizontal(|ui| {
+                if ui.button(lang.tr("Update", "升级")).clicked() {
+                    decision = Some(true);
+                }
+                if ui.button(lang.tr("Do not update", "不升级")).clicked() {
+                    decision = Some(false);
+                }
+            });
+        });
+        if modal.should_close() && decision.is_none() {
+            decision = Some(false);
+        }
+        match decision? {
+            true => {
+                self.confirm = None;
+                self.running = true;
+                self.progress = None;
+                self.result = None;
+                Some(Action::StartJob(work(path)))
+            }
+            false => {
+                self.confirm = None;
+                None
+            }
+        }
+    }
+}

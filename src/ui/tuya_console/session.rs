@@ -1,0 +1,350 @@
+//! What the Tuya link has said, kept by the runtime as it arrives (bounded), so that nothing is
+//! lost while another panel is shown: the handshake's steps, heartbeats, each data point's last
+//! report, the report log, and the MCU's own requests with the module's answers.
+
+use crate::link::LogEntry;
+use crate::link::tuya_module::{HandshakeStep, ProductInfo, TuyaEvent};
+use crate::packet::{Header, Packet};
+use crate::profile::{Profile, Value};
+use crate::protocol::Direction;
+use crate::protocol::tuya::cmd;
+use crate::protocol::tuya::dp::{self, DpValue};
+use chrono::{DateTime, Local};
+use std::collections::{BTreeMap, VecDeque};
+use std::time::Instant;
+
+/// Lines the report log keeps.
+pub const LOG_CAPACITY: usize = 500;
+/// MCU requests kept.
+pub const REQUESTS_CAPACITY: usize = 200;
+
+/// How a handshake step ended.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepResult {
+    /// It worked.
+    pub ok: bool,
+    /// What came back, or why it failed.
+    pub detail: String,
+    /// When.
+    pub at: DateTime<Local>,
+}
+
+/// A data point's last report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DpState {
+    /// The raw value reported.
+    pub value: Value,
+    /// When (for comparisons).
+    pub at: Instant,
+    /// When (for people).
+    pub clock: DateTime<Local>,
+}
+
+/// One line of the report log.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogLine {
+    /// Its number, counting from the connection.
+    pub seq: u64,
+    /// When.
+    pub clock: DateTime<Local>,
+    /// The data point's id, ident and value, or what was wrong with it.
+    pub item: Result<(u8, String, Value), String>,
+}
+
+/// An MCU request the module answered.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RequestLine {
+    /// When.
+    pub clock: DateTime<Local>,
+    /// The command word.
+    pub command: u8,
+    /// What it asked.
+    pub name: String,
+    /// The module's answer (its data).
+    pub answer: Vec<u8>,
+}
+
+/// What the Tuya link has reported since the connection.
+#[derive(Debug, Clone, Default)]
+pub struct Session {
+    /// Counts connections: a new one starts a new session.
+    pub generation: u64,
+    /// The current (or last) handshake attempt, step by step, in [`HandshakeStep::ALL`] order.
+    pub steps: [Option<StepResult>; 5],
+    /// Handshake attempts started.
+    pub attempts: u32,
+    /// Where the last failed attempt stopped, until a handshake completes.
+    pub stopped: Option<(HandshakeStep, StepResult)>,
+    /// When the handshake last completed.
+    pub done_at: Option<DateTime<Local>>,
+    /// The product info of the last handshake.
+    pub product: Option<ProductInfo>,
+    /// The current attempt received product info (a failed product-info step then means JSON
+    /// that is shown raw, and the handshake goes on; without it, no answer).
+    pub product_in_attempt: bool,
+    /// The working mode: `None` the MCU drives the LED, or the module's GPIOs.
+    pub work_mode: Option<Option<(u8, u8)>>,
+    /// MCU restarts seen by the heartbeat, and the last one.
+    pub restarts: (u32, Option<DateTime<Local>>),
+    /// When the MCU last failed to answer a heartbeat.
+    pub heartbeat_lost: Option<DateTime<Local>>,
+    /// The last heartbeat answer: when, and its byte (0 first after a restart, 1 later).
+    pub last_heartbeat: Option<(DateTime<Local>, Option<u8>)>,
+    /// The last Wi-Fi state sent to the MCU (0x03), and when.
+    pub wifi_sent: Option<(u8, DateTime<Local>)>,
+    /// When the MCU last acknowledged a Wi-Fi state.
+    pub wifi_acked: Option<DateTime<Local>>,
+    /// When a status query (0x08) was last sent.
+    pub last_query: Option<DateTime<Local>>,
+    /// Each data point's last report, by id.
+    pub dps: BTreeMap<u8, DpState>,
+    /// The report log, oldest first.
+    pub log: VecDeque<LogLine>,
+    /// Report lines so far (the next line's number).
+    pub log_seq: u64,
+    /// The MCU's requests answered, oldest first.
+    pub requests: VecDeque<RequestLine>,
+    /// Reset-Wi-Fi requests (0x04, 0x05) acknowledged, and the last one.
+    pub resets: (u32, Option<RequestLine>),
+}
+
+fn step_index(step: HandshakeStep) -> usize {
+    HandshakeStep::ALL
+        .iter()
+        .position(|s| *s == step)
+        .unwrap_or(0)
+}
+
+/// A data point's value as the profile's fields hold it, if its type is the profile's.
+pub fn dp_raw_value(v: &DpValue) -> Value {
+    match v {
+        DpValue::Bool(b) => Value::Int(i64::from(*b)),
+        DpValue::Value(x) => Value::Int(i64::from(*x)),
+        DpValue::Enum(e) => Value::Int(i64::from(*e)),
+        DpValue::Bitmap { bits, .. } => Value::Int(i64::from(*bits)),
+        DpValue::String(s) => Value::Text(s.clone()),
+        DpValue::Raw(b) => Value::Bytes(b.clone()),
+    }
+}
+
+impl Session {
+    /// A new session for the connection after `self`'s.
+    pub fn next(&self) -> Self {
+        Self {
+            generation: self.generation + 1,
+            ..Self::default()
+        }
+    }
+
+    /// Whether `step` failed only because its product info is not JSON: it is shown raw and the
+    /// handshake goes on.
+    pub fn shown_raw(&self, step: HandshakeStep) -> bool {
+        step == HandshakeStep::ProductInfo && self.product_in_attempt
+    }
+
+    /// Takes a Tuya event from the worker.
+    pub fn on_event(&mut self, ev: TuyaEvent) {
+        let now = Local::now();
+        match ev {
+            TuyaEvent::Step { step, ok, detail } => {
+                if step == HandshakeStep::Heartbeat {
+                    // Every attempt starts with a heartbeat: a new attempt.
+                    self.steps = Default::default();
+                    self.attempts += 1;
+                    self.done_at = None;
+                    self.product_in_attempt = false;
+                }
+                let result = StepResult {
+                    ok,
+                    detail,
+                    at: now,
+                };
+                // A product info that is not JSON is shown raw and the handshake goes on.
+                if !ok && !self.shown_raw(step) {
+                    self.stopped = Some((step, result.clone()));
+                }
+                self.steps[step_index(step)] = Some(result);
+            }
+            TuyaEvent::ProductInfo(p) => {
+                self.product = Some(p);
+                self.product_in_attempt = true;
+            }
+            TuyaEvent::WorkMode { gpio } => self.work_mode = Some(gpio),
+            TuyaEvent::HandshakeDone => {
+                self.done_at = Some(now);
+                self.stopped = None;
+            }
+            TuyaEvent::McuRestarted => {
+                self.restarts.0 += 1;
+                self.restarts.1 = Some(now);
+            }
+            TuyaEvent::HeartbeatLost => self.heartbeat_lost = Some(now),
+            TuyaEvent::McuRequest {
+                command,
+                name,
+                answer,
+            } => {
+                let line = RequestLine {
+                    clock: now,
+                    command,
+                    name,
+                    answer,
+                };
+                if matches!(command, cmd::RESET_WIFI | cmd::RESET_WIFI_MODE) {
+                    self.resets.0 += 1;
+                    self.resets.1 = Some(line.clone());
+                }
+                if self.requests.len() >= REQUESTS_CAPACITY {
+                    self.requests.pop_front();
+                }
+                self.requests.push_back(line);
+            }
+        }
+    }
+
+    /// Takes a frame of the packet log: heartbeats, Wi-Fi state reports and queries.
+    pub fn on_frame(&mut self, entry: &LogEntry) {
+        let Ok(p) = &entry.frame else { return };
+        if !matches!(p.header, Header::Tuya { .. }) {
+            return;
+        }
+        let at: DateTime<Local> = entry.at.into();
+        match (p.direction, p.command) {
+            (Direction::DeviceToHost, cmd::HEARTBEAT) => {
+                self.last_heartbeat = Some((at, p.payload.first().copied()));
+            }
+            (Direction::HostToDevice, cmd::WIFI_STATE) => {
+                if let Some(s) = p.payload.first() {
+                    self.wifi_sent = Some((*s, at));
+                }
+            }
+            (Direction::DeviceToHost, cmd::WIFI_STATE) => self.wifi_acked = Some(at),
+            (Direction::HostToDevice, cmd::QUERY_STATUS) => self.last_query = Some(at),
+            _ => {}
+        }
+    }
+
+    /// Takes a report (0x07): each data point in it, checked against the profile.
+    pub fn on_report(&mut self, profile: &Profile, p: &Packet) {
+        if !matches!(p.header, Header::Tuya { .. })
+            || p.command != cmd::DP_REPORT
+            || p.direction != Direction::DeviceToHost
+        {
+            return;
+        }
+        let (at, clock) = (Instant::now(), Local::now());
+        let points = match dp::decode(&p.payload) {
+            Ok(points) => points,
+            Err(e) => {
+                self.log(clock, Err(format!("malformed report: {e}")));
+                return;
+            }
+        };
+        for point in points {
+            let item = match profile.data_point(point.id) {
+                None => Err(format!(
+                    "data point {} is not in the profile ({} {:?})",
+                    point.id,
+                    point.value.dp_type().name(),
+                    point.value
+                )),
+                Some(def) if def.dp_type != point.value.dp_type() => Err(format!(
+                    "data point {} ({}): type {} on the wire, the profile says {}",
+                    point.id,
+                    def.field.ident,
+                    point.value.dp_type().name(),
+                    def.dp_type.name()
+                )),
+                Some(def) => {
+                    let value = dp_raw_value(&point.value);
+                    self.dps.insert(
+                        point.id,
+                        DpState {
+                            value: value.clone(),
+                            at,
+                            clock,
+                        },
+                    );
+                    Ok((point.id, def.field.ident.clone(), value))
+                }
+            };
+            self.log(clock, item);
+        }
+    }
+
+    fn log(&mut self, clock: DateTime<Local>, item: Result<(u8, String, Value), String>) {
+        if self.log.len() >= LOG_CAPACITY {
+            self.log.pop_front();
+        }
+        self.log.push_back(LogLine {
+            seq: self.log_seq,
+            clock,
+            item,
+        });
+        self.log_seq += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::tuya_module::parse_product_info;
+
+    fn step(step: HandshakeStep, ok: bool) -> TuyaEvent {
+        TuyaEvent::Step {
+            step,
+            ok,
+            detail: String::new(),
+        }
+    }
+
+    #[test]
+    fn product_info_that_is_not_json_does_not_stop_the_handshake_but_no_answer_does() {
+        let mut s = Session::default();
+        s.on_event(step(HandshakeStep::Heartbeat, true));
+        s.on_event(TuyaEvent::ProductInfo(parse_product_info(b"{\"p\":")));
+        s.on_event(step(HandshakeStep::ProductInfo, false));
+        assert!(s.stopped.is_none());
+        assert!(s.shown_raw(HandshakeStep::ProductInfo));
+        // The next attempt gets no answer at all.
+        s.on_event(step(HandshakeStep::Heartbeat, true));
+        s.on_event(step(HandshakeStep::ProductInfo, false));
+        assert_eq!(s.attempts, 2);
+        assert_eq!(
+            s.stopped.as_ref().map(|(st, _)| *st),
+            Some(HandshakeStep::ProductInfo)
+        );
+        assert!(s.steps[2].is_none(), "a new attempt clears the later steps");
+        s.on_event(TuyaEvent::HandshakeDone);
+        assert!(s.stopped.is_none() && s.done_at.is_some());
+    }
+
+    #[test]
+    fn the_logs_are_bounded_and_a_wrong_typed_report_is_logged_not_shown() {
+        let profile = crate::sim::tuya_mcu::builtin_vacuum_profile();
+        let mut s = Session::default();
+        let frame = |data: Vec<u8>| {
+            Packet::tuya(crate::protocol::tuya::Frame::from_mcu(cmd::DP_REPORT, data))
+        };
+        // DP 6 (battery) is a value; reported as a bool it is refused.
+        s.on_report(&profile, &frame(vec![6, 1, 0, 1, 1]));
+        assert!(s.dps.is_empty());
+        assert!(s.log[0].item.is_err());
+        s.on_report(&profile, &frame(vec![6, 2, 0, 4, 0, 0, 0, 42]));
+        for _ in 0..LOG_CAPACITY {
+            s.on_report(&profile, &frame(vec![1, 1, 0, 1, 1]));
+        }
+        assert_eq!(s.log.len(), LOG_CAPACITY);
+        assert_eq!(s.dps.get(&1).map(|d| d.value.clone()), Some(Value::Int(1)));
+        assert_eq!(s.dps.get(&6).map(|d| d.value.clone()), Some(Value::Int(42)));
+        for _ in 0..REQUESTS_CAPACITY + 5 {
+            s.on_event(TuyaEvent::McuRequest {
+                command: cmd::RESET_WIFI,
+                name: "reset Wi-Fi".into(),
+                answer: Vec::new(),
+            });
+        }
+        assert_eq!(s.requests.len(), REQUESTS_CAPACITY);
+        assert_eq!(s.resets.0, REQUESTS_CAPACITY as u32 + 5);
+    }
+}
