@@ -66,6 +66,10 @@ enum Cmd {
         /// Device profile.
         #[arg(long)]
         profile: Option<String>,
+        /// Open on a built-in simulated device: window-cleaner, solar-cleanbot, servo-bus or
+        /// tuya-vacuum (its profile unless --profile is given).
+        #[arg(long, value_name = "KIND", conflicts_with = "port")]
+        demo: Option<String>,
     },
     /// Decode or build frames of the three protocols.
     #[command(subcommand)]
@@ -138,8 +142,9 @@ fn run(cli: Cli) -> CliResult {
             port,
             baud,
             profile,
-        }) => gui(port, baud, profile),
-        None => gui(None, None, None),
+            demo,
+        }) => gui(port, baud, profile, demo),
+        None => gui(None, None, None, None),
     }
 }
 
@@ -210,11 +215,21 @@ fn bench(long: bool, json: bool) -> CliResult {
     Ok(0)
 }
 
-fn gui(port: Option<String>, baud: Option<u32>, profile: Option<String>) -> CliResult {
+fn gui(
+    port: Option<String>,
+    baud: Option<u32>,
+    mut profile: Option<String>,
+    demo: Option<String>,
+) -> CliResult {
+    let mut target = port.map(crate::ui::Target::Port);
+    if let Some(kind) = demo {
+        let kind: crate::sim::SimKind = kind.parse().map_err(CliError::input)?;
+        profile = profile.or_else(|| Some(kind.profile_id().to_string()));
+        target = Some(crate::ui::Target::Demo(kind.name().to_string()));
+    }
     if let Some(p) = &profile {
         registry()?.get(p).map_err(CliError::input)?;
     }
-    let target = port.map(crate::ui::Target::Port);
     crate::ui::run(target, baud, profile)
         .map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
     Ok(0)
