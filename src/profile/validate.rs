@@ -70,7 +70,10 @@ fn check_panels(p: &Profile) -> Result<(), Issue> {
             return Err(issue(at("panel"), "panels are for MSP profiles only"));
         }
         if !seen.insert(rule.panel) {
-            return Err(issue(at("panel"), format!("{:?} is listed twice", rule.panel)));
+            return Err(issue(
+                at("panel"),
+                format!("{:?} is listed twice", rule.panel),
+            ));
         }
         if let Some(bit) = rule.flag
             && bit > 7

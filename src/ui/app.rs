@@ -182,7 +182,13 @@ impl App {
                 JobOutput::Servo(o) => self.servo.on_output(o),
                 JobOutput::Tuya(o) => self.tuya.on_output(o),
                 JobOutput::Device(o) => self.device.on_output(o),
-                JobOutput::SelfTest(o) => self.selftest.on_output(o),
+                JobOutput::SelfTest(o) => {
+                    // An operator prompt is answered on the self-test panel.
+                    if o.is_prompt() {
+                        self.saved.panel = PanelId::SelfTest;
+                    }
+                    self.selftest.on_output(o)
+                }
                 JobOutput::Solar(o) => self.solar.on_output(o),
                 _ => {}
             }

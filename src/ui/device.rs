@@ -121,7 +121,9 @@ impl DevicePanel {
             if ui
                 .add_enabled(
                     ready,
-                    egui::Button::new(lang.tr("Read version and power state", "读取版本与电源状态")),
+                    egui::Button::new(
+                        lang.tr("Read version and power state", "读取版本与电源状态"),
+                    ),
                 )
                 .clicked()
             {
@@ -197,7 +199,10 @@ impl DevicePanel {
                 ui.colored_label(egui::Color32::RED, e);
             }
             None => {
-                ui.weak(lang.tr("the device has not answered CMD_VERSION yet", "设备尚未应答版本查询"));
+                ui.weak(lang.tr(
+                    "the device has not answered CMD_VERSION yet",
+                    "设备尚未应答版本查询",
+                ));
             }
         }
         if let Some(at) = self.at {
@@ -227,7 +232,11 @@ impl DevicePanel {
                 );
                 row(ui, lang.tr("Firmware", "固件版本"), info.firmware.clone());
                 row(ui, lang.tr("API", "接口版本"), info.api.clone());
-                row(ui, lang.tr("Build number", "构建号"), info.build.to_string());
+                row(
+                    ui,
+                    lang.tr("Build number", "构建号"),
+                    info.build.to_string(),
+                );
                 row(
                     ui,
                     lang.tr("Build date and time", "编译日期与时间"),
@@ -277,7 +286,10 @@ impl DevicePanel {
                 if !hidden.is_empty() {
                     ui.label(format!(
                         "{}: {}",
-                        lang.tr("Hidden (not supported by this device)", "已隐藏(设备不支持)"),
+                        lang.tr(
+                            "Hidden (not supported by this device)",
+                            "已隐藏(设备不支持)"
+                        ),
                         hidden.join(", ")
                     ));
                 }

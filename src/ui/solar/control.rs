@@ -83,7 +83,19 @@ impl Default for Control {
 impl Control {
     /// Encodes `inputs` for command `id` (checking every value against the profile) and
     /// returns the action that sends it; a refusal is recorded as the command's outcome.
+    /// One attempt only: a retry after a late answer would apply a relative command (rotate)
+    /// twice. A failure is shown, and the operator decides.
     pub fn send(&mut self, rt: &Runtime, id: u8, inputs: &[(String, Input)]) -> Option<Action> {
+        self.send_with(rt, id, inputs, 1)
+    }
+
+    fn send_with(
+        &mut self,
+        rt: &Runtime,
+        id: u8,
+        inputs: &[(String, Input)],
+        attempts: u8,
+    ) -> Option<Action> {
         let Some(cmd) = rt.profile.command_by_id(id) else {
             return None;
         };
@@ -120,7 +132,7 @@ impl Control {
         self.outcomes
             .insert(id, (Outcome::Waiting(text), Instant::now()));
         Some(Action::Link(LinkCommand::Request {
-            request: Request::for_command(&rt.profile, cmd, payload),
+            request: Request::for_command(&rt.profile, cmd, payload).attempts(attempts),
             reply_to: ReplyTo::Event(reply_id),
         }))
     }
@@ -132,10 +144,12 @@ impl Control {
             self.trip = Some((Trip::LinkLost, Instant::now()));
             return None;
         }
-        let a = self.send(
+        // Speed 0 is the same however often it arrives: retried.
+        let a = self.send_with(
             rt,
             CMD_SET_SPEED,
             &[("speed".into(), Input::Raw(Value::Int(0)))],
+            3,
         );
         if a.is_some() {
             self.stop_id = self.last_sent;

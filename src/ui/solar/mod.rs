@@ -88,11 +88,10 @@ impl SolarPanel {
         egui::ScrollArea::vertical()
             .auto_shrink(false)
             .show(ui, |ui| {
-                ui.columns(2, |cols| {
-                    self.readouts(&mut cols[0], lang, rt);
-                    cols[0].separator();
+                ui.columns(3, |cols| {
                     self.controls(&mut cols[0], lang, rt, &mut actions);
-                    self.plots(&mut cols[1], lang, rt);
+                    self.readouts(&mut cols[1], lang, rt);
+                    self.plots(&mut cols[2], lang, rt);
                 });
             });
         self.confirm_modal(ui, lang, rt, &mut actions);
@@ -147,10 +146,7 @@ impl SolarPanel {
                     RED,
                     format!(
                         "{} ({:.0} s)",
-                        lang.tr(
-                            "The link came back: STOP sent",
-                            "链路已恢复:已发送停止",
-                        ),
+                        lang.tr("The link came back: STOP sent", "链路已恢复:已发送停止",),
                         at.elapsed().as_secs_f64()
                     ),
                 );
@@ -181,8 +177,10 @@ impl SolarPanel {
             .labelled_by(label.id);
             if self.control.deadman {
                 let hold = ui.add(
-                    egui::Button::new(lang.tr("Hold to confirm (or press Space)", "按住确认(或按空格键)"))
-                        .sense(egui::Sense::click_and_drag()),
+                    egui::Button::new(
+                        lang.tr("Hold to confirm (or press Space)", "按住确认(或按空格键)"),
+                    )
+                    .sense(egui::Sense::click_and_drag()),
                 );
                 let typing = ui.ctx().memory(|m| m.focused().is_some());
                 let space = !typing && ui.input(|i| i.key_pressed(egui::Key::Space));
@@ -214,7 +212,10 @@ impl SolarPanel {
     fn readouts(&self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
         ui.strong(lang.tr("Readouts", "实时读数"));
         let cmds = rt.profile.commands.iter().filter(|c| {
-            c.kind == CommandKind::Telemetry && c.id > 9 && c.request.is_empty() && !c.reply.is_empty()
+            c.kind == CommandKind::Telemetry
+                && c.id > 9
+                && c.request.is_empty()
+                && !c.reply.is_empty()
         });
         egui::Grid::new("solar-readouts")
             .num_columns(2)
@@ -226,7 +227,7 @@ impl SolarPanel {
                     match rt.readings.get(&cmd.id) {
                         Some(Reading::Values(values, at)) => {
                             let stale = at.elapsed() > STALE;
-                            ui.vertical(|ui| {
+                            ui.horizontal_wrapped(|ui| {
                                 for (k, v) in values {
                                     let Some(f) = cmd.reply.iter().find(|f| &f.ident == k) else {
                                         continue;
@@ -354,16 +355,20 @@ impl SolarPanel {
                     }
                 }
                 // Why it cannot be sent, as typed; then what the last send did.
-                let typed = cmd
-                    .request
-                    .iter()
-                    .any(|f| self.inputs.get(&(cmd.id, f.ident.clone())).is_some_and(|t| !t.is_empty()));
+                let typed = cmd.request.iter().any(|f| {
+                    self.inputs
+                        .get(&(cmd.id, f.ident.clone()))
+                        .is_some_and(|t| !t.is_empty())
+                });
                 if let (Err(e), true) = (&inputs, typed) {
                     ui.colored_label(RED, format!("{} {e}", lang.tr("refused:", "拒绝:")));
                 } else {
                     match self.control.outcomes.get(&cmd.id) {
                         Some((Outcome::Waiting(t), _)) => {
-                            ui.label(format!("{t}: {}", lang.tr("sent, waiting…", "已发送,等待应答…")));
+                            ui.label(format!(
+                                "{t}: {}",
+                                lang.tr("sent, waiting…", "已发送,等待应答…")
+                            ));
                         }
                         Some((Outcome::Acked(t), at)) => {
                             ui.colored_label(
@@ -391,7 +396,11 @@ impl SolarPanel {
         let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
         if f.labels.is_empty() || f.range.is_some() {
             let bad = !text.is_empty() && f.parse(text).is_err();
-            let width = if matches!(f.ty, FieldType::Bytes(_)) { 160.0 } else { 70.0 };
+            let width = if matches!(f.ty, FieldType::Bytes(_)) {
+                160.0
+            } else {
+                70.0
+            };
             let mut edit = egui::TextEdit::singleline(text)
                 .desired_width(width)
                 .hint_text(super::tuning::range_text(f));
@@ -418,14 +427,19 @@ impl SolarPanel {
         }
     }
 
-    fn confirm_modal(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, actions: &mut Vec<Action>) {
+    fn confirm_modal(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &Runtime,
+        actions: &mut Vec<Action>,
+    ) {
         let Some((id, inputs)) = &self.confirm else {
             return;
         };
-        let name = rt
-            .profile
-            .command_by_id(*id)
-            .map_or(String::new(), |c| lang.tr(&c.name.en, &c.name.zh).to_string());
+        let name = rt.profile.command_by_id(*id).map_or(String::new(), |c| {
+            lang.tr(&c.name.en, &c.name.zh).to_string()
+        });
         let what = inputs
             .iter()
             .map(|(k, v)| match v {
