@@ -96,9 +96,7 @@ impl Control {
         inputs: &[(String, Input)],
         attempts: u8,
     ) -> Option<Action> {
-        let Some(cmd) = rt.profile.command_by_id(id) else {
-            return None;
-        };
+        let cmd = rt.profile.command_by_id(id)?;
         let text = inputs
             .iter()
             .map(|(k, v)| match v {
@@ -214,8 +212,9 @@ impl Control {
                     Outcome::Acked(what)
                 }
                 Some(Err(e)) => {
-                    if Some(reply_id) == self.stop_id {
-                        // A STOP that did not arrive is sent again when the link is back.
+                    if Some(reply_id) == self.stop_id && !rt.connected() {
+                        // A STOP lost with the link is sent again when the link is back (one
+                        // the robot did not answer is shown, and the operator presses again).
                         self.stop_pending = true;
                     }
                     Outcome::Failed(e.clone())
@@ -244,5 +243,116 @@ impl Control {
             rt.ctx.request_repaint_after(Duration::from_millis(100));
         }
         actions
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::LinkState;
+
+    fn runtime() -> Runtime {
+        let mut rt = Runtime::new(&eframe::egui::Context::default(), "solar-cleanbot").unwrap();
+        rt.state = Some(LinkState::Connected {
+            port: "test".into(),
+            baud: 115_200,
+        });
+        rt
+    }
+
+    /// The command and payload of a request action.
+    fn sent(a: &Action) -> (u8, Vec<u8>) {
+        match a {
+            Action::Link(LinkCommand::Request { request, .. }) => {
+                (request.command, request.payload.clone())
+            }
+            other => panic!("not a request: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn out_of_range_values_are_refused_before_sending() {
+        let rt = runtime();
+        let mut c = Control::default();
+        let a = c.send(&rt, 100, &[("speed".into(), Input::Text("1001".into()))]);
+        assert!(a.is_none());
+        assert!(matches!(
+            c.outcomes.get(&100),
+            Some((Outcome::Failed(e), _)) if e.contains("out of range")
+        ));
+        let a = c.send(&rt, 100, &[("speed".into(), Input::Text("-250".into()))]);
+        assert_eq!(sent(&a.unwrap()), (100, (-250i16).to_le_bytes().to_vec()));
+    }
+
+    #[test]
+    fn a_stop_while_the_link_is_down_is_sent_when_it_is_back() {
+        let mut rt = runtime();
+        let mut c = Control::default();
+        let arm = c.arm(&rt, true).expect("the heartbeat is set");
+        assert_eq!(sent(&arm), (98, 2i16.to_le_bytes().to_vec()));
+        assert!(c.tick(&rt).is_empty(), "confirmed just now");
+        rt.state = Some(LinkState::Lost {
+            reason: "unplugged".into(),
+        });
+        assert!(c.tick(&rt).is_empty(), "nothing can be sent");
+        assert!(c.stop_pending);
+        assert!(matches!(c.trip, Some((Trip::LinkLost, _))));
+        rt.state = Some(LinkState::Connected {
+            port: "test".into(),
+            baud: 115_200,
+        });
+        let actions = c.tick(&rt);
+        assert_eq!(actions.len(), 1, "{actions:?}");
+        assert_eq!(sent(&actions[0]), (100, vec![0, 0]));
+        assert!(!c.stop_pending);
+        assert!(matches!(c.trip, Some((Trip::SentAfterReconnect, _))));
+
+        // STOP pressed while the link is down, without the dead-man, waits for the link too.
+        let mut c = Control::default();
+        rt.state = Some(LinkState::Reconnecting { attempt: 1 });
+        assert!(c.stop(&rt).is_none());
+        assert!(c.stop_pending);
+        rt.state = Some(LinkState::Connected {
+            port: "test".into(),
+            baud: 115_200,
+        });
+        let actions = c.tick(&rt);
+        assert_eq!(sent(&actions[0]), (100, vec![0, 0]));
+    }
+
+    fn reply_id(a: Action) -> u64 {
+        match a {
+            Action::Link(LinkCommand::Request {
+                reply_to: ReplyTo::Event(id),
+                ..
+            }) => id,
+            other => panic!("not a request answered as an event: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_failed_stop_is_sent_again_when_the_link_is_back() {
+        let mut rt = runtime();
+        let mut c = Control::default();
+        // Unanswered on a working link: shown, not repeated on its own.
+        let id = reply_id(c.stop(&rt).unwrap());
+        rt.replies.insert(id, Err("no answer".into()));
+        assert!(c.tick(&rt).is_empty());
+        assert!(!c.stop_pending);
+        assert!(matches!(
+            c.outcomes.get(&100),
+            Some((Outcome::Failed(_), _))
+        ));
+        // Lost with the link: sent again when it is back.
+        let id = reply_id(c.stop(&rt).unwrap());
+        rt.replies.insert(id, Err("link lost: unplugged".into()));
+        rt.state = None;
+        assert!(c.tick(&rt).is_empty());
+        assert!(c.stop_pending);
+        rt.state = Some(LinkState::Connected {
+            port: "test".into(),
+            baud: 115_200,
+        });
+        assert_eq!(sent(&c.tick(&rt)[0]), (100, vec![0, 0]));
     }
 }
