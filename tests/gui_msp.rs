@@ -74,8 +74,16 @@ fn step_until(h: &mut H, what: &str, done: impl Fn(&App) -> bool) {
         if Instant::now() >= deadline {
             let a = app(h);
             panic!(
-                "timed out waiting for {what}: info {:?}, state {:?}, solar inputs {:?}, outcomes {:?}",
-                a.rt.info, a.rt.state, a.solar.inputs, a.solar.control.outcomes
+                "timed out waiting for {what}: info {:?}, state {:?}, solar inputs {:?}, outcomes {:?}, \
+                 status {:?}, self-test running {} results {:?} error {:?}",
+                a.rt.info,
+                a.rt.state,
+                a.solar.inputs,
+                a.solar.control.outcomes,
+                a.rt.status.as_ref().map(|s| &s.text),
+                a.selftest.running,
+                a.selftest.results,
+                a.selftest.error
             );
         }
         std::thread::sleep(Duration::from_millis(10));
@@ -314,6 +322,15 @@ fn plan_file(tag: &str) -> std::path::PathBuf {
     path
 }
 
+/// Clicks Run once nothing else runs, and waits for the job to start.
+fn start_selftest(h: &mut H) {
+    step_until(h, "no job running", |a| a.rt.job_progress().is_none());
+    h.get_by_label("Run self-test").click();
+    step_until(h, "the self-test job", |a| {
+        a.selftest.running && a.rt.job.as_ref().is_some_and(|j| !j.is_done())
+    });
+}
+
 /// Opens the plan, runs it, and covers the corners when the prompt asks (answering through the
 /// modal). Returns the log's path.
 fn run_selftest(h: &mut H, b: &Bench<WindowCleaner>, tag: &str) -> std::path::PathBuf {
@@ -339,7 +356,7 @@ fn run_selftest(h: &mut H, b: &Bench<WindowCleaner>, tag: &str) -> std::path::Pa
         "{:?}",
         app(h).selftest.error
     );
-    h.get_by_label("Run self-test").click();
+    start_selftest(h);
     step_until(h, "the operator prompt", |a| a.selftest.prompt.is_some());
     h.run_steps(2);
     assert!(h.query_by_label_contains("corner switches").is_some());
@@ -468,4 +485,46 @@ fn the_msp_panels_render_in_english_and_chinese() {
         h.state_mut().as_mut().unwrap().saved.panel = PanelId::Device;
         h.run_steps(2);
     }
+}
+
+#[test]
+fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step() {
+    let b = window_cleaner(Some(0x0F), &[]);
+    let mut h = harness(
+        b.server.path(),
+        "window-cleaner",
+        PanelId::SelfTest,
+        Lang::En,
+    );
+    let plan = plan_file("lost");
+    step_until(&mut h, "the device identified", |a| {
+        identified(a) && a.rt.job_progress().is_none()
+    });
+    {
+        let a = h.state_mut().as_mut().unwrap();
+        a.selftest.path = plan.display().to_string();
+        a.selftest.log_path = String::new();
+    }
+    h.step();
+    h.get_by_label("Open plan").click();
+    h.run_steps(2);
+    start_selftest(&mut h);
+    step_until(&mut h, "the operator prompt", |a| {
+        a.selftest.prompt.is_some()
+    });
+    b.server.vanish_handle().vanish();
+    h.run_steps(2);
+    h.get_by_label("Done").click();
+    step_until(&mut h, "the report", |a| a.selftest.report.is_some());
+    h.run_steps(2);
+    let report = app(&h).selftest.report.clone().unwrap();
+    assert!(!report.pass);
+    let aborted = report.aborted.as_deref().unwrap_or_default();
+    assert!(aborted.starts_with("step 'Corner switches':"), "{aborted}");
+    assert!(
+        h.query_by_label_contains("Ended early: step 'Corner switches'")
+            .is_some()
+    );
+    assert!(h.query_all_by_label("PASS").count() < report.results.len() + 1);
+    let _ = std::fs::remove_file(&plan);
 }
