@@ -138,16 +138,25 @@ fn a_clear_capability_bit_hides_its_panels_and_the_app_leaves_them() {
 
 #[test]
 fn the_device_panel_pings_and_shows_version_build_and_flags() {
-    let b = window_cleaner(Some(0b0101), &[]);
+    let b = window_cleaner(Some(0b1111), &[]);
     let mut h = harness(b.server.path(), "window-cleaner", PanelId::Device, Lang::En);
-    step_until(&mut h, "the device identified", |a| {
-        identified(a) && a.rt.job_progress().is_none()
+    // The panel reads version and power state on its own once the link is free.
+    step_until(&mut h, "the power state", |a| {
+        a.device.power.is_some() && a.rt.job_progress().is_none()
     });
+    assert!(matches!(app(&h).device.power, Some(Ok(_))));
     h.get_by_label("Ping").click();
     step_until(&mut h, "the ping", |a| a.device.ping.is_some());
     assert!(matches!(app(&h).device.ping, Some(Ok(_))));
+    step_until(&mut h, "the ping job to end", |a| {
+        a.rt.job_progress().is_none()
+    });
+    b.sim.lock().unwrap().set_flags(Some(0b0101));
     h.get_by_label("Read version and power state").click();
-    step_until(&mut h, "the power state", |a| a.device.power.is_some());
+    step_until(&mut h, "the new flags", |a| {
+        matches!(&a.device.version, Some(Ok(v)) if v.flags == Some(0b0101))
+            && matches!(&a.rt.info, Some(Ok(v)) if v.flags == Some(0b0101))
+    });
     h.run_steps(2);
     assert_eq!(
         app(&h)
@@ -392,6 +401,10 @@ fn the_self_test_passes_on_a_healthy_robot_and_logs_the_device() {
         "every row and the banner"
     );
     assert!(h.query_all_by_label("FAIL").next().is_none());
+    assert!(
+        h.query_by_label("11.5 V to 16.8 V").is_some(),
+        "bounds with units"
+    );
     let text = std::fs::read_to_string(&log).unwrap();
     assert_eq!(text.lines().count(), 1);
     assert!(

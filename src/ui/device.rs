@@ -23,6 +23,10 @@ pub struct DevicePanel {
     pub version: Option<Result<DeviceInfo, String>>,
     /// When the last answer came.
     at: Option<Instant>,
+    /// The connection the values came from (its `rt.t0`): another connection clears them.
+    conn: Option<Instant>,
+    /// Version and power state have been asked on this connection.
+    asked: bool,
 }
 
 /// What this panel's jobs report.
@@ -67,6 +71,23 @@ fn power(client: &crate::link::Client, profile: &Profile) -> Result<Vec<u8>, Str
     Ok(reply.payload().unwrap_or_default().to_vec())
 }
 
+/// Reads CMD_VERSION, CMD_BUILD_INFO and the power state.
+fn read_job(profile: &std::sync::Arc<Profile>) -> Action {
+    let p = profile.clone();
+    Action::StartJob(JobWork::new("version", move |client, cancel, sink| {
+        let v = version(client, &p);
+        sink.send(JobOutput::Device(Output::Version(v.clone())));
+        if cancel.is_cancelled() {
+            return Err("cancelled".into());
+        }
+        let pw = power(client, &p);
+        sink.send(JobOutput::Device(Output::Power(pw.clone())));
+        v?;
+        pw?;
+        Ok("version and power state read".into())
+    }))
+}
+
 /// The capability bits by name, from the profile's CMD_VERSION `flags` field: (bit, English,
 /// Chinese, set).
 pub fn flag_names(profile: &Profile, flags: u8) -> Vec<(u8, String, String, bool)> {
@@ -101,8 +122,20 @@ impl DevicePanel {
     /// Draws the panel.
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
         let mut actions = Vec::new();
+        if self.conn != Some(rt.t0) {
+            // Values of another connection (maybe another device) are never shown.
+            *self = Self {
+                conn: Some(rt.t0),
+                ..Self::default()
+            };
+        }
         let ready = rt.connected() && rt.job_progress().is_none();
         let profile = rt.profile.clone();
+        if ready && !self.asked {
+            // Read once on each connection, as soon as the link is free.
+            self.asked = true;
+            actions.push(read_job(&profile));
+        }
         ui.horizontal_wrapped(|ui| {
             if ui
                 .add_enabled(ready, egui::Button::new(lang.tr("Ping", "通讯检测")))
@@ -127,24 +160,9 @@ impl DevicePanel {
                 )
                 .clicked()
             {
-                let p = profile.clone();
                 // The session's own record (which panels are shown) is refreshed too.
                 actions.push(Action::Link(LinkCommand::Identify));
-                actions.push(Action::StartJob(JobWork::new(
-                    "version",
-                    move |client, cancel, sink| {
-                        let v = version(client, &p);
-                        sink.send(JobOutput::Device(Output::Version(v.clone())));
-                        if cancel.is_cancelled() {
-                            return Err("cancelled".into());
-                        }
-                        let pw = power(client, &p);
-                        sink.send(JobOutput::Device(Output::Power(pw.clone())));
-                        v?;
-                        pw?;
-                        Ok("version and power state read".into())
-                    },
-                )));
+                actions.push(read_job(&profile));
             }
             if !rt.connected() {
                 ui.weak(lang.tr("not connected", "未连接"));

@@ -8,6 +8,7 @@ use super::runtime::Runtime;
 use super::{Action, JobWork};
 use crate::i18n::Lang;
 use crate::ops::selftest::{self, Plan, Report, StepKind, StepResult};
+use crate::profile::Profile;
 use crossbeam_channel::Sender;
 use eframe::egui;
 use std::path::PathBuf;
@@ -83,12 +84,42 @@ impl Output {
     }
 }
 
-/// The pass/fail bounds of a step, as a person reads them.
-pub fn bounds(kind: &StepKind) -> String {
+/// The unit of a step's first field, with a leading space (or empty).
+fn unit(profile: &Profile, command: &str, fields: &[String]) -> String {
+    profile
+        .command(command)
+        .and_then(|c| {
+            let name = fields.first()?;
+            c.reply.iter().find(|f| f.ident.eq_ignore_ascii_case(name))
+        })
+        .map_or(String::new(), |f| f.unit_suffix())
+}
+
+/// The pass/fail bounds of a step, as a person reads them (in display units).
+pub fn bounds(kind: &StepKind, profile: &Profile) -> String {
     match kind {
-        StepKind::Range { min, max, .. } => format!("{min} to {max}"),
-        StepKind::Stable { max_spread, .. } => format!("spread ≤ {max_spread}"),
-        StepKind::Rises { min_rise, .. } => format!("rise ≥ {min_rise}"),
+        StepKind::Range {
+            min,
+            max,
+            command,
+            fields,
+            ..
+        } => {
+            let u = unit(profile, command, fields);
+            format!("{min}{u} to {max}{u}")
+        }
+        StepKind::Stable {
+            max_spread,
+            command,
+            fields,
+            ..
+        } => format!("spread ≤ {max_spread}{}", unit(profile, command, fields)),
+        StepKind::Rises {
+            min_rise,
+            command,
+            fields,
+            ..
+        } => format!("rise ≥ {min_rise}{}", unit(profile, command, fields)),
         StepKind::Operator { bits, timeout, .. } => format!(
             "bits {bits:#06b} seen clear and set within {:.0} s",
             timeout.as_secs_f64()
@@ -292,7 +323,7 @@ impl SelfTestPanel {
         }
         self.banner(ui, lang);
         ui.separator();
-        self.table(ui, lang);
+        self.table(ui, lang, &rt.profile);
         self.prompt_modal(ui, lang);
         actions
     }
@@ -357,7 +388,7 @@ impl SelfTestPanel {
         }
     }
 
-    fn table(&self, ui: &mut egui::Ui, lang: Lang) {
+    fn table(&self, ui: &mut egui::Ui, lang: Lang, profile: &Profile) {
         let Some(plan) = &self.plan else { return };
         egui::ScrollArea::both().auto_shrink(false).show(ui, |ui| {
             egui::Grid::new("selftest-results")
@@ -383,7 +414,7 @@ impl SelfTestPanel {
                     for (i, step) in plan.steps.iter().enumerate() {
                         ui.label(&step.name);
                         ui.weak(what(&step.kind));
-                        ui.monospace(bounds(&step.kind));
+                        ui.monospace(bounds(&step.kind, profile));
                         match self.results.iter().find(|r| r.name == step.name) {
                             Some(r) => {
                                 ui.label(&r.detail);
