@@ -122,3 +122,24 @@ fn a_users_file_overrides_the_builtin_and_a_broken_one_is_an_error() {
     assert!(err.file.ends_with("servo.ron"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_panel_rule_with_a_bad_flag_or_an_unknown_panel_is_refused_with_its_line() {
+    let src = edited(
+        "(panel: Tuning, flag: Some(0))",
+        "(panel: Tuning, flag: Some(8))",
+    );
+    let err = parse("wc.ron", &src, None).unwrap_err();
+    let (line, _) = line_col_of(&src, "flag: Some(8)", 0);
+    assert_eq!(err.line, line, "{err}");
+    assert!(err.message.contains("bits 0 to 7"), "{err}");
+
+    let src = edited("(panel: SelfTest)", "(panel: Dashboard)");
+    let err = parse("wc.ron", &src, None).unwrap_err();
+    let (line, _) = line_col_of(&src, "Dashboard", 0);
+    assert_eq!(err.line, line, "{err}");
+
+    let src = edited("(panel: SelfTest)", "(panel: Tuning)");
+    let err = parse("wc.ron", &src, None).unwrap_err();
+    assert!(err.message.contains("listed twice"), "{err}");
+}

@@ -102,6 +102,42 @@ pub struct Profile {
     /// Live plots: which telemetry fields to draw together.
     #[serde(default)]
     pub plots: Vec<Plot>,
+    /// MSP: the device's own panels (solar cleanbot, self-test), and the CMD_VERSION capability
+    /// bit a panel needs. The generic panels (tuning, telemetry…) are shown whenever the command
+    /// set has what they need; listing one here with a `flag` also hides it when the device
+    /// reports that bit clear.
+    #[serde(default)]
+    pub panels: Vec<PanelRule>,
+}
+
+/// The panels a profile can name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum PanelKind {
+    /// Ping, version, power state.
+    Device,
+    /// Parameters (Get/Set pairs).
+    Tuning,
+    /// Live plots.
+    Telemetry,
+    /// Parameter presets.
+    Presets,
+    /// Action commands.
+    Actions,
+    /// The solar cleanbot's readouts, drive controls and STOP.
+    Solar,
+    /// The production self-test (test plans).
+    SelfTest,
+}
+
+/// A panel of a profile and the capability it needs.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PanelRule {
+    /// The panel.
+    pub panel: PanelKind,
+    /// The CMD_VERSION capability bit (0-7) the panel needs; `None`: always shown.
+    #[serde(default)]
+    pub flag: Option<u8>,
 }
 
 /// A group of commands on a panel (e.g. "Fan").

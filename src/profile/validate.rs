@@ -58,6 +58,32 @@ pub fn validate(profile: &mut Profile) -> Result<(), Issue> {
     check_params(profile)?;
     check_data_points(profile)?;
     check_plots(profile)?;
+    check_panels(profile)?;
+    Ok(())
+}
+
+fn check_panels(p: &Profile) -> Result<(), Issue> {
+    let mut seen = HashSet::new();
+    for (i, rule) in p.panels.iter().enumerate() {
+        let at = |k| vec![Key("panels"), Index(i), Key(k)];
+        if p.protocol != Protocol::Msp {
+            return Err(issue(at("panel"), "panels are for MSP profiles only"));
+        }
+        if !seen.insert(rule.panel) {
+            return Err(issue(
+                at("panel"),
+                format!("{:?} is listed twice", rule.panel),
+            ));
+        }
+        if let Some(bit) = rule.flag
+            && bit > 7
+        {
+            return Err(issue(
+                at("flag"),
+                format!("capability flag {bit}: CMD_VERSION has bits 0 to 7"),
+            ));
+        }
+    }
     Ok(())
 }
 

@@ -123,6 +123,7 @@ fn empty_profile(id: &str, protocol: Protocol, baud: u32) -> Profile {
         params: Vec::new(),
         data_points: Vec::new(),
         plots: Vec::new(),
+        panels: Vec::new(),
     }
 }
 

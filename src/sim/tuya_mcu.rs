@@ -205,6 +205,7 @@ pub fn builtin_vacuum_profile() -> Arc<Profile> {
                 params: Vec::new(),
                 data_points: Vec::new(),
                 plots: Vec::new(),
+                panels: Vec::new(),
             }))
         })
         .clone()

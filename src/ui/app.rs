@@ -9,7 +9,7 @@ use super::{
 };
 use crate::i18n::Lang;
 use crate::link::LinkCommand;
-use crate::profile::Protocol;
+use crate::profile::{PanelKind, Protocol};
 use eframe::egui;
 use serde::{Deserialize, Serialize};
 
@@ -39,6 +39,19 @@ pub enum PanelId {
 }
 
 impl PanelId {
+    /// The panel a profile names.
+    pub fn of(kind: PanelKind) -> PanelId {
+        match kind {
+            PanelKind::Device => PanelId::Device,
+            PanelKind::Tuning => PanelId::Tuning,
+            PanelKind::Telemetry => PanelId::Telemetry,
+            PanelKind::Presets => PanelId::Presets,
+            PanelKind::Actions => PanelId::Actions,
+            PanelKind::Solar => PanelId::Solar,
+            PanelKind::SelfTest => PanelId::SelfTest,
+        }
+    }
+
     /// The panel's name.
     pub fn name(self, lang: Lang) -> &'static str {
         match self {
@@ -169,12 +182,27 @@ impl App {
                 JobOutput::Servo(o) => self.servo.on_output(o),
                 JobOutput::Tuya(o) => self.tuya.on_output(o),
                 JobOutput::Device(o) => self.device.on_output(o),
-                JobOutput::SelfTest(o) => self.selftest.on_output(o),
+                JobOutput::SelfTest(o) => {
+                    // An operator prompt is answered on the self-test panel.
+                    if o.is_prompt() {
+                        self.saved.panel = PanelId::SelfTest;
+                    }
+                    self.selftest.on_output(o)
+                }
                 JobOutput::Solar(o) => self.solar.on_output(o),
                 _ => {}
             }
         }
         self.rt.refresh_ports();
+        // The app leaves a panel the device turns out not to support.
+        let panels = self.panels();
+        if !panels.contains(&self.saved.panel) {
+            self.saved.panel = panels[0];
+        }
+        // The solar panel's STOP-on-reconnect and dead-man run whichever panel is shown.
+        for a in self.solar.tick(&self.rt) {
+            self.apply(a);
+        }
         if std::mem::take(&mut self.rt.just_connected) && self.panels().contains(&PanelId::Tuning) {
             // What the device holds is shown as soon as it is known; nothing is shown before.
             let gets: Vec<u8> = self
@@ -201,7 +229,9 @@ impl App {
             self.title = title;
         }
         // Repaint while a plot follows live data or a job runs; otherwise only on events.
-        let live = self.saved.panel == PanelId::Telemetry && !self.rt.paused && self.rt.connected();
+        let live = matches!(self.saved.panel, PanelId::Telemetry | PanelId::Solar)
+            && !self.rt.paused
+            && self.rt.connected();
         if live || self.rt.job_progress().is_some() {
             ctx.request_repaint_after(std::time::Duration::from_millis(33));
         }
@@ -226,6 +256,11 @@ impl App {
                 {
                     self.saved.panel = panel;
                 }
+            }
+            // The solar cleanbot's STOP is on every panel.
+            if self.saved.panel != PanelId::Solar && self.panels().contains(&PanelId::Solar) {
+                ui.separator();
+                actions.extend(self.solar.stop_button(ui, lang, &self.rt));
             }
         });
         egui::CentralPanel::default().show(ui, |ui| match self.saved.panel {
@@ -281,7 +316,24 @@ impl App {
         {
             v.push(PanelId::Actions);
         }
+        for rule in &self.rt.profile.panels {
+            match rule.panel {
+                PanelKind::Solar => v.push(PanelId::Solar),
+                PanelKind::SelfTest => v.push(PanelId::SelfTest),
+                _ => {}
+            }
+        }
         v.push(PanelId::Monitor);
+        // A panel whose capability bit the device reports clear is hidden (nothing is hidden
+        // before the device has answered CMD_VERSION).
+        if let Some(Ok(info)) = &self.rt.info {
+            v.retain(|p| {
+                self.rt.profile.panels.iter().all(|r| {
+                    r.flag
+                        .is_none_or(|bit| PanelId::of(r.panel) != *p || info.supports(bit))
+                })
+            });
+        }
         v
     }
 

@@ -1,29 +1,327 @@
-//! The MSP core commands: ping, version (hardware, firmware, API, build date, capability flags)
-//! and power state.
+//! The MSP core commands: ping (with its round trip), version (hardware, firmware, API, build date
+//! and time, capability flags by name) and power state. Nothing is shown before a reply brings it.
 
-use super::Action;
+use super::jobs::JobOutput;
 use super::runtime::Runtime;
+use super::{Action, JobWork};
 use crate::i18n::Lang;
+use crate::link::{DeviceInfo, LinkCommand, session};
+use crate::ops::msp as ops;
+use crate::profile::Profile;
+use crate::protocol::{hex, msp};
 use eframe::egui;
+use std::time::{Duration, Instant};
 
-/// The panel's state.
+/// The panel's state: what the last replies said.
 #[derive(Default)]
-pub struct DevicePanel {}
+pub struct DevicePanel {
+    /// The last ping: its round trip, or why it failed.
+    pub ping: Option<Result<Duration, String>>,
+    /// The last power-state read: the raw bytes, or why it failed.
+    pub power: Option<Result<Vec<u8>, String>>,
+    /// The last version read by this panel (the session's own is `rt.info`).
+    pub version: Option<Result<DeviceInfo, String>>,
+    /// When the last answer came.
+    at: Option<Instant>,
+    /// The connection the values came from (its `rt.t0`): another connection clears them.
+    conn: Option<Instant>,
+    /// Version and power state have been asked on this connection.
+    asked: bool,
+}
 
 /// What this panel's jobs report.
 #[derive(Debug, Clone)]
-pub enum Output {}
+pub enum Output {
+    /// A ping's round trip, or why it failed.
+    Ping(Result<Duration, String>),
+    /// CMD_VERSION with CMD_BUILD_INFO, or why it failed.
+    Version(Result<DeviceInfo, String>),
+    /// CMD_GET_POWER_STATE's raw answer, or why it failed.
+    Power(Result<Vec<u8>, String>),
+}
+
+fn ping(client: &crate::link::Client, profile: &Profile) -> Result<Duration, String> {
+    let cmd = profile
+        .command_by_id(msp::CMD_PING)
+        .ok_or("the profile has no CMD_PING")?;
+    let t = Instant::now();
+    ops::send(client, profile, cmd, &[]).map_err(|e| e.to_string())?;
+    Ok(t.elapsed())
+}
+
+fn version(client: &crate::link::Client, profile: &Profile) -> Result<DeviceInfo, String> {
+    let cmd = profile
+        .command_by_id(msp::CMD_VERSION)
+        .ok_or("the profile has no CMD_VERSION")?;
+    let reply = ops::send(client, profile, cmd, &[]).map_err(|e| e.to_string())?;
+    let mut info = DeviceInfo::from_version(profile, reply.payload().unwrap_or_default())?;
+    if let Some(cmd) = profile.command_by_id(msp::CMD_BUILD_INFO)
+        && let Ok(reply) = ops::send(client, profile, cmd, &[])
+    {
+        info.build_date = session::build_date(reply.payload().unwrap_or_default());
+    }
+    Ok(info)
+}
+
+fn power(client: &crate::link::Client, profile: &Profile) -> Result<Vec<u8>, String> {
+    let cmd = profile
+        .command_by_id(3)
+        .ok_or("the profile has no CMD_GET_POWER_STATE")?;
+    let reply = ops::send(client, profile, cmd, &[]).map_err(|e| e.to_string())?;
+    Ok(reply.payload().unwrap_or_default().to_vec())
+}
+
+/// Reads CMD_VERSION, CMD_BUILD_INFO and the power state.
+fn read_job(profile: &std::sync::Arc<Profile>) -> Action {
+    let p = profile.clone();
+    Action::StartJob(JobWork::new("version", move |client, cancel, sink| {
+        let v = version(client, &p);
+        sink.send(JobOutput::Device(Output::Version(v.clone())));
+        if cancel.is_cancelled() {
+            return Err("cancelled".into());
+        }
+        let pw = power(client, &p);
+        sink.send(JobOutput::Device(Output::Power(pw.clone())));
+        v?;
+        pw?;
+        Ok("version and power state read".into())
+    }))
+}
+
+/// The capability bits by name, from the profile's CMD_VERSION `flags` field: (bit, English,
+/// Chinese, set).
+pub fn flag_names(profile: &Profile, flags: u8) -> Vec<(u8, String, String, bool)> {
+    let bits = profile
+        .command_by_id(msp::CMD_VERSION)
+        .and_then(|c| c.reply.iter().find(|f| f.ident == "flags"))
+        .map(|f| f.bits.clone())
+        .unwrap_or_default();
+    let mut out: Vec<(u8, String, String, bool)> = bits
+        .iter()
+        .filter(|b| b.bit < 8)
+        .map(|b| {
+            (
+                b.bit,
+                b.name.en.clone(),
+                b.name.zh.clone(),
+                flags >> b.bit & 1 == 1,
+            )
+        })
+        .collect();
+    // Bits the profile does not name, when set, are shown by number.
+    for bit in 0..8u8 {
+        if flags >> bit & 1 == 1 && !out.iter().any(|(b, ..)| *b == bit) {
+            out.push((bit, format!("bit {bit}"), format!("第 {bit} 位"), true));
+        }
+    }
+    out.sort_by_key(|(b, ..)| *b);
+    out
+}
 
 impl DevicePanel {
     /// Draws the panel.
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
-        let _ = rt;
-        ui.label(lang.tr("Not built yet.", "尚未实现。"));
-        Vec::new()
+        let mut actions = Vec::new();
+        if self.conn != Some(rt.t0) {
+            // Values of another connection (maybe another device) are never shown.
+            *self = Self {
+                conn: Some(rt.t0),
+                ..Self::default()
+            };
+        }
+        let ready = rt.connected() && rt.job_progress().is_none();
+        let profile = rt.profile.clone();
+        if ready && !self.asked {
+            // Read once on each connection, as soon as the link is free.
+            self.asked = true;
+            actions.push(read_job(&profile));
+        }
+        ui.horizontal_wrapped(|ui| {
+            if ui
+                .add_enabled(ready, egui::Button::new(lang.tr("Ping", "通讯检测")))
+                .clicked()
+            {
+                let p = profile.clone();
+                actions.push(Action::StartJob(JobWork::new(
+                    "ping",
+                    move |client, _cancel, sink| {
+                        let r = ping(client, &p);
+                        sink.send(JobOutput::Device(Output::Ping(r.clone())));
+                        r.map(|d| format!("answered in {:.1} ms", d.as_secs_f64() * 1e3))
+                    },
+                )));
+            }
+            if ui
+                .add_enabled(
+                    ready,
+                    egui::Button::new(
+                        lang.tr("Read version and power state", "读取版本与电源状态"),
+                    ),
+                )
+                .clicked()
+            {
+                // The session's own record (which panels are shown) is refreshed too.
+                actions.push(Action::Link(LinkCommand::Identify));
+                actions.push(read_job(&profile));
+            }
+            if !rt.connected() {
+                ui.weak(lang.tr("not connected", "未连接"));
+            }
+        });
+        ui.separator();
+        egui::Grid::new("device-core")
+            .num_columns(2)
+            .striped(true)
+            .show(ui, |ui| {
+                ui.label(lang.tr("Ping round trip", "通讯往返时间"));
+                match &self.ping {
+                    Some(Ok(d)) => {
+                        ui.monospace(format!("{:.1} ms", d.as_secs_f64() * 1e3));
+                    }
+                    Some(Err(e)) => {
+                        ui.colored_label(egui::Color32::RED, e);
+                    }
+                    None => {
+                        ui.weak(lang.tr("not pinged yet", "尚未检测"));
+                    }
+                }
+                ui.end_row();
+                ui.label(lang.tr("Power state (raw)", "电源状态(原始数据)"))
+                    .on_hover_text(lang.tr(
+                        "No layout is published for this answer: its bytes are shown as sent.",
+                        "此应答的格式未公开:按原始字节显示。",
+                    ));
+                match &self.power {
+                    Some(Ok(b)) if b.is_empty() => {
+                        ui.monospace(lang.tr("(empty answer)", "(空应答)"));
+                    }
+                    Some(Ok(b)) => {
+                        ui.monospace(hex::format(b));
+                    }
+                    Some(Err(e)) => {
+                        ui.colored_label(egui::Color32::RED, e);
+                    }
+                    None => {
+                        ui.weak(lang.tr("not read yet", "尚未读取"));
+                    }
+                }
+                ui.end_row();
+            });
+        ui.separator();
+        ui.strong(lang.tr("Version", "版本信息"));
+        // This panel's own read wins; until then, what the session learned on connect.
+        let info = self.version.as_ref().or(rt.info.as_ref());
+        match info {
+            Some(Ok(info)) => self.show_info(ui, lang, &profile, info),
+            Some(Err(e)) => {
+                ui.colored_label(egui::Color32::RED, e);
+            }
+            None => {
+                ui.weak(lang.tr(
+                    "the device has not answered CMD_VERSION yet",
+                    "设备尚未应答版本查询",
+                ));
+            }
+        }
+        if let Some(at) = self.at {
+            ui.weak(format!(
+                "{} {:.0} s",
+                lang.tr("last answer", "上次应答"),
+                at.elapsed().as_secs_f64()
+            ));
+        }
+        actions
+    }
+
+    fn show_info(&self, ui: &mut egui::Ui, lang: Lang, profile: &Profile, info: &DeviceInfo) {
+        egui::Grid::new("device-version")
+            .num_columns(2)
+            .striped(true)
+            .show(ui, |ui| {
+                let row = |ui: &mut egui::Ui, name: &str, value: String| {
+                    ui.label(name);
+                    ui.monospace(value);
+                    ui.end_row();
+                };
+                row(
+                    ui,
+                    lang.tr("Hardware (device code)", "硬件版本(设备码)"),
+                    format!("{:#04x}", info.hw),
+                );
+                row(ui, lang.tr("Firmware", "固件版本"), info.firmware.clone());
+                row(ui, lang.tr("API", "接口版本"), info.api.clone());
+                row(
+                    ui,
+                    lang.tr("Build number", "构建号"),
+                    info.build.to_string(),
+                );
+                row(
+                    ui,
+                    lang.tr("Build date and time", "编译日期与时间"),
+                    info.build_date
+                        .clone()
+                        .unwrap_or_else(|| lang.tr("not answered", "设备未应答").to_string()),
+                );
+            });
+        ui.add_space(6.0);
+        ui.strong(lang.tr("Capabilities", "功能支持标志"));
+        match info.flags {
+            None => {
+                ui.label(lang.tr(
+                    "The firmware sends no capability byte (7-byte version): every panel is shown.",
+                    "固件未发送功能标志字节(7 字节版本应答):显示全部页面。",
+                ));
+            }
+            Some(flags) => {
+                ui.monospace(format!("{flags:#04x} = {flags:#010b}"));
+                egui::Grid::new("device-flags")
+                    .num_columns(3)
+                    .striped(true)
+                    .show(ui, |ui| {
+                        for (bit, en, zh, set) in flag_names(profile, flags) {
+                            ui.monospace(format!("bit {bit}"));
+                            ui.label(lang.tr(&en, &zh));
+                            if set {
+                                ui.colored_label(
+                                    egui::Color32::from_rgb(0, 150, 60),
+                                    lang.tr("supported", "支持"),
+                                );
+                            } else {
+                                ui.colored_label(
+                                    egui::Color32::GRAY,
+                                    lang.tr("not supported", "不支持"),
+                                );
+                            }
+                            ui.end_row();
+                        }
+                    });
+                let hidden: Vec<String> = profile
+                    .panels
+                    .iter()
+                    .filter(|r| r.flag.is_some_and(|b| !info.supports(b)))
+                    .map(|r| super::PanelId::of(r.panel).name(lang).to_string())
+                    .collect();
+                if !hidden.is_empty() {
+                    ui.label(format!(
+                        "{}: {}",
+                        lang.tr(
+                            "Hidden (not supported by this device)",
+                            "已隐藏(设备不支持)"
+                        ),
+                        hidden.join(", ")
+                    ));
+                }
+            }
+        }
     }
 
     /// Takes what one of its jobs reported.
     pub fn on_output(&mut self, out: Output) {
-        match out {}
+        self.at = Some(Instant::now());
+        match out {
+            Output::Ping(r) => self.ping = Some(r),
+            Output::Version(r) => self.version = Some(r),
+            Output::Power(r) => self.power = Some(r),
+        }
     }
 }

@@ -19,6 +19,7 @@ mod tuya_console;
 
 pub use app::{App, PanelId, Saved};
 pub use runtime::Target;
+pub use solar::{Outcome as SolarOutcome, Trip as SolarTrip};
 
 use crate::ops::msp as ops;
 use crate::profile::{Input, Value};

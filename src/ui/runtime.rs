@@ -122,6 +122,9 @@ pub struct Runtime {
     pub just_connected: bool,
     /// Tuya: what the module session has reported (handshake, data points, MCU requests).
     pub tuya: super::tuya_console::Session,
+    /// Results of requests sent with `ReplyTo::Event(id)` (see [`Runtime::request_id`]), by id;
+    /// the oldest are dropped beyond 256.
+    pub replies: HashMap<u64, Result<crate::link::Reply, String>>,
 }
 
 impl Runtime {
@@ -155,7 +158,15 @@ impl Runtime {
             ctx: ctx.clone(),
             just_connected: false,
             tuya: Default::default(),
+            replies: HashMap::new(),
         })
+    }
+
+    /// A fresh id for a request whose result comes back as a `LinkEvent::Reply` (kept in
+    /// [`Runtime::replies`]).
+    pub fn request_id(&self) -> u64 {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+        NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Shows a message in the status bar.
@@ -334,8 +345,15 @@ impl Runtime {
                         .insert(command, Reading::Failed(e.to_string()));
                 }
             },
+            LinkEvent::Reply { id, result } => {
+                if self.replies.len() >= 256
+                    && let Some(oldest) = self.replies.keys().min().copied()
+                {
+                    self.replies.remove(&oldest);
+                }
+                self.replies.insert(id, result.map_err(|e| e.to_string()));
+            }
             LinkEvent::Tuya(ev) => self.tuya.on_event(ev),
-            LinkEvent::Reply { .. } => {}
         }
     }
 

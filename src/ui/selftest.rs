@@ -1,29 +1,487 @@
-//! The window cleaner's production self-test: a RON test plan run step by step, operator
-//! prompts, a results table and a log record.
+//! The window cleaner's production self-test: a RON test plan (checked against the profile when
+//! it opens, refused with line and column), run as a job with a progress bar and Cancel,
+//! operator prompts as a modal that the job waits on, a results table, a PASS/FAIL banner, and
+//! one JSON line per run appended to a log with the device's version and build info.
 
-use super::Action;
+use super::jobs::JobOutput;
 use super::runtime::Runtime;
+use super::{Action, JobWork};
 use crate::i18n::Lang;
+use crate::ops::selftest::{self, Plan, Report, StepKind, StepResult};
+use crate::profile::Profile;
+use crossbeam_channel::Sender;
 use eframe::egui;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// The plan offered first.
+pub const DEFAULT_PLAN: &str = "presets/window-cleaner-selftest.ron";
+/// The log appended to unless the operator names another.
+pub const DEFAULT_LOG: &str = "selftest-log.jsonl";
+
+/// An operator prompt the running job waits on.
+#[derive(Debug, Clone)]
+pub struct Prompt {
+    /// What the operator is asked to do.
+    pub text: String,
+    /// The answer: `true` done, `false` abort.
+    answer: Sender<bool>,
+}
 
 /// The panel's state.
-#[derive(Default)]
-pub struct SelfTestPanel {}
+pub struct SelfTestPanel {
+    /// The plan file's path.
+    pub path: String,
+    /// The log file's path (empty: no log).
+    pub log_path: String,
+    /// The plan opened (checked against the profile).
+    pub plan: Option<Plan>,
+    /// Why the last open failed, with line and column.
+    pub error: Option<String>,
+    /// Results of the run in progress (or the last), in step order.
+    pub results: Vec<StepResult>,
+    /// The last finished run.
+    pub report: Option<Report>,
+    /// Where the last record went, or why it could not be written.
+    pub logged: Option<Result<String, String>>,
+    /// A run is in progress.
+    pub running: bool,
+    /// The prompt the job waits on.
+    pub prompt: Option<Prompt>,
+}
+
+impl Default for SelfTestPanel {
+    fn default() -> Self {
+        Self {
+            path: DEFAULT_PLAN.into(),
+            log_path: DEFAULT_LOG.into(),
+            plan: None,
+            error: None,
+            results: Vec::new(),
+            report: None,
+            logged: None,
+            running: false,
+            prompt: None,
+        }
+    }
+}
 
 /// What this panel's jobs report.
 #[derive(Debug, Clone)]
-pub enum Output {}
+pub enum Output {
+    /// A step's result.
+    Step(StepResult),
+    /// The job waits for the operator.
+    Prompt(Prompt),
+    /// The run ended: its report, and where its record went (or why it was not written).
+    Done(Box<Report>, Option<Result<String, String>>),
+}
+
+impl Output {
+    /// Whether it asks the operator something (the app then shows this panel).
+    pub fn is_prompt(&self) -> bool {
+        matches!(self, Output::Prompt(_))
+    }
+}
+
+/// The unit of a step's first field, with a leading space (or empty).
+fn unit(profile: &Profile, command: &str, fields: &[String]) -> String {
+    profile
+        .command(command)
+        .and_then(|c| {
+            let name = fields.first()?;
+            c.reply.iter().find(|f| f.ident.eq_ignore_ascii_case(name))
+        })
+        .map_or(String::new(), |f| f.unit_suffix())
+}
+
+/// The pass/fail bounds of a step, as a person reads them (in display units).
+pub fn bounds(kind: &StepKind, profile: &Profile) -> String {
+    match kind {
+        StepKind::Range {
+            min,
+            max,
+            command,
+            fields,
+            ..
+        } => {
+            let u = unit(profile, command, fields);
+            format!("{min}{u} to {max}{u}")
+        }
+        StepKind::Stable {
+            max_spread,
+            command,
+            fields,
+            ..
+        } => format!("spread ≤ {max_spread}{}", unit(profile, command, fields)),
+        StepKind::Rises {
+            min_rise,
+            command,
+            fields,
+            ..
+        } => format!("rise ≥ {min_rise}{}", unit(profile, command, fields)),
+        StepKind::Operator { bits, timeout, .. } => format!(
+            "bits {bits:#06b} seen clear and set within {:.0} s",
+            timeout.as_secs_f64()
+        ),
+        StepKind::Reads { expect, .. } if expect.is_empty() => "answers".into(),
+        StepKind::Reads { expect, .. } => expect
+            .iter()
+            .map(|(f, _, text)| format!("{f} = {text}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+    }
+}
+
+fn what(kind: &StepKind) -> String {
+    match kind {
+        StepKind::Range {
+            command, fields, ..
+        }
+        | StepKind::Stable {
+            command, fields, ..
+        } => format!("{command}: {}", fields.join(", ")),
+        StepKind::Rises {
+            action,
+            command,
+            fields,
+            ..
+        } => format!("{} → {command}: {}", action.text, fields.join(", ")),
+        StepKind::Operator { command, field, .. } => format!("{command}: {field}"),
+        StepKind::Reads { command, .. } => command.clone(),
+    }
+}
 
 impl SelfTestPanel {
+    /// Opens the plan at `path`, checking it against the profile.
+    pub fn open(&mut self, rt: &Runtime) {
+        match Plan::load(&PathBuf::from(self.path.trim()), &rt.profile) {
+            Ok(p) => {
+                self.plan = Some(p);
+                self.error = None;
+            }
+            Err(e) => {
+                self.plan = None;
+                self.error = Some(e.to_string());
+            }
+        }
+        self.results.clear();
+        self.report = None;
+        self.logged = None;
+    }
+
+    fn start(&mut self, rt: &Runtime) -> Option<Action> {
+        let plan = self.plan.clone()?;
+        let profile = rt.profile.clone();
+        let log = self.log_path.trim().to_string();
+        self.results.clear();
+        self.report = None;
+        self.logged = None;
+        self.running = true;
+        Some(Action::StartJob(JobWork::new(
+            "self-test",
+            move |client, cancel, sink| {
+                let mut operator = |text: &str| -> bool {
+                    let (tx, rx) = crossbeam_channel::bounded(1);
+                    sink.send(JobOutput::SelfTest(Output::Prompt(Prompt {
+                        text: text.to_string(),
+                        answer: tx,
+                    })));
+                    loop {
+                        if cancel.is_cancelled() {
+                            return false;
+                        }
+                        match rx.recv_timeout(Duration::from_millis(50)) {
+                            Ok(answer) => return answer,
+                            Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+                            // The window went away: nobody can answer.
+                            Err(crossbeam_channel::RecvTimeoutError::Disconnected) => {
+                                return false;
+                            }
+                        }
+                    }
+                };
+                let report = selftest::run_each(
+                    client,
+                    &profile,
+                    &plan,
+                    &mut operator,
+                    cancel,
+                    &mut |p| sink.send(JobOutput::Progress(p)),
+                    &mut |r| sink.send(JobOutput::SelfTest(Output::Step(r.clone()))),
+                );
+                let logged = (!log.is_empty()).then(|| {
+                    selftest::append_log(std::path::Path::new(&log), &report)
+                        .map(|()| log.clone())
+                        .map_err(|e| format!("cannot append to {log}: {e}"))
+                });
+                let pass = report.pass;
+                let failed: Vec<String> = report.failed().map(|r| r.name.clone()).collect();
+                let aborted = report.aborted.clone();
+                sink.send(JobOutput::SelfTest(Output::Done(
+                    Box::new(report),
+                    logged.clone(),
+                )));
+                if let Some(Err(e)) = logged {
+                    return Err(e);
+                }
+                match (pass, aborted) {
+                    (true, _) => Ok("PASS".into()),
+                    (false, Some(a)) => Err(format!("FAIL: {a}")),
+                    (false, None) => Err(format!("FAIL: {}", failed.join(", "))),
+                }
+            },
+        )))
+    }
+
     /// Draws the panel.
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
-        let _ = rt;
-        ui.label(lang.tr("Not built yet.", "尚未实现。"));
-        Vec::new()
+        let mut actions = Vec::new();
+        let busy = rt.job_progress().is_some();
+        if self.running
+            && !busy
+            && self.report.is_none()
+            && rt.job.as_ref().is_none_or(|j| j.is_done())
+        {
+            // The job ended without a report (it could not start).
+            self.running = false;
+        }
+        ui.horizontal_wrapped(|ui| {
+            let label = ui.label(lang.tr("Test plan", "测试方案"));
+            ui.add(egui::TextEdit::singleline(&mut self.path).desired_width(320.0))
+                .labelled_by(label.id);
+            if ui
+                .add_enabled(
+                    !self.running,
+                    egui::Button::new(lang.tr("Browse…", "浏览…")),
+                )
+                .clicked()
+                && let Some(p) = rfd::FileDialog::new()
+                    .add_filter("RON", &["ron"])
+                    .pick_file()
+            {
+                self.path = p.display().to_string();
+                self.open(rt);
+            }
+            if ui
+                .add_enabled(
+                    !self.running,
+                    egui::Button::new(lang.tr("Open plan", "打开方案")),
+                )
+                .clicked()
+            {
+                self.open(rt);
+            }
+        });
+        ui.horizontal_wrapped(|ui| {
+            let label = ui.label(lang.tr("Log file (JSON lines)", "日志文件(JSON 行)"));
+            ui.add_enabled(
+                !self.running,
+                egui::TextEdit::singleline(&mut self.log_path)
+                    .desired_width(320.0)
+                    .hint_text(lang.tr("empty: no log", "留空:不记录")),
+            )
+            .labelled_by(label.id);
+        });
+        if let Some(e) = &self.error {
+            ui.colored_label(
+                egui::Color32::RED,
+                format!(
+                    "{}\n{e}",
+                    lang.tr("The plan was refused:", "测试方案被拒绝:")
+                ),
+            );
+        }
+        let Some(plan) = &self.plan else {
+            if self.error.is_none() {
+                ui.weak(lang.tr("Open a test plan to start.", "请先打开测试方案。"));
+            }
+            return actions;
+        };
+        let (name, steps) = (plan.name.clone(), plan.steps.len());
+        ui.horizontal_wrapped(|ui| {
+            ui.strong(name);
+            ui.weak(format!("{steps} {}", lang.tr("steps", "个步骤")));
+            let can_run = rt.connected() && !busy && !self.running;
+            if ui
+                .add_enabled(
+                    can_run,
+                    egui::Button::new(lang.tr("Run self-test", "运行自检")),
+                )
+                .clicked()
+            {
+                actions.extend(self.start(rt));
+            }
+            if self.running && ui.button(lang.tr("Cancel", "取消")).clicked() {
+                actions.push(Action::CancelJob);
+            }
+        });
+        if self.running
+            && let Some((_, fraction, msg)) = rt.job_progress()
+        {
+            ui.add(egui::ProgressBar::new(fraction).show_percentage().text(msg));
+        }
+        self.banner(ui, lang);
+        ui.separator();
+        self.table(ui, lang, &rt.profile);
+        self.prompt_modal(ui, lang);
+        actions
+    }
+
+    fn banner(&self, ui: &mut egui::Ui, lang: Lang) {
+        let Some(report) = &self.report else {
+            return;
+        };
+        let (text, color) = if report.pass {
+            ("PASS", egui::Color32::from_rgb(0, 140, 60))
+        } else {
+            ("FAIL", egui::Color32::from_rgb(200, 30, 30))
+        };
+        egui::Frame::new()
+            .fill(color)
+            .inner_margin(8.0)
+            .show(ui, |ui| {
+                ui.set_width(ui.available_width());
+                ui.label(
+                    egui::RichText::new(text)
+                        .size(28.0)
+                        .strong()
+                        .color(egui::Color32::WHITE),
+                );
+                let failed: Vec<&str> = report.failed().map(|r| r.name.as_str()).collect();
+                if !failed.is_empty() {
+                    ui.label(
+                        egui::RichText::new(format!(
+                            "{} {}",
+                            lang.tr("Failed:", "未通过:"),
+                            failed.join(", ")
+                        ))
+                        .color(egui::Color32::WHITE),
+                    );
+                }
+                if let Some(a) = &report.aborted {
+                    ui.label(
+                        egui::RichText::new(format!(
+                            "{} {a}",
+                            lang.tr("Ended early:", "提前结束:")
+                        ))
+                        .color(egui::Color32::WHITE),
+                    );
+                }
+            });
+        if let Some(d) = &report.device {
+            ui.monospace(format!("{} {d}", lang.tr("Device:", "设备:")));
+        }
+        match &self.logged {
+            Some(Ok(p)) => {
+                ui.label(format!(
+                    "{} {p}",
+                    lang.tr("Record appended to", "记录已追加到")
+                ));
+            }
+            Some(Err(e)) => {
+                ui.colored_label(egui::Color32::RED, e);
+            }
+            None => {
+                ui.weak(lang.tr("Not logged (no log file).", "未记录(未指定日志文件)。"));
+            }
+        }
+    }
+
+    fn table(&self, ui: &mut egui::Ui, lang: Lang, profile: &Profile) {
+        let Some(plan) = &self.plan else { return };
+        egui::ScrollArea::both().auto_shrink(false).show(ui, |ui| {
+            egui::Grid::new("selftest-results")
+                .num_columns(5)
+                .striped(true)
+                .show(ui, |ui| {
+                    ui.strong(lang.tr("Check", "检查项"));
+                    ui.strong(lang.tr("Reads", "读取"));
+                    ui.strong(lang.tr("Bounds", "判定范围"));
+                    ui.strong(lang.tr("Measured", "测量值"));
+                    ui.strong(lang.tr("Result", "结果"));
+                    ui.end_row();
+                    // The identity step appears only when it failed.
+                    for r in self.results.iter().filter(|r| r.kind == "Identify") {
+                        ui.label(&r.name);
+                        ui.label("CMD_VERSION");
+                        ui.label("—");
+                        ui.label(&r.detail);
+                        ui.colored_label(egui::Color32::RED, "FAIL");
+                        ui.end_row();
+                    }
+                    let done = self.results.iter().filter(|r| r.kind != "Identify").count();
+                    for (i, step) in plan.steps.iter().enumerate() {
+                        ui.label(&step.name);
+                        ui.weak(what(&step.kind));
+                        ui.monospace(bounds(&step.kind, profile));
+                        match self.results.iter().find(|r| r.name == step.name) {
+                            Some(r) => {
+                                ui.label(&r.detail);
+                                if r.pass {
+                                    ui.colored_label(egui::Color32::from_rgb(0, 140, 60), "PASS");
+                                } else {
+                                    ui.colored_label(egui::Color32::RED, "FAIL");
+                                }
+                            }
+                            None if self.running && i == done => {
+                                ui.label(lang.tr("running…", "进行中…"));
+                                ui.label("");
+                            }
+                            None if self.report.is_some() => {
+                                ui.weak(lang.tr("not run", "未运行"));
+                                ui.label("");
+                            }
+                            None => {
+                                ui.label("");
+                                ui.label("");
+                            }
+                        }
+                        ui.end_row();
+                    }
+                });
+        });
+    }
+
+    fn prompt_modal(&mut self, ui: &mut egui::Ui, lang: Lang) {
+        let Some(prompt) = &self.prompt else { return };
+        let mut answer = None;
+        egui::Modal::new(egui::Id::unique("selftest-prompt")).show(ui.ctx(), |ui| {
+            ui.heading(lang.tr("Operator action needed", "需要操作员操作"));
+            ui.label(egui::RichText::new(&prompt.text).size(18.0));
+            ui.label(lang.tr(
+                "Do it now, then press Done: the test watches for the result.",
+                "请立即操作,然后按“完成”:测试将检测结果。",
+            ));
+            ui.horizontal(|ui| {
+                if ui.button(lang.tr("Done", "完成")).clicked() {
+                    answer = Some(true);
+                }
+                if ui.button(lang.tr("Abort test", "中止测试")).clicked() {
+                    answer = Some(false);
+                }
+            });
+        });
+        // Closing by Escape or a click outside is not an answer: the job keeps waiting.
+        if let Some(a) = answer
+            && let Some(p) = self.prompt.take()
+        {
+            let _ = p.answer.send(a);
+        }
     }
 
     /// Takes what one of its jobs reported.
     pub fn on_output(&mut self, out: Output) {
-        match out {}
+        match out {
+            Output::Step(r) => self.results.push(r),
+            Output::Prompt(p) => self.prompt = Some(p),
+            Output::Done(report, logged) => {
+                self.results = report.results.clone();
+                self.report = Some(*report);
+                self.logged = logged;
+                self.running = false;
+                self.prompt = None;
+            }
+        }
     }
 }

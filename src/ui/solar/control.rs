@@ -1,0 +1,358 @@
+//! What the solar panel sends: controls (each range-checked before anything leaves), STOP, and
+//! the dead-man. Everything goes straight to the worker queue (`Action::Link`) with a reply id,
+//! so that it works while a job runs, and its answer is shown when it comes.
+
+use super::super::Action;
+use super::super::runtime::Runtime;
+use crate::link::{LinkCommand, ReplyTo, Request};
+use crate::profile::{Input, Value};
+use crate::protocol::Direction;
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+/// CMD_SET_SPEED: STOP is speed 0.
+pub const CMD_SET_SPEED: u8 = 100;
+/// CMD_SET_HEARTBEAT: set when the dead-man is armed.
+pub const CMD_SET_HEARTBEAT: u8 = 98;
+/// The dead-man intervals offered, seconds.
+pub const DEADMAN_SECS: std::ops::RangeInclusive<u32> = 1..=10;
+
+/// The last outcome of a command sent from the panel.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// Sent; no answer yet.
+    Waiting(String),
+    /// The device acknowledged it.
+    Acked(String),
+    /// It was refused before sending, or the exchange failed.
+    Failed(String),
+}
+
+/// Why the robot was last stopped by the app on its own.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Trip {
+    /// The operator stopped confirming.
+    NotConfirmed,
+    /// The link went down while the dead-man was armed (or a STOP could not be delivered): STOP
+    /// waits for the link.
+    LinkLost,
+    /// STOP was sent after the link came back.
+    SentAfterReconnect,
+}
+
+/// The sending side of the panel.
+#[derive(Debug)]
+pub struct Control {
+    /// Requests in flight: reply id → command id.
+    sent: HashMap<u64, u8>,
+    /// The last outcome per command id.
+    pub outcomes: HashMap<u8, (Outcome, Instant)>,
+    /// The id of the last STOP sent.
+    stop_id: Option<u64>,
+    /// STOP must be sent as soon as the link is back.
+    pub stop_pending: bool,
+    /// The dead-man is armed.
+    pub deadman: bool,
+    /// Its interval, seconds.
+    pub deadman_secs: u32,
+    /// The operator's last confirmation.
+    pub confirmed_at: Option<Instant>,
+    /// What the app did on its own last, and when.
+    pub trip: Option<(Trip, Instant)>,
+    was_connected: bool,
+    last_sent: Option<u64>,
+}
+
+impl Default for Control {
+    fn default() -> Self {
+        Self {
+            sent: HashMap::new(),
+            outcomes: HashMap::new(),
+            stop_id: None,
+            stop_pending: false,
+            deadman: false,
+            deadman_secs: 2,
+            confirmed_at: None,
+            trip: None,
+            was_connected: false,
+            last_sent: None,
+        }
+    }
+}
+
+impl Control {
+    /// Encodes `inputs` for command `id` (checking every value against the profile) and
+    /// returns the action that sends it; a refusal is recorded as the command's outcome.
+    /// One attempt only: a retry after a late answer would apply a relative command (rotate)
+    /// twice. A failure is shown, and the operator decides.
+    pub fn send(&mut self, rt: &Runtime, id: u8, inputs: &[(String, Input)]) -> Option<Action> {
+        self.send_with(rt, id, inputs, 1)
+    }
+
+    fn send_with(
+        &mut self,
+        rt: &Runtime,
+        id: u8,
+        inputs: &[(String, Input)],
+        attempts: u8,
+    ) -> Option<Action> {
+        let cmd = rt.profile.command_by_id(id)?;
+        let text = inputs
+            .iter()
+            .map(|(k, v)| match v {
+                Input::Text(t) => format!("{k}={t}"),
+                Input::Raw(Value::Int(i)) => format!("{k}={i}"),
+                Input::Raw(r) => format!("{k}={r:?}"),
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        let payload = match rt.profile.encode(cmd, Direction::HostToDevice, inputs) {
+            Ok(p) => p,
+            Err(e) => {
+                self.outcomes
+                    .insert(id, (Outcome::Failed(e.to_string()), Instant::now()));
+                return None;
+            }
+        };
+        if !rt.connected() {
+            self.outcomes.insert(
+                id,
+                (
+                    Outcome::Failed("not sent: the link is down".into()),
+                    Instant::now(),
+                ),
+            );
+            return None;
+        }
+        let reply_id = rt.request_id();
+        self.sent.insert(reply_id, id);
+        self.last_sent = Some(reply_id);
+        self.outcomes
+            .insert(id, (Outcome::Waiting(text), Instant::now()));
+        Some(Action::Link(LinkCommand::Request {
+            request: Request::for_command(&rt.profile, cmd, payload).attempts(attempts),
+            reply_to: ReplyTo::Event(reply_id),
+        }))
+    }
+
+    /// STOP: speed 0, now. When the link is down it is sent as soon as the link is back.
+    pub fn stop(&mut self, rt: &Runtime) -> Option<Action> {
+        if !rt.connected() {
+            self.stop_pending = true;
+            self.trip = Some((Trip::LinkLost, Instant::now()));
+            return None;
+        }
+        // Speed 0 is the same however often it arrives: retried.
+        let a = self.send_with(
+            rt,
+            CMD_SET_SPEED,
+            &[("speed".into(), Input::Raw(Value::Int(0)))],
+            3,
+        );
+        if a.is_some() {
+            self.stop_id = self.last_sent;
+        }
+        a
+    }
+
+    /// The operator confirms they are watching (dead-man).
+    pub fn confirm(&mut self) {
+        self.confirmed_at = Some(Instant::now());
+    }
+
+    /// Arms or disarms the dead-man; arming sets the robot's heartbeat interval to the same
+    /// period, so that the robot's own watchdog (where its firmware has one) agrees.
+    pub fn arm(&mut self, rt: &Runtime, on: bool) -> Option<Action> {
+        self.deadman = on;
+        if !on {
+            return None;
+        }
+        self.confirm();
+        self.trip = None;
+        let secs = i64::from(self.deadman_secs);
+        self.send(
+            rt,
+            CMD_SET_HEARTBEAT,
+            &[("heartbeat".into(), Input::Raw(Value::Int(secs)))],
+        )
+    }
+
+    /// Time left before the dead-man stops the robot.
+    pub fn deadman_left(&self) -> Option<Duration> {
+        if !self.deadman {
+            return None;
+        }
+        let period = Duration::from_secs(u64::from(self.deadman_secs));
+        Some(
+            self.confirmed_at
+                .map_or(Duration::ZERO, |t| period.saturating_sub(t.elapsed())),
+        )
+    }
+
+    /// Called every frame, whichever panel is shown: takes answers, sends STOP when the
+    /// dead-man runs out, and sends a pending STOP once the link is back.
+    pub fn tick(&mut self, rt: &Runtime) -> Vec<Action> {
+        let mut actions = Vec::new();
+        let answered: Vec<u64> = self
+            .sent
+            .keys()
+            .filter(|id| rt.replies.contains_key(id))
+            .copied()
+            .collect();
+        for reply_id in answered {
+            let Some(cmd) = self.sent.remove(&reply_id) else {
+                continue;
+            };
+            let outcome = match rt.replies.get(&reply_id) {
+                Some(Ok(_)) => {
+                    let what = match self.outcomes.get(&cmd) {
+                        Some((Outcome::Waiting(t), _)) => t.clone(),
+                        _ => String::new(),
+                    };
+                    Outcome::Acked(what)
+                }
+                Some(Err(e)) => {
+                    if Some(reply_id) == self.stop_id && !rt.connected() {
+                        // A STOP lost with the link is sent again when the link is back (one
+                        // the robot did not answer is shown, and the operator presses again).
+                        self.stop_pending = true;
+                    }
+                    Outcome::Failed(e.clone())
+                }
+                None => continue,
+            };
+            self.outcomes.insert(cmd, (outcome, Instant::now()));
+        }
+        let connected = rt.connected();
+        if self.deadman && self.was_connected && !connected {
+            self.stop_pending = true;
+            self.trip = Some((Trip::LinkLost, Instant::now()));
+        }
+        self.was_connected = connected;
+        if self.stop_pending && connected {
+            self.stop_pending = false;
+            actions.extend(self.stop(rt));
+            self.trip = Some((Trip::SentAfterReconnect, Instant::now()));
+        }
+        if connected && self.deadman_left() == Some(Duration::ZERO) {
+            actions.extend(self.stop(rt));
+            self.deadman = false;
+            self.trip = Some((Trip::NotConfirmed, Instant::now()));
+        }
+        if self.deadman || self.stop_pending || !self.sent.is_empty() {
+            rt.ctx.request_repaint_after(Duration::from_millis(100));
+        }
+        actions
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::LinkState;
+
+    fn runtime() -> Runtime {
+        let mut rt = Runtime::new(&eframe::egui::Context::default(), "solar-cleanbot").unwrap();
+        rt.state = Some(LinkState::Connected {
+            port: "test".into(),
+            baud: 115_200,
+        });
+        rt
+    }
+
+    /// The command and payload of a request action.
+    fn sent(a: &Action) -> (u8, Vec<u8>) {
+        match a {
+            Action::Link(LinkCommand::Request { request, .. }) => {
+                (request.command, request.payload.clone())
+            }
+            other => panic!("not a request: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn out_of_range_values_are_refused_before_sending() {
+        let rt = runtime();
+        let mut c = Control::default();
+        let a = c.send(&rt, 100, &[("speed".into(), Input::Text("1001".into()))]);
+        assert!(a.is_none());
+        assert!(matches!(
+            c.outcomes.get(&100),
+            Some((Outcome::Failed(e), _)) if e.contains("out of range")
+        ));
+        let a = c.send(&rt, 100, &[("speed".into(), Input::Text("-250".into()))]);
+        assert_eq!(sent(&a.unwrap()), (100, (-250i16).to_le_bytes().to_vec()));
+    }
+
+    #[test]
+    fn a_stop_while_the_link_is_down_is_sent_when_it_is_back() {
+        let mut rt = runtime();
+        let mut c = Control::default();
+        let arm = c.arm(&rt, true).expect("the heartbeat is set");
+        assert_eq!(sent(&arm), (98, 2i16.to_le_bytes().to_vec()));
+        assert!(c.tick(&rt).is_empty(), "confirmed just now");
+        rt.state = Some(LinkState::Lost {
+            reason: "unplugged".into(),
+        });
+        assert!(c.tick(&rt).is_empty(), "nothing can be sent");
+        assert!(c.stop_pending);
+        assert!(matches!(c.trip, Some((Trip::LinkLost, _))));
+        rt.state = Some(LinkState::Connected {
+            port: "test".into(),
+            baud: 115_200,
+        });
+        let actions = c.tick(&rt);
+        assert_eq!(actions.len(), 1, "{actions:?}");
+        assert_eq!(sent(&actions[0]), (100, vec![0, 0]));
+        assert!(!c.stop_pending);
+        assert!(matches!(c.trip, Some((Trip::SentAfterReconnect, _))));
+
+        // STOP pressed while the link is down, without the dead-man, waits for the link too.
+        let mut c = Control::default();
+        rt.state = Some(LinkState::Reconnecting { attempt: 1 });
+        assert!(c.stop(&rt).is_none());
+        assert!(c.stop_pending);
+        rt.state = Some(LinkState::Connected {
+            port: "test".into(),
+            baud: 115_200,
+        });
+        let actions = c.tick(&rt);
+        assert_eq!(sent(&actions[0]), (100, vec![0, 0]));
+    }
+
+    fn reply_id(a: Action) -> u64 {
+        match a {
+            Action::Link(LinkCommand::Request {
+                reply_to: ReplyTo::Event(id),
+                ..
+            }) => id,
+            other => panic!("not a request answered as an event: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_failed_stop_is_sent_again_when_the_link_is_back() {
+        let mut rt = runtime();
+        let mut c = Control::default();
+        // Unanswered on a working link: shown, not repeated on its own.
+        let id = reply_id(c.stop(&rt).unwrap());
+        rt.replies.insert(id, Err("no answer".into()));
+        assert!(c.tick(&rt).is_empty());
+        assert!(!c.stop_pending);
+        assert!(matches!(
+            c.outcomes.get(&100),
+            Some((Outcome::Failed(_), _))
+        ));
+        // Lost with the link: sent again when it is back.
+        let id = reply_id(c.stop(&rt).unwrap());
+        rt.replies.insert(id, Err("link lost: unplugged".into()));
+        rt.state = None;
+        assert!(c.tick(&rt).is_empty());
+        assert!(c.stop_pending);
+        rt.state = Some(LinkState::Connected {
+            port: "test".into(),
+            baud: 115_200,
+        });
+        assert_eq!(sent(&c.tick(&rt)[0]), (100, vec![0, 0]));
+    }
+}

@@ -1,0 +1,493 @@
+//! The solar cleanbot: live readouts and plots (polled by the worker), range-checked controls,
+//! a STOP that is always visible, and an optional dead-man.
+//!
+//! Readouts and controls come from the profile: every telemetry command (97-134) is shown with
+//! its fields, and every action with a payload gets a row of inputs, each checked as typed.
+
+mod control;
+
+pub use control::{Control, Outcome, Trip};
+
+use super::Action;
+use super::runtime::{Reading, Runtime};
+use crate::i18n::Lang;
+use crate::profile::{Command, CommandKind, Field, FieldType, Input, Value};
+use eframe::egui;
+use egui_plot::{Legend, Line, Plot, PlotPoints};
+use std::collections::HashMap;
+use std::time::Duration;
+
+/// Readings older than this are shown as stale.
+const STALE: Duration = Duration::from_secs(3);
+/// The plots' time window, seconds.
+const WINDOW_SECS: f64 = 30.0;
+
+/// The panel's state.
+#[derive(Default)]
+pub struct SolarPanel {
+    /// What it sends, STOP and the dead-man.
+    pub control: Control,
+    /// Typed text by (command id, field ident).
+    pub inputs: HashMap<(u8, String), String>,
+    /// A command that moves the robot, waiting for the operator's yes.
+    confirm: Option<(u8, Vec<(String, Input)>)>,
+    points: Vec<[f64; 2]>,
+}
+
+/// What this panel's jobs report (it runs none: everything goes straight to the worker).
+#[derive(Debug, Clone)]
+pub enum Output {}
+
+const RED: egui::Color32 = egui::Color32::from_rgb(200, 30, 30);
+const GREEN: egui::Color32 = egui::Color32::from_rgb(0, 140, 60);
+
+/// A value as a person reads it, labels in the UI's language.
+fn shown(f: &Field, v: &Value, lang: Lang) -> String {
+    if let Value::Int(raw) = v
+        && let Some(l) = f.label(*raw)
+    {
+        return format!("{} ({raw})", lang.tr(&l.name.en, &l.name.zh));
+    }
+    format!("{}{}", f.format(v), f.unit_suffix())
+}
+
+impl SolarPanel {
+    /// Called every frame whichever panel is shown (STOP after a reconnect, the dead-man).
+    pub fn tick(&mut self, rt: &Runtime) -> Vec<Action> {
+        self.control.tick(rt)
+    }
+
+    /// The STOP button alone, for places outside the panel (the navigation).
+    pub fn stop_button(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+        let b = egui::Button::new(
+            egui::RichText::new(lang.tr("STOP", "停止"))
+                .strong()
+                .color(egui::Color32::WHITE),
+        )
+        .fill(RED)
+        .min_size(egui::vec2(90.0, 32.0));
+        if ui
+            .add(b)
+            .on_hover_text(lang.tr("Speed 0, now", "立即将速度设为 0"))
+            .clicked()
+        {
+            return self.control.stop(rt).into_iter().collect();
+        }
+        Vec::new()
+    }
+
+    /// Draws the panel.
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+        let mut actions = Vec::new();
+        ui.horizontal_wrapped(|ui| {
+            actions.extend(self.stop_button(ui, lang, rt));
+            self.stop_status(ui, lang, rt);
+        });
+        self.deadman(ui, lang, rt, &mut actions);
+        ui.separator();
+        egui::ScrollArea::vertical()
+            .auto_shrink(false)
+            .show(ui, |ui| {
+                ui.columns(3, |cols| {
+                    self.controls(&mut cols[0], lang, rt, &mut actions);
+                    self.readouts(&mut cols[1], lang, rt);
+                    self.plots(&mut cols[2], lang, rt);
+                });
+            });
+        self.confirm_modal(ui, lang, rt, &mut actions);
+        actions
+    }
+
+    fn stop_status(&self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
+        match self.control.outcomes.get(&control::CMD_SET_SPEED) {
+            Some((Outcome::Acked(t), at)) if t.ends_with("speed=0") => {
+                ui.colored_label(
+                    GREEN,
+                    format!(
+                        "{} ({:.0} s)",
+                        lang.tr("speed 0 acknowledged", "速度 0 已确认"),
+                        at.elapsed().as_secs_f64()
+                    ),
+                );
+            }
+            Some((Outcome::Waiting(t), _)) if t.ends_with("speed=0") => {
+                ui.label(lang.tr("STOP sent, waiting for the answer…", "已发送停止,等待应答…"));
+            }
+            Some((Outcome::Failed(e), _)) => {
+                ui.colored_label(RED, format!("{}: {e}", lang.tr("speed", "速度")));
+            }
+            _ => {}
+        }
+        if self.control.stop_pending {
+            ui.colored_label(
+                RED,
+                lang.tr(
+                    "Link down: STOP will be sent as soon as the link is back.",
+                    "链路中断:链路恢复后将立即发送停止。",
+                ),
+            );
+        }
+        match &self.control.trip {
+            Some((Trip::NotConfirmed, at)) => {
+                ui.colored_label(
+                    RED,
+                    format!(
+                        "{} ({:.0} s)",
+                        lang.tr(
+                            "Dead-man: the operator stopped confirming; STOP sent",
+                            "失能保护:操作员未持续确认,已发送停止",
+                        ),
+                        at.elapsed().as_secs_f64()
+                    ),
+                );
+            }
+            Some((Trip::SentAfterReconnect, at)) => {
+                ui.colored_label(
+                    RED,
+                    format!(
+                        "{} ({:.0} s)",
+                        lang.tr("The link came back: STOP sent", "链路已恢复:已发送停止",),
+                        at.elapsed().as_secs_f64()
+                    ),
+                );
+            }
+            Some((Trip::LinkLost, _)) | None => {}
+        }
+        if !rt.connected() && rt.conn.is_some() {
+            ui.colored_label(RED, lang.tr("link down", "链路中断"));
+        }
+    }
+
+    fn deadman(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, actions: &mut Vec<Action>) {
+        ui.horizontal_wrapped(|ui| {
+            let mut on = self.control.deadman;
+            if ui
+                .checkbox(&mut on, lang.tr("Dead-man", "失能保护"))
+                .changed()
+            {
+                actions.extend(self.control.arm(rt, on));
+            }
+            let label = ui.label(lang.tr("confirm every", "确认间隔"));
+            ui.add_enabled(
+                !self.control.deadman,
+                egui::DragValue::new(&mut self.control.deadman_secs)
+                    .range(control::DEADMAN_SECS)
+                    .suffix(" s"),
+            )
+            .labelled_by(label.id);
+            if self.control.deadman {
+                let hold = ui.add(
+                    egui::Button::new(
+                        lang.tr("Hold to confirm (or press Space)", "按住确认(或按空格键)"),
+                    )
+                    .sense(egui::Sense::click_and_drag()),
+                );
+                let typing = ui.ctx().memory(|m| m.focused().is_some());
+                let space = !typing && ui.input(|i| i.key_pressed(egui::Key::Space));
+                if hold.is_pointer_button_down_on() || hold.clicked() || space {
+                    self.control.confirm();
+                }
+                if let Some(left) = self.control.deadman_left() {
+                    let f = left.as_secs_f32() / self.control.deadman_secs.max(1) as f32;
+                    ui.add(
+                        egui::ProgressBar::new(f)
+                            .desired_width(120.0)
+                            .text(format!("{:.1} s", left.as_secs_f32())),
+                    );
+                }
+            }
+        });
+        ui.weak(lang.tr(
+            "While the dead-man is armed, botbench sends STOP if nobody confirms within the interval, \
+             and sets the robot's heartbeat interval to the same period. If the link is down botbench \
+             cannot reach the robot: only the robot's own heartbeat timeout can stop it then (the \
+             protocol does not say what the firmware does when heartbeats stop). botbench sends STOP \
+             as soon as the link is back.",
+            "失能保护开启时,若在间隔内无人确认,botbench 发送停止,并将机器人心跳间隔设为相同时长。\
+             链路中断时 botbench 无法联系机器人:此时只有机器人自身的心跳超时能让它停下(协议未说明心跳中断时固件的行为)。\
+             链路恢复后 botbench 立即发送停止。",
+        ));
+    }
+
+    fn readouts(&self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
+        ui.strong(lang.tr("Readouts", "实时读数"));
+        let cmds = rt.profile.commands.iter().filter(|c| {
+            c.kind == CommandKind::Telemetry
+                && c.id > 9
+                && c.request.is_empty()
+                && !c.reply.is_empty()
+        });
+        egui::Grid::new("solar-readouts")
+            .num_columns(2)
+            .striped(true)
+            .show(ui, |ui| {
+                for cmd in cmds {
+                    ui.label(lang.tr(&cmd.name.en, &cmd.name.zh))
+                        .on_hover_text(format!("{} ({})", cmd.ident, cmd.id));
+                    match rt.readings.get(&cmd.id) {
+                        Some(Reading::Values(values, at)) => {
+                            let stale = at.elapsed() > STALE;
+                            ui.horizontal_wrapped(|ui| {
+                                for (k, v) in values {
+                                    let Some(f) = cmd.reply.iter().find(|f| &f.ident == k) else {
+                                        continue;
+                                    };
+                                    let text = format!(
+                                        "{}: {}",
+                                        lang.tr(&f.name.en, &f.name.zh),
+                                        shown(f, v, lang)
+                                    );
+                                    if stale {
+                                        ui.weak(text);
+                                    } else {
+                                        ui.monospace(text);
+                                    }
+                                }
+                                if stale {
+                                    ui.colored_label(
+                                        RED,
+                                        format!(
+                                            "{} {:.0} s",
+                                            lang.tr("stale: last answer", "数据过期:上次应答"),
+                                            at.elapsed().as_secs_f64()
+                                        ),
+                                    );
+                                }
+                            });
+                        }
+                        Some(Reading::Failed(e)) => {
+                            ui.colored_label(RED, e);
+                        }
+                        None => {
+                            ui.weak(lang.tr("no answer yet", "尚无应答"));
+                        }
+                    }
+                    ui.end_row();
+                }
+            });
+    }
+
+    fn plots(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
+        let now = rt.t0.elapsed().as_secs_f64();
+        let width_px = ui.available_width().max(100.0) as usize;
+        for plot in &rt.profile.plots {
+            ui.label(egui::RichText::new(lang.tr(&plot.name.en, &plot.name.zh)).strong());
+            let set = rt.plots.get(&plot.id);
+            let points = &mut self.points;
+            Plot::new(("solar-plot", &plot.id))
+                .height(110.0)
+                .legend(Legend::default())
+                .allow_drag(false)
+                .allow_zoom(false)
+                .allow_scroll(false)
+                .show(ui, |pui| {
+                    pui.set_plot_bounds_x(now - WINDOW_SECS..=now);
+                    pui.set_auto_bounds([false, true]);
+                    let Some(set) = set else { return };
+                    for name in &plot.fields {
+                        let Some(series) = set.get(name) else {
+                            continue;
+                        };
+                        points.clear();
+                        series.decimate(now - WINDOW_SECS, now, width_px, points);
+                        pui.line(Line::new(name.clone(), PlotPoints::from(points.clone())));
+                    }
+                });
+        }
+    }
+
+    /// The typed inputs of `cmd`, checked; an error names the first bad field.
+    fn inputs_of(&self, cmd: &Command) -> Result<Vec<(String, Input)>, String> {
+        cmd.request
+            .iter()
+            .map(|f| {
+                let text = self
+                    .inputs
+                    .get(&(cmd.id, f.ident.clone()))
+                    .map_or("", String::as_str);
+                if text.trim().is_empty() {
+                    return Err(format!(
+                        "{}: give a value ({})",
+                        f.ident,
+                        super::tuning::range_text(f)
+                    ));
+                }
+                f.parse(text).map_err(|e| e.to_string())?;
+                Ok((f.ident.clone(), Input::Text(text.to_string())))
+            })
+            .collect()
+    }
+
+    fn controls(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, actions: &mut Vec<Action>) {
+        ui.strong(lang.tr("Controls", "控制"));
+        let profile = rt.profile.clone();
+        let cmds = profile
+            .commands
+            .iter()
+            .filter(|c| c.kind == CommandKind::Action && !c.request.is_empty());
+        for cmd in cmds {
+            ui.horizontal_wrapped(|ui| {
+                for f in &cmd.request {
+                    self.input(ui, lang, cmd, f);
+                }
+            });
+            let inputs = self.inputs_of(cmd);
+            ui.horizontal_wrapped(|ui| {
+                let resp = ui.add_enabled(
+                    rt.connected() && inputs.is_ok(),
+                    egui::Button::new(lang.tr(&cmd.name.en, &cmd.name.zh)),
+                );
+                let resp = match &inputs {
+                    Err(e) => resp.on_disabled_hover_text(e),
+                    Ok(_) => resp.on_hover_text(format!("{} ({})", cmd.ident, cmd.id)),
+                };
+                if resp.clicked()
+                    && let Ok(inputs) = inputs.clone()
+                {
+                    let moving = inputs.iter().any(|(_, v)| match v {
+                        Input::Text(t) => t.trim().parse::<f64>() != Ok(0.0),
+                        Input::Raw(r) => *r != Value::Int(0),
+                    });
+                    if cmd.confirm && moving {
+                        self.confirm = Some((cmd.id, inputs));
+                    } else {
+                        actions.extend(self.control.send(rt, cmd.id, &inputs));
+                    }
+                }
+                // Why it cannot be sent, as typed; then what the last send did.
+                let typed = cmd.request.iter().any(|f| {
+                    self.inputs
+                        .get(&(cmd.id, f.ident.clone()))
+                        .is_some_and(|t| !t.is_empty())
+                });
+                if let (Err(e), true) = (&inputs, typed) {
+                    ui.colored_label(RED, format!("{} {e}", lang.tr("refused:", "拒绝:")));
+                } else {
+                    match self.control.outcomes.get(&cmd.id) {
+                        Some((Outcome::Waiting(t), _)) => {
+                            ui.label(format!(
+                                "{t}: {}",
+                                lang.tr("sent, waiting…", "已发送,等待应答…")
+                            ));
+                        }
+                        Some((Outcome::Acked(t), at)) => {
+                            ui.colored_label(
+                                GREEN,
+                                format!(
+                                    "{t}: {} ({:.0} s)",
+                                    lang.tr("acknowledged", "设备已确认"),
+                                    at.elapsed().as_secs_f64()
+                                ),
+                            );
+                        }
+                        Some((Outcome::Failed(e), _)) => {
+                            ui.colored_label(RED, e);
+                        }
+                        None => {}
+                    }
+                }
+            });
+            ui.add_space(4.0);
+        }
+    }
+
+    fn input(&mut self, ui: &mut egui::Ui, lang: Lang, cmd: &Command, f: &Field) {
+        let text = self.inputs.entry((cmd.id, f.ident.clone())).or_default();
+        let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
+        if f.labels.is_empty() || f.range.is_some() {
+            let bad = !text.is_empty() && f.parse(text).is_err();
+            let width = if matches!(f.ty, FieldType::Bytes(_)) {
+                160.0
+            } else {
+                70.0
+            };
+            let mut edit = egui::TextEdit::singleline(text)
+                .desired_width(width)
+                .hint_text(super::tuning::range_text(f));
+            if bad {
+                edit = edit.text_color(RED);
+            }
+            ui.add(edit).labelled_by(name.id);
+        } else {
+            egui::ComboBox::from_id_salt(("solar", cmd.id, &f.ident))
+                .selected_text(match f.labels.iter().find(|l| l.ident == *text) {
+                    Some(l) => lang.tr(&l.name.en, &l.name.zh).to_string(),
+                    None => "—".to_string(),
+                })
+                .show_ui(ui, |ui| {
+                    for l in &f.labels {
+                        let label = format!("{} ({})", lang.tr(&l.name.en, &l.name.zh), l.value);
+                        if ui.selectable_label(*text == l.ident, label).clicked() {
+                            *text = l.ident.clone();
+                        }
+                    }
+                })
+                .response
+                .labelled_by(name.id);
+        }
+    }
+
+    fn confirm_modal(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &Runtime,
+        actions: &mut Vec<Action>,
+    ) {
+        let Some((id, inputs)) = &self.confirm else {
+            return;
+        };
+        let name = rt.profile.command_by_id(*id).map_or(String::new(), |c| {
+            lang.tr(&c.name.en, &c.name.zh).to_string()
+        });
+        let what = inputs
+            .iter()
+            .map(|(k, v)| match v {
+                Input::Text(t) => format!("{k}={t}"),
+                Input::Raw(r) => format!("{k}={r:?}"),
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        let mut decision = None;
+        let mut stop = Vec::new();
+        let modal = egui::Modal::new(egui::Id::unique("solar-confirm")).show(ui.ctx(), |ui| {
+            ui.heading(lang.tr("The robot will move", "机器人将会动作"));
+            ui.label(format!("{name}: {what}"));
+            ui.label(lang.tr(
+                "Make sure it is safe, then confirm. STOP stays available.",
+                "请确认安全后再执行。停止按钮始终可用。",
+            ));
+            ui.horizontal(|ui| {
+                if ui.button(lang.tr("Confirm", "确认")).clicked() {
+                    decision = Some(true);
+                }
+                if ui.button(lang.tr("Cancel", "取消")).clicked() {
+                    decision = Some(false);
+                }
+                ui.separator();
+                stop = self.stop_button(ui, lang, rt);
+            });
+        });
+        if !stop.is_empty() {
+            actions.extend(stop);
+            decision = Some(false);
+        }
+        if modal.should_close() && decision.is_none() {
+            decision = Some(false);
+        }
+        match decision {
+            Some(true) => {
+                if let Some((id, inputs)) = self.confirm.take() {
+                    actions.extend(self.control.send(rt, id, &inputs));
+                }
+            }
+            Some(false) => self.confirm = None,
+            None => {}
+        }
+    }
+
+    /// Takes what one of its jobs reported.
+    pub fn on_output(&mut self, out: Output) {
+        match out {}
+    }
+}

@@ -1,0 +1,543 @@
+//! The real app, driven through egui_kittest against the MSP simulators on ptys: capability flags,
+//! the solar cleanbot's controls, STOP and dead-man, and the window cleaner's self-test.
+
+use botbench::i18n::Lang;
+use botbench::sim::solar_cleanbot::SolarCleanbot;
+use botbench::sim::window_cleaner::{Fault, WindowCleaner};
+use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
+use botbench::ui::{App, PanelId, Saved, SolarOutcome, SolarTrip, Target};
+use eframe::egui;
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+type H = Harness<'static, Option<App>>;
+
+struct Bench<D> {
+    server: PtyServer,
+    sim: Arc<Mutex<D>>,
+}
+
+fn serve<D: botbench::sim::Device + 'static>(device: D) -> Bench<D> {
+    let sim = Arc::new(Mutex::new(device));
+    let shared: SharedDevice = sim.clone();
+    Bench {
+        server: PtyServer::start(shared, Faults::default()).unwrap(),
+        sim,
+    }
+}
+
+fn window_cleaner(flags: Option<u8>, faults: &[Fault]) -> Bench<WindowCleaner> {
+    let mut wc = WindowCleaner::new(&SimOptions::default()).unwrap();
+    wc.set_flags(flags);
+    for f in faults {
+        wc.inject(*f);
+    }
+    serve(wc)
+}
+
+fn solar() -> Bench<SolarCleanbot> {
+    serve(SolarCleanbot::new(&SimOptions::default()).unwrap())
+}
+
+fn harness(path: &str, profile: &str, panel: PanelId, lang: Lang) -> H {
+    let saved = Saved {
+        target: Target::Port(path.to_string()),
+        baud: 115_200,
+        profile: profile.into(),
+        panel,
+        lang,
+        ..Saved::default()
+    };
+    Harness::builder()
+        .with_size(egui::vec2(1400.0, 1000.0))
+        .build_ui_state(
+            move |ui, app: &mut Option<App>| {
+                let app = app
+                    .get_or_insert_with(|| App::new(ui.ctx(), saved.clone()).expect("app starts"));
+                app.logic(ui.ctx());
+                app.ui(ui);
+            },
+            None,
+        )
+}
+
+/// Steps the UI in real time until `done` holds.
+fn step_until(h: &mut H, what: &str, done: impl Fn(&App) -> bool) {
+    let deadline = Instant::now() + Duration::from_secs(20);
+    loop {
+        h.step();
+        if h.state().as_ref().is_some_and(&done) {
+            return;
+        }
+        if Instant::now() >= deadline {
+            let a = app(h);
+            panic!(
+                "timed out waiting for {what}: info {:?}, state {:?}, solar inputs {:?}, outcomes {:?}, \
+                 status {:?}, self-test running {} results {:?} error {:?}",
+                a.rt.info,
+                a.rt.state,
+                a.solar.inputs,
+                a.solar.control.outcomes,
+                a.rt.status.as_ref().map(|s| &s.text),
+                a.selftest.running,
+                a.selftest.results,
+                a.selftest.error
+            );
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+fn app(h: &H) -> &App {
+    h.state().as_ref().expect("app")
+}
+
+fn identified(a: &App) -> bool {
+    a.rt.connected() && matches!(a.rt.info, Some(Ok(_)))
+}
+
+fn nav_has(h: &H, name: &str) -> bool {
+    h.query_all_by_label(name).next().is_some()
+}
+
+#[test]
+fn a_clear_capability_bit_hides_its_panels_and_the_app_leaves_them() {
+    // Bit 0 (config page) clear: the parameter pages are hidden.
+    let b = window_cleaner(Some(0b1110), &[]);
+    let mut h = harness(b.server.path(), "window-cleaner", PanelId::Tuning, Lang::En);
+    step_until(&mut h, "the device identified", identified);
+    h.run_steps(2);
+    let a = app(&h);
+    assert!(!a.panels().contains(&PanelId::Tuning), "{:?}", a.panels());
+    assert!(!a.panels().contains(&PanelId::Presets), "{:?}", a.panels());
+    assert!(a.panels().contains(&PanelId::SelfTest));
+    assert_ne!(
+        a.saved.panel,
+        PanelId::Tuning,
+        "the app left the hidden panel"
+    );
+    assert!(!nav_has(&h, "Tuning") && !nav_has(&h, "Presets"));
+    assert!(nav_has(&h, "Self-test"));
+    // The device panel says why.
+    h.state_mut().as_mut().unwrap().saved.panel = PanelId::Device;
+    h.run_steps(2);
+    assert!(h.query_by_label_contains("Hidden (not supported").is_some());
+    assert!(h.query_all_by_label("not supported").next().is_some());
+
+    // The same robot with the bit set shows them.
+    let b = window_cleaner(Some(0b1111), &[]);
+    let mut h = harness(b.server.path(), "window-cleaner", PanelId::Tuning, Lang::En);
+    step_until(&mut h, "the device identified", identified);
+    h.run_steps(2);
+    assert!(app(&h).panels().contains(&PanelId::Tuning));
+    assert_eq!(app(&h).saved.panel, PanelId::Tuning);
+    assert!(nav_has(&h, "Tuning"));
+}
+
+#[test]
+fn the_device_panel_pings_and_shows_version_build_and_flags() {
+    let b = window_cleaner(Some(0b1111), &[]);
+    let mut h = harness(b.server.path(), "window-cleaner", PanelId::Device, Lang::En);
+    // The panel reads version and power state on its own once the link is free.
+    step_until(&mut h, "the power state", |a| {
+        a.device.power.is_some() && a.rt.job_progress().is_none()
+    });
+    assert!(matches!(app(&h).device.power, Some(Ok(_))));
+    h.get_by_label("Ping").click();
+    step_until(&mut h, "the ping", |a| a.device.ping.is_some());
+    assert!(matches!(app(&h).device.ping, Some(Ok(_))));
+    step_until(&mut h, "the ping job to end", |a| {
+        a.rt.job_progress().is_none()
+    });
+    b.sim.lock().unwrap().set_flags(Some(0b0101));
+    h.get_by_label("Read version and power state").click();
+    step_until(&mut h, "the new flags", |a| {
+        matches!(&a.device.version, Some(Ok(v)) if v.flags == Some(0b0101))
+            && matches!(&a.rt.info, Some(Ok(v)) if v.flags == Some(0b0101))
+    });
+    h.run_steps(2);
+    assert_eq!(
+        app(&h)
+            .device
+            .version
+            .as_ref()
+            .map(|v| v.as_ref().map(|v| v.flags)),
+        Some(Ok(Some(0b0101)))
+    );
+    assert!(
+        h.query_by_label("2024-05-17 14:03:52").is_some(),
+        "build date and time"
+    );
+    assert!(h.query_by_label("1.4.2").is_some(), "firmware");
+    assert!(h.query_by_label("Config page supported").is_some());
+    assert_eq!(h.query_all_by_label("supported").count(), 2);
+    assert_eq!(h.query_all_by_label("not supported").count(), 2);
+}
+
+fn text_input<'h>(h: &'h H, label: &'h str) -> egui_kittest::Node<'h> {
+    h.get_by(|n| {
+        n.role() == egui::accesskit::Role::TextInput && n.label().as_deref() == Some(label)
+    })
+}
+
+fn type_into(h: &mut H, label: &str, text: &str) {
+    text_input(h, label).focus();
+    h.step();
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.step();
+    text_input(h, label).type_text(text);
+    h.run_steps(2);
+}
+
+fn solar_ready(b: &Bench<SolarCleanbot>) -> H {
+    let mut h = harness(b.server.path(), "solar-cleanbot", PanelId::Solar, Lang::En);
+    step_until(&mut h, "the device identified", identified);
+    h.run_steps(2);
+    h
+}
+
+fn drive(h: &mut H, b: &Bench<SolarCleanbot>, speed: i16) {
+    type_into(h, "Speed value", &speed.to_string());
+    h.get_by_label("Set speed").click();
+    h.run_steps(2);
+    // Moving asks first.
+    h.get_by_label("Confirm").click();
+    step_until(h, "the robot to take the speed", |_| {
+        b.sim.lock().unwrap().commanded_speed() == speed
+    });
+}
+
+#[test]
+fn speed_rotate_and_stop_from_the_solar_panel_drive_the_simulated_robot() {
+    let b = solar();
+    let mut h = solar_ready(&b);
+    assert!(app(&h).panels().contains(&PanelId::Solar));
+    assert!(!app(&h).panels().contains(&PanelId::SelfTest));
+    drive(&mut h, &b, 300);
+    step_until(&mut h, "the robot to move", |_| {
+        b.sim.lock().unwrap().speed() > 100.0
+    });
+    step_until(&mut h, "the readouts", |a| {
+        a.rt.plots
+            .get("motor_speed")
+            .and_then(|s| s.get("averageSpeed"))
+            .is_some_and(|s| s.len() > 5)
+    });
+    type_into(&mut h, "Rotate value", "90");
+    h.get_by_label("Rotate").click();
+    h.run_steps(2);
+    h.get_by_label("Confirm").click();
+    step_until(&mut h, "the robot to turn", |_| {
+        b.sim.lock().unwrap().yaw() > 20.0
+    });
+    // STOP, while a job runs.
+    h.state_mut().as_mut().unwrap().saved.panel = PanelId::Device;
+    h.run_steps(2);
+    h.get_by_label("Read version and power state").click();
+    h.run_steps(1);
+    h.get_by_label("STOP").click();
+    step_until(&mut h, "STOP", |_| {
+        b.sim.lock().unwrap().commanded_speed() == 0
+    });
+    h.state_mut().as_mut().unwrap().saved.panel = PanelId::Solar;
+    step_until(&mut h, "the STOP acknowledged", |a| {
+        matches!(
+            a.solar.control.outcomes.get(&100),
+            Some((SolarOutcome::Acked(_), _))
+        )
+    });
+}
+
+#[test]
+fn out_of_range_control_values_are_refused_and_nothing_is_sent() {
+    let b = solar();
+    let mut h = solar_ready(&b);
+    let before = b.sim.lock().unwrap().heartbeat();
+    type_into(&mut h, "Speed value", "5000");
+    assert!(
+        h.query_all_by_label_contains("out of range")
+            .next()
+            .is_some(),
+        "the refusal is shown as typed"
+    );
+    h.get_by_label("Set speed").click();
+    h.run_steps(3);
+    assert!(h.query_by_label("Confirm").is_none(), "nothing to confirm");
+    type_into(&mut h, "Heartbeat interval", "0");
+    h.get_by_label("Set heartbeat").click();
+    type_into(&mut h, "Frame rate", "abc");
+    h.get_by_label("Set vision frame rate").click();
+    h.run_steps(5);
+    std::thread::sleep(Duration::from_millis(100));
+    h.run_steps(2);
+    let sim = b.sim.lock().unwrap();
+    assert_eq!(sim.commanded_speed(), 0);
+    assert_eq!(sim.heartbeat(), before);
+    assert_eq!(sim.frame_rate(), 30);
+    drop(sim);
+    assert!(
+        app(&h).solar.control.outcomes.is_empty(),
+        "nothing was sent"
+    );
+    // A value in range goes through and is acknowledged.
+    type_into(&mut h, "Frame rate", "15");
+    h.get_by_label("Set vision frame rate").click();
+    step_until(&mut h, "the frame rate", |_| {
+        b.sim.lock().unwrap().frame_rate() == 15
+    });
+}
+
+#[test]
+fn the_dead_man_stops_the_robot_when_the_operator_stops_confirming() {
+    let b = solar();
+    let mut h = solar_ready(&b);
+    drive(&mut h, &b, 200);
+    h.state_mut().as_mut().unwrap().solar.control.deadman_secs = 1;
+    h.get_by_label("Dead-man").click();
+    // Arming sets the robot's heartbeat to the same period.
+    step_until(&mut h, "the heartbeat set", |_| {
+        b.sim.lock().unwrap().heartbeat() == 1
+    });
+    h.get_by_label("Hold to confirm (or press Space)").click();
+    // Nobody confirms any more.
+    step_until(&mut h, "the dead-man STOP", |_| {
+        b.sim.lock().unwrap().commanded_speed() == 0
+    });
+    assert!(matches!(
+        app(&h).solar.control.trip,
+        Some((SolarTrip::NotConfirmed, _))
+    ));
+    assert!(!app(&h).solar.control.deadman, "it disarms once tripped");
+    h.run_steps(2);
+    assert!(h.query_by_label_contains("stopped confirming").is_some());
+}
+
+const EXAMPLE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/presets/window-cleaner-selftest.ron"
+);
+
+/// The example plan with the corner step's timeout cut to 3 s, written to a temp file.
+fn plan_file(tag: &str) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(EXAMPLE).unwrap();
+    let text = text.replace("timeout_ms: 20000", "timeout_ms: 3000");
+    let path = std::env::temp_dir().join(format!(
+        "botbench-gui-plan-{tag}-{}.ron",
+        std::process::id()
+    ));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Clicks Run once nothing else runs, and waits for the job to start.
+fn start_selftest(h: &mut H) {
+    step_until(h, "no job running", |a| a.rt.job_progress().is_none());
+    h.get_by_label("Run self-test").click();
+    step_until(h, "the self-test job", |a| {
+        a.selftest.running && a.rt.job.as_ref().is_some_and(|j| !j.is_done())
+    });
+}
+
+/// Opens the plan, runs it, and covers the corners when the prompt asks (answering through the
+/// modal). Returns the log's path.
+fn run_selftest(h: &mut H, b: &Bench<WindowCleaner>, tag: &str) -> std::path::PathBuf {
+    let plan = plan_file(tag);
+    let log = std::env::temp_dir().join(format!(
+        "botbench-gui-log-{tag}-{}.jsonl",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_file(&log);
+    step_until(h, "the device identified", |a| {
+        identified(a) && a.rt.job_progress().is_none()
+    });
+    {
+        let a = h.state_mut().as_mut().unwrap();
+        a.selftest.path = plan.display().to_string();
+        a.selftest.log_path = log.display().to_string();
+    }
+    h.step();
+    h.get_by_label("Open plan").click();
+    h.run_steps(2);
+    assert!(
+        app(h).selftest.plan.is_some(),
+        "{:?}",
+        app(h).selftest.error
+    );
+    start_selftest(h);
+    step_until(h, "the operator prompt", |a| a.selftest.prompt.is_some());
+    h.run_steps(2);
+    assert!(h.query_by_label_contains("corner switches").is_some());
+    let sim = b.sim.clone();
+    std::thread::spawn(move || {
+        for bits in [0b0001, 0b0011, 0b0111, 0b1111] {
+            sim.lock().unwrap().set_corners(bits);
+            std::thread::sleep(Duration::from_millis(40));
+        }
+    });
+    h.get_by_label("Done").click();
+    step_until(h, "the report", |a| a.selftest.report.is_some());
+    h.run_steps(2);
+    let _ = std::fs::remove_file(&plan);
+    log
+}
+
+#[test]
+fn the_self_test_passes_on_a_healthy_robot_and_logs_the_device() {
+    let b = window_cleaner(Some(0x0F), &[]);
+    let mut h = harness(
+        b.server.path(),
+        "window-cleaner",
+        PanelId::SelfTest,
+        Lang::En,
+    );
+    let log = run_selftest(&mut h, &b, "pass");
+    let report = app(&h).selftest.report.clone().unwrap();
+    assert!(report.pass, "{report:#?}");
+    assert_eq!(
+        h.query_all_by_label("PASS").count(),
+        report.results.len() + 1,
+        "every row and the banner"
+    );
+    assert!(h.query_all_by_label("FAIL").next().is_none());
+    assert!(
+        h.query_by_label("11.5 V to 16.8 V").is_some(),
+        "bounds with units"
+    );
+    let text = std::fs::read_to_string(&log).unwrap();
+    assert_eq!(text.lines().count(), 1);
+    assert!(
+        text.contains("\"pass\":true") && text.contains("2024-05-17 14:03:52"),
+        "{text}"
+    );
+    let _ = std::fs::remove_file(&log);
+}
+
+#[test]
+fn the_self_test_fails_naming_the_faulty_check() {
+    let b = window_cleaner(Some(0x0F), &[Fault::FanCurrentStuck]);
+    let mut h = harness(
+        b.server.path(),
+        "window-cleaner",
+        PanelId::SelfTest,
+        Lang::En,
+    );
+    let log = run_selftest(&mut h, &b, "fail");
+    let report = app(&h).selftest.report.clone().unwrap();
+    assert!(!report.pass);
+    let failed: Vec<&str> = report.failed().map(|r| r.name.as_str()).collect();
+    assert_eq!(failed, ["Fan current"], "{report:#?}");
+    assert_eq!(
+        h.query_all_by_label("FAIL").count(),
+        2,
+        "the row and the banner"
+    );
+    assert!(h.query_by_label("Failed: Fan current").is_some());
+    assert_eq!(b.sim.lock().unwrap().fan_pwm(), 0, "the fan is off after");
+    let _ = std::fs::remove_file(&log);
+}
+
+#[test]
+fn a_malformed_plan_is_refused_with_its_line() {
+    let b = window_cleaner(Some(0x0F), &[]);
+    let mut h = harness(
+        b.server.path(),
+        "window-cleaner",
+        PanelId::SelfTest,
+        Lang::En,
+    );
+    step_until(&mut h, "the link", |a| a.rt.connected());
+    let path =
+        std::env::temp_dir().join(format!("botbench-gui-bad-plan-{}.ron", std::process::id()));
+    std::fs::write(
+        &path,
+        "(\n  version: 1,\n  profile: \"window-cleaner\",\n  name: \"bad\",\n  steps: [\n    Reads(name: \"Water\", command: \"MSP_NO_SUCH_COMMAND\"),\n  ],\n)\n",
+    )
+    .unwrap();
+    h.state_mut().as_mut().unwrap().selftest.path = path.display().to_string();
+    h.step();
+    h.get_by_label("Open plan").click();
+    h.run_steps(2);
+    let err = app(&h).selftest.error.clone().expect("refused");
+    assert!(
+        err.contains(":6:") && err.contains("MSP_NO_SUCH_COMMAND"),
+        "{err}"
+    );
+    assert!(app(&h).selftest.plan.is_none());
+    assert!(
+        h.query_by_label("Run self-test").is_none(),
+        "nothing to run"
+    );
+    assert!(h.query_by_label_contains("The plan was refused").is_some());
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn the_msp_panels_render_in_english_and_chinese() {
+    let b = solar();
+    for lang in [Lang::En, Lang::Zh] {
+        let mut h = harness(b.server.path(), "solar-cleanbot", PanelId::Solar, lang);
+        step_until(&mut h, "readings", |a| a.rt.readings.len() > 5);
+        for panel in app(&h).panels() {
+            h.state_mut().as_mut().unwrap().saved.panel = panel;
+            h.run_steps(2);
+        }
+        drop(h);
+    }
+    let b = window_cleaner(Some(0x0F), &[]);
+    for lang in [Lang::En, Lang::Zh] {
+        let mut h = harness(b.server.path(), "window-cleaner", PanelId::SelfTest, lang);
+        step_until(&mut h, "the link", |a| a.rt.connected());
+        h.state_mut().as_mut().unwrap().selftest.path = EXAMPLE.into();
+        h.step();
+        let open = lang.tr("Open plan", "打开方案");
+        h.get_by_label(open).click();
+        h.run_steps(2);
+        assert!(app(&h).selftest.plan.is_some());
+        h.state_mut().as_mut().unwrap().saved.panel = PanelId::Device;
+        h.run_steps(2);
+    }
+}
+
+#[test]
+fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step() {
+    let b = window_cleaner(Some(0x0F), &[]);
+    let mut h = harness(
+        b.server.path(),
+        "window-cleaner",
+        PanelId::SelfTest,
+        Lang::En,
+    );
+    let plan = plan_file("lost");
+    step_until(&mut h, "the device identified", |a| {
+        identified(a) && a.rt.job_progress().is_none()
+    });
+    {
+        let a = h.state_mut().as_mut().unwrap();
+        a.selftest.path = plan.display().to_string();
+        a.selftest.log_path = String::new();
+    }
+    h.step();
+    h.get_by_label("Open plan").click();
+    h.run_steps(2);
+    start_selftest(&mut h);
+    step_until(&mut h, "the operator prompt", |a| {
+        a.selftest.prompt.is_some()
+    });
+    b.server.vanish_handle().vanish();
+    h.run_steps(2);
+    h.get_by_label("Done").click();
+    step_until(&mut h, "the report", |a| a.selftest.report.is_some());
+    h.run_steps(2);
+    let report = app(&h).selftest.report.clone().unwrap();
+    assert!(!report.pass);
+    let aborted = report.aborted.as_deref().unwrap_or_default();
+    assert!(aborted.starts_with("step 'Corner switches':"), "{aborted}");
+    assert!(
+        h.query_by_label_contains("Ended early: step 'Corner switches'")
+            .is_some()
+    );
+    assert!(h.query_all_by_label("PASS").count() < report.results.len() + 1);
+    let _ = std::fs::remove_file(&plan);
+}
