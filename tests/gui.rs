@@ -52,7 +52,7 @@ fn harness(path: &str, panel: PanelId) -> Harness<'static, Option<App>> {
 
 /// Steps the UI in real time until `done` holds.
 fn step_until(h: &mut Harness<'static, Option<App>>, what: &str, done: impl Fn(&App) -> bool) {
-    let deadline = Instant::now() + Duration::from_secs(15);
+    let deadline = Instant::now() + Duration::from_secs(40);
     loop {
         h.step();
         if h.state().as_ref().is_some_and(&done) {
@@ -74,7 +74,10 @@ fn all_read(app: &App) -> bool {
 fn read_all(h: &mut Harness<'static, Option<App>>) {
     step_until(h, "the link", |a| a.rt.connected());
     h.get_by_label("Read all").click();
-    step_until(h, "every parameter read", all_read);
+    // Also the read job's end: while it runs, writing is disabled.
+    step_until(h, "every parameter read", |a| {
+        all_read(a) && a.rt.job_progress().is_none()
+    });
 }
 
 #[test]
