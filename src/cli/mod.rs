@@ -70,6 +70,10 @@ enum Cmd {
         /// tuya-vacuum (its profile unless --profile is given).
         #[arg(long, value_name = "KIND", conflicts_with = "port")]
         demo: Option<String>,
+        /// The panel to show first: Device, Tuning, Telemetry, Presets, Actions, Solar,
+        /// SelfTest, ServoBench, TuyaConsole or Monitor (if the device has it).
+        #[arg(long, value_name = "PANEL", value_parser = parse_panel)]
+        panel: Option<crate::ui::PanelId>,
     },
     /// Decode or build frames of the three protocols.
     #[command(subcommand)]
@@ -143,8 +147,9 @@ fn run(cli: Cli) -> CliResult {
             baud,
             profile,
             demo,
-        }) => gui(port, baud, profile, demo),
-        None => gui(None, None, None, None),
+            panel,
+        }) => gui(port, baud, profile, demo, panel),
+        None => gui(None, None, None, None, None),
     }
 }
 
@@ -215,11 +220,22 @@ fn bench(long: bool, json: bool) -> CliResult {
     Ok(0)
 }
 
+/// A panel by its name, as in the saved settings.
+fn parse_panel(name: &str) -> Result<crate::ui::PanelId, String> {
+    ron::from_str(name).map_err(|_| {
+        format!(
+            "unknown panel '{name}'; known: Device, Tuning, Telemetry, Presets, Actions, Solar, \
+             SelfTest, ServoBench, TuyaConsole, Monitor"
+        )
+    })
+}
+
 fn gui(
     port: Option<String>,
     baud: Option<u32>,
     mut profile: Option<String>,
     demo: Option<String>,
+    panel: Option<crate::ui::PanelId>,
 ) -> CliResult {
     let mut target = port.map(crate::ui::Target::Port);
     if let Some(kind) = demo {
@@ -230,7 +246,7 @@ fn gui(
     if let Some(p) = &profile {
         registry()?.get(p).map_err(CliError::input)?;
     }
-    crate::ui::run(target, baud, profile)
+    crate::ui::run(target, baud, profile, panel)
         .map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
     Ok(0)
 }

@@ -232,6 +232,7 @@ pub fn run(
     target: Option<Target>,
     baud: Option<u32>,
     profile: Option<String>,
+    panel: Option<PanelId>,
 ) -> Result<(), String> {
     let options = eframe::NativeOptions {
         viewport: eframe::egui::ViewportBuilder::default()
@@ -256,6 +257,9 @@ pub fn run(
             }
             if let Some(p) = profile {
                 saved.profile = p;
+            }
+            if let Some(p) = panel {
+                saved.panel = p;
             }
             let app = App::new(&cc.egui_ctx, saved)
                 .map_err(|e| -> Box<dyn std::error::Error + Send + Sync> { e.into() })?;
