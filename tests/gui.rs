@@ -5,73 +5,27 @@ use botbench::profile::Value;
 use botbench::sim::window_cleaner::WindowCleaner;
 use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
 use botbench::ui::runtime::Reading;
-use botbench::ui::{App, PanelId, Saved, Target};
+use botbench::ui::{App, PanelId};
 use eframe::egui;
-use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
 
-struct Bench {
-    _server: PtyServer,
-    sim: Arc<Mutex<WindowCleaner>>,
+mod gui_harness;
+use gui_harness::{H, Served, app, serve, settings, step_until};
+
+fn bench() -> Served<WindowCleaner> {
+    serve(WindowCleaner::new(&SimOptions::default()).unwrap())
 }
 
-fn bench() -> Bench {
-    let sim = Arc::new(Mutex::new(
-        WindowCleaner::new(&SimOptions::default()).unwrap(),
-    ));
-    let shared: SharedDevice = sim.clone();
-    Bench {
-        _server: PtyServer::start(shared, Faults::default()).unwrap(),
-        sim,
-    }
-}
-
-fn harness(path: &str, panel: PanelId) -> Harness<'static, Option<App>> {
-    let saved = Saved {
-        target: Target::Port(path.to_string()),
-        baud: 115_200,
-        profile: "window-cleaner".into(),
-        panel,
-        lang: Lang::En,
-        ..Saved::default()
-    };
-    Harness::builder()
-        .with_size(egui::vec2(1300.0, 900.0))
-        .build_ui_state(
-            move |ui, app: &mut Option<App>| {
-                let app = app
-                    .get_or_insert_with(|| App::new(ui.ctx(), saved.clone()).expect("app starts"));
-                app.logic(ui.ctx());
-                app.ui(ui);
-            },
-            None,
-        )
-}
-
-/// Steps the UI in real time until `done` holds.
-fn step_until(h: &mut Harness<'static, Option<App>>, what: &str, done: impl Fn(&App) -> bool) {
-    let deadline = Instant::now() + Duration::from_secs(40);
-    loop {
-        h.step();
-        if h.state().as_ref().is_some_and(&done) {
-            return;
-        }
-        assert!(Instant::now() < deadline, "timed out waiting for {what}");
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
-
-fn app<'h>(h: &'h Harness<'static, Option<App>>) -> &'h App {
-    h.state().as_ref().expect("app")
+fn harness(path: &str, panel: PanelId) -> H {
+    gui_harness::harness(settings(path, "window-cleaner", panel, Lang::En))
 }
 
 fn all_read(app: &App) -> bool {
     (130..=136).all(|id| matches!(app.rt.readings.get(&id), Some(Reading::Values(..))))
 }
 
-fn read_all(h: &mut Harness<'static, Option<App>>) {
+fn read_all(h: &mut H) {
     step_until(h, "the link", |a| a.rt.connected());
     h.get_by_label("Read all").click();
     // Also the read job's end: while it runs, writing is disabled.
@@ -88,7 +42,7 @@ fn read_all_brings_every_parameter_from_the_device() {
         .unwrap()
         .set_param("waterPumpDuration", 4321)
         .unwrap();
-    let mut h = harness(b._server.path(), PanelId::Tuning);
+    let mut h = harness(b.path(), PanelId::Tuning);
     read_all(&mut h);
     let want = b.sim.lock().unwrap().param("waterPumpDuration").unwrap();
     let got = match app(&h).rt.readings.get(&135) {
@@ -110,7 +64,7 @@ fn is_text_input(n: &egui_kittest::kittest::AccessKitNode<'_>) -> bool {
     n.role() == egui::accesskit::Role::TextInput
 }
 
-fn edit(h: &mut Harness<'static, Option<App>>, current: &str, new: &str) {
+fn edit(h: &mut H, current: &str, new: &str) {
     h.get_by(|n| is_text_input(n) && n.value().as_deref() == Some(current))
         .focus();
     h.step();
@@ -126,7 +80,7 @@ fn edit(h: &mut Harness<'static, Option<App>>, current: &str, new: &str) {
 fn an_out_of_range_edit_is_refused_for_writing() {
     let b = bench();
     b.sim.lock().unwrap().set_param("pwmValue", 33).unwrap();
-    let mut h = harness(b._server.path(), PanelId::Tuning);
+    let mut h = harness(b.path(), PanelId::Tuning);
     read_all(&mut h);
     h.step();
     edit(&mut h, "33", "101");
@@ -154,7 +108,7 @@ fn an_out_of_range_edit_is_refused_for_writing() {
 fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
     let b = bench();
     b.sim.lock().unwrap().set_param("pwmValue", 33).unwrap();
-    let mut h = harness(b._server.path(), PanelId::Tuning);
+    let mut h = harness(b.path(), PanelId::Tuning);
     read_all(&mut h);
     h.step();
     edit(&mut h, "33", "64");
@@ -175,7 +129,7 @@ fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
 #[test]
 fn the_plots_receive_points() {
     let b = bench();
-    let mut h = harness(b._server.path(), PanelId::Telemetry);
+    let mut h = harness(b.path(), PanelId::Telemetry);
     step_until(&mut h, "attitude and battery points", |a| {
         let n = |id: &str, f: &str| {
             a.rt.plots
@@ -191,7 +145,7 @@ fn the_plots_receive_points() {
 fn a_preset_saves_and_applies_in_a_round_trip() {
     let b = bench();
     let path = std::env::temp_dir().join(format!("botbench-gui-preset-{}.ron", std::process::id()));
-    let mut h = harness(b._server.path(), PanelId::Presets);
+    let mut h = harness(b.path(), PanelId::Presets);
     step_until(&mut h, "the first read", |a| {
         all_read(a) && a.rt.job_progress().is_none()
     });
@@ -242,7 +196,7 @@ fn a_malformed_preset_is_shown_with_its_line_and_column() {
     let b = bench();
     let path = std::env::temp_dir().join(format!("botbench-gui-bad-{}.ron", std::process::id()));
     std::fs::write(&path, "(\n  version: 1,\n  profile: \"window-cleaner\",\n  values: {\n    \"MSP_SET_PWMVALUE\": { \"pwmValue\": \"101\" },\n  },\n)\n").unwrap();
-    let mut h = harness(b._server.path(), PanelId::Presets);
+    let mut h = harness(b.path(), PanelId::Presets);
     step_until(&mut h, "the link", |a| a.rt.connected());
     h.state_mut().as_mut().unwrap().presets.path = path.display().to_string();
     h.step();
@@ -259,7 +213,7 @@ fn every_panel_renders_in_english_and_chinese() {
     // A glyph missing from the bundled fonts panics while drawing, so drawing every panel in both
     // languages checks the font as well as the layout.
     let b = bench();
-    let mut h = harness(b._server.path(), PanelId::Tuning);
+    let mut h = harness(b.path(), PanelId::Tuning);
     step_until(&mut h, "the link", |a| a.rt.connected());
     let panels = app(&h).panels();
     assert!(panels.len() >= 5, "{panels:?}");
@@ -309,6 +263,6 @@ fn nothing_is_shown_before_a_reply_and_a_failed_read_says_so_in_place() {
 #[test]
 fn the_parameters_are_read_as_soon_as_the_link_is_up() {
     let b = bench();
-    let mut h = harness(b._server.path(), PanelId::Tuning);
+    let mut h = harness(b.path(), PanelId::Tuning);
     step_until(&mut h, "every parameter read without a click", all_read);
 }

@@ -2,31 +2,18 @@
 //! the solar cleanbot's controls, STOP and dead-man, and the window cleaner's self-test.
 
 use botbench::i18n::Lang;
+use botbench::sim::SimOptions;
 use botbench::sim::solar_cleanbot::SolarCleanbot;
 use botbench::sim::window_cleaner::{Fault, WindowCleaner};
-use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
-use botbench::ui::{App, PanelId, Saved, SolarOutcome, SolarTrip, Target};
+use botbench::ui::{App, PanelId, SolarOutcome, SolarTrip};
 use eframe::egui;
-use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-type H = Harness<'static, Option<App>>;
+mod gui_harness;
+use gui_harness::{H, Served, app, serve, settings};
 
-struct Bench<D> {
-    server: PtyServer,
-    sim: Arc<Mutex<D>>,
-}
-
-fn serve<D: botbench::sim::Device + 'static>(device: D) -> Bench<D> {
-    let sim = Arc::new(Mutex::new(device));
-    let shared: SharedDevice = sim.clone();
-    Bench {
-        server: PtyServer::start(shared, Faults::default()).unwrap(),
-        sim,
-    }
-}
+type Bench<D> = Served<D>;
 
 fn window_cleaner(flags: Option<u8>, faults: &[Fault]) -> Bench<WindowCleaner> {
     let mut wc = WindowCleaner::new(&SimOptions::default()).unwrap();
@@ -42,56 +29,23 @@ fn solar() -> Bench<SolarCleanbot> {
 }
 
 fn harness(path: &str, profile: &str, panel: PanelId, lang: Lang) -> H {
-    let saved = Saved {
-        target: Target::Port(path.to_string()),
-        baud: 115_200,
-        profile: profile.into(),
-        panel,
-        lang,
-        ..Saved::default()
-    };
-    Harness::builder()
-        .with_size(egui::vec2(1400.0, 1000.0))
-        .build_ui_state(
-            move |ui, app: &mut Option<App>| {
-                let app = app
-                    .get_or_insert_with(|| App::new(ui.ctx(), saved.clone()).expect("app starts"));
-                app.logic(ui.ctx());
-                app.ui(ui);
-            },
-            None,
-        )
+    gui_harness::harness(settings(path, profile, panel, lang))
 }
 
-/// Steps the UI in real time until `done` holds.
+/// Steps the UI in real time until `done` holds; on timeout says what the panels hold.
 fn step_until(h: &mut H, what: &str, done: impl Fn(&App) -> bool) {
-    let deadline = Instant::now() + Duration::from_secs(20);
-    loop {
-        h.step();
-        if h.state().as_ref().is_some_and(&done) {
-            return;
-        }
-        if Instant::now() >= deadline {
-            let a = app(h);
-            panic!(
-                "timed out waiting for {what}: info {:?}, state {:?}, solar inputs {:?}, outcomes {:?}, \
-                 status {:?}, self-test running {} results {:?} error {:?}",
-                a.rt.info,
-                a.rt.state,
-                a.solar.inputs,
-                a.solar.control.outcomes,
-                a.rt.status.as_ref().map(|s| &s.text),
-                a.selftest.running,
-                a.selftest.results,
-                a.selftest.error
-            );
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
-
-fn app(h: &H) -> &App {
-    h.state().as_ref().expect("app")
+    gui_harness::step_until_or(h, what, done, |a| {
+        format!(
+            "info {:?}, solar inputs {:?}, outcomes {:?}, self-test running {} results {:?} \
+             error {:?}",
+            a.rt.info,
+            a.solar.inputs,
+            a.solar.control.outcomes,
+            a.selftest.running,
+            a.selftest.results,
+            a.selftest.error
+        )
+    });
 }
 
 fn identified(a: &App) -> bool {
@@ -106,7 +60,7 @@ fn nav_has(h: &H, name: &str) -> bool {
 fn a_clear_capability_bit_hides_its_panels_and_the_app_leaves_them() {
     // Bit 0 (config page) clear: the parameter pages are hidden.
     let b = window_cleaner(Some(0b1110), &[]);
-    let mut h = harness(b.server.path(), "window-cleaner", PanelId::Tuning, Lang::En);
+    let mut h = harness(b.path(), "window-cleaner", PanelId::Tuning, Lang::En);
     step_until(&mut h, "the device identified", identified);
     h.run_steps(2);
     let a = app(&h);
@@ -128,7 +82,7 @@ fn a_clear_capability_bit_hides_its_panels_and_the_app_leaves_them() {
 
     // The same robot with the bit set shows them.
     let b = window_cleaner(Some(0b1111), &[]);
-    let mut h = harness(b.server.path(), "window-cleaner", PanelId::Tuning, Lang::En);
+    let mut h = harness(b.path(), "window-cleaner", PanelId::Tuning, Lang::En);
     step_until(&mut h, "the device identified", identified);
     h.run_steps(2);
     assert!(app(&h).panels().contains(&PanelId::Tuning));
@@ -139,7 +93,7 @@ fn a_clear_capability_bit_hides_its_panels_and_the_app_leaves_them() {
 #[test]
 fn the_device_panel_pings_and_shows_version_build_and_flags() {
     let b = window_cleaner(Some(0b1111), &[]);
-    let mut h = harness(b.server.path(), "window-cleaner", PanelId::Device, Lang::En);
+    let mut h = harness(b.path(), "window-cleaner", PanelId::Device, Lang::En);
     // The panel reads version and power state on its own once the link is free.
     step_until(&mut h, "the power state", |a| {
         a.device.power.is_some() && a.rt.job_progress().is_none()
@@ -192,7 +146,7 @@ fn type_into(h: &mut H, label: &str, text: &str) {
 }
 
 fn solar_ready(b: &Bench<SolarCleanbot>) -> H {
-    let mut h = harness(b.server.path(), "solar-cleanbot", PanelId::Solar, Lang::En);
+    let mut h = harness(b.path(), "solar-cleanbot", PanelId::Solar, Lang::En);
     step_until(&mut h, "the device identified", identified);
     h.run_steps(2);
     h
@@ -386,12 +340,7 @@ fn run_selftest(h: &mut H, b: &Bench<WindowCleaner>, tag: &str) -> std::path::Pa
 #[test]
 fn the_self_test_passes_on_a_healthy_robot_and_logs_the_device() {
     let b = window_cleaner(Some(0x0F), &[]);
-    let mut h = harness(
-        b.server.path(),
-        "window-cleaner",
-        PanelId::SelfTest,
-        Lang::En,
-    );
+    let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
     let log = run_selftest(&mut h, &b, "pass");
     let report = app(&h).selftest.report.clone().unwrap();
     assert!(report.pass, "{report:#?}");
@@ -417,12 +366,7 @@ fn the_self_test_passes_on_a_healthy_robot_and_logs_the_device() {
 #[test]
 fn the_self_test_fails_naming_the_faulty_check() {
     let b = window_cleaner(Some(0x0F), &[Fault::FanCurrentStuck]);
-    let mut h = harness(
-        b.server.path(),
-        "window-cleaner",
-        PanelId::SelfTest,
-        Lang::En,
-    );
+    let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
     let log = run_selftest(&mut h, &b, "fail");
     let report = app(&h).selftest.report.clone().unwrap();
     assert!(!report.pass);
@@ -441,12 +385,7 @@ fn the_self_test_fails_naming_the_faulty_check() {
 #[test]
 fn a_malformed_plan_is_refused_with_its_line() {
     let b = window_cleaner(Some(0x0F), &[]);
-    let mut h = harness(
-        b.server.path(),
-        "window-cleaner",
-        PanelId::SelfTest,
-        Lang::En,
-    );
+    let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
     step_until(&mut h, "the link", |a| a.rt.connected());
     let path =
         std::env::temp_dir().join(format!("botbench-gui-bad-plan-{}.ron", std::process::id()));
@@ -477,7 +416,7 @@ fn a_malformed_plan_is_refused_with_its_line() {
 fn the_msp_panels_render_in_english_and_chinese() {
     let b = solar();
     for lang in [Lang::En, Lang::Zh] {
-        let mut h = harness(b.server.path(), "solar-cleanbot", PanelId::Solar, lang);
+        let mut h = harness(b.path(), "solar-cleanbot", PanelId::Solar, lang);
         step_until(&mut h, "readings", |a| a.rt.readings.len() > 5);
         for panel in app(&h).panels() {
             h.state_mut().as_mut().unwrap().saved.panel = panel;
@@ -487,7 +426,7 @@ fn the_msp_panels_render_in_english_and_chinese() {
     }
     let b = window_cleaner(Some(0x0F), &[]);
     for lang in [Lang::En, Lang::Zh] {
-        let mut h = harness(b.server.path(), "window-cleaner", PanelId::SelfTest, lang);
+        let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, lang);
         step_until(&mut h, "the link", |a| a.rt.connected());
         h.state_mut().as_mut().unwrap().selftest.path = EXAMPLE.into();
         h.step();
@@ -503,12 +442,7 @@ fn the_msp_panels_render_in_english_and_chinese() {
 #[test]
 fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step() {
     let b = window_cleaner(Some(0x0F), &[]);
-    let mut h = harness(
-        b.server.path(),
-        "window-cleaner",
-        PanelId::SelfTest,
-        Lang::En,
-    );
+    let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
     let plan = plan_file("lost");
     step_until(&mut h, "the device identified", |a| {
         identified(a) && a.rt.job_progress().is_none()

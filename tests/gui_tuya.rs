@@ -5,24 +5,23 @@ use botbench::i18n::Lang;
 use botbench::profile::Value;
 use botbench::profile::registry::parse;
 use botbench::protocol::tuya::dp::DpValue;
+use botbench::sim::Faults;
 use botbench::sim::tuya_mcu::{OtaState, TuyaConfig, TuyaMcu, crc32};
-use botbench::sim::{Faults, PtyServer, SharedDevice};
-use botbench::ui::{App, PanelId, Saved, Target};
+use botbench::ui::{App, PanelId};
 use eframe::egui;
 use egui::accesskit::Role;
-use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 const BAUD: u32 = 115_200;
 const VACUUM: &str = include_str!("../assets/profiles/tuya-vacuum.ron");
 
-struct Bench {
-    server: PtyServer,
-    mcu: Arc<Mutex<TuyaMcu>>,
-}
+mod gui_harness;
+use gui_harness::{H, Served, app, app_mut, serve_with, settings, step_until};
+
+type Bench = Served<TuyaMcu>;
 
 fn config() -> TuyaConfig {
     TuyaConfig {
@@ -32,12 +31,7 @@ fn config() -> TuyaConfig {
 }
 
 fn bench_with(mcu: TuyaMcu, faults: Faults) -> Bench {
-    let mcu = Arc::new(Mutex::new(mcu));
-    let shared: SharedDevice = mcu.clone();
-    Bench {
-        server: PtyServer::start(shared, faults).unwrap(),
-        mcu,
-    }
+    serve_with(mcu, faults)
 }
 
 fn bench() -> Bench {
@@ -71,49 +65,10 @@ fn writable_profile(dir: &std::path::Path) -> (String, Bench) {
     )
 }
 
-type H = Harness<'static, Option<App>>;
-
 fn harness(path: &str, profile: &str) -> H {
-    let saved = Saved {
-        target: Target::Port(path.to_string()),
-        baud: BAUD,
-        profile: profile.into(),
-        panel: PanelId::TuyaConsole,
-        lang: Lang::En,
-        ..Saved::default()
-    };
-    Harness::builder()
-        .with_size(egui::vec2(1400.0, 1000.0))
-        .build_ui_state(
-            move |ui, app: &mut Option<App>| {
-                let app = app
-                    .get_or_insert_with(|| App::new(ui.ctx(), saved.clone()).expect("app starts"));
-                app.logic(ui.ctx());
-                app.ui(ui);
-            },
-            None,
-        )
-}
-
-/// Steps the UI in real time until `done` holds.
-fn step_until(h: &mut H, what: &str, done: impl Fn(&App) -> bool) {
-    let deadline = Instant::now() + Duration::from_secs(20);
-    loop {
-        h.step();
-        if h.state().as_ref().is_some_and(&done) {
-            return;
-        }
-        assert!(Instant::now() < deadline, "timed out waiting for {what}");
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
-
-fn app(h: &H) -> &App {
-    h.state().as_ref().expect("app")
-}
-
-fn app_mut(h: &mut H) -> &mut App {
-    h.state_mut().as_mut().expect("app")
+    let mut saved = settings(path, profile, PanelId::TuyaConsole, Lang::En);
+    saved.baud = BAUD;
+    gui_harness::harness(saved)
 }
 
 fn handshake(h: &mut H) {
@@ -163,7 +118,7 @@ fn the_handshake_completes_and_the_panel_shows_the_product_info() {
     h.get_by_label("2: Configured, not connected to router")
         .click();
     step_until(&mut h, "the MCU to hold Wi-Fi state 2", |_| {
-        b.mcu.lock().unwrap().wifi_state() == Some(2)
+        b.sim.lock().unwrap().wifi_state() == Some(2)
     });
     step_until(&mut h, "the ack", |a| {
         a.rt.tuya.wifi_acked.is_some_and(|t| {
@@ -229,7 +184,7 @@ fn an_mcu_restart_is_shown_and_the_handshake_runs_again() {
     a.tuya.opts.heartbeat = Duration::from_millis(300);
     a.tuya.synced = None;
     handshake(&mut h);
-    b.mcu.lock().unwrap().restart();
+    b.sim.lock().unwrap().restart();
     step_until(&mut h, "the restart and a new handshake", |a| {
         a.rt.tuya.restarts.0 == 1 && a.rt.tuya.done_at.is_some() && a.rt.tuya.attempts >= 2
     });
@@ -253,7 +208,7 @@ fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_
         reported(a, 13) == Some(Value::Int(1))
             && format!("{:?}", a.tuya.dps.marks.get(&13)) == "Some(Confirmed)"
     });
-    assert_eq!(b.mcu.lock().unwrap().dp(13), Some(&DpValue::Bool(true)));
+    assert_eq!(b.sim.lock().unwrap().dp(13), Some(&DpValue::Bool(true)));
     h.get_by(|n| n.role() == Role::ComboBox && n.label().as_deref() == Some("3 Work mode"))
         .click();
     h.run_steps(2);
@@ -261,7 +216,7 @@ fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_
     step_until(&mut h, "the mode reported", |a| {
         reported(a, 3) == Some(Value::Int(5)) && a.tuya.dps.pending.is_empty()
     });
-    assert_eq!(b.mcu.lock().unwrap().dp(3), Some(&DpValue::Enum(5)));
+    assert_eq!(b.sim.lock().unwrap().dp(3), Some(&DpValue::Enum(5)));
     h.run_steps(2);
     // The side effect the MCU reported (status: spot cleaning) is shown too, and logged.
     assert!(h.query_by_label("Spot cleaning").is_some());
@@ -311,7 +266,7 @@ fn a_value_out_of_range_is_refused_before_sending_and_typed_data_points_are_set(
     std::thread::sleep(Duration::from_millis(100));
     h.run_steps(2);
     assert_eq!(sent_dp_commands(app(&h)), 0, "no 0x06 went out");
-    assert_eq!(b.mcu.lock().unwrap().dp(16), Some(&DpValue::Value(35)));
+    assert_eq!(b.sim.lock().unwrap().dp(16), Some(&DpValue::Value(35)));
     assert_eq!(reported(app(&h), 16), Some(Value::Int(35)));
     // A valid value of each typed kind goes out and comes back.
     app_mut(&mut h).tuya.dps.edits.clear();
@@ -355,7 +310,7 @@ fn a_value_out_of_range_is_refused_before_sending_and_typed_data_points_are_set(
         step_until(&mut h, label, |a| {
             reported(a, id) == Some(value.clone()) && a.tuya.dps.pending.is_empty()
         });
-        assert_eq!(b.mcu.lock().unwrap().dp(id), Some(&dp), "{label}");
+        assert_eq!(b.sim.lock().unwrap().dp(id), Some(&dp), "{label}");
         assert_eq!(
             format!("{:?}", app(&h).tuya.dps.marks.get(&id)),
             "Some(Confirmed)",
@@ -384,7 +339,7 @@ fn the_mcus_requests_are_answered_and_shown_with_a_chosen_time() {
     std::thread::sleep(Duration::from_millis(300));
     h.run_steps(2);
     {
-        let mut m = b.mcu.lock().unwrap();
+        let mut m = b.sim.lock().unwrap();
         m.request_local_time();
         m.reset_wifi();
         m.request_wifi_test();
@@ -399,10 +354,10 @@ fn the_mcus_requests_are_answered_and_shown_with_a_chosen_time() {
     assert!(has_label(&h, "passed, signal 80 %"));
     assert!(h.query_by_label("02:b0:7b:00:00:01").is_some());
     let deadline = Instant::now() + Duration::from_secs(2);
-    while b.mcu.lock().unwrap().answers().len() < 4 && Instant::now() < deadline {
+    while b.sim.lock().unwrap().answers().len() < 4 && Instant::now() < deadline {
         std::thread::sleep(Duration::from_millis(5));
     }
-    let answers = b.mcu.lock().unwrap().answers().to_vec();
+    let answers = b.sim.lock().unwrap().answers().to_vec();
     assert!(
         answers.contains(&(0x1c, vec![1, 26, 11, 22, 8, 30, 15, 7])),
         "{answers:?}"
@@ -438,7 +393,7 @@ fn an_update_from_the_panel_completes_and_the_mcu_holds_the_image() {
         (3000, 256, 12)
     );
     assert_eq!(
-        *b.mcu.lock().unwrap().ota_state(),
+        *b.sim.lock().unwrap().ota_state(),
         OtaState::Complete {
             size: 3000,
             crc32: crc32(&img)
@@ -475,7 +430,7 @@ fn an_empty_or_missing_firmware_file_is_refused_with_a_clear_message() {
         assert!(h.query_by_label("Update the MCU firmware?").is_none());
         assert!(app(&h).rt.job.is_none(), "no update started");
     }
-    assert_eq!(*b.mcu.lock().unwrap().ota_state(), OtaState::Idle);
+    assert_eq!(*b.sim.lock().unwrap().ota_state(), OtaState::Idle);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -505,7 +460,7 @@ fn an_update_can_be_cancelled_and_says_where_it_stopped() {
     let err = app(&h).tuya.ota.result.clone().unwrap().unwrap_err();
     assert!(err.contains("cancelled after offset"), "{err}");
     assert!(!matches!(
-        b.mcu.lock().unwrap().ota_state(),
+        b.sim.lock().unwrap().ota_state(),
         OtaState::Complete { .. }
     ));
     let _ = std::fs::remove_dir_all(&dir);
@@ -520,7 +475,7 @@ fn every_section_renders_in_english_and_chinese() {
     let mut h = harness(b.server.path(), &profile);
     handshake(&mut h);
     {
-        let mut m = b.mcu.lock().unwrap();
+        let mut m = b.sim.lock().unwrap();
         m.set_dp(
             18,
             DpValue::Bitmap {

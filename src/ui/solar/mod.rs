@@ -227,7 +227,8 @@ impl SolarPanel {
                     match rt.readings.get(&cmd.id) {
                         Some(Reading::Values(values, at)) => {
                             let stale = at.elapsed() > STALE;
-                            ui.horizontal_wrapped(|ui| {
+                            // One field a line: wrapped runs of values overlap the next row.
+                            ui.vertical(|ui| {
                                 for (k, v) in values {
                                     let Some(f) = cmd.reply.iter().find(|f| &f.ident == k) else {
                                         continue;
