@@ -791,3 +791,8 @@ pub fn read_angle(client: &Client, profile: &Profile, id: u8) -> Result<i64, OpE
         _ => Err(OpError::Verify(format!("servo {id}: no angle"))),
     }
 }
+
+/// Looks for servo `id` at every baud rate; the port is left where it answered. Returns that rate.
+pub fn locate(client: &Client, id: u8) -> Result<Option<u32>, OpError> {
+    recover(client, id)
+}

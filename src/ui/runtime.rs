@@ -120,6 +120,8 @@ pub struct Runtime {
     pub ctx: eframe::egui::Context,
     /// The link has just come up (first connect or a reconnect): the app reads the device.
     pub just_connected: bool,
+    /// How links are opened (answer margin, reconnect), as `--margin-ms` on the command line.
+    pub link_options: LinkOptions,
 }
 
 impl Runtime {
@@ -152,6 +154,7 @@ impl Runtime {
             ports_at: None,
             ctx: ctx.clone(),
             just_connected: false,
+            link_options: LinkOptions::default(),
         })
     }
 
@@ -207,8 +210,13 @@ impl Runtime {
         // a live plot asks for its own frame rate, and jobs wake the UI at once.
         let waker: crate::link::Waker =
             Arc::new(move || ctx.request_repaint_after(Duration::from_millis(200)));
-        let link = Link::open(opener, profile.clone(), LinkOptions::default(), Some(waker))
-            .map_err(|e| e.to_string())?;
+        let link = Link::open(
+            opener,
+            profile.clone(),
+            self.link_options.clone(),
+            Some(waker),
+        )
+        .map_err(|e| e.to_string())?;
         self.profile = profile;
         self.readings.clear();
         self.marks.clear();
@@ -240,6 +248,10 @@ impl Runtime {
     /// The telemetry commands to poll: the profile's plotted commands at `rate` Hz (`None`: as
     /// fast as the wire allows), and its other telemetry at 1 Hz, so that every value is live.
     pub fn polls(&self, rate: Option<f64>) -> Vec<Poll> {
+        // Servo commands name a servo: the servo bench polls the servo it works on itself.
+        if self.profile.protocol == crate::profile::Protocol::Servo {
+            return Vec::new();
+        }
         let mut plotted: Vec<u8> = Vec::new();
         for plot in &self.profile.plots {
             if let Some(cmd) = self.profile.command(&plot.command)
