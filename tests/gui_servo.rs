@@ -319,29 +319,46 @@ fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
     let b = Bench::new(vec![
         SimServo::fresh(51).with_id(1),
         SimServo::fresh(52).with_id(2).with_extended(false),
+        SimServo::fresh(53).with_id(3).with_baud(57_600),
     ]);
     let mut h = harness(&b, Lang::En);
+    h.get_by_label("57600").click();
     scan(&mut h, "0", "3");
-    h.get_by_label("Servo 1").click();
-    h.step();
-    h.get_by_label("Motion").click();
-    h.step();
-    set_text(&mut h, "Angle (°)", "90");
-    set_text(&mut h, "Interval (ms)", "60000");
-    h.get_by_label("Go to angle").click();
-    h.step();
-    step_until(&mut h, "the servo to move", |_| {
-        matches!(b.servo(51).motion_at(Instant::now()), Motion::Move { .. })
-    });
+    for (servo, serial) in [("Servo 1", 51), ("Servo 3", 53)] {
+        h.get_by_label("Bus scan").click();
+        h.step();
+        h.get_by_label(servo).click();
+        h.step();
+        h.get_by_label("Motion").click();
+        h.step();
+        set_text(&mut h, "Angle (°)", "90");
+        set_text(&mut h, "Interval (ms)", "60000");
+        h.get_by_label("Go to angle").click();
+        h.step();
+        step_until(&mut h, "the servo to move", |_| {
+            matches!(
+                b.servo(serial).motion_at(Instant::now()),
+                Motion::Move { .. }
+            )
+        });
+    }
+    // The port is at 57600 now; the stop reaches the servos at 115200 too.
     h.get_by_label("STOP ALL").click();
     h.step();
     step_until(&mut h, "the servos to stop", |_| {
         b.servo(51).motion_at(Instant::now()) == Motion::Hold
+            && b.servo(53).motion_at(Instant::now()) == Motion::Hold
     });
     assert_eq!(
         b.servo(52).motion_at(Instant::now()),
         Motion::Damping { power: 0 }
     );
+    step_until(&mut h, "the port back at 57600", |a| {
+        matches!(
+            &a.rt.state,
+            Some(botbench::link::LinkState::Connected { baud: 57_600, .. })
+        )
+    });
     // While a long scan runs, the button is still there and enabled.
     h.get_by_label("Bus scan").click();
     h.step();

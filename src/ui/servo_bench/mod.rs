@@ -254,22 +254,12 @@ impl ServoBenchPanel {
             if ui
                 .add_enabled(rt.connected(), stop)
                 .on_hover_text(lang.tr(
-                    "Broadcast at the port's baud rate: damping, then stop and hold. Sent at once, even while a job runs.",
-                    "在当前波特率下广播: 先阻尼, 再停止并保持锁力。即使有任务在运行也会立即发送。",
+                    "Broadcast: damping, then stop and hold. Sent at once, even while a job runs (then at the port's baud rate only); otherwise at the port's rate and at every rate where the scan found servos.",
+                    "广播: 先阻尼, 再停止并保持锁力。即使有任务在运行也会立即发送(此时仅在当前波特率); 否则在当前波特率及扫描到舵机的所有波特率下发送。",
                 ))
                 .clicked()
             {
-                for r in crate::ops::servo::stop_all_requests(&rt.profile) {
-                    actions.push(direct(r));
-                }
-                actions.push(Action::Say(
-                    format!(
-                        "{} {}",
-                        lang.tr("Stop all sent at", "已广播全部停止, 波特率"),
-                        port_baud(rt).map_or("-".into(), |b| b.to_string())
-                    ),
-                    false,
-                ));
+                actions.extend(self.stop_all(rt));
             }
             ui.separator();
             match self.selected {
@@ -308,6 +298,40 @@ impl ServoBenchPanel {
                 }
             }
         });
+    }
+
+    /// The broadcasts of "Stop all": at the port's rate at once; with no job running, also at
+    /// every other rate where the scan found servos, and the port then returns to its rate.
+    fn stop_all(&self, rt: &Runtime) -> Vec<Action> {
+        let requests = crate::ops::servo::stop_all_requests(&rt.profile);
+        let mut out: Vec<Action> = requests.iter().cloned().map(direct).collect();
+        let here = port_baud(rt);
+        let mut rates: Vec<u32> = Vec::new();
+        if rt.job_progress().is_none() {
+            for r in &self.scan.rows {
+                if Some(r.baud) != here && !rates.contains(&r.baud) {
+                    rates.push(r.baud);
+                }
+            }
+        }
+        for &b in &rates {
+            out.push(Action::Link(LinkCommand::SetBaud { baud: b, ack: None }));
+            out.extend(requests.iter().cloned().map(direct));
+        }
+        if let (Some(h), false) = (here, rates.is_empty()) {
+            out.push(Action::Link(LinkCommand::SetBaud { baud: h, ack: None }));
+        }
+        let mut all: Vec<String> = here
+            .into_iter()
+            .chain(rates)
+            .map(|b| b.to_string())
+            .collect();
+        all.dedup();
+        out.push(Action::Say(
+            format!("stop all broadcast at {} baud", all.join(", ")),
+            false,
+        ));
+        out
     }
 
     /// Works on `servo` from now on: the port follows it; what was read of another servo goes.

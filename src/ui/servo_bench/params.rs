@@ -197,6 +197,19 @@ impl ParamsState {
             {
                 actions.push(read_all_job(rt, servo));
             }
+            if ui
+                .add_enabled(
+                    can,
+                    egui::Button::new(lang.tr("Read block (batch)", "批量读取用户参数")),
+                )
+                .on_hover_text(lang.tr(
+                    "The 22 user parameters as one 32-byte block",
+                    "一次读取22个用户参数(32字节)",
+                ))
+                .clicked()
+            {
+                actions.push(read_block_job(rt, servo));
+            }
             let n = pending.as_ref().map_or(0, Vec::len);
             let write = ui.add_enabled(
                 can && n > 0 && pending.is_ok(),
@@ -564,6 +577,29 @@ fn read_all_job(rt: &Runtime, servo: Servo) -> Action {
                 "{failed} parameter(s) of servo {} not read",
                 servo.id
             ))
+        }
+    }))
+}
+
+fn read_block_job(rt: &Runtime, servo: Servo) -> Action {
+    let profile = rt.profile.clone();
+    Action::StartJob(JobWork::new("read user block", move |client, _, sink| {
+        at_rate(client, servo.baud)?;
+        match ops::read_block(client, &profile, servo.id) {
+            Ok(block) => {
+                let values = block.into_iter().map(|(pid, v)| (pid, Ok(v))).collect();
+                send(sink, Output::Values { servo, values });
+                Ok(format!("user block of servo {} read", servo.id))
+            }
+            Err(e) => {
+                let e = e.to_string();
+                let values = profile
+                    .block_params()
+                    .map(|p| (p.id, Err(e.clone())))
+                    .collect();
+                send(sink, Output::Values { servo, values });
+                Err(e)
+            }
         }
     }))
 }
