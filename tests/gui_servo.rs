@@ -431,3 +431,156 @@ fn the_panel_renders_every_tab_in_english_and_chinese() {
         }
     }
 }
+
+#[test]
+fn a_baud_change_is_followed_and_verified_and_a_lost_servo_is_found() {
+    let b = Bench::new(vec![
+        SimServo::fresh(81).with_id(4),
+        // An old servo does not take option 8 (1 Mbaud): it stays at 115200.
+        SimServo::fresh(82).with_id(6).with_extended(false),
+    ]);
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "0", "8");
+    h.get_by_label("Servo 4").click();
+    h.step();
+    h.get_by_label("ID & baud rate").click();
+    h.step();
+    h.get_by_label("New baud rate").click();
+    h.run_steps(2);
+    h.get_by_label("4 (57600)").click();
+    h.step();
+    h.get_by_label("Set baud rate").click();
+    h.step();
+    step_until(&mut h, "the baud change", |a| {
+        idle(a) && a.servo.setup.message.is_some()
+    });
+    h.step();
+    assert_eq!(b.servo(81).baud(), 57_600);
+    let sel = app(&h).servo.selected.unwrap();
+    assert_eq!((sel.id, sel.baud), (4, 57_600));
+    assert!(h.query_by_label_contains("57600 baud: verified").is_some());
+
+    h.get_by_label("Bus scan").click();
+    h.step();
+    h.get_by_label("Servo 6").click();
+    h.step();
+    h.get_by_label("ID & baud rate").click();
+    h.step();
+    h.get_by_label("New baud rate").click();
+    h.run_steps(2);
+    h.get_by_label("8 (1000000, newer servos)").click();
+    h.step();
+    h.get_by_label("Set baud rate").click();
+    h.step();
+    step_until(&mut h, "the failed baud change", |a| {
+        idle(a)
+            && a.servo
+                .setup
+                .message
+                .as_ref()
+                .is_some_and(|(ok, m)| !ok && m.contains("found at 115200"))
+    });
+    let sel = app(&h).servo.selected.unwrap();
+    assert_eq!(
+        (sel.id, sel.baud),
+        (6, 115_200),
+        "the servo is where it was found"
+    );
+    assert_eq!(b.servo(82).baud(), 115_200);
+}
+
+#[test]
+fn a_parameter_preset_saves_loads_and_writes_and_a_bad_one_is_refused_with_its_place() {
+    let b = Bench::new(vec![SimServo::fresh(91).with_id(3).with_param(41, 66)]);
+    let path =
+        std::env::temp_dir().join(format!("botbench-servo-preset-{}.ron", std::process::id()));
+    let _ = std::fs::remove_file(&path);
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "3", "3");
+    h.get_by_label("Parameters").click();
+    h.step();
+    h.get_by_label("Read all").click();
+    h.step();
+    step_until(&mut h, "the parameters", |a| {
+        idle(a) && a.servo.params.values.len() == 30
+    });
+    set_text(&mut h, "Parameter preset", &path.display().to_string());
+    h.get_by_label("Save preset").click();
+    h.step();
+    assert!(path.exists(), "{:?}", app(&h).servo.params.message);
+    // The servo drifts from the preset; loading it brings the preset's value back as an edit.
+    b.bus
+        .lock()
+        .unwrap()
+        .servo_by_serial_mut(91)
+        .unwrap()
+        .clone_from(&SimServo::fresh(91).with_id(3).with_param(41, 80));
+    h.get_by_label("Read all").click();
+    h.step();
+    step_until(&mut h, "the new value", |a| {
+        idle(a) && a.servo.params.values.get(&41) == Some(&Ok(80))
+    });
+    h.get_by_label("Load preset").click();
+    h.step();
+    h.step();
+    h.get_by_label("Write changes (1)").click();
+    h.step();
+    step_until(&mut h, "the write", |a| {
+        idle(a) && !a.servo.params.marks.is_empty()
+    });
+    assert_eq!(b.servo(91).param(41), Some(66));
+
+    std::fs::write(
+        &path,
+        "(\n    version: 1,\n    params: [\n        (\"over_temprature\", \"70\"),\n        (\"accel_switch\", \"sometimes\"),\n    ],\n)\n",
+    )
+    .unwrap();
+    h.get_by_label("Load preset").click();
+    h.step();
+    let msg = app(&h).servo.params.message.clone().unwrap();
+    assert!(
+        !msg.0 && msg.1.contains(":5:9:") && msg.1.contains("accel_switch"),
+        "{msg:?}"
+    );
+    assert!(
+        app(&h).servo.params.edits.is_empty(),
+        "nothing of a bad preset is taken"
+    );
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn reset_user_data_asks_first_then_follows_the_servo_to_id_0() {
+    let b = Bench::new(vec![
+        SimServo::fresh(95)
+            .with_id(9)
+            .with_baud(57_600)
+            .with_param(41, 61),
+    ]);
+    let mut h = harness(&b, Lang::En);
+    h.get_by_label("57600").click();
+    scan(&mut h, "9", "9");
+    h.get_by_label("Parameters").click();
+    h.step();
+    h.get_by_label("Reset user data…").click();
+    h.run_steps(2);
+    h.get_by_label("Keep").click();
+    h.run_steps(3);
+    assert!(idle(app(&h)));
+    assert_eq!(b.servo(95).id(), 9);
+    h.get_by_label("Reset user data…").click();
+    h.run_steps(2);
+    h.get_by_label("Reset").click();
+    h.step();
+    step_until(&mut h, "the reset", |a| {
+        idle(a) && a.servo.params.message.is_some()
+    });
+    let s = b.servo(95);
+    assert_eq!((s.id(), s.baud()), (0, 115_200));
+    let sel = app(&h).servo.selected.unwrap();
+    assert_eq!((sel.id, sel.baud), (0, 115_200));
+    assert!(
+        app(&h).servo.params.values.get(&34) == Some(&Ok(0)),
+        "read again"
+    );
+}
