@@ -43,6 +43,8 @@ pub struct ParamsState {
     pub message: Option<(bool, String)>,
     /// "Reset user data" awaits confirmation.
     pub confirm_reset: bool,
+    /// The language last drawn in (for messages made between frames).
+    pub lang: Lang,
 }
 
 /// Whether the table edits this parameter (the id and the baud rate have their own tab).
@@ -146,22 +148,37 @@ impl ParamsState {
                 }
             }
         }
+        let lang = self.lang;
         self.message = Some((
             bad == 0,
-            format!("{good} written and verified, {bad} not verified"),
+            format!(
+                "{good} {}, {bad} {}",
+                lang.tr("written and verified", "个已写入并校验"),
+                lang.tr("not verified", "个未通过校验")
+            ),
         ));
     }
 
     pub(super) fn on_reset(&mut self, result: Result<Location, String>) {
+        let lang = self.lang;
         self.message = Some(match result {
             Ok(at) => (
                 true,
                 format!(
-                    "user data reset: the servo is now id {} at {} baud (verified); its parameters were read again",
-                    at.id, at.baud
+                    "{} {} @ {} baud ({})",
+                    lang.tr(
+                        "user data reset: the servo is now id",
+                        "用户数据已重置: 舵机现在为ID"
+                    ),
+                    at.id,
+                    at.baud,
+                    lang.tr(
+                        "verified; its parameters were read again",
+                        "已校验; 参数已重新读取"
+                    )
                 ),
             ),
-            Err(e) => (false, format!("reset: {e}")),
+            Err(e) => (false, format!("{}: {e}", lang.tr("reset", "重置"))),
         });
     }
 
@@ -182,6 +199,7 @@ impl ParamsState {
             ));
             return;
         };
+        self.lang = lang;
         let profile = rt.profile.clone();
         self.prune(&profile);
         let pending = self.pending(&profile);
@@ -436,9 +454,12 @@ impl ParamsState {
                 self.message = Some((
                     true,
                     format!(
-                        "{} values loaded from {}: review them, then Write changes",
+                        "{} {} {}: {}",
                         values.len(),
-                        path.display()
+                        self.lang.tr("values loaded from", "个值载入自"),
+                        path.display(),
+                        self.lang
+                            .tr("review them, then Write changes", "请检查后点击写入修改")
                     ),
                 ));
             }
@@ -457,14 +478,24 @@ impl ParamsState {
         if !missing.is_empty() {
             self.message = Some((
                 false,
-                format!("read all first: not read: {}", missing.join(", ")),
+                format!(
+                    "{}: {}",
+                    self.lang
+                        .tr("read all first; not read", "请先全部读取; 未读取"),
+                    missing.join(", ")
+                ),
             ));
             return;
         }
         if !self.edits.is_empty() {
             self.message = Some((
                 false,
-                "write or revert the edits first: a preset holds what the servo holds".into(),
+                self.lang
+                    .tr(
+                        "write or revert the edits first: a preset holds what the servo holds",
+                        "请先写入或撤销修改: 预设保存的是舵机中的值",
+                    )
+                    .into(),
             ));
             return;
         }
@@ -476,8 +507,22 @@ impl ParamsState {
         let preset = ParamPreset::from_values(profile, &self.note, &values);
         let path = std::path::PathBuf::from(self.preset_path.trim());
         self.message = Some(match preset.save(&path, profile) {
-            Ok(()) => (true, format!("saved to {}", path.display())),
-            Err(e) => (false, format!("cannot save {}: {e}", path.display())),
+            Ok(()) => (
+                true,
+                format!(
+                    "{} {}",
+                    self.lang.tr("saved to", "已保存到"),
+                    path.display()
+                ),
+            ),
+            Err(e) => (
+                false,
+                format!(
+                    "{} {}: {e}",
+                    self.lang.tr("cannot save", "无法保存"),
+                    path.display()
+                ),
+            ),
         });
     }
 

@@ -51,18 +51,27 @@ pub fn status_bits(status: i64, lang: Lang) -> String {
 
 impl ScanState {
     /// The id range typed, or why it is not one.
-    pub fn ids(&self) -> Result<RangeInclusive<u8>, String> {
+    pub fn ids(&self, lang: Lang) -> Result<RangeInclusive<u8>, String> {
         let parse = |s: &str, what: &str| {
             s.trim()
                 .parse::<u8>()
                 .ok()
                 .filter(|v| *v < crate::protocol::servo::BROADCAST_ID)
-                .ok_or_else(|| format!("{what} '{}' is not an id 0-254", s.trim()))
+                .ok_or_else(|| {
+                    format!(
+                        "{what} '{}' {}",
+                        s.trim(),
+                        lang.tr("is not an id 0-254", "不是0-254之间的ID")
+                    )
+                })
         };
-        let a = parse(&self.first, "first id")?;
-        let b = parse(&self.last, "last id")?;
+        let a = parse(&self.first, lang.tr("first id", "起始ID"))?;
+        let b = parse(&self.last, lang.tr("last id", "结束ID"))?;
         if a > b {
-            return Err(format!("the first id {a} is above the last id {b}"));
+            return Err(format!(
+                "{} {a} > {b}",
+                lang.tr("the first id is above the last id:", "起始ID大于结束ID:")
+            ));
         }
         Ok(a..=b)
     }
@@ -132,7 +141,7 @@ impl ScanState {
         actions: &mut Vec<Action>,
     ) -> Option<Servo> {
         let mut picked = None;
-        let ids = self.ids();
+        let ids = self.ids(lang);
         let bauds = self.chosen_bauds();
         ui.horizontal(|ui| {
             let l = ui.label(lang.tr("First id", "起始ID"));

@@ -20,41 +20,72 @@ pub struct SetupState {
     pub option: u8,
     /// The last result: ok, and what happened.
     pub message: Option<(bool, String)>,
+    /// The language last drawn in (for messages made between frames).
+    pub lang: Lang,
 }
 
 impl SetupState {
     /// The new id typed, checked against what is known; `Err` says why it cannot be given.
     pub fn check_id(&self, servo: Servo, scan: &ScanState) -> Result<u8, String> {
+        let lang = self.lang;
         let text = self.new_id.trim();
-        let id: u8 = text
-            .parse()
-            .map_err(|_| format!("'{text}' is not an id: give 1 to 254"))?;
+        let id: u8 = text.parse().map_err(|_| {
+            format!(
+                "'{text}' {}",
+                lang.tr("is not an id: give 1 to 254", "不是有效ID: 请输入1到254")
+            )
+        })?;
         if id == crate::protocol::servo::BROADCAST_ID {
-            return Err("id 255 is the broadcast address and cannot be assigned".into());
+            return Err(lang
+                .tr(
+                    "id 255 is the broadcast address and cannot be assigned",
+                    "ID 255是广播地址, 不能分配",
+                )
+                .into());
         }
         if id == servo.id {
-            return Err(format!("the servo already has id {id}"));
+            return Err(format!(
+                "{} {id}",
+                lang.tr("the servo already has id", "舵机已经是ID")
+            ));
         }
         if scan
             .rows
             .iter()
             .any(|r| r.id == id && r.presence != Presence::Absent)
         {
-            return Err(format!("id {id} already answers on the bus (see the scan)"));
+            return Err(format!(
+                "{} {id} {}",
+                lang.tr("id", "ID"),
+                lang.tr(
+                    "already answers on the bus (see the scan)",
+                    "已在总线上应答(见扫描结果)"
+                )
+            ));
         }
         Ok(id)
     }
 
     pub(super) fn on_id(&mut self, servo: Servo, new: u8, result: Result<(), String>) {
+        let lang = self.lang;
         self.message = Some(match result {
             Ok(()) => {
                 self.new_id.clear();
                 (
                     true,
-                    format!("servo {} is now id {new}: verified at the new id", servo.id),
+                    format!(
+                        "{} {} {} {new}: {}",
+                        lang.tr("servo", "舵机"),
+                        servo.id,
+                        lang.tr("is now id", "现在的ID为"),
+                        lang.tr("verified at the new id", "已在新ID校验")
+                    ),
                 )
             }
-            Err(e) => (false, format!("id not changed: {e}")),
+            Err(e) => (
+                false,
+                format!("{}: {e}", lang.tr("id not changed", "ID未修改")),
+            ),
         });
     }
 
@@ -64,26 +95,35 @@ impl SetupState {
         result: Result<u32, String>,
         found: Option<u32>,
     ) {
+        let lang = self.lang;
+        let who = format!("{} {}", lang.tr("servo", "舵机"), servo.id);
         self.message = Some(match (result, found) {
             (Ok(b), _) => (
                 true,
                 format!(
-                    "servo {} now talks at {b} baud: verified; the port follows it",
-                    servo.id
+                    "{who} {} {b} baud: {}",
+                    lang.tr("now talks at", "现在的波特率为"),
+                    lang.tr("verified; the port follows it", "已校验; 端口已随之切换")
                 ),
             ),
             (Err(e), Some(b)) => (
                 false,
                 format!(
-                    "not verified ({e}). Servo {} was found at {b} baud; the port is there now",
-                    servo.id
+                    "{} ({e}). {who} {} {b} baud; {}",
+                    lang.tr("not verified", "未通过校验"),
+                    lang.tr("was found at", "在此波特率下找到:"),
+                    lang.tr("the port is there now", "端口已切换到该波特率")
                 ),
             ),
             (Err(e), None) => (
                 false,
                 format!(
-                    "servo {} lost: {e}. It answers at no baud rate: check power and wiring, then scan all 8 rates",
-                    servo.id
+                    "{who} {}: {e}. {}",
+                    lang.tr("lost", "丢失"),
+                    lang.tr(
+                        "It answers at no baud rate: check power and wiring, then scan all 8 rates",
+                        "在所有波特率下均无应答: 请检查电源和接线, 然后扫描全部8种波特率"
+                    )
                 ),
             ),
         });
@@ -101,6 +141,7 @@ impl SetupState {
         scan: &ScanState,
         actions: &mut Vec<Action>,
     ) {
+        self.lang = lang;
         let Some(servo) = selected else {
             ui.weak(lang.tr(
                 "Select a servo in the bus scan first.",
