@@ -273,10 +273,17 @@ impl MotionState {
         }
 
         ui.horizontal(|ui| {
-            let live = ui.checkbox(&mut self.live, lang.tr("Live angle", "实时角度"));
-            let monitor = ui.checkbox(
-                &mut self.monitor,
-                lang.tr("Also monitor (newer servos)", "同时监控(新款舵机)"),
+            // Not while a job runs: polling takes the port to the servo's rate.
+            let live = ui.add_enabled(
+                can,
+                egui::Checkbox::new(&mut self.live, lang.tr("Live angle", "实时角度")),
+            );
+            let monitor = ui.add_enabled(
+                can,
+                egui::Checkbox::new(
+                    &mut self.monitor,
+                    lang.tr("Also monitor (newer servos)", "同时监控(新款舵机)"),
+                ),
             );
             if live.changed() || (monitor.changed() && self.live) {
                 if self.live {

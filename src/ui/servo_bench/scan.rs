@@ -248,8 +248,9 @@ impl ScanState {
                     let clean = row.presence == Presence::Present;
                     let label = format!("{} {}", lang.tr("Servo", "舵机"), row.id);
                     let sel = ui
+                        // Not while a job runs: the port follows the servo selected.
                         .add_enabled(
-                            clean,
+                            clean && !busy,
                             egui::Button::selectable(selected == Some(here), label),
                         )
                         .on_hover_text(lang.tr("Work on this servo", "选择此舵机进行操作"));
