@@ -584,3 +584,37 @@ fn reset_user_data_asks_first_then_follows_the_servo_to_id_0() {
         "read again"
     );
 }
+
+#[test]
+fn wheel_mode_and_damping_reach_the_servo() {
+    let b = Bench::new(vec![SimServo::fresh(97).with_id(8)]);
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "8", "8");
+    h.get_by_label("Motion").click();
+    h.step();
+    h.get_by_label("Method").click();
+    h.run_steps(2);
+    h.get_by_label("Continuous").click();
+    h.step();
+    set_text(&mut h, "Speed (°/s)", "120");
+    h.get_by_label("Run wheel").click();
+    h.step();
+    step_until(
+        &mut h,
+        "the spin",
+        |_| matches!(b.servo(97).motion_at(Instant::now()), Motion::Spin { rate, .. } if rate > 0.0),
+    );
+    // Out of range speeds are refused before sending.
+    set_text(&mut h, "Speed (°/s)", "70000");
+    assert!(
+        h.query_all_by_label_contains("out of range")
+            .next()
+            .is_some()
+    );
+    set_text(&mut h, "Holding power (mW, 0 = limit)", "1500");
+    h.get_by_label("Damping mode").click();
+    h.step();
+    step_until(&mut h, "damping", |_| {
+        b.servo(97).motion_at(Instant::now()) == Motion::Damping { power: 1500 }
+    });
+}
