@@ -373,7 +373,16 @@ fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
     stop.click();
     h.step();
     h.get_by_label("Cancel job").click();
-    step_until(&mut h, "the cancel", idle);
+    step_until(&mut h, "the cancel", |a| {
+        idle(a) && a.servo.scan.outcome.is_some()
+    });
+    h.step();
+    assert!(
+        matches!(&app(&h).servo.scan.outcome, Some(Err(e)) if e.contains("cancelled")),
+        "{:?}",
+        app(&h).servo.scan.outcome
+    );
+    assert!(h.query_by_label_contains("scan stopped").is_some());
 }
 
 #[test]
