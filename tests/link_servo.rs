@@ -174,3 +174,118 @@ fn a_parameter_write_is_range_checked_and_read_back() {
         Err(OpError::Input(_))
     ));
 }
+
+fn sim(bench: &Bench, serial: u32) -> SimServo {
+    bench
+        .bus
+        .lock()
+        .unwrap()
+        .servo_by_serial(serial)
+        .unwrap()
+        .clone()
+}
+
+#[test]
+fn the_user_block_is_read_and_written_as_a_batch_and_read_back() {
+    let bench = Bench::new(vec![SimServo::fresh(21).with_id(4).with_param(41, 65)]);
+    let (client, profile) = (bench.client(), bench.profile.clone());
+    let mut block = ops::read_block(&client, &profile, 4).unwrap();
+    assert_eq!(block.len(), 22);
+    assert!(block.contains(&(41, 65)));
+    assert!(block.contains(&(34, 4)));
+    for (id, v) in block.iter_mut() {
+        if *id == 41 {
+            *v = 72;
+        }
+    }
+    let checks = ops::write_block(&client, &profile, 4, &block).unwrap();
+    assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
+    assert_eq!(sim(&bench, 21).param(41), Some(72));
+    // The id is not changed through the block: the servo would be lost.
+    let mut moved = block.clone();
+    for (id, v) in moved.iter_mut() {
+        if *id == 34 {
+            *v = 9;
+        }
+    }
+    let e = ops::write_block(&client, &profile, 4, &moved).unwrap_err();
+    assert!(matches!(e, OpError::Input(_)), "{e}");
+    assert_eq!(sim(&bench, 21).id(), 4);
+    // Out of range values are refused before anything is sent.
+    let mut bad = block.clone();
+    bad.retain(|(id, _)| *id != 44);
+    bad.push((44, 7));
+    assert!(matches!(
+        ops::write_block(&client, &profile, 4, &bad),
+        Err(OpError::Input(_))
+    ));
+}
+
+#[test]
+fn reset_user_data_follows_the_servo_to_its_factory_id_and_rate() {
+    let bench = Bench::new(vec![
+        SimServo::fresh(31)
+            .with_id(6)
+            .with_baud(57_600)
+            .with_param(41, 60),
+    ]);
+    let (client, profile) = (bench.client(), bench.profile.clone());
+    client.set_baud(57_600).unwrap();
+    let at = ops::reset_user_data(&client, &profile, 6, 57_600).unwrap();
+    assert_eq!(
+        at,
+        ops::Location {
+            id: 0,
+            baud: 115_200
+        }
+    );
+    let s = sim(&bench, 31);
+    assert_eq!((s.id(), s.baud()), (0, 115_200));
+    assert_ne!(s.param(41), Some(60));
+}
+
+#[test]
+fn reset_user_data_is_refused_when_another_servo_holds_the_factory_id() {
+    let bench = Bench::new(vec![SimServo::fresh(41).with_id(6), SimServo::fresh(42)]);
+    let (client, profile) = (bench.client(), bench.profile.clone());
+    let e = ops::reset_user_data(&client, &profile, 6, 115_200).unwrap_err();
+    assert!(matches!(e, OpError::Input(_)), "{e}");
+    assert_eq!(sim(&bench, 41).id(), 6);
+}
+
+#[test]
+fn motion_requests_move_the_servo_and_stop_all_stops_every_servo() {
+    use botbench::sim::servo_bus::Motion;
+    let bench = Bench::new(vec![
+        SimServo::fresh(51).with_id(1),
+        SimServo::fresh(52).with_id(2).with_extended(false),
+    ]);
+    let (client, profile) = (bench.client(), bench.profile.clone());
+    let r = ops::rotate_request(&profile, 1, 450, 10, 0).unwrap();
+    let _ = client.request(r);
+    std::thread::sleep(std::time::Duration::from_millis(60));
+    let angle = ops::read_angle(&client, &profile, 1).unwrap();
+    assert_eq!(angle, 450);
+    assert!(ops::rotate_request(&profile, 1, 40_000, 10, 0).is_err());
+    for id in [1, 2] {
+        let r = ops::spin_request(&profile, id, ops::Wheel::Continuous, true, 60).unwrap();
+        let _ = client.request(r);
+    }
+    let now = std::time::Instant::now();
+    assert!(matches!(
+        sim(&bench, 51).motion_at(now),
+        Motion::Spin { .. }
+    ));
+    assert!(matches!(
+        sim(&bench, 52).motion_at(now),
+        Motion::Spin { .. }
+    ));
+    for r in ops::stop_all_requests(&profile) {
+        client.request(r).unwrap();
+    }
+    // A broadcast is not answered: the ping makes sure it has crossed the wire.
+    assert_eq!(ops::ping(&client, 1, 2).unwrap(), Presence::Present);
+    let now = std::time::Instant::now();
+    assert_eq!(sim(&bench, 51).motion_at(now), Motion::Hold);
+    assert_eq!(sim(&bench, 52).motion_at(now), Motion::Damping { power: 0 });
+}

@@ -447,3 +447,359 @@ pub fn set_baud(client: &Client, profile: &Profile, id: u8, option: u8) -> Resul
         ))),
     }
 }
+
+/// The user parameters (32-53) of the 32-byte block, in block order.
+fn block_params(profile: &Profile) -> Vec<&Param> {
+    profile.block_params().collect()
+}
+
+/// Reads the 32-byte user block (parameters 32-53) in one exchange: raw values by `data_id`, in
+/// block order.
+pub fn read_block(client: &Client, profile: &Profile, id: u8) -> Result<Vec<(u8, i64)>, OpError> {
+    let read = profile
+        .command_by_id(cmd::READ_BATCH_DATA)
+        .ok_or_else(|| OpError::Input("the profile has no READ_BATCH_DATA".into()))?;
+    let req = Request::for_command(profile, read, vec![id])
+        .reply(ReplySpec::Required(Match::servo(
+            cmd::READ_BATCH_DATA,
+            &[id],
+        )))
+        .attempts(2);
+    let reply = client.request(req)?;
+    let d = profile
+        .decode(
+            read,
+            Direction::DeviceToHost,
+            reply.payload().unwrap_or_default(),
+        )
+        .map_err(|e| OpError::answer(&read.ident, e))?;
+    let params = block_params(profile);
+    let values = d.values.get(1..).unwrap_or_default();
+    if values.len() != params.len() {
+        return Err(OpError::Verify(format!(
+            "servo {id}: the user block holds {} values, the profile {}",
+            values.len(),
+            params.len()
+        )));
+    }
+    params
+        .iter()
+        .zip(values)
+        .map(|(p, v)| match v.value {
+            Value::Int(raw) => Ok((p.id, raw)),
+            _ => Err(OpError::Verify(format!(
+                "servo {id}: no value for {}",
+                p.field.ident
+            ))),
+        })
+        .collect()
+}
+
+/// Writes the whole 32-byte user block of servo `id` in one exchange, then reads it back.
+/// `values` must give every user parameter (raw, by `data_id`); each is checked against the
+/// profile first. The block also holds the id (34) and the baud option (36): they must be what
+/// the servo holds now (they are changed with [`set_id`] and [`set_baud`], which follow the servo).
+pub fn write_block(
+    client: &Client,
+    profile: &Profile,
+    id: u8,
+    values: &[(u8, i64)],
+) -> Result<Vec<Check>, OpError> {
+    let write = profile
+        .command_by_id(cmd::WRITE_BATCH_DATA)
+        .ok_or_else(|| OpError::Input("the profile has no WRITE_BATCH_DATA".into()))?;
+    let params = block_params(profile);
+    let mut inputs = vec![("servo_id".to_string(), Input::Raw(Value::Int(id.into())))];
+    for p in &params {
+        let Some(&(_, raw)) = values.iter().find(|(pid, _)| *pid == p.id) else {
+            return Err(OpError::Input(format!(
+                "the block needs a value for {} ({})",
+                p.field.ident, p.id
+            )));
+        };
+        p.field.check(&Value::Int(raw))?;
+        inputs.push((p.field.ident.clone(), Input::Raw(Value::Int(raw))));
+    }
+    let before = read_block(client, profile, id)?;
+    for pid in [PARAM_ID, PARAM_BAUD] {
+        let now = before.iter().find(|(p, _)| *p == pid).map(|(_, v)| *v);
+        let new = values.iter().find(|(p, _)| *p == pid).map(|(_, v)| *v);
+        if now != new {
+            let name = param_by_id(profile, pid)?.field.ident.clone();
+            return Err(OpError::Input(format!(
+                "the block would change {name} from {now:?} to {new:?}: change the id or baud rate with their own commands, which follow the servo"
+            )));
+        }
+    }
+    let payload = profile.encode(write, Direction::HostToDevice, &inputs)?;
+    let req = Request::for_command(profile, write, payload).reply(ReplySpec::Required(
+        Match::servo(cmd::WRITE_BATCH_DATA, &[id]),
+    ));
+    let reply = client.request(req)?;
+    if reply.payload().and_then(|p| p.get(1)) != Some(&1) {
+        return Err(OpError::Verify(format!(
+            "servo {id} refused the user block"
+        )));
+    }
+    let after = read_block(client, profile, id)?;
+    Ok(params
+        .iter()
+        .map(|p| {
+            let written = values.iter().find(|(pid, _)| *pid == p.id).map(|(_, v)| *v);
+            let read = after.iter().find(|(pid, _)| *pid == p.id).map(|(_, v)| *v);
+            Check {
+                field: p.field.ident.clone(),
+                written: written.map_or(Value::Bytes(Vec::new()), Value::Int),
+                read: read.map_or(Value::Bytes(Vec::new()), Value::Int),
+            }
+        })
+        .collect())
+}
+
+/// Where a servo is after [`reset_user_data`]: its factory id and baud rate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Location {
+    /// Its id.
+    pub id: u8,
+    /// Its baud rate.
+    pub baud: u32,
+}
+
+/// The id and baud rate the user parameters reset to (the profile's defaults of 34 and 36).
+pub fn factory_location(profile: &Profile) -> Location {
+    let id = profile
+        .param(PARAM_ID)
+        .and_then(|p| p.field.default)
+        .and_then(|v| u8::try_from(v).ok())
+        .unwrap_or(0);
+    let baud = profile
+        .param(PARAM_BAUD)
+        .and_then(|p| p.field.default)
+        .and_then(|v| u8::try_from(v).ok())
+        .and_then(baud_of_option)
+        .unwrap_or(profile.baud);
+    Location { id, baud }
+}
+
+/// Restores servo `id`'s user parameters (32-53) to the factory defaults. That includes its id
+/// and baud rate: refused when another servo already answers at the factory id and rate (the two
+/// would then share an id). The servo is then looked for at its factory id and rate, and the port
+/// is left there; if it is not found, the error says so. `baud` is the rate the servo talks at
+/// now.
+pub fn reset_user_data(
+    client: &Client,
+    profile: &Profile,
+    id: u8,
+    baud: u32,
+) -> Result<Location, OpError> {
+    let reset = profile
+        .command_by_id(cmd::RESET_USER_DATA)
+        .ok_or_else(|| OpError::Input("the profile has no RESET_USER_DATA".into()))?;
+    let home = factory_location(profile);
+    let switch = |b: u32| {
+        client
+            .set_baud(b)
+            .map_err(|e| OpError::Verify(e.to_string()))
+    };
+    if home != (Location { id, baud }) {
+        switch(home.baud)?;
+        let there = ping(client, home.id, 2)?;
+        switch(baud)?;
+        if there != Presence::Absent {
+            return Err(OpError::Input(format!(
+                "another servo answers at the factory id {} at {} baud: after a reset the two would share an id; give that one another id first",
+                home.id, home.baud
+            )));
+        }
+    }
+    match ping(client, id, 2)? {
+        Presence::Present => {}
+        other => {
+            return Err(OpError::Verify(format!(
+                "servo {id} is not answering cleanly: {other:?}"
+            )));
+        }
+    }
+    // The servo may answer from its new id and at its new rate: the answer is not awaited here.
+    let req = Request::for_command(profile, reset, vec![id])
+        .reply(ReplySpec::Optional(Match::servo(
+            cmd::RESET_USER_DATA,
+            &[id, home.id],
+        )))
+        .attempts(1);
+    match client.request(req) {
+        Ok(r) if r.payload().and_then(|p| p.get(1)) == Some(&0) => {
+            return Err(OpError::Verify(format!("servo {id} refused the reset")));
+        }
+        Ok(_) | Err(ExchangeError::Garbled { .. } | ExchangeError::Timeout { .. }) => {}
+        Err(e) => return Err(e.into()),
+    }
+    switch(home.baud)?;
+    if ping(client, home.id, 3)? == Presence::Present {
+        return Ok(home);
+    }
+    match recover(client, home.id)? {
+        Some(b) => Err(OpError::Verify(format!(
+            "after the reset servo {} answers at {b} baud, not at {} (the port is now at {b})",
+            home.id, home.baud
+        ))),
+        None => {
+            let _ = switch(baud);
+            Err(OpError::Verify(format!(
+                "after the reset no servo answers at the factory id {} at any rate",
+                home.id
+            )))
+        }
+    }
+}
+
+/// The ROTATE request: servo `id` to `deci_degrees` (0.1°) over `interval_ms`, with `power` mW
+/// (0: the servo's limit). Checked against the profile.
+pub fn rotate_request(
+    profile: &Profile,
+    id: u8,
+    deci_degrees: i64,
+    interval_ms: i64,
+    power: i64,
+) -> Result<Request, OpError> {
+    motion_request(
+        profile,
+        cmd::ROTATE,
+        id,
+        &[
+            ("angle", deci_degrees),
+            ("interval", interval_ms),
+            ("power", power),
+        ],
+    )
+}
+
+/// Wheel-mode methods (SPIN, bits 1-0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Wheel {
+    /// Stop turning.
+    Stop,
+    /// Turn until told otherwise.
+    Continuous,
+    /// Turn this many turns.
+    Turns(u16),
+    /// Turn for this many milliseconds.
+    Timed(u16),
+}
+
+/// The SPIN request: servo `id` in wheel mode at `speed` °/s, clockwise or not.
+pub fn spin_request(
+    profile: &Profile,
+    id: u8,
+    wheel: Wheel,
+    clockwise: bool,
+    speed: u16,
+) -> Result<Request, OpError> {
+    let (mode, value) = match wheel {
+        Wheel::Stop => (0, 0),
+        Wheel::Continuous => (1, 0),
+        Wheel::Turns(n) => (2, n),
+        Wheel::Timed(ms) => (3, ms),
+    };
+    let method = mode | if clockwise { 0x80 } else { 0 };
+    motion_request(
+        profile,
+        cmd::SPIN,
+        id,
+        &[
+            ("method", method),
+            ("speed", speed.into()),
+            ("value", value.into()),
+        ],
+    )
+}
+
+/// The DAMPING request: servo `id` (255: all) in damping mode with `power` mW (0: the limit).
+pub fn damping_request(profile: &Profile, id: u8, power: i64) -> Result<Request, OpError> {
+    motion_request(profile, cmd::DAMPING, id, &[("power", power)])
+}
+
+fn motion_request(
+    profile: &Profile,
+    command: u8,
+    id: u8,
+    values: &[(&str, i64)],
+) -> Result<Request, OpError> {
+    let c = profile
+        .command_by_id(command)
+        .ok_or_else(|| OpError::Input(format!("the profile has no command {command}")))?;
+    let mut inputs = vec![("servo_id".to_string(), Input::Raw(Value::Int(id.into())))];
+    inputs.extend(
+        values
+            .iter()
+            .map(|(k, v)| (k.to_string(), Input::Raw(Value::Int(*v)))),
+    );
+    let payload = profile.encode(c, Direction::HostToDevice, &inputs)?;
+    Ok(Request::for_command(profile, c, payload).attempts(1))
+}
+
+/// "Stop all": broadcasts that stop every servo at the port's baud rate. Damping (every servo
+/// knows it) stops a move or a spin; then STOP with hold (newer servos) locks them where they are.
+/// Nobody answers a broadcast.
+pub fn stop_all_requests(profile: &Profile) -> Vec<Request> {
+    let broadcast = crate::protocol::servo::BROADCAST_ID;
+    let mut out = Vec::new();
+    if let Ok(r) = damping_request(profile, broadcast, 0) {
+        out.push(r);
+    }
+    // 0x11: stop and hold.
+    if let Ok(r) = motion_request(
+        profile,
+        cmd::STOP,
+        broadcast,
+        &[("mode", 0x11), ("power", 0)],
+    ) {
+        out.push(r);
+    }
+    // Nobody answers from 255: waiting for an optional answer from it holds the link until the
+    // frame has crossed the wire, so that a baud change queued after it cannot cut it off.
+    out.into_iter()
+        .map(|r| {
+            let m = Match::servo(r.command, &[broadcast]);
+            r.reply(ReplySpec::Optional(m))
+        })
+        .collect()
+}
+
+/// The READ_ANGLE request to poll for servo `id`'s angle (answer: id, angle i16 in 0.1°).
+pub fn read_angle_request(id: u8) -> Request {
+    Request::new(cmd::READ_ANGLE, vec![id])
+        .reply(ReplySpec::Required(Match::servo(cmd::READ_ANGLE, &[id])))
+        .attempts(1)
+}
+
+/// The MONITOR request (newer servos) to poll for all of servo `id`'s live values.
+pub fn monitor_request(id: u8) -> Request {
+    Request::new(cmd::MONITOR, vec![id])
+        .reply(ReplySpec::Required(Match::servo(cmd::MONITOR, &[id])))
+        .attempts(1)
+}
+
+/// Reads servo `id`'s angle, 0.1°.
+pub fn read_angle(client: &Client, profile: &Profile, id: u8) -> Result<i64, OpError> {
+    let c = profile
+        .command_by_id(cmd::READ_ANGLE)
+        .ok_or_else(|| OpError::Input("the profile has no READ_ANGLE".into()))?;
+    let reply = client.request(read_angle_request(id).attempts(2))?;
+    let d = profile
+        .decode(
+            c,
+            Direction::DeviceToHost,
+            reply.payload().unwrap_or_default(),
+        )
+        .map_err(|e| OpError::answer(&c.ident, e))?;
+    match d.values.get(1).map(|v| &v.value) {
+        Some(Value::Int(v)) => Ok(*v),
+        _ => Err(OpError::Verify(format!("servo {id}: no angle"))),
+    }
+}
+
+/// Looks for servo `id` at every baud rate; the port is left where it answered. Returns that rate.
+pub fn locate(client: &Client, id: u8) -> Result<Option<u32>, OpError> {
+    recover(client, id)
+}

@@ -125,6 +125,8 @@ pub struct Runtime {
     /// Results of requests sent with `ReplyTo::Event(id)` (see [`Runtime::request_id`]), by id;
     /// the oldest are dropped beyond 256.
     pub replies: HashMap<u64, Result<crate::link::Reply, String>>,
+    /// How links are opened (answer margin, reconnect), as `--margin-ms` on the command line.
+    pub link_options: LinkOptions,
 }
 
 impl Runtime {
@@ -159,6 +161,7 @@ impl Runtime {
             just_connected: false,
             tuya: Default::default(),
             replies: HashMap::new(),
+            link_options: LinkOptions::default(),
         })
     }
 
@@ -221,8 +224,13 @@ impl Runtime {
         // a live plot asks for its own frame rate, and jobs wake the UI at once.
         let waker: crate::link::Waker =
             Arc::new(move || ctx.request_repaint_after(Duration::from_millis(200)));
-        let link = Link::open(opener, profile.clone(), LinkOptions::default(), Some(waker))
-            .map_err(|e| e.to_string())?;
+        let link = Link::open(
+            opener,
+            profile.clone(),
+            self.link_options.clone(),
+            Some(waker),
+        )
+        .map_err(|e| e.to_string())?;
         self.profile = profile;
         self.readings.clear();
         self.marks.clear();
@@ -255,9 +263,11 @@ impl Runtime {
     /// The telemetry commands to poll: the profile's plotted commands at `rate` Hz (`None`: as
     /// fast as the wire allows), and its other telemetry at 1 Hz, so that every value is live.
     pub fn polls(&self, rate: Option<f64>) -> Vec<Poll> {
-        // Tuya: the module session sends the heartbeat itself and the MCU reports its data
-        // points; polling 0x00/0x01/0x08 would take the restart heartbeat's 0 from the session.
-        if self.profile.protocol == crate::profile::Protocol::Tuya {
+        // Only MSP devices are polled from here. Tuya: the module session sends the heartbeat
+        // itself and the MCU reports its data points; polling 0x00/0x01/0x08 would take the
+        // restart heartbeat's 0 from the session. Servo commands name a servo: the servo bench
+        // polls the servo it works on itself.
+        if self.profile.protocol != crate::profile::Protocol::Msp {
             return Vec::new();
         }
         let mut plotted: Vec<u8> = Vec::new();

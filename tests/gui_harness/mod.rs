@@ -59,12 +59,20 @@ pub fn settings(path: &str, profile: &str, panel: PanelId, lang: Lang) -> Saved 
 
 /// The app with `saved` settings, in a 1400×1000 window: each step runs its logic and draws it.
 pub fn harness(saved: Saved) -> H {
+    harness_with(saved, |_| {})
+}
+
+/// As [`harness`], with `prepare` run on the app once it has started.
+pub fn harness_with(saved: Saved, prepare: impl Fn(&mut App) + 'static) -> H {
     Harness::builder()
         .with_size(egui::vec2(1400.0, 1000.0))
         .build_ui_state(
             move |ui, app: &mut Option<App>| {
-                let app = app
-                    .get_or_insert_with(|| App::new(ui.ctx(), saved.clone()).expect("app starts"));
+                let app = app.get_or_insert_with(|| {
+                    let mut app = App::new(ui.ctx(), saved.clone()).expect("app starts");
+                    prepare(&mut app);
+                    app
+                });
                 app.logic(ui.ctx());
                 app.ui(ui);
             },

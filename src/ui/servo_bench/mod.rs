@@ -1,0 +1,451 @@
+//! The servo bench: bus scan, parameters, ID and baud provisioning, motion tests, production
+//! provisioning. One sub-module per tab; this file holds the panel's frame: the "Stop all"
+//! button (always there, even while a job runs), the selected servo, the running job's progress,
+//! and the tabs.
+//!
+//! Everything that talks to servos is an operation of [`crate::ops::servo`] or
+//! [`crate::ops::provision`], run as a job; motion commands and "Stop all" go straight to the
+//! link worker so that they never wait for a job.
+
+mod motion;
+mod param_preset;
+mod params;
+mod provision;
+mod scan;
+mod setup;
+
+use super::Action;
+use super::jobs::{JobOutput, JobSink};
+use super::runtime::Runtime;
+use crate::i18n::Lang;
+use crate::link::{LinkCommand, LinkState, ReplyTo, Request};
+use crate::ops::msp::Check;
+use crate::ops::provision::{ProvisionState, Record};
+use crate::ops::servo::{Location, ScanRow};
+use eframe::egui;
+
+pub use params::ParamsState;
+pub use provision::ProvisionPanel;
+pub use scan::ScanState;
+
+/// A servo on the bus: its id and the rate it talks at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Servo {
+    /// Its id.
+    pub id: u8,
+    /// Its baud rate.
+    pub baud: u32,
+}
+
+/// The tabs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Tab {
+    /// Bus scan.
+    #[default]
+    Scan,
+    /// The selected servo's parameters.
+    Params,
+    /// ID and baud rate.
+    Setup,
+    /// Angle, wheel mode, damping, live angle.
+    Motion,
+    /// Production provisioning.
+    Production,
+}
+
+impl Tab {
+    const ALL: [Tab; 5] = [
+        Tab::Scan,
+        Tab::Params,
+        Tab::Setup,
+        Tab::Motion,
+        Tab::Production,
+    ];
+
+    fn name(self, lang: Lang) -> &'static str {
+        match self {
+            Tab::Scan => lang.tr("Bus scan", "总线扫描"),
+            Tab::Params => lang.tr("Parameters", "参数"),
+            Tab::Setup => lang.tr("ID & baud rate", "ID与波特率"),
+            Tab::Motion => lang.tr("Motion", "运动测试"),
+            Tab::Production => lang.tr("Production", "产线烧录"),
+        }
+    }
+}
+
+/// The panel's state.
+#[derive(Default)]
+pub struct ServoBenchPanel {
+    /// The tab shown.
+    pub tab: Tab,
+    /// The servo being worked on.
+    pub selected: Option<Servo>,
+    /// The scan tab.
+    pub scan: ScanState,
+    /// The parameters tab.
+    pub params: ParamsState,
+    /// The ID and baud tab.
+    pub setup: setup::SetupState,
+    /// The motion tab.
+    pub motion: motion::MotionState,
+    /// The production tab.
+    pub production: ProvisionPanel,
+}
+
+/// What this panel's jobs report.
+#[derive(Debug, Clone)]
+pub enum Output {
+    /// A scan found a servo (or a possible duplicate).
+    Found(ScanRow),
+    /// A scan ended: every row, or why it stopped.
+    Scanned(Result<Vec<ScanRow>, String>),
+    /// One id was scanned again at one rate: what answers there now.
+    Rescanned {
+        /// Where.
+        at: Servo,
+        /// What answers (empty: nothing), or why the scan failed.
+        rows: Result<Vec<ScanRow>, String>,
+    },
+    /// Parameters read from a servo: raw values by `data_id`, or why not.
+    Values {
+        /// Which servo.
+        servo: Servo,
+        /// The values.
+        values: Vec<(u8, Result<i64, String>)>,
+    },
+    /// Parameters written and read back, by `data_id`.
+    Written {
+        /// Which servo.
+        servo: Servo,
+        /// The checks, or why the write failed.
+        checks: Vec<(u8, Result<Check, String>)>,
+    },
+    /// "Reset user data" ended: where the servo is now, or why not.
+    Reset {
+        /// The servo as it was.
+        servo: Servo,
+        /// Its factory location, verified, or why not.
+        result: Result<Location, String>,
+    },
+    /// An id change ended.
+    IdSet {
+        /// The servo as it was.
+        servo: Servo,
+        /// The id given.
+        new: u8,
+        /// Verified at the new id, or why not.
+        result: Result<(), String>,
+    },
+    /// A baud change ended.
+    BaudSet {
+        /// The servo as it was.
+        servo: Servo,
+        /// Verified at this rate, or why not.
+        result: Result<u32, String>,
+        /// Where the servo was found when the change could not be verified.
+        found: Option<u32>,
+    },
+    /// One servo was provisioned (or failed).
+    Provisioned {
+        /// What happened.
+        record: Record,
+        /// The session's state afterwards (ids given out).
+        state: ProvisionState,
+        /// Why the record could not be logged, if it could not.
+        log_error: Option<String>,
+    },
+}
+
+/// Sends a panel output from a job.
+pub(crate) fn send(sink: &JobSink, out: Output) {
+    sink.send(JobOutput::Servo(out));
+}
+
+/// The rate the port is at now.
+pub(crate) fn port_baud(rt: &Runtime) -> Option<u32> {
+    match &rt.state {
+        Some(LinkState::Connected { baud, .. }) => Some(*baud),
+        _ => None,
+    }
+}
+
+/// A request for the worker, bypassing the job queue (the answer, if any, is not awaited).
+pub(crate) fn direct(request: Request) -> Action {
+    Action::Link(LinkCommand::Request {
+        request,
+        reply_to: ReplyTo::Event(0),
+    })
+}
+
+/// Switches the port to `baud` unless it is there already.
+pub(crate) fn follow(rt: &Runtime, baud: u32) -> Option<Action> {
+    (port_baud(rt) != Some(baud)).then_some(Action::Link(LinkCommand::SetBaud { baud, ack: None }))
+}
+
+/// A red error line.
+pub(crate) fn error_label(ui: &mut egui::Ui, text: impl Into<egui::RichText>) {
+    ui.colored_label(egui::Color32::from_rgb(210, 40, 40), text);
+}
+
+/// A green confirmation line.
+pub(crate) fn ok_label(ui: &mut egui::Ui, text: impl Into<egui::RichText>) {
+    ui.colored_label(egui::Color32::from_rgb(40, 150, 60), text);
+}
+
+impl ServoBenchPanel {
+    /// Draws the panel.
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+        let mut actions = Vec::new();
+        self.header(ui, lang, rt, &mut actions);
+        ui.separator();
+        ui.horizontal(|ui| {
+            for tab in Tab::ALL {
+                if ui
+                    .selectable_label(self.tab == tab, tab.name(lang))
+                    .clicked()
+                {
+                    self.tab = tab;
+                }
+            }
+        });
+        ui.separator();
+        let busy = rt.job_progress().is_some();
+        egui::ScrollArea::vertical()
+            .auto_shrink(false)
+            .show(ui, |ui| match self.tab {
+                Tab::Scan => {
+                    let picked = self
+                        .scan
+                        .show(ui, lang, rt, busy, self.selected, &mut actions);
+                    if let Some(s) = picked {
+                        self.select(Some(s), rt, &mut actions);
+                    }
+                }
+                Tab::Params => self
+                    .params
+                    .show(ui, lang, rt, busy, self.selected, &mut actions),
+                Tab::Setup => {
+                    self.setup
+                        .show(ui, lang, rt, busy, self.selected, &self.scan, &mut actions)
+                }
+                Tab::Motion => self
+                    .motion
+                    .show(ui, lang, rt, busy, self.selected, &mut actions),
+                Tab::Production => self.production.show(ui, lang, rt, busy, &mut actions),
+            });
+        // Live polling stops when a job starts: the job may take the port to other rates.
+        if actions.iter().any(|a| matches!(a, Action::StartJob(_))) && self.motion.live {
+            self.motion.live = false;
+            actions.insert(0, Action::Link(LinkCommand::SetPolls(Vec::new())));
+        }
+        actions
+    }
+
+    /// Stop all, the selected servo, the port's rate and the running job.
+    fn header(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, actions: &mut Vec<Action>) {
+        ui.horizontal(|ui| {
+            let stop = egui::Button::new(
+                egui::RichText::new(lang.tr("STOP ALL", "全部停止"))
+                    .strong()
+                    .size(18.0)
+                    .color(egui::Color32::WHITE),
+            )
+            .fill(egui::Color32::from_rgb(190, 30, 30))
+            .min_size(egui::vec2(140.0, 34.0));
+            if ui
+                .add_enabled(rt.connected(), stop)
+                .on_hover_text(lang.tr(
+                    "Broadcast: damping, then stop and hold. Sent at once, even while a job runs (then at the port's baud rate only); otherwise at the port's rate and at every rate where the scan found servos.",
+                    "广播: 先阻尼, 再停止并保持锁力。即使有任务在运行也会立即发送(此时仅在当前波特率); 否则在当前波特率及扫描到舵机的所有波特率下发送。",
+                ))
+                .clicked()
+            {
+                actions.extend(self.stop_all(rt));
+            }
+            ui.separator();
+            match self.selected {
+                Some(s) => {
+                    ui.label(format!(
+                        "{} {} @ {} {}",
+                        lang.tr("Selected servo", "当前舵机"),
+                        s.id,
+                        s.baud,
+                        lang.tr("baud", "波特")
+                    ));
+                }
+                None => {
+                    ui.weak(lang.tr(
+                        "No servo selected: scan the bus and select one",
+                        "未选择舵机: 请先扫描总线并选择",
+                    ));
+                }
+            }
+            ui.separator();
+            match port_baud(rt) {
+                Some(b) => ui.label(format!("{} {b}", lang.tr("Port at", "端口波特率"))),
+                None => ui.weak(lang.tr("not connected", "未连接")),
+            };
+            if let Some((title, fraction, msg)) = rt.job_progress() {
+                ui.separator();
+                ui.label(title);
+                ui.add(
+                    egui::ProgressBar::new(fraction)
+                        .desired_width(180.0)
+                        .show_percentage(),
+                );
+                ui.weak(msg);
+                if ui.button(lang.tr("Cancel job", "取消任务")).clicked() {
+                    actions.push(Action::CancelJob);
+                }
+            }
+        });
+    }
+
+    /// The broadcasts of "Stop all": at the port's rate at once; with no job running, also at
+    /// every other rate where the scan found servos, and the port then returns to its rate.
+    fn stop_all(&self, rt: &Runtime) -> Vec<Action> {
+        let requests = crate::ops::servo::stop_all_requests(&rt.profile);
+        let mut out: Vec<Action> = requests.iter().cloned().map(direct).collect();
+        let here = port_baud(rt);
+        let mut rates: Vec<u32> = Vec::new();
+        if rt.job_progress().is_none() {
+            for r in &self.scan.rows {
+                if Some(r.baud) != here && !rates.contains(&r.baud) {
+                    rates.push(r.baud);
+                }
+            }
+        }
+        for &b in &rates {
+            out.push(Action::Link(LinkCommand::SetBaud { baud: b, ack: None }));
+            out.extend(requests.iter().cloned().map(direct));
+        }
+        if let (Some(h), false) = (here, rates.is_empty()) {
+            out.push(Action::Link(LinkCommand::SetBaud { baud: h, ack: None }));
+        }
+        let mut all: Vec<String> = here
+            .into_iter()
+            .chain(rates)
+            .map(|b| b.to_string())
+            .collect();
+        all.dedup();
+        out.push(Action::Say(
+            format!("stop all broadcast at {} baud", all.join(", ")),
+            false,
+        ));
+        out
+    }
+
+    /// Works on `servo` from now on: the port follows it; what was read of another servo goes.
+    fn select(&mut self, servo: Option<Servo>, rt: &Runtime, actions: &mut Vec<Action>) {
+        if self.selected != servo {
+            self.params = ParamsState {
+                preset_path: std::mem::take(&mut self.params.preset_path),
+                ..ParamsState::default()
+            };
+            if self.motion.live {
+                self.motion.live = false;
+                actions.push(Action::Link(LinkCommand::SetPolls(Vec::new())));
+            }
+            self.motion.clear_plot();
+        }
+        self.selected = servo;
+        if let Some(s) = servo
+            && let Some(a) = follow(rt, s.baud)
+        {
+            actions.push(a);
+        }
+    }
+
+    /// The servo moved (new id, new rate, reset): the selection and the scan table follow it;
+    /// what was read stays valid only for parameters the move did not touch.
+    fn moved(&mut self, from: Servo, to: Servo) {
+        for row in &mut self.scan.rows {
+            if row.id == from.id && row.baud == from.baud {
+                row.id = to.id;
+                row.baud = to.baud;
+            }
+        }
+        if self.selected == Some(from) {
+            self.selected = Some(to);
+        }
+    }
+
+    /// Takes what one of its jobs reported.
+    pub fn on_output(&mut self, out: Output) {
+        match out {
+            Output::Found(row) => self.scan.on_found(row),
+            Output::Scanned(result) => {
+                self.scan.on_scanned(result);
+                // One clean servo on the bus: that is the one to work on.
+                let present: Vec<&ScanRow> = self
+                    .scan
+                    .rows
+                    .iter()
+                    .filter(|r| r.presence == crate::ops::servo::Presence::Present)
+                    .collect();
+                if self.selected.is_none()
+                    && let [only] = present.as_slice()
+                {
+                    self.selected = Some(Servo {
+                        id: only.id,
+                        baud: only.baud,
+                    });
+                }
+            }
+            Output::Rescanned { at, rows } => self.scan.on_rescanned(at, rows),
+            Output::Values { servo, values } => {
+                if self.selected == Some(servo) {
+                    self.params.on_values(values);
+                }
+            }
+            Output::Written { servo, checks } => {
+                if self.selected == Some(servo) {
+                    self.params.on_written(checks);
+                }
+            }
+            Output::Reset { servo, result } => {
+                if let Ok(at) = &result {
+                    let to = Servo {
+                        id: at.id,
+                        baud: at.baud,
+                    };
+                    self.moved(servo, to);
+                    self.params.values.clear();
+                    self.params.marks.clear();
+                }
+                self.params.on_reset(result);
+            }
+            Output::IdSet { servo, new, result } => {
+                if result.is_ok() {
+                    let to = Servo { id: new, ..servo };
+                    self.moved(servo, to);
+                    if let Some(v) = self.params.values.get_mut(&crate::ops::servo::PARAM_ID) {
+                        *v = Ok(new.into());
+                    }
+                }
+                self.setup.on_id(servo, new, result);
+            }
+            Output::BaudSet {
+                servo,
+                result,
+                found,
+            } => {
+                let now = result.as_ref().ok().copied().or(found);
+                if let Some(b) = now {
+                    self.moved(servo, Servo { baud: b, ..servo });
+                    if let Some(opt) = crate::ops::servo::option_of_baud(b)
+                        && let Some(v) = self.params.values.get_mut(&crate::ops::servo::PARAM_BAUD)
+                    {
+                        *v = Ok(opt.into());
+                    }
+                }
+                self.setup.on_baud(servo, result, found);
+            }
+            Output::Provisioned {
+                record,
+                state,
+                log_error,
+            } => self.production.on_record(record, state, log_error),
+        }
+    }
+}

@@ -1,0 +1,472 @@
+//! The motion tab: angle (slider or typed, with an interval: ROTATE), a live angle readout and
+//! plot (READ_ANGLE polled; MONITOR too where the servo answers it), wheel mode (stop,
+//! continuous, turns, timed; direction), damping with a holding power.
+//!
+//! Motion commands go straight to the link worker: they never wait behind a job, and the live
+//! angle keeps coming while the servo moves.
+
+use super::{Servo, direct, error_label, follow};
+use crate::i18n::Lang;
+use crate::link::{LinkCommand, Poll};
+use crate::ops::servo::{self as ops, Wheel};
+use crate::profile::{Field, Value};
+use crate::protocol::servo::cmd;
+use crate::ui::Action;
+use crate::ui::runtime::{Reading, Runtime};
+use eframe::egui;
+use egui_plot::{Line, Plot, PlotPoints};
+use std::time::{Duration, Instant};
+
+/// The most angle samples kept for the plot.
+const MAX_POINTS: usize = 4000;
+
+/// The wheel-mode methods offered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum WheelMode {
+    /// Stop turning.
+    #[default]
+    Stop,
+    /// Turn until stopped.
+    Continuous,
+    /// A number of turns.
+    Turns,
+    /// A number of milliseconds.
+    Timed,
+}
+
+impl WheelMode {
+    const ALL: [WheelMode; 4] = [
+        WheelMode::Stop,
+        WheelMode::Continuous,
+        WheelMode::Turns,
+        WheelMode::Timed,
+    ];
+
+    fn name(self, lang: Lang) -> &'static str {
+        match self {
+            WheelMode::Stop => lang.tr("Stop", "停止"),
+            WheelMode::Continuous => lang.tr("Continuous", "持续旋转"),
+            WheelMode::Turns => lang.tr("Turns", "定圈"),
+            WheelMode::Timed => lang.tr("Timed", "定时"),
+        }
+    }
+}
+
+/// The motion tab's state.
+pub struct MotionState {
+    /// The slider's angle, degrees.
+    pub angle: f64,
+    /// The angle as typed, degrees.
+    pub angle_text: String,
+    /// The interval as typed, ms.
+    pub interval: String,
+    /// The power as typed, mW (0: the servo's limit).
+    pub power: String,
+    /// READ_ANGLE is polled.
+    pub live: bool,
+    /// MONITOR is polled too.
+    pub monitor: bool,
+    /// Angle samples: seconds since `t0`, degrees.
+    pub series: Vec<[f64; 2]>,
+    last_at: Option<Instant>,
+    t0: Instant,
+    /// The wheel-mode method.
+    pub wheel: WheelMode,
+    /// Clockwise.
+    pub clockwise: bool,
+    /// Wheel speed as typed, °/s.
+    pub speed: String,
+    /// Turns or milliseconds as typed.
+    pub value: String,
+    /// Damping holding power as typed, mW.
+    pub damping: String,
+}
+
+impl Default for MotionState {
+    fn default() -> Self {
+        Self {
+            angle: 0.0,
+            angle_text: "0.0".into(),
+            interval: "500".into(),
+            power: "0".into(),
+            live: false,
+            monitor: false,
+            series: Vec::new(),
+            last_at: None,
+            t0: Instant::now(),
+            wheel: WheelMode::Stop,
+            clockwise: true,
+            speed: "60".into(),
+            value: "3".into(),
+            damping: "0".into(),
+        }
+    }
+}
+
+/// A command's request field by ident.
+fn field<'p>(rt: &'p Runtime, command: u8, ident: &str) -> Option<&'p Field> {
+    rt.profile
+        .command_by_id(command)?
+        .request
+        .iter()
+        .find(|f| f.ident == ident)
+}
+
+/// What a person typed for a command's field, as a raw value, or why it does not fit.
+fn raw(rt: &Runtime, command: u8, ident: &str, text: &str) -> Result<i64, String> {
+    let f = field(rt, command, ident).ok_or_else(|| format!("the profile has no {ident}"))?;
+    match f.parse(text) {
+        Ok(Value::Int(v)) => Ok(v),
+        Ok(_) => Err(format!("{ident}: not a number")),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// A labelled text entry that turns red when `ok` is false.
+fn entry(ui: &mut egui::Ui, label: &str, text: &mut String, ok: bool) -> egui::Response {
+    let l = ui.label(label);
+    let mut edit = egui::TextEdit::singleline(text).desired_width(60.0);
+    if !ok {
+        edit = edit.text_color(egui::Color32::from_rgb(210, 40, 40));
+    }
+    ui.add(edit).labelled_by(l.id)
+}
+
+impl MotionState {
+    /// Forgets the plotted angle (another servo).
+    pub fn clear_plot(&mut self) {
+        self.series.clear();
+        self.last_at = None;
+        self.t0 = Instant::now();
+    }
+
+    fn polls(&self, id: u8) -> Vec<Poll> {
+        let mut polls = vec![Poll {
+            request: ops::read_angle_request(id),
+            interval: Some(Duration::from_millis(50)),
+        }];
+        if self.monitor {
+            polls.push(Poll {
+                request: ops::monitor_request(id),
+                interval: Some(Duration::from_millis(250)),
+            });
+        }
+        polls
+    }
+
+    /// Takes a new READ_ANGLE answer of `id` into the plot.
+    fn collect(&mut self, rt: &Runtime, id: u8) {
+        let Some(Reading::Values(values, at)) = rt.readings.get(&cmd::READ_ANGLE) else {
+            return;
+        };
+        if self.last_at == Some(*at) {
+            return;
+        }
+        self.last_at = Some(*at);
+        let of = values.iter().find(|(k, _)| k == "servo_id").map(|(_, v)| v);
+        let angle = values.iter().find(|(k, _)| k == "angle").map(|(_, v)| v);
+        if let (Some(Value::Int(sid)), Some(Value::Int(a))) = (of, angle)
+            && *sid == i64::from(id)
+        {
+            let t = at.saturating_duration_since(self.t0).as_secs_f64();
+            self.series.push([t, *a as f64 * 0.1]);
+            if self.series.len() > MAX_POINTS {
+                self.series.drain(..self.series.len() - MAX_POINTS);
+            }
+        }
+    }
+
+    /// Draws the tab.
+    pub(super) fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &Runtime,
+        busy: bool,
+        selected: Option<Servo>,
+        actions: &mut Vec<Action>,
+    ) {
+        let Some(servo) = selected else {
+            ui.weak(lang.tr(
+                "Select a servo in the bus scan first.",
+                "请先在总线扫描中选择一个舵机。",
+            ));
+            return;
+        };
+        let can = rt.connected() && !busy;
+        if busy {
+            ui.weak(lang.tr(
+                "A job is running: motion commands wait until it ends. STOP ALL always works.",
+                "有任务在运行: 运动指令需等待任务结束。全部停止始终可用。",
+            ));
+        }
+        let send = |actions: &mut Vec<Action>, request: Result<crate::link::Request, String>| {
+            match request {
+                Ok(r) => {
+                    actions.extend(follow(rt, servo.baud));
+                    actions.push(direct(r));
+                }
+                Err(e) => actions.push(Action::Say(e, true)),
+            }
+        };
+
+        ui.heading(lang.tr("Angle", "角度"));
+        let angle = raw(rt, cmd::ROTATE, "angle", &self.angle_text);
+        let interval = raw(rt, cmd::ROTATE, "interval", &self.interval);
+        let power = raw(rt, cmd::ROTATE, "power", &self.power);
+        ui.horizontal_wrapped(|ui| {
+            let l = ui.label(lang.tr("Target angle", "目标角度"));
+            let slider = ui
+                .add(
+                    egui::Slider::new(&mut self.angle, -180.0..=180.0)
+                        .step_by(0.1)
+                        .suffix("°"),
+                )
+                .labelled_by(l.id);
+            if slider.changed() {
+                self.angle_text = format!("{:.1}", self.angle);
+            }
+            let typed = entry(
+                ui,
+                lang.tr("Angle (°)", "角度(°)"),
+                &mut self.angle_text,
+                angle.is_ok(),
+            );
+            if typed.changed()
+                && let Ok(v) = self.angle_text.trim().parse::<f64>()
+            {
+                self.angle = v.clamp(-180.0, 180.0);
+            }
+            entry(
+                ui,
+                lang.tr("Interval (ms)", "时间(ms)"),
+                &mut self.interval,
+                interval.is_ok(),
+            );
+            entry(
+                ui,
+                lang.tr("Power (mW, 0 = limit)", "功率(mW, 0为上限)"),
+                &mut self.power,
+                power.is_ok(),
+            );
+            let ok = angle.is_ok() && interval.is_ok() && power.is_ok();
+            if ui
+                .add_enabled(
+                    can && ok,
+                    egui::Button::new(lang.tr("Go to angle", "转到角度")),
+                )
+                .clicked()
+                && let (Ok(a), Ok(i), Ok(p)) = (&angle, &interval, &power)
+            {
+                send(
+                    actions,
+                    ops::rotate_request(&rt.profile, servo.id, *a, *i, *p)
+                        .map_err(|e| e.to_string()),
+                );
+            }
+        });
+        for e in [&angle, &interval, &power]
+            .into_iter()
+            .filter_map(|r| r.as_ref().err())
+        {
+            error_label(ui, e);
+        }
+
+        ui.horizontal(|ui| {
+            // Not while a job runs: polling takes the port to the servo's rate.
+            let live = ui.add_enabled(
+                can,
+                egui::Checkbox::new(&mut self.live, lang.tr("Live angle", "实时角度")),
+            );
+            let monitor = ui.add_enabled(
+                can,
+                egui::Checkbox::new(
+                    &mut self.monitor,
+                    lang.tr("Also monitor (newer servos)", "同时监控(新款舵机)"),
+                ),
+            );
+            if live.changed() || (monitor.changed() && self.live) {
+                if self.live {
+                    actions.extend(follow(rt, servo.baud));
+                    actions.push(Action::Link(LinkCommand::SetPolls(self.polls(servo.id))));
+                } else {
+                    actions.push(Action::Link(LinkCommand::SetPolls(Vec::new())));
+                }
+            }
+            if ui.button(lang.tr("Clear plot", "清除曲线")).clicked() {
+                self.clear_plot();
+            }
+        });
+        if self.live {
+            self.collect(rt, servo.id);
+            ui.ctx().request_repaint_after(Duration::from_millis(50));
+        }
+        self.readout(ui, lang, rt, servo);
+        Plot::new("servo-angle")
+            .height(180.0)
+            .allow_scroll(false)
+            .show(ui, |p| {
+                p.line(Line::new(
+                    lang.tr("angle (°)", "角度(°)"),
+                    PlotPoints::from(self.series.clone()),
+                ));
+            });
+
+        ui.heading(lang.tr("Wheel mode", "轮式模式"));
+        let speed = raw(rt, cmd::SPIN, "speed", &self.speed);
+        let needs_value = matches!(self.wheel, WheelMode::Turns | WheelMode::Timed);
+        let value = raw(rt, cmd::SPIN, "value", &self.value);
+        ui.horizontal_wrapped(|ui| {
+            let l = ui.label(lang.tr("Method", "方式"));
+            egui::ComboBox::from_id_salt("servo-wheel")
+                .selected_text(self.wheel.name(lang))
+                .show_ui(ui, |ui| {
+                    for m in WheelMode::ALL {
+                        ui.selectable_value(&mut self.wheel, m, m.name(lang));
+                    }
+                })
+                .response
+                .labelled_by(l.id);
+            ui.checkbox(&mut self.clockwise, lang.tr("Clockwise", "顺时针"));
+            entry(
+                ui,
+                lang.tr("Speed (°/s)", "速度(°/s)"),
+                &mut self.speed,
+                speed.is_ok(),
+            );
+            let what = match self.wheel {
+                WheelMode::Timed => lang.tr("Time (ms)", "时间(ms)"),
+                _ => lang.tr("Turns", "圈数"),
+            };
+            if needs_value {
+                entry(ui, what, &mut self.value, value.is_ok());
+            }
+            let ok = speed.is_ok() && (!needs_value || value.is_ok());
+            if ui
+                .add_enabled(
+                    can && ok,
+                    egui::Button::new(lang.tr("Run wheel", "执行轮式")),
+                )
+                .clicked()
+                && let Ok(s) = &speed
+            {
+                let v = value.as_ref().ok().map_or(0, |v| *v as u16);
+                let wheel = match self.wheel {
+                    WheelMode::Stop => Wheel::Stop,
+                    WheelMode::Continuous => Wheel::Continuous,
+                    WheelMode::Turns => Wheel::Turns(v),
+                    WheelMode::Timed => Wheel::Timed(v),
+                };
+                send(
+                    actions,
+                    ops::spin_request(&rt.profile, servo.id, wheel, self.clockwise, *s as u16)
+                        .map_err(|e| e.to_string()),
+                );
+            }
+        });
+        for e in [&speed]
+            .into_iter()
+            .chain(needs_value.then_some(&value))
+            .filter_map(|r| r.as_ref().err())
+        {
+            error_label(ui, e);
+        }
+
+        ui.heading(lang.tr("Damping", "阻尼"));
+        let damping = raw(rt, cmd::DAMPING, "power", &self.damping);
+        ui.horizontal(|ui| {
+            entry(
+                ui,
+                lang.tr("Holding power (mW, 0 = limit)", "保持功率(mW, 0为上限)"),
+                &mut self.damping,
+                damping.is_ok(),
+            );
+            if ui
+                .add_enabled(
+                    can && damping.is_ok(),
+                    egui::Button::new(lang.tr("Damping mode", "进入阻尼模式")),
+                )
+                .clicked()
+                && let Ok(p) = &damping
+            {
+                send(
+                    actions,
+                    ops::damping_request(&rt.profile, servo.id, *p).map_err(|e| e.to_string()),
+                );
+            }
+            if let Err(e) = &damping {
+                error_label(ui, e);
+            }
+        });
+    }
+
+    /// The latest angle and monitor values of the selected servo, nothing before they arrive.
+    fn readout(&self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, servo: Servo) {
+        let of_servo = |values: &[(String, Value)]| {
+            values
+                .iter()
+                .any(|(k, v)| k == "servo_id" && *v == Value::Int(servo.id.into()))
+        };
+        ui.horizontal(|ui| {
+            ui.label(lang.tr("Angle now:", "当前角度:"));
+            match rt.readings.get(&cmd::READ_ANGLE) {
+                Some(Reading::Values(values, at)) if of_servo(values) && self.live => {
+                    let a = values.iter().find(|(k, _)| k == "angle").map(|(_, v)| v);
+                    if let Some(Value::Int(a)) = a {
+                        ui.label(
+                            egui::RichText::new(format!("{:.1}°", *a as f64 * 0.1))
+                                .size(20.0)
+                                .strong(),
+                        );
+                        ui.weak(format!(
+                            "{} ms {}",
+                            at.elapsed().as_millis(),
+                            lang.tr("ago", "前")
+                        ));
+                    }
+                }
+                Some(Reading::Failed(e)) if self.live => error_label(ui, e),
+                _ => {
+                    ui.weak(lang.tr("turn on Live angle", "请开启实时角度"));
+                }
+            }
+        });
+        if !(self.live && self.monitor) {
+            return;
+        }
+        match rt.readings.get(&cmd::MONITOR) {
+            Some(Reading::Values(values, _)) if of_servo(values) => {
+                let Some(mon) = rt.profile.command_by_id(cmd::MONITOR) else {
+                    return;
+                };
+                ui.horizontal_wrapped(|ui| {
+                    for f in mon.reply.iter().skip(1) {
+                        if let Some((_, v)) = values.iter().find(|(k, _)| *k == f.ident) {
+                            let shown = if f.ident == "status" {
+                                match v {
+                                    Value::Int(s) => format!("{s:#04x}"),
+                                    _ => f.format(v),
+                                }
+                            } else {
+                                format!("{}{}", f.format(v), f.unit_suffix())
+                            };
+                            ui.label(format!("{}: {shown}", lang.tr(&f.name.en, &f.name.zh)));
+                            ui.separator();
+                        }
+                    }
+                });
+            }
+            Some(Reading::Failed(e)) => error_label(
+                ui,
+                format!(
+                    "{}: {e}",
+                    lang.tr(
+                        "monitor: no answer (older servos do not answer it)",
+                        "监控无应答(旧款舵机不支持)"
+                    )
+                ),
+            ),
+            _ => {}
+        }
+    }
+}

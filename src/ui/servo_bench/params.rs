@@ -1,0 +1,613 @@
+//! The parameters tab: the selected servo's read-only (1-8) and user (32-53) parameters from the
+//! profile, with unit, range and labels. Edits are checked as typed; changed values are written
+//! and read back one by one, or the whole user block in one exchange. "Reset user data" asks
+//! first. Servo parameter presets are saved from and loaded into the table.
+
+use super::{Output, Servo, error_label, ok_label, send};
+use crate::i18n::Lang;
+use crate::ops::msp::Check;
+use crate::ops::servo::{self as ops, Location, PARAM_BAUD, PARAM_ID};
+use crate::profile::{Access, Input, Param, Profile, Value};
+use crate::ui::runtime::Runtime;
+use crate::ui::tuning::range_text;
+use crate::ui::{Action, JobWork};
+use eframe::egui;
+use std::collections::BTreeMap;
+
+/// What a parameter shows after a write.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ParamMark {
+    /// The servo holds what was written.
+    Verified,
+    /// The servo holds this raw value instead.
+    Mismatch(i64),
+    /// The write failed.
+    Failed(String),
+}
+
+/// The parameters tab's state (for the selected servo).
+#[derive(Default)]
+pub struct ParamsState {
+    /// Raw values read from the servo by `data_id`, or why the read failed.
+    pub values: BTreeMap<u8, Result<i64, String>>,
+    /// Edited text by `data_id`.
+    pub edits: BTreeMap<u8, String>,
+    /// Marks left by the last write.
+    pub marks: BTreeMap<u8, ParamMark>,
+    /// The preset file.
+    pub preset_path: String,
+    /// The preset's note.
+    pub note: String,
+    /// The last preset, reset or write message: ok, and its text.
+    pub message: Option<(bool, String)>,
+    /// "Reset user data" awaits confirmation.
+    pub confirm_reset: bool,
+    /// The language last drawn in (for messages made between frames).
+    pub lang: Lang,
+}
+
+/// Whether the table edits this parameter (the id and the baud rate have their own tab).
+pub(super) fn editable(p: &Param) -> bool {
+    p.access == Access::ReadWrite && p.id != PARAM_ID && p.id != PARAM_BAUD
+}
+
+impl ParamsState {
+    pub(super) fn device(&self, id: u8) -> Option<i64> {
+        self.values.get(&id).and_then(|v| v.as_ref().ok()).copied()
+    }
+
+    /// Drops edits that equal what the servo holds.
+    fn prune(&mut self, profile: &Profile) {
+        let values = &self.values;
+        self.edits.retain(|id, text| {
+            let Some(p) = profile.param(*id) else {
+                return false;
+            };
+            let device = values.get(id).and_then(|v| v.as_ref().ok()).copied();
+            !matches!((p.field.parse(text), device), (Ok(Value::Int(v)), Some(d)) if v == d)
+        });
+    }
+
+    /// The values to write (raw, by `data_id`), or the first reason they cannot be written.
+    pub fn pending(&self, profile: &Profile) -> Result<Vec<(u8, i64)>, String> {
+        let mut out = Vec::new();
+        for (id, text) in &self.edits {
+            let Some(p) = profile.param(*id) else {
+                continue;
+            };
+            match p.field.parse(text) {
+                Ok(Value::Int(v)) => {
+                    if self.device(*id) != Some(v) {
+                        out.push((*id, v));
+                    }
+                }
+                Ok(_) => return Err(format!("{}: not a number", p.field.ident)),
+                Err(e) => return Err(e.to_string()),
+            }
+        }
+        Ok(out)
+    }
+
+    /// The whole user block as it would be written: the servo's values with the edits applied.
+    fn block(&self, profile: &Profile) -> Result<Vec<(u8, i64)>, String> {
+        let pending = self.pending(profile)?;
+        profile
+            .block_params()
+            .map(|p| {
+                if let Some((_, v)) = pending.iter().find(|(id, _)| *id == p.id) {
+                    return Ok((p.id, *v));
+                }
+                self.device(p.id).map(|v| (p.id, v)).ok_or_else(|| {
+                    format!(
+                        "{} has not been read: read all first, so that the whole block can be written",
+                        p.field.ident
+                    )
+                })
+            })
+            .collect()
+    }
+
+    pub(super) fn on_values(&mut self, values: Vec<(u8, Result<i64, String>)>) {
+        for (id, v) in values {
+            self.values.insert(id, v);
+        }
+    }
+
+    pub(super) fn on_written(&mut self, checks: Vec<(u8, Result<Check, String>)>) {
+        let (mut good, mut bad) = (0, 0);
+        for (id, c) in checks {
+            match c {
+                Ok(c) => {
+                    let read = match c.read {
+                        Value::Int(v) => Some(v),
+                        _ => None,
+                    };
+                    match read {
+                        Some(r) => {
+                            self.values.insert(id, Ok(r));
+                        }
+                        None => {
+                            self.values.remove(&id);
+                        }
+                    }
+                    if c.ok() {
+                        good += 1;
+                        self.marks.insert(id, ParamMark::Verified);
+                    } else {
+                        bad += 1;
+                        self.marks
+                            .insert(id, ParamMark::Mismatch(read.unwrap_or_default()));
+                    }
+                }
+                Err(e) => {
+                    bad += 1;
+                    // Nothing is known of what the servo holds now.
+                    self.values.remove(&id);
+                    self.marks.insert(id, ParamMark::Failed(e));
+                }
+            }
+        }
+        let lang = self.lang;
+        self.message = Some((
+            bad == 0,
+            format!(
+                "{good} {}, {bad} {}",
+                lang.tr("written and verified", "个已写入并校验"),
+                lang.tr("not verified", "个未通过校验")
+            ),
+        ));
+    }
+
+    pub(super) fn on_reset(&mut self, result: Result<Location, String>) {
+        let lang = self.lang;
+        self.message = Some(match result {
+            Ok(at) => (
+                true,
+                format!(
+                    "{} {} @ {} baud ({})",
+                    lang.tr(
+                        "user data reset: the servo is now id",
+                        "用户数据已重置: 舵机现在为ID"
+                    ),
+                    at.id,
+                    at.baud,
+                    lang.tr(
+                        "verified; its parameters were read again",
+                        "已校验; 参数已重新读取"
+                    )
+                ),
+            ),
+            Err(e) => (false, format!("{}: {e}", lang.tr("reset", "重置"))),
+        });
+    }
+
+    /// Draws the tab.
+    pub(super) fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &Runtime,
+        busy: bool,
+        selected: Option<Servo>,
+        actions: &mut Vec<Action>,
+    ) {
+        let Some(servo) = selected else {
+            ui.weak(lang.tr(
+                "Select a servo in the bus scan first.",
+                "请先在总线扫描中选择一个舵机。",
+            ));
+            return;
+        };
+        self.lang = lang;
+        let profile = rt.profile.clone();
+        self.prune(&profile);
+        let pending = self.pending(&profile);
+        let can = rt.connected() && !busy;
+        ui.horizontal_wrapped(|ui| {
+            if ui
+                .add_enabled(can, egui::Button::new(lang.tr("Read all", "全部读取")))
+                .on_hover_text(lang.tr(
+                    "Read-only parameters one by one, user parameters as one 32-byte block",
+                    "只读参数逐个读取, 用户参数按32字节批量读取",
+                ))
+                .clicked()
+            {
+                actions.push(read_all_job(rt, servo));
+            }
+            if ui
+                .add_enabled(
+                    can,
+                    egui::Button::new(lang.tr("Read block (batch)", "批量读取用户参数")),
+                )
+                .on_hover_text(lang.tr(
+                    "The 22 user parameters as one 32-byte block",
+                    "一次读取22个用户参数(32字节)",
+                ))
+                .clicked()
+            {
+                actions.push(read_block_job(rt, servo));
+            }
+            let n = pending.as_ref().map_or(0, Vec::len);
+            let write = ui.add_enabled(
+                can && n > 0 && pending.is_ok(),
+                egui::Button::new(format!("{} ({n})", lang.tr("Write changes", "写入修改"))),
+            );
+            if write.clicked()
+                && let Ok(values) = &pending
+            {
+                actions.push(write_job(rt, servo, values.clone()));
+            }
+            let block = self.block(&profile);
+            if ui
+                .add_enabled(
+                    can && block.is_ok(),
+                    egui::Button::new(lang.tr("Write block (batch)", "批量写入用户参数")),
+                )
+                .on_hover_text(match &block {
+                    Ok(_) => lang
+                        .tr(
+                            "All 22 user parameters in one exchange, then read back",
+                            "一次写入全部22个用户参数并回读",
+                        )
+                        .to_string(),
+                    Err(e) => e.clone(),
+                })
+                .clicked()
+                && let Ok(values) = block
+            {
+                actions.push(block_job(rt, servo, values));
+            }
+            if ui
+                .add_enabled(
+                    !self.edits.is_empty(),
+                    egui::Button::new(lang.tr("Revert", "撤销修改")),
+                )
+                .clicked()
+            {
+                self.edits.clear();
+            }
+            if ui
+                .add_enabled(
+                    can,
+                    egui::Button::new(lang.tr("Reset user data…", "重置用户数据…")),
+                )
+                .clicked()
+            {
+                self.confirm_reset = true;
+            }
+        });
+        if let Err(e) = &pending {
+            error_label(ui, e);
+        }
+        self.preset_row(ui, lang, &profile);
+        match &self.message {
+            Some((true, m)) => ok_label(ui, m),
+            Some((false, m)) => error_label(ui, m),
+            None => {}
+        }
+        ui.separator();
+        egui::Grid::new("servo-params")
+            .striped(true)
+            .num_columns(7)
+            .min_col_width(40.0)
+            .show(ui, |ui| {
+                for h in [
+                    lang.tr("ID", "ID"),
+                    lang.tr("Parameter", "参数"),
+                    lang.tr("Servo", "舵机值"),
+                    lang.tr("New value", "新值"),
+                    lang.tr("Unit", "单位"),
+                    lang.tr("Range", "范围"),
+                    "",
+                ] {
+                    ui.strong(h);
+                }
+                ui.end_row();
+                for p in &profile.params {
+                    self.row(ui, lang, p);
+                    ui.end_row();
+                }
+            });
+        if self.confirm_reset {
+            self.reset_dialog(ui, lang, rt, servo, actions);
+        }
+    }
+
+    fn row(&mut self, ui: &mut egui::Ui, lang: Lang, p: &Param) {
+        let f = &p.field;
+        ui.monospace(p.id.to_string());
+        let name = ui
+            .label(lang.tr(&f.name.en, &f.name.zh))
+            .on_hover_text(&f.ident);
+        let device = self.device(p.id);
+        match self.values.get(&p.id) {
+            Some(Ok(v)) => {
+                ui.monospace(f.format(&Value::Int(*v)));
+            }
+            Some(Err(e)) => {
+                ui.colored_label(
+                    egui::Color32::from_rgb(210, 40, 40),
+                    lang.tr("read failed", "读取失败"),
+                )
+                .on_hover_text(e);
+            }
+            None => {
+                ui.weak(lang.tr("not read yet", "尚未读取"));
+            }
+        }
+        let parsed = self.edits.get(&p.id).map(|t| f.parse(t));
+        if editable(p) {
+            let mut text =
+                self.edits.get(&p.id).cloned().unwrap_or_else(|| {
+                    device.map(|v| f.format(&Value::Int(v))).unwrap_or_default()
+                });
+            let invalid = matches!(parsed, Some(Err(_)));
+            let mut edit = egui::TextEdit::singleline(&mut text).desired_width(110.0);
+            if invalid {
+                edit = edit.text_color(egui::Color32::from_rgb(210, 40, 40));
+            }
+            let resp = ui.add(edit).labelled_by(name.id);
+            if resp.changed() {
+                self.edits.insert(p.id, text);
+            }
+        } else if p.access == Access::ReadWrite {
+            ui.weak(lang.tr("set in ID & baud rate", "在ID与波特率页设置"));
+        } else {
+            ui.weak(lang.tr("read-only", "只读"));
+        }
+        ui.label(&f.unit);
+        ui.weak(range_text(f));
+        let changed = matches!(&parsed, Some(Ok(Value::Int(v))) if device != Some(*v));
+        match (&parsed, self.marks.get(&p.id)) {
+            (Some(Err(e)), _) => {
+                ui.colored_label(
+                    egui::Color32::from_rgb(210, 40, 40),
+                    format!("× {}: {e}", lang.tr("invalid", "无效")),
+                );
+            }
+            _ if changed => {
+                ui.colored_label(
+                    egui::Color32::from_rgb(220, 150, 0),
+                    lang.tr("changed", "已修改"),
+                );
+            }
+            (_, Some(ParamMark::Verified)) => ok_label(ui, lang.tr("verified", "已校验")),
+            (_, Some(ParamMark::Mismatch(v))) => error_label(
+                ui,
+                format!(
+                    "× {} {}",
+                    lang.tr("mismatch: servo holds", "不一致: 舵机为"),
+                    f.format(&Value::Int(*v))
+                ),
+            ),
+            (_, Some(ParamMark::Failed(e))) => error_label(
+                ui,
+                format!("× {}: {e}", lang.tr("write failed", "写入失败")),
+            ),
+            _ => {
+                ui.label("");
+            }
+        }
+    }
+
+    fn reset_dialog(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &Runtime,
+        servo: Servo,
+        actions: &mut Vec<Action>,
+    ) {
+        let home = ops::factory_location(&rt.profile);
+        let mut decision = None;
+        let modal = egui::Modal::new(egui::Id::unique("servo-reset")).show(ui.ctx(), |ui| {
+            ui.heading(lang.tr("Reset user data?", "重置用户数据?"));
+            ui.label(format!(
+                "{} {} ({} {}). {} {} {} {} {}.",
+                lang.tr("Servo", "舵机"),
+                servo.id,
+                servo.baud,
+                lang.tr("baud", "波特"),
+                lang.tr(
+                    "All user parameters return to the factory defaults, including the id and the baud rate: the servo will be id",
+                    "全部用户参数将恢复出厂默认值, 包括ID和波特率: 舵机将变为ID"
+                ),
+                home.id,
+                lang.tr("at", "波特率"),
+                home.baud,
+                lang.tr("baud", "波特")
+            ));
+            ui.label(lang.tr(
+                "It is refused if another servo already answers there. The parameters are read again afterwards.",
+                "若已有其他舵机在该ID应答则拒绝执行。重置后将重新读取参数。",
+            ));
+            ui.horizontal(|ui| {
+                if ui.button(lang.tr("Reset", "重置")).clicked() {
+                    decision = Some(true);
+                }
+                if ui.button(lang.tr("Keep", "不重置")).clicked() {
+                    decision = Some(false);
+                }
+            });
+        });
+        if modal.should_close() && decision.is_none() {
+            decision = Some(false);
+        }
+        if let Some(go) = decision {
+            self.confirm_reset = false;
+            if go {
+                actions.push(reset_job(rt, servo));
+            }
+        }
+    }
+}
+
+/// Reads every parameter: the read-only ones one by one, the user block in one exchange.
+fn read_everything(
+    client: &crate::link::Client,
+    profile: &Profile,
+    id: u8,
+) -> Vec<(u8, Result<i64, String>)> {
+    let mut out = Vec::new();
+    for p in profile
+        .params
+        .iter()
+        .filter(|p| p.access == Access::ReadOnly)
+    {
+        out.push((
+            p.id,
+            ops::read_param(client, profile, id, p).map_err(|e| e.to_string()),
+        ));
+    }
+    match ops::read_block(client, profile, id) {
+        Ok(block) => out.extend(block.into_iter().map(|(pid, v)| (pid, Ok(v)))),
+        Err(e) => out.extend(profile.block_params().map(|p| (p.id, Err(e.to_string())))),
+    }
+    out
+}
+
+fn at_rate(client: &crate::link::Client, baud: u32) -> Result<(), String> {
+    client
+        .set_baud(baud)
+        .map_err(|e| format!("cannot switch the port to {baud} baud: {e}"))
+}
+
+fn read_all_job(rt: &Runtime, servo: Servo) -> Action {
+    let profile = rt.profile.clone();
+    Action::StartJob(JobWork::new("read parameters", move |client, _, sink| {
+        at_rate(client, servo.baud)?;
+        let values = read_everything(client, &profile, servo.id);
+        let failed = values.iter().filter(|(_, v)| v.is_err()).count();
+        send(sink, Output::Values { servo, values });
+        if failed == 0 {
+            Ok(format!("servo {} read", servo.id))
+        } else {
+            Err(format!(
+                "{failed} parameter(s) of servo {} not read",
+                servo.id
+            ))
+        }
+    }))
+}
+
+fn read_block_job(rt: &Runtime, servo: Servo) -> Action {
+    let profile = rt.profile.clone();
+    Action::StartJob(JobWork::new("read user block", move |client, _, sink| {
+        at_rate(client, servo.baud)?;
+        match ops::read_block(client, &profile, servo.id) {
+            Ok(block) => {
+                let values = block.into_iter().map(|(pid, v)| (pid, Ok(v))).collect();
+                send(sink, Output::Values { servo, values });
+                Ok(format!("user block of servo {} read", servo.id))
+            }
+            Err(e) => {
+                let e = e.to_string();
+                let values = profile
+                    .block_params()
+                    .map(|p| (p.id, Err(e.clone())))
+                    .collect();
+                send(sink, Output::Values { servo, values });
+                Err(e)
+            }
+        }
+    }))
+}
+
+fn write_job(rt: &Runtime, servo: Servo, values: Vec<(u8, i64)>) -> Action {
+    let profile = rt.profile.clone();
+    Action::StartJob(JobWork::new(
+        "write parameters",
+        move |client, cancel, sink| {
+            at_rate(client, servo.baud)?;
+            let mut checks = Vec::new();
+            for (i, (pid, raw)) in values.iter().enumerate() {
+                if cancel.is_cancelled() {
+                    break;
+                }
+                let Some(p) = profile.param(*pid) else {
+                    continue;
+                };
+                sink.send(crate::ui::jobs::JobOutput::Progress(crate::ops::Progress {
+                    done: i as u64,
+                    total: values.len() as u64,
+                    message: p.field.ident.clone(),
+                }));
+                let c =
+                    ops::write_param(client, &profile, servo.id, p, Input::Raw(Value::Int(*raw)))
+                        .map_err(|e| e.to_string());
+                checks.push((*pid, c));
+            }
+            let bad = checks
+                .iter()
+                .filter(|(_, c)| !matches!(c, Ok(c) if c.ok()))
+                .count();
+            let n = checks.len();
+            send(sink, Output::Written { servo, checks });
+            if cancel.is_cancelled() {
+                Err(format!("cancelled after {n} of {}", values.len()))
+            } else if bad == 0 {
+                Ok(format!("{n} parameter(s) written and verified"))
+            } else {
+                Err(format!("{bad} of {n} parameter(s) not verified"))
+            }
+        },
+    ))
+}
+
+fn block_job(rt: &Runtime, servo: Servo, values: Vec<(u8, i64)>) -> Action {
+    let profile = rt.profile.clone();
+    Action::StartJob(JobWork::new("write user block", move |client, _, sink| {
+        at_rate(client, servo.baud)?;
+        match ops::write_block(client, &profile, servo.id, &values) {
+            Ok(checks) => {
+                let bad = checks.iter().filter(|c| !c.ok()).count();
+                let checks = checks
+                    .into_iter()
+                    .filter_map(|c| Some((profile.find_param(&c.field)?.id, Ok(c))))
+                    .collect();
+                send(sink, Output::Written { servo, checks });
+                if bad == 0 {
+                    Ok("user block written and verified".into())
+                } else {
+                    Err(format!("{bad} value(s) of the block not verified"))
+                }
+            }
+            Err(e) => {
+                let e = e.to_string();
+                let checks = values
+                    .iter()
+                    .map(|(pid, _)| (*pid, Err(e.clone())))
+                    .collect();
+                send(sink, Output::Written { servo, checks });
+                Err(e)
+            }
+        }
+    }))
+}
+
+fn reset_job(rt: &Runtime, servo: Servo) -> Action {
+    let profile = rt.profile.clone();
+    Action::StartJob(JobWork::new("reset user data", move |client, _, sink| {
+        at_rate(client, servo.baud)?;
+        let result =
+            ops::reset_user_data(client, &profile, servo.id, servo.baud).map_err(|e| e.to_string());
+        send(
+            sink,
+            Output::Reset {
+                servo,
+                result: result.clone(),
+            },
+        );
+        let at = result?;
+        let values = read_everything(client, &profile, at.id);
+        let now = Servo {
+            id: at.id,
+            baud: at.baud,
+        };
+        send(sink, Output::Values { servo: now, values });
+        Ok(format!(
+            "servo {} reset: now id {} at {} baud",
+            servo.id, at.id, at.baud
+        ))
+    }))
+}

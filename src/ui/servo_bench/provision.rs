@@ -1,0 +1,297 @@
+//! The production tab: load a plan, choose the CSV log, "Provision next" for each fresh servo,
+//! a clear PASS/FAIL banner that names the failed step, and the records of this session.
+
+use super::{Output, error_label, send};
+use crate::i18n::Lang;
+use crate::ops::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
+use crate::ui::runtime::Runtime;
+use crate::ui::{Action, JobWork};
+use eframe::egui;
+use std::path::PathBuf;
+
+/// The production tab's state.
+#[derive(Default)]
+pub struct ProvisionPanel {
+    /// The plan file, as typed.
+    pub plan_path: String,
+    /// The plan loaded (checked against the profile).
+    pub plan: Option<Plan>,
+    /// Why the plan did not load (with line and column).
+    pub plan_error: Option<String>,
+    /// The CSV log, as typed (empty: no log).
+    pub log_path: String,
+    /// Ids given out in this session.
+    pub state: ProvisionState,
+    /// Every record of this session, newest last.
+    pub history: Vec<Record>,
+    /// Why the last record could not be logged.
+    pub log_error: Option<String>,
+}
+
+impl ProvisionPanel {
+    /// Loads the plan at the path.
+    pub fn load(&mut self, rt: &Runtime) {
+        let path = PathBuf::from(self.plan_path.trim());
+        match Plan::load(&path, &rt.profile) {
+            Ok(plan) => {
+                self.plan = Some(plan);
+                self.plan_error = None;
+                self.state = ProvisionState::new();
+            }
+            Err(e) => {
+                self.plan = None;
+                self.plan_error = Some(e.to_string());
+            }
+        }
+    }
+
+    pub(super) fn on_record(
+        &mut self,
+        record: Record,
+        state: ProvisionState,
+        log_error: Option<String>,
+    ) {
+        self.state = state;
+        self.log_error = log_error;
+        self.history.push(record);
+    }
+
+    /// Draws the tab.
+    pub(super) fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &Runtime,
+        busy: bool,
+        actions: &mut Vec<Action>,
+    ) {
+        ui.horizontal_wrapped(|ui| {
+            let l = ui.label(lang.tr("Plan", "计划文件"));
+            ui.add(egui::TextEdit::singleline(&mut self.plan_path).desired_width(320.0))
+                .labelled_by(l.id);
+            if ui.button(lang.tr("Browse…", "浏览…")).clicked()
+                && let Some(p) = rfd::FileDialog::new()
+                    .add_filter("RON", &["ron"])
+                    .pick_file()
+            {
+                self.plan_path = p.display().to_string();
+                self.load(rt);
+            }
+            if ui
+                .add_enabled(
+                    !self.plan_path.trim().is_empty(),
+                    egui::Button::new(lang.tr("Load plan", "载入计划")),
+                )
+                .clicked()
+            {
+                self.load(rt);
+            }
+        });
+        if let Some(e) = &self.plan_error {
+            error_label(ui, e);
+        }
+        ui.horizontal_wrapped(|ui| {
+            let l = ui.label(lang.tr("CSV log", "CSV日志"));
+            ui.add(egui::TextEdit::singleline(&mut self.log_path).desired_width(320.0))
+                .labelled_by(l.id);
+            if ui.button(lang.tr("Choose…", "选择…")).clicked()
+                && let Some(p) = rfd::FileDialog::new()
+                    .add_filter("CSV", &["csv"])
+                    .set_file_name("servo-provision.csv")
+                    .save_file()
+            {
+                self.log_path = p.display().to_string();
+            }
+            if self.log_path.trim().is_empty() {
+                ui.weak(lang.tr("(no log)", "(不记录日志)"));
+            }
+        });
+        if let Some(plan) = &self.plan {
+            let ids = match &plan.ids {
+                prov::IdSequence::Start(s) => format!("{} {s}", lang.tr("from", "起始")),
+                prov::IdSequence::List(l) => format!("{l:?}"),
+            };
+            ui.label(format!(
+                "{}: {} {} · {}: {ids} · {} {} · {}: {}",
+                lang.tr("Target", "目标"),
+                plan.target_baud,
+                lang.tr("baud", "波特"),
+                lang.tr("ids", "ID"),
+                plan.params.len(),
+                lang.tr("parameters", "个参数"),
+                lang.tr("recorded", "记录"),
+                plan.record.join(", ")
+            ));
+            if !self.state.assigned.is_empty() {
+                ui.weak(format!(
+                    "{}: {:?}",
+                    lang.tr("Ids given this session", "本次已分配ID"),
+                    self.state.assigned
+                ));
+            }
+        }
+        ui.add_space(6.0);
+        let can = rt.connected() && !busy && self.plan.is_some();
+        let next = ui.add_enabled(
+            can,
+            egui::Button::new(
+                egui::RichText::new(lang.tr("Provision next", "烧录下一个"))
+                    .size(22.0)
+                    .strong(),
+            )
+            .min_size(egui::vec2(260.0, 56.0)),
+        );
+        if next.clicked()
+            && let Some(plan) = self.plan.clone()
+        {
+            let log =
+                Some(PathBuf::from(self.log_path.trim())).filter(|p| !p.as_os_str().is_empty());
+            match log.as_deref().map(prov::check_log) {
+                Some(Err(e)) => {
+                    self.log_error = Some(format!("cannot write the log: {e}"));
+                }
+                _ => {
+                    self.log_error = None;
+                    actions.push(job(rt, plan, self.state.clone(), log));
+                }
+            }
+        }
+        if let Some(e) = &self.log_error {
+            error_label(ui, e);
+        }
+        ui.add_space(6.0);
+        if let Some(last) = self.history.last() {
+            banner(ui, lang, last);
+        }
+        if !self.history.is_empty() {
+            ui.add_space(6.0);
+            ui.label(format!(
+                "{} ({} {}, {} {})",
+                lang.tr("This session", "本次记录"),
+                self.history.iter().filter(|r| r.result.is_pass()).count(),
+                lang.tr("passed", "通过"),
+                self.history.iter().filter(|r| !r.result.is_pass()).count(),
+                lang.tr("failed", "失败"),
+            ));
+            history(ui, lang, &self.history);
+        }
+    }
+}
+
+/// The big PASS / FAIL banner of the last servo.
+fn banner(ui: &mut egui::Ui, lang: Lang, r: &Record) {
+    let (fill, head, detail) = match &r.result {
+        Outcome::Pass => (
+            egui::Color32::from_rgb(30, 140, 60),
+            "PASS".to_string(),
+            format!(
+                "{} {} · {} {} · {} {}",
+                lang.tr("id", "ID"),
+                r.id.map_or("-".into(), |v| v.to_string()),
+                r.baud.map_or("-".into(), |v| v.to_string()),
+                lang.tr("baud", "波特"),
+                lang.tr("serial", "序列号"),
+                r.serial.map_or("-".into(), |v| v.to_string()),
+            ),
+        ),
+        Outcome::Fail { step, reason } => (
+            egui::Color32::from_rgb(190, 30, 30),
+            format!("FAIL · {} {step}", lang.tr("step", "步骤")),
+            reason.clone(),
+        ),
+    };
+    egui::Frame::new()
+        .fill(fill)
+        .inner_margin(12.0)
+        .corner_radius(6.0)
+        .show(ui, |ui| {
+            ui.set_min_width(ui.available_width());
+            ui.label(
+                egui::RichText::new(head)
+                    .size(30.0)
+                    .strong()
+                    .color(egui::Color32::WHITE),
+            );
+            ui.label(
+                egui::RichText::new(detail)
+                    .size(15.0)
+                    .color(egui::Color32::WHITE),
+            );
+            for m in &r.mismatches {
+                ui.label(egui::RichText::new(m).color(egui::Color32::WHITE));
+            }
+        });
+}
+
+fn history(ui: &mut egui::Ui, lang: Lang, records: &[Record]) {
+    egui::Grid::new("servo-provision-history")
+        .striped(true)
+        .num_columns(6)
+        .show(ui, |ui| {
+            for h in [
+                lang.tr("Time", "时间"),
+                lang.tr("Serial", "序列号"),
+                lang.tr("ID", "ID"),
+                lang.tr("Baud", "波特率"),
+                lang.tr("Result", "结果"),
+                lang.tr("Mismatches", "不一致项"),
+            ] {
+                ui.strong(h);
+            }
+            ui.end_row();
+            for r in records.iter().rev() {
+                ui.label(&r.time);
+                ui.label(r.serial.map_or("-".into(), |v| v.to_string()));
+                ui.label(r.id.map_or("-".into(), |v| v.to_string()));
+                ui.label(r.baud.map_or("-".into(), |v| v.to_string()));
+                match &r.result {
+                    Outcome::Pass => super::ok_label(ui, "PASS"),
+                    Outcome::Fail { step, reason } => {
+                        error_label(ui, format!("FAIL ({step})"));
+                        ui.end_row();
+                        ui.label("");
+                        ui.label("");
+                        ui.label("");
+                        ui.label("");
+                        ui.weak(reason);
+                    }
+                }
+                ui.label(r.mismatches.join("; "));
+                ui.end_row();
+            }
+        });
+}
+
+fn job(rt: &Runtime, plan: Plan, mut state: ProvisionState, log: Option<PathBuf>) -> Action {
+    let profile = rt.profile.clone();
+    Action::StartJob(JobWork::new("provision", move |client, cancel, sink| {
+        let record = prov::provision_next(client, &profile, &plan, &mut state, cancel, &mut |p| {
+            sink.send(crate::ui::jobs::JobOutput::Progress(p))
+        });
+        let log_error = log.as_deref().and_then(|path| {
+            prov::append_csv(path, &record)
+                .err()
+                .map(|e| format!("the record was not logged to {}: {e}", path.display()))
+        });
+        let summary = match &record.result {
+            Outcome::Pass => Ok(format!(
+                "PASS: servo {} at {} baud",
+                record.id.map_or("-".into(), |v| v.to_string()),
+                record.baud.map_or("-".into(), |v| v.to_string())
+            )),
+            Outcome::Fail { step, reason } => Err(format!("FAIL at {step}: {reason}")),
+        };
+        send(
+            sink,
+            Output::Provisioned {
+                record,
+                state,
+                log_error: log_error.clone(),
+            },
+        );
+        match (summary, log_error) {
+            (Ok(_), Some(e)) => Err(e),
+            (s, _) => s,
+        }
+    }))
+}

@@ -1,0 +1,337 @@
+//! The scan tab: an id range and a set of baud rates, the servos found (details, status as raw
+//! hex and decoded bits, possible duplicate ids), rescanning one id, selecting a servo.
+
+use super::{Output, Servo, error_label, ok_label, port_baud, send};
+use crate::i18n::Lang;
+use crate::ops::servo::{self as ops, BAUDS, Presence, ScanPlan, ScanRow};
+use crate::ui::runtime::Runtime;
+use crate::ui::{Action, JobWork};
+use eframe::egui;
+use std::ops::RangeInclusive;
+
+/// The scan tab's state.
+pub struct ScanState {
+    /// The first id, as typed.
+    pub first: String,
+    /// The last id, as typed.
+    pub last: String,
+    /// Which of [`BAUDS`] to scan.
+    pub bauds: [bool; 8],
+    /// The servos found, in scan order.
+    pub rows: Vec<ScanRow>,
+    /// How the last scan ended (`None`: none yet, or running).
+    pub outcome: Option<Result<usize, String>>,
+}
+
+impl Default for ScanState {
+    fn default() -> Self {
+        let mut bauds = [false; 8];
+        bauds[4] = true; // 115200, the factory rate
+        Self {
+            first: "0".into(),
+            last: "254".into(),
+            bauds,
+            rows: Vec::new(),
+            outcome: None,
+        }
+    }
+}
+
+/// The status byte decoded: the bits that are set (their meaning is published inconsistently).
+pub fn status_bits(status: i64, lang: Lang) -> String {
+    if status == 0 {
+        return lang.tr("no flags", "无标志").to_string();
+    }
+    let bits: Vec<String> = (0..8)
+        .filter(|b| status >> b & 1 == 1)
+        .map(|b| b.to_string())
+        .collect();
+    format!("{} {}", lang.tr("bits", "位"), bits.join(", "))
+}
+
+impl ScanState {
+    /// The id range typed, or why it is not one.
+    pub fn ids(&self, lang: Lang) -> Result<RangeInclusive<u8>, String> {
+        let parse = |s: &str, what: &str| {
+            s.trim()
+                .parse::<u8>()
+                .ok()
+                .filter(|v| *v < crate::protocol::servo::BROADCAST_ID)
+                .ok_or_else(|| {
+                    format!(
+                        "{what} '{}' {}",
+                        s.trim(),
+                        lang.tr("is not an id 0-254", "不是0-254之间的ID")
+                    )
+                })
+        };
+        let a = parse(&self.first, lang.tr("first id", "起始ID"))?;
+        let b = parse(&self.last, lang.tr("last id", "结束ID"))?;
+        if a > b {
+            return Err(format!(
+                "{} {a} > {b}",
+                lang.tr("the first id is above the last id:", "起始ID大于结束ID:")
+            ));
+        }
+        Ok(a..=b)
+    }
+
+    fn chosen_bauds(&self) -> Vec<u32> {
+        BAUDS
+            .iter()
+            .zip(self.bauds)
+            .filter(|(_, on)| *on)
+            .map(|(b, _)| *b)
+            .collect()
+    }
+
+    pub(super) fn on_found(&mut self, row: ScanRow) {
+        if !self
+            .rows
+            .iter()
+            .any(|r| r.id == row.id && r.baud == row.baud)
+        {
+            self.rows.push(row);
+        }
+    }
+
+    pub(super) fn on_scanned(&mut self, result: Result<Vec<ScanRow>, String>) {
+        match result {
+            Ok(rows) => {
+                self.outcome = Some(Ok(rows.len()));
+                self.rows = rows;
+            }
+            // Partial results stay: what was found was found.
+            Err(e) => self.outcome = Some(Err(e)),
+        }
+    }
+
+    pub(super) fn on_rescanned(&mut self, at: Servo, rows: Result<Vec<ScanRow>, String>) {
+        match rows {
+            Ok(rows) => {
+                let pos = self
+                    .rows
+                    .iter()
+                    .position(|r| r.id == at.id && r.baud == at.baud);
+                self.rows.retain(|r| !(r.id == at.id && r.baud == at.baud));
+                let at_pos = pos.unwrap_or(self.rows.len()).min(self.rows.len());
+                for (i, row) in rows.into_iter().enumerate() {
+                    if !self
+                        .rows
+                        .iter()
+                        .any(|r| r.id == row.id && r.baud == row.baud)
+                    {
+                        self.rows.insert(at_pos + i, row);
+                    }
+                }
+                self.outcome = Some(Ok(self.rows.len()));
+            }
+            Err(e) => self.outcome = Some(Err(e)),
+        }
+    }
+
+    /// Draws the tab; returns a servo the technician selected.
+    pub(super) fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &Runtime,
+        busy: bool,
+        selected: Option<Servo>,
+        actions: &mut Vec<Action>,
+    ) -> Option<Servo> {
+        let mut picked = None;
+        let ids = self.ids(lang);
+        let bauds = self.chosen_bauds();
+        ui.horizontal(|ui| {
+            let l = ui.label(lang.tr("First id", "起始ID"));
+            ui.add(egui::TextEdit::singleline(&mut self.first).desired_width(40.0))
+                .labelled_by(l.id);
+            let l = ui.label(lang.tr("Last id", "结束ID"));
+            ui.add(egui::TextEdit::singleline(&mut self.last).desired_width(40.0))
+                .labelled_by(l.id);
+            if let Err(e) = &ids {
+                error_label(ui, e);
+            }
+        });
+        ui.horizontal_wrapped(|ui| {
+            ui.label(lang.tr("Baud rates:", "波特率:"));
+            for (i, b) in BAUDS.iter().enumerate() {
+                ui.checkbox(&mut self.bauds[i], b.to_string());
+            }
+            if ui.button(lang.tr("All 8", "全部8种")).clicked() {
+                self.bauds = [true; 8];
+            }
+            if ui.button(lang.tr("Only 115200", "仅115200")).clicked() {
+                self.bauds = [false; 8];
+                self.bauds[4] = true;
+            }
+        });
+        ui.horizontal(|ui| {
+            let can = rt.connected() && !busy && ids.is_ok() && !bauds.is_empty();
+            let scan = ui.add_enabled(
+                can,
+                egui::Button::new(egui::RichText::new(lang.tr("Scan", "扫描")).strong())
+                    .min_size(egui::vec2(90.0, 26.0)),
+            );
+            if bauds.is_empty() {
+                error_label(
+                    ui,
+                    lang.tr("choose at least one baud rate", "请至少选择一种波特率"),
+                );
+            }
+            if scan.clicked()
+                && let Ok(ids) = ids.clone()
+            {
+                self.rows.clear();
+                self.outcome = None;
+                let plan = ScanPlan {
+                    ids,
+                    bauds: bauds.clone(),
+                    home_baud: port_baud(rt).unwrap_or(rt.profile.baud),
+                };
+                actions.push(scan_job(rt, plan, None));
+            }
+            match &self.outcome {
+                Some(Ok(n)) => {
+                    ok_label(
+                        ui,
+                        format!("{n} {}", lang.tr("servo(s) found", "个舵机已找到")),
+                    );
+                }
+                Some(Err(e)) => {
+                    error_label(
+                        ui,
+                        format!(
+                            "{}: {e} ({} {})",
+                            lang.tr("scan stopped", "扫描中止"),
+                            self.rows.len(),
+                            lang.tr("found before it stopped", "个在中止前找到")
+                        ),
+                    );
+                }
+                None => {}
+            }
+        });
+        ui.separator();
+        if self.rows.is_empty() {
+            ui.weak(lang.tr("No servos listed yet.", "尚无舵机。"));
+            return None;
+        }
+        egui::Grid::new("servo-scan")
+            .striped(true)
+            .num_columns(11)
+            .min_col_width(40.0)
+            .show(ui, |ui| {
+                for h in [
+                    lang.tr("Servo", "舵机"),
+                    lang.tr("Baud", "波特率"),
+                    lang.tr("Type", "型号"),
+                    lang.tr("Firmware", "固件"),
+                    lang.tr("Serial", "序列号"),
+                    lang.tr("Voltage", "电压"),
+                    lang.tr("Temperature", "温度"),
+                    lang.tr("Status (raw)", "状态(原始)"),
+                    lang.tr("Status (decoded)", "状态(解析)"),
+                    lang.tr("Presence", "应答"),
+                    "",
+                ] {
+                    ui.strong(h);
+                }
+                ui.end_row();
+                let opt = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
+                for row in &self.rows {
+                    let here = Servo {
+                        id: row.id,
+                        baud: row.baud,
+                    };
+                    let clean = row.presence == Presence::Present;
+                    let label = format!("{} {}", lang.tr("Servo", "舵机"), row.id);
+                    let sel = ui
+                        // Not while a job runs: the port follows the servo selected.
+                        .add_enabled(
+                            clean && !busy,
+                            egui::Button::selectable(selected == Some(here), label),
+                        )
+                        .on_hover_text(lang.tr("Work on this servo", "选择此舵机进行操作"));
+                    if sel.clicked() {
+                        picked = Some(here);
+                    }
+                    ui.label(row.baud.to_string());
+                    ui.label(opt(row.servo_type));
+                    ui.label(opt(row.firmware));
+                    ui.label(opt(row.serial));
+                    ui.label(row.voltage_mv.map_or("-".into(), |v| format!("{v} mV")));
+                    ui.label(row.temperature.map_or("-".into(), |v| format!("{v} °C")));
+                    ui.monospace(row.status_hex());
+                    ui.label(row.status.map_or("-".into(), |s| status_bits(s, lang)));
+                    match &row.presence {
+                        Presence::Present => ok_label(ui, lang.tr("ok", "正常")),
+                        Presence::PossibleDuplicate(e) => {
+                            ui.colored_label(
+                                egui::Color32::from_rgb(210, 40, 40),
+                                lang.tr("possible duplicate id", "可能存在重复ID"),
+                            )
+                            .on_hover_text(e);
+                        }
+                        Presence::Absent => {
+                            ui.weak(lang.tr("absent", "无应答"));
+                        }
+                    }
+                    let again = ui
+                        .add_enabled(
+                            rt.connected() && !busy,
+                            egui::Button::new(format!(
+                                "{} {}",
+                                lang.tr("Rescan", "重新扫描"),
+                                row.id
+                            )),
+                        )
+                        .on_hover_text(lang.tr(
+                            "Ping this id again at this baud rate and read its details",
+                            "在此波特率下重新检测此ID并读取信息",
+                        ));
+                    if again.clicked() {
+                        let plan = ScanPlan {
+                            ids: row.id..=row.id,
+                            bauds: vec![row.baud],
+                            home_baud: port_baud(rt).unwrap_or(rt.profile.baud),
+                        };
+                        actions.push(scan_job(rt, plan, Some(here)));
+                    }
+                    ui.end_row();
+                }
+            });
+        picked
+    }
+}
+
+/// A scan as a job; `again` marks the rescan of one servo.
+fn scan_job(rt: &Runtime, plan: ScanPlan, again: Option<Servo>) -> Action {
+    let profile = rt.profile.clone();
+    let title = if again.is_some() { "rescan" } else { "scan" };
+    Action::StartJob(JobWork::new(title, move |client, cancel, sink| {
+        let result = ops::scan(
+            client,
+            &profile,
+            &plan,
+            cancel,
+            &mut |p| sink.send(crate::ui::jobs::JobOutput::Progress(p)),
+            &mut |row| {
+                if again.is_none() {
+                    send(sink, Output::Found(row.clone()));
+                }
+            },
+        )
+        .map_err(|e| e.to_string());
+        let summary = match &result {
+            Ok(rows) => Ok(format!("{} servo(s) found", rows.len())),
+            Err(e) => Err(e.clone()),
+        };
+        match again {
+            Some(at) => send(sink, Output::Rescanned { at, rows: result }),
+            None => send(sink, Output::Scanned(result)),
+        }
+        summary
+    }))
+}

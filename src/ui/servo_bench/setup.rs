@@ -1,0 +1,276 @@
+//! The ID & baud rate tab: give the selected servo a new id (refusing 255 and ids that answer;
+//! a fresh id-0 servo must be alone on the bus; verified at the new id), or a new baud rate
+//! (the port follows it and verifies; if it is lost, every rate is searched and the tab says
+//! where it is).
+
+use super::scan::ScanState;
+use super::{Output, Servo, error_label, ok_label, send};
+use crate::i18n::Lang;
+use crate::ops::servo::{self as ops, BAUDS, Presence};
+use crate::ui::runtime::Runtime;
+use crate::ui::{Action, JobWork};
+use eframe::egui;
+
+/// The tab's state.
+#[derive(Default)]
+pub struct SetupState {
+    /// The new id, as typed.
+    pub new_id: String,
+    /// The baud option chosen, 1-8 (0: none yet).
+    pub option: u8,
+    /// The last result: ok, and what happened.
+    pub message: Option<(bool, String)>,
+    /// The language last drawn in (for messages made between frames).
+    pub lang: Lang,
+}
+
+impl SetupState {
+    /// The new id typed, checked against what is known; `Err` says why it cannot be given.
+    pub fn check_id(&self, servo: Servo, scan: &ScanState) -> Result<u8, String> {
+        let lang = self.lang;
+        let text = self.new_id.trim();
+        let id: u8 = text.parse().map_err(|_| {
+            format!(
+                "'{text}' {}",
+                lang.tr("is not an id: give 1 to 254", "不是有效ID: 请输入1到254")
+            )
+        })?;
+        if id == crate::protocol::servo::BROADCAST_ID {
+            return Err(lang
+                .tr(
+                    "id 255 is the broadcast address and cannot be assigned",
+                    "ID 255是广播地址, 不能分配",
+                )
+                .into());
+        }
+        if id == servo.id {
+            return Err(format!(
+                "{} {id}",
+                lang.tr("the servo already has id", "舵机已经是ID")
+            ));
+        }
+        if scan
+            .rows
+            .iter()
+            .any(|r| r.id == id && r.presence != Presence::Absent)
+        {
+            return Err(format!(
+                "{} {id} {}",
+                lang.tr("id", "ID"),
+                lang.tr(
+                    "already answers on the bus (see the scan)",
+                    "已在总线上应答(见扫描结果)"
+                )
+            ));
+        }
+        Ok(id)
+    }
+
+    pub(super) fn on_id(&mut self, servo: Servo, new: u8, result: Result<(), String>) {
+        let lang = self.lang;
+        self.message = Some(match result {
+            Ok(()) => {
+                self.new_id.clear();
+                (
+                    true,
+                    format!(
+                        "{} {} {} {new}: {}",
+                        lang.tr("servo", "舵机"),
+                        servo.id,
+                        lang.tr("is now id", "现在的ID为"),
+                        lang.tr("verified at the new id", "已在新ID校验")
+                    ),
+                )
+            }
+            Err(e) => (
+                false,
+                format!("{}: {e}", lang.tr("id not changed", "ID未修改")),
+            ),
+        });
+    }
+
+    pub(super) fn on_baud(
+        &mut self,
+        servo: Servo,
+        result: Result<u32, String>,
+        found: Option<u32>,
+    ) {
+        let lang = self.lang;
+        let who = format!("{} {}", lang.tr("servo", "舵机"), servo.id);
+        self.message = Some(match (result, found) {
+            (Ok(b), _) => (
+                true,
+                format!(
+                    "{who} {} {b} baud: {}",
+                    lang.tr("now talks at", "现在的波特率为"),
+                    lang.tr("verified; the port follows it", "已校验; 端口已随之切换")
+                ),
+            ),
+            (Err(e), Some(b)) => (
+                false,
+                format!(
+                    "{} ({e}). {who} {} {b} baud; {}",
+                    lang.tr("not verified", "未通过校验"),
+                    lang.tr("was found at", "在此波特率下找到:"),
+                    lang.tr("the port is there now", "端口已切换到该波特率")
+                ),
+            ),
+            (Err(e), None) => (
+                false,
+                format!(
+                    "{who} {}: {e}. {}",
+                    lang.tr("lost", "丢失"),
+                    lang.tr(
+                        "It answers at no baud rate: check power and wiring, then scan all 8 rates",
+                        "在所有波特率下均无应答: 请检查电源和接线, 然后扫描全部8种波特率"
+                    )
+                ),
+            ),
+        });
+    }
+
+    /// Draws the tab.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &Runtime,
+        busy: bool,
+        selected: Option<Servo>,
+        scan: &ScanState,
+        actions: &mut Vec<Action>,
+    ) {
+        self.lang = lang;
+        let Some(servo) = selected else {
+            ui.weak(lang.tr(
+                "Select a servo in the bus scan first.",
+                "请先在总线扫描中选择一个舵机。",
+            ));
+            return;
+        };
+        let can = rt.connected() && !busy;
+        ui.heading(lang.tr("Servo ID", "舵机ID"));
+        if servo.id == 0 {
+            ui.label(lang.tr(
+                "A fresh servo (id 0) gets an id only when it is the only servo on the bus: the bus is checked first.",
+                "出厂舵机(ID 0)仅在总线上只有它一个舵机时才能分配ID: 将先检查总线。",
+            ));
+        }
+        let check = self.check_id(servo, scan);
+        ui.horizontal(|ui| {
+            let l = ui.label(lang.tr("New id", "新ID"));
+            ui.add(egui::TextEdit::singleline(&mut self.new_id).desired_width(50.0))
+                .labelled_by(l.id);
+            let set = ui.add_enabled(
+                can && check.is_ok(),
+                egui::Button::new(lang.tr("Set ID", "设置ID")),
+            );
+            if set.clicked()
+                && let Ok(new) = check
+            {
+                self.message = None;
+                actions.push(id_job(rt, servo, new));
+            }
+            if let Err(e) = &check
+                && !self.new_id.trim().is_empty()
+            {
+                error_label(ui, e);
+            }
+        });
+        ui.add_space(8.0);
+        ui.heading(lang.tr("Baud rate", "波特率"));
+        ui.horizontal(|ui| {
+            let l = ui.label(lang.tr("New baud rate", "新波特率"));
+            let text = ops::baud_of_option(self.option).map_or_else(
+                || lang.tr("choose…", "请选择…").to_string(),
+                |b| format!("{} ({b})", self.option),
+            );
+            egui::ComboBox::from_id_salt("servo-new-baud")
+                .selected_text(text)
+                .show_ui(ui, |ui| {
+                    for (i, b) in BAUDS.iter().enumerate() {
+                        let opt = i as u8 + 1;
+                        let label = if opt == 8 {
+                            format!("{opt} ({b}, {})", lang.tr("newer servos", "新款舵机"))
+                        } else {
+                            format!("{opt} ({b})")
+                        };
+                        ui.selectable_value(&mut self.option, opt, label);
+                    }
+                })
+                .response
+                .labelled_by(l.id);
+            let target = ops::baud_of_option(self.option);
+            let set = ui.add_enabled(
+                can && target.is_some_and(|b| b != servo.baud),
+                egui::Button::new(lang.tr("Set baud rate", "设置波特率")),
+            );
+            if set.clicked() {
+                self.message = None;
+                actions.push(baud_job(rt, servo, self.option));
+            }
+        });
+        ui.weak(lang.tr(
+            "The servo switches at once; the port follows it and verifies. If it does not answer there, all 8 rates are searched.",
+            "舵机立即切换; 端口随之切换并校验。若新波特率下无应答, 将搜索全部8种波特率。",
+        ));
+        ui.add_space(8.0);
+        match &self.message {
+            Some((true, m)) => ok_label(ui, m),
+            Some((false, m)) => error_label(ui, m),
+            None => {}
+        }
+    }
+}
+
+fn id_job(rt: &Runtime, servo: Servo, new: u8) -> Action {
+    let profile = rt.profile.clone();
+    Action::StartJob(JobWork::new("set id", move |client, cancel, sink| {
+        client
+            .set_baud(servo.baud)
+            .map_err(|e| format!("cannot switch the port to {} baud: {e}", servo.baud))?;
+        let result =
+            ops::set_id(client, &profile, servo.id, new, cancel).map_err(|e| e.to_string());
+        send(
+            sink,
+            Output::IdSet {
+                servo,
+                new,
+                result: result.clone(),
+            },
+        );
+        result.map(|()| format!("servo {} is now id {new} (verified)", servo.id))
+    }))
+}
+
+fn baud_job(rt: &Runtime, servo: Servo, option: u8) -> Action {
+    let profile = rt.profile.clone();
+    Action::StartJob(JobWork::new("set baud rate", move |client, _, sink| {
+        client
+            .set_baud(servo.baud)
+            .map_err(|e| format!("cannot switch the port to {} baud: {e}", servo.baud))?;
+        let result = ops::set_baud(client, &profile, servo.id, option).map_err(|e| e.to_string());
+        // Where the servo is when the change was not verified (the operation left the port
+        // at the rate where it found it, if it did).
+        let found = match &result {
+            Ok(_) => None,
+            Err(_) => {
+                let found = ops::locate(client, servo.id).ok().flatten();
+                if found.is_none() {
+                    let _ = client.set_baud(servo.baud);
+                }
+                found
+            }
+        };
+        send(
+            sink,
+            Output::BaudSet {
+                servo,
+                result: result.clone(),
+                found,
+            },
+        );
+        result.map(|b| format!("servo {} now at {b} baud (verified)", servo.id))
+    }))
+}
