@@ -584,3 +584,22 @@ fn wheel_mode_and_damping_reach_the_servo() {
         b.servo(97).motion_at(Instant::now()) == Motion::Damping { power: 1500 }
     });
 }
+
+#[test]
+fn a_new_connection_forgets_the_servos_found_on_the_last_one() {
+    let b = Bench::new(vec![SimServo::fresh(51).with_id(4)]);
+    let other = serve(ServoBus::new(Vec::new()));
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "0", "10");
+    assert_eq!(app(&h).servo.scan.rows.len(), 1);
+    assert!(app(&h).servo.selected.is_some(), "a lone servo is selected");
+    gui_harness::app_mut(&mut h).apply(Action::Connect {
+        target: botbench::ui::Target::Port(other.path().to_string()),
+        baud: 115_200,
+        profile: "servo".into(),
+    });
+    step_until(&mut h, "the new link", |a| a.rt.connected());
+    let a = app(&h);
+    assert!(a.servo.scan.rows.is_empty(), "{:?}", a.servo.scan.rows);
+    assert!(a.servo.selected.is_none());
+}

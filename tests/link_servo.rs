@@ -289,3 +289,29 @@ fn motion_requests_move_the_servo_and_stop_all_stops_every_servo() {
     assert_eq!(sim(&bench, 51).motion_at(now), Motion::Hold);
     assert_eq!(sim(&bench, 52).motion_at(now), Motion::Damping { power: 0 });
 }
+
+#[test]
+fn a_baud_change_right_after_a_broadcast_lets_the_broadcast_cross_the_wire_whole() {
+    use botbench::sim::servo_bus::Motion;
+    let bench = Bench::new(vec![SimServo::fresh(61).with_id(1)]);
+    let (client, profile) = (bench.client(), bench.profile.clone());
+    let r = ops::spin_request(&profile, 1, ops::Wheel::Continuous, true, 60).unwrap();
+    let _ = client.request(r);
+    assert!(matches!(
+        sim(&bench, 61).motion_at(std::time::Instant::now()),
+        Motion::Spin { .. }
+    ));
+    // Nobody answers a broadcast: each returns as soon as it is written, and the baud change
+    // comes at once after them.
+    for r in ops::stop_all_requests(&profile) {
+        client.request(r).unwrap();
+    }
+    client.set_baud(9600).unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    client.set_baud(115_200).unwrap();
+    assert_eq!(ops::ping(&client, 1, 2).unwrap(), Presence::Present);
+    assert_eq!(
+        sim(&bench, 61).motion_at(std::time::Instant::now()),
+        Motion::Hold
+    );
+}

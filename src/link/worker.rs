@@ -65,6 +65,8 @@ pub(super) struct Worker {
     in_flight: VecDeque<InFlight>,
     device_code: u8,
     baud: u32,
+    /// When the bytes written so far have crossed the wire (at the rate they were sent at).
+    sent_until: Instant,
     stats: LinkStats,
     stats_reported: LinkStats,
     stats_at: Instant,
@@ -141,6 +143,7 @@ impl Worker {
             polls: Vec::new(),
             poll_cursor: 0,
             in_flight: VecDeque::new(),
+            sent_until: Instant::now(),
             device_code,
             baud,
             stats: LinkStats::default(),
@@ -240,6 +243,12 @@ impl Worker {
     }
 
     fn switch_baud(&mut self, baud: u32, ack: Option<Sender<Result<(), super::LinkError>>>) {
+        // A frame still crossing the wire (a broadcast nobody answers) would be cut off by the
+        // new rate: it goes out whole first.
+        let now = Instant::now();
+        if self.sent_until > now {
+            std::thread::sleep(self.sent_until - now);
+        }
         self.baud = baud;
         let result = match self.transport.as_mut() {
             Some(t) => t.set_baud(baud).map(|()| {
@@ -418,6 +427,8 @@ impl Worker {
             self.lost(reason.clone());
             return Err(ExchangeError::Disconnected(reason));
         }
+        let now = Instant::now();
+        self.sent_until = self.sent_until.max(now) + wire_time(bytes.len(), self.baud);
         self.stats.sent += 1;
         self.log(Direction::HostToDevice, Ok(sent));
         Ok(())

@@ -756,14 +756,9 @@ pub fn stop_all_requests(profile: &Profile) -> Vec<Request> {
     ) {
         out.push(r);
     }
-    // Nobody answers from 255: waiting for an optional answer from it holds the link until the
-    // frame has crossed the wire, so that a baud change queued after it cannot cut it off.
-    out.into_iter()
-        .map(|r| {
-            let m = Match::servo(r.command, &[broadcast]);
-            r.reply(ReplySpec::Optional(m))
-        })
-        .collect()
+    // Nobody answers a broadcast. (The worker lets a frame cross the wire whole before a baud
+    // change queued after it.)
+    out.into_iter().map(|r| r.reply(ReplySpec::None)).collect()
 }
 
 /// The READ_ANGLE request to poll for servo `id`'s angle (answer: id, angle i16 in 0.1°).

@@ -170,7 +170,7 @@ fn follow_baud(master: &TTYPort, wire: &mut Wire) {
         && baud != wire.baud()
         && baud > 0
     {
-        wire.set_baud(baud);
+        wire.set_baud(baud, Instant::now());
     }
 }
 

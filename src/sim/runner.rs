@@ -132,8 +132,13 @@ impl Wire {
         self.baud
     }
 
-    pub(crate) fn set_baud(&mut self, baud: u32) {
+    /// The host switches its port to `baud` at `now`. Bytes still crossing the wire are cut
+    /// off, as a UART's would be: what has not arrived goes out at the new rate.
+    pub(crate) fn set_baud(&mut self, baud: u32, now: Instant) {
         self.baud = baud.max(1);
+        for chunk in self.inbound.iter_mut().filter(|c| c.at > now) {
+            chunk.baud = self.baud;
+        }
     }
 
     pub(crate) fn device(&self) -> SharedDevice {
@@ -389,7 +394,7 @@ impl Transport for SimTransport {
         if baud == 0 {
             return Err(LinkError::Setting("baud rate 0".into()));
         }
-        self.wire.set_baud(baud);
+        self.wire.set_baud(baud, Instant::now());
         Ok(())
     }
 

@@ -350,6 +350,8 @@ impl App {
                     self.saved.baud = baud;
                     self.saved.profile = profile;
                     self.tuning = tuning::TuningPanel::default();
+                    // What was found on another connection is not on this one.
+                    self.servo.forget_bus();
                     if !self.panels().contains(&self.saved.panel) {
                         self.saved.panel = self.panels()[0];
                     }

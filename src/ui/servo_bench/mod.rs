@@ -193,6 +193,19 @@ pub(crate) fn ok_label(ui: &mut egui::Ui, text: impl Into<egui::RichText>) {
 }
 
 impl ServoBenchPanel {
+    /// Forgets what was found on the bus (a new connection): scan rows, the selection, the
+    /// parameters read and the angle plot. What the technician typed and chose is kept.
+    pub fn forget_bus(&mut self) {
+        self.selected = None;
+        self.scan.rows.clear();
+        self.scan.outcome = None;
+        self.params.values.clear();
+        self.params.edits.clear();
+        self.params.marks.clear();
+        self.params.message = None;
+        self.motion.series.clear();
+    }
+
     /// Draws the panel.
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
         let mut actions = Vec::new();
