@@ -13,7 +13,7 @@ use super::runtime::{Reading, Runtime};
 use crate::i18n::Lang;
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Value};
 use eframe::egui;
-use egui_plot::{Legend, Line, Plot, PlotPoints};
+use egui_plot::{Corner, Legend, Line, Plot, PlotPoints};
 use std::collections::HashMap;
 use std::time::Duration;
 
@@ -277,7 +277,8 @@ impl SolarPanel {
             let points = &mut self.points;
             Plot::new(("solar-plot", &plot.id))
                 .height(110.0)
-                .legend(Legend::default())
+                // New points come in at the right: the legend stays out of their way.
+                .legend(Legend::default().position(Corner::LeftTop))
                 .allow_drag(false)
                 .allow_zoom(false)
                 .allow_scroll(false)
