@@ -927,35 +927,31 @@ fn run_step(
         } => {
             let r = Reader::new(client, profile, command, fields).map_err(halt)?;
             let series = r.samples(*samples, *interval, cancel).map_err(halt)?;
-            let mut pass = true;
-            let mut parts = Vec::new();
-            for (f, values) in r.fields.iter().zip(&series) {
-                let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
-                let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            Ok(verdict(r.fields.iter().zip(&series).map(|(f, values)| {
+                let (lo, hi) = span(values);
                 let tol = f.scale.abs() * 1e-6;
                 let outside = values
                     .iter()
                     .filter(|v| **v < min - tol || **v > max + tol)
                     .count();
-                pass &= outside == 0;
                 let seen = if lo == hi {
                     show(f, lo)
                 } else {
                     format!("{} to {}", show(f, lo), show(f, hi))
                 };
-                let verdict = if outside == 0 {
+                let note = if outside == 0 {
                     String::new()
                 } else {
                     format!(", {outside} of {} samples outside", values.len())
                 };
-                parts.push(format!(
-                    "{} {seen} (allowed {} to {}){verdict}",
+                let text = format!(
+                    "{} {seen} (allowed {} to {}){note}",
                     f.ident,
                     show(f, *min),
                     show(f, *max)
-                ));
-            }
-            Ok((pass, parts.join("; ")))
+                );
+                (outside == 0, text)
+            })))
         }
         StepKind::Stable {
             command,
@@ -966,15 +962,11 @@ fn run_step(
         } => {
             let r = Reader::new(client, profile, command, fields).map_err(halt)?;
             let series = r.samples(*samples, *interval, cancel).map_err(halt)?;
-            let mut pass = true;
-            let mut parts = Vec::new();
-            for (f, values) in r.fields.iter().zip(&series) {
-                let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
-                let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            Ok(verdict(r.fields.iter().zip(&series).map(|(f, values)| {
+                let (lo, hi) = span(values);
                 let spread = hi - lo;
                 let ok = spread <= max_spread + f.scale.abs() * 1e-6;
-                pass &= ok;
-                parts.push(format!(
+                let text = format!(
                     "{} spread {} ({} to {}; max {}){}",
                     f.ident,
                     show(f, spread),
@@ -982,9 +974,9 @@ fn run_step(
                     show(f, hi),
                     show(f, *max_spread),
                     if ok { "" } else { " TOO NOISY" }
-                ));
-            }
-            Ok((pass, parts.join("; ")))
+                );
+                (ok, text)
+            })))
         }
         StepKind::Rises {
             action,
@@ -1001,23 +993,22 @@ fn run_step(
             let stopped = send_action(client, profile, then);
             let (pass, mut detail, halted) = match measured {
                 Ok((before, after)) => {
-                    let mut pass = true;
-                    let mut parts = Vec::new();
-                    for ((f, b), a) in r.fields.iter().zip(&before).zip(&after) {
-                        let rise = a - b;
-                        let ok = rise >= min_rise - f.scale.abs() * 1e-6;
-                        pass &= ok;
-                        parts.push(format!(
-                            "{} {} → {} (rise {}, min {}){}",
-                            f.ident,
-                            show(f, *b),
-                            show(f, *a),
-                            show(f, rise),
-                            show(f, *min_rise),
-                            if ok { "" } else { " NO RISE" }
-                        ));
-                    }
-                    (pass, parts.join("; "), None)
+                    let (pass, detail) =
+                        verdict(r.fields.iter().zip(&before).zip(&after).map(|((f, b), a)| {
+                            let rise = a - b;
+                            let ok = rise >= min_rise - f.scale.abs() * 1e-6;
+                            let text = format!(
+                                "{} {} → {} (rise {}, min {}){}",
+                                f.ident,
+                                show(f, *b),
+                                show(f, *a),
+                                show(f, rise),
+                                show(f, *min_rise),
+                                if ok { "" } else { " NO RISE" }
+                            );
+                            (ok, text)
+                        }));
+                    (pass, detail, None)
                 }
                 Err(h) => (false, String::new(), Some(h)),
             };
@@ -1222,6 +1213,26 @@ fn show(f: &Field, x: f64) -> String {
 }
 
 /// Reads fields of one command, in display units.
+/// A step's verdict over its fields: it passes when every field does; their texts joined.
+fn verdict(fields: impl Iterator<Item = (bool, String)>) -> (bool, String) {
+    let mut pass = true;
+    let mut texts = Vec::new();
+    for (ok, text) in fields {
+        pass &= ok;
+        texts.push(text);
+    }
+    (pass, texts.join("; "))
+}
+
+/// The lowest and the highest of `values`.
+fn span(values: &[f64]) -> (f64, f64) {
+    values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(*v), hi.max(*v))
+        })
+}
+
 struct Reader<'a> {
     client: &'a Client,
     profile: &'a Profile,

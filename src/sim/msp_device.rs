@@ -9,7 +9,7 @@ use crate::protocol::msp::{
     CMD_BUILD_INFO, CMD_PING, CMD_VERSION, DEVICE_CORE, Reply, Request, RequestDecoder,
 };
 use std::sync::{Arc, OnceLock};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// A device's default answer latency: how long after a request's last byte its reply starts.
 pub const DEFAULT_LATENCY: Duration = Duration::from_micros(100);
@@ -213,6 +213,48 @@ fn fixed(text: &str, n: usize) -> String {
         s.push(' ');
     }
     s
+}
+
+/// An MSP robot built on an [`MspCore`]: its own state moves on with time, and it answers what
+/// the core does not (the core answers CMD_VERSION and the commands every device shares).
+pub trait MspRobot {
+    /// The core.
+    fn msp_core(&mut self) -> &mut MspCore;
+    /// Moves its state on to `now`.
+    fn advance(&mut self, now: Instant);
+    /// Its answer to `req`, a command of its own.
+    fn answer(&mut self, req: &Request, now: Instant) -> Answer;
+}
+
+/// [`super::Device::receive`] for an MSP robot: the bytes that arrived at `now`, at `baud`, and
+/// the replies they bring.
+pub fn receive<R: MspRobot>(robot: &mut R, bytes: &[u8], baud: u32, now: Instant) -> Vec<Outgoing> {
+    robot.advance(now);
+    let mut out = Vec::new();
+    for req in robot.msp_core().requests(bytes, baud) {
+        let answer = match robot.msp_core().core_answer(&req) {
+            Some(a) => a,
+            None => robot.answer(&req, now),
+        };
+        robot.msp_core().respond(&req, answer, &mut out);
+    }
+    out
+}
+
+/// Tests: asks `device` (code `code`) `command` with `data` at `now`; its first reply.
+#[cfg(test)]
+pub(crate) fn ask(
+    device: &mut dyn super::Device,
+    code: u8,
+    command: u8,
+    data: Vec<u8>,
+    now: Instant,
+) -> Option<crate::protocol::msp::Reply> {
+    let bytes = Request::new(code, command, data).encode().ok()?;
+    let out = device.receive(&bytes, 115_200, now);
+    let mut dec = crate::protocol::msp::ReplyDecoder::new();
+    dec.push(&out.first()?.bytes);
+    dec.next()?.ok()
 }
 
 /// The raw default of every field of `cmd`'s reply, by ident (`fallback` where none is given).

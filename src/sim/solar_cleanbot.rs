@@ -7,7 +7,7 @@
 //! distance to the panel's front and back edges (mm, at most 4500). Actions whose payload is not
 //! exactly their layout, or holds an unlabelled state, are refused without an ack.
 
-use super::msp_device::{Answer, MspCore, builtin_profile, clamp_i};
+use super::msp_device::{self, Answer, MspCore, MspRobot, builtin_profile, clamp_i};
 use super::{Device, Outgoing, SimOptions};
 use crate::profile::{CommandKind, Value};
 use crate::protocol::msp::Request;
@@ -372,22 +372,27 @@ impl SolarCleanbot {
     }
 }
 
+impl MspRobot for SolarCleanbot {
+    fn msp_core(&mut self) -> &mut MspCore {
+        &mut self.core
+    }
+
+    fn advance(&mut self, now: Instant) {
+        SolarCleanbot::advance(self, now);
+    }
+
+    fn answer(&mut self, req: &Request, _now: Instant) -> Answer {
+        SolarCleanbot::answer(self, req)
+    }
+}
+
 impl Device for SolarCleanbot {
     fn receive(&mut self, bytes: &[u8], baud: u32, now: Instant) -> Vec<Outgoing> {
-        self.advance(now);
-        let mut out = Vec::new();
-        for req in self.core.requests(bytes, baud) {
-            let answer = match self.core.core_answer(&req) {
-                Some(a) => a,
-                None => self.answer(&req),
-            };
-            self.core.respond(&req, answer, &mut out);
-        }
-        out
+        msp_device::receive(self, bytes, baud, now)
     }
 
     fn tick(&mut self, now: Instant) -> Vec<Outgoing> {
-        self.advance(now);
+        SolarCleanbot::advance(self, now);
         Vec::new()
     }
 }
@@ -395,15 +400,11 @@ impl Device for SolarCleanbot {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::msp::{Reply, ReplyDecoder};
+    use crate::protocol::msp::Reply;
     use std::time::Duration;
 
     fn ask(d: &mut SolarCleanbot, command: u8, data: Vec<u8>, now: Instant) -> Option<Reply> {
-        let bytes = Request::new(DEVICE_CODE, command, data).encode().ok()?;
-        let out = d.receive(&bytes, 115_200, now);
-        let mut dec = ReplyDecoder::new();
-        dec.push(&out.first()?.bytes);
-        dec.next()?.ok()
+        msp_device::ask(d, DEVICE_CODE, command, data, now)
     }
 
     #[test]

@@ -6,7 +6,9 @@
 //! outside its field's range or labels is refused: nothing is stored or done, and no ack is sent
 //! (the host sees a timeout, as with firmware that rejects a frame).
 
-use super::msp_device::{Answer, MspCore, builtin_profile, clamp_i, reply_defaults};
+use super::msp_device::{
+    self, Answer, MspCore, MspRobot, builtin_profile, clamp_i, reply_defaults,
+};
 use super::{Device, Outgoing, SimOptions};
 use crate::profile::{CommandKind, Input, Value};
 use crate::protocol::msp::Request;
@@ -603,22 +605,27 @@ impl WindowCleaner {
     }
 }
 
+impl MspRobot for WindowCleaner {
+    fn msp_core(&mut self) -> &mut MspCore {
+        &mut self.core
+    }
+
+    fn advance(&mut self, now: Instant) {
+        WindowCleaner::advance(self, now);
+    }
+
+    fn answer(&mut self, req: &Request, now: Instant) -> Answer {
+        WindowCleaner::answer(self, req, now)
+    }
+}
+
 impl Device for WindowCleaner {
     fn receive(&mut self, bytes: &[u8], baud: u32, now: Instant) -> Vec<Outgoing> {
-        self.advance(now);
-        let mut out = Vec::new();
-        for req in self.core.requests(bytes, baud) {
-            let answer = match self.core.core_answer(&req) {
-                Some(a) => a,
-                None => self.answer(&req, now),
-            };
-            self.core.respond(&req, answer, &mut out);
-        }
-        out
+        msp_device::receive(self, bytes, baud, now)
     }
 
     fn tick(&mut self, now: Instant) -> Vec<Outgoing> {
-        self.advance(now);
+        WindowCleaner::advance(self, now);
         Vec::new()
     }
 }
@@ -626,14 +633,10 @@ impl Device for WindowCleaner {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::msp::{Reply, ReplyDecoder};
+    use crate::protocol::msp::Reply;
 
     fn ask(d: &mut WindowCleaner, command: u8, data: Vec<u8>, now: Instant) -> Option<Reply> {
-        let bytes = Request::new(DEVICE_CODE, command, data).encode().ok()?;
-        let out = d.receive(&bytes, 115_200, now);
-        let mut dec = ReplyDecoder::new();
-        dec.push(&out.first()?.bytes);
-        dec.next()?.ok()
+        msp_device::ask(d, DEVICE_CODE, command, data, now)
     }
 
     #[test]
