@@ -527,7 +527,10 @@ fn reset_user_data_asks_first_then_follows_the_servo_to_id_0() {
     h.get_by_label("57600").click();
     scan(&mut h, "9", "9");
     h.get_by_label("Parameters").click();
-    h.step();
+    // The tab reads the selected servo as soon as it shows it.
+    step_until(&mut h, "the parameters read", |a| {
+        idle(a) && a.servo.params.values.get(&41) == Some(&Ok(61))
+    });
     h.get_by_label("Reset user data…").click();
     h.run_steps(2);
     h.get_by_label("Keep").click();

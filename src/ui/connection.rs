@@ -178,19 +178,31 @@ fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
             rtt.as_secs_f64() * 1e3
         ));
     }
-    let errors = rt.stats.timeouts + rt.stats.frame_errors;
-    let color = if errors > 0 {
-        egui::Color32::from_rgb(220, 150, 0)
+    let warn = egui::Color32::from_rgb(220, 150, 0);
+    let quiet = ui.visuals().weak_text_color();
+    // A scan asks every id, and most never answer: on a servo bus silence is not an error.
+    let silence_expected = rt.profile.protocol == crate::profile::Protocol::Servo;
+    let details = format!(
+        "{} {}, {} {}, {} {}, {} {}",
+        lang.tr("retries", "重试"),
+        rt.stats.retries,
+        lang.tr("frames sent", "已发送帧"),
+        rt.stats.sent,
+        lang.tr("received", "已接收"),
+        rt.stats.received,
+        lang.tr("dropped events", "丢弃事件"),
+        rt.stats.dropped_events
+    );
+    let n = rt.stats.timeouts;
+    let color = if n > 0 && !silence_expected {
+        warn
     } else {
-        ui.visuals().weak_text_color()
+        quiet
     };
-    ui.colored_label(color, format!("{} {errors}", lang.tr("errors", "错误")))
-        .on_hover_text(format!(
-            "timeouts {}, frame errors {}, retries {}, frames sent {}, received {}",
-            rt.stats.timeouts,
-            rt.stats.frame_errors,
-            rt.stats.retries,
-            rt.stats.sent,
-            rt.stats.received
-        ));
+    ui.colored_label(color, format!("{} {n}", lang.tr("no answer", "无应答")))
+        .on_hover_text(details.clone());
+    let n = rt.stats.frame_errors;
+    let color = if n > 0 { warn } else { quiet };
+    ui.colored_label(color, format!("{} {n}", lang.tr("frame errors", "帧错误")))
+        .on_hover_text(details);
 }

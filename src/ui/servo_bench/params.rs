@@ -44,6 +44,8 @@ pub struct ParamsState {
     pub confirm_reset: bool,
     /// The language last drawn in (for messages made between frames).
     pub lang: Lang,
+    /// The servo whose parameters were read when the tab first showed it.
+    pub read_on_show: Option<Servo>,
 }
 
 /// Whether the table edits this parameter (the id and the baud rate have their own tab).
@@ -203,6 +205,11 @@ impl ParamsState {
         self.prune(&profile);
         let pending = self.pending(&profile);
         let can = rt.connected() && !busy;
+        // What the servo holds is shown as soon as the tab shows it: nothing is shown unread.
+        if can && self.values.is_empty() && self.read_on_show != Some(servo) {
+            self.read_on_show = Some(servo);
+            actions.push(read_all_job(rt, servo));
+        }
         ui.horizontal_wrapped(|ui| {
             if ui
                 .add_enabled(can, egui::Button::new(lang.tr("Read all", "全部读取")))
