@@ -335,8 +335,6 @@ fn the_mcus_requests_are_answered_and_shown_with_a_chosen_time() {
         .click();
     h.run_steps(3);
     assert!(app(&h).tuya.opts.fixed_time.is_some());
-    // The worker takes the new answers between exchanges: let it.
-    std::thread::sleep(Duration::from_millis(300));
     h.run_steps(2);
     {
         let mut m = b.sim.lock().unwrap();

@@ -290,6 +290,9 @@ impl Worker {
                     self.shutdown = true;
                     return Err(ExchangeError::Cancelled);
                 }
+                // What the module answers the MCU takes effect at once: the MCU may ask while
+                // an exchange is under way.
+                LinkCommand::TuyaOptions(o) => self.tuya.opts = o,
                 other => self.deferred.push_back(other),
             }
         }
