@@ -12,13 +12,18 @@ use std::sync::{Arc, Mutex};
 
 mod gui_harness;
 use gui_harness::{H, Served, app, serve, settings, step_until};
+use std::time::Duration;
 
 fn bench() -> Served<WindowCleaner> {
     serve(WindowCleaner::new(&SimOptions::default()).unwrap())
 }
 
+/// The app on the window cleaner at `path`, with 100 ms for the device to start answering:
+/// generous for a loaded test machine (the protocol's own 20 ms is tested below).
 fn harness(path: &str, panel: PanelId) -> H {
-    gui_harness::harness(settings(path, "window-cleaner", panel, Lang::En))
+    let mut saved = settings(path, "window-cleaner", panel, Lang::En);
+    saved.margin_ms = Some(100);
+    gui_harness::harness(saved)
 }
 
 fn all_read(app: &App) -> bool {
@@ -265,4 +270,27 @@ fn the_parameters_are_read_as_soon_as_the_link_is_up() {
     let b = bench();
     let mut h = harness(b.path(), PanelId::Tuning);
     step_until(&mut h, "every parameter read without a click", all_read);
+}
+
+#[test]
+fn a_slow_device_is_read_once_the_answer_margin_allows_for_it() {
+    let slow = Faults {
+        extra_latency: Duration::from_millis(150),
+        ..Faults::default()
+    };
+    let served = gui_harness::serve_with(WindowCleaner::new(&SimOptions::default()).unwrap(), slow);
+    // The protocol's own 20 ms is too short for it, even over three attempts: reads fail, and
+    // say so.
+    let saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
+    assert_eq!(saved.margin_ms, None, "the protocol's own margin");
+    let mut h = gui_harness::harness(saved);
+    step_until(&mut h, "the first read to fail", |a| {
+        matches!(a.rt.readings.get(&130), Some(Reading::Failed(_)))
+    });
+    drop(h);
+    // 300 ms chosen in the connection bar: every parameter is read.
+    let mut saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
+    saved.margin_ms = Some(300);
+    let mut h = gui_harness::harness(saved);
+    step_until(&mut h, "every parameter read", all_read);
 }

@@ -28,8 +28,12 @@ fn solar() -> Bench<SolarCleanbot> {
     serve(SolarCleanbot::new(&SimOptions::default()).unwrap())
 }
 
+/// The app on `profile` at `path`, with 100 ms for the device to start answering: generous for a
+/// loaded test machine.
 fn harness(path: &str, profile: &str, panel: PanelId, lang: Lang) -> H {
-    gui_harness::harness(settings(path, profile, panel, lang))
+    let mut saved = settings(path, profile, panel, lang);
+    saved.margin_ms = Some(100);
+    gui_harness::harness(saved)
 }
 
 /// Steps the UI in real time until `done` holds; on timeout says what the panels hold.

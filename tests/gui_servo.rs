@@ -8,7 +8,7 @@ use botbench::ui::{Action, App, PanelId};
 use eframe::egui;
 use egui_kittest::kittest::{NodeT, Queryable};
 use std::sync::Mutex;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 mod gui_harness;
 use gui_harness::{H, Served, app, serve, settings, step_until};
@@ -44,7 +44,7 @@ fn harness(b: &Bench, lang: Lang) -> H {
     let saved = settings(b.served.path(), "servo", PanelId::ServoBench, lang);
     let mut h = gui_harness::harness_with(saved.clone(), move |app| {
         // Generous for a loaded test machine (the tests share 2 cores with builds).
-        app.rt.link_options.margin = Some(Duration::from_millis(20));
+        app.saved.margin_ms = Some(20);
         app.apply(Action::Connect {
             target: saved.target.clone(),
             baud: saved.baud,

@@ -89,6 +89,8 @@ pub struct Saved {
     pub window_secs: f64,
     /// The navigation is shown.
     pub nav_open: bool,
+    /// How long the device may take to start answering, ms (`None`: the protocol's own).
+    pub margin_ms: Option<u64>,
 }
 
 impl Default for Saved {
@@ -102,6 +104,7 @@ impl Default for Saved {
             poll_hz: Some(50.0),
             window_secs: 60.0,
             nav_open: true,
+            margin_ms: None,
         }
     }
 }
@@ -344,21 +347,7 @@ impl App {
                 target,
                 baud,
                 profile,
-            } => match self.rt.connect(target.clone(), baud, &profile) {
-                Ok(()) => {
-                    self.saved.target = target;
-                    self.saved.baud = baud;
-                    self.saved.profile = profile;
-                    self.tuning = tuning::TuningPanel::default();
-                    // What was found on another connection is not on this one.
-                    self.servo.forget_bus();
-                    if !self.panels().contains(&self.saved.panel) {
-                        self.saved.panel = self.panels()[0];
-                    }
-                    self.restart_polls();
-                }
-                Err(e) => self.rt.say(format!("cannot connect: {e}"), true),
-            },
+            } => self.connect(target, baud, profile),
             Action::Disconnect => {
                 self.rt.disconnect();
                 self.rt.say("disconnected", false);
@@ -381,6 +370,24 @@ impl App {
             Action::Link(cmd) => self.rt.send(cmd),
             Action::StartJob(job) => self.rt.start_job(&job.title, job.work),
         }
+    }
+
+    fn connect(&mut self, target: Target, baud: u32, profile: String) {
+        self.rt.link_options.margin = self.saved.margin_ms.map(std::time::Duration::from_millis);
+        if let Err(e) = self.rt.connect(target.clone(), baud, &profile) {
+            self.rt.say(format!("cannot connect: {e}"), true);
+            return;
+        }
+        self.saved.target = target;
+        self.saved.baud = baud;
+        self.saved.profile = profile;
+        self.tuning = tuning::TuningPanel::default();
+        // What was found on another connection is not on this one.
+        self.servo.forget_bus();
+        if !self.panels().contains(&self.saved.panel) {
+            self.saved.panel = self.panels()[0];
+        }
+        self.restart_polls();
     }
 
     fn restart_polls(&mut self) {

@@ -8,6 +8,18 @@ use crate::link::LinkState;
 use crate::sim::SimKind;
 use eframe::egui;
 
+/// Answer margins offered, ms (`None`: the protocol's own).
+const MARGINS: [Option<u64>; 8] = [
+    None,
+    Some(2),
+    Some(5),
+    Some(10),
+    Some(20),
+    Some(50),
+    Some(100),
+    Some(300),
+];
+
 const BAUDS: [u32; 11] = [
     9600, 19_200, 38_400, 57_600, 115_200, 230_400, 250_000, 460_800, 500_000, 921_600, 1_000_000,
 ];
@@ -17,6 +29,8 @@ pub struct ConnectionBar {
     target: Target,
     baud: u32,
     profile: String,
+    /// How long the device may take to start answering, ms (`None`: the protocol's own).
+    margin_ms: Option<u64>,
     /// A path typed by hand (a pseudo-terminal is not listed by the OS).
     typed: String,
 }
@@ -28,6 +42,7 @@ impl ConnectionBar {
             target: saved.target.clone(),
             baud: saved.baud,
             profile: saved.profile.clone(),
+            margin_ms: saved.margin_ms,
             typed: match &saved.target {
                 Target::Port(p) => p.clone(),
                 Target::Demo(_) => String::new(),
@@ -101,11 +116,35 @@ impl ConnectionBar {
                 })
                 .response
                 .labelled_by(profile_label.id);
+            let margin_label = ui
+                .label(lang.tr("Margin", "应答余量"))
+                .on_hover_text(lang.tr(
+                    "How long the device may take to start answering, beyond the bytes' wire time. \
+                 Auto: MSP 20 ms, servo 1.5 ms, Tuya 300 ms. Raise it for a USB adapter with a \
+                 latency timer (FTDI: 16 ms unless set to 1 ms).",
+                    "设备开始应答前允许的时间(不含字节在线路上的传输时间)。自动: MSP 20 ms, \
+                 舵机 1.5 ms, 涂鸦 300 ms。USB 转串口适配器有延迟定时器时请加大\
+                 (FTDI 默认 16 ms, 可设为 1 ms)。",
+                ));
+            let shown = |m: Option<u64>| match m {
+                None => lang.tr("auto", "自动").to_string(),
+                Some(ms) => format!("{ms} ms"),
+            };
+            egui::ComboBox::from_id_salt("margin")
+                .selected_text(shown(self.margin_ms))
+                .show_ui(ui, |ui| {
+                    for m in MARGINS {
+                        ui.selectable_value(&mut self.margin_ms, m, shown(m));
+                    }
+                })
+                .response
+                .labelled_by(margin_label.id);
             if rt.conn.is_some() {
                 if ui.button(lang.tr("Disconnect", "断开")).clicked() {
                     actions.push(Action::Disconnect);
                 }
             } else if ui.button(lang.tr("Connect", "连接")).clicked() {
+                saved.margin_ms = self.margin_ms;
                 actions.push(Action::Connect {
                     target: self.target.clone(),
                     baud: self.baud,
@@ -115,9 +154,11 @@ impl ConnectionBar {
             if rt.conn.is_some()
                 && (self.target != saved.target
                     || self.baud != saved.baud
-                    || self.profile != saved.profile)
+                    || self.profile != saved.profile
+                    || self.margin_ms != saved.margin_ms)
                 && ui.button(lang.tr("Reconnect", "重新连接")).clicked()
             {
+                saved.margin_ms = self.margin_ms;
                 actions.push(Action::Connect {
                     target: self.target.clone(),
                     baud: self.baud,
