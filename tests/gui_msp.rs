@@ -437,7 +437,12 @@ fn the_msp_panels_render_in_english_and_chinese() {
         let open = lang.tr("Open plan", "打开方案");
         h.get_by_label(open).click();
         h.run_steps(2);
-        assert!(app(&h).selftest.plan.is_some());
+        assert!(
+            app(&h).selftest.plan.is_some(),
+            "{:?} on {:?}",
+            app(&h).selftest.error,
+            app(&h).saved.panel
+        );
         h.state_mut().as_mut().unwrap().saved.panel = PanelId::Device;
         h.run_steps(2);
     }

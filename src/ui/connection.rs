@@ -1,4 +1,5 @@
-//! The top bar: port picker, baud, profile, connect/disconnect, link state, language.
+//! The top bar: port picker, baud, profile, answer margin, connect/disconnect, link state,
+//! language. Its content keeps its width, so that the panels below never move.
 
 use super::Action;
 use super::app::Saved;
@@ -57,7 +58,7 @@ impl ConnectionBar {
         ui.horizontal_wrapped(|ui| {
             let port_label = ui.label(lang.tr("Port", "端口"));
             egui::ComboBox::from_id_salt("port")
-                .width(260.0)
+                .width(220.0)
                 .selected_text(self.target.label())
                 .show_ui(ui, |ui| {
                     for kind in SimKind::ALL {
@@ -212,38 +213,4 @@ fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
         ),
     };
     ui.colored_label(color, text);
-    if let Some(rtt) = rt.stats.rtt {
-        ui.label(format!(
-            "{} {:.1} ms",
-            lang.tr("round trip", "往返"),
-            rtt.as_secs_f64() * 1e3
-        ));
-    }
-    let warn = egui::Color32::from_rgb(220, 150, 0);
-    let quiet = ui.visuals().weak_text_color();
-    // A scan asks every id, and most never answer: on a servo bus silence is not an error.
-    let silence_expected = rt.profile.protocol == crate::profile::Protocol::Servo;
-    let details = format!(
-        "{} {}, {} {}, {} {}, {} {}",
-        lang.tr("retries", "重试"),
-        rt.stats.retries,
-        lang.tr("frames sent", "已发送帧"),
-        rt.stats.sent,
-        lang.tr("received", "已接收"),
-        rt.stats.received,
-        lang.tr("dropped events", "丢弃事件"),
-        rt.stats.dropped_events
-    );
-    let n = rt.stats.timeouts;
-    let color = if n > 0 && !silence_expected {
-        warn
-    } else {
-        quiet
-    };
-    ui.colored_label(color, format!("{} {n}", lang.tr("no answer", "无应答")))
-        .on_hover_text(details.clone());
-    let n = rt.stats.frame_errors;
-    let color = if n > 0 { warn } else { quiet };
-    ui.colored_label(color, format!("{} {n}", lang.tr("frame errors", "帧错误")))
-        .on_hover_text(details);
 }

@@ -1,4 +1,5 @@
-//! The status line: what the link is, the last message, and the running job's progress.
+//! The status line: what the link is, its counters, the last message, and the running job's
+//! progress.
 
 use super::Action;
 use super::runtime::Runtime;
@@ -19,6 +20,8 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
                         info.hw, info.firmware, info.api
                     ));
                 }
+                ui.separator();
+                link_stats(ui, lang, rt);
             }
             None => {
                 ui.label(lang.tr("not connected", "未连接"));
@@ -48,4 +51,42 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
         }
     });
     actions
+}
+
+/// The link's round trip and counters.
+fn link_stats(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
+    if let Some(rtt) = rt.stats.rtt {
+        ui.label(format!(
+            "{} {:.1} ms",
+            lang.tr("round trip", "往返"),
+            rtt.as_secs_f64() * 1e3
+        ));
+    }
+    let warn = egui::Color32::from_rgb(220, 150, 0);
+    let quiet = ui.visuals().weak_text_color();
+    // A scan asks every id, and most never answer: on a servo bus silence is not an error.
+    let silence_expected = rt.profile.protocol == crate::profile::Protocol::Servo;
+    let details = format!(
+        "{} {}, {} {}, {} {}, {} {}",
+        lang.tr("retries", "重试"),
+        rt.stats.retries,
+        lang.tr("frames sent", "已发送帧"),
+        rt.stats.sent,
+        lang.tr("received", "已接收"),
+        rt.stats.received,
+        lang.tr("dropped events", "丢弃事件"),
+        rt.stats.dropped_events
+    );
+    let n = rt.stats.timeouts;
+    let color = if n > 0 && !silence_expected {
+        warn
+    } else {
+        quiet
+    };
+    ui.colored_label(color, format!("{} {n}", lang.tr("no answer", "无应答")))
+        .on_hover_text(details.clone());
+    let n = rt.stats.frame_errors;
+    let color = if n > 0 { warn } else { quiet };
+    ui.colored_label(color, format!("{} {n}", lang.tr("frame errors", "帧错误")))
+        .on_hover_text(details);
 }
