@@ -54,7 +54,12 @@ shot() {
 SCRIPT
 for s in "${shots[@]}"; do echo "shot $s" >> "$home/run.sh"; done
 chmod +x "$home/run.sh"
-xvfb-run -a -s "-screen 0 1280x800x24" "$home/run.sh"
+# Two xvfb-run -a started at once can race for a display number: one retry.
+xvfb-run -a -s "-screen 0 1280x800x24" "$home/run.sh" || {
+    echo "== the X session failed; retrying once"
+    sleep 2
+    xvfb-run -a -s "-screen 0 1280x800x24" "$home/run.sh"
+}
 
 # Blank means a single colour: its standard deviation is (about) zero.
 for s in "${shots[@]}"; do
