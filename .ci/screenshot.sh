@@ -31,23 +31,35 @@ fi
 home=$(mktemp -d)
 trap 'rm -rf "$home"' EXIT
 mkdir -p "$dir"
+dir=$(cd "$dir" && pwd)
 cat > "$home/run.sh" <<SCRIPT
 #!/usr/bin/env bash
 set -u
 export HOME="$home" XDG_CONFIG_HOME="$home/config" XDG_DATA_HOME="$home/data" LIBGL_ALWAYS_SOFTWARE=1
-shot() {
-    "$PWD/$bin" gui --demo "\$2" --panel "\$3" > "$home/app.log" 2>&1 &
+# xvfb-run gives the server a fixed few seconds to start; on a loaded machine it needs more.
+for _ in \$(seq 1 60); do
+    if xdotool getdisplaygeometry >/dev/null 2>&1; then break; fi
+    sleep 0.5
+done
+echo "X display \$DISPLAY: \$(xdotool getdisplaygeometry 2>&1)"
+# Now and then the app cannot open its X connection at start, though the server answers (about
+# one launch in ten under Xvfb here): each shot gets three launches.
+launch() {
+    "$PWD/$bin" gui --demo "\$1" --panel "\$2" > "$home/app.log" 2>&1 &
     app=\$!
     for _ in \$(seq 1 120); do
-        if xdotool search --name "botbench" >/dev/null 2>&1; then break; fi
-        if ! kill -0 \$app 2>/dev/null; then echo "the app exited early:"; cat "$home/app.log"; exit 1; fi
+        if xdotool search --name "botbench" >/dev/null 2>&1; then return 0; fi
+        if ! kill -0 \$app 2>/dev/null; then
+            echo "the app exited early (\$1 \$2):"; cat "$home/app.log"; return 1
+        fi
         sleep 0.5
     done
-    if ! xdotool search --name "botbench" >/dev/null 2>&1; then
-        echo "no window titled botbench after 60 s"; cat "$home/app.log"; kill \$app; exit 1
-    fi
+    echo "no window titled botbench after 60 s (\$1 \$2)"; cat "$home/app.log"; kill \$app; return 1
+}
+shot() {
+    launch "\$2" "\$3" || { sleep 1; launch "\$2" "\$3"; } || { sleep 1; launch "\$2" "\$3"; } || exit 1
     sleep "\$4"
-    import -window root "$PWD/$dir/\$1.png"
+    import -window root "$dir/\$1.png"
     kill \$app
     wait \$app 2>/dev/null || true
 }
