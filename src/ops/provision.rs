@@ -100,6 +100,20 @@ pub struct PlanError {
     pub message: String,
 }
 
+/// A RON file's name (for errors) and text, or why it cannot be read.
+pub(crate) fn read_source(path: &Path) -> Result<(String, String), PlanError> {
+    let file = path.display().to_string();
+    match std::fs::read_to_string(path) {
+        Ok(text) => Ok((file, text)),
+        Err(e) => Err(PlanError {
+            file,
+            line: 0,
+            col: 0,
+            message: format!("cannot read: {e}"),
+        }),
+    }
+}
+
 impl fmt::Display for PlanError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if self.line == 0 {
@@ -151,13 +165,7 @@ struct Doc {
 impl Plan {
     /// Reads a plan file and checks it against the servo `profile`.
     pub fn load(path: &Path, profile: &Profile) -> Result<Plan, PlanError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| PlanError {
-            file: file.clone(),
-            line: 0,
-            col: 0,
-            message: format!("cannot read: {e}"),
-        })?;
+        let (file, text) = read_source(path)?;
         Self::parse(&file, &text, profile)
     }
 

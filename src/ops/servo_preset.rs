@@ -50,13 +50,7 @@ pub fn in_preset(p: &crate::profile::Param) -> bool {
 impl ParamPreset {
     /// Reads a preset file and checks it against the servo `profile`.
     pub fn load(path: &Path, profile: &Profile) -> Result<Self, PresetError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| PresetError {
-            file: file.clone(),
-            line: 0,
-            col: 0,
-            message: format!("cannot read: {e}"),
-        })?;
+        let (file, text) = super::provision::read_source(path)?;
         Self::parse(&file, &text, profile)
     }
 

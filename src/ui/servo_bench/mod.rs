@@ -192,6 +192,25 @@ pub(crate) fn ok_label(ui: &mut egui::Ui, text: impl Into<egui::RichText>) {
     ui.colored_label(egui::Color32::from_rgb(40, 150, 60), text);
 }
 
+/// The selected servo, or a hint to select one first.
+fn selection_or_hint(ui: &mut egui::Ui, lang: Lang, selected: Option<Servo>) -> Option<Servo> {
+    if selected.is_none() {
+        ui.weak(lang.tr(
+            "Select a servo in the bus scan first.",
+            "请先在总线扫描中选择一个舵机。",
+        ));
+    }
+    selected
+}
+
+/// A grid's header row.
+fn header_row(ui: &mut egui::Ui, headers: &[&str]) {
+    for h in headers {
+        ui.strong(*h);
+    }
+    ui.end_row();
+}
+
 impl ServoBenchPanel {
     /// Forgets what was found on the bus (a new connection): scan rows, the selection, the
     /// parameters read and the angle plot. What the technician typed and chose is kept.

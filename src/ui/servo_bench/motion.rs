@@ -5,6 +5,7 @@
 //! Motion commands go straight to the link worker: they never wait behind a job, and the live
 //! angle keeps coming while the servo moves.
 
+use super::selection_or_hint;
 use super::{Servo, direct, error_label, follow};
 use crate::i18n::Lang;
 use crate::link::{LinkCommand, Poll};
@@ -186,11 +187,7 @@ impl MotionState {
         selected: Option<Servo>,
         actions: &mut Vec<Action>,
     ) {
-        let Some(servo) = selected else {
-            ui.weak(lang.tr(
-                "Select a servo in the bus scan first.",
-                "请先在总线扫描中选择一个舵机。",
-            ));
+        let Some(servo) = selection_or_hint(ui, lang, selected) else {
             return;
         };
         let can = rt.connected() && !busy;

@@ -4,6 +4,7 @@
 //! first. Servo parameter presets are saved from and loaded into the table.
 
 use super::{Output, Servo, error_label, ok_label, send};
+use super::{header_row, selection_or_hint};
 use crate::i18n::Lang;
 use crate::ops::msp::Check;
 use crate::ops::servo::{self as ops, Location, PARAM_BAUD, PARAM_ID};
@@ -193,11 +194,7 @@ impl ParamsState {
         selected: Option<Servo>,
         actions: &mut Vec<Action>,
     ) {
-        let Some(servo) = selected else {
-            ui.weak(lang.tr(
-                "Select a servo in the bus scan first.",
-                "请先在总线扫描中选择一个舵机。",
-            ));
+        let Some(servo) = selection_or_hint(ui, lang, selected) else {
             return;
         };
         self.lang = lang;
@@ -298,18 +295,18 @@ impl ParamsState {
             .num_columns(7)
             .min_col_width(40.0)
             .show(ui, |ui| {
-                for h in [
-                    lang.tr("ID", "ID"),
-                    lang.tr("Parameter", "参数"),
-                    lang.tr("Servo", "舵机值"),
-                    lang.tr("New value", "新值"),
-                    lang.tr("Unit", "单位"),
-                    lang.tr("Range", "范围"),
-                    "",
-                ] {
-                    ui.strong(h);
-                }
-                ui.end_row();
+                header_row(
+                    ui,
+                    &[
+                        lang.tr("ID", "ID"),
+                        lang.tr("Parameter", "参数"),
+                        lang.tr("Servo", "舵机值"),
+                        lang.tr("New value", "新值"),
+                        lang.tr("Unit", "单位"),
+                        lang.tr("Range", "范围"),
+                        "",
+                    ],
+                );
                 for p in &profile.params {
                     self.row(ui, lang, p);
                     ui.end_row();

@@ -1,6 +1,7 @@
 //! The production tab: load a plan, choose the CSV log, "Provision next" for each fresh servo,
 //! a clear PASS/FAIL banner that names the failed step, and the records of this session.
 
+use super::header_row;
 use super::{Output, error_label, send};
 use crate::i18n::Lang;
 use crate::ops::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
@@ -228,17 +229,17 @@ fn history(ui: &mut egui::Ui, lang: Lang, records: &[Record]) {
         .striped(true)
         .num_columns(6)
         .show(ui, |ui| {
-            for h in [
-                lang.tr("Time", "时间"),
-                lang.tr("Serial", "序列号"),
-                lang.tr("ID", "ID"),
-                lang.tr("Baud", "波特率"),
-                lang.tr("Result", "结果"),
-                lang.tr("Mismatches", "不一致项"),
-            ] {
-                ui.strong(h);
-            }
-            ui.end_row();
+            header_row(
+                ui,
+                &[
+                    lang.tr("Time", "时间"),
+                    lang.tr("Serial", "序列号"),
+                    lang.tr("ID", "ID"),
+                    lang.tr("Baud", "波特率"),
+                    lang.tr("Result", "结果"),
+                    lang.tr("Mismatches", "不一致项"),
+                ],
+            );
             for r in records.iter().rev() {
                 ui.label(&r.time);
                 ui.label(r.serial.map_or("-".into(), |v| v.to_string()));

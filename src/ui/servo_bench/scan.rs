@@ -1,6 +1,7 @@
 //! The scan tab: an id range and a set of baud rates, the servos found (details, status as raw
 //! hex and decoded bits, possible duplicate ids), rescanning one id, selecting a servo.
 
+use super::header_row;
 use super::{Output, Servo, error_label, ok_label, port_baud, send};
 use crate::i18n::Lang;
 use crate::ops::servo::{self as ops, BAUDS, Presence, ScanPlan, ScanRow};
@@ -223,22 +224,22 @@ impl ScanState {
             .num_columns(11)
             .min_col_width(40.0)
             .show(ui, |ui| {
-                for h in [
-                    lang.tr("Servo", "舵机"),
-                    lang.tr("Baud", "波特率"),
-                    lang.tr("Type", "型号"),
-                    lang.tr("Firmware", "固件"),
-                    lang.tr("Serial", "序列号"),
-                    lang.tr("Voltage", "电压"),
-                    lang.tr("Temperature", "温度"),
-                    lang.tr("Status (raw)", "状态(原始)"),
-                    lang.tr("Status (decoded)", "状态(解析)"),
-                    lang.tr("Presence", "应答"),
-                    "",
-                ] {
-                    ui.strong(h);
-                }
-                ui.end_row();
+                header_row(
+                    ui,
+                    &[
+                        lang.tr("Servo", "舵机"),
+                        lang.tr("Baud", "波特率"),
+                        lang.tr("Type", "型号"),
+                        lang.tr("Firmware", "固件"),
+                        lang.tr("Serial", "序列号"),
+                        lang.tr("Voltage", "电压"),
+                        lang.tr("Temperature", "温度"),
+                        lang.tr("Status (raw)", "状态(原始)"),
+                        lang.tr("Status (decoded)", "状态(解析)"),
+                        lang.tr("Presence", "应答"),
+                        "",
+                    ],
+                );
                 let opt = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
                 for row in &self.rows {
                     let here = Servo {

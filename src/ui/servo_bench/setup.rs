@@ -4,6 +4,7 @@
 //! where it is).
 
 use super::scan::ScanState;
+use super::selection_or_hint;
 use super::{Output, Servo, error_label, ok_label, send};
 use crate::i18n::Lang;
 use crate::ops::servo::{self as ops, BAUDS, Presence};
@@ -142,11 +143,7 @@ impl SetupState {
         actions: &mut Vec<Action>,
     ) {
         self.lang = lang;
-        let Some(servo) = selected else {
-            ui.weak(lang.tr(
-                "Select a servo in the bus scan first.",
-                "请先在总线扫描中选择一个舵机。",
-            ));
+        let Some(servo) = selection_or_hint(ui, lang, selected) else {
             return;
         };
         let can = rt.connected() && !busy;
