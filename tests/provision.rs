@@ -465,41 +465,28 @@ fn the_cli_provisions_one_servo_with_a_pass_line_and_a_log() {
         .read_line(&mut path)
         .unwrap();
     let log = tmp("cli.csv");
-    let out = std::process::Command::new(exe)
-        .args([
-            "servo",
-            "--port",
-            path.trim(),
-            "--margin-ms",
-            "5",
-            "provision",
-        ])
-        .arg(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/presets/servo-provision-plan.ron"
-        ))
-        .arg("--log")
-        .arg(&log)
-        .output()
-        .unwrap();
+    let provision = || {
+        std::process::Command::new(exe)
+            .args([
+                "servo",
+                "--port",
+                path.trim(),
+                "--margin-ms",
+                "5",
+                "provision",
+            ])
+            .arg(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/presets/servo-provision-plan.ron"
+            ))
+            .arg("--log")
+            .arg(&log)
+            .output()
+            .unwrap()
+    };
+    let out = provision();
     // A second run finds no fresh servo: a FAIL, exit 1, and a second line in the log.
-    let again = std::process::Command::new(exe)
-        .args([
-            "servo",
-            "--port",
-            path.trim(),
-            "--margin-ms",
-            "5",
-            "provision",
-        ])
-        .arg(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/presets/servo-provision-plan.ron"
-        ))
-        .arg("--log")
-        .arg(&log)
-        .output()
-        .unwrap();
+    let again = provision();
     let _ = sim.kill();
     let _ = sim.wait();
     let stdout = String::from_utf8_lossy(&out.stdout);
