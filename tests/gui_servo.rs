@@ -70,6 +70,20 @@ fn set_text(h: &mut H, label: &str, text: &str) {
     h.step();
 }
 
+/// Selects `servo` in the scan table and asks for the baud option labelled `option`.
+fn set_baud(h: &mut H, servo: &str, option: &str) {
+    h.get_by_label(servo).click();
+    h.step();
+    h.get_by_label("ID & baud rate").click();
+    h.step();
+    h.get_by_label("New baud rate").click();
+    h.run_steps(2);
+    h.get_by_label(option).click();
+    h.step();
+    h.get_by_label("Set baud rate").click();
+    h.step();
+}
+
 /// Scans ids `first`-`last` at the checked rates and waits for the end.
 fn scan(h: &mut H, first: &str, last: &str) {
     set_text(h, "First id", first);
@@ -409,16 +423,7 @@ fn a_baud_change_is_followed_and_verified_and_a_lost_servo_is_found() {
     ]);
     let mut h = harness(&b, Lang::En);
     scan(&mut h, "0", "8");
-    h.get_by_label("Servo 4").click();
-    h.step();
-    h.get_by_label("ID & baud rate").click();
-    h.step();
-    h.get_by_label("New baud rate").click();
-    h.run_steps(2);
-    h.get_by_label("4 (57600)").click();
-    h.step();
-    h.get_by_label("Set baud rate").click();
-    h.step();
+    set_baud(&mut h, "Servo 4", "4 (57600)");
     step_until(&mut h, "the baud change", |a| {
         idle(a) && a.servo.setup.message.is_some()
     });
@@ -430,16 +435,7 @@ fn a_baud_change_is_followed_and_verified_and_a_lost_servo_is_found() {
 
     h.get_by_label("Bus scan").click();
     h.step();
-    h.get_by_label("Servo 6").click();
-    h.step();
-    h.get_by_label("ID & baud rate").click();
-    h.step();
-    h.get_by_label("New baud rate").click();
-    h.run_steps(2);
-    h.get_by_label("8 (1000000, newer servos)").click();
-    h.step();
-    h.get_by_label("Set baud rate").click();
-    h.step();
+    set_baud(&mut h, "Servo 6", "8 (1000000, newer servos)");
     step_until(&mut h, "the failed baud change", |a| {
         idle(a)
             && a.servo
