@@ -49,6 +49,16 @@ ABSENT_ID = 200
 # buffer to the frame parser again each time more bytes arrive: a reply that arrives in two pieces
 # split after its header is lost (an SDK defect; USB adapters and the simulator deliver in pieces).
 # Such a step passes when the reply itself arrived whole (the simulator is then not at fault).
+# The SDK waits exactly 100 ms for a reply; on a loaded host (PROTOCOL_NOTES section 4) a reply
+# can come later and is lost. Reads are therefore tried up to READ_ATTEMPTS times, motion commands
+# once (their checks read the angle back several times).
+READ_ATTEMPTS = 3
+READS = {
+    "ping", "scan_servo", "query_servo_angle", "query_servo_mturn_angle", "read_data",
+    "write_data", "query_voltage", "query_current", "query_power", "query_temperature",
+    "query_status", "query_servo_monitor", "send_sync_servo_monitor", "SyncServoMonitor",
+    "read_positions", "ReadCurrentPosition", "ReadCurrentPosition_EX", "read_servo_angle_monitor",
+}  # fmt: skip
 
 
 class RecordingSerial:
@@ -102,23 +112,27 @@ class Driver:
         sdk_defect: why the SDK itself cannot do this step; it is then not checked."""
         if self.api == "PortHandler":
             name = f"PortHandler.{name}"
-        self.port.take()
-        with Captured() as cap:
-            value, error = call(lambda: getattr(self.sdk, method)(**args))
-        tx, rx = self.port.take()
-        ok, observed, what = None, None, None
         if sdk_defect:
             check = None
-        if check is not None and error is None:
-            ok, observed, what = check(value)
-        elif check is not None:
-            ok, what = False, "the call raised"
-        verify_tx, _ = self.port.take()
-        lost = False
-        if ok is False and quick_update:
-            arrived = [c for c, body, _ in split_frames(rx, REPLY_HEADER)
-                       if c == quick_update[0] and body[:1] == bytes([quick_update[1]])]
-            lost = ok = bool(arrived)
+        attempts = READ_ATTEMPTS if method in READS else 1
+        for attempt in range(1, attempts + 1):
+            self.port.take()
+            with Captured() as cap:
+                value, error = call(lambda: getattr(self.sdk, method)(**args))
+            tx, rx = self.port.take()
+            ok, observed, what = None, None, None
+            if check is not None and error is None:
+                ok, observed, what = check(value)
+            elif check is not None:
+                ok, what = False, "the call raised"
+            verify_tx, _ = self.port.take()
+            lost = False
+            if ok is False and quick_update:
+                arrived = [c for c, body, _ in split_frames(rx, REPLY_HEADER)
+                           if c == quick_update[0] and body[:1] == bytes([quick_update[1]])]
+                lost = ok = bool(arrived)
+            if ok is not False:
+                break
         doc = {
             "kind": "step",
             "name": name,
@@ -137,6 +151,8 @@ class Driver:
             doc["observed"] = jsonable(observed)
         if verify_tx:
             doc["check_requests"] = len(verify_tx)
+        if attempt > 1:
+            doc["attempts"] = attempt
         if lost:
             doc["sdk_lost_reply"] = "the reply arrived whole (see received); quick_update lost it"
         if sdk_defect:
@@ -148,14 +164,24 @@ class Driver:
         return value
 
 
+def read_angle(sdk, sid, mturn, tries=3):
+    """Servo sid's angle (cmd 16 if mturn, else cmd 10), asked up to `tries` times: the SDK
+    gives a reply 100 ms, which a loaded host can miss. None if it never came."""
+    read = sdk.query_servo_mturn_angle if mturn else sdk.query_servo_angle
+    for _ in range(tries):
+        a = read(sid, realtime=True)
+        if a is not None:
+            return a
+    return None
+
+
 def wait_angle(sdk, sid, target, mturn, within_s):
     """Reads servo sid's angle (cmd 16 if mturn, else 10) until it is within ANGLE_TOLERANCE of
     target or within_s + SETTLE_S has passed. Returns the last angle read (None if none)."""
     deadline = time.monotonic() + within_s + SETTLE_S
     last = None
     while True:
-        read = sdk.query_servo_mturn_angle if mturn else sdk.query_servo_angle
-        a = read(sid, realtime=True)
+        a = read_angle(sdk, sid, mturn, tries=1)
         last = a if a is not None else last
         if a is not None and abs(a - target) <= ANGLE_TOLERANCE:
             return a
@@ -184,10 +210,9 @@ def all_arrive(sdk, targets, mturn, within_s):
 def stays(sdk, sid, mturn=True, gap_s=0.3):
     """A check: servo sid's angle does not change over gap_s. Returns (ok, (a, b), what)."""
     def check(_value):
-        read = sdk.query_servo_mturn_angle if mturn else sdk.query_servo_angle
-        a = read(sid, realtime=True)
+        a = read_angle(sdk, sid, mturn)
         time.sleep(gap_s)
-        b = read(sid, realtime=True)
+        b = read_angle(sdk, sid, mturn)
         ok = a is not None and b is not None and abs(a - b) <= ANGLE_TOLERANCE
         return ok, [a, b], f"servo {sid} holds still over {gap_s} s"
     return check
@@ -197,7 +222,7 @@ def still_at(sdk, sid, angle, gap_s=0.3):
     """A check: after gap_s, servo sid still reads angle (single-turn read, cmd 10)."""
     def check(_value):
         time.sleep(gap_s)
-        a = sdk.query_servo_angle(sid, realtime=True)
+        a = read_angle(sdk, sid, False)
         ok = a is not None and abs(a - angle) <= ANGLE_TOLERANCE
         return ok, a, f"servo {sid} still at {angle} deg after {gap_s} s"
     return check
@@ -212,9 +237,9 @@ def wrapped(deg):
 def moves(sdk, sid, gap_s=0.3):
     """A check: servo sid's multi-turn angle changes over gap_s."""
     def check(_value):
-        a = sdk.query_servo_mturn_angle(sid, realtime=True)
+        a = read_angle(sdk, sid, True)
         time.sleep(gap_s)
-        b = sdk.query_servo_mturn_angle(sid, realtime=True)
+        b = read_angle(sdk, sid, True)
         ok = a is not None and b is not None and abs(a - b) > ANGLE_TOLERANCE
         return ok, [a, b], f"servo {sid} turns (angle changes over {gap_s} s)"
     return check
@@ -302,7 +327,7 @@ def manager_steps(d, sdk, ids):
     d.step("set_servo_angle/cmd15_mturn_by_velocity", "set_servo_angle",
            {"servo_id": sid, "angle": 400.0, "is_mturn": True, "velocity": 750.0, "t_acc": 20,
             "t_dec": 20}, arrives(sdk, sid, 400.0, mturn=True, within_s=2.0))
-    before = sdk.query_servo_mturn_angle(sid, realtime=True) or 0.0
+    before = read_angle(sdk, sid, True) or 0.0
     d.step("reset_multi_turn_angle", "reset_multi_turn_angle", {"servo_id": sid},
            arrives(sdk, sid, wrapped(before), mturn=True))
     d.step("set_origin_point", "set_origin_point", {"servo_id": sid},
@@ -321,7 +346,7 @@ def manager_steps(d, sdk, ids):
     d.step("set_wheel_norm", "set_wheel_norm", {"servo_id": sid, "is_cw": True, "mean_dps": 90},
            moves(sdk, sid))
     d.step("wheel_stop", "wheel_stop", {"servo_id": sid}, stays(sdk, sid))
-    before = sdk.query_servo_mturn_angle(sid, realtime=True) or 0.0
+    before = read_angle(sdk, sid, True) or 0.0
     d.step("set_wheel_turn", "set_wheel_turn",
            {"servo_id": sid, "turn": 1, "is_cw": True, "mean_dps": 360, "is_wait": True},
            arrives(sdk, sid, before + 360.0, mturn=True))
@@ -350,33 +375,27 @@ def manager_steps(d, sdk, ids):
     single = {s: 10.0 * (i + 1) for i, s in enumerate(ids)}
     mturn = {s: 400.0 * (i + 1) for i, s in enumerate(ids)}
 
-    def records(fmt, row):
-        return [struct.pack(fmt, *row(s)) for s in ids]
-
-    d.step("send_sync_angle", "send_sync_angle",
-           {"command_id": 8, "servo_num": n,
-            "command_data_list": records("<BhHH", lambda s: (s, int(single[s] * 10), 0, 0))},
-           all_arrive(sdk, single, False, 0))
-    d.step("send_sync_anglebyinterval", "send_sync_anglebyinterval",
-           {"command_id": 11, "servo_num": n, "command_data_list": records(
-               "<BhHHHH", lambda s: (s, -int(single[s] * 10), 300, 50, 50, 0))},
-           all_arrive(sdk, {s: -a for s, a in single.items()}, False, 0.3))
-    d.step("send_sync_anglebyvelocity", "send_sync_anglebyvelocity",
-           {"command_id": 12, "servo_num": n, "command_data_list": records(
-               "<BhHHHH", lambda s: (s, int(single[s] * 20), 3000, 20, 20, 0))},
-           all_arrive(sdk, {s: 2 * a for s, a in single.items()}, False, 0.5))
-    d.step("send_sync_multiturnangle", "send_sync_multiturnangle",
-           {"command_id": 13, "servo_num": n, "command_data_list": records(
-               "<BiIH", lambda s: (s, int(mturn[s] * 10), 0, 0))},
-           all_arrive(sdk, mturn, True, 0))
-    d.step("send_sync_multiturnanglebyinterval", "send_sync_multiturnanglebyinterval",
-           {"command_id": 14, "servo_num": n, "command_data_list": records(
-               "<BiIHHH", lambda s: (s, -int(mturn[s] * 10), 500, 100, 100, 0))},
-           all_arrive(sdk, {s: -a for s, a in mturn.items()}, True, 0.5))
-    d.step("send_sync_multiturnanglebyvelocity", "send_sync_multiturnanglebyvelocity",
-           {"command_id": 15, "servo_num": n, "command_data_list": records(
-               "<BiHHHH", lambda s: (s, int(mturn[s] * 5), 7500, 20, 20, 0))},
-           all_arrive(sdk, {s: a / 2 for s, a in mturn.items()}, True, 2.0))
+    # (method, sub-command, record layout, target deg per servo, multi-turn, motion s, record)
+    forms = [
+        ("send_sync_angle", 8, "<BhHH", single, False, 0,
+         lambda s, t: (s, int(t * 10), 0, 0)),
+        ("send_sync_anglebyinterval", 11, "<BhHHHH", {s: -a for s, a in single.items()}, False,
+         0.3, lambda s, t: (s, int(t * 10), 300, 50, 50, 0)),
+        ("send_sync_anglebyvelocity", 12, "<BhHHHH", {s: 2 * a for s, a in single.items()},
+         False, 0.5, lambda s, t: (s, int(t * 10), 3000, 20, 20, 0)),
+        ("send_sync_multiturnangle", 13, "<BiIH", mturn, True, 0,
+         lambda s, t: (s, int(t * 10), 0, 0)),
+        ("send_sync_multiturnanglebyinterval", 14, "<BiIHHH",
+         {s: -a for s, a in mturn.items()}, True, 0.5,
+         lambda s, t: (s, int(t * 10), 500, 100, 100, 0)),
+        ("send_sync_multiturnanglebyvelocity", 15, "<BiHHHH",
+         {s: a / 2 for s, a in mturn.items()}, True, 2.0,
+         lambda s, t: (s, int(t * 10), 7500, 20, 20, 0)),
+    ]
+    for method, sub, fmt, targets, is_mturn, within_s, record in forms:
+        data = [struct.pack(fmt, *record(s, targets[s])) for s in ids]
+        d.step(method, method, {"command_id": sub, "servo_num": n, "command_data_list": data},
+               all_arrive(sdk, targets, is_mturn, within_s))
     d.step("send_sync_servo_monitor", "send_sync_servo_monitor",
            {"servo_ids": ids, "realtime": True}, sync_monitor_ok(ids))
     if others:
