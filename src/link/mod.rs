@@ -8,13 +8,12 @@ pub mod request;
 pub mod serial;
 pub mod session;
 pub mod transport;
-pub mod tuya_module;
 mod worker;
 
 pub use request::{ExchangeError, Match, Reply, ReplySpec, Request};
 pub use session::DeviceInfo;
+pub use session::tuya::{HandshakeStep, ProductInfo, TuyaEvent, TuyaModuleOptions};
 pub use transport::{LinkError, Transport, wire_time};
-pub use tuya_module::{TuyaEvent, TuyaModuleOptions};
 
 use crate::packet::Packet;
 use crate::profile::Profile;

@@ -1,4 +1,4 @@
-//! What each protocol's session does beyond exchanges: MSP learns the device from CMD_VERSION.
+//! The MSP session: what the device says of itself (CMD_VERSION, CMD_BUILD_INFO).
 
 use crate::profile::Profile;
 use crate::protocol::{Direction, msp};

@@ -3,8 +3,8 @@
 
 use super::decoder::AnyDecoder;
 use super::request::{ExchangeError, Match, Reply, ReplySpec, Request};
+use super::session::tuya::{self as tuya_module, HandshakeStep, TuyaEvent, TuyaModuleOptions};
 use super::session::{self, DeviceInfo};
-use super::tuya_module::{self, HandshakeStep, TuyaEvent, TuyaModuleOptions};
 use super::{
     LinkCommand, LinkEvent, LinkOptions, LinkState, LinkStats, LogEntry, Opener, Poll, ReplyTo,
     Transport, Waker, wire_time,
