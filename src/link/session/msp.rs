@@ -1,8 +1,13 @@
-//! The MSP session: what the device says of itself (CMD_VERSION, CMD_BUILD_INFO).
+//! The MSP session: identifies the device once per connection (CMD_VERSION to the core device
+//! code, then CMD_BUILD_INFO), learns the device code later requests go to where the profile
+//! says `Auto`, and keeps the result for whoever asks ([`crate::link::Client::device_info`]).
 
-use crate::profile::Profile;
+use crate::link::LinkEvent;
+use crate::link::request::{ExchangeError, Reply, Request};
+use crate::profile::{DeviceCode, Profile};
 use crate::protocol::{Direction, msp};
 use serde::Serialize;
+use std::sync::Arc;
 
 /// What an MSP device says of itself (CMD_VERSION, CMD_BUILD_INFO).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -23,7 +28,11 @@ pub struct DeviceInfo {
 }
 
 impl DeviceInfo {
-    /// Reads a CMD_VERSION answer with the profile's layout.
+    /// Reads a CMD_VERSION answer with the profile's layout (at least 7 fields: hardware code,
+    /// firmware major, minor and patch, API major and minor, build; then optional flags).
+    ///
+    /// Errors: the profile has no CMD_VERSION, the payload does not decode with its layout, or
+    /// it has fewer than 7 fields.
     pub fn from_version(profile: &Profile, payload: &[u8]) -> Result<Self, String> {
         let cmd = profile
             .command_by_id(msp::CMD_VERSION)
@@ -62,11 +71,157 @@ impl DeviceInfo {
     }
 }
 
-/// Reads a CMD_BUILD_INFO answer: 10 date characters, then 8 time characters.
+/// Reads a CMD_BUILD_INFO answer: 10 date characters, then 8 time characters (such as
+/// `2024-05-0112:30:00`), as `date time`; `None` when the payload is shorter or not UTF-8.
 pub fn build_date(payload: &[u8]) -> Option<String> {
     let text = std::str::from_utf8(payload).ok()?;
     if text.len() < 18 || !text.is_char_boundary(10) || !text.is_char_boundary(18) {
         return None;
     }
     Some(format!("{} {}", &text[..10], &text[10..18]))
+}
+
+/// The MSP session of one link: where the identification of the current connection stands.
+#[derive(Debug)]
+pub(crate) struct MspSession {
+    profile: Arc<Profile>,
+    /// The device code requests go to when they name none: the profile's, or, where the
+    /// profile says `Auto`, the hardware code CMD_VERSION answered.
+    device_code: u8,
+    /// Identify on every new connection ([`crate::link::LinkOptions::start_session`]).
+    identify_on_connect: bool,
+    state: Identify,
+}
+
+/// Where the identification of the current connection stands.
+#[derive(Debug)]
+enum Identify {
+    /// Not asked on this connection.
+    NotAsked,
+    /// `Ask` is to be sent before the next caller's request.
+    Due(Ask),
+    /// `Ask` is sent; its answer is awaited.
+    Asked(Ask),
+    /// Finished for this connection.
+    Done,
+}
+
+/// A request of the identification.
+#[derive(Debug)]
+enum Ask {
+    /// CMD_VERSION, to the core device code.
+    Version,
+    /// CMD_BUILD_INFO, after CMD_VERSION answered this.
+    BuildInfo(DeviceInfo),
+}
+
+impl MspSession {
+    /// A session for `profile`; identifies the device at once when `identify_on_connect`.
+    pub(crate) fn new(profile: Arc<Profile>, identify_on_connect: bool) -> Self {
+        let device_code = profile
+            .device_code
+            .map_or(msp::DEVICE_CORE, DeviceCode::initial);
+        let mut session = Self {
+            profile,
+            device_code,
+            identify_on_connect,
+            state: Identify::NotAsked,
+        };
+        session.connected();
+        session
+    }
+
+    /// The device code of requests that name none.
+    pub(crate) fn device_code(&self) -> u8 {
+        self.device_code
+    }
+
+    /// A new connection (the first, or after a reconnect): its device is identified afresh.
+    pub(crate) fn connected(&mut self) {
+        self.state = if self.identify_on_connect {
+            Identify::Due(Ask::Version)
+        } else {
+            Identify::NotAsked
+        };
+    }
+
+    /// The port went away. An identification under way finishes with the error of its exchange.
+    pub(crate) fn lost(&mut self) {
+        if !matches!(self.state, Identify::Asked(_)) {
+            self.state = Identify::NotAsked;
+        }
+    }
+
+    /// [`crate::link::LinkCommand::Identify`]: identify again before the next request.
+    pub(crate) fn identify_again(&mut self) {
+        self.state = Identify::Due(Ask::Version);
+    }
+
+    /// Whether a request of the identification is to be sent.
+    pub(crate) fn due(&self) -> bool {
+        matches!(self.state, Identify::Due(_))
+    }
+
+    /// The identification's next request, if one is due; its answer is then awaited.
+    pub(crate) fn next_request(&mut self) -> Option<Request> {
+        let request = match &self.state {
+            Identify::Due(Ask::Version) => Request::new(msp::CMD_VERSION, Vec::new())
+                .device(msp::DEVICE_CORE)
+                .attempts(2),
+            Identify::Due(Ask::BuildInfo(_)) => {
+                Request::new(msp::CMD_BUILD_INFO, Vec::new()).attempts(1)
+            }
+            _ => return None,
+        };
+        if let Identify::Due(ask) = std::mem::replace(&mut self.state, Identify::NotAsked) {
+            self.state = Identify::Asked(ask);
+        }
+        Some(request)
+    }
+
+    /// The result of the request [`Self::next_request`] gave. Returns whether another request
+    /// follows at once; `events` gets [`LinkEvent::Identified`] when the identification ends.
+    /// A CMD_BUILD_INFO the device does not answer leaves the build date out.
+    pub(crate) fn on_answer(
+        &mut self,
+        result: Result<Reply, ExchangeError>,
+        events: &mut Vec<LinkEvent>,
+    ) -> bool {
+        let Identify::Asked(ask) = std::mem::replace(&mut self.state, Identify::NotAsked) else {
+            return false;
+        };
+        match ask {
+            Ask::Version => {
+                let info = result.and_then(|r| {
+                    DeviceInfo::from_version(&self.profile, r.payload().unwrap_or_default())
+                        .map_err(|e| ExchangeError::Encode(format!("bad CMD_VERSION answer: {e}")))
+                });
+                match info {
+                    Ok(info) => {
+                        if let Some(DeviceCode::Auto(_)) = self.profile.device_code {
+                            self.device_code = info.hw;
+                        }
+                        self.state = Identify::Due(Ask::BuildInfo(info));
+                        true
+                    }
+                    Err(e) => {
+                        self.finish(Err(e), events);
+                        false
+                    }
+                }
+            }
+            Ask::BuildInfo(mut info) => {
+                if let Ok(r) = result {
+                    info.build_date = build_date(r.payload().unwrap_or_default());
+                }
+                self.finish(Ok(info), events);
+                false
+            }
+        }
+    }
+
+    fn finish(&mut self, result: Result<DeviceInfo, ExchangeError>, events: &mut Vec<LinkEvent>) {
+        events.push(LinkEvent::Identified(result));
+        self.state = Identify::Done;
+    }
 }

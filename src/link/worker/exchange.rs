@@ -2,18 +2,27 @@
 //! frame that matches, and say why nothing answered (a garbled frame, an answer to something
 //! else, or silence). Frames that answer no request are passed on here too.
 
-use super::{Worker, default_margin};
+use super::Worker;
 use crate::link::request::{ExchangeError, Match, Reply, ReplySpec, Request};
-use crate::link::session::tuya as tuya_module;
-use crate::link::session::tuya::TuyaEvent;
+use crate::link::session::Unasked;
 use crate::link::{LinkEvent, wire_time};
 use crate::packet::{Header, Packet};
 use crate::profile::Protocol;
-use crate::protocol::{Direction, FrameError, msp, servo, tuya};
+use crate::protocol::{Direction, FrameError};
 use std::time::{Duration, Instant};
 
 /// Extra time allowed between the bytes of one frame (scheduler jitter on a loaded machine).
 const INTER_BYTE_SLACK: Duration = Duration::from_millis(5);
+
+/// The default answer margin of a protocol: how long the device may think before its first byte
+/// (the seeds' and the field's figures: MSP 20 ms, servo 1.5 ms, Tuya 300 ms).
+pub(super) fn default_margin(protocol: Protocol) -> Duration {
+    match protocol {
+        Protocol::Msp => Duration::from_millis(20),
+        Protocol::Servo => Duration::from_micros(1500),
+        Protocol::Tuya => Duration::from_millis(300),
+    }
+}
 
 /// What a wait for an answer saw.
 pub(super) struct Waited {
@@ -24,12 +33,24 @@ pub(super) struct Waited {
     pub(super) mismatch: Option<(u8, Option<u8>)>,
 }
 
+/// Whether an answer came.
 pub(super) enum Outcome {
+    /// The answer (one frame, or the frames of a burst).
     Answered(Vec<Packet>),
+    /// Nothing that answers the request.
     Nothing,
 }
 
 impl Worker {
+    /// How long the device may take to start answering `req`, beyond the wire time: the
+    /// request's own margin, else the link's, else the protocol's default.
+    pub(super) fn margin(&self, req: &Request) -> Duration {
+        req.margin
+            .or(self.opts.margin)
+            .unwrap_or(default_margin(self.session.protocol()))
+    }
+
+    /// Writes `bytes` (the frame `sent`, for the packet log); a failed write loses the port.
     pub(super) fn write(&mut self, bytes: &[u8], sent: Packet) -> Result<(), ExchangeError> {
         let Some(t) = self.transport.as_mut() else {
             return Err(ExchangeError::Disconnected("port lost".into()));
@@ -65,13 +86,15 @@ impl Worker {
         }
     }
 
+    /// Takes every frame already decoded as one that answers no request.
     pub(super) fn drain_unsolicited(&mut self) {
         while let Some(item) = self.decoder.next_packet() {
             match item {
                 Ok(p) => {
                     self.stats.received += 1;
                     self.log(Direction::DeviceToHost, Ok(p.clone()));
-                    let _ = self.on_incoming(p);
+                    let unasked = self.session.unasked(&p);
+                    let _ = self.take_unasked(p, unasked);
                 }
                 Err(e) => {
                     self.stats.frame_errors += 1;
@@ -81,75 +104,32 @@ impl Worker {
         }
     }
 
-    /// A frame that answers no request: the device's own requests are answered, reports passed on.
-    pub(super) fn on_incoming(&mut self, p: Packet) -> Result<(), ExchangeError> {
-        if p.direction != Direction::DeviceToHost {
-            return Ok(()); // an echo of our own request on a one-wire bus
-        }
-        match (&p.header, self.profile.protocol) {
-            (Header::Tuya { .. }, _) => {
-                if let Some((name, answer)) =
-                    tuya_module::answer_mcu_request(&self.tuya.opts, p.command)
-                {
-                    let frame = tuya::Frame::from_module(p.command, answer.clone());
-                    let bytes = frame
-                        .encode()
-                        .map_err(|e| ExchangeError::Encode(e.to_string()))?;
-                    self.write(&bytes, Packet::tuya(frame))?;
-                    self.emit(LinkEvent::Tuya(TuyaEvent::McuRequest {
-                        command: p.command,
-                        name: name.to_string(),
-                        answer,
-                    }));
-                } else if p.command == tuya::cmd::DP_REPORT {
-                    self.emit(LinkEvent::Report(p));
-                }
+    /// A frame that answers no request, as the session sorted it: reports are passed on, the
+    /// MCU's own requests answered, the rest dropped.
+    pub(super) fn take_unasked(
+        &mut self,
+        p: Packet,
+        unasked: Unasked,
+    ) -> Result<(), ExchangeError> {
+        match unasked {
+            Unasked::Echo | Unasked::Stale => {}
+            Unasked::Report | Unasked::LateReply => self.emit(LinkEvent::Report(p)),
+            Unasked::McuRequest { reply, event } => {
+                let bytes = reply
+                    .encode()
+                    .map_err(|e| ExchangeError::Encode(e.to_string()))?;
+                self.write(&bytes, Packet::tuya(reply))?;
+                self.emit(LinkEvent::Tuya(event));
             }
-            (
-                Header::MspReply {
-                    kind: msp::ReplyKind::Async,
-                },
-                _,
-            ) => self.emit(LinkEvent::Report(p)),
-            (Header::Servo, _) => self.emit(LinkEvent::Report(p)),
-            _ => {}
         }
         Ok(())
-    }
-
-    pub(super) fn encode(&self, req: &Request) -> Result<(Vec<u8>, Packet), ExchangeError> {
-        let enc = |e: crate::protocol::EncodeError| ExchangeError::Encode(e.to_string());
-        Ok(match self.profile.protocol {
-            Protocol::Msp => {
-                let mut r = msp::Request::new(
-                    req.device.unwrap_or(self.device_code),
-                    req.command,
-                    req.payload.clone(),
-                );
-                if req.reply == ReplySpec::None {
-                    r.option = msp::OPTION_SILENT;
-                }
-                (r.encode().map_err(enc)?, Packet::msp_request(r))
-            }
-            Protocol::Servo => {
-                let f = servo::Frame::request(req.command, req.payload.clone());
-                (f.encode().map_err(enc)?, Packet::servo(f))
-            }
-            Protocol::Tuya => {
-                let f = tuya::Frame::from_module(req.command, req.payload.clone());
-                (f.encode().map_err(enc)?, Packet::tuya(f))
-            }
-        })
     }
 
     /// Sends `req` and waits for its answer, with bounded attempts. Returns at the first valid
     /// answer; a frame that answers something else is never taken for it.
     pub(super) fn exchange(&mut self, req: &Request) -> Result<Reply, ExchangeError> {
-        let (bytes, sent) = self.encode(req)?;
-        let margin = req
-            .margin
-            .or(self.opts.margin)
-            .unwrap_or(default_margin(self.profile.protocol));
+        let (bytes, sent) = self.session.encode(req)?;
+        let margin = self.margin(req);
         let attempts = req.attempts.max(1);
         // What has already arrived (a late answer to an earlier request) is dealt with before
         // this request is sent, so that it cannot be taken for this request's answer.
@@ -258,9 +238,7 @@ impl Worker {
                         self.stats.received += 1;
                         self.log(Direction::DeviceToHost, Ok(p.clone()));
                         if each.accepts(&p) {
-                            if self.profile.protocol == Protocol::Tuya
-                                && p.command == tuya::cmd::DP_REPORT
-                            {
+                            if self.session.answer_is_report(&p) {
                                 self.emit(LinkEvent::Report(p.clone()));
                             }
                             match burst {
@@ -277,24 +255,14 @@ impl Worker {
                                 }
                             }
                         } else {
-                            let answers_other = p.direction == Direction::DeviceToHost
-                                && !matches!(
-                                    p.header,
-                                    Header::MspReply {
-                                        kind: msp::ReplyKind::Async
-                                    }
-                                )
-                                && tuya_module::answer_mcu_request(&self.tuya.opts, p.command)
-                                    .is_none()
-                                && !(matches!(p.header, Header::Tuya { .. })
-                                    && p.command == tuya::cmd::DP_REPORT);
-                            if answers_other {
+                            let unasked = self.session.unasked(&p);
+                            if unasked.answers_other() {
                                 let from = matches!(p.header, Header::Servo)
                                     .then(|| p.payload.first().copied())
                                     .flatten();
                                 mismatch = Some((p.command, from));
                             }
-                            self.on_incoming(p)?;
+                            self.take_unasked(p, unasked)?;
                         }
                     }
                     Err(e) => {

@@ -1,5 +1,6 @@
-//! The worker thread: owns the transport, runs exchanges, polls telemetry, answers the device's
-//! own requests, and reconnects a lost port.
+//! The worker thread: owns the transport and the protocol session, takes commands in order,
+//! and reports events. The loop is here; exchanges, polling and the port have a file each, and
+//! the protocol sessions it drives live in [`crate::link::session`].
 
 mod exchange;
 mod polls;
@@ -8,16 +9,15 @@ mod port;
 use polls::InFlight;
 
 use super::decoder::AnyDecoder;
-use super::request::{ExchangeError, Match, Reply, ReplySpec, Request};
-use super::session::tuya::{self as tuya_module, HandshakeStep, TuyaEvent, TuyaModuleOptions};
-use super::session::{self, DeviceInfo};
+use super::request::{ExchangeError, Reply, Request};
+use super::session::{Precedence, ProtocolSession};
 use super::{
-    LinkCommand, LinkEvent, LinkOptions, LinkState, LinkStats, LogEntry, Opener, Poll, ReplyTo,
-    Transport, Waker, wire_time,
+    LinkCommand, LinkError, LinkEvent, LinkOptions, LinkState, LinkStats, LogEntry, Opener, Poll,
+    ReplyTo, Transport, Waker,
 };
 use crate::packet::Packet;
-use crate::profile::{DeviceCode, Profile, Protocol};
-use crate::protocol::{Direction, FrameError, msp, tuya};
+use crate::profile::Profile;
+use crate::protocol::{Direction, FrameError};
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TrySendError};
 use std::collections::VecDeque;
 use std::sync::Arc;
@@ -25,66 +25,50 @@ use std::time::{Duration, Instant, SystemTime};
 
 /// How long the idle loop waits for a command before looking at the port again.
 const IDLE_SLICE: Duration = Duration::from_millis(5);
-/// How often an idle worker checks that the port is still there.
-const PORT_CHECK: Duration = Duration::from_millis(500);
 /// How often changed counters are reported.
 const STATS_EVERY: Duration = Duration::from_millis(250);
-/// Reconnect backoff bounds.
-const BACKOFF_MIN: Duration = Duration::from_millis(100);
-const BACKOFF_MAX: Duration = Duration::from_secs(2);
-/// Tuya: how soon a failed handshake is tried again, and how soon a missed heartbeat.
-const HANDSHAKE_RETRY: Duration = Duration::from_secs(1);
-const HEARTBEAT_RETRY: Duration = Duration::from_secs(3);
 
-/// The default answer margin of a protocol: how long the device may think before its first byte.
-pub fn default_margin(protocol: Protocol) -> Duration {
-    match protocol {
-        Protocol::Msp => Duration::from_millis(20),
-        Protocol::Servo => Duration::from_micros(1500),
-        Protocol::Tuya => Duration::from_millis(300),
-    }
-}
-
-struct TuyaState {
-    opts: TuyaModuleOptions,
-    handshake_done: bool,
-    next_heartbeat: Instant,
-    next_handshake: Option<Instant>,
-}
-
+/// The worker of one link (one per open port, on the thread `botbench-link`).
 pub(super) struct Worker {
+    /// The port; `None` while it is lost.
     transport: Option<Box<dyn Transport>>,
+    /// Reopens the port after a loss.
     opener: Opener,
-    profile: Arc<Profile>,
     opts: LinkOptions,
     cmds: Receiver<LinkCommand>,
     events: Sender<LinkEvent>,
     waker: Option<Waker>,
     decoder: AnyDecoder,
+    /// What the protocol does beyond callers' exchanges (MSP identify, the Tuya module side).
+    session: ProtocolSession,
+    /// Callers' exchanges and baud changes, in order.
     queue: VecDeque<Queued>,
+    /// Commands that came during an exchange, taken after it.
     deferred: VecDeque<LinkCommand>,
+    /// The polled commands and when each is due.
     polls: Vec<(Poll, Instant)>,
+    /// The poll to look at first (polls take turns).
     poll_cursor: usize,
     /// Polls sent ahead of their answers (MSP polls at the wire's maximum), oldest first.
     in_flight: VecDeque<InFlight>,
-    device_code: u8,
+    /// The port's rate, in baud.
     baud: u32,
     /// When the bytes written so far have crossed the wire (at the rate they were sent at).
     sent_until: Instant,
     stats: LinkStats,
     stats_reported: LinkStats,
     stats_at: Instant,
+    /// When the idle loop last checked that the port is there.
     checked_at: Instant,
-    tuya: TuyaState,
-    identify_pending: bool,
     shutdown: bool,
+    /// Events were sent since the UI was last woken.
     wake: bool,
 }
 
 /// Work done in order.
 enum Queued {
     Exchange(Request, ReplyTo),
-    Baud(u32, Option<Sender<Result<(), super::LinkError>>>),
+    Baud(u32, Option<Sender<Result<(), LinkError>>>),
 }
 
 impl Worker {
@@ -98,22 +82,12 @@ impl Worker {
         waker: Option<Waker>,
     ) -> Self {
         let now = Instant::now();
-        let device_code = profile
-            .device_code
-            .map_or(msp::DEVICE_CORE, DeviceCode::initial);
         let baud = transport.baud();
-        let start = opts.start_session;
         Self {
             decoder: AnyDecoder::new(profile.protocol),
+            session: ProtocolSession::new(profile, &opts, now),
             transport: Some(transport),
             opener,
-            tuya: TuyaState {
-                opts: opts.tuya.clone(),
-                handshake_done: false,
-                next_heartbeat: now,
-                next_handshake: start.then_some(now),
-            },
-            profile,
             opts,
             cmds,
             events,
@@ -123,19 +97,21 @@ impl Worker {
             polls: Vec::new(),
             poll_cursor: 0,
             in_flight: VecDeque::new(),
-            sent_until: Instant::now(),
-            device_code,
+            sent_until: now,
             baud,
             stats: LinkStats::default(),
             stats_reported: LinkStats::default(),
             stats_at: now,
             checked_at: now,
-            identify_pending: start,
             shutdown: false,
             wake: false,
         }
     }
 
+    /// The loop, until [`LinkCommand::Shutdown`] or the link is dropped: a lost port is
+    /// reopened; otherwise, in this order, the session's work that comes first (MSP learns the
+    /// device before anything else is sent to it), callers' requests, the session's other work
+    /// (Tuya's handshake and heartbeat), polls, and reading the idle line.
     pub(super) fn run(mut self) {
         self.emit_connected();
         while !self.shutdown {
@@ -147,11 +123,8 @@ impl Worker {
             if self.shutdown {
                 break;
             }
-            // The session learns the device before anything else is sent to it.
-            if self.identify_pending && self.profile.protocol == Protocol::Msp {
-                self.identify_pending = false;
-                self.settle_polls();
-                self.identify();
+            if self.session.due(Instant::now()) == Some(Precedence::BeforeRequests) {
+                self.run_session();
             } else if let Some(item) = self.queue.pop_front() {
                 // Polls in flight are answered first: no answer can be taken for another's.
                 self.settle_polls();
@@ -162,8 +135,8 @@ impl Worker {
                     }
                     Queued::Baud(baud, ack) => self.switch_baud(baud, ack),
                 }
-            } else if self.tuya_due() {
-                self.tuya_tick();
+            } else if self.session.due(Instant::now()).is_some() {
+                self.run_session();
             } else if let Some(i) = self.due_poll() {
                 if self.pipelined(i) {
                     self.send_poll_ahead(i);
@@ -181,6 +154,24 @@ impl Worker {
         self.fail_queue(|| ExchangeError::Cancelled);
         self.emit(LinkEvent::State(LinkState::Closed));
         self.flush_wake();
+    }
+
+    /// Runs the session's requests due now: one, or a whole sequence (an identification, a
+    /// handshake) with no caller's request in between.
+    fn run_session(&mut self) {
+        self.settle_polls();
+        let mut events = Vec::new();
+        while let Some(request) = self.session.next_request(Instant::now(), self.baud) {
+            let result = self.exchange(&request);
+            let more = self.session.on_answer(result, Instant::now(), &mut events);
+            for ev in events.drain(..) {
+                self.emit(ev);
+            }
+            self.flush_wake();
+            if !more {
+                break;
+            }
+        }
     }
 
     // ---- commands -------------------------------------------------------------------------
@@ -212,12 +203,9 @@ impl Worker {
                 self.poll_cursor = 0;
             }
             LinkCommand::SetBaud { baud, ack } => self.queue.push_back(Queued::Baud(baud, ack)),
-            LinkCommand::Identify => self.identify_pending = true,
-            LinkCommand::Handshake => {
-                self.tuya.handshake_done = false;
-                self.tuya.next_handshake = Some(Instant::now());
-            }
-            LinkCommand::TuyaOptions(o) => self.tuya.opts = o,
+            LinkCommand::Identify => self.session.identify_again(),
+            LinkCommand::Handshake => self.session.handshake_again(Instant::now()),
+            LinkCommand::TuyaOptions(o) => self.session.set_tuya_options(o),
             LinkCommand::Shutdown => self.shutdown = true,
         }
     }
@@ -227,7 +215,7 @@ impl Worker {
             match item {
                 Queued::Exchange(_, to) => self.deliver(to, Err(err())),
                 Queued::Baud(_, Some(tx)) => {
-                    let _ = tx.send(Err(super::LinkError::Disconnected(err().to_string())));
+                    let _ = tx.send(Err(LinkError::Disconnected(err().to_string())));
                 }
                 Queued::Baud(_, None) => {}
             }
@@ -244,7 +232,7 @@ impl Worker {
                 }
                 // What the module answers the MCU takes effect at once: the MCU may ask while
                 // an exchange is under way.
-                LinkCommand::TuyaOptions(o) => self.tuya.opts = o,
+                LinkCommand::TuyaOptions(o) => self.session.set_tuya_options(o),
                 other => self.deferred.push_back(other),
             }
         }
@@ -306,8 +294,10 @@ impl Worker {
         }));
     }
 
-    // ---- the port -------------------------------------------------------------------------
+    // ---- idle ---------------------------------------------------------------------------------
 
+    /// Nothing to do: waits a little for a command, reads what the device sends on its own, and
+    /// now and then checks that the port is still there.
     fn idle(&mut self) {
         let now = Instant::now();
         let mut wait = IDLE_SLICE;
@@ -336,163 +326,6 @@ impl Worker {
             Ok(_) => self.drain_unsolicited(),
             Err(_) => return,
         }
-        if now.duration_since(self.checked_at) >= PORT_CHECK {
-            self.checked_at = now;
-            if let Some(t) = self.transport.as_mut()
-                && let Err(e) = t.check()
-            {
-                self.lost(e.to_string());
-            }
-        }
-    }
-
-    // ---- MSP session ----------------------------------------------------------------------
-
-    fn identify(&mut self) {
-        let req = Request::new(msp::CMD_VERSION, Vec::new())
-            .device(msp::DEVICE_CORE)
-            .attempts(2);
-        let result = self.exchange(&req).and_then(|r| {
-            DeviceInfo::from_version(&self.profile, r.payload().unwrap_or_default())
-                .map_err(|e| ExchangeError::Encode(format!("bad CMD_VERSION answer: {e}")))
-        });
-        let result = result.map(|mut info| {
-            if let Some(DeviceCode::Auto(_)) = self.profile.device_code {
-                self.device_code = info.hw;
-            }
-            let build = Request::new(msp::CMD_BUILD_INFO, Vec::new()).attempts(1);
-            if let Ok(r) = self.exchange(&build) {
-                info.build_date = session::build_date(r.payload().unwrap_or_default());
-            }
-            info
-        });
-        self.emit(LinkEvent::Identified(result));
-    }
-
-    // ---- Tuya session ---------------------------------------------------------------------
-
-    fn tuya_due(&self) -> bool {
-        if self.profile.protocol != Protocol::Tuya {
-            return false;
-        }
-        let now = Instant::now();
-        match self.tuya.next_handshake {
-            Some(t) => t <= now,
-            None => self.tuya.handshake_done && self.tuya.next_heartbeat <= now,
-        }
-    }
-
-    fn tuya_tick(&mut self) {
-        if self.tuya.next_handshake.is_some() {
-            self.handshake();
-            return;
-        }
-        let hb = Request::new(tuya::cmd::HEARTBEAT, Vec::new()).attempts(2);
-        match self.exchange(&hb) {
-            Ok(r) if r.payload() == Some(&[0][..]) => {
-                self.emit(LinkEvent::Tuya(TuyaEvent::McuRestarted));
-                self.tuya.handshake_done = false;
-                self.tuya.next_handshake = Some(Instant::now());
-            }
-            Ok(_) => self.tuya.next_heartbeat = Instant::now() + self.tuya.opts.heartbeat,
-            Err(ExchangeError::Disconnected(_)) => {}
-            Err(_) => {
-                self.emit(LinkEvent::Tuya(TuyaEvent::HeartbeatLost));
-                self.tuya.next_heartbeat = Instant::now() + HEARTBEAT_RETRY;
-            }
-        }
-    }
-
-    fn step(&mut self, step: HandshakeStep, ok: bool, detail: String) {
-        self.emit(LinkEvent::Tuya(TuyaEvent::Step { step, ok, detail }));
-        self.flush_wake();
-    }
-
-    /// The module's start-up sequence; on a failed step it stops there and tries again later.
-    fn handshake(&mut self) {
-        self.tuya.next_handshake = None;
-        let fail = |w: &mut Self, step, e: ExchangeError| {
-            w.step(step, false, e.to_string());
-            w.tuya.next_handshake = Some(Instant::now() + HANDSHAKE_RETRY);
-        };
-        let hb = Request::new(tuya::cmd::HEARTBEAT, Vec::new()).attempts(2);
-        match self.exchange(&hb) {
-            Ok(r) => {
-                let first = r.payload() == Some(&[0][..]);
-                let detail = if first {
-                    "answered 0: first since the MCU started"
-                } else {
-                    "answered 1"
-                };
-                self.step(HandshakeStep::Heartbeat, true, detail.into());
-            }
-            Err(e) => return fail(self, HandshakeStep::Heartbeat, e),
-        }
-        match self.exchange(&Request::new(tuya::cmd::PRODUCT_INFO, Vec::new())) {
-            Ok(r) => {
-                let info = tuya_module::parse_product_info(r.payload().unwrap_or_default());
-                let detail = match &info.error {
-                    None => format!(
-                        "PID {}, MCU {}, mode {}",
-                        info.pid.as_deref().unwrap_or("?"),
-                        info.version.as_deref().unwrap_or("?"),
-                        info.mode.map_or("?".to_string(), |m| m.to_string())
-                    ),
-                    Some(e) => format!("not valid JSON ({e}); shown raw: {}", info.raw),
-                };
-                let ok = info.error.is_none();
-                self.emit(LinkEvent::Tuya(TuyaEvent::ProductInfo(info)));
-                self.step(HandshakeStep::ProductInfo, ok, detail);
-            }
-            Err(e) => return fail(self, HandshakeStep::ProductInfo, e),
-        }
-        let gpio = match self.exchange(&Request::new(tuya::cmd::WORK_MODE, Vec::new())) {
-            Ok(r) => {
-                let gpio = match r.payload().unwrap_or_default() {
-                    [led, reset, ..] => Some((*led, *reset)),
-                    _ => None,
-                };
-                self.emit(LinkEvent::Tuya(TuyaEvent::WorkMode { gpio }));
-                let detail = match gpio {
-                    None => "the MCU drives the Wi-Fi LED".to_string(),
-                    Some((l, r)) => format!("the module drives the LED (GPIO {l}, reset GPIO {r})"),
-                };
-                self.step(HandshakeStep::WorkMode, true, detail);
-                gpio
-            }
-            Err(e) => return fail(self, HandshakeStep::WorkMode, e),
-        };
-        if gpio.is_none() {
-            let state = self.tuya.opts.wifi_state;
-            match self.exchange(&Request::new(tuya::cmd::WIFI_STATE, vec![state])) {
-                Ok(_) => self.step(
-                    HandshakeStep::WifiState,
-                    true,
-                    format!("reported state {state}"),
-                ),
-                Err(e) => return fail(self, HandshakeStep::WifiState, e),
-            }
-        } else {
-            self.step(
-                HandshakeStep::WifiState,
-                true,
-                "not needed: the module drives the LED".into(),
-            );
-        }
-        let query = Request::new(tuya::cmd::QUERY_STATUS, Vec::new()).reply(ReplySpec::Burst {
-            each: Match::command(tuya::cmd::DP_REPORT),
-            quiet: Duration::from_millis(300).max(wire_time(64, self.baud)),
-        });
-        match self.exchange(&query) {
-            Ok(r) => self.step(
-                HandshakeStep::QueryStatus,
-                true,
-                format!("{} report(s)", r.packets.len()),
-            ),
-            Err(e) => return fail(self, HandshakeStep::QueryStatus, e),
-        }
-        self.tuya.handshake_done = true;
-        self.tuya.next_heartbeat = Instant::now() + self.tuya.opts.heartbeat;
-        self.emit(LinkEvent::Tuya(TuyaEvent::HandshakeDone));
+        self.check_port(now);
     }
 }

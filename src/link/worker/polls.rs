@@ -6,7 +6,6 @@ use super::Worker;
 use super::exchange::{Outcome, Waited};
 use crate::link::request::{ExchangeError, ReplySpec, Request};
 use crate::link::{LinkEvent, wire_time};
-use crate::profile::Protocol;
 use std::time::Instant;
 
 /// A polled request whose answer has not come yet.
@@ -34,7 +33,7 @@ impl Worker {
     /// sending the previous answer (full duplex), so that the device-to-host line never waits
     /// for the host.
     pub(super) fn pipelined(&self, i: usize) -> bool {
-        self.profile.protocol == Protocol::Msp
+        self.session.pipelines_polls()
             && self.opts.poll_pipeline > 1
             && self.polls[i].0.interval.is_none()
             && matches!(self.polls[i].0.request.reply, ReplySpec::Required(_))
@@ -49,7 +48,7 @@ impl Worker {
         }
         let request = self.polls[i].0.request.clone();
         self.poll_cursor = (i + 1) % self.polls.len().max(1);
-        let Ok((bytes, sent)) = self.encode(&request) else {
+        let Ok((bytes, sent)) = self.session.encode(&request) else {
             // Not encodable: report it as the sequential path would.
             self.run_poll(i);
             return;
@@ -61,10 +60,7 @@ impl Worker {
             }
             self.drain_unsolicited();
         }
-        let margin = request
-            .margin
-            .or(self.opts.margin)
-            .unwrap_or(super::default_margin(self.profile.protocol));
+        let margin = self.margin(&request);
         let t0 = Instant::now();
         if self.write(&bytes, sent).is_err() {
             return;
@@ -94,11 +90,7 @@ impl Worker {
         let ReplySpec::Required(each) = f.request.reply.clone() else {
             return;
         };
-        let margin = f
-            .request
-            .margin
-            .or(self.opts.margin)
-            .unwrap_or(super::default_margin(self.profile.protocol));
+        let margin = self.margin(&f.request);
         let deadline = f.deadline.max(Instant::now() + margin);
         let baud = self.baud;
         let result = match self.wait_for(&each, None, deadline, baud) {

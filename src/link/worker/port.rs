@@ -1,11 +1,17 @@
 //! The port: a baud change in order with the requests, a lost port (everything waiting is told),
 //! reopening it with backoff, and the idle check that it is still there.
 
-use super::{BACKOFF_MAX, BACKOFF_MIN, Worker};
+use super::Worker;
 use crate::link::request::ExchangeError;
 use crate::link::{LinkError, LinkEvent, LinkState};
 use crossbeam_channel::{RecvTimeoutError, Sender};
-use std::time::Instant;
+use std::time::{Duration, Instant};
+
+/// Reconnect backoff bounds: the first wait, doubled after each failed attempt up to the last.
+const BACKOFF_MIN: Duration = Duration::from_millis(100);
+const BACKOFF_MAX: Duration = Duration::from_secs(2);
+/// How often an idle worker checks that the port is still there.
+const PORT_CHECK: Duration = Duration::from_millis(500);
 
 impl Worker {
     pub(super) fn switch_baud(&mut self, baud: u32, ack: Option<Sender<Result<(), LinkError>>>) {
@@ -40,7 +46,7 @@ impl Worker {
         self.transport = None;
         self.decoder.clear();
         self.fail_polls_in_flight(&reason);
-        self.tuya.handshake_done = false;
+        self.session.lost();
         self.emit(LinkEvent::State(LinkState::Lost {
             reason: reason.clone(),
         }));
@@ -84,13 +90,22 @@ impl Worker {
                     self.transport = Some(t);
                     self.decoder.clear();
                     self.emit_connected();
-                    self.identify_pending = self.opts.start_session;
-                    if self.opts.start_session {
-                        self.tuya.next_handshake = Some(Instant::now());
-                    }
+                    self.session.connected(Instant::now());
                     return;
                 }
                 Err(_) => backoff = (backoff * 2).min(BACKOFF_MAX),
+            }
+        }
+    }
+
+    /// While idle, every [`PORT_CHECK`]: is the port still there (a USB adapter unplugged)?
+    pub(super) fn check_port(&mut self, now: Instant) {
+        if now.duration_since(self.checked_at) >= PORT_CHECK {
+            self.checked_at = now;
+            if let Some(t) = self.transport.as_mut()
+                && let Err(e) = t.check()
+            {
+                self.lost(e.to_string());
             }
         }
     }
