@@ -138,12 +138,34 @@ impl ProtocolSession {
         }
     }
 
-    /// The port went away.
-    pub(crate) fn lost(&mut self) {
+    /// The port went away (`reason`): whoever waits for the session is told.
+    pub(crate) fn lost(&mut self, reason: &str) {
         match self {
-            Self::Msp(s) => s.lost(),
+            Self::Msp(s) => s.lost(&ExchangeError::Disconnected(reason.to_string())),
             Self::Servo => {}
             Self::Tuya(s) => s.lost(),
+        }
+    }
+
+    /// The link closes: whoever waits for the session is told it was cancelled.
+    pub(crate) fn closed(&mut self) {
+        if let Self::Msp(s) = self {
+            s.closed(&ExchangeError::Cancelled);
+        }
+    }
+
+    /// [`crate::link::LinkCommand::DeviceInfo`]: MSP gives this connection's identification
+    /// (when it is known, or once it is); other protocols have none
+    /// ([`ExchangeError::NotInProtocol`]).
+    pub(crate) fn want_device_info(&mut self, waiter: msp::InfoWaiter) {
+        match self {
+            Self::Msp(s) => s.want_device_info(waiter),
+            _ => {
+                let _ = waiter.send(Err(ExchangeError::NotInProtocol {
+                    what: "device identification (CMD_VERSION)",
+                    protocol: self.protocol(),
+                }));
+            }
         }
     }
 

@@ -6,6 +6,7 @@ use crate::link::LinkEvent;
 use crate::link::request::{ExchangeError, Reply, Request};
 use crate::profile::{DeviceCode, Profile};
 use crate::protocol::{Direction, msp};
+use crossbeam_channel::Sender;
 use serde::Serialize;
 use std::sync::Arc;
 
@@ -81,6 +82,10 @@ pub fn build_date(payload: &[u8]) -> Option<String> {
     Some(format!("{} {}", &text[..10], &text[10..18]))
 }
 
+/// A caller of [`crate::link::Client::device_info`], waiting for this connection's
+/// identification.
+pub(crate) type InfoWaiter = Sender<Result<DeviceInfo, ExchangeError>>;
+
 /// The MSP session of one link: where the identification of the current connection stands.
 #[derive(Debug)]
 pub(crate) struct MspSession {
@@ -91,6 +96,8 @@ pub(crate) struct MspSession {
     /// Identify on every new connection ([`crate::link::LinkOptions::start_session`]).
     identify_on_connect: bool,
     state: Identify,
+    /// Callers waiting for the identification under way.
+    waiters: Vec<InfoWaiter>,
 }
 
 /// Where the identification of the current connection stands.
@@ -102,8 +109,8 @@ enum Identify {
     Due(Ask),
     /// `Ask` is sent; its answer is awaited.
     Asked(Ask),
-    /// Finished for this connection.
-    Done,
+    /// Finished for this connection: kept, and given to whoever asks.
+    Done(Result<DeviceInfo, ExchangeError>),
 }
 
 /// A request of the identification.
@@ -126,6 +133,7 @@ impl MspSession {
             device_code,
             identify_on_connect,
             state: Identify::NotAsked,
+            waiters: Vec::new(),
         };
         session.connected();
         session
@@ -145,10 +153,38 @@ impl MspSession {
         };
     }
 
-    /// The port went away. An identification under way finishes with the error of its exchange.
-    pub(crate) fn lost(&mut self) {
+    /// The port went away: callers waiting are told `err`. An identification under way
+    /// finishes with the error of its exchange.
+    pub(crate) fn lost(&mut self, err: &ExchangeError) {
+        self.answer_waiters(&Err(err.clone()));
         if !matches!(self.state, Identify::Asked(_)) {
             self.state = Identify::NotAsked;
+        }
+    }
+
+    /// The link closes: callers waiting are told `err`.
+    pub(crate) fn closed(&mut self, err: &ExchangeError) {
+        self.answer_waiters(&Err(err.clone()));
+    }
+
+    /// A caller wants this connection's identification: it gets it at once when it is known,
+    /// else when the identification under way (or started now) ends. A failed identification is
+    /// tried again rather than handed out.
+    pub(crate) fn want_device_info(&mut self, waiter: InfoWaiter) {
+        match &self.state {
+            Identify::Done(Ok(info)) => {
+                let _ = waiter.send(Ok(info.clone()));
+                return;
+            }
+            Identify::Done(Err(_)) | Identify::NotAsked => self.state = Identify::Due(Ask::Version),
+            Identify::Due(_) | Identify::Asked(_) => {}
+        }
+        self.waiters.push(waiter);
+    }
+
+    fn answer_waiters(&mut self, result: &Result<DeviceInfo, ExchangeError>) {
+        for waiter in self.waiters.drain(..) {
+            let _ = waiter.send(result.clone());
         }
     }
 
@@ -194,7 +230,10 @@ impl MspSession {
             Ask::Version => {
                 let info = result.and_then(|r| {
                     DeviceInfo::from_version(&self.profile, r.payload().unwrap_or_default())
-                        .map_err(|e| ExchangeError::Encode(format!("bad CMD_VERSION answer: {e}")))
+                        .map_err(|reason| ExchangeError::Unreadable {
+                            command: msp::CMD_VERSION,
+                            reason,
+                        })
                 });
                 match info {
                     Ok(info) => {
@@ -221,7 +260,8 @@ impl MspSession {
     }
 
     fn finish(&mut self, result: Result<DeviceInfo, ExchangeError>, events: &mut Vec<LinkEvent>) {
-        events.push(LinkEvent::Identified(result));
-        self.state = Identify::Done;
+        self.answer_waiters(&result);
+        events.push(LinkEvent::Identified(result.clone()));
+        self.state = Identify::Done(result);
     }
 }

@@ -136,7 +136,13 @@ fn an_msp_identify_without_build_info_still_identifies_and_a_failed_one_says_why
     );
     assert!(!more);
     assert!(
-        matches!(&events[..], [LinkEvent::Identified(Err(_))]),
+        matches!(
+            &events[..],
+            [LinkEvent::Identified(Err(ExchangeError::Unreadable {
+                command: msp::CMD_VERSION,
+                ..
+            }))]
+        ),
         "{events:?}"
     );
     assert_eq!(s.next_request(now, 115_200), None);
@@ -154,7 +160,7 @@ fn msp_identifies_again_on_a_new_connection_only_when_the_options_say_so() {
         timeout(msp::CMD_VERSION),
         &mut events,
     );
-    s.lost();
+    s.lost("unplugged");
     s.connected(now);
     assert_eq!(s.due(now), Some(Precedence::BeforeRequests));
 
@@ -340,7 +346,7 @@ fn a_lost_port_stops_the_heartbeat_until_the_next_connection() {
     let mut s = session("tuya-vacuum", &LinkOptions::default());
     let now = Instant::now();
     handshake(&mut s, now, None);
-    s.lost();
+    s.lost("unplugged");
     assert_eq!(s.due(now + Duration::from_secs(3600)), None);
     s.connected(now);
     handshake(&mut s, now, None);

@@ -152,6 +152,7 @@ impl Worker {
             self.housekeeping();
         }
         self.fail_queue(|| ExchangeError::Cancelled);
+        self.session.closed();
         self.emit(LinkEvent::State(LinkState::Closed));
         self.flush_wake();
     }
@@ -204,6 +205,13 @@ impl Worker {
             }
             LinkCommand::SetBaud { baud, ack } => self.queue.push_back(Queued::Baud(baud, ack)),
             LinkCommand::Identify => self.session.identify_again(),
+            LinkCommand::DeviceInfo { reply } => {
+                if self.transport.is_none() {
+                    let _ = reply.send(Err(ExchangeError::Disconnected("port lost".into())));
+                } else {
+                    self.session.want_device_info(reply);
+                }
+            }
             LinkCommand::Handshake => self.session.handshake_again(Instant::now()),
             LinkCommand::TuyaOptions(o) => self.session.set_tuya_options(o),
             LinkCommand::Shutdown => self.shutdown = true,

@@ -46,7 +46,7 @@ impl Worker {
         self.transport = None;
         self.decoder.clear();
         self.fail_polls_in_flight(&reason);
-        self.session.lost();
+        self.session.lost(&reason);
         self.emit(LinkEvent::State(LinkState::Lost {
             reason: reason.clone(),
         }));
