@@ -184,7 +184,9 @@ pub struct LinkOptions {
     pub margin: Option<Duration>,
     /// Reopen a lost port, with backoff.
     pub reconnect: bool,
-    /// MSP: ask CMD_VERSION on connect. Tuya: run the handshake on connect.
+    /// Start the protocol session on every connection: MSP identifies the device (otherwise
+    /// only when asked: [`LinkCommand::Identify`], [`Client::device_info`]), Tuya runs the
+    /// handshake (otherwise only on [`LinkCommand::Handshake`]).
     pub start_session: bool,
     /// Tuya: what the module answers the MCU.
     pub tuya: TuyaModuleOptions,

@@ -11,7 +11,8 @@ pub struct Request {
     pub command: u8,
     /// The payload (for servo frames, starting with the servo id).
     pub payload: Vec<u8>,
-    /// MSP: the device code, when it is not the session's (CMD_VERSION goes to 0x00).
+    /// MSP: the device code, when it is not the link's (the profile's, or the hardware code
+    /// CMD_VERSION named); CMD_VERSION itself goes to 0x00.
     pub device: Option<u8>,
     /// What answer to wait for.
     pub reply: ReplySpec,
