@@ -18,7 +18,7 @@
 //! the font when it fails.
 
 use crate::link::LinkState;
-use crate::link::tuya_module::{HandshakeStep, TuyaEvent};
+use crate::link::session::tuya::{HandshakeStep, TuyaEvent};
 use crate::profile::Text;
 use eframe::egui;
 use serde::{Deserialize, Serialize};

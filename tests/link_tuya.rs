@@ -1,7 +1,7 @@
 //! botbench as the Tuya Wi-Fi module, through the link worker, against the simulated vacuum MCU
 //! on a pseudo-terminal.
 
-use botbench::link::tuya_module::{HandshakeStep, TuyaEvent, TuyaModuleOptions};
+use botbench::link::session::tuya::{HandshakeStep, TuyaEvent, TuyaModuleOptions};
 use botbench::link::{Link, LinkEvent, LinkOptions, serial};
 use botbench::ops::Cancel;
 use botbench::ops::msp::OpError;

@@ -2,7 +2,7 @@
 
 use super::port::{PortArgs, op_error, parse_assignments, print_checks};
 use super::{CliError, CliResult};
-use crate::link::tuya_module::TuyaEvent;
+use crate::link::session::tuya::TuyaEvent;
 use crate::link::{LinkEvent, LinkState};
 use crate::ops::tuya as ops;
 use crate::profile::{Profile, Protocol};

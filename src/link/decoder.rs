@@ -1,4 +1,5 @@
-//! The session's incoming-frame decoder: one of the three protocols, yielding [`Packet`]s.
+//! The link's decoder of what the device sends: one of the three protocols' decoders, yielding
+//! [`Packet`]s.
 
 use crate::packet::Packet;
 use crate::profile::Protocol;

@@ -8,13 +8,12 @@ pub mod request;
 pub mod serial;
 pub mod session;
 pub mod transport;
-pub mod tuya_module;
 mod worker;
 
 pub use request::{ExchangeError, Match, Reply, ReplySpec, Request};
 pub use session::DeviceInfo;
+pub use session::tuya::{HandshakeStep, ProductInfo, TuyaEvent, TuyaModuleOptions};
 pub use transport::{LinkError, Transport, wire_time};
-pub use tuya_module::{TuyaEvent, TuyaModuleOptions};
 
 use crate::packet::Packet;
 use crate::profile::Profile;
@@ -67,8 +66,19 @@ pub enum LinkCommand {
         /// Told when the port has switched (or could not).
         ack: Option<Sender<Result<(), LinkError>>>,
     },
-    /// MSP: asks CMD_VERSION again.
+    /// MSP: identifies the device again (CMD_VERSION, then CMD_BUILD_INFO) before any request
+    /// still queued; [`LinkEvent::Identified`] tells the result.
     Identify,
+    /// MSP: this connection's identification, into `reply`: at once when it is known, else when
+    /// the identification under way (or started now, or tried again after it failed) ends.
+    /// [`Client::device_info`] waits for it.
+    DeviceInfo {
+        /// Gets the identification, or why there is none: [`ExchangeError::Disconnected`] when
+        /// the port is or goes away first, [`ExchangeError::NotInProtocol`] on a servo or Tuya
+        /// link, [`ExchangeError::Cancelled`] when the link closes, or what the identify's
+        /// exchange failed with.
+        reply: Sender<Result<DeviceInfo, ExchangeError>>,
+    },
     /// Tuya: runs the start-up handshake again.
     Handshake,
     /// Tuya: changes what the module answers the MCU.
@@ -157,7 +167,8 @@ pub enum LinkEvent {
     Report(Packet),
     /// A frame for the packet monitor.
     Frame(LogEntry),
-    /// MSP: what CMD_VERSION said.
+    /// MSP: the device identified itself (CMD_VERSION, then CMD_BUILD_INFO), once per
+    /// connection and again on [`LinkCommand::Identify`], or why it could not.
     Identified(Result<DeviceInfo, ExchangeError>),
     /// Tuya: handshake steps, MCU requests answered, restarts.
     Tuya(TuyaEvent),
@@ -173,7 +184,9 @@ pub struct LinkOptions {
     pub margin: Option<Duration>,
     /// Reopen a lost port, with backoff.
     pub reconnect: bool,
-    /// MSP: ask CMD_VERSION on connect. Tuya: run the handshake on connect.
+    /// Start the protocol session on every connection: MSP identifies the device (otherwise
+    /// only when asked: [`LinkCommand::Identify`], [`Client::device_info`]), Tuya runs the
+    /// handshake (otherwise only on [`LinkCommand::Handshake`]).
     pub start_session: bool,
     /// Tuya: what the module answers the MCU.
     pub tuya: TuyaModuleOptions,
@@ -282,6 +295,31 @@ impl Client {
         rx.recv().unwrap_or(Err(ExchangeError::Cancelled))
     }
 
+    /// MSP: this connection's identification (hardware code, firmware, API, build, flags, build
+    /// date), read once per connection by the link itself: no new exchange when it is known,
+    /// else waits for the identification under way (started now when the link identifies on
+    /// demand only, or tried again when it failed).
+    ///
+    /// Errors: [`ExchangeError::Disconnected`] when the port is or goes away first,
+    /// [`ExchangeError::NotInProtocol`] on a servo or Tuya link, [`ExchangeError::Cancelled`]
+    /// when the link closes, or what CMD_VERSION failed with (no answer, a garbled one,
+    /// [`ExchangeError::Unreadable`]).
+    pub fn device_info(&self) -> Result<DeviceInfo, ExchangeError> {
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        self.commands
+            .send(LinkCommand::DeviceInfo { reply: tx })
+            .map_err(|_| ExchangeError::Cancelled)?;
+        rx.recv().unwrap_or(Err(ExchangeError::Cancelled))
+    }
+
+    /// MSP: identifies the device again (CMD_VERSION, then CMD_BUILD_INFO; before any request
+    /// still queued, as on connect) and waits for the result, which [`Self::device_info`] gives from then on.
+    /// Errors: as [`Self::device_info`].
+    pub fn identify(&self) -> Result<DeviceInfo, ExchangeError> {
+        self.send(LinkCommand::Identify);
+        self.device_info()
+    }
+
     /// Switches the port's baud rate after the requests before it, and waits until it has.
     pub fn set_baud(&self, baud: u32) -> Result<(), LinkError> {
         let (tx, rx) = crossbeam_channel::bounded(1);
@@ -300,3 +338,6 @@ impl Client {
         let _ = self.commands.send(cmd);
     }
 }
+
+#[cfg(test)]
+mod tests;

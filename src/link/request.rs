@@ -11,7 +11,8 @@ pub struct Request {
     pub command: u8,
     /// The payload (for servo frames, starting with the servo id).
     pub payload: Vec<u8>,
-    /// MSP: the device code, when it is not the session's (CMD_VERSION goes to 0x00).
+    /// MSP: the device code, when it is not the link's (the profile's, or the hardware code
+    /// CMD_VERSION named); CMD_VERSION itself goes to 0x00.
     pub device: Option<u8>,
     /// What answer to wait for.
     pub reply: ReplySpec,
@@ -185,6 +186,24 @@ pub enum ExchangeError {
         got: u8,
         /// Servo: the id it came from.
         from: Option<u8>,
+    },
+    /// An answer came but does not read as its command's layout (a CMD_VERSION answer too
+    /// short for the profile's fields).
+    #[error("the answer to command {command} does not read: {reason}")]
+    Unreadable {
+        /// The command answered.
+        command: u8,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The link's protocol has no such exchange (device identification asked of a servo bus or
+    /// a Tuya MCU).
+    #[error("{what} is not part of the {} protocol", protocol.name())]
+    NotInProtocol {
+        /// What was asked.
+        what: &'static str,
+        /// The link's protocol.
+        protocol: crate::profile::Protocol,
     },
     /// The request could not be built (payload too long).
     #[error("cannot send: {0}")]

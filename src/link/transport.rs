@@ -1,4 +1,4 @@
-//! The byte pipe under a session: a serial port, a pseudo-terminal, or an in-process simulator.
+//! The byte pipe under the link: a serial port, a pseudo-terminal, or an in-process simulator.
 
 use std::time::{Duration, Instant};
 

@@ -3,7 +3,7 @@
 
 use super::{Action, Runtime, clock, fire, wifi_state_name};
 use crate::i18n::Lang;
-use crate::link::tuya_module::HandshakeStep;
+use crate::link::session::tuya::HandshakeStep;
 use crate::link::{LinkCommand, Request, TuyaModuleOptions};
 use crate::protocol::tuya::cmd;
 use eframe::egui;

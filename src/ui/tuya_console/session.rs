@@ -3,7 +3,7 @@
 //! report, the report log, and the MCU's own requests with the module's answers.
 
 use crate::link::LogEntry;
-use crate::link::tuya_module::{HandshakeStep, ProductInfo, TuyaEvent};
+use crate::link::session::tuya::{HandshakeStep, ProductInfo, TuyaEvent};
 use crate::packet::{Header, Packet};
 use crate::profile::{Profile, Value};
 use crate::protocol::Direction;
@@ -288,7 +288,7 @@ impl Session {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::tuya_module::parse_product_info;
+    use crate::link::session::tuya::parse_product_info;
 
     fn step(step: HandshakeStep, ok: bool) -> TuyaEvent {
         TuyaEvent::Step {

@@ -1,0 +1,355 @@
+//! The Tuya session: botbench plays the Wi-Fi module (PROTOCOL_NOTES §3). A state machine runs
+//! the start-up handshake (heartbeat, product info, working mode, Wi-Fi state, query status),
+//! then a heartbeat that notices an MCU restart and starts the handshake again; frames the MCU
+//! sends on its own are answered ([`mcu_requests`]) or passed on as reports.
+
+mod mcu_requests;
+mod product_info;
+
+pub use mcu_requests::{TuyaModuleOptions, answer_mcu_request, local_time};
+pub use product_info::{ProductInfo, parse_product_info};
+
+use super::Unasked;
+use crate::link::request::{ExchangeError, Match, Reply, ReplySpec, Request};
+use crate::link::{LinkEvent, wire_time};
+use crate::packet::Packet;
+use crate::protocol::tuya::{self, cmd};
+use serde::Serialize;
+use std::time::{Duration, Instant};
+
+/// How soon a handshake that failed at a step starts again.
+const HANDSHAKE_RETRY: Duration = Duration::from_secs(1);
+/// How soon the heartbeat is sent again after the MCU missed one.
+const HEARTBEAT_RETRY: Duration = Duration::from_secs(3);
+/// The pause that ends the burst of data-point reports answering the query (at least; longer
+/// when 64 bytes take longer on the wire).
+const QUERY_QUIET: Duration = Duration::from_millis(300);
+
+/// A step of the module's start-up handshake.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HandshakeStep {
+    /// 0x00 until the MCU answers.
+    Heartbeat,
+    /// 0x01: PID, MCU version, configuration mode.
+    ProductInfo,
+    /// 0x02: who drives the Wi-Fi LED.
+    WorkMode,
+    /// 0x03: the Wi-Fi state, when the MCU drives the LED.
+    WifiState,
+    /// 0x08: every data point, as a burst of 0x07 reports.
+    QueryStatus,
+}
+
+impl HandshakeStep {
+    /// All steps, in order.
+    pub const ALL: [HandshakeStep; 5] = [
+        HandshakeStep::Heartbeat,
+        HandshakeStep::ProductInfo,
+        HandshakeStep::WorkMode,
+        HandshakeStep::WifiState,
+        HandshakeStep::QueryStatus,
+    ];
+
+    /// The command word it sends.
+    pub fn command(self) -> u8 {
+        match self {
+            HandshakeStep::Heartbeat => cmd::HEARTBEAT,
+            HandshakeStep::ProductInfo => cmd::PRODUCT_INFO,
+            HandshakeStep::WorkMode => cmd::WORK_MODE,
+            HandshakeStep::WifiState => cmd::WIFI_STATE,
+            HandshakeStep::QueryStatus => cmd::QUERY_STATUS,
+        }
+    }
+}
+
+/// What the Tuya part of the link reports.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "event", rename_all = "snake_case")]
+pub enum TuyaEvent {
+    /// A handshake step finished, well or not.
+    Step {
+        /// Which.
+        step: HandshakeStep,
+        /// Whether it worked.
+        ok: bool,
+        /// What came back, or why it failed.
+        detail: String,
+    },
+    /// Product info as read.
+    ProductInfo(ProductInfo),
+    /// The working mode: the MCU drives the LED, or the module's GPIO numbers.
+    WorkMode {
+        /// GPIO numbers (LED, reset) when the module drives the LED itself.
+        gpio: Option<(u8, u8)>,
+    },
+    /// Every step done; heartbeats follow.
+    HandshakeDone,
+    /// The heartbeat answer was 0: the MCU restarted, and the handshake runs again.
+    McuRestarted,
+    /// The MCU stopped answering heartbeats.
+    HeartbeatLost,
+    /// The MCU asked something and the module answered.
+    McuRequest {
+        /// The MCU's command word.
+        command: u8,
+        /// What it asked.
+        name: String,
+        /// The answer's data.
+        answer: Vec<u8>,
+    },
+}
+
+/// The Tuya session of one link: the module's side of the handshake and heartbeat.
+#[derive(Debug)]
+pub(crate) struct TuyaSession {
+    /// What the module answers the MCU; changed at any time, even during an exchange.
+    options: TuyaModuleOptions,
+    /// Run the handshake on every new connection ([`crate::link::LinkOptions::start_session`]).
+    handshake_on_connect: bool,
+    phase: Phase,
+    /// What was sent and is awaited.
+    asked: Option<Ask>,
+}
+
+/// Where the module stands with the MCU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    /// Nothing scheduled (no handshake asked on this connection, or the port was lost).
+    Idle,
+    /// The handshake starts at this time (at once on connect, a second after a failed step).
+    HandshakeAt(Instant),
+    /// In the handshake: this step is sent next, at once.
+    Handshake(HandshakeStep),
+    /// The handshake is done; the next heartbeat is due at this time.
+    Heartbeat(Instant),
+}
+
+/// A request sent and awaited.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Ask {
+    /// A handshake step (for 0x03, with the Wi-Fi state reported).
+    Step(HandshakeStep, u8),
+    /// The heartbeat after the handshake.
+    Heartbeat,
+}
+
+impl TuyaSession {
+    /// A session answering the MCU with `options`; the handshake starts at `now` when
+    /// `handshake_on_connect`.
+    pub(crate) fn new(
+        options: TuyaModuleOptions,
+        handshake_on_connect: bool,
+        now: Instant,
+    ) -> Self {
+        let mut session = Self {
+            options,
+            handshake_on_connect,
+            phase: Phase::Idle,
+            asked: None,
+        };
+        session.connected(now);
+        session
+    }
+
+    /// Changes what the module answers the MCU (and the heartbeat interval).
+    pub(crate) fn set_options(&mut self, options: TuyaModuleOptions) {
+        self.options = options;
+    }
+
+    /// A new connection (the first, or after a reconnect).
+    pub(crate) fn connected(&mut self, now: Instant) {
+        if self.handshake_on_connect {
+            self.phase = Phase::HandshakeAt(now);
+        }
+    }
+
+    /// The port went away: the heartbeat stops until a handshake. A handshake under way fails
+    /// at its step and is tried again.
+    pub(crate) fn lost(&mut self) {
+        if let Phase::Heartbeat(_) = self.phase {
+            self.phase = Phase::Idle;
+        }
+    }
+
+    /// [`crate::link::LinkCommand::Handshake`]: the handshake starts again at `now`.
+    pub(crate) fn handshake_again(&mut self, now: Instant) {
+        self.phase = Phase::HandshakeAt(now);
+    }
+
+    /// Whether a request is due at `now`.
+    pub(crate) fn due(&self, now: Instant) -> bool {
+        match self.phase {
+            Phase::Idle => false,
+            Phase::HandshakeAt(at) | Phase::Heartbeat(at) => at <= now,
+            Phase::Handshake(_) => true,
+        }
+    }
+
+    /// The request due at `now`, if any; its answer is then awaited. `baud` sets how long a
+    /// pause ends the query's burst of reports.
+    pub(crate) fn next_request(&mut self, now: Instant, baud: u32) -> Option<Request> {
+        if !self.due(now) {
+            return None;
+        }
+        let step = match self.phase {
+            Phase::Heartbeat(_) => {
+                self.asked = Some(Ask::Heartbeat);
+                return Some(Request::new(cmd::HEARTBEAT, Vec::new()).attempts(2));
+            }
+            Phase::HandshakeAt(_) => HandshakeStep::Heartbeat,
+            Phase::Handshake(step) => step,
+            Phase::Idle => return None,
+        };
+        self.phase = Phase::Handshake(step);
+        let wifi_state = self.options.wifi_state;
+        self.asked = Some(Ask::Step(step, wifi_state));
+        Some(match step {
+            HandshakeStep::Heartbeat => Request::new(cmd::HEARTBEAT, Vec::new()).attempts(2),
+            HandshakeStep::WifiState => Request::new(cmd::WIFI_STATE, vec![wifi_state]),
+            HandshakeStep::QueryStatus => {
+                Request::new(cmd::QUERY_STATUS, Vec::new()).reply(ReplySpec::Burst {
+                    each: Match::command(cmd::DP_REPORT),
+                    quiet: QUERY_QUIET.max(wire_time(64, baud)),
+                })
+            }
+            HandshakeStep::ProductInfo | HandshakeStep::WorkMode => {
+                Request::new(step.command(), Vec::new())
+            }
+        })
+    }
+
+    /// The result of the request [`Self::next_request`] gave, at `now`. Returns whether the next
+    /// handshake step follows at once; `events` gets what to report.
+    pub(crate) fn on_answer(
+        &mut self,
+        result: Result<Reply, ExchangeError>,
+        now: Instant,
+        events: &mut Vec<LinkEvent>,
+    ) -> bool {
+        match self.asked.take() {
+            Some(Ask::Step(step, wifi_state)) => match result {
+                Ok(reply) => self.step_done(step, wifi_state, &reply, now, events),
+                Err(e) => {
+                    events.push(step_event(step, false, e.to_string()));
+                    self.phase = Phase::HandshakeAt(now + HANDSHAKE_RETRY);
+                    false
+                }
+            },
+            Some(Ask::Heartbeat) => {
+                match result {
+                    Ok(r) if r.payload() == Some(&[0][..]) => {
+                        events.push(LinkEvent::Tuya(TuyaEvent::McuRestarted));
+                        self.phase = Phase::HandshakeAt(now);
+                    }
+                    Ok(_) => self.phase = Phase::Heartbeat(now + self.options.heartbeat),
+                    // The port is gone: the handshake runs again on the next connection.
+                    Err(ExchangeError::Disconnected(_)) => {}
+                    Err(_) => {
+                        events.push(LinkEvent::Tuya(TuyaEvent::HeartbeatLost));
+                        self.phase = Phase::Heartbeat(now + HEARTBEAT_RETRY);
+                    }
+                }
+                false
+            }
+            None => false,
+        }
+    }
+
+    /// A handshake step answered: reports it and moves to the next step (returns `true`), or
+    /// ends the handshake.
+    fn step_done(
+        &mut self,
+        step: HandshakeStep,
+        wifi_state: u8,
+        reply: &Reply,
+        now: Instant,
+        events: &mut Vec<LinkEvent>,
+    ) -> bool {
+        let payload = reply.payload().unwrap_or_default();
+        let next = match step {
+            HandshakeStep::Heartbeat => {
+                let detail = if payload == [0] {
+                    "answered 0: first since the MCU started"
+                } else {
+                    "answered 1"
+                };
+                events.push(step_event(step, true, detail.into()));
+                HandshakeStep::ProductInfo
+            }
+            HandshakeStep::ProductInfo => {
+                let info = parse_product_info(payload);
+                let detail = match &info.error {
+                    None => format!(
+                        "PID {}, MCU {}, mode {}",
+                        info.pid.as_deref().unwrap_or("?"),
+                        info.version.as_deref().unwrap_or("?"),
+                        info.mode.map_or("?".to_string(), |m| m.to_string())
+                    ),
+                    Some(e) => format!("not valid JSON ({e}); shown raw: {}", info.raw),
+                };
+                let ok = info.error.is_none();
+                events.push(LinkEvent::Tuya(TuyaEvent::ProductInfo(info)));
+                events.push(step_event(step, ok, detail));
+                HandshakeStep::WorkMode
+            }
+            HandshakeStep::WorkMode => {
+                let gpio = match payload {
+                    [led, reset, ..] => Some((*led, *reset)),
+                    _ => None,
+                };
+                events.push(LinkEvent::Tuya(TuyaEvent::WorkMode { gpio }));
+                let detail = match gpio {
+                    None => "the MCU drives the Wi-Fi LED".to_string(),
+                    Some((l, r)) => format!("the module drives the LED (GPIO {l}, reset GPIO {r})"),
+                };
+                events.push(step_event(step, true, detail));
+                if gpio.is_none() {
+                    HandshakeStep::WifiState
+                } else {
+                    // The module drives the LED: the MCU needs no Wi-Fi state.
+                    let detail = "not needed: the module drives the LED".to_string();
+                    events.push(step_event(HandshakeStep::WifiState, true, detail));
+                    HandshakeStep::QueryStatus
+                }
+            }
+            HandshakeStep::WifiState => {
+                let detail = format!("reported state {wifi_state}");
+                events.push(step_event(step, true, detail));
+                HandshakeStep::QueryStatus
+            }
+            HandshakeStep::QueryStatus => {
+                let detail = format!("{} report(s)", reply.packets.len());
+                events.push(step_event(step, true, detail));
+                events.push(LinkEvent::Tuya(TuyaEvent::HandshakeDone));
+                self.phase = Phase::Heartbeat(now + self.options.heartbeat);
+                return false;
+            }
+        };
+        self.phase = Phase::Handshake(next);
+        true
+    }
+
+    /// A frame from the MCU that is not the awaited answer: one of its own requests (answered
+    /// with the same command word), a data-point report, or an answer to something else.
+    pub(crate) fn unasked(&self, p: &Packet) -> Unasked {
+        if let Some((name, answer)) = answer_mcu_request(&self.options, p.command) {
+            Unasked::McuRequest {
+                reply: tuya::Frame::from_module(p.command, answer.clone()),
+                event: TuyaEvent::McuRequest {
+                    command: p.command,
+                    name: name.to_string(),
+                    answer,
+                },
+            }
+        } else if p.command == cmd::DP_REPORT {
+            Unasked::Report
+        } else {
+            Unasked::Stale
+        }
+    }
+}
+
+fn step_event(step: HandshakeStep, ok: bool, detail: String) -> LinkEvent {
+    LinkEvent::Tuya(TuyaEvent::Step { step, ok, detail })
+}
