@@ -21,10 +21,10 @@
 //! )
 //! ```
 
+use crate::document::{self, DocumentError, ErrorKind, Problem, Source, Step};
 use crate::link::{Client, DeviceInfo};
 use crate::ops::msp::{self as ops, Check, OpError};
 use crate::ops::{Cancel, Progress};
-use crate::profile::locate::line_col;
 use crate::profile::value::Typed as Text;
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Profile, Value};
 use crate::protocol::msp;
@@ -89,57 +89,6 @@ pub struct Loaded {
     /// What applying it writes, per Set command.
     pub writes: Vec<SetWrite>,
 }
-
-/// What kind of problem a preset has.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ErrorKind {
-    /// The file cannot be read or written.
-    Io,
-    /// Not valid preset RON.
-    Syntax,
-    /// No version, or a newer one than this build reads.
-    Version,
-    /// Made for another profile.
-    Profile,
-    /// An unknown command or field, a missing field, or a value the field refuses.
-    Value,
-}
-
-pub use crate::profile::locate::Problem;
-
-/// Why a preset cannot be used. Nothing has been written when this is returned.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct PresetError {
-    /// The file (or the name given to [`Preset::parse`]).
-    pub file: String,
-    /// What kind of problem (of the first, when there are several).
-    pub kind: ErrorKind,
-    /// The problems, at least one.
-    pub problems: Vec<Problem>,
-}
-
-impl PresetError {
-    fn one(file: &str, kind: ErrorKind, (line, col): (usize, usize), message: String) -> Self {
-        Self {
-            file: file.to_string(),
-            kind,
-            problems: vec![Problem { line, col, message }],
-        }
-    }
-
-    /// The first problem's message.
-    pub fn message(&self) -> &str {
-        self.problems.first().map_or("", |p| p.message.as_str())
-    }
-}
-
-impl fmt::Display for PresetError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        crate::profile::locate::write_problems(f, &self.file, &self.problems)
-    }
-}
-
-impl std::error::Error for PresetError {}
 
 /// A field of the preset compared with the device.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
@@ -233,60 +182,48 @@ impl Preset {
     }
 
     /// Reads a preset file and checks it against `profile`.
-    pub fn load(path: &Path, profile: &Profile) -> Result<Loaded, PresetError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            PresetError::one(&file, ErrorKind::Io, (0, 0), format!("cannot read: {e}"))
-        })?;
-        Self::parse(&file, &text, profile)
+    pub fn load(path: &Path, profile: &Profile) -> Result<Loaded, DocumentError> {
+        let text = document::read(path)?;
+        Self::parse(&path.display().to_string(), &text, profile)
     }
 
     /// Parses preset text (`name` names it in errors) and checks it against `profile`.
-    pub fn parse(name: &str, text: &str, profile: &Profile) -> Result<Loaded, PresetError> {
+    pub fn parse(name: &str, text: &str, profile: &Profile) -> Result<Loaded, DocumentError> {
         let preset = Self::parse_unchecked(name, text)?;
-        let writes = preset.check(profile, name, Some(text))?;
+        let writes = preset.check(profile, &Source::new(name, text))?;
         Ok(Loaded { preset, writes })
     }
 
     /// Parses preset text, checking its syntax and version only.
-    pub fn parse_unchecked(name: &str, text: &str) -> Result<Preset, PresetError> {
+    pub fn parse_unchecked(name: &str, text: &str) -> Result<Preset, DocumentError> {
+        let src = Source::new(name, text);
         // `device: "..."` and `device: Some("...")` both read.
-        let options = ron::Options::default()
-            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
-        let doc: Doc = match options.from_str(text) {
+        let doc: Doc = match src.parse() {
             Ok(doc) => doc,
             Err(e) => {
                 // A newer format may not parse; say so rather than show its syntax error.
-                if let Ok(Head {
-                    version: Some(v), ..
-                }) = options.from_str::<Head>(text)
+                if let Ok(Head { version: Some(v) }) = src.parse::<Head>()
                     && v > VERSION
                 {
-                    return Err(newer(name, text, v));
+                    return Err(newer(&src, v));
                 }
-                return Err(PresetError::one(
-                    name,
-                    ErrorKind::Syntax,
-                    (e.span.start.line, e.span.start.col),
-                    e.code.to_string(),
-                ));
+                return Err(e);
             }
         };
         match doc.version {
             None => {
-                return Err(PresetError::one(
+                return Err(DocumentError::one(
                     name,
                     ErrorKind::Version,
                     (1, 1),
                     format!("no `version`: a preset starts with `version: {VERSION},`"),
                 ));
             }
-            Some(v) if v > VERSION => return Err(newer(name, text, v)),
+            Some(v) if v > VERSION => return Err(newer(&src, v)),
             Some(0) => {
-                return Err(PresetError::one(
-                    name,
+                return Err(src.error(
                     ErrorKind::Version,
-                    find_key(text, "version"),
+                    &[Step::Key("version")],
                     format!(
                         "version 0 is not a preset version; this botbench reads version {VERSION}"
                     ),
@@ -306,22 +243,16 @@ impl Preset {
 
     /// Checks the preset against `profile`: the profile id, every command and field, every value.
     /// Returns what applying it writes.
-    pub fn validate(&self, profile: &Profile) -> Result<Vec<SetWrite>, PresetError> {
-        self.check(profile, "preset", None)
+    pub fn validate(&self, profile: &Profile) -> Result<Vec<SetWrite>, DocumentError> {
+        self.check(profile, &Source::new("preset", ""))
     }
 
-    fn check(
-        &self,
-        profile: &Profile,
-        name: &str,
-        text: Option<&str>,
-    ) -> Result<Vec<SetWrite>, PresetError> {
-        let text = text.unwrap_or("");
+    /// [`Preset::validate`], placing each problem in `src`, the text the preset was read from.
+    fn check(&self, profile: &Profile, src: &Source) -> Result<Vec<SetWrite>, DocumentError> {
         if self.profile != profile.id {
-            return Err(PresetError::one(
-                name,
+            return Err(src.error(
                 ErrorKind::Profile,
-                find_key(text, "profile"),
+                &[Step::Key("profile")],
                 format!(
                     "this preset is for {}; the connected device uses {}",
                     if self.profile.is_empty() {
@@ -338,14 +269,9 @@ impl Preset {
         let mut writes = Vec::new();
         let mut seen: Vec<&str> = Vec::new();
         for cv in &self.values {
-            let at_cmd = find_entry(text, &cv.command, None);
-            let mut problem = |at: (usize, usize), message: String| {
-                problems.push(Problem {
-                    line: at.0,
-                    col: at.1,
-                    message,
-                })
-            };
+            let at_cmd = src.locate(&[Step::Key("values"), Step::Entry(cv.command.clone())]);
+            let mut problem =
+                |at: (usize, usize), message: String| problems.push(Problem::at(at, message));
             let Some(cmd) = profile
                 .commands
                 .iter()
@@ -388,7 +314,11 @@ impl Preset {
             let mut inputs = Vec::new();
             let mut ok = true;
             for (key, text_value) in &cv.fields {
-                let at = find_entry(text, &cv.command, Some(key));
+                let at = src.locate(&[
+                    Step::Key("values"),
+                    Step::Entry(cv.command.clone()),
+                    Step::Entry(key.clone()),
+                ]);
                 let Some(field) = set
                     .request
                     .iter()
@@ -458,24 +388,16 @@ impl Preset {
             }
         }
         if self.values.is_empty() {
-            problems.push(Problem {
-                line: find_key(text, "values").0,
-                col: find_key(text, "values").1,
-                message: format!(
+            problems.push(src.problem(
+                &[Step::Key("values")],
+                format!(
                     "the preset holds no values; it can hold {}",
                     list(allowed.iter().map(|(s, _)| s.ident.as_str()))
                 ),
-            });
+            ));
         }
-        if problems.is_empty() {
-            Ok(writes)
-        } else {
-            Err(PresetError {
-                file: name.to_string(),
-                kind: ErrorKind::Value,
-                problems,
-            })
-        }
+        src.check(ErrorKind::Value, problems)?;
+        Ok(writes)
     }
 
     /// Reads every Get command that has a Set partner and returns the values as a preset, keyed
@@ -634,13 +556,13 @@ impl Preset {
     }
 
     /// Writes the preset (plain, without field comments), atomically.
-    pub fn save(&self, path: &Path) -> Result<(), PresetError> {
-        write_atomic(path, &self.to_ron(None))
+    pub fn save(&self, path: &Path) -> Result<(), DocumentError> {
+        document::write_atomic(path, self.to_ron(None).as_bytes())
     }
 
     /// Writes the preset with field comments from `profile`, atomically.
-    pub fn save_annotated(&self, path: &Path, profile: &Profile) -> Result<(), PresetError> {
-        write_atomic(path, &self.to_ron(Some(profile)))
+    pub fn save_annotated(&self, path: &Path, profile: &Profile) -> Result<(), DocumentError> {
+        document::write_atomic(path, self.to_ron(Some(profile)).as_bytes())
     }
 }
 
@@ -735,82 +657,14 @@ fn now() -> String {
     chrono::Local::now().to_rfc3339_opts(chrono::SecondsFormat::Secs, false)
 }
 
-fn newer(name: &str, text: &str, v: u32) -> PresetError {
-    PresetError::one(
-        name,
+fn newer(src: &Source, v: u32) -> DocumentError {
+    src.error(
         ErrorKind::Version,
-        find_key(text, "version"),
+        &[Step::Key("version")],
         format!(
             "preset version {v} is newer than this botbench reads (version {VERSION}); update botbench"
         ),
     )
-}
-
-/// Writes `text` to a temporary file beside `path`, then renames it over `path`.
-fn write_atomic(path: &Path, text: &str) -> Result<(), PresetError> {
-    use std::io::Write;
-    let file = path.display().to_string();
-    let io = |what: &str, e: std::io::Error| {
-        PresetError::one(&file, ErrorKind::Io, (0, 0), format!("cannot {what}: {e}"))
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let stem = path
-        .file_name()
-        .map_or_else(|| "preset".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = dir.join(format!(".{stem}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp).map_err(|e| io("create a temporary file", e))?;
-        f.write_all(text.as_bytes())
-            .and_then(|()| f.sync_all())
-            .map_err(|e| io("write", e))?;
-        drop(f);
-        std::fs::rename(&tmp, path).map_err(|e| io("replace the file", e))
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
-
-/// The line and column of a top-level `key:` outside comments, or (1, 1).
-fn find_key(text: &str, key: &str) -> (usize, usize) {
-    find_outside_comments(text, key, 0, |rest| rest.trim_start().starts_with(':'))
-        .map_or((1, 1), |pos| line_col(text, pos))
-}
-
-/// Where a command's key (and, given `field`, that field's key after it) sits in the text.
-fn find_entry(text: &str, command: &str, field: Option<&str>) -> (usize, usize) {
-    let quoted = |s: &str| ron::to_string(s).unwrap_or_else(|_| format!("\"{s}\""));
-    let Some(cmd_at) = find_outside_comments(text, &quoted(command), 0, |_| true) else {
-        return (0, 0);
-    };
-    let pos = match field {
-        Some(f) => find_outside_comments(text, &quoted(f), cmd_at, |_| true).unwrap_or(cmd_at),
-        None => cmd_at,
-    };
-    line_col(text, pos)
-}
-
-fn find_outside_comments(
-    text: &str,
-    needle: &str,
-    from: usize,
-    followed: impl Fn(&str) -> bool,
-) -> Option<usize> {
-    let mut start = from;
-    while let Some(i) = text.get(start..)?.find(needle) {
-        let pos = start + i;
-        let line_start = text[..pos].rfind('\n').map_or(0, |n| n + 1);
-        let in_comment = text[line_start..pos].contains("//");
-        if !in_comment && followed(&text[pos + needle.len()..]) {
-            return Some(pos);
-        }
-        start = pos + needle.len();
-    }
-    None
 }
 
 // ---- The file's shape ----

@@ -1,9 +1,10 @@
 //! Presets against the built-in profiles and the simulated window cleaner on a pty.
 
+use botbench::document::{DocumentError, ErrorKind};
 use botbench::link::{Link, LinkEvent, LinkOptions, serial};
 use botbench::ops::msp::OpError;
 use botbench::ops::{Cancel, Progress};
-use botbench::preset::{self, ErrorKind, Preset, PresetError};
+use botbench::preset::{self, Preset};
 use botbench::profile::{Field, FieldType, Input, Len, Profile, Registry, Value};
 use botbench::sim::window_cleaner::WindowCleaner;
 use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
@@ -80,7 +81,7 @@ impl Drop for TempDir {
     }
 }
 
-fn parse_err(text: &str, p: &Profile) -> PresetError {
+fn parse_err(text: &str, p: &Profile) -> DocumentError {
     Preset::parse("test.ron", text, p).expect_err("refused")
 }
 

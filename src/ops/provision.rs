@@ -23,12 +23,11 @@
 use super::msp::OpError;
 use super::servo::{self, BAUDS, PARAM_BAUD, PARAM_ID, Presence};
 use super::{Cancel, Progress};
+use crate::document::{self, DocumentError, ErrorKind, Source, Step};
 use crate::link::{Client, ExchangeError};
-use crate::profile::locate::{Step, locate};
 use crate::profile::value::Typed as DisplayText;
 use crate::profile::{Access, Input, Param, Profile, Value};
 use serde::{Deserialize, Serialize};
-use std::fmt;
 use std::io::{BufRead, Write};
 use std::path::Path;
 
@@ -87,49 +86,6 @@ pub struct Plan {
     pub record: Vec<String>,
 }
 
-/// A plan that does not parse or does not fit the profile. Nothing has been written.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct PlanError {
-    /// The file (or the name given to [`Plan::parse`]).
-    pub file: String,
-    /// 1-based line, 0 when unknown.
-    pub line: usize,
-    /// 1-based column, 0 when unknown.
-    pub col: usize,
-    /// What is wrong.
-    pub message: String,
-}
-
-/// A RON file's name (for errors) and text, or why it cannot be read.
-pub(crate) fn read_source(path: &Path) -> Result<(String, String), PlanError> {
-    let file = path.display().to_string();
-    match std::fs::read_to_string(path) {
-        Ok(text) => Ok((file, text)),
-        Err(e) => Err(PlanError {
-            file,
-            line: 0,
-            col: 0,
-            message: format!("cannot read: {e}"),
-        }),
-    }
-}
-
-impl fmt::Display for PlanError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.line == 0 {
-            write!(f, "{}: {}", self.file, self.message)
-        } else {
-            write!(
-                f,
-                "{}:{}:{}: {}",
-                self.file, self.line, self.col, self.message
-            )
-        }
-    }
-}
-
-impl std::error::Error for PlanError {}
-
 /// A problem with a plan and where it is.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Issue {
@@ -163,22 +119,17 @@ struct Doc {
 }
 
 impl Plan {
-    /// Reads a plan file and checks it against the servo `profile`.
-    pub fn load(path: &Path, profile: &Profile) -> Result<Plan, PlanError> {
-        let (file, text) = read_source(path)?;
-        Self::parse(&file, &text, profile)
+    /// Reads a plan file and checks it against the servo `profile`. Nothing has been written
+    /// when it is refused.
+    pub fn load(path: &Path, profile: &Profile) -> Result<Plan, DocumentError> {
+        let text = document::read(path)?;
+        Self::parse(&path.display().to_string(), &text, profile)
     }
 
     /// Parses plan text (`name` names it in errors) and checks it against `profile`.
-    pub fn parse(name: &str, text: &str, profile: &Profile) -> Result<Plan, PlanError> {
-        let doc: Doc = ron::Options::default()
-            .from_str(text)
-            .map_err(|e| PlanError {
-                file: name.to_string(),
-                line: e.span.start.line,
-                col: e.span.start.col,
-                message: e.code.to_string(),
-            })?;
+    pub fn parse(name: &str, text: &str, profile: &Profile) -> Result<Plan, DocumentError> {
+        let src = Source::new(name, text);
+        let doc: Doc = src.parse()?;
         let plan = Plan {
             target_baud: doc.target_baud,
             ids: doc.ids,
@@ -186,13 +137,7 @@ impl Plan {
             record: doc.record,
         };
         if let Err(issue) = plan.resolve(profile) {
-            let (line, col) = locate(text, &issue.path);
-            return Err(PlanError {
-                file: name.to_string(),
-                line,
-                col,
-                message: issue.message,
-            });
+            return Err(src.error(ErrorKind::Value, &issue.path, issue.message));
         }
         Ok(plan)
     }

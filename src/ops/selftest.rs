@@ -35,17 +35,15 @@
 //! FAIL, naming the step) when the link is lost, the device stops answering, the operator aborts
 //! or the run is cancelled. A Rises step's `then` action is sent whatever happened before it.
 
+use crate::document::{self, DocumentError, ErrorKind, Problem, Source, Step as At};
 use crate::link::{Client, DeviceInfo, session};
 use crate::ops::msp::{self as ops, OpError};
 use crate::ops::{Cancel, Progress};
-use crate::profile::locate::Problem;
-use crate::profile::locate::{Step as At, locate};
 use crate::profile::value::Typed as Text;
 use crate::profile::{Command, CommandKind, Field, Input, Profile, Value};
 use crate::protocol::{Direction, msp};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::fmt;
 use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -173,90 +171,58 @@ pub struct Action {
     pub text: String,
 }
 
-/// Why a plan cannot be used.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct PlanError {
-    /// The file (or the name given to [`Plan::parse`]).
-    pub file: String,
-    /// The problems, at least one.
-    pub problems: Vec<Problem>,
-}
-
-impl PlanError {
-    fn one(file: &str, (line, col): (usize, usize), message: String) -> Self {
-        Self {
-            file: file.to_string(),
-            problems: vec![Problem { line, col, message }],
-        }
-    }
-}
-
-impl fmt::Display for PlanError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        crate::profile::locate::write_problems(f, &self.file, &self.problems)
-    }
-}
-
-impl std::error::Error for PlanError {}
-
 impl Plan {
     /// Reads a plan file and checks it against `profile`.
-    pub fn load(path: &Path, profile: &Profile) -> Result<Plan, PlanError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| PlanError::one(&file, (0, 0), format!("cannot read: {e}")))?;
-        Self::parse(&file, &text, profile)
+    pub fn load(path: &Path, profile: &Profile) -> Result<Plan, DocumentError> {
+        let text = document::read(path)?;
+        Self::parse(&path.display().to_string(), &text, profile)
     }
 
-    /// Parses plan text (`name` names it in errors) and checks it against `profile`.
-    pub fn parse(name: &str, text: &str, profile: &Profile) -> Result<Plan, PlanError> {
-        let options = ron::Options::default()
-            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
-        let doc: Doc = options.from_str(text).map_err(|e| {
-            PlanError::one(
-                name,
-                (e.span.start.line, e.span.start.col),
-                e.code.to_string(),
-            )
-        })?;
-        let mut problems = Vec::new();
-        let mut problem = |at: (usize, usize), message: String| {
-            problems.push(Problem {
-                line: at.0,
-                col: at.1,
-                message,
-            })
-        };
+    /// Parses plan text (`name` names it in errors) and checks it against `profile`. Every
+    /// problem is reported, each where it is; the error's kind is the first one's.
+    pub fn parse(name: &str, text: &str, profile: &Profile) -> Result<Plan, DocumentError> {
+        let src = Source::new(name, text);
+        let doc: Doc = src.parse()?;
+        let mut problems: Vec<(ErrorKind, Problem)> = Vec::new();
         match doc.version {
             Some(VERSION) => {}
-            Some(v) => problem(
-                locate(text, &[At::Key("version")]),
-                format!("plan version {v}; this botbench reads version {VERSION}"),
-            ),
-            None => problem(
-                (1, 1),
-                format!("no `version`: a plan starts with `version: {VERSION},`"),
-            ),
+            Some(v) => problems.push((
+                ErrorKind::Version,
+                src.problem(
+                    &[At::Key("version")],
+                    format!("plan version {v}; this botbench reads version {VERSION}"),
+                ),
+            )),
+            None => problems.push((
+                ErrorKind::Version,
+                Problem::at(
+                    (1, 1),
+                    format!("no `version`: a plan starts with `version: {VERSION},`"),
+                ),
+            )),
         }
         if doc.profile != profile.id {
-            problem(
-                locate(text, &[At::Key("profile")]),
-                format!(
-                    "this plan is for '{}'; the device uses {}",
-                    doc.profile, profile.id
+            problems.push((
+                ErrorKind::Profile,
+                src.problem(
+                    &[At::Key("profile")],
+                    format!(
+                        "this plan is for '{}'; the device uses {}",
+                        doc.profile, profile.id
+                    ),
                 ),
-            );
+            ));
         }
         if doc.steps.is_empty() {
-            problem(
-                locate(text, &[At::Key("steps")]),
-                "the plan has no steps".into(),
-            );
+            problems.push((
+                ErrorKind::Value,
+                src.problem(&[At::Key("steps")], "the plan has no steps"),
+            ));
         }
         let mut steps = Vec::new();
         for (i, s) in doc.steps.iter().enumerate() {
             let mut cx = Check {
-                text,
+                src: &src,
                 index: i,
                 profile,
                 problems: Vec::new(),
@@ -270,9 +236,7 @@ impl Plan {
             } else if s.name().trim().is_empty() {
                 cx.at(&[At::Key("name")], "a step needs a name".into());
             }
-            for p in cx.problems {
-                problem((p.line, p.col), p.message);
-            }
+            problems.extend(cx.problems.into_iter().map(|p| (ErrorKind::Value, p)));
             if let Some(kind) = step {
                 steps.push(Step {
                     name: s.name().to_string(),
@@ -280,24 +244,24 @@ impl Plan {
                 });
             }
         }
-        if problems.is_empty() {
-            Ok(Plan {
-                name: doc.name,
-                profile: profile.id.clone(),
-                steps,
-            })
-        } else {
-            Err(PlanError {
+        if let Some(&(kind, _)) = problems.first() {
+            return Err(DocumentError {
                 file: name.to_string(),
-                problems,
-            })
+                kind,
+                problems: problems.into_iter().map(|(_, p)| p).collect(),
+            });
         }
+        Ok(Plan {
+            name: doc.name,
+            profile: profile.id.clone(),
+            steps,
+        })
     }
 }
 
 /// Checks one step of the document, collecting problems with their place.
 struct Check<'a> {
-    text: &'a str,
+    src: &'a Source<'a>,
     index: usize,
     profile: &'a Profile,
     problems: Vec<Problem>,
@@ -307,8 +271,7 @@ impl<'a> Check<'a> {
     fn at(&mut self, path: &[At], message: String) {
         let mut full = vec![At::Key("steps"), At::Index(self.index)];
         full.extend_from_slice(path);
-        let (line, col) = locate(self.text, &full);
-        self.problems.push(Problem { line, col, message });
+        self.problems.push(self.src.problem(&full, message));
     }
 
     /// A command that can be read with an empty request (Telemetry or Get).

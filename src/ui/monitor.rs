@@ -156,14 +156,11 @@ fn save(lines: &[String]) -> Action {
             false,
         );
     };
-    let tmp = path.with_extension("tmp");
-    let result =
-        std::fs::write(&tmp, lines.join("\n") + "\n").and_then(|()| std::fs::rename(&tmp, &path));
-    match result {
+    match crate::document::write_atomic(&path, (lines.join("\n") + "\n").as_bytes()) {
         Ok(()) => Action::Say(
             format!("{} line(s) saved to {}", lines.len(), path.display()),
             false,
         ),
-        Err(e) => Action::Say(format!("cannot write {}: {e}", path.display()), true),
+        Err(e) => Action::Say(e.to_string(), true),
     }
 }

@@ -247,12 +247,16 @@ fn export_csv(rt: &Runtime) -> Action {
     };
     match write_csv(rt, &path) {
         Ok(n) => Action::Say(format!("{n} plot(s) written to {}", path.display()), false),
-        Err(e) => Action::Say(format!("cannot write {}: {e}", path.display()), true),
+        Err(e) => Action::Say(e.to_string(), true),
     }
 }
 
-/// Writes every plotted series to `path` as one CSV (a column per `plot.field`, a row per time).
-pub fn write_csv(rt: &Runtime, path: &std::path::Path) -> std::io::Result<usize> {
+/// Writes every plotted series to `path` as one CSV (a column per `plot.field`, a row per time),
+/// atomically. Returns the number of plots written.
+pub fn write_csv(
+    rt: &Runtime,
+    path: &std::path::Path,
+) -> Result<usize, crate::document::DocumentError> {
     let mut all = crate::series::SeriesSet::new(crate::series::DEFAULT_CAPACITY);
     let mut n = 0;
     for plot in &rt.profile.plots {
@@ -268,9 +272,8 @@ pub fn write_csv(rt: &Runtime, path: &std::path::Path) -> std::io::Result<usize>
         }
     }
     let mut buf = Vec::new();
-    all.write_csv(&mut buf)?;
-    let tmp = path.with_extension("csv.tmp");
-    std::fs::write(&tmp, &buf)?;
-    std::fs::rename(&tmp, path)?;
+    all.write_csv(&mut buf)
+        .map_err(|e| crate::document::DocumentError::io(path, "write", &e))?;
+    crate::document::write_atomic(path, &buf)?;
     Ok(n)
 }

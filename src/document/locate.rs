@@ -1,5 +1,6 @@
 //! Finds where a value sits in RON text, so that an inconsistency found after parsing can be
-//! reported with its line and column, as a syntax error is.
+//! reported with its line and column, as a syntax error is. Comments, strings and raw strings
+//! are skipped; a path that leaves the text stops at the deepest step found.
 
 /// One step of a path into a RON document.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -8,6 +9,8 @@ pub enum Step {
     Key(&'static str),
     /// A list element by index.
     Index(usize),
+    /// A map entry by its string key, as written (`{ "MSP_SET_PWMVALUE": ... }`).
+    Entry(String),
 }
 
 /// The 1-based line and column of the value at `path`, or of the deepest step found.
@@ -22,6 +25,7 @@ pub fn locate(src: &str, path: &[Step]) -> (usize, usize) {
         let found = match step {
             Step::Key(k) => c.enter_struct() && c.find_key(k),
             Step::Index(i) => c.find_index(*i),
+            Step::Entry(k) => c.find_entry(k),
         };
         if !found {
             break;
@@ -266,40 +270,55 @@ impl Cursor<'_> {
             n += 1;
         }
     }
-}
 
-/// One problem in a RON document (a preset, a test plan), where it is.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Problem {
-    /// 1-based line, 0 when unknown.
-    pub line: usize,
-    /// 1-based column, 0 when unknown.
-    pub col: usize,
-    /// What is wrong.
-    pub message: String,
-}
-
-/// Writes the problems of `file` as `file:line:col: message`, one, or a count then one a line.
-pub fn write_problems(
-    f: &mut std::fmt::Formatter<'_>,
-    file: &str,
-    problems: &[Problem],
-) -> std::fmt::Result {
-    let at = |p: &Problem| {
-        if p.line == 0 {
-            format!("{file}: {}", p.message)
-        } else {
-            format!("{file}:{}:{}: {}", p.line, p.col, p.message)
-        }
-    };
-    match problems {
-        [one] => write!(f, "{}", at(one)),
-        many => {
-            write!(f, "{file}: {} problems:", many.len())?;
-            for p in many {
-                write!(f, "\n  {}", at(p))?;
+    /// At a map value (or `Some({`): moves to the value of the entry whose key is the string
+    /// `key`.
+    fn find_entry(&mut self, key: &str) -> bool {
+        self.skip_ws();
+        if self.s[self.pos..].starts_with(b"Some") {
+            self.ident();
+            self.skip_ws();
+            if self.peek() != Some(b'(') {
+                return false;
             }
-            Ok(())
+            self.pos += 1;
+            self.skip_ws();
+        }
+        if self.peek() != Some(b'{') {
+            return false;
+        }
+        self.pos += 1;
+        let quoted = ron::to_string(key).unwrap_or_else(|_| format!("\"{key}\""));
+        loop {
+            self.skip_ws();
+            match self.peek() {
+                None | Some(b'}') => return false,
+                Some(b',') => {
+                    self.pos += 1;
+                    continue;
+                }
+                _ => {}
+            }
+            let start = self.pos;
+            self.skip_value();
+            if self.pos == start {
+                return false;
+            }
+            let matched = &self.s[start..self.pos] == quoted.as_bytes();
+            self.skip_ws();
+            if self.peek() != Some(b':') {
+                return false;
+            }
+            self.pos += 1;
+            self.skip_ws();
+            if matched {
+                return true;
+            }
+            let before = self.pos;
+            self.skip_value();
+            if self.pos == before {
+                return false;
+            }
         }
     }
 }
@@ -336,6 +355,20 @@ Profile(
             Key("range"),
         ];
         assert_eq!(locate(SRC, &range), (8, 65));
+    }
+
+    #[test]
+    fn finds_map_entries_by_their_string_key() {
+        use Step::*;
+        let src = "// \"A\": { in a comment\n(\n    values: {\n        \"A\": { \"x\": \"1\" },\n        \"B\": {\n            \"x\": \"2\", \"y\": \"3\",\n        },\n    },\n)";
+        let at = |path: &[Step]| locate(src, path);
+        assert_eq!(at(&[Key("values"), Entry("A".into())]), (4, 14));
+        assert_eq!(
+            at(&[Key("values"), Entry("B".into()), Entry("y".into())]),
+            (6, 28)
+        );
+        // A key not there: the deepest step found.
+        assert_eq!(at(&[Key("values"), Entry("C".into())]), (3, 13));
     }
 
     #[test]
