@@ -28,7 +28,7 @@ use crate::link::{Client, ExchangeError};
 use crate::profile::value::Typed as DisplayText;
 use crate::profile::{Access, Input, Param, Profile, Value};
 use serde::{Deserialize, Serialize};
-use std::io::{BufRead, Write};
+use std::io::Write;
 use std::path::Path;
 
 /// The `data_id` of the serial number.
@@ -702,9 +702,10 @@ fn mismatch(param: &Param, written: &Value, read: &Value) -> String {
 
 // ---- The log ----
 
-/// The log's header for a plan that records `recorded`.
-pub fn csv_header(recorded: &[String]) -> String {
-    let mut cols: Vec<String> = [
+/// The log's columns for a plan that records `recorded`: `time, serial, id, baud, result, step,
+/// reason, mismatches`, then each recorded parameter.
+pub fn log_columns(recorded: &[String]) -> Vec<String> {
+    [
         "time",
         "serial",
         "id",
@@ -716,80 +717,75 @@ pub fn csv_header(recorded: &[String]) -> String {
     ]
     .iter()
     .map(|s| s.to_string())
-    .collect();
-    cols.extend(recorded.iter().map(|r| csv_field(r)));
-    cols.join(",")
+    .chain(recorded.iter().cloned())
+    .collect()
 }
 
-/// One record as a log line (without its newline).
-pub fn csv_line(record: &Record) -> String {
+/// One record as the log's cells, in [`log_columns`] order: unknown values as empty cells,
+/// mismatches joined with `; `.
+pub fn log_row(record: &Record) -> Vec<String> {
     let opt = |v: Option<String>| v.unwrap_or_default();
     let (result, step, reason) = match &record.result {
         Outcome::Pass => ("PASS", "", ""),
         Outcome::Fail { step, reason } => ("FAIL", step.as_str(), reason.as_str()),
     };
-    let mut cols = vec![
-        csv_field(&record.time),
+    let mut cells = vec![
+        record.time.clone(),
         opt(record.serial.map(|s| s.to_string())),
         opt(record.id.map(|s| s.to_string())),
         opt(record.baud.map(|s| s.to_string())),
         result.to_string(),
-        csv_field(step),
-        csv_field(reason),
-        csv_field(&record.mismatches.join("; ")),
+        step.to_string(),
+        reason.to_string(),
+        record.mismatches.join("; "),
     ];
-    cols.extend(
+    cells.extend(
         record
             .recorded
             .iter()
-            .map(|(_, v)| csv_field(v.as_deref().unwrap_or(""))),
+            .map(|(_, v)| v.clone().unwrap_or_default()),
     );
-    cols.join(",")
+    cells
 }
 
-/// A CSV field, quoted when it holds a comma, a quote, a line break or edge spaces.
-pub fn csv_field(s: &str) -> String {
-    let needs = s.contains([',', '"', '\n', '\r']) || s.trim() != s;
-    if needs {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
-/// Appends `record` to the CSV log at `path`, writing the header first when the file is new or
-/// empty, and syncs it to disk. A log whose header is for other recorded parameters is refused
-/// rather than mixed.
+/// Appends `record` to the CSV log at `path` (RFC 4180, written with the `csv` crate), writing
+/// the header first when the file is new or empty, and syncs it to disk. A log whose header is
+/// for other recorded parameters is refused rather than mixed.
 pub fn append_csv(path: &Path, record: &Record) -> std::io::Result<()> {
     let names: Vec<String> = record.recorded.iter().map(|(k, _)| k.clone()).collect();
-    let header = csv_header(&names);
+    let header = log_columns(&names);
     let mut file = std::fs::OpenOptions::new()
         .create(true)
         .append(true)
-        .read(true)
         .open(path)?;
-    let len = file.metadata()?.len();
-    let mut text = String::new();
-    if len == 0 {
-        text.push_str(&header);
-        text.push('\n');
-    } else {
-        let mut first = String::new();
-        std::io::BufReader::new(std::fs::File::open(path)?).read_line(&mut first)?;
-        let first = first.trim_end_matches(['\n', '\r']);
-        if first != header {
+    let new = file.metadata()?.len() == 0;
+    if !new {
+        let mut first = csv::StringRecord::new();
+        csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .from_path(path)?
+            .read_record(&mut first)?;
+        if !first.iter().eq(header.iter()) {
             return Err(std::io::Error::new(
                 std::io::ErrorKind::InvalidData,
                 format!(
-                    "{} has another header ({first}); this plan logs {header}: use another log file",
-                    path.display()
+                    "{} has another header ({}); this plan logs {}: use another log file",
+                    path.display(),
+                    first.iter().collect::<Vec<_>>().join(","),
+                    header.join(",")
                 ),
             ));
         }
     }
-    text.push_str(&csv_line(record));
-    text.push('\n');
-    file.write_all(text.as_bytes())?;
+    let mut out = csv::Writer::from_writer(Vec::new());
+    if new {
+        out.write_record(&header)?;
+    }
+    out.write_record(log_row(record))?;
+    let bytes = out.into_inner().map_err(|e| e.into_error())?;
+    // One write, so that two stations appending to a shared log do not interleave.
+    file.write_all(&bytes)?;
     file.sync_all()
 }
 
