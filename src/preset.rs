@@ -23,8 +23,9 @@
 
 use crate::document::{self, DocumentError, ErrorKind, Problem, Source, Step};
 use crate::link::{Client, DeviceInfo};
-use crate::ops::msp::{self as ops, Check, OpError};
+use crate::ops::exchange as ops;
 use crate::ops::{Cancel, Progress};
+use crate::ops::{Check, OpError};
 use crate::profile::value::Typed as Text;
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Profile, Value};
 use crate::protocol::msp;
@@ -481,9 +482,7 @@ impl Preset {
         progress: &mut dyn FnMut(Progress),
         written: &mut dyn FnMut(&str, &[Check]),
     ) -> Result<(), OpError> {
-        let writes = self
-            .validate(profile)
-            .map_err(|e| OpError::Input(e.to_string()))?;
+        let writes = self.validate(profile)?;
         let total = writes.len() as u64;
         progress(Progress {
             done: 0,
@@ -494,9 +493,9 @@ impl Preset {
             if cancel.is_cancelled() {
                 break;
             }
-            let set = profile.command(&w.command).ok_or_else(|| {
-                OpError::Input(format!("{} has no command '{}'", profile.id, w.command))
-            })?;
+            let set = profile
+                .command(&w.command)
+                .ok_or_else(|| OpError::unknown_command(profile, &w.command))?;
             let checks = ops::write_verified(client, profile, set, &w.inputs)?;
             written(&set.ident, &checks);
             progress(Progress {

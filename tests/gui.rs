@@ -51,10 +51,7 @@ fn read_all_brings_every_parameter_from_the_device() {
     read_all(&mut h);
     let want = b.sim.lock().unwrap().param("waterPumpDuration").unwrap();
     let got = match app(&h).rt.readings.get(&135) {
-        Some(Reading::Values(v, _)) => v
-            .iter()
-            .find(|(k, _)| k == "waterPumpDuration")
-            .map(|(_, v)| v.clone()),
+        Some(Reading::Values(v, _)) => v.get("waterPumpDuration").cloned(),
         _ => None,
     };
     assert_eq!(got, Some(Value::Int(want)));

@@ -2,7 +2,7 @@
 
 use botbench::document::{DocumentError, ErrorKind};
 use botbench::link::{Link, LinkEvent, LinkOptions, serial};
-use botbench::ops::msp::OpError;
+use botbench::ops::OpError;
 use botbench::ops::{Cancel, Progress};
 use botbench::preset::{self, Preset};
 use botbench::profile::{Field, FieldType, Input, Len, Profile, Registry, Value};
@@ -450,7 +450,7 @@ fn an_out_of_range_value_is_refused_before_anything_is_written() {
         .apply(&link.client(), &p, &Cancel::new(), &mut |_| {})
         .unwrap_err();
     assert!(
-        matches!(err, OpError::Input(ref m) if m.contains("out of range")),
+        matches!(err, OpError::Document(ref e) if e.to_string().contains("out of range")),
         "{err}"
     );
     let sim = wc.lock().unwrap();

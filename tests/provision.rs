@@ -1,6 +1,6 @@
 //! Production provisioning against the simulated servo bus on a pseudo-terminal.
 
-use botbench::ops::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
+use botbench::ops::servo::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
 use botbench::ops::{Cancel, Progress};
 use botbench::profile::{Profile, Registry};
 use botbench::sim::servo_bus::SimServo;

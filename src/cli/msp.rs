@@ -4,7 +4,7 @@ use super::port::{PortArgs, exchange_error, op_error, parse_assignments, print_c
 use super::{CliError, CliResult};
 use crate::link::{LinkCommand, LinkEvent, Poll, Request};
 
-use crate::ops::msp as ops;
+use crate::ops::exchange as ops;
 use crate::ops::selftest::{self, Operator, Plan};
 use crate::profile::{Command, Profile, Protocol};
 use crate::protocol::{Direction, msp};

@@ -9,7 +9,8 @@ pub enum Step {
     Key(&'static str),
     /// A list element by index.
     Index(usize),
-    /// A map entry by its string key, as written (`{ "MSP_SET_PWMVALUE": ... }`).
+    /// A map entry by its string key, as written (`{ "MSP_SET_PWMVALUE": ... }`). It is placed
+    /// at its key, which is where a person looks for it; a further step goes into its value.
     Entry(String),
 }
 
@@ -18,6 +19,7 @@ pub fn locate(src: &str, path: &[Step]) -> (usize, usize) {
     let mut c = Cursor {
         s: src.as_bytes(),
         pos: 0,
+        key: None,
     };
     c.skip_ws();
     let mut best = c.pos;
@@ -30,7 +32,7 @@ pub fn locate(src: &str, path: &[Step]) -> (usize, usize) {
         if !found {
             break;
         }
-        best = c.pos;
+        best = c.key.take().unwrap_or(c.pos);
     }
     line_col(src, best)
 }
@@ -54,6 +56,8 @@ fn floor_char_boundary(s: &str, mut i: usize) -> usize {
 struct Cursor<'a> {
     s: &'a [u8],
     pos: usize,
+    /// Where the map entry just found starts (its key), when the last step was an entry.
+    key: Option<usize>,
 }
 
 impl Cursor<'_> {
@@ -312,6 +316,7 @@ impl Cursor<'_> {
             self.pos += 1;
             self.skip_ws();
             if matched {
+                self.key = Some(start);
                 return true;
             }
             let before = self.pos;
@@ -362,10 +367,10 @@ Profile(
         use Step::*;
         let src = "// \"A\": { in a comment\n(\n    values: {\n        \"A\": { \"x\": \"1\" },\n        \"B\": {\n            \"x\": \"2\", \"y\": \"3\",\n        },\n    },\n)";
         let at = |path: &[Step]| locate(src, path);
-        assert_eq!(at(&[Key("values"), Entry("A".into())]), (4, 14));
+        assert_eq!(at(&[Key("values"), Entry("A".into())]), (4, 9));
         assert_eq!(
             at(&[Key("values"), Entry("B".into()), Entry("y".into())]),
-            (6, 28)
+            (6, 23)
         );
         // A key not there: the deepest step found.
         assert_eq!(at(&[Key("values"), Entry("C".into())]), (3, 13));

@@ -2,12 +2,14 @@
 //! upload). They run on the calling thread over a [`crate::link::Client`], report progress and
 //! stop when cancelled, so the command line runs them directly and the GUI on a job thread.
 
-pub mod msp;
-pub mod provision;
+pub mod error;
+pub mod exchange;
 pub mod selftest;
 pub mod servo;
-pub mod servo_preset;
 pub mod tuya;
+
+pub use error::OpError;
+pub use exchange::{Check, FieldValues};
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};

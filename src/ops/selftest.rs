@@ -37,7 +37,8 @@
 
 use crate::document::{self, DocumentError, ErrorKind, Problem, Source, Step as At};
 use crate::link::{Client, DeviceInfo, session};
-use crate::ops::msp::{self as ops, OpError};
+use crate::ops::OpError;
+use crate::ops::exchange as ops;
 use crate::ops::{Cancel, Progress};
 use crate::profile::value::Typed as Text;
 use crate::profile::{Command, CommandKind, Field, Input, Profile, Value};
@@ -1084,7 +1085,7 @@ fn run_step(
             let mut pass = true;
             let mut parts = Vec::new();
             for (k, v) in &values {
-                let Some(f) = cmd.reply.iter().find(|f| &f.ident == k) else {
+                let Some(f) = cmd.reply.iter().find(|f| f.ident == k) else {
                     continue;
                 };
                 let mut part = format!("{k} {}", f.format(v));
@@ -1099,7 +1100,7 @@ fn run_step(
                 parts.push(part);
             }
             for (k, _, text) in expect {
-                if !values.iter().any(|(v, _)| v == k) {
+                if !values.contains(k) {
                     pass = false;
                     parts.push(format!("{k} missing from the answer (expected {text})"));
                 }
@@ -1139,7 +1140,7 @@ fn means(series: &[Vec<f64>]) -> Vec<f64> {
 fn send_action(client: &Client, profile: &Profile, action: &Action) -> Result<(), OpError> {
     let cmd = profile
         .command(&action.command)
-        .ok_or_else(|| OpError::Input(format!("no command {}", action.command)))?;
+        .ok_or_else(|| OpError::unknown_command(profile, &action.command))?;
     client.request(crate::link::Request::for_command(
         profile,
         cmd,
@@ -1237,21 +1238,12 @@ impl<'a> Reader<'a> {
         self.fields
             .iter()
             .map(|f| {
-                values
-                    .iter()
-                    .find_map(|(k, v)| match v {
-                        Value::Int(x) if k == &f.ident => Some(*x),
-                        _ => None,
-                    })
-                    .ok_or_else(|| {
-                        (
-                            Halt::Device(format!(
-                                "{}: the answer has no {}",
-                                self.cmd.ident, f.ident
-                            )),
-                            String::new(),
-                        )
-                    })
+                values.int(&f.ident).ok_or_else(|| {
+                    (
+                        Halt::Device(format!("{}: the answer has no {}", self.cmd.ident, f.ident)),
+                        String::new(),
+                    )
+                })
             })
             .collect::<Result<Vec<_>, _>>()
             .map(|v| (v,))

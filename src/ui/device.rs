@@ -6,7 +6,7 @@ use super::runtime::Runtime;
 use super::{Action, JobWork};
 use crate::i18n::Lang;
 use crate::link::{DeviceInfo, LinkCommand, session};
-use crate::ops::msp as ops;
+use crate::ops::exchange as ops;
 use crate::profile::Profile;
 use crate::protocol::{hex, msp};
 use eframe::egui;

@@ -2,9 +2,8 @@
 //! its results and progress back, and can be cancelled.
 
 use crate::link::Client;
-use crate::ops::msp::Check;
-use crate::ops::{Cancel, Progress};
-use crate::profile::Value;
+use crate::ops::Check;
+use crate::ops::{Cancel, FieldValues, Progress};
 use crossbeam_channel::{Receiver, Sender};
 
 /// What a job reports.
@@ -13,7 +12,7 @@ pub enum JobOutput {
     /// How far it got.
     Progress(Progress),
     /// A command was read: its values, or why not.
-    Read(u8, Result<Vec<(String, Value)>, String>),
+    Read(u8, Result<FieldValues, String>),
     /// A Set was written and read back: the checks, or why not.
     Wrote(u8, Result<Vec<Check>, String>),
     /// A line for the status bar.

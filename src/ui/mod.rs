@@ -21,7 +21,7 @@ pub use app::{App, PanelId, Saved};
 pub use runtime::Target;
 pub use solar::{Outcome as SolarOutcome, Trip as SolarTrip};
 
-use crate::ops::msp as ops;
+use crate::ops::exchange as ops;
 use crate::profile::{Input, Value};
 use runtime::Runtime;
 

@@ -33,7 +33,7 @@ fn device_values(rt: &Runtime) -> Vec<CommandValues> {
                 .request
                 .iter()
                 .filter_map(|f| {
-                    let (_, v) = values.iter().find(|(k, _)| k == &f.ident)?;
+                    let v = values.get(&f.ident)?;
                     Some((f.ident.clone(), display_value(f, v)))
                 })
                 .collect();

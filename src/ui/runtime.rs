@@ -7,7 +7,7 @@ use crate::link::{
     Poll, Request,
     serial::{self, PortInfo},
 };
-use crate::ops::msp::Check;
+use crate::ops::{Check, FieldValues};
 use crate::packet::Packet;
 use crate::profile::{Profile, Registry, Value};
 use crate::series::SeriesSet;
@@ -52,7 +52,7 @@ pub struct Conn {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Reading {
     /// Values, raw, in wire order, and when they came.
-    Values(Vec<(String, Value)>, Instant),
+    Values(FieldValues, Instant),
     /// The read failed.
     Failed(String),
 }
@@ -389,7 +389,7 @@ impl Runtime {
             );
             return;
         };
-        let values: Vec<(String, Value)> = d
+        let values: FieldValues = d
             .values
             .iter()
             .map(|v| (v.ident.clone(), v.value.clone()))
@@ -475,7 +475,7 @@ impl Runtime {
         };
         match result {
             Ok(checks) => {
-                let values: Vec<(String, Value)> = checks
+                let values: FieldValues = checks
                     .iter()
                     .map(|c| (c.field.clone(), c.read.clone()))
                     .collect();

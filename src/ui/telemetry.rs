@@ -206,7 +206,7 @@ impl TelemetryPanel {
                                             let shown = cmd
                                                 .reply
                                                 .iter()
-                                                .find(|f| &f.ident == k)
+                                                .find(|f| f.ident == k)
                                                 .map_or(format!("{v:?}"), |f| {
                                                     format!("{}{}", f.format(v), f.unit_suffix())
                                                 });

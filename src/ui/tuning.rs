@@ -39,7 +39,7 @@ pub struct TuningPanel {
 /// The device's value of a field, if a reply has brought one.
 fn device_value<'a>(rt: &'a Runtime, get: u8, field: &str) -> Option<&'a Value> {
     match rt.readings.get(&get) {
-        Some(Reading::Values(values, _)) => values.iter().find(|(k, _)| k == field).map(|(_, v)| v),
+        Some(Reading::Values(values, _)) => values.get(field),
         _ => None,
     }
 }

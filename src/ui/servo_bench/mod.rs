@@ -4,7 +4,7 @@
 //! and the tabs.
 //!
 //! Everything that talks to servos is an operation of [`crate::ops::servo`] or
-//! [`crate::ops::provision`], run as a job; motion commands and "Stop all" go straight to the
+//! [`crate::ops::servo::provision`], run as a job; motion commands and "Stop all" go straight to the
 //! link worker so that they never wait for a job.
 
 mod motion;
@@ -19,8 +19,8 @@ use super::jobs::{JobOutput, JobSink};
 use super::runtime::Runtime;
 use crate::i18n::Lang;
 use crate::link::{LinkCommand, LinkState, ReplyTo, Request};
-use crate::ops::msp::Check;
-use crate::ops::provision::{ProvisionState, Record};
+use crate::ops::Check;
+use crate::ops::servo::provision::{ProvisionState, Record};
 use crate::ops::servo::{Location, ScanRow};
 use eframe::egui;
 

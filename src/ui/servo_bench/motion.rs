@@ -9,6 +9,7 @@ use super::selection_or_hint;
 use super::{Servo, direct, error_label, follow};
 use crate::i18n::Lang;
 use crate::link::{LinkCommand, Poll};
+use crate::ops::FieldValues;
 use crate::ops::servo::{self as ops, Wheel};
 use crate::profile::{Field, Value};
 use crate::protocol::servo::cmd;
@@ -164,13 +165,11 @@ impl MotionState {
             return;
         }
         self.last_at = Some(*at);
-        let of = values.iter().find(|(k, _)| k == "servo_id").map(|(_, v)| v);
-        let angle = values.iter().find(|(k, _)| k == "angle").map(|(_, v)| v);
-        if let (Some(Value::Int(sid)), Some(Value::Int(a))) = (of, angle)
-            && *sid == i64::from(id)
+        if let (Some(sid), Some(a)) = (values.int("servo_id"), values.int("angle"))
+            && sid == i64::from(id)
         {
             let t = at.saturating_duration_since(self.t0).as_secs_f64();
-            self.series.push([t, *a as f64 * 0.1]);
+            self.series.push([t, a as f64 * 0.1]);
             if self.series.len() > MAX_POINTS {
                 self.series.drain(..self.series.len() - MAX_POINTS);
             }
@@ -399,19 +398,14 @@ impl MotionState {
 
     /// The latest angle and monitor values of the selected servo, nothing before they arrive.
     fn readout(&self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, servo: Servo) {
-        let of_servo = |values: &[(String, Value)]| {
-            values
-                .iter()
-                .any(|(k, v)| k == "servo_id" && *v == Value::Int(servo.id.into()))
-        };
+        let of_servo = |values: &FieldValues| values.int("servo_id") == Some(servo.id.into());
         ui.horizontal(|ui| {
             ui.label(lang.tr("Angle now:", "当前角度:"));
             match rt.readings.get(&cmd::READ_ANGLE) {
                 Some(Reading::Values(values, at)) if of_servo(values) && self.live => {
-                    let a = values.iter().find(|(k, _)| k == "angle").map(|(_, v)| v);
-                    if let Some(Value::Int(a)) = a {
+                    if let Some(a) = values.int("angle") {
                         ui.label(
-                            egui::RichText::new(format!("{:.1}°", *a as f64 * 0.1))
+                            egui::RichText::new(format!("{:.1}°", a as f64 * 0.1))
                                 .size(20.0)
                                 .strong(),
                         );
@@ -438,7 +432,7 @@ impl MotionState {
                 };
                 ui.horizontal_wrapped(|ui| {
                     for f in mon.reply.iter().skip(1) {
-                        if let Some((_, v)) = values.iter().find(|(k, _)| *k == f.ident) {
+                        if let Some(v) = values.get(&f.ident) {
                             let shown = if f.ident == "status" {
                                 match v {
                                     Value::Int(s) => format!("{s:#04x}"),

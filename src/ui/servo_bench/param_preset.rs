@@ -4,7 +4,7 @@
 
 use super::params::{ParamsState, editable};
 use crate::i18n::Lang;
-use crate::ops::servo_preset::ParamPreset;
+use crate::ops::servo::preset::ParamPreset;
 use crate::profile::{Profile, Value};
 use eframe::egui;
 

@@ -6,7 +6,7 @@
 use super::{Output, Servo, error_label, ok_label, send};
 use super::{header_row, selection_or_hint};
 use crate::i18n::Lang;
-use crate::ops::msp::Check;
+use crate::ops::Check;
 use crate::ops::servo::{self as ops, Location, PARAM_BAUD, PARAM_ID};
 use crate::profile::{Access, Input, Param, Profile, Value};
 use crate::ui::runtime::Runtime;

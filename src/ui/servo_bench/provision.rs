@@ -4,7 +4,7 @@
 use super::header_row;
 use super::{Output, error_label, send};
 use crate::i18n::Lang;
-use crate::ops::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
+use crate::ops::servo::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
 use crate::ui::runtime::Runtime;
 use crate::ui::{Action, JobWork};
 use eframe::egui;

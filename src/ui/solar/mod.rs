@@ -230,7 +230,7 @@ impl SolarPanel {
                             // One field a line: wrapped runs of values overlap the next row.
                             ui.vertical(|ui| {
                                 for (k, v) in values {
-                                    let Some(f) = cmd.reply.iter().find(|f| &f.ident == k) else {
+                                    let Some(f) = cmd.reply.iter().find(|f| f.ident == k) else {
                                         continue;
                                     };
                                     let text = format!(

@@ -3,7 +3,7 @@
 
 use super::{Action, Output, Runtime};
 use crate::i18n::Lang;
-use crate::ops::msp::OpError;
+use crate::ops::OpError;
 use crate::ops::tuya::{self as ops, OtaTiming};
 use crate::ui::JobWork;
 use crate::ui::jobs::JobOutput;

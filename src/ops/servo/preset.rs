@@ -12,7 +12,7 @@
 //! )
 //! ```
 
-use super::servo::{PARAM_BAUD, PARAM_ID};
+use super::{PARAM_BAUD, PARAM_ID};
 use crate::document::{self, DocumentError, ErrorKind, Source, Step};
 use crate::profile::value::Typed;
 use crate::profile::{Access, Profile, Value};
