@@ -1,5 +1,7 @@
-//! Presets: a device's tunable parameters saved to a versioned RON file, compared with a device,
-//! and written back with read-back verification.
+//! Presets: a device's tunable parameters as a versioned RON document: its schema, its check
+//! against a profile, its comparison with a device's values, and its text. Capturing one from a
+//! device and applying one (with read-back verification) are operations:
+//! [`crate::ops::preset`].
 //!
 //! A preset names each Set command by its canonical ident and gives every field of it as display
 //! text ("2.75", not 275; labels such as `on`), so that a technician can read and edit it. The
@@ -22,13 +24,8 @@
 //! ```
 
 use crate::document::{self, DocumentError, ErrorKind, Problem, Source, Step};
-use crate::link::{Client, DeviceInfo};
-use crate::ops::exchange as ops;
-use crate::ops::{Cancel, Progress};
-use crate::ops::{Check, OpError};
 use crate::profile::value::Typed as Text;
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Profile, Value};
-use crate::protocol::msp;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use std::fmt;
@@ -73,7 +70,7 @@ impl CommandValues {
     }
 }
 
-/// One Set command of a checked preset, ready for [`ops::write_verified`].
+/// One Set command of a checked preset, ready for [`crate::ops::exchange::write_verified`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct SetWrite {
     /// The Set command's canonical ident.
@@ -140,11 +137,6 @@ pub fn display_value(field: &Field, value: &Value) -> String {
         }
         _ => field.format(value),
     }
-}
-
-/// "hw 0x03 fw 1.4.2"
-pub fn describe_device(info: &DeviceInfo) -> String {
-    format!("hw {:#04x} fw {}", info.hw, info.firmware)
 }
 
 impl Preset {
@@ -401,24 +393,8 @@ impl Preset {
         Ok(writes)
     }
 
-    /// Reads every Get command that has a Set partner and returns the values as a preset, keyed
-    /// by the Set's ident. The device's identity is asked with CMD_VERSION where the profile has
-    /// it (MSP).
-    pub fn capture(
-        client: &Client,
-        profile: &Profile,
-        cancel: &Cancel,
-        progress: &mut dyn FnMut(Progress),
-    ) -> Result<Preset, OpError> {
-        let mut preset = Preset::new(&profile.id, "");
-        preset.device = device_description(client, profile);
-        let values = read_device(client, profile, cancel, progress)?;
-        preset.values = values;
-        Ok(preset)
-    }
-
-    /// Compares the preset with values read from the device (e.g. [`Preset::capture`]'s or
-    /// [`read_device`]'s). Values are compared as raw values, so "2.8" equals "2.80".
+    /// Compares the preset with values read from the device (e.g. by
+    /// [`crate::ops::preset::capture`] or [`crate::ops::preset::read_device`]). Values are compared as raw values, so "2.8" equals "2.80".
     pub fn diff(&self, profile: &Profile, device: &[CommandValues]) -> Vec<DiffRow> {
         let mut rows = Vec::new();
         for cv in &self.values {
@@ -451,60 +427,6 @@ impl Preset {
             }
         }
         rows
-    }
-
-    /// Checks the preset, then writes each Set command's full payload with
-    /// [`ops::write_verified`], reporting progress per command. Returns every read-back check;
-    /// a mismatch is a check that is not `ok()`, not an error. When cancelled it stops between
-    /// commands and returns the checks of what was written.
-    pub fn apply(
-        &self,
-        client: &Client,
-        profile: &Profile,
-        cancel: &Cancel,
-        progress: &mut dyn FnMut(Progress),
-    ) -> Result<Vec<Check>, OpError> {
-        let mut all = Vec::new();
-        self.apply_each(client, profile, cancel, progress, &mut |_, checks| {
-            all.extend_from_slice(checks)
-        })?;
-        Ok(all)
-    }
-
-    /// [`Preset::apply`], telling `written` each command's checks as it is written. Progress is
-    /// reported before the first command and after each; a cancel raised then stops before the
-    /// next command.
-    pub fn apply_each(
-        &self,
-        client: &Client,
-        profile: &Profile,
-        cancel: &Cancel,
-        progress: &mut dyn FnMut(Progress),
-        written: &mut dyn FnMut(&str, &[Check]),
-    ) -> Result<(), OpError> {
-        let writes = self.validate(profile)?;
-        let total = writes.len() as u64;
-        progress(Progress {
-            done: 0,
-            total,
-            message: "checked; writing".into(),
-        });
-        for (i, w) in writes.iter().enumerate() {
-            if cancel.is_cancelled() {
-                break;
-            }
-            let set = profile
-                .command(&w.command)
-                .ok_or_else(|| OpError::unknown_command(profile, &w.command))?;
-            let checks = ops::write_verified(client, profile, set, &w.inputs)?;
-            written(&set.ident, &checks);
-            progress(Progress {
-                done: i as u64 + 1,
-                total,
-                message: format!("wrote {}", set.ident),
-            });
-        }
-        Ok(())
     }
 
     /// The preset as RON text with a header comment; with `profile`, each field carries a
@@ -563,53 +485,6 @@ impl Preset {
     pub fn save_annotated(&self, path: &Path, profile: &Profile) -> Result<(), DocumentError> {
         document::write_atomic(path, self.to_ron(Some(profile)).as_bytes())
     }
-}
-
-/// Reads every presettable Get of the profile, as display values keyed by the Set's ident.
-pub fn read_device(
-    client: &Client,
-    profile: &Profile,
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(Progress),
-) -> Result<Vec<CommandValues>, OpError> {
-    let pairs = preset_commands(profile);
-    let total = pairs.len() as u64;
-    let mut values = Vec::new();
-    for (i, (set, get)) in pairs.iter().enumerate() {
-        if cancel.is_cancelled() {
-            return Err(OpError::Cancelled);
-        }
-        let read = ops::read(client, profile, get, &[])?;
-        let fields = set
-            .request
-            .iter()
-            .filter_map(|f| {
-                read.iter()
-                    .find(|(k, _)| k.eq_ignore_ascii_case(&f.ident))
-                    .map(|(_, v)| (f.ident.clone(), display_value(f, v)))
-            })
-            .collect();
-        values.push(CommandValues {
-            command: set.ident.clone(),
-            fields,
-        });
-        progress(Progress {
-            done: i as u64 + 1,
-            total,
-            message: format!("read {}", get.ident),
-        });
-    }
-    Ok(values)
-}
-
-fn device_description(client: &Client, profile: &Profile) -> Option<String> {
-    if profile.protocol != crate::profile::Protocol::Msp {
-        return None;
-    }
-    let cmd = profile.command_by_id(msp::CMD_VERSION)?;
-    let reply = ops::send(client, profile, cmd, &[]).ok()?;
-    let info = DeviceInfo::from_version(profile, reply.payload().unwrap_or_default()).ok()?;
-    Some(describe_device(&info))
 }
 
 fn describe_field(f: &Field) -> String {

@@ -2,10 +2,14 @@
 //! upload). They run on the calling thread over a [`crate::link::Client`], report progress and
 //! stop when cancelled, so the command line runs them directly and the GUI on a job thread.
 
+pub mod device;
 pub mod error;
 pub mod exchange;
+pub mod preset;
 pub mod selftest;
 pub mod servo;
+pub mod telemetry;
+pub mod tuning;
 pub mod tuya;
 
 pub use error::OpError;

@@ -36,13 +36,13 @@
 //! or the run is cancelled. A Rises step's `then` action is sent whatever happened before it.
 
 use crate::document::{self, DocumentError, ErrorKind, Problem, Source, Step as At};
-use crate::link::{Client, DeviceInfo, session};
+use crate::link::{Client, DeviceInfo};
 use crate::ops::OpError;
 use crate::ops::exchange as ops;
 use crate::ops::{Cancel, Progress};
 use crate::profile::value::Typed as Text;
 use crate::profile::{Command, CommandKind, Field, Input, Profile, Value};
-use crate::protocol::{Direction, msp};
+use crate::protocol::Direction;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -768,9 +768,9 @@ pub fn run_each(
         total,
         message: "identifying the device".into(),
     });
-    match identify(client, profile) {
+    match super::device::identify(client, profile) {
         Ok(info) => {
-            report.device = Some(describe(&info));
+            report.device = Some(super::device::description(&info));
             report.device_info = Some(info);
         }
         Err(e) => {
@@ -842,32 +842,6 @@ pub fn run_each(
         && report.results.iter().all(|r| r.pass);
     report.duration_ms = t0.elapsed().as_millis() as u64;
     report
-}
-
-/// CMD_VERSION, then CMD_BUILD_INFO where the device answers it.
-fn identify(client: &Client, profile: &Profile) -> Result<DeviceInfo, String> {
-    let cmd = profile
-        .command_by_id(msp::CMD_VERSION)
-        .ok_or("the profile has no CMD_VERSION")?;
-    let reply = ops::send(client, profile, cmd, &[]).map_err(|e| Halt::from(e).message())?;
-    let mut info = DeviceInfo::from_version(profile, reply.payload().unwrap_or_default())?;
-    if let Some(cmd) = profile.command_by_id(msp::CMD_BUILD_INFO)
-        && let Ok(reply) = ops::send(client, profile, cmd, &[])
-    {
-        info.build_date = session::build_date(reply.payload().unwrap_or_default());
-    }
-    Ok(info)
-}
-
-fn describe(info: &DeviceInfo) -> String {
-    let mut s = format!(
-        "hw {:#04x} fw {} api {} build {}",
-        info.hw, info.firmware, info.api, info.build
-    );
-    if let Some(d) = &info.build_date {
-        s.push_str(&format!(" ({d})"));
-    }
-    s
 }
 
 type StepOutcome = Result<(bool, String), (Halt, String)>;

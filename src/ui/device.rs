@@ -5,8 +5,8 @@ use super::jobs::JobOutput;
 use super::runtime::Runtime;
 use super::{Action, JobWork};
 use crate::i18n::Lang;
-use crate::link::{DeviceInfo, LinkCommand, session};
-use crate::ops::exchange as ops;
+use crate::link::{DeviceInfo, LinkCommand};
+use crate::ops::device as ops;
 use crate::profile::Profile;
 use crate::protocol::{hex, msp};
 use eframe::egui;
@@ -40,47 +40,16 @@ pub enum Output {
     Power(Result<Vec<u8>, String>),
 }
 
-fn ping(client: &crate::link::Client, profile: &Profile) -> Result<Duration, String> {
-    let cmd = profile
-        .command_by_id(msp::CMD_PING)
-        .ok_or("the profile has no CMD_PING")?;
-    let t = Instant::now();
-    ops::send(client, profile, cmd, &[]).map_err(|e| e.to_string())?;
-    Ok(t.elapsed())
-}
-
-fn version(client: &crate::link::Client, profile: &Profile) -> Result<DeviceInfo, String> {
-    let cmd = profile
-        .command_by_id(msp::CMD_VERSION)
-        .ok_or("the profile has no CMD_VERSION")?;
-    let reply = ops::send(client, profile, cmd, &[]).map_err(|e| e.to_string())?;
-    let mut info = DeviceInfo::from_version(profile, reply.payload().unwrap_or_default())?;
-    if let Some(cmd) = profile.command_by_id(msp::CMD_BUILD_INFO)
-        && let Ok(reply) = ops::send(client, profile, cmd, &[])
-    {
-        info.build_date = session::build_date(reply.payload().unwrap_or_default());
-    }
-    Ok(info)
-}
-
-fn power(client: &crate::link::Client, profile: &Profile) -> Result<Vec<u8>, String> {
-    let cmd = profile
-        .command_by_id(3)
-        .ok_or("the profile has no CMD_GET_POWER_STATE")?;
-    let reply = ops::send(client, profile, cmd, &[]).map_err(|e| e.to_string())?;
-    Ok(reply.payload().unwrap_or_default().to_vec())
-}
-
 /// Reads CMD_VERSION, CMD_BUILD_INFO and the power state.
 fn read_job(profile: &std::sync::Arc<Profile>) -> Action {
     let p = profile.clone();
     Action::StartJob(JobWork::new("version", move |client, cancel, sink| {
-        let v = version(client, &p);
+        let v = ops::identify(client, &p).map_err(|e| e.to_string());
         sink.send(JobOutput::Device(Output::Version(v.clone())));
         if cancel.is_cancelled() {
             return Err("cancelled".into());
         }
-        let pw = power(client, &p);
+        let pw = ops::power_state(client, &p).map_err(|e| e.to_string());
         sink.send(JobOutput::Device(Output::Power(pw.clone())));
         v?;
         pw?;
@@ -145,7 +114,9 @@ impl DevicePanel {
                 actions.push(Action::StartJob(JobWork::new(
                     "ping",
                     move |client, _cancel, sink| {
-                        let r = ping(client, &p);
+                        let r = ops::ping(client, &p)
+                            .map(|ping| ping.rtt)
+                            .map_err(|e| e.to_string());
                         sink.send(JobOutput::Device(Output::Ping(r.clone())));
                         r.map(|d| format!("answered in {:.1} ms", d.as_secs_f64() * 1e3))
                     },

@@ -21,7 +21,6 @@ pub use app::{App, PanelId, Saved};
 pub use runtime::Target;
 pub use solar::{Outcome as SolarOutcome, Trip as SolarTrip};
 
-use crate::ops::exchange as ops;
 use crate::profile::{Input, Value};
 use runtime::Runtime;
 
@@ -118,63 +117,53 @@ impl JobSpec {
         let profile = rt.profile.clone();
         match self {
             JobSpec::Read(ids) => rt.start_job("read", move |client, cancel, sink| {
-                let total = ids.len() as u64;
-                let mut failed = 0;
-                for (i, id) in ids.iter().enumerate() {
-                    if cancel.is_cancelled() {
-                        return Err("cancelled".into());
-                    }
-                    let Some(cmd) = profile.command_by_id(*id) else {
-                        continue;
-                    };
-                    let r = ops::read(client, &profile, cmd, &[]).map_err(|e| e.to_string());
-                    failed += usize::from(r.is_err());
-                    sink.send(jobs::JobOutput::Read(*id, r));
-                    sink.send(jobs::JobOutput::Progress(crate::ops::Progress {
-                        done: i as u64 + 1,
-                        total,
-                        message: cmd.ident.clone(),
-                    }));
-                }
-                if failed == 0 {
-                    Ok(format!("{total} read"))
+                let tally = crate::ops::tuning::read_commands(
+                    client,
+                    &profile,
+                    &ids,
+                    cancel,
+                    &mut |p| sink.send(jobs::JobOutput::Progress(p)),
+                    &mut |id, r| sink.send(jobs::JobOutput::Read(id, r.map_err(|e| e.to_string()))),
+                )
+                .map_err(|e| e.to_string())?;
+                if tally.failed == 0 {
+                    Ok(format!("{} read", tally.total))
                 } else {
-                    Err(format!("{failed} of {total} reads failed"))
+                    Err(format!("{} of {} reads failed", tally.failed, tally.total))
                 }
             }),
             JobSpec::Write(items) => rt.start_job("write", move |client, cancel, sink| {
-                let total = items.len() as u64;
-                let (mut verified, mut bad) = (0, 0);
-                for (i, (set, inputs)) in items.iter().enumerate() {
-                    if cancel.is_cancelled() {
-                        return Err(format!("cancelled after {i} of {total} commands"));
+                let mut done = 0;
+                let tally = crate::ops::tuning::write_commands(
+                    client,
+                    &profile,
+                    &items,
+                    cancel,
+                    &mut |p| sink.send(jobs::JobOutput::Progress(p)),
+                    &mut |id, r| {
+                        done += 1;
+                        sink.send(jobs::JobOutput::Wrote(id, r.map_err(|e| e.to_string())))
+                    },
+                )
+                .map_err(|e| match e {
+                    crate::ops::OpError::Cancelled => {
+                        format!("cancelled after {done} of {} commands", items.len())
                     }
-                    let Some(cmd) = profile.command_by_id(*set) else {
-                        continue;
-                    };
-                    let r = ops::write_verified(client, &profile, cmd, inputs)
-                        .map_err(|e| e.to_string());
-                    match &r {
-                        Ok(checks) if checks.iter().all(|c| c.ok()) => verified += 1,
-                        _ => bad += 1,
-                    }
-                    sink.send(jobs::JobOutput::Wrote(*set, r));
-                    sink.send(jobs::JobOutput::Progress(crate::ops::Progress {
-                        done: i as u64 + 1,
-                        total,
-                        message: cmd.ident.clone(),
-                    }));
-                }
-                if bad == 0 {
-                    Ok(format!("{verified} command(s) written and verified"))
+                    e => e.to_string(),
+                })?;
+                if tally.failed == 0 {
+                    Ok(format!("{} command(s) written and verified", tally.done))
                 } else {
-                    Err(format!("{bad} of {total} command(s) not verified"))
+                    Err(format!(
+                        "{} of {} command(s) not verified",
+                        tally.failed, tally.total
+                    ))
                 }
             }),
             JobSpec::SavePreset(path, note) => {
                 rt.start_job("save preset", move |client, cancel, sink| {
                     let mut preset =
-                        crate::preset::Preset::capture(client, &profile, cancel, &mut |p| {
+                        crate::ops::preset::capture(client, &profile, cancel, &mut |p| {
                             sink.send(jobs::JobOutput::Progress(p))
                         })
                         .map_err(|e| e.to_string())?;
@@ -189,21 +178,21 @@ impl JobSpec {
                 rt.start_job("apply preset", move |client, cancel, sink| {
                     let mut total = 0;
                     let mut bad = 0;
-                    preset
-                        .apply_each(
-                            client,
-                            &profile,
-                            cancel,
-                            &mut |p| sink.send(jobs::JobOutput::Progress(p)),
-                            &mut |command, checks| {
-                                total += checks.len();
-                                bad += checks.iter().filter(|c| !c.ok()).count();
-                                if let Some(cmd) = profile.command(command) {
-                                    sink.send(jobs::JobOutput::Wrote(cmd.id, Ok(checks.to_vec())));
-                                }
-                            },
-                        )
-                        .map_err(|e| e.to_string())?;
+                    crate::ops::preset::apply_each(
+                        client,
+                        &profile,
+                        &preset,
+                        cancel,
+                        &mut |p| sink.send(jobs::JobOutput::Progress(p)),
+                        &mut |command, checks| {
+                            total += checks.len();
+                            bad += checks.iter().filter(|c| !c.ok()).count();
+                            if let Some(cmd) = profile.command(command) {
+                                sink.send(jobs::JobOutput::Wrote(cmd.id, Ok(checks.to_vec())));
+                            }
+                        },
+                    )
+                    .map_err(|e| e.to_string())?;
                     if bad == 0 {
                         Ok(format!("{total} field(s) written and verified"))
                     } else {
@@ -214,9 +203,9 @@ impl JobSpec {
                 })
             }
             JobSpec::Send(id, inputs) => rt.start_job("send", move |client, _cancel, _sink| {
-                let cmd = profile.command_by_id(id).ok_or("unknown command")?;
-                ops::send(client, &profile, cmd, &inputs).map_err(|e| e.to_string())?;
-                Ok(format!("{} acknowledged", cmd.ident))
+                let ident = crate::ops::tuning::send_command(client, &profile, id, &inputs)
+                    .map_err(|e| e.to_string())?;
+                Ok(format!("{ident} acknowledged"))
             }),
         }
     }

@@ -4,7 +4,7 @@
 use super::runtime::{Reading, Runtime};
 use super::{Action, JobSpec};
 use crate::i18n::Lang;
-use crate::preset::{CommandValues, Loaded, Preset, display_value, preset_commands};
+use crate::preset::{CommandValues, Loaded, Preset, preset_commands};
 use eframe::egui;
 use std::path::PathBuf;
 
@@ -29,18 +29,7 @@ fn device_values(rt: &Runtime) -> Vec<CommandValues> {
             let Some(Reading::Values(values, _)) = rt.readings.get(&get.id) else {
                 return None;
             };
-            let fields = set
-                .request
-                .iter()
-                .filter_map(|f| {
-                    let v = values.get(&f.ident)?;
-                    Some((f.ident.clone(), display_value(f, v)))
-                })
-                .collect();
-            Some(CommandValues {
-                command: set.ident.clone(),
-                fields,
-            })
+            Some(crate::ops::preset::command_values(set, values))
         })
         .collect()
 }

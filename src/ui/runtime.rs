@@ -4,7 +4,7 @@
 use super::jobs::{Job, JobOutput};
 use crate::link::{
     DeviceInfo, Link, LinkCommand, LinkEvent, LinkOptions, LinkState, LinkStats, LogEntry, Opener,
-    Poll, Request,
+    Poll,
     serial::{self, PortInfo},
 };
 use crate::ops::{Check, FieldValues};
@@ -263,42 +263,7 @@ impl Runtime {
     /// The telemetry commands to poll: the profile's plotted commands at `rate` Hz (`None`: as
     /// fast as the wire allows), and its other telemetry at 1 Hz, so that every value is live.
     pub fn polls(&self, rate: Option<f64>) -> Vec<Poll> {
-        // Only MSP devices are polled from here. Tuya: the module session sends the heartbeat
-        // itself and the MCU reports its data points; polling 0x00/0x01/0x08 would take the
-        // restart heartbeat's 0 from the session. Servo commands name a servo: the servo bench
-        // polls the servo it works on itself.
-        if self.profile.protocol != crate::profile::Protocol::Msp {
-            return Vec::new();
-        }
-        let mut plotted: Vec<u8> = Vec::new();
-        for plot in &self.profile.plots {
-            if let Some(cmd) = self.profile.command(&plot.command)
-                && !plotted.contains(&cmd.id)
-            {
-                plotted.push(cmd.id);
-            }
-        }
-        let poll = |cmd: &crate::profile::Command, interval| Poll {
-            request: Request::for_command(&self.profile, cmd, Vec::new()).attempts(1),
-            interval,
-        };
-        let plot_interval = rate.map(|r| Duration::from_secs_f64(1.0 / r.max(0.1)));
-        let mut polls: Vec<Poll> = plotted
-            .iter()
-            .filter_map(|id| self.profile.command_by_id(*id))
-            .map(|cmd| poll(cmd, plot_interval))
-            .collect();
-        // The other telemetry: commands that take no payload and answer values. MSP's core
-        // commands (identity, power state) are read once by the session, not polled.
-        let others = self.profile.commands.iter().filter(|c| {
-            c.kind == crate::profile::CommandKind::Telemetry
-                && c.request.is_empty()
-                && !c.reply.is_empty()
-                && !plotted.contains(&c.id)
-                && !(self.profile.protocol == crate::profile::Protocol::Msp && c.id <= 9)
-        });
-        polls.extend(others.map(|cmd| poll(cmd, Some(Duration::from_secs(1)))));
-        polls
+        crate::ops::telemetry::polls(&self.profile, rate)
     }
 
     /// Drains worker events for at most `EVENT_BUDGET`; returns whether more are waiting.
