@@ -156,6 +156,17 @@ pub enum OpError {
     /// The device's answer to CMD_VERSION cannot be read.
     #[error("{0}")]
     Identity(String),
+    /// A servo that did not answer at the rate it was just given; `found` is the rate it was
+    /// found at instead (the port is left there), if any.
+    #[error("servo {id} did not answer at {baud} baud{}", found.map_or(", nor at any other rate".to_string(), |b| format!("; it was found at {b} baud (the port is now at {b})")))]
+    NotAtNewRate {
+        /// The servo.
+        id: u8,
+        /// The rate it was given.
+        baud: u32,
+        /// Where it answers instead.
+        found: Option<u32>,
+    },
     /// The device does not hold what was written, or is not where it should be.
     #[error("{0}")]
     Verify(String),

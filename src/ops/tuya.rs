@@ -25,6 +25,12 @@ pub fn query_request() -> Request {
     })
 }
 
+/// The Wi-Fi state report (0x03) the module sends the MCU: `state` 0-6 (the profile's labels
+/// name them). The MCU acks it; the ack is seen in the packet log.
+pub fn wifi_state_request(state: u8) -> Request {
+    Request::new(cmd::WIFI_STATE, vec![state])
+}
+
 /// Every data point, as the MCU reports them to a query (0x08).
 pub fn query(client: &Client) -> Result<Vec<Packet>, OpError> {
     Ok(client.request(query_request())?.packets)

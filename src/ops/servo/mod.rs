@@ -12,7 +12,7 @@ pub use motion::{
     Wheel, damping_request, monitor_request, read_angle, read_angle_request, rotate_request,
     spin_request, stop_all_requests,
 };
-pub use params::{read_block, read_param, write_block, write_param};
+pub use params::{read_all, read_block, read_param, write_block, write_param, write_params};
 pub use scan::{ScanPlan, ScanRow, scan};
 pub use setup::{Location, factory_location, locate, reset_user_data, set_baud, set_id};
 
@@ -100,8 +100,8 @@ fn command(profile: &Profile, id: u8) -> Result<&crate::profile::Command, OpErro
         .ok_or_else(|| OpError::unknown_command(profile, id))
 }
 
-/// Switches the port to `baud`.
-fn switch(client: &Client, baud: u32) -> Result<(), OpError> {
+/// Switches the port to `baud` (where the servo to work on talks).
+pub fn switch(client: &Client, baud: u32) -> Result<(), OpError> {
     client
         .set_baud(baud)
         .map_err(|error| OpError::Port { baud, error })

@@ -3,7 +3,7 @@
 
 use super::{PARAM_BAUD, PARAM_ID, command, param_by_id};
 use crate::link::{Client, Match, ReplySpec, Request};
-use crate::ops::{Check, OpError};
+use crate::ops::{Cancel, Check, OpError, Progress};
 use crate::profile::model::Access;
 use crate::profile::{Input, Param, Profile, Value};
 use crate::protocol::Direction;
@@ -192,4 +192,54 @@ pub fn write_block(
             }
         })
         .collect())
+}
+
+/// Every parameter of servo `id`: the read-only ones one by one, the user block in one
+/// exchange. Raw values by `data_id`, each with why it could not be read.
+pub fn read_all(client: &Client, profile: &Profile, id: u8) -> Vec<(u8, Result<i64, OpError>)> {
+    let mut out = Vec::new();
+    for p in profile
+        .params
+        .iter()
+        .filter(|p| p.access == Access::ReadOnly)
+    {
+        out.push((p.id, read_param(client, profile, id, p)));
+    }
+    match read_block(client, profile, id) {
+        Ok(block) => out.extend(block.into_iter().map(|(pid, v)| (pid, Ok(v)))),
+        Err(e) => out.extend(profile.block_params().map(|p| (p.id, Err(e.clone())))),
+    }
+    out
+}
+
+/// Writes each of `values` (raw, by `data_id`) to servo `id` with [`write_param`], each read
+/// back. A failed or mismatched write does not stop the others; a cancel stops between
+/// parameters. Returns each parameter's check, or why it failed, in order.
+pub fn write_params(
+    client: &Client,
+    profile: &Profile,
+    id: u8,
+    values: &[(u8, i64)],
+    cancel: &Cancel,
+    progress: &mut dyn FnMut(Progress),
+) -> Vec<(u8, Result<Check, OpError>)> {
+    let mut checks = Vec::new();
+    for (i, (pid, raw)) in values.iter().enumerate() {
+        if cancel.is_cancelled() {
+            break;
+        }
+        let Some(p) = profile.param(*pid) else {
+            continue;
+        };
+        progress(Progress {
+            done: i as u64,
+            total: values.len() as u64,
+            message: p.field.ident.clone(),
+        });
+        checks.push((
+            *pid,
+            write_param(client, profile, id, p, Input::Raw(Value::Int(*raw))),
+        ));
+    }
+    checks
 }

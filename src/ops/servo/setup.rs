@@ -145,14 +145,11 @@ pub fn set_baud(client: &Client, profile: &Profile, id: u8, option: u8) -> Resul
     if verified {
         return Ok(baud);
     }
-    match recover(client, id)? {
-        Some(b) => Err(OpError::Verify(format!(
-            "servo {id} did not answer at {baud} baud; it was found at {b} baud (the port is now at {b})"
-        ))),
-        None => Err(OpError::Verify(format!(
-            "servo {id} did not answer at {baud} baud, nor at any other rate"
-        ))),
-    }
+    Err(OpError::NotAtNewRate {
+        id,
+        baud,
+        found: recover(client, id)?,
+    })
 }
 
 /// Where a servo is after [`reset_user_data`]: its factory id and baud rate.

@@ -135,11 +135,7 @@ impl ParamsState {
             ),
             Err(e) => (
                 false,
-                format!(
-                    "{} {}: {e}",
-                    self.lang.tr("cannot save", "无法保存"),
-                    path.display()
-                ),
+                format!("{}: {e}", self.lang.tr("cannot save", "无法保存")),
             ),
         });
     }
