@@ -236,8 +236,8 @@ impl Cursor<'_> {
         }
     }
 
-    /// At a list value (or `Some([`): moves to element `index`.
-    fn find_index(&mut self, index: usize) -> bool {
+    /// At a group opened by `open` (or `Some(` and then it): moves inside it.
+    fn enter(&mut self, open: u8) -> bool {
         self.skip_ws();
         if self.s[self.pos..].starts_with(b"Some") {
             self.ident();
@@ -248,21 +248,33 @@ impl Cursor<'_> {
             self.pos += 1;
             self.skip_ws();
         }
-        if self.peek() != Some(b'[') {
+        if self.peek() != Some(open) {
             return false;
         }
         self.pos += 1;
-        let mut n = 0;
+        true
+    }
+
+    /// Inside a group closed by `close`: moves to the next item (past commas); false at its end.
+    fn next_item(&mut self, close: u8) -> bool {
         loop {
             self.skip_ws();
             match self.peek() {
-                None | Some(b']') => return false,
-                Some(b',') => {
-                    self.pos += 1;
-                    continue;
-                }
-                _ => {}
+                None => return false,
+                Some(b) if b == close => return false,
+                Some(b',') => self.pos += 1,
+                _ => return true,
             }
+        }
+    }
+
+    /// At a list value (or `Some([`): moves to element `index`.
+    fn find_index(&mut self, index: usize) -> bool {
+        if !self.enter(b'[') {
+            return false;
+        }
+        let mut n = 0;
+        while self.next_item(b']') {
             if n == index {
                 return true;
             }
@@ -273,36 +285,17 @@ impl Cursor<'_> {
             }
             n += 1;
         }
+        false
     }
 
     /// At a map value (or `Some({`): moves to the value of the entry whose key is the string
     /// `key`.
     fn find_entry(&mut self, key: &str) -> bool {
-        self.skip_ws();
-        if self.s[self.pos..].starts_with(b"Some") {
-            self.ident();
-            self.skip_ws();
-            if self.peek() != Some(b'(') {
-                return false;
-            }
-            self.pos += 1;
-            self.skip_ws();
-        }
-        if self.peek() != Some(b'{') {
+        if !self.enter(b'{') {
             return false;
         }
-        self.pos += 1;
         let quoted = ron::to_string(key).unwrap_or_else(|_| format!("\"{key}\""));
-        loop {
-            self.skip_ws();
-            match self.peek() {
-                None | Some(b'}') => return false,
-                Some(b',') => {
-                    self.pos += 1;
-                    continue;
-                }
-                _ => {}
-            }
+        while self.next_item(b'}') {
             let start = self.pos;
             self.skip_value();
             if self.pos == start {
@@ -325,6 +318,7 @@ impl Cursor<'_> {
                 return false;
             }
         }
+        false
     }
 }
 

@@ -204,6 +204,16 @@ pub fn read(path: &Path) -> Result<String, DocumentError> {
     std::fs::read_to_string(path).map_err(|e| DocumentError::io(path, "read", &e))
 }
 
+/// Reads the document at `path` and parses it with `parse`, which is given the name errors use
+/// (the path) and the text.
+pub fn load<T>(
+    path: &Path,
+    parse: impl FnOnce(&str, &str) -> Result<T, DocumentError>,
+) -> Result<T, DocumentError> {
+    let text = read(path)?;
+    parse(&path.display().to_string(), &text)
+}
+
 /// Writes `bytes` to `path` atomically: into a temporary file in the same folder, synced to
 /// disk, then renamed over `path`. On any failure `path` is untouched and the temporary file is
 /// removed.

@@ -175,8 +175,7 @@ impl Preset {
 
     /// Reads a preset file and checks it against `profile`.
     pub fn load(path: &Path, profile: &Profile) -> Result<Loaded, DocumentError> {
-        let text = document::read(path)?;
-        Self::parse(&path.display().to_string(), &text, profile)
+        document::load(path, |name, text| Self::parse(name, text, profile))
     }
 
     /// Parses preset text (`name` names it in errors) and checks it against `profile`.

@@ -135,8 +135,7 @@ pub struct Action {
 impl Plan {
     /// Reads a plan file and checks it against `profile`.
     pub fn load(path: &Path, profile: &Profile) -> Result<Plan, DocumentError> {
-        let text = document::read(path)?;
-        Self::parse(&path.display().to_string(), &text, profile)
+        document::load(path, |name, text| Self::parse(name, text, profile))
     }
 
     /// Parses plan text (`name` names it in errors) and checks it against `profile`. Every

@@ -48,8 +48,7 @@ pub fn in_preset(p: &crate::profile::Param) -> bool {
 impl ParamPreset {
     /// Reads a preset file and checks it against the servo `profile`.
     pub fn load(path: &Path, profile: &Profile) -> Result<Self, DocumentError> {
-        let text = document::read(path)?;
-        Self::parse(&path.display().to_string(), &text, profile)
+        document::load(path, |name, text| Self::parse(name, text, profile))
     }
 
     /// Parses preset text (`name` names it in errors) and checks every value against `profile`.
