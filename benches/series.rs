@@ -1,6 +1,7 @@
 //! Plot-path costs of `botbench::series` at the GUI's sizing: 4 series × 10 min at 100 Hz
-//! (60_000 points each, ring wrapped) decimated into 1200 pixel columns, and pushing samples.
-//! Each `decimate` iteration is one frame's worth (all 4 series); the frame budget is 4 ms p95.
+//! (60_000 points each, ring wrapped) decimated into 1200 pixel columns, pushing samples, and
+//! the CSV export of the whole set. Each `decimate` iteration is one frame's worth (all 4
+//! series); the frame budget is 4 ms p95.
 //!
 //! Run: `cargo bench --bench series -- --warm-up-time 1 --measurement-time 3`
 
@@ -105,5 +106,24 @@ fn push(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, decimate, push);
+/// The telemetry CSV export of the full set (4 series × 60_000 samples, one row per 10 ms),
+/// written with the `csv` crate into memory: rows a second.
+fn csv_export(c: &mut Criterion) {
+    let (set, _, _) = full_set();
+    let mut out = Vec::with_capacity(8 << 20);
+    set.write_csv(&mut out).unwrap();
+    let rows = out.iter().filter(|&&b| b == b'\n').count() as u64;
+    let mut g = c.benchmark_group("csv_export");
+    g.throughput(Throughput::Elements(rows));
+    g.bench_function("full_set_rows", |b| {
+        b.iter(|| {
+            out.clear();
+            set.write_csv(&mut out).unwrap();
+            black_box(out.len())
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, decimate, push, csv_export);
 criterion_main!(benches);

@@ -3,7 +3,7 @@
 //! Prints one JSON document a line. Run: `cargo bench --bench ui_frame`.
 
 use botbench::series::{DEFAULT_CAPACITY, SeriesSet};
-use botbench::ui::{App, PanelId, Saved, Target};
+use botbench::ui::{App, PanelId, Settings, Target};
 use eframe::egui;
 use egui_kittest::Harness;
 use std::time::{Duration, Instant};
@@ -18,12 +18,12 @@ fn main() {
     let quick = !std::env::args().any(|a| a == "--bench");
     let frames = if quick { 5 } else { 300 };
 
-    let saved = Saved {
+    let saved = Settings {
         // No device: the frame cost is drawing, not the link.
         target: Target::Port("/nonexistent/botbench-bench".into()),
         panel: PanelId::Telemetry,
         window_secs: 600.0,
-        ..Saved::default()
+        ..Settings::default()
     };
     let mut h = Harness::builder()
         .with_size(egui::vec2(1280.0, 800.0))
@@ -38,7 +38,7 @@ fn main() {
         );
     {
         let app = h.state_mut().as_mut().expect("app");
-        let now = app.rt.t0.elapsed().as_secs_f64();
+        let now = app.state.device.t0.elapsed().as_secs_f64();
         let n = DEFAULT_CAPACITY; // 10 min at 100 Hz
         let mut attitude = SeriesSet::new(DEFAULT_CAPACITY);
         let mut battery = SeriesSet::new(DEFAULT_CAPACITY);
@@ -49,8 +49,8 @@ fn main() {
             let _ = attitude.push("eulerZ", t, t * 0.5 % 360.0);
             let _ = battery.push("batteryVoltage", t, 14.8 - t * 1e-4);
         }
-        app.rt.plots.insert("attitude".into(), attitude);
-        app.rt.plots.insert("battery".into(), battery);
+        app.state.device.plots.insert("attitude".into(), attitude);
+        app.state.device.plots.insert("battery".into(), battery);
     }
     h.run_steps(3);
     let mut times = Vec::with_capacity(frames);

@@ -6,7 +6,7 @@ use crate::link::{
     Link, LinkCommand, LinkEvent, LinkOptions, Match, Poll, ReplySpec, Request, serial, wire_time,
 };
 use crate::ops::Cancel;
-use crate::ops::provision;
+use crate::ops::servo::provision;
 use crate::ops::servo::{self, ScanPlan};
 use crate::ops::tuya::{self as tuya_ops, OtaTiming};
 use crate::profile::{Input, Profile, Registry, Value};

@@ -1,5 +1,6 @@
 pub mod bench;
 pub mod cli;
+pub mod document;
 pub mod i18n;
 pub mod link;
 pub mod ops;

@@ -4,7 +4,7 @@ use botbench::i18n::Lang;
 use botbench::profile::Value;
 use botbench::sim::window_cleaner::WindowCleaner;
 use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
-use botbench::ui::runtime::Reading;
+use botbench::ui::state::Reading;
 use botbench::ui::{App, PanelId};
 use eframe::egui;
 use egui_kittest::kittest::Queryable;
@@ -27,15 +27,20 @@ fn harness(path: &str, panel: PanelId) -> H {
 }
 
 fn all_read(app: &App) -> bool {
-    (130..=136).all(|id| matches!(app.rt.readings.get(&id), Some(Reading::Values(..))))
+    (130..=136).all(|id| {
+        matches!(
+            app.state.device.readings.get(&id),
+            Some(Reading::Values(..))
+        )
+    })
 }
 
 fn read_all(h: &mut H) {
-    step_until(h, "the link", |a| a.rt.connected());
+    step_until(h, "the link", |a| a.state.connected());
     h.get_by_label("Read all").click();
     // Also the read job's end: while it runs, writing is disabled.
     step_until(h, "every parameter read", |a| {
-        all_read(a) && a.rt.job_progress().is_none()
+        all_read(a) && a.state.job_progress().is_none()
     });
 }
 
@@ -50,11 +55,8 @@ fn read_all_brings_every_parameter_from_the_device() {
     let mut h = harness(b.path(), PanelId::Tuning);
     read_all(&mut h);
     let want = b.sim.lock().unwrap().param("waterPumpDuration").unwrap();
-    let got = match app(&h).rt.readings.get(&135) {
-        Some(Reading::Values(v, _)) => v
-            .iter()
-            .find(|(k, _)| k == "waterPumpDuration")
-            .map(|(_, v)| v.clone()),
+    let got = match app(&h).state.device.readings.get(&135) {
+        Some(Reading::Values(v, _)) => v.get("waterPumpDuration").cloned(),
         _ => None,
     };
     assert_eq!(got, Some(Value::Int(want)));
@@ -95,7 +97,7 @@ fn an_out_of_range_edit_is_refused_for_writing() {
         vec!["101".to_string()]
     );
     assert!(
-        a.tuning.pending(&a.rt).is_err(),
+        a.tuning.pending(&a.state).is_err(),
         "an invalid edit blocks writing"
     );
     assert!(
@@ -123,8 +125,8 @@ fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
     assert!(h.query_by_label("Write these changes?").is_some());
     h.get_by_label("Write").click();
     step_until(&mut h, "the write to be verified", |a| {
-        a.rt.marks.get(&(130, "pwmValue".to_string()))
-            == Some(&botbench::ui::runtime::Mark::Verified)
+        a.state.device.marks.get(&(130, "pwmValue".to_string()))
+            == Some(&botbench::ui::state::Mark::Verified)
     });
     assert_eq!(b.sim.lock().unwrap().param("pwmValue"), Some(64));
     h.step();
@@ -137,7 +139,9 @@ fn the_plots_receive_points() {
     let mut h = harness(b.path(), PanelId::Telemetry);
     step_until(&mut h, "attitude and battery points", |a| {
         let n = |id: &str, f: &str| {
-            a.rt.plots
+            a.state
+                .device
+                .plots
                 .get(id)
                 .and_then(|s| s.get(f))
                 .map_or(0, |s| s.len())
@@ -152,13 +156,15 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
     let path = std::env::temp_dir().join(format!("botbench-gui-preset-{}.ron", std::process::id()));
     let mut h = harness(b.path(), PanelId::Presets);
     step_until(&mut h, "the first read", |a| {
-        all_read(a) && a.rt.job_progress().is_none()
+        all_read(a) && a.state.job_progress().is_none()
     });
     h.state_mut().as_mut().unwrap().presets.path = path.display().to_string();
     h.step();
     h.get_by_label("Save device to file").click();
     step_until(&mut h, "the preset saved", |_| path.exists());
-    step_until(&mut h, "the job to end", |a| a.rt.job_progress().is_none());
+    step_until(&mut h, "the job to end", |a| {
+        a.state.job_progress().is_none()
+    });
     let saved_pwm = b.sim.lock().unwrap().param("pwmValue").unwrap();
     let saved_target = b.sim.lock().unwrap().param("defaultTarget").unwrap();
     // The device drifts from the preset.
@@ -176,8 +182,8 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
     h.run_steps(2);
     h.get_by_label("Compare with device").click();
     step_until(&mut h, "the device read", |a| {
-        a.rt.job_progress().is_none()
-            && matches!(a.rt.readings.get(&130), Some(Reading::Values(..)))
+        a.state.job_progress().is_none()
+            && matches!(a.state.device.readings.get(&130), Some(Reading::Values(..)))
     });
     h.step();
     assert!(
@@ -186,7 +192,11 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
     );
     h.get_by_label_contains("Apply (").click();
     step_until(&mut h, "the preset applied", |a| {
-        a.rt.job_progress().is_none() && a.rt.marks.contains_key(&(130, "pwmValue".to_string()))
+        a.state.job_progress().is_none()
+            && a.state
+                .device
+                .marks
+                .contains_key(&(130, "pwmValue".to_string()))
     });
     assert_eq!(b.sim.lock().unwrap().param("pwmValue"), Some(saved_pwm));
     assert_eq!(
@@ -202,12 +212,12 @@ fn a_malformed_preset_is_shown_with_its_line_and_column() {
     let path = std::env::temp_dir().join(format!("botbench-gui-bad-{}.ron", std::process::id()));
     std::fs::write(&path, "(\n  version: 1,\n  profile: \"window-cleaner\",\n  values: {\n    \"MSP_SET_PWMVALUE\": { \"pwmValue\": \"101\" },\n  },\n)\n").unwrap();
     let mut h = harness(b.path(), PanelId::Presets);
-    step_until(&mut h, "the link", |a| a.rt.connected());
+    step_until(&mut h, "the link", |a| a.state.connected());
     h.state_mut().as_mut().unwrap().presets.path = path.display().to_string();
     h.step();
     h.get_by_label("Open").click();
     h.run_steps(2);
-    let err = app(&h).presets.error.clone().expect("refused");
+    let err = app(&h).presets.error.clone().expect("refused").to_string();
     assert!(err.contains(":5:") && err.contains("out of range"), "{err}");
     assert!(app(&h).presets.loaded.is_none());
     let _ = std::fs::remove_file(&path);
@@ -219,22 +229,22 @@ fn every_panel_renders_in_english_and_chinese() {
     // languages checks the font as well as the layout.
     let b = bench();
     let mut h = harness(b.path(), PanelId::Tuning);
-    step_until(&mut h, "the link", |a| a.rt.connected());
+    step_until(&mut h, "the link", |a| a.state.connected());
     let panels = app(&h).panels();
     assert!(panels.len() >= 5, "{panels:?}");
     for lang in [Lang::En, Lang::Zh] {
         for panel in &panels {
             {
                 let a = h.state_mut().as_mut().unwrap();
-                a.saved.lang = lang;
-                a.saved.panel = *panel;
+                a.settings.lang = lang;
+                a.settings.panel = *panel;
             }
             h.run_steps(3);
         }
     }
     h.get_by_label("English").click();
     h.run_steps(2);
-    assert_eq!(app(&h).saved.lang, Lang::En);
+    assert_eq!(app(&h).settings.lang, Lang::En);
 }
 
 #[test]
@@ -250,7 +260,7 @@ fn nothing_is_shown_before_a_reply_and_a_failed_read_says_so_in_place() {
     let server = PtyServer::start(shared, silent).unwrap();
     let mut h = harness(server.path(), PanelId::Tuning);
     step_until(&mut h, "the reads to fail", |a| {
-        matches!(a.rt.readings.get(&130), Some(Reading::Failed(_)))
+        matches!(a.state.device.readings.get(&130), Some(Reading::Failed(_)))
     });
     h.step();
     assert!(h.query_all_by_label("not read yet").next().is_some());
@@ -285,7 +295,7 @@ fn a_slow_device_is_read_once_the_answer_margin_allows_for_it() {
     assert_eq!(saved.margin_ms, None, "the protocol's own margin");
     let mut h = gui_harness::harness(saved);
     step_until(&mut h, "the first read to fail", |a| {
-        matches!(a.rt.readings.get(&130), Some(Reading::Failed(_)))
+        matches!(a.state.device.readings.get(&130), Some(Reading::Failed(_)))
     });
     drop(h);
     // 300 ms chosen in the connection bar: every parameter is read.

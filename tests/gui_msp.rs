@@ -42,7 +42,7 @@ fn step_until(h: &mut H, what: &str, done: impl Fn(&App) -> bool) {
         format!(
             "info {:?}, solar inputs {:?}, outcomes {:?}, self-test running {} results {:?} \
              error {:?}",
-            a.rt.info,
+            a.state.device.info,
             a.solar.inputs,
             a.solar.control.outcomes,
             a.selftest.running,
@@ -53,7 +53,7 @@ fn step_until(h: &mut H, what: &str, done: impl Fn(&App) -> bool) {
 }
 
 fn identified(a: &App) -> bool {
-    a.rt.connected() && matches!(a.rt.info, Some(Ok(_)))
+    a.state.connected() && matches!(a.state.device.info, Some(Ok(_)))
 }
 
 fn nav_has(h: &H, name: &str) -> bool {
@@ -72,14 +72,14 @@ fn a_clear_capability_bit_hides_its_panels_and_the_app_leaves_them() {
     assert!(!a.panels().contains(&PanelId::Presets), "{:?}", a.panels());
     assert!(a.panels().contains(&PanelId::SelfTest));
     assert_ne!(
-        a.saved.panel,
+        a.settings.panel,
         PanelId::Tuning,
         "the app left the hidden panel"
     );
     assert!(!nav_has(&h, "Tuning") && !nav_has(&h, "Presets"));
     assert!(nav_has(&h, "Self-test"));
     // The device panel says why.
-    h.state_mut().as_mut().unwrap().saved.panel = PanelId::Device;
+    h.state_mut().as_mut().unwrap().settings.panel = PanelId::Device;
     h.run_steps(2);
     assert!(h.query_by_label_contains("Hidden (not supported").is_some());
     assert!(h.query_all_by_label("not supported").next().is_some());
@@ -90,7 +90,7 @@ fn a_clear_capability_bit_hides_its_panels_and_the_app_leaves_them() {
     step_until(&mut h, "the device identified", identified);
     h.run_steps(2);
     assert!(app(&h).panels().contains(&PanelId::Tuning));
-    assert_eq!(app(&h).saved.panel, PanelId::Tuning);
+    assert_eq!(app(&h).settings.panel, PanelId::Tuning);
     assert!(nav_has(&h, "Tuning"));
 }
 
@@ -100,20 +100,20 @@ fn the_device_panel_pings_and_shows_version_build_and_flags() {
     let mut h = harness(b.path(), "window-cleaner", PanelId::Device, Lang::En);
     // The panel reads version and power state on its own once the link is free.
     step_until(&mut h, "the power state", |a| {
-        a.device.power.is_some() && a.rt.job_progress().is_none()
+        a.device.power.is_some() && a.state.job_progress().is_none()
     });
     assert!(matches!(app(&h).device.power, Some(Ok(_))));
     h.get_by_label("Ping").click();
     step_until(&mut h, "the ping", |a| a.device.ping.is_some());
     assert!(matches!(app(&h).device.ping, Some(Ok(_))));
     step_until(&mut h, "the ping job to end", |a| {
-        a.rt.job_progress().is_none()
+        a.state.job_progress().is_none()
     });
     b.sim.lock().unwrap().set_flags(Some(0b0101));
     h.get_by_label("Read version and power state").click();
     step_until(&mut h, "the new flags", |a| {
         matches!(&a.device.version, Some(Ok(v)) if v.flags == Some(0b0101))
-            && matches!(&a.rt.info, Some(Ok(v)) if v.flags == Some(0b0101))
+            && matches!(&a.state.device.info, Some(Ok(v)) if v.flags == Some(0b0101))
     });
     h.run_steps(2);
     assert_eq!(
@@ -178,7 +178,9 @@ fn speed_rotate_and_stop_from_the_solar_panel_drive_the_simulated_robot() {
         b.sim.lock().unwrap().speed() > 100.0
     });
     step_until(&mut h, "the readouts", |a| {
-        a.rt.plots
+        a.state
+            .device
+            .plots
             .get("motor_speed")
             .and_then(|s| s.get("averageSpeed"))
             .is_some_and(|s| s.len() > 5)
@@ -191,7 +193,7 @@ fn speed_rotate_and_stop_from_the_solar_panel_drive_the_simulated_robot() {
         b.sim.lock().unwrap().yaw() > 20.0
     });
     // STOP, while a job runs.
-    h.state_mut().as_mut().unwrap().saved.panel = PanelId::Device;
+    h.state_mut().as_mut().unwrap().settings.panel = PanelId::Device;
     h.run_steps(2);
     h.get_by_label("Read version and power state").click();
     h.run_steps(1);
@@ -199,7 +201,7 @@ fn speed_rotate_and_stop_from_the_solar_panel_drive_the_simulated_robot() {
     step_until(&mut h, "STOP", |_| {
         b.sim.lock().unwrap().commanded_speed() == 0
     });
-    h.state_mut().as_mut().unwrap().saved.panel = PanelId::Solar;
+    h.state_mut().as_mut().unwrap().settings.panel = PanelId::Solar;
     step_until(&mut h, "the STOP acknowledged", |a| {
         matches!(
             a.solar.control.outcomes.get(&100),
@@ -291,10 +293,10 @@ fn plan_file(tag: &str) -> std::path::PathBuf {
 
 /// Clicks Run once nothing else runs, and waits for the job to start.
 fn start_selftest(h: &mut H) {
-    step_until(h, "no job running", |a| a.rt.job_progress().is_none());
+    step_until(h, "no job running", |a| a.state.job_progress().is_none());
     h.get_by_label("Run self-test").click();
     step_until(h, "the self-test job", |a| {
-        a.selftest.running && a.rt.job.as_ref().is_some_and(|j| !j.is_done())
+        a.selftest.running && a.state.job.as_ref().is_some_and(|j| !j.is_done())
     });
 }
 
@@ -308,7 +310,7 @@ fn run_selftest(h: &mut H, b: &Bench<WindowCleaner>, tag: &str) -> std::path::Pa
     ));
     let _ = std::fs::remove_file(&log);
     step_until(h, "the device identified", |a| {
-        identified(a) && a.rt.job_progress().is_none()
+        identified(a) && a.state.job_progress().is_none()
     });
     {
         let a = h.state_mut().as_mut().unwrap();
@@ -390,7 +392,7 @@ fn the_self_test_fails_naming_the_faulty_check() {
 fn a_malformed_plan_is_refused_with_its_line() {
     let b = window_cleaner(Some(0x0F), &[]);
     let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
-    step_until(&mut h, "the link", |a| a.rt.connected());
+    step_until(&mut h, "the link", |a| a.state.connected());
     let path =
         std::env::temp_dir().join(format!("botbench-gui-bad-plan-{}.ron", std::process::id()));
     std::fs::write(
@@ -402,7 +404,7 @@ fn a_malformed_plan_is_refused_with_its_line() {
     h.step();
     h.get_by_label("Open plan").click();
     h.run_steps(2);
-    let err = app(&h).selftest.error.clone().expect("refused");
+    let err = app(&h).selftest.error.clone().expect("refused").to_string();
     assert!(
         err.contains(":6:") && err.contains("MSP_NO_SUCH_COMMAND"),
         "{err}"
@@ -421,9 +423,9 @@ fn the_msp_panels_render_in_english_and_chinese() {
     let b = solar();
     for lang in [Lang::En, Lang::Zh] {
         let mut h = harness(b.path(), "solar-cleanbot", PanelId::Solar, lang);
-        step_until(&mut h, "readings", |a| a.rt.readings.len() > 5);
+        step_until(&mut h, "readings", |a| a.state.device.readings.len() > 5);
         for panel in app(&h).panels() {
-            h.state_mut().as_mut().unwrap().saved.panel = panel;
+            h.state_mut().as_mut().unwrap().settings.panel = panel;
             h.run_steps(2);
         }
         drop(h);
@@ -431,7 +433,7 @@ fn the_msp_panels_render_in_english_and_chinese() {
     let b = window_cleaner(Some(0x0F), &[]);
     for lang in [Lang::En, Lang::Zh] {
         let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, lang);
-        step_until(&mut h, "the link", |a| a.rt.connected());
+        step_until(&mut h, "the link", |a| a.state.connected());
         h.state_mut().as_mut().unwrap().selftest.path = EXAMPLE.into();
         h.step();
         let open = lang.tr("Open plan", "打开方案");
@@ -441,9 +443,9 @@ fn the_msp_panels_render_in_english_and_chinese() {
             app(&h).selftest.plan.is_some(),
             "{:?} on {:?}",
             app(&h).selftest.error,
-            app(&h).saved.panel
+            app(&h).settings.panel
         );
-        h.state_mut().as_mut().unwrap().saved.panel = PanelId::Device;
+        h.state_mut().as_mut().unwrap().settings.panel = PanelId::Device;
         h.run_steps(2);
     }
 }
@@ -454,7 +456,7 @@ fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step
     let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
     let plan = plan_file("lost");
     step_until(&mut h, "the device identified", |a| {
-        identified(a) && a.rt.job_progress().is_none()
+        identified(a) && a.state.job_progress().is_none()
     });
     {
         let a = h.state_mut().as_mut().unwrap();

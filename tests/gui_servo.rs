@@ -2,6 +2,7 @@
 //! servo bus on a pty.
 
 use botbench::i18n::Lang;
+use botbench::ops::OpError;
 use botbench::ops::servo::Presence;
 use botbench::sim::servo_bus::{Motion, ServoBus, SimServo};
 use botbench::ui::{Action, App, PanelId};
@@ -44,19 +45,19 @@ fn harness(b: &Bench, lang: Lang) -> H {
     let saved = settings(b.served.path(), "servo", PanelId::ServoBench, lang);
     let mut h = gui_harness::harness_with(saved.clone(), move |app| {
         // Generous for a loaded test machine (the tests share 2 cores with builds).
-        app.saved.margin_ms = Some(20);
         app.apply(Action::Connect {
             target: saved.target.clone(),
             baud: saved.baud,
             profile: saved.profile.clone(),
+            margin_ms: Some(20),
         });
     });
-    step_until(&mut h, "the link", |a| a.rt.connected());
+    step_until(&mut h, "the link", |a| a.state.connected());
     h
 }
 
 fn idle(a: &App) -> bool {
-    a.rt.job_progress().is_none()
+    a.state.job_progress().is_none()
 }
 
 /// Replaces the text of the entry labelled `label`.
@@ -176,7 +177,13 @@ fn a_parameter_out_of_range_is_refused_and_one_in_range_is_written_and_verified(
     h.step();
     assert_eq!(app(&h).servo.params.values.get(&41), Some(&Ok(77)));
     set_text(&mut h, "Temperature limit", "70000");
-    assert!(app(&h).servo.params.pending(&app(&h).rt.profile).is_err());
+    assert!(
+        app(&h)
+            .servo
+            .params
+            .pending(&app(&h).state.device.profile)
+            .is_err()
+    );
     assert!(
         h.query_all_by_label_contains("out of range")
             .next()
@@ -328,7 +335,7 @@ fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
     );
     step_until(&mut h, "the port back at 57600", |a| {
         matches!(
-            &a.rt.state,
+            &a.state.link.state,
             Some(botbench::link::LinkState::Connected { baud: 57_600, .. })
         )
     });
@@ -351,7 +358,7 @@ fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
     });
     h.step();
     assert!(
-        matches!(&app(&h).servo.scan.outcome, Some(Err(e)) if e.contains("cancelled")),
+        matches!(&app(&h).servo.scan.outcome, Some(Err(OpError::Cancelled))),
         "{:?}",
         app(&h).servo.scan.outcome
     );
@@ -592,12 +599,14 @@ fn a_new_connection_forgets_the_servos_found_on_the_last_one() {
     scan(&mut h, "0", "10");
     assert_eq!(app(&h).servo.scan.rows.len(), 1);
     assert!(app(&h).servo.selected.is_some(), "a lone servo is selected");
+    let margin_ms = app(&h).settings.margin_ms;
     gui_harness::app_mut(&mut h).apply(Action::Connect {
         target: botbench::ui::Target::Port(other.path().to_string()),
         baud: 115_200,
         profile: "servo".into(),
+        margin_ms,
     });
-    step_until(&mut h, "the new link", |a| a.rt.connected());
+    step_until(&mut h, "the new link", |a| a.state.connected());
     let a = app(&h);
     assert!(a.servo.scan.rows.is_empty(), "{:?}", a.servo.scan.rows);
     assert!(a.servo.selected.is_none());

@@ -7,7 +7,7 @@ use botbench::profile::registry::parse;
 use botbench::protocol::tuya::dp::DpValue;
 use botbench::sim::Faults;
 use botbench::sim::tuya_mcu::{OtaState, TuyaConfig, TuyaMcu, crc32};
-use botbench::ui::{App, PanelId};
+use botbench::ui::{App, FirmwareFileError, PanelId};
 use eframe::egui;
 use egui::accesskit::Role;
 use egui_kittest::kittest::Queryable;
@@ -72,7 +72,9 @@ fn harness(path: &str, profile: &str) -> H {
 }
 
 fn handshake(h: &mut H) {
-    step_until(h, "the handshake", |a| a.rt.tuya.done_at.is_some());
+    step_until(h, "the handshake", |a| {
+        a.state.device.tuya.done_at.is_some()
+    });
     h.run_steps(2);
 }
 
@@ -83,7 +85,7 @@ fn tab(h: &mut H, name: &str) {
 }
 
 fn reported(a: &App, id: u8) -> Option<Value> {
-    a.rt.tuya.dps.get(&id).map(|s| s.value.clone())
+    a.state.device.tuya.dps.get(&id).map(|s| s.value.clone())
 }
 
 fn has_label(h: &H, text: &str) -> bool {
@@ -121,8 +123,10 @@ fn the_handshake_completes_and_the_panel_shows_the_product_info() {
         b.sim.lock().unwrap().wifi_state() == Some(2)
     });
     step_until(&mut h, "the ack", |a| {
-        a.rt.tuya.wifi_acked.is_some_and(|t| {
-            a.rt.tuya
+        a.state.device.tuya.wifi_acked.is_some_and(|t| {
+            a.state
+                .device
+                .tuya
                 .wifi_sent
                 .as_ref()
                 .is_some_and(|(s, sent)| *s == 2 && t >= *sent)
@@ -161,7 +165,7 @@ fn a_silent_mcu_shows_where_the_handshake_stopped_and_no_value() {
     let b = bench_with(TuyaMcu::new(config()), silent);
     let mut h = harness(b.server.path(), "tuya-vacuum");
     step_until(&mut h, "two failed attempts", |a| {
-        a.rt.tuya.stopped.is_some() && a.rt.tuya.attempts >= 2
+        a.state.device.tuya.stopped.is_some() && a.state.device.tuya.attempts >= 2
     });
     h.run_steps(2);
     assert!(has_label(&h, "Handshake stopped at Heartbeat (0x00)"));
@@ -186,7 +190,9 @@ fn an_mcu_restart_is_shown_and_the_handshake_runs_again() {
     handshake(&mut h);
     b.sim.lock().unwrap().restart();
     step_until(&mut h, "the restart and a new handshake", |a| {
-        a.rt.tuya.restarts.0 == 1 && a.rt.tuya.done_at.is_some() && a.rt.tuya.attempts >= 2
+        a.state.device.tuya.restarts.0 == 1
+            && a.state.device.tuya.done_at.is_some()
+            && a.state.device.tuya.attempts >= 2
     });
     h.run_steps(2);
     assert!(has_label(
@@ -223,10 +229,12 @@ fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_
     assert!(has_label(&h, "3 mode = Spot clean"));
     assert!(has_label(&h, "✓ reported back"));
     // Query status (0x08): every data point is reported again.
-    let before = app(&h).rt.tuya.log_seq;
+    let before = app(&h).state.device.tuya.log_seq;
     h.get_by_label("Query status").click();
-    step_until(&mut h, "19 reports", |a| a.rt.tuya.log_seq >= before + 19);
-    assert!(app(&h).rt.tuya.last_query.is_some());
+    step_until(&mut h, "19 reports", |a| {
+        a.state.device.tuya.log_seq >= before + 19
+    });
+    assert!(app(&h).state.device.tuya.last_query.is_some());
 }
 
 /// Types `text` into the empty text field labelled `label`.
@@ -241,7 +249,9 @@ fn type_into(h: &mut H, label: &str, text: &str) {
 }
 
 fn sent_dp_commands(a: &App) -> usize {
-    a.rt.log
+    a.state
+        .packets
+        .entries
         .iter()
         .filter(|e| {
             e.direction == botbench::protocol::Direction::HostToDevice
@@ -344,7 +354,7 @@ fn the_mcus_requests_are_answered_and_shown_with_a_chosen_time() {
         m.request_mac();
     }
     step_until(&mut h, "four requests answered", |a| {
-        a.rt.tuya.requests.len() == 4
+        a.state.device.tuya.requests.len() == 4
     });
     h.run_steps(2);
     assert!(has_label(&h, "time 2026-11-22 08:30:15, Sunday"));
@@ -423,10 +433,11 @@ fn an_empty_or_missing_firmware_file_is_refused_with_a_clear_message() {
         h.get_by_label("Start update").click();
         h.run_steps(2);
         let err = app(&h).tuya.ota.error.clone().expect("refused");
+        let err = err.to_string();
         assert!(err.contains(&path) && err.contains(why), "{err}");
         assert!(has_label(&h, why));
         assert!(h.query_by_label("Update the MCU firmware?").is_none());
-        assert!(app(&h).rt.job.is_none(), "no update started");
+        assert!(app(&h).state.job.is_none(), "no update started");
     }
     assert_eq!(*b.sim.lock().unwrap().ota_state(), OtaState::Idle);
     let _ = std::fs::remove_dir_all(&dir);
@@ -456,7 +467,7 @@ fn an_update_can_be_cancelled_and_says_where_it_stopped() {
     h.get_by_label("Cancel update").click();
     step_until(&mut h, "the update to end", |a| a.tuya.ota.result.is_some());
     let err = app(&h).tuya.ota.result.clone().unwrap().unwrap_err();
-    assert!(err.contains("cancelled after offset"), "{err}");
+    assert!(err.to_string().contains("cancelled after offset"), "{err}");
     assert!(!matches!(
         b.sim.lock().unwrap().ota_state(),
         OtaState::Complete { .. }
@@ -487,10 +498,14 @@ fn every_section_renders_in_english_and_chinese() {
         m.request_net_status();
         m.request_mac();
     }
-    step_until(&mut h, "the requests", |a| a.rt.tuya.requests.len() == 5);
+    step_until(&mut h, "the requests", |a| {
+        a.state.device.tuya.requests.len() == 5
+    });
     tab(&mut h, "Data points");
     type_into(&mut h, "16 Clean area", "-5");
-    app_mut(&mut h).tuya.ota.error = Some("firmware.bin: the firmware file is empty".into());
+    app_mut(&mut h).tuya.ota.error = Some(FirmwareFileError::Empty {
+        path: "firmware.bin".into(),
+    });
     for (lang, tabs) in [
         (Lang::Zh, ["握手", "数据点", "MCU请求", "固件升级"]),
         (
@@ -503,7 +518,7 @@ fn every_section_renders_in_english_and_chinese() {
             ],
         ),
     ] {
-        app_mut(&mut h).saved.lang = lang;
+        app_mut(&mut h).settings.lang = lang;
         h.run_steps(2);
         for t in tabs {
             tab(&mut h, t);

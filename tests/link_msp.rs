@@ -3,7 +3,8 @@
 use botbench::link::{
     ExchangeError, Link, LinkCommand, LinkEvent, LinkOptions, LinkState, Poll, Request, serial,
 };
-use botbench::ops::msp::{self as ops, OpError};
+use botbench::ops::OpError;
+use botbench::ops::exchange as ops;
 use botbench::profile::{Input, Profile, Registry, Value};
 use botbench::sim::window_cleaner::WindowCleaner;
 use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
@@ -94,7 +95,10 @@ fn an_out_of_range_value_is_refused_before_anything_is_sent() {
     )
     .unwrap_err();
     assert!(
-        matches!(err, OpError::Input(ref m) if m.contains("out of range")),
+        matches!(
+            err,
+            OpError::Value(botbench::profile::FieldError::OutOfRange { .. })
+        ),
         "{err}"
     );
     assert_eq!(wc.lock().unwrap().param("pwmValue"), before);
@@ -143,7 +147,9 @@ fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_type
                     let held = wc.lock().unwrap().param("pwmValue").unwrap();
                     assert_eq!(
                         values,
-                        vec![("pwmValue".to_string(), Value::Int(held))],
+                        [("pwmValue".to_string(), Value::Int(held))]
+                            .into_iter()
+                            .collect(),
                         "op {i}"
                     );
                     ok += 1;

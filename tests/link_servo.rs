@@ -1,7 +1,7 @@
 //! Servo operations through the link worker against the simulated bus on a pseudo-terminal.
 
 use botbench::ops::Cancel;
-use botbench::ops::msp::OpError;
+use botbench::ops::OpError;
 use botbench::ops::servo::{self as ops, Presence, ScanPlan};
 use botbench::profile::Input;
 use botbench::sim::servo_bus::SimServo;
@@ -95,7 +95,7 @@ fn an_id_change_is_followed_and_verified_and_bad_ids_are_refused() {
     let cancel = Cancel::new();
     assert!(matches!(
         ops::set_id(&c, &bench.profile, 0, 255, &cancel),
-        Err(OpError::Input(_))
+        Err(OpError::BroadcastId)
     ));
     ops::set_id(&c, &bench.profile, 0, 12, &cancel).unwrap();
     assert_eq!(
@@ -126,7 +126,14 @@ fn a_baud_change_is_followed_and_verified() {
     assert_eq!(ops::ping(&c, 4, 2).unwrap(), Presence::Present);
     let err = ops::set_baud(&c, &bench.profile, 4, 9).unwrap_err();
     assert!(
-        matches!(err, OpError::Input(ref m) if m.contains("out of range")),
+        matches!(
+            err,
+            OpError::OutOfRange {
+                what: "baud option",
+                value: 9,
+                ..
+            }
+        ),
         "{err}"
     );
 }
@@ -166,12 +173,12 @@ fn a_parameter_write_is_range_checked_and_read_back() {
     let ro = bench.profile.find_param("voltage").unwrap();
     assert!(matches!(
         ops::write_param(&c, &bench.profile, 1, ro, Input::from("5000")),
-        Err(OpError::Input(_))
+        Err(OpError::ReadOnly { .. })
     ));
     let baud = bench.profile.find_param("baudrate").unwrap();
     assert!(matches!(
         ops::write_param(&c, &bench.profile, 1, baud, Input::from("9")),
-        Err(OpError::Input(_))
+        Err(OpError::Value(_))
     ));
 }
 
@@ -209,7 +216,7 @@ fn the_user_block_is_read_and_written_as_a_batch_and_read_back() {
         }
     }
     let e = ops::write_block(&client, &profile, 4, &moved).unwrap_err();
-    assert!(matches!(e, OpError::Input(_)), "{e}");
+    assert!(matches!(e, OpError::FollowedChange { .. }), "{e}");
     assert_eq!(sim(&bench, 21).id(), 4);
     // Out of range values are refused before anything is sent.
     let mut bad = block.clone();
@@ -217,7 +224,7 @@ fn the_user_block_is_read_and_written_as_a_batch_and_read_back() {
     bad.push((44, 7));
     assert!(matches!(
         ops::write_block(&client, &profile, 4, &bad),
-        Err(OpError::Input(_))
+        Err(OpError::Value(_))
     ));
 }
 
@@ -249,7 +256,7 @@ fn reset_user_data_is_refused_when_another_servo_holds_the_factory_id() {
     let bench = Bench::new(vec![SimServo::fresh(41).with_id(6), SimServo::fresh(42)]);
     let (client, profile) = (bench.client(), bench.profile.clone());
     let e = ops::reset_user_data(&client, &profile, 6, 115_200).unwrap_err();
-    assert!(matches!(e, OpError::Input(_)), "{e}");
+    assert!(matches!(e, OpError::FactoryIdTaken { .. }), "{e}");
     assert_eq!(sim(&bench, 41).id(), 6);
 }
 

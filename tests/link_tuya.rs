@@ -4,7 +4,7 @@
 use botbench::link::session::tuya::{HandshakeStep, TuyaEvent, TuyaModuleOptions};
 use botbench::link::{Link, LinkEvent, LinkOptions, serial};
 use botbench::ops::Cancel;
-use botbench::ops::msp::OpError;
+use botbench::ops::OpError;
 use botbench::ops::tuya::{self as ops, OtaTiming};
 use botbench::profile::{Input, Profile, Registry, Value};
 use botbench::sim::tuya_mcu::{OtaPacketAnswer, OtaState, TuyaConfig, TuyaMcu};
@@ -233,7 +233,7 @@ fn a_wrong_typed_or_report_only_data_point_is_refused_before_sending() {
         ("nope", "1"),
     ] {
         let err = ops::set_dps(&c, &bench.profile, &[(k.into(), Input::from(v))]).unwrap_err();
-        assert!(matches!(err, OpError::Input(_)), "{k}={v}: {err}");
+        assert!(err.is_input(), "{k}={v}: {err}");
     }
     // A raw value of the wrong kind is refused too.
     let err = ops::set_dps(
@@ -242,7 +242,7 @@ fn a_wrong_typed_or_report_only_data_point_is_refused_before_sending() {
         &[("mode".into(), Input::Raw(Value::Text("x".into())))],
     )
     .unwrap_err();
-    assert!(matches!(err, OpError::Input(_)), "{err}");
+    assert!(matches!(err, OpError::Value(_)), "{err}");
 }
 
 fn image(len: usize) -> Vec<u8> {
@@ -339,5 +339,5 @@ fn an_empty_image_is_refused() {
         &mut |_| {},
     )
     .unwrap_err();
-    assert!(matches!(err, OpError::Input(_)));
+    assert!(matches!(err, OpError::EmptyImage), "{err}");
 }

@@ -1,9 +1,10 @@
 //! Presets against the built-in profiles and the simulated window cleaner on a pty.
 
+use botbench::document::{DocumentError, ErrorKind};
 use botbench::link::{Link, LinkEvent, LinkOptions, serial};
-use botbench::ops::msp::OpError;
-use botbench::ops::{Cancel, Progress};
-use botbench::preset::{self, ErrorKind, Preset, PresetError};
+use botbench::ops::OpError;
+use botbench::ops::{self, Cancel, Progress};
+use botbench::preset::{self, Preset};
 use botbench::profile::{Field, FieldType, Input, Len, Profile, Registry, Value};
 use botbench::sim::window_cleaner::WindowCleaner;
 use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
@@ -80,7 +81,7 @@ impl Drop for TempDir {
     }
 }
 
-fn parse_err(text: &str, p: &Profile) -> PresetError {
+fn parse_err(text: &str, p: &Profile) -> DocumentError {
     Preset::parse("test.ron", text, p).expect_err("refused")
 }
 
@@ -233,7 +234,7 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
 
     // Save what the device holds.
     let mut seen: Vec<Progress> = Vec::new();
-    let captured = Preset::capture(&client, &p, &cancel, &mut |pr| seen.push(pr)).unwrap();
+    let captured = ops::preset::capture(&client, &p, &cancel, &mut |pr| seen.push(pr)).unwrap();
     assert_eq!(captured.device.as_deref(), Some("hw 0x03 fw 1.4.2"));
     assert_eq!(captured.values.len(), preset::preset_commands(&p).len());
     assert_eq!(seen.last().map(|s| (s.done, s.total)), Some((9, 9)));
@@ -253,7 +254,7 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
         sim.set_param("pwmValue", 60).unwrap();
         sim.set_param("defaultTarget", 290).unwrap();
     }
-    let device = preset::read_device(&client, &p, &cancel, &mut |_| {}).unwrap();
+    let device = ops::preset::read_device(&client, &p, &cancel, &mut |_| {}).unwrap();
     let rows = saved.preset.diff(&p, &device);
     assert_eq!(rows.len(), 26);
     let differing: Vec<(&str, &str, &str, Option<&str>)> = rows
@@ -283,10 +284,10 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
 
     // Apply: every field is written and read back.
     let mut steps = Vec::new();
-    let checks = saved
-        .preset
-        .apply(&client, &p, &cancel, &mut |pr| steps.push(pr.done))
-        .unwrap();
+    let checks = ops::preset::apply(&client, &p, &saved.preset, &cancel, &mut |pr| {
+        steps.push(pr.done)
+    })
+    .unwrap();
     assert_eq!(steps, (0..=9).collect::<Vec<u64>>());
     assert_eq!(checks.len(), 26);
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
@@ -295,7 +296,7 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
         assert_eq!(sim.param("pwmValue"), Some(85));
         assert_eq!(sim.param("defaultTarget"), Some(275));
     }
-    let after = preset::read_device(&client, &p, &cancel, &mut |_| {}).unwrap();
+    let after = ops::preset::read_device(&client, &p, &cancel, &mut |_| {}).unwrap();
     assert!(saved.preset.diff(&p, &after).iter().all(|r| !r.differs));
 }
 
@@ -311,9 +312,8 @@ fn the_factory_preset_applies_to_a_tuned_device() {
     }
     let link = connect(server.path(), &p);
     let factory = Preset::load(Path::new(FACTORY), &p).unwrap().preset;
-    let checks = factory
-        .apply(&link.client(), &p, &Cancel::new(), &mut |_| {})
-        .unwrap();
+    let checks =
+        ops::preset::apply(&link.client(), &p, &factory, &Cancel::new(), &mut |_| {}).unwrap();
     assert_eq!(checks.len(), 22);
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
     let sim = wc.lock().unwrap();
@@ -331,13 +331,12 @@ fn a_cancel_stops_between_commands_and_returns_what_was_done() {
     let factory = Preset::load(Path::new(FACTORY), &p).unwrap().preset;
     let cancel = Cancel::new();
     let c2 = cancel.clone();
-    let checks = factory
-        .apply(&link.client(), &p, &cancel, &mut |pr| {
-            if pr.done == 1 {
-                c2.cancel();
-            }
-        })
-        .unwrap();
+    let checks = ops::preset::apply(&link.client(), &p, &factory, &cancel, &mut |pr| {
+        if pr.done == 1 {
+            c2.cancel();
+        }
+    })
+    .unwrap();
     // Only MSP_SET_PWMVALUE was written.
     assert_eq!(checks.len(), 1);
     assert_eq!(checks[0].field, "pwmValue");
@@ -445,11 +444,10 @@ fn an_out_of_range_value_is_refused_before_anything_is_written() {
     // Applying it anyway (unchecked) writes nothing, not even the valid commands.
     let unchecked = Preset::parse_unchecked("test.ron", &text).unwrap();
     let link = connect(server.path(), &p);
-    let err = unchecked
-        .apply(&link.client(), &p, &Cancel::new(), &mut |_| {})
+    let err = ops::preset::apply(&link.client(), &p, &unchecked, &Cancel::new(), &mut |_| {})
         .unwrap_err();
     assert!(
-        matches!(err, OpError::Input(ref m) if m.contains("out of range")),
+        matches!(err, OpError::Document(ref e) if e.to_string().contains("out of range")),
         "{err}"
     );
     let sim = wc.lock().unwrap();

@@ -24,7 +24,7 @@ fn edited(from: &str, to: &str) -> String {
 
 fn line_col_of(src: &str, needle: &str, nth: usize) -> (usize, usize) {
     let pos = src.match_indices(needle).nth(nth).expect("needle").0;
-    botbench::profile::locate::line_col(src, pos)
+    botbench::document::line_col(src, pos)
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! Production provisioning against the simulated servo bus on a pseudo-terminal.
 
-use botbench::ops::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
+use botbench::ops::servo::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
 use botbench::ops::{Cancel, Progress};
 use botbench::profile::{Profile, Registry};
 use botbench::sim::servo_bus::SimServo;
@@ -402,8 +402,8 @@ fn bad_plans_are_refused_at_load_with_line_and_column() {
         let skip = to.find(": ").map_or(0, |i| i + 2);
         let (text, line, col) = edited(from, to, skip);
         let e = Plan::parse("plan.ron", &text, &profile).unwrap_err();
-        assert!(e.message.contains(says), "{to}: {e}");
-        assert_eq!((e.line, e.col), (line, col), "{to}: {e}");
+        assert!(e.message().contains(says), "{to}: {e}");
+        assert_eq!(e.at(), (line, col), "{to}: {e}");
         assert!(
             e.to_string()
                 .starts_with(&format!("plan.ron:{line}:{col}: ")),
@@ -413,10 +413,10 @@ fn bad_plans_are_refused_at_load_with_line_and_column() {
     // A syntax error, and an unknown key, from the RON reader.
     let (text, line, _) = edited("    record: [", "    recrod: [", 0);
     let e = Plan::parse("plan.ron", &text, &profile).unwrap_err();
-    assert_eq!(e.line, line, "{e}");
-    assert!(e.message.contains("recrod"), "{e}");
+    assert_eq!(e.at().0, line, "{e}");
+    assert!(e.message().contains("recrod"), "{e}");
     let e = Plan::parse("plan.ron", "(target_baud: 500000, ids: Start(1),", &profile).unwrap_err();
-    assert_eq!(e.line, 1, "{e}");
+    assert_eq!(e.at().0, 1, "{e}");
 }
 
 #[test]

@@ -2,12 +2,12 @@
 
 use super::port::{PortArgs, exchange_error, op_error, parse_assignments, print_checks};
 use super::{CliError, CliResult};
-use crate::link::{LinkCommand, LinkEvent, Poll, Request};
+use crate::link::{LinkCommand, LinkEvent};
 
-use crate::ops::msp as ops;
+use crate::ops::exchange as ops;
 use crate::ops::selftest::{self, Operator, Plan};
 use crate::profile::{Command, Profile, Protocol};
-use crate::protocol::{Direction, msp};
+use crate::protocol::Direction;
 use clap::Subcommand;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -168,9 +168,7 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
             None => Err(CliError::device("no answer to CMD_VERSION")),
         },
         MspCmd::Ping => {
-            let r = client
-                .request(Request::new(msp::CMD_PING, Vec::new()))
-                .map_err(exchange_error)?;
+            let r = crate::ops::device::ping(&client, &profile).map_err(op_error)?;
             if json {
                 println!(
                     "{}",
@@ -217,10 +215,7 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
             };
             let polls = cmds
                 .iter()
-                .map(|c| Poll {
-                    request: Request::for_command(&profile, c, Vec::new()).attempts(1),
-                    interval,
-                })
+                .map(|c| crate::ops::telemetry::poll(&profile, c, interval))
                 .collect();
             link.send(LinkCommand::SetPolls(polls));
             let started = Instant::now();

@@ -2,7 +2,7 @@
 
 use super::{CliError, registry};
 use crate::link::{ExchangeError, Link, LinkOptions, serial};
-use crate::ops::msp::{Check, OpError};
+use crate::ops::{Check, OpError};
 use crate::profile::{Field, Profile, Protocol};
 use clap::Args;
 use std::sync::Arc;
@@ -87,11 +87,12 @@ impl PortArgs {
     }
 }
 
-/// Maps an operation's error to an exit code: bad input 2, everything else 1.
+/// Maps an operation's error to an exit code: refused for its input 2, everything else 1.
 pub(crate) fn op_error(e: OpError) -> CliError {
-    match e {
-        OpError::Input(m) => CliError::input(m),
-        other => CliError::device(other),
+    if e.is_input() {
+        CliError::input(e)
+    } else {
+        CliError::device(e)
     }
 }
 

@@ -3,7 +3,7 @@
 use super::port::{PortArgs, op_error, print_checks};
 use super::{CliError, CliResult, registry};
 use crate::link::{DeviceInfo, Link, LinkEvent, LinkState};
-use crate::ops::{Cancel, Progress};
+use crate::ops::{self, Cancel, Progress};
 use crate::preset::{self, Preset};
 use crate::profile::{Profile, Protocol};
 use clap::Subcommand;
@@ -88,10 +88,11 @@ fn save(file: &std::path::Path, note: &str, port: &PortArgs) -> CliResult {
             profile.id
         )));
     }
-    let mut captured = Preset::capture(&link.client(), &profile, &Cancel::new(), &mut no_progress)
-        .map_err(op_error)?;
+    let mut captured =
+        ops::preset::capture(&link.client(), &profile, &Cancel::new(), &mut no_progress)
+            .map_err(op_error)?;
     captured.note = note.to_string();
-    captured.device = Some(preset::describe_device(&info));
+    captured.device = Some(ops::device::short_description(&info));
     captured
         .save_annotated(file, &profile)
         .map_err(CliError::device)?;
@@ -118,8 +119,9 @@ fn save(file: &std::path::Path, note: &str, port: &PortArgs) -> CliResult {
 fn diff(file: &std::path::Path, port: &PortArgs) -> CliResult {
     let (preset, _) = load(file, port)?;
     let (link, profile, _) = connect(port)?;
-    let device = preset::read_device(&link.client(), &profile, &Cancel::new(), &mut no_progress)
-        .map_err(op_error)?;
+    let device =
+        ops::preset::read_device(&link.client(), &profile, &Cancel::new(), &mut no_progress)
+            .map_err(op_error)?;
     let rows = preset.diff(&profile, &device);
     let differing = rows.iter().filter(|r| r.differs).count();
     if port.json {
@@ -156,9 +158,10 @@ fn apply(file: &std::path::Path, port: &PortArgs) -> CliResult {
     let (link, profile, _) = connect(port)?;
     let mut results = Vec::new();
     let json = port.json;
-    let outcome = preset.apply_each(
+    let outcome = ops::preset::apply_each(
         &link.client(),
         &profile,
+        &preset,
         &super::port::cancel_on_ctrl_c(),
         &mut no_progress,
         &mut |command, checks| {

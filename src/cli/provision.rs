@@ -4,7 +4,7 @@
 use super::port::PortArgs;
 use super::{CliError, CliResult, registry};
 use crate::link::Client;
-use crate::ops::provision::{self as ops, Outcome, Plan, ProvisionState, Record};
+use crate::ops::servo::provision::{self as ops, Outcome, Plan, ProvisionState, Record};
 use crate::ops::servo::{self as servo_ops, BAUDS, Presence};
 use crate::profile::{Profile, Protocol};
 use std::io::BufRead;

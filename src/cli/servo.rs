@@ -2,7 +2,6 @@
 
 use super::port::{PortArgs, op_error, print_checks};
 use super::{CliError, CliResult};
-use crate::ops::msp::OpError;
 use crate::ops::servo::{self as ops, BAUDS, Presence};
 use crate::profile::{Input, Profile, Protocol, Value};
 use clap::Subcommand;
@@ -301,10 +300,7 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
             } else {
                 ops::option_of_baud(baud).unwrap_or(0)
             };
-            let rate = ops::set_baud(&client, &profile, id, option).map_err(|e| match e {
-                OpError::Input(m) => CliError::input(m),
-                other => CliError::device(other),
-            })?;
+            let rate = ops::set_baud(&client, &profile, id, option).map_err(op_error)?;
             if json {
                 println!(
                     "{}",
@@ -325,7 +321,7 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
                 ("interval".to_string(), Input::Raw(Value::Int(ms.into()))),
                 ("power".to_string(), Input::Raw(Value::Int(power.into()))),
             ];
-            crate::ops::msp::send(&client, &profile, rotate, &inputs).map_err(op_error)?;
+            crate::ops::exchange::send(&client, &profile, rotate, &inputs).map_err(op_error)?;
             if !json {
                 println!("servo {id}: turning over {ms} ms");
             }

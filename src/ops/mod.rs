@@ -1,13 +1,29 @@
-//! Operations that take several exchanges (verified writes, scans, provisioning, firmware
-//! upload). They run on the calling thread over a [`crate::link::Client`], report progress and
-//! stop when cancelled, so the command line runs them directly and the GUI on a job thread.
+//! Every operation that takes several exchanges (verified writes, scans, provisioning, presets,
+//! self-tests, firmware upload) is written here once, whoever starts it. Operations run on the
+//! calling thread over a [`crate::link::Client`], report progress and stop when cancelled, so the
+//! command line runs them directly and the GUI on a job thread. Requests the GUI sends without
+//! waiting (controls, STOP, data points) are built here too, checked against the profile.
+//!
+//! - [`exchange`]: the protocol-neutral pieces (send, read as [`FieldValues`], verified write,
+//!   a checked request); [`error`]: [`OpError`].
+//! - [`device`] (MSP ping, identity, power state), [`tuning`] (batches of reads and verified
+//!   writes), [`telemetry`] (what is polled), [`preset`] (capture, read, apply).
+//! - [`servo`] (scan, parameters, id / baud / reset, motion, production provisioning, parameter
+//!   presets), [`selftest`] (the window cleaner's production test), [`tuya`] (data points,
+//!   status query, OTA).
 
-pub mod msp;
-pub mod provision;
+pub mod device;
+pub mod error;
+pub mod exchange;
+pub mod preset;
 pub mod selftest;
 pub mod servo;
-pub mod servo_preset;
+pub mod telemetry;
+pub mod tuning;
 pub mod tuya;
+
+pub use error::OpError;
+pub use exchange::{Check, FieldValues};
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};

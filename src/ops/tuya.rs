@@ -1,11 +1,10 @@
 //! Tuya operations as the Wi-Fi module: status query, verified data-point commands, MCU firmware
 //! update (OTA).
 
-use super::msp::{Check, OpError};
-use super::{Cancel, Progress};
+use super::{Cancel, Check, FieldValues, OpError, Progress};
 use crate::link::{Client, ExchangeError, Match, ReplySpec, Request};
 use crate::packet::Packet;
-use crate::profile::{Input, Profile, Value};
+use crate::profile::{Command, DataPointDef, Input, Profile, Value};
 use crate::protocol::Direction;
 use crate::protocol::tuya::cmd;
 use std::time::{Duration, Instant};
@@ -17,19 +16,49 @@ pub const OTA_RETRIES: u8 = 3;
 /// How long a pause ends a burst of reports.
 pub const REPORT_QUIET: Duration = Duration::from_millis(300);
 
-/// Every data point, as the MCU reports them to a query (0x08).
-pub fn query(client: &Client) -> Result<Vec<Packet>, OpError> {
-    let req = Request::new(cmd::QUERY_STATUS, Vec::new()).reply(ReplySpec::Burst {
+/// The status query (0x08): its answer is the burst of reports (0x07) that ends with a pause of
+/// [`REPORT_QUIET`].
+pub fn query_request() -> Request {
+    Request::new(cmd::QUERY_STATUS, Vec::new()).reply(ReplySpec::Burst {
         each: Match::command(cmd::DP_REPORT),
         quiet: REPORT_QUIET,
-    });
-    Ok(client.request(req)?.packets)
+    })
 }
 
-/// The data points of report frames as named raw values.
-pub fn report_values(profile: &Profile, reports: &[Packet]) -> Vec<(String, Value)> {
+/// The Wi-Fi state report (0x03) the module sends the MCU: `state` 0-6 (the profile's labels
+/// name them). The MCU acks it; the ack is seen in the packet log.
+pub fn wifi_state_request(state: u8) -> Request {
+    Request::new(cmd::WIFI_STATE, vec![state])
+}
+
+/// Every data point, as the MCU reports them to a query (0x08).
+pub fn query(client: &Client) -> Result<Vec<Packet>, OpError> {
+    Ok(client.request(query_request())?.packets)
+}
+
+fn dp_command(profile: &Profile) -> Result<&Command, OpError> {
+    profile
+        .command_by_id(cmd::DP_COMMAND)
+        .ok_or_else(|| OpError::unknown_command(profile, "0x06 (data-point command)"))
+}
+
+/// The 0x06 command that sets data point `def` to the raw `value`, checked against the profile
+/// (type, range, writable) before anything is built. Sent without waiting: what the MCU makes
+/// of it comes back as a report (0x07).
+pub fn dp_request(profile: &Profile, def: &DataPointDef, value: Value) -> Result<Request, OpError> {
+    let command = dp_command(profile)?;
+    let payload = profile.encode(
+        command,
+        Direction::HostToDevice,
+        &[(def.field.ident.clone(), Input::Raw(value))],
+    )?;
+    Ok(Request::send_only(cmd::DP_COMMAND, payload))
+}
+
+/// The data points of report frames as named raw values, in the order reported.
+pub fn report_values(profile: &Profile, reports: &[Packet]) -> FieldValues {
     let Some(report) = profile.command_by_id(cmd::DP_REPORT) else {
-        return Vec::new();
+        return FieldValues::new();
     };
     reports
         .iter()
@@ -49,11 +78,12 @@ pub fn set_dps(
     profile: &Profile,
     inputs: &[(String, Input)],
 ) -> Result<Vec<Check>, OpError> {
-    let command = profile
-        .command_by_id(cmd::DP_COMMAND)
-        .ok_or_else(|| OpError::Input("the profile has no data-point command".into()))?;
+    let command = dp_command(profile)?;
     if inputs.is_empty() {
-        return Err(OpError::Input("no data point given: use NAME=VALUE".into()));
+        return Err(OpError::NothingGiven {
+            what: "data point",
+            hint: "use NAME=VALUE",
+        });
     }
     let payload = profile.encode(command, Direction::HostToDevice, inputs)?;
     let written = profile
@@ -142,10 +172,10 @@ pub fn ota(
 ) -> Result<OtaReport, OpError> {
     let attempts = timing.retries.saturating_add(1);
     if image.is_empty() {
-        return Err(OpError::Input("the firmware image is empty".into()));
+        return Err(OpError::EmptyImage);
     }
-    let size = u32::try_from(image.len())
-        .map_err(|_| OpError::Input(format!("the image is {} bytes, over 4 GiB", image.len())))?;
+    let size =
+        u32::try_from(image.len()).map_err(|_| OpError::ImageTooLarge { size: image.len() })?;
     let started = Instant::now();
     let start = Request::new(cmd::OTA_START, size.to_be_bytes().to_vec())
         .margin(timing.ack_wait)

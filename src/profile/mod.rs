@@ -5,7 +5,6 @@ pub mod model;
 
 pub use model::*;
 pub mod codec;
-pub mod locate;
 pub mod registry;
 pub mod validate;
 pub mod value;

@@ -1,8 +1,8 @@
 //! Loading profiles: the built-in ones, a user's overrides, and files named on the command line.
 
-use super::locate::{Step, locate};
 use super::model::{Command, Profile};
 use super::validate::validate;
+use crate::document::{Step, locate};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 

@@ -1,7 +1,7 @@
 //! Consistency rules that a profile must meet beyond its syntax.
 
-use super::locate::Step::{self, Index, Key};
 use super::model::{Access, CommandKind, Field, FieldType, Len, Profile, Protocol};
+use crate::document::Step::{self, Index, Key};
 use crate::protocol::tuya::dp::DpType;
 use std::collections::HashSet;
 

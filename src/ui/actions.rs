@@ -2,8 +2,10 @@
 //! profile's Action commands. Each field is range-checked as typed; a command that makes the
 //! robot move asks for confirmation first.
 
-use super::runtime::Runtime;
-use super::{Action, JobSpec};
+use super::Action;
+use super::inputs::{command_inputs, range_text};
+use super::jobs;
+use super::state::AppState;
 use crate::i18n::Lang;
 use crate::profile::{Command, CommandKind, Input};
 use eframe::egui;
@@ -19,34 +21,12 @@ pub struct ActionsPanel {
 }
 
 impl ActionsPanel {
-    fn inputs_of(&self, cmd: &Command) -> Result<Vec<(String, Input)>, String> {
-        cmd.request
-            .iter()
-            .map(|f| {
-                let text = self
-                    .inputs
-                    .get(&(cmd.id, f.ident.clone()))
-                    .cloned()
-                    .unwrap_or_default();
-                if text.trim().is_empty() {
-                    return Err(format!(
-                        "{}: give a value ({})",
-                        f.ident,
-                        super::tuning::range_text(f)
-                    ));
-                }
-                f.parse(&text).map_err(|e| e.to_string())?;
-                Ok((f.ident.clone(), Input::Text(text)))
-            })
-            .collect()
-    }
-
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
         let ready = rt.connected() && rt.job_progress().is_none();
-        let cmds: Vec<&Command> = rt
-            .profile
+        let profile = &rt.device.profile;
+        let cmds: Vec<&Command> = profile
             .commands
             .iter()
             .filter(|c| c.kind == CommandKind::Action)
@@ -70,7 +50,7 @@ impl ActionsPanel {
                                         let bad = !text.is_empty() && f.parse(text).is_err();
                                         let mut edit = egui::TextEdit::singleline(text)
                                             .desired_width(70.0)
-                                            .hint_text(super::tuning::range_text(f));
+                                            .hint_text(range_text(f));
                                         if bad {
                                             edit = edit.text_color(egui::Color32::RED);
                                         }
@@ -103,7 +83,7 @@ impl ActionsPanel {
                                     }
                                 }
                             });
-                            let inputs = self.inputs_of(cmd);
+                            let inputs = command_inputs(cmd, &self.inputs);
                             let label = if cmd.confirm {
                                 format!("⚠ {}", lang.tr("Send…", "发送…"))
                             } else {
@@ -112,7 +92,7 @@ impl ActionsPanel {
                             let resp =
                                 ui.add_enabled(ready && inputs.is_ok(), egui::Button::new(label));
                             let resp = match &inputs {
-                                Err(e) => resp.on_disabled_hover_text(e),
+                                Err(e) => resp.on_disabled_hover_text(e.to_string()),
                                 Ok(_) => resp,
                             };
                             if resp.clicked()
@@ -121,7 +101,9 @@ impl ActionsPanel {
                                 if cmd.confirm {
                                     self.confirm = Some((cmd.id, inputs));
                                 } else {
-                                    actions.push(Action::Job(JobSpec::Send(cmd.id, inputs)));
+                                    actions.push(Action::StartJob(jobs::send(
+                                        profile, cmd.id, inputs,
+                                    )));
                                 }
                             }
                             ui.end_row();
@@ -129,7 +111,7 @@ impl ActionsPanel {
                     });
             });
         if let Some((id, inputs)) = &self.confirm {
-            let name = rt.profile.command_by_id(*id).map_or(String::new(), |c| {
+            let name = profile.command_by_id(*id).map_or(String::new(), |c| {
                 lang.tr(&c.name.en, &c.name.zh).to_string()
             });
             let mut decision = None;
@@ -165,7 +147,7 @@ impl ActionsPanel {
             match decision {
                 Some(true) => {
                     if let Some((id, inputs)) = self.confirm.take() {
-                        actions.push(Action::Job(JobSpec::Send(id, inputs)));
+                        actions.push(Action::StartJob(jobs::send(profile, id, inputs)));
                     }
                 }
                 Some(false) => self.confirm = None,

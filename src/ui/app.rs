@@ -1,15 +1,18 @@
-//! The app shell: saved settings kept apart from runtime state, a top bar, a left navigation, one
-//! panel at a time, a status line. Panels return actions; the app applies them once per frame.
+//! The app shell: saved settings kept apart from run-time state, a top bar, a left navigation,
+//! one panel at a time, a status line. Each frame the app takes the link's events and the
+//! running job's output (each routed once, to the state or the panel it concerns), lets the
+//! panels draw, and applies the actions they returned.
 
-use super::jobs::JobOutput;
-use super::runtime::{Runtime, Target};
+use super::jobs::{self, JobOutput};
+use super::settings::Settings;
+use super::state::{AppState, Notice, Target};
 use super::{
     Action, actions, connection, device, monitor, presets, selftest, servo_bench, solar,
     status_bar, telemetry, tuning, tuya_console,
 };
 use crate::i18n::Lang;
 use crate::link::LinkCommand;
-use crate::profile::{PanelKind, Protocol};
+use crate::profile::{PanelKind, ProfileError, Protocol};
 use eframe::egui;
 use serde::{Deserialize, Serialize};
 
@@ -69,52 +72,12 @@ impl PanelId {
     }
 }
 
-/// What is kept between runs (eframe storage).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Saved {
-    /// The last target.
-    pub target: Target,
-    /// The last baud rate.
-    pub baud: u32,
-    /// The last profile.
-    pub profile: String,
-    /// The panel shown.
-    pub panel: PanelId,
-    /// The UI language.
-    pub lang: Lang,
-    /// Telemetry: polls a second (`None`: as fast as the wire allows).
-    pub poll_hz: Option<f64>,
-    /// Telemetry: the plotted time window, seconds.
-    pub window_secs: f64,
-    /// The navigation is shown.
-    pub nav_open: bool,
-    /// How long the device may take to start answering, ms (`None`: the protocol's own).
-    pub margin_ms: Option<u64>,
-}
-
-impl Default for Saved {
-    fn default() -> Self {
-        Self {
-            target: Target::Demo("window-cleaner".into()),
-            baud: 115_200,
-            profile: "window-cleaner".into(),
-            panel: PanelId::Tuning,
-            lang: Lang::En,
-            poll_hz: Some(50.0),
-            window_secs: 60.0,
-            nav_open: true,
-            margin_ms: None,
-        }
-    }
-}
-
 /// The application.
 pub struct App {
     /// Kept between runs.
-    pub saved: Saved,
-    /// Not kept.
-    pub rt: Runtime,
+    pub settings: Settings,
+    /// Not kept: link status, device model, packet log, job, status line.
+    pub state: AppState,
     /// The tuning panel's edits.
     pub tuning: tuning::TuningPanel,
     /// The telemetry panel's view state.
@@ -142,14 +105,14 @@ pub struct App {
 }
 
 impl App {
-    /// An app with `saved` settings, connected to its target.
-    pub fn new(ctx: &egui::Context, saved: Saved) -> Result<Self, String> {
+    /// An app with `settings`, connected to its target.
+    pub fn new(ctx: &egui::Context, settings: Settings) -> Result<Self, ProfileError> {
         crate::i18n::install_cjk_font(ctx);
-        let rt = Runtime::new(ctx, &saved.profile)?;
+        let state = AppState::new(ctx, &settings.profile)?;
         let mut app = Self {
-            connection: connection::ConnectionBar::new(&saved),
-            saved,
-            rt,
+            connection: connection::ConnectionBar::new(&settings),
+            settings,
+            state,
             tuning: tuning::TuningPanel::default(),
             telemetry: telemetry::TelemetryPanel::default(),
             monitor: monitor::MonitorPanel::default(),
@@ -162,67 +125,52 @@ impl App {
             tuya: tuya_console::TuyaConsolePanel::default(),
             title: String::new(),
         };
-        let (target, baud, profile) = (
-            app.saved.target.clone(),
-            app.saved.baud,
-            app.saved.profile.clone(),
-        );
         app.apply(Action::Connect {
-            target,
-            baud,
-            profile,
+            target: app.settings.target.clone(),
+            baud: app.settings.baud,
+            profile: app.settings.profile.clone(),
+            margin_ms: app.settings.margin_ms,
         });
         Ok(app)
     }
 
-    /// Work that is not drawing: worker events (within a time budget) and job output.
+    /// Work that is not drawing: worker events (within a time budget), job output, and what the
+    /// app does on its own (the solar STOP and dead-man, reading a device that came up).
     pub fn logic(&mut self, ctx: &egui::Context) {
-        if self.rt.drain_events() {
+        if self.state.drain_link_events() {
             ctx.request_repaint();
         }
-        for out in self.rt.drain_job() {
-            match out {
-                JobOutput::Servo(o) => self.servo.on_output(o),
-                JobOutput::Tuya(o) => self.tuya.on_output(o),
-                JobOutput::Device(o) => self.device.on_output(o),
-                JobOutput::SelfTest(o) => {
-                    // An operator prompt is answered on the self-test panel.
-                    if o.is_prompt() {
-                        self.saved.panel = PanelId::SelfTest;
-                    }
-                    self.selftest.on_output(o)
-                }
-                JobOutput::Solar(o) => self.solar.on_output(o),
-                _ => {}
-            }
+        for out in self.state.take_job_output() {
+            self.route(out);
         }
-        self.rt.refresh_ports();
+        self.state.link.refresh_ports();
         // The app leaves a panel the device turns out not to support.
         let panels = self.panels();
-        if !panels.contains(&self.saved.panel) {
-            self.saved.panel = panels[0];
+        if !panels.contains(&self.settings.panel) {
+            self.settings.panel = panels[0];
         }
         // The solar panel's STOP-on-reconnect and dead-man run whichever panel is shown.
-        for a in self.solar.tick(&self.rt) {
+        for a in self.solar.tick(&self.state) {
             self.apply(a);
         }
-        if std::mem::take(&mut self.rt.just_connected) && self.panels().contains(&PanelId::Tuning) {
+        if std::mem::take(&mut self.state.link.just_connected)
+            && self.panels().contains(&PanelId::Tuning)
+        {
             // What the device holds is shown as soon as it is known; nothing is shown before.
-            let gets: Vec<u8> = self
-                .rt
-                .profile
+            let profile = &self.state.device.profile;
+            let gets: Vec<u8> = profile
                 .commands
                 .iter()
                 .filter(|c| c.kind == crate::profile::CommandKind::Get && c.pair.is_some())
                 .map(|c| c.id)
                 .collect();
-            self.apply(Action::Job(super::JobSpec::Read(gets)));
+            self.apply(Action::StartJob(jobs::read(profile, gets)));
         }
-        let title = match &self.rt.conn {
-            Some(c) => format!(
+        let title = match self.state.link.target() {
+            Some(t) => format!(
                 "botbench — {} — {}",
-                c.target.label(),
-                self.rt.profile.name.en
+                t.label(),
+                self.state.device.profile.name.en
             ),
             None => "botbench — not connected".to_string(),
         };
@@ -232,53 +180,73 @@ impl App {
             self.title = title;
         }
         // Repaint while a plot follows live data or a job runs; otherwise only on events.
-        let live = matches!(self.saved.panel, PanelId::Telemetry | PanelId::Solar)
-            && !self.rt.paused
-            && self.rt.connected();
-        if live || self.rt.job_progress().is_some() {
+        let live = matches!(self.settings.panel, PanelId::Telemetry | PanelId::Solar)
+            && !self.state.link.polling_paused
+            && self.state.connected();
+        if live || self.state.job_progress().is_some() {
             ctx.request_repaint_after(std::time::Duration::from_millis(33));
+        }
+    }
+
+    /// Routes one piece of job output: to the device model, the status line or its panel.
+    fn route(&mut self, out: JobOutput) {
+        match out {
+            JobOutput::Progress(_) => {}
+            JobOutput::Read(id, r) => self.state.device.on_read(id, r),
+            JobOutput::Wrote(set, r) => self.state.device.on_written(set, r),
+            JobOutput::Done(r) => self.state.job_done(r),
+            JobOutput::Servo(o) => self.servo.on_output(o),
+            JobOutput::Tuya(o) => self.tuya.on_output(o),
+            JobOutput::Device(o) => self.device.on_output(o),
+            JobOutput::SelfTest(o) => {
+                // An operator prompt is answered on the self-test panel.
+                if o.is_prompt() {
+                    self.settings.panel = PanelId::SelfTest;
+                }
+                self.selftest.on_output(o)
+            }
         }
     }
 
     /// Draws the window and applies what the panels asked for.
     pub fn ui(&mut self, ui: &mut egui::Ui) {
-        let lang = self.saved.lang;
+        let lang = self.settings.lang;
+        let (settings, state) = (&self.settings, &self.state);
         let mut actions = Vec::new();
         egui::Panel::top("connection").show(ui, |ui| {
-            actions.extend(self.connection.show(ui, &mut self.saved, &self.rt));
+            actions.extend(self.connection.show(ui, settings, state));
         });
         egui::Panel::bottom("status").show(ui, |ui| {
-            actions.extend(status_bar::show(ui, lang, &self.rt));
+            actions.extend(status_bar::show(ui, lang, state));
         });
+        let panels = self.panels();
         egui::Panel::left("nav").resizable(false).show(ui, |ui| {
             ui.add_space(4.0);
-            for panel in self.panels() {
+            for &panel in &panels {
                 if ui
-                    .selectable_label(self.saved.panel == panel, panel.name(lang))
+                    .selectable_label(settings.panel == panel, panel.name(lang))
                     .clicked()
                 {
-                    self.saved.panel = panel;
+                    actions.push(Action::ShowPanel(panel));
                 }
             }
             // The solar cleanbot's STOP is on every panel.
-            if self.saved.panel != PanelId::Solar && self.panels().contains(&PanelId::Solar) {
+            if settings.panel != PanelId::Solar && panels.contains(&PanelId::Solar) {
                 ui.separator();
-                actions.extend(self.solar.stop_button(ui, lang, &self.rt));
+                actions.extend(self.solar.stop_button(ui, lang, state));
             }
         });
-        egui::CentralPanel::default().show(ui, |ui| match self.saved.panel {
-            PanelId::Tuning => actions.extend(self.tuning.show(ui, lang, &self.rt)),
-            PanelId::Telemetry => {
-                actions.extend(self.telemetry.show(ui, &mut self.saved, &self.rt))
-            }
-            PanelId::Monitor => actions.extend(self.monitor.show(ui, lang, &mut self.rt)),
-            PanelId::Presets => actions.extend(self.presets.show(ui, lang, &self.rt)),
-            PanelId::Actions => actions.extend(self.actions.show(ui, lang, &self.rt)),
-            PanelId::Device => actions.extend(self.device.show(ui, lang, &self.rt)),
-            PanelId::Solar => actions.extend(self.solar.show(ui, lang, &self.rt)),
-            PanelId::SelfTest => actions.extend(self.selftest.show(ui, lang, &self.rt)),
-            PanelId::ServoBench => actions.extend(self.servo.show(ui, lang, &self.rt)),
-            PanelId::TuyaConsole => actions.extend(self.tuya.show(ui, lang, &self.rt)),
+        egui::CentralPanel::default().show(ui, |ui| match settings.panel {
+            PanelId::Tuning => actions.extend(self.tuning.show(ui, lang, state)),
+            PanelId::Telemetry => actions.extend(self.telemetry.show(ui, settings, state)),
+            PanelId::Monitor => actions.extend(self.monitor.show(ui, lang, state)),
+            PanelId::Presets => actions.extend(self.presets.show(ui, lang, state)),
+            PanelId::Actions => actions.extend(self.actions.show(ui, lang, state)),
+            PanelId::Device => actions.extend(self.device.show(ui, lang, state)),
+            PanelId::Solar => actions.extend(self.solar.show(ui, lang, state)),
+            PanelId::SelfTest => actions.extend(self.selftest.show(ui, lang, state)),
+            PanelId::ServoBench => actions.extend(self.servo.show(ui, lang, state)),
+            PanelId::TuyaConsole => actions.extend(self.tuya.show(ui, lang, state)),
         });
         for a in actions {
             self.apply(a);
@@ -287,39 +255,34 @@ impl App {
 
     /// The panels the profile has.
     pub fn panels(&self) -> Vec<PanelId> {
+        let profile = &self.state.device.profile;
         let mut v = Vec::new();
-        match self.rt.profile.protocol {
+        match profile.protocol {
             Protocol::Servo => return vec![PanelId::ServoBench, PanelId::Monitor],
             Protocol::Tuya => return vec![PanelId::TuyaConsole, PanelId::Monitor],
             Protocol::Msp => v.push(PanelId::Device),
         }
-        if self.rt.profile.protocol == Protocol::Msp
-            && self
-                .rt
-                .profile
-                .commands
-                .iter()
-                .any(|c| c.kind == crate::profile::CommandKind::Set)
+        if profile
+            .commands
+            .iter()
+            .any(|c| c.kind == crate::profile::CommandKind::Set)
         {
             v.push(PanelId::Tuning);
         }
-        if !self.rt.profile.plots.is_empty() {
+        if !profile.plots.is_empty() {
             v.push(PanelId::Telemetry);
         }
-        if !crate::preset::preset_commands(&self.rt.profile).is_empty() {
+        if !crate::preset::preset_commands(profile).is_empty() {
             v.push(PanelId::Presets);
         }
-        if self.rt.profile.protocol == Protocol::Msp
-            && self
-                .rt
-                .profile
-                .commands
-                .iter()
-                .any(|c| c.kind == crate::profile::CommandKind::Action)
+        if profile
+            .commands
+            .iter()
+            .any(|c| c.kind == crate::profile::CommandKind::Action)
         {
             v.push(PanelId::Actions);
         }
-        for rule in &self.rt.profile.panels {
+        for rule in &profile.panels {
             match rule.panel {
                 PanelKind::Solar => v.push(PanelId::Solar),
                 PanelKind::SelfTest => v.push(PanelId::SelfTest),
@@ -329,9 +292,9 @@ impl App {
         v.push(PanelId::Monitor);
         // A panel whose capability bit the device reports clear is hidden (nothing is hidden
         // before the device has answered CMD_VERSION).
-        if let Some(Ok(info)) = &self.rt.info {
+        if let Some(Ok(info)) = &self.state.device.info {
             v.retain(|p| {
-                self.rt.profile.panels.iter().all(|r| {
+                profile.panels.iter().all(|r| {
                     r.flag
                         .is_none_or(|bit| PanelId::of(r.panel) != *p || info.supports(bit))
                 })
@@ -347,56 +310,64 @@ impl App {
                 target,
                 baud,
                 profile,
-            } => self.connect(target, baud, profile),
-            Action::Disconnect => {
-                self.rt.disconnect();
-                self.rt.say("disconnected", false);
+                margin_ms,
+            } => {
+                self.settings.margin_ms = margin_ms;
+                self.connect(target, baud, profile)
             }
-            Action::Job(job) => job.start(&mut self.rt),
+            Action::Disconnect => {
+                self.state.disconnect();
+                self.state.notify(Notice::info("disconnected"));
+            }
+            Action::StartJob(job) => self.state.start_job(job),
+            Action::CancelJob => self.state.cancel_job(),
             Action::SetPollRate(hz) => {
-                self.saved.poll_hz = hz;
+                self.settings.poll_hz = hz;
                 self.restart_polls();
             }
             Action::PausePolling(paused) => {
-                self.rt.paused = paused;
+                self.state.link.polling_paused = paused;
                 self.restart_polls();
             }
-            Action::CancelJob => {
-                if let Some(j) = &self.rt.job {
-                    j.cancel.cancel();
-                }
-            }
-            Action::Say(text, error) => self.rt.say(text, error),
-            Action::Link(cmd) => self.rt.send(cmd),
-            Action::StartJob(job) => self.rt.start_job(&job.title, job.work),
+            Action::SetPlotWindow(secs) => self.settings.window_secs = secs,
+            Action::ShowPanel(panel) => self.settings.panel = panel,
+            Action::SetLanguage(lang) => self.settings.lang = lang,
+            Action::PausePacketLog(paused) => self.state.packets.paused = paused,
+            Action::ClearPacketLog => self.state.packets.clear(),
+            Action::Notify(n) => self.state.notify(n),
+            Action::Link(cmd) => self.state.send(cmd),
         }
     }
 
     fn connect(&mut self, target: Target, baud: u32, profile: String) {
-        self.rt.link_options.margin = self.saved.margin_ms.map(std::time::Duration::from_millis);
-        if let Err(e) = self.rt.connect(target.clone(), baud, &profile) {
-            self.rt.say(format!("cannot connect: {e}"), true);
+        self.state.link.options.margin = self
+            .settings
+            .margin_ms
+            .map(std::time::Duration::from_millis);
+        if let Err(e) = self.state.connect(target.clone(), baud, &profile) {
+            self.state
+                .notify(Notice::error(format!("cannot connect: {e}")));
             return;
         }
-        self.saved.target = target;
-        self.saved.baud = baud;
-        self.saved.profile = profile;
+        self.settings.target = target;
+        self.settings.baud = baud;
+        self.settings.profile = profile;
         self.tuning = tuning::TuningPanel::default();
         // What was found on another connection is not on this one.
         self.servo.forget_bus();
-        if !self.panels().contains(&self.saved.panel) {
-            self.saved.panel = self.panels()[0];
+        if !self.panels().contains(&self.settings.panel) {
+            self.settings.panel = self.panels()[0];
         }
         self.restart_polls();
     }
 
     fn restart_polls(&mut self) {
-        let polls = if self.rt.paused {
+        let polls = if self.state.link.polling_paused {
             Vec::new()
         } else {
-            self.rt.polls(self.saved.poll_hz)
+            crate::ops::telemetry::polls(&self.state.device.profile, self.settings.poll_hz)
         };
-        self.rt.send(LinkCommand::SetPolls(polls));
+        self.state.send(LinkCommand::SetPolls(polls));
     }
 }
 
@@ -410,6 +381,6 @@ impl eframe::App for App {
     }
 
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
-        eframe::set_value(storage, eframe::APP_KEY, &self.saved);
+        eframe::set_value(storage, eframe::APP_KEY, &self.settings);
     }
 }

@@ -2,8 +2,8 @@
 //! language. Its content keeps its width, so that the panels below never move.
 
 use super::Action;
-use super::app::Saved;
-use super::runtime::{Runtime, Target};
+use super::settings::Settings;
+use super::state::{AppState, Target};
 use crate::i18n::Lang;
 use crate::link::LinkState;
 use crate::sim::SimKind;
@@ -38,7 +38,7 @@ pub struct ConnectionBar {
 
 impl ConnectionBar {
     /// Fields from the saved settings.
-    pub fn new(saved: &Saved) -> Self {
+    pub fn new(saved: &Settings) -> Self {
         Self {
             target: saved.target.clone(),
             baud: saved.baud,
@@ -52,7 +52,7 @@ impl ConnectionBar {
     }
 
     /// Draws the bar.
-    pub fn show(&mut self, ui: &mut egui::Ui, saved: &mut Saved, rt: &Runtime) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
         let lang = saved.lang;
         let mut actions = Vec::new();
         ui.horizontal_wrapped(|ui| {
@@ -71,10 +71,10 @@ impl ConnectionBar {
                         }
                     }
                     ui.separator();
-                    if rt.ports.is_empty() {
+                    if rt.link.ports.is_empty() {
                         ui.weak(lang.tr("no serial ports found", "未找到串口"));
                     }
-                    for p in &rt.ports {
+                    for p in &rt.link.ports {
                         let t = Target::Port(p.path.clone());
                         if ui.selectable_label(self.target == t, p.label()).clicked() {
                             self.typed = p.path.clone();
@@ -140,31 +140,28 @@ impl ConnectionBar {
                 })
                 .response
                 .labelled_by(margin_label.id);
-            if rt.conn.is_some() {
+            let connect = || Action::Connect {
+                target: self.target.clone(),
+                baud: self.baud,
+                profile: self.profile.clone(),
+                margin_ms: self.margin_ms,
+            };
+            let open = rt.link.connection.is_some();
+            if open {
                 if ui.button(lang.tr("Disconnect", "断开")).clicked() {
                     actions.push(Action::Disconnect);
                 }
             } else if ui.button(lang.tr("Connect", "连接")).clicked() {
-                saved.margin_ms = self.margin_ms;
-                actions.push(Action::Connect {
-                    target: self.target.clone(),
-                    baud: self.baud,
-                    profile: self.profile.clone(),
-                });
+                actions.push(connect());
             }
-            if rt.conn.is_some()
+            if open
                 && (self.target != saved.target
                     || self.baud != saved.baud
                     || self.profile != saved.profile
                     || self.margin_ms != saved.margin_ms)
                 && ui.button(lang.tr("Reconnect", "重新连接")).clicked()
             {
-                saved.margin_ms = self.margin_ms;
-                actions.push(Action::Connect {
-                    target: self.target.clone(),
-                    baud: self.baud,
-                    profile: self.profile.clone(),
-                });
+                actions.push(connect());
             }
             ui.separator();
             state_badge(ui, lang, rt);
@@ -178,7 +175,7 @@ impl ConnectionBar {
                     Lang::Zh => "English",
                 };
                 if ui.button(label).on_hover_text("Language / 语言").clicked() {
-                    saved.lang = next;
+                    actions.push(Action::SetLanguage(next));
                 }
             });
         });
@@ -186,8 +183,8 @@ impl ConnectionBar {
     }
 }
 
-fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
-    let (text, color) = match (&rt.conn, &rt.state) {
+fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    let (text, color) = match (&rt.link.connection, &rt.link.state) {
         (None, _) => (
             lang.tr("not connected", "未连接").to_string(),
             egui::Color32::GRAY,

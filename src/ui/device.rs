@@ -1,12 +1,13 @@
 //! The MSP core commands: ping (with its round trip), version (hardware, firmware, API, build date
 //! and time, capability flags by name) and power state. Nothing is shown before a reply brings it.
 
-use super::jobs::JobOutput;
-use super::runtime::Runtime;
-use super::{Action, JobWork};
+use super::Action;
+use super::jobs::{Job, JobOutput};
+use super::state::AppState;
 use crate::i18n::Lang;
-use crate::link::{DeviceInfo, LinkCommand, session};
-use crate::ops::msp as ops;
+use crate::link::{DeviceInfo, LinkCommand};
+use crate::ops::OpError;
+use crate::ops::device as ops;
 use crate::profile::Profile;
 use crate::protocol::{hex, msp};
 use eframe::egui;
@@ -16,14 +17,15 @@ use std::time::{Duration, Instant};
 #[derive(Default)]
 pub struct DevicePanel {
     /// The last ping: its round trip, or why it failed.
-    pub ping: Option<Result<Duration, String>>,
+    pub ping: Option<Result<Duration, OpError>>,
     /// The last power-state read: the raw bytes, or why it failed.
-    pub power: Option<Result<Vec<u8>, String>>,
-    /// The last version read by this panel (the session's own is `rt.info`).
-    pub version: Option<Result<DeviceInfo, String>>,
+    pub power: Option<Result<Vec<u8>, OpError>>,
+    /// The last version read by this panel (the session's own is the device model's `info`).
+    pub version: Option<Result<DeviceInfo, OpError>>,
     /// When the last answer came.
     at: Option<Instant>,
-    /// The connection the values came from (its `rt.t0`): another connection clears them.
+    /// The connection the values came from (the device model's `t0`): another connection
+    /// clears them.
     conn: Option<Instant>,
     /// Version and power state have been asked on this connection.
     asked: bool,
@@ -33,54 +35,23 @@ pub struct DevicePanel {
 #[derive(Debug, Clone)]
 pub enum Output {
     /// A ping's round trip, or why it failed.
-    Ping(Result<Duration, String>),
+    Ping(Result<Duration, OpError>),
     /// CMD_VERSION with CMD_BUILD_INFO, or why it failed.
-    Version(Result<DeviceInfo, String>),
+    Version(Result<DeviceInfo, OpError>),
     /// CMD_GET_POWER_STATE's raw answer, or why it failed.
-    Power(Result<Vec<u8>, String>),
-}
-
-fn ping(client: &crate::link::Client, profile: &Profile) -> Result<Duration, String> {
-    let cmd = profile
-        .command_by_id(msp::CMD_PING)
-        .ok_or("the profile has no CMD_PING")?;
-    let t = Instant::now();
-    ops::send(client, profile, cmd, &[]).map_err(|e| e.to_string())?;
-    Ok(t.elapsed())
-}
-
-fn version(client: &crate::link::Client, profile: &Profile) -> Result<DeviceInfo, String> {
-    let cmd = profile
-        .command_by_id(msp::CMD_VERSION)
-        .ok_or("the profile has no CMD_VERSION")?;
-    let reply = ops::send(client, profile, cmd, &[]).map_err(|e| e.to_string())?;
-    let mut info = DeviceInfo::from_version(profile, reply.payload().unwrap_or_default())?;
-    if let Some(cmd) = profile.command_by_id(msp::CMD_BUILD_INFO)
-        && let Ok(reply) = ops::send(client, profile, cmd, &[])
-    {
-        info.build_date = session::build_date(reply.payload().unwrap_or_default());
-    }
-    Ok(info)
-}
-
-fn power(client: &crate::link::Client, profile: &Profile) -> Result<Vec<u8>, String> {
-    let cmd = profile
-        .command_by_id(3)
-        .ok_or("the profile has no CMD_GET_POWER_STATE")?;
-    let reply = ops::send(client, profile, cmd, &[]).map_err(|e| e.to_string())?;
-    Ok(reply.payload().unwrap_or_default().to_vec())
+    Power(Result<Vec<u8>, OpError>),
 }
 
 /// Reads CMD_VERSION, CMD_BUILD_INFO and the power state.
 fn read_job(profile: &std::sync::Arc<Profile>) -> Action {
     let p = profile.clone();
-    Action::StartJob(JobWork::new("version", move |client, cancel, sink| {
-        let v = version(client, &p);
+    Action::StartJob(Job::new("version", move |client, cancel, sink| {
+        let v = ops::identify(client, &p);
         sink.send(JobOutput::Device(Output::Version(v.clone())));
         if cancel.is_cancelled() {
-            return Err("cancelled".into());
+            return Err(OpError::Cancelled.into());
         }
-        let pw = power(client, &p);
+        let pw = ops::power_state(client, &p);
         sink.send(JobOutput::Device(Output::Power(pw.clone())));
         v?;
         pw?;
@@ -120,17 +91,17 @@ pub fn flag_names(profile: &Profile, flags: u8) -> Vec<(u8, String, String, bool
 
 impl DevicePanel {
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
-        if self.conn != Some(rt.t0) {
+        if self.conn != Some(rt.device.t0) {
             // Values of another connection (maybe another device) are never shown.
             *self = Self {
-                conn: Some(rt.t0),
+                conn: Some(rt.device.t0),
                 ..Self::default()
             };
         }
         let ready = rt.connected() && rt.job_progress().is_none();
-        let profile = rt.profile.clone();
+        let profile = rt.device.profile.clone();
         if ready && !self.asked {
             // Read once on each connection, as soon as the link is free.
             self.asked = true;
@@ -142,12 +113,13 @@ impl DevicePanel {
                 .clicked()
             {
                 let p = profile.clone();
-                actions.push(Action::StartJob(JobWork::new(
+                actions.push(Action::StartJob(Job::new(
                     "ping",
                     move |client, _cancel, sink| {
-                        let r = ping(client, &p);
+                        let r = ops::ping(client, &p).map(|ping| ping.rtt);
                         sink.send(JobOutput::Device(Output::Ping(r.clone())));
-                        r.map(|d| format!("answered in {:.1} ms", d.as_secs_f64() * 1e3))
+                        let rtt = r?;
+                        Ok(format!("answered in {:.1} ms", rtt.as_secs_f64() * 1e3))
                     },
                 )));
             }
@@ -179,7 +151,7 @@ impl DevicePanel {
                         ui.monospace(format!("{:.1} ms", d.as_secs_f64() * 1e3));
                     }
                     Some(Err(e)) => {
-                        ui.colored_label(egui::Color32::RED, e);
+                        ui.colored_label(egui::Color32::RED, e.to_string());
                     }
                     None => {
                         ui.weak(lang.tr("not pinged yet", "尚未检测"));
@@ -199,7 +171,7 @@ impl DevicePanel {
                         ui.monospace(hex::format(b));
                     }
                     Some(Err(e)) => {
-                        ui.colored_label(egui::Color32::RED, e);
+                        ui.colored_label(egui::Color32::RED, e.to_string());
                     }
                     None => {
                         ui.weak(lang.tr("not read yet", "尚未读取"));
@@ -210,11 +182,11 @@ impl DevicePanel {
         ui.separator();
         ui.strong(lang.tr("Version", "版本信息"));
         // This panel's own read wins; until then, what the session learned on connect.
-        let info = self.version.as_ref().or(rt.info.as_ref());
+        let info = self.version.as_ref().or(rt.device.info.as_ref());
         match info {
             Some(Ok(info)) => self.show_info(ui, lang, &profile, info),
             Some(Err(e)) => {
-                ui.colored_label(egui::Color32::RED, e);
+                ui.colored_label(egui::Color32::RED, e.to_string());
             }
             None => {
                 ui.weak(lang.tr(

@@ -1,23 +1,114 @@
-//! Long work off the UI thread: a named job thread runs an operation over a link client, sends
-//! its results and progress back, and can be cancelled.
+//! Long work off the UI thread: a panel asks for a [`Job`] (`Action::StartJob`, the one way to
+//! start one); the app runs it on a named job thread over a link client, and routes what it
+//! reports ([`JobOutput`]) once per frame. A job can be cancelled.
+//!
+//! The jobs several panels share (read, write with read-back, send) are made here; each runs an
+//! operation of [`crate::ops`].
 
+use crate::document::DocumentError;
 use crate::link::Client;
-use crate::ops::msp::Check;
-use crate::ops::{Cancel, Progress};
-use crate::profile::Value;
+use crate::ops::{self, Cancel, Check, FieldValues, OpError, Progress};
+use crate::profile::{Input, Profile};
 use crossbeam_channel::{Receiver, Sender};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// What a job ends with: a summary for the status line, or why it failed.
+pub type JobResult = Result<String, JobError>;
+
+/// Why a job failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum JobError {
+    /// Its operation failed (cancelled included).
+    #[error(transparent)]
+    Op(#[from] OpError),
+    /// A document could not be read or saved.
+    #[error(transparent)]
+    Document(#[from] DocumentError),
+    /// Some of a batch failed.
+    #[error("{failed} of {total} {what}")]
+    Incomplete {
+        /// How many failed.
+        failed: usize,
+        /// How many there were.
+        total: usize,
+        /// What failed, e.g. `reads failed`.
+        what: String,
+    },
+    /// Cancelled part of the way through a batch.
+    #[error("cancelled after {done} of {total} {what}")]
+    CancelledAfter {
+        /// How many were done.
+        done: usize,
+        /// How many there were.
+        total: usize,
+        /// Of what, e.g. `commands`.
+        what: &'static str,
+    },
+    /// A firmware update cancelled part of the way: the MCU holds an incomplete image.
+    #[error("cancelled after offset {offset} of {size} bytes: the MCU holds an incomplete image")]
+    UpdateCancelled {
+        /// Bytes acked.
+        offset: u64,
+        /// The image's size.
+        size: usize,
+    },
+    /// The device failed a test: what failed.
+    #[error("FAIL: {0}")]
+    Failed(String),
+    /// A device failed a step of its provisioning.
+    #[error("FAIL at {step}: {reason}")]
+    StepFailed {
+        /// The step.
+        step: String,
+        /// Why.
+        reason: String,
+    },
+    /// A log could not be appended to.
+    #[error(transparent)]
+    Log(#[from] LogError),
+    /// A file could not be read.
+    #[error("{path}: {reason}")]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        reason: String,
+    },
+    /// The job thread could not start.
+    #[error("cannot start a job thread: {0}")]
+    Thread(String),
+}
+
+/// A record that could not be appended to its log (self-test, provisioning).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("cannot append to {}: {reason}", path.display())]
+pub struct LogError {
+    /// The log.
+    pub path: PathBuf,
+    /// What the system said.
+    pub reason: String,
+}
+
+impl LogError {
+    /// `path` could not be appended to: `error`.
+    pub fn new(path: &std::path::Path, error: &std::io::Error) -> Self {
+        Self {
+            path: path.to_path_buf(),
+            reason: error.to_string(),
+        }
+    }
+}
 
 /// What a job reports.
 #[derive(Debug, Clone)]
 pub enum JobOutput {
     /// How far it got.
     Progress(Progress),
-    /// A command was read: its values, or why not.
-    Read(u8, Result<Vec<(String, Value)>, String>),
-    /// A Set was written and read back: the checks, or why not.
-    Wrote(u8, Result<Vec<Check>, String>),
-    /// A line for the status bar.
-    Note(String),
+    /// A command was read: its values, or why not (for the device model).
+    Read(u8, Result<FieldValues, OpError>),
+    /// A Set was written and read back: the checks, or why not (for the device model).
+    Wrote(u8, Result<Vec<Check>, OpError>),
     /// For the servo bench panel.
     Servo(super::servo_bench::Output),
     /// For the Tuya console panel.
@@ -26,10 +117,8 @@ pub enum JobOutput {
     Device(super::device::Output),
     /// For the self-test panel.
     SelfTest(super::selftest::Output),
-    /// For the solar cleanbot panel.
-    Solar(super::solar::Output),
     /// The job ended: a summary, or the error that ended it.
-    Done(Result<String, String>),
+    Done(JobResult),
 }
 
 /// Where a job sends its output.
@@ -42,10 +131,46 @@ impl JobSink {
         let _ = self.0.send(out);
         self.1.request_repaint();
     }
+
+    /// Sends progress.
+    pub fn progress(&self, p: Progress) {
+        self.send(JobOutput::Progress(p));
+    }
 }
 
-/// A running job.
+/// What a job runs: on the job thread, with a link client, a cancel flag and a sink for output.
+pub type Work = Box<dyn FnOnce(&Client, &Cancel, &JobSink) -> JobResult + Send>;
+
+/// A job to start: a title for the status line, and its work.
 pub struct Job {
+    /// What it does, for the status bar.
+    pub title: String,
+    work: Work,
+}
+
+impl Job {
+    /// A job titled `title` that runs `work`.
+    pub fn new(
+        title: impl Into<String>,
+        work: impl FnOnce(&Client, &Cancel, &JobSink) -> JobResult + Send + 'static,
+    ) -> Self {
+        Self {
+            title: title.into(),
+            work: Box::new(work),
+        }
+    }
+}
+
+impl std::fmt::Debug for Job {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Job")
+            .field("title", &self.title)
+            .finish_non_exhaustive()
+    }
+}
+
+/// A job that runs (or ran).
+pub struct RunningJob {
     /// What it does, for the status bar.
     pub title: String,
     /// Its latest progress.
@@ -56,27 +181,27 @@ pub struct Job {
     done: bool,
 }
 
-impl Job {
-    /// Starts `work` on a thread named `botbench-job`.
+impl RunningJob {
+    /// Starts `job` on a thread named `botbench-job`.
     pub fn spawn(
-        title: impl Into<String>,
+        job: Job,
         client: Client,
         ctx: &eframe::egui::Context,
-        work: impl FnOnce(&Client, &Cancel, &JobSink) -> Result<String, String> + Send + 'static,
-    ) -> Result<Job, String> {
+    ) -> Result<RunningJob, JobError> {
         let (tx, rx) = crossbeam_channel::unbounded();
         let cancel = Cancel::new();
         let sink = JobSink(tx, ctx.clone());
         let c = cancel.clone();
+        let work = job.work;
         std::thread::Builder::new()
             .name("botbench-job".into())
             .spawn(move || {
                 let result = work(&client, &c, &sink);
                 sink.send(JobOutput::Done(result));
             })
-            .map_err(|e| format!("cannot start a job thread: {e}"))?;
-        Ok(Job {
-            title: title.into(),
+            .map_err(|e| JobError::Thread(e.to_string()))?;
+        Ok(RunningJob {
+            title: job.title,
             progress: None,
             cancel,
             rx,
@@ -101,4 +226,75 @@ impl Job {
     pub fn is_done(&self) -> bool {
         self.done
     }
+}
+
+/// Reads the commands `ids` one after another ([`ops::tuning::read_commands`]); each answer goes
+/// to the device model.
+pub fn read(profile: &Arc<Profile>, ids: Vec<u8>) -> Job {
+    let profile = profile.clone();
+    Job::new("read", move |client, cancel, sink| {
+        let tally = ops::tuning::read_commands(
+            client,
+            &profile,
+            &ids,
+            cancel,
+            &mut |p| sink.progress(p),
+            &mut |id, r| sink.send(JobOutput::Read(id, r)),
+        )?;
+        if tally.failed == 0 {
+            Ok(format!("{} read", tally.total))
+        } else {
+            Err(JobError::Incomplete {
+                failed: tally.failed,
+                total: tally.total,
+                what: "reads failed".into(),
+            })
+        }
+    })
+}
+
+/// Writes these Set commands with their full payloads, each read back through its Get
+/// ([`ops::tuning::write_commands`]); each result goes to the device model.
+pub fn write(profile: &Arc<Profile>, writes: Vec<ops::tuning::SetWrite>) -> Job {
+    let profile = profile.clone();
+    Job::new("write", move |client, cancel, sink| {
+        let mut done = 0;
+        let tally = ops::tuning::write_commands(
+            client,
+            &profile,
+            &writes,
+            cancel,
+            &mut |p| sink.progress(p),
+            &mut |id, r| {
+                done += 1;
+                sink.send(JobOutput::Wrote(id, r))
+            },
+        )
+        .map_err(|e| match e {
+            OpError::Cancelled => JobError::CancelledAfter {
+                done,
+                total: writes.len(),
+                what: "commands",
+            },
+            e => e.into(),
+        })?;
+        if tally.failed == 0 {
+            Ok(format!("{} command(s) written and verified", tally.done))
+        } else {
+            Err(JobError::Incomplete {
+                failed: tally.failed,
+                total: tally.total,
+                what: "command(s) not verified".into(),
+            })
+        }
+    })
+}
+
+/// Sends command `id` (an action) with `inputs` and waits for its acknowledgement.
+pub fn send(profile: &Arc<Profile>, id: u8, inputs: Vec<(String, Input)>) -> Job {
+    let profile = profile.clone();
+    Job::new("send", move |client, _cancel, _sink| {
+        let ident = ops::tuning::send_command(client, &profile, id, &inputs)?;
+        Ok(format!("{ident} acknowledged"))
+    })
 }

@@ -1,34 +1,40 @@
-//! The desktop window (eframe/egui): one file per panel. Panels draw from the runtime state and
-//! return [`Action`]s; the app applies them once per frame. The UI never touches the port.
+//! The desktop window (eframe/egui): one file (or folder) per panel. Panels draw from the
+//! run-time state ([`AppState`]: link status, device model, packet log, job, status line) and
+//! the saved [`Settings`], both read-only, and return [`Action`]s; the app applies them once per
+//! frame. Panels never build a link request: they ask [`crate::ops`] for one, or start a
+//! [`Job`] that runs an operation. The UI never touches the port.
 
 mod actions;
 pub mod app;
 mod connection;
 mod device;
+mod inputs;
 pub mod jobs;
 mod monitor;
 mod presets;
-pub mod runtime;
 mod selftest;
 mod servo_bench;
+pub mod settings;
 mod solar;
+pub mod state;
 mod status_bar;
 mod telemetry;
 mod tuning;
 mod tuya_console;
 
-pub use app::{App, PanelId, Saved};
-pub use runtime::Target;
+pub use app::{App, PanelId};
+pub use jobs::Job;
+pub use settings::Settings;
 pub use solar::{Outcome as SolarOutcome, Trip as SolarTrip};
+pub use state::{AppState, Notice, Target};
+pub use tuya_console::FirmwareFileError;
 
-use crate::ops::msp as ops;
-use crate::profile::{Input, Value};
-use runtime::Runtime;
+use crate::i18n::Lang;
 
 /// Something a panel asks the app to do.
 #[derive(Debug)]
 pub enum Action {
-    /// Open a link.
+    /// Open a link (closing any other).
     Connect {
         /// To what.
         target: Target,
@@ -36,195 +42,45 @@ pub enum Action {
         baud: u32,
         /// With which profile.
         profile: String,
+        /// How long the device may take to start answering, ms (`None`: the protocol's own).
+        margin_ms: Option<u64>,
     },
     /// Close the link.
     Disconnect,
-    /// Start a job.
-    Job(JobSpec),
+    /// Start a job (the one way to start one).
+    StartJob(Job),
     /// Cancel the running job.
     CancelJob,
     /// Telemetry polls a second (`None`: as fast as the wire allows).
     SetPollRate(Option<f64>),
     /// Pause or resume telemetry polling.
     PausePolling(bool),
-    /// A status-bar message.
-    Say(String, bool),
-    /// A command for the worker that needs no answer on this thread (stop all, Tuya options…).
+    /// The plotted time window, seconds.
+    SetPlotWindow(f64),
+    /// Show this panel.
+    ShowPanel(PanelId),
+    /// The UI language.
+    SetLanguage(Lang),
+    /// Freeze or unfreeze the packet log.
+    PausePacketLog(bool),
+    /// Forget the packet log.
+    ClearPacketLog,
+    /// A status-line message.
+    Notify(Notice),
+    /// A command for the worker that needs no answer on this thread (stop all, polls, Tuya
+    /// options, a request an operation built…).
     Link(crate::link::LinkCommand),
-    /// Start a panel's own job.
-    StartJob(JobWork),
 }
 
-/// What a job runs: on the job thread, with a link client, a cancel flag and a sink for output.
-pub type Work = Box<
-    dyn FnOnce(&crate::link::Client, &crate::ops::Cancel, &jobs::JobSink) -> Result<String, String>
-        + Send,
->;
-
-/// Work a panel runs as a job: on the job thread, with a link client, a cancel flag and a sink
-/// for its output.
-pub struct JobWork {
-    /// What it does, for the status bar.
-    pub title: String,
-    /// The work.
-    pub work: Work,
-}
-
-impl JobWork {
-    /// Work titled `title`.
-    pub fn new(
-        title: impl Into<String>,
-        work: impl FnOnce(
-            &crate::link::Client,
-            &crate::ops::Cancel,
-            &jobs::JobSink,
-        ) -> Result<String, String>
-        + Send
-        + 'static,
-    ) -> Self {
-        Self {
-            title: title.into(),
-            work: Box::new(work),
-        }
-    }
-}
-
-impl std::fmt::Debug for JobWork {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("JobWork")
-            .field("title", &self.title)
-            .finish_non_exhaustive()
-    }
-}
-
-/// A job a panel can ask for.
-#[derive(Debug, Clone)]
-pub enum JobSpec {
-    /// Read these commands (Get or Telemetry), one after another.
-    Read(Vec<u8>),
-    /// Write these Set commands with their full payloads, each read back through its Get.
-    Write(Vec<(u8, Vec<(String, Input)>)>),
-    /// Send one command (an action) with these inputs.
-    Send(u8, Vec<(String, Input)>),
-    /// Read the device's parameters and save them as a preset at this path, with a note.
-    SavePreset(std::path::PathBuf, String),
-    /// Write a (checked) preset, each command read back.
-    ApplyPreset(Box<crate::preset::Preset>),
-}
-
-impl JobSpec {
-    /// Starts the job on the runtime's link.
-    pub fn start(self, rt: &mut Runtime) {
-        let profile = rt.profile.clone();
-        match self {
-            JobSpec::Read(ids) => rt.start_job("read", move |client, cancel, sink| {
-                let total = ids.len() as u64;
-                let mut failed = 0;
-                for (i, id) in ids.iter().enumerate() {
-                    if cancel.is_cancelled() {
-                        return Err("cancelled".into());
-                    }
-                    let Some(cmd) = profile.command_by_id(*id) else {
-                        continue;
-                    };
-                    let r = ops::read(client, &profile, cmd, &[]).map_err(|e| e.to_string());
-                    failed += usize::from(r.is_err());
-                    sink.send(jobs::JobOutput::Read(*id, r));
-                    sink.send(jobs::JobOutput::Progress(crate::ops::Progress {
-                        done: i as u64 + 1,
-                        total,
-                        message: cmd.ident.clone(),
-                    }));
-                }
-                if failed == 0 {
-                    Ok(format!("{total} read"))
-                } else {
-                    Err(format!("{failed} of {total} reads failed"))
-                }
-            }),
-            JobSpec::Write(items) => rt.start_job("write", move |client, cancel, sink| {
-                let total = items.len() as u64;
-                let (mut verified, mut bad) = (0, 0);
-                for (i, (set, inputs)) in items.iter().enumerate() {
-                    if cancel.is_cancelled() {
-                        return Err(format!("cancelled after {i} of {total} commands"));
-                    }
-                    let Some(cmd) = profile.command_by_id(*set) else {
-                        continue;
-                    };
-                    let r = ops::write_verified(client, &profile, cmd, inputs)
-                        .map_err(|e| e.to_string());
-                    match &r {
-                        Ok(checks) if checks.iter().all(|c| c.ok()) => verified += 1,
-                        _ => bad += 1,
-                    }
-                    sink.send(jobs::JobOutput::Wrote(*set, r));
-                    sink.send(jobs::JobOutput::Progress(crate::ops::Progress {
-                        done: i as u64 + 1,
-                        total,
-                        message: cmd.ident.clone(),
-                    }));
-                }
-                if bad == 0 {
-                    Ok(format!("{verified} command(s) written and verified"))
-                } else {
-                    Err(format!("{bad} of {total} command(s) not verified"))
-                }
-            }),
-            JobSpec::SavePreset(path, note) => {
-                rt.start_job("save preset", move |client, cancel, sink| {
-                    let mut preset =
-                        crate::preset::Preset::capture(client, &profile, cancel, &mut |p| {
-                            sink.send(jobs::JobOutput::Progress(p))
-                        })
-                        .map_err(|e| e.to_string())?;
-                    preset.note = note;
-                    preset
-                        .save_annotated(&path, &profile)
-                        .map_err(|e| e.to_string())?;
-                    Ok(format!("saved to {}", path.display()))
-                })
-            }
-            JobSpec::ApplyPreset(preset) => {
-                rt.start_job("apply preset", move |client, cancel, sink| {
-                    let mut total = 0;
-                    let mut bad = 0;
-                    preset
-                        .apply_each(
-                            client,
-                            &profile,
-                            cancel,
-                            &mut |p| sink.send(jobs::JobOutput::Progress(p)),
-                            &mut |command, checks| {
-                                total += checks.len();
-                                bad += checks.iter().filter(|c| !c.ok()).count();
-                                if let Some(cmd) = profile.command(command) {
-                                    sink.send(jobs::JobOutput::Wrote(cmd.id, Ok(checks.to_vec())));
-                                }
-                            },
-                        )
-                        .map_err(|e| e.to_string())?;
-                    if bad == 0 {
-                        Ok(format!("{total} field(s) written and verified"))
-                    } else {
-                        Err(format!(
-                            "{bad} of {total} field(s) do not hold the preset's value"
-                        ))
-                    }
-                })
-            }
-            JobSpec::Send(id, inputs) => rt.start_job("send", move |client, _cancel, _sink| {
-                let cmd = profile.command_by_id(id).ok_or("unknown command")?;
-                ops::send(client, &profile, cmd, &inputs).map_err(|e| e.to_string())?;
-                Ok(format!("{} acknowledged", cmd.ident))
-            }),
-        }
-    }
-}
-
-/// A value as a person reads it, by the field's format.
-pub fn shown(field: &crate::profile::Field, v: &Value) -> String {
-    field.format(v)
+/// Why the window could not open.
+#[derive(Debug, thiserror::Error)]
+pub enum UiError {
+    /// The profiles cannot be loaded.
+    #[error(transparent)]
+    Profile(#[from] crate::profile::ProfileError),
+    /// eframe could not open the window.
+    #[error("{0}")]
+    Window(String),
 }
 
 /// Opens the window. `target`, `baud` and `profile` override the saved settings.
@@ -233,7 +89,7 @@ pub fn run(
     baud: Option<u32>,
     profile: Option<String>,
     panel: Option<PanelId>,
-) -> Result<(), String> {
+) -> Result<(), UiError> {
     let options = eframe::NativeOptions {
         viewport: eframe::egui::ViewportBuilder::default()
             .with_inner_size([1200.0, 780.0])
@@ -245,7 +101,7 @@ pub fn run(
         "botbench",
         options,
         Box::new(move |cc| {
-            let mut saved: Saved = cc
+            let mut saved: Settings = cc
                 .storage
                 .and_then(|s| eframe::get_value(s, eframe::APP_KEY))
                 .unwrap_or_default();
@@ -266,5 +122,5 @@ pub fn run(
             Ok(Box::new(app))
         }),
     )
-    .map_err(|e| e.to_string())
+    .map_err(|e| UiError::Window(e.to_string()))
 }

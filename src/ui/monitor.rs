@@ -2,7 +2,7 @@
 //! meaning (command name, fields, errors). Filter by command, pause, copy, save as text.
 
 use super::Action;
-use super::runtime::Runtime;
+use super::state::{AppState, Notice};
 use crate::i18n::Lang;
 use crate::link::LogEntry;
 use crate::profile::Profile;
@@ -58,9 +58,10 @@ impl MonitorPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &mut Runtime) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
-        let profile = rt.profile.clone();
+        let profile = rt.device.profile.clone();
+        let log = &rt.packets;
         ui.horizontal_wrapped(|ui| {
             let label = ui.label(lang.tr("Filter", "筛选"));
             ui.add(
@@ -70,47 +71,50 @@ impl MonitorPanel {
             )
             .labelled_by(label.id);
             ui.checkbox(&mut self.errors_only, lang.tr("errors only", "仅错误"));
-            let pause = if rt.log_paused {
+            let pause = if log.paused {
                 lang.tr("Resume", "继续")
             } else {
                 lang.tr("Pause", "暂停")
             };
             if ui.button(pause).clicked() {
-                rt.log_paused = !rt.log_paused;
+                actions.push(Action::PausePacketLog(!log.paused));
             }
             if ui.button(lang.tr("Clear", "清空")).clicked() {
-                rt.log.clear();
-                rt.log_dropped = 0;
+                actions.push(Action::ClearPacketLog);
             }
             let copy = ui.button(lang.tr("Copy", "复制")).clicked();
             let save_clicked = ui.button(lang.tr("Save…", "保存…")).clicked();
             if copy || save_clicked {
-                let shown: Vec<String> = rt
-                    .log
+                let shown: Vec<String> = log
+                    .entries
                     .iter()
                     .filter(|e| self.matches(&profile, e))
                     .map(|e| line(&profile, e))
                     .collect();
                 if copy {
                     ui.ctx().copy_text(shown.join("\n"));
-                    actions.push(Action::Say(
-                        format!("{} line(s) copied", shown.len()),
-                        false,
-                    ));
+                    actions.push(Action::Notify(Notice::info(format!(
+                        "{} line(s) copied",
+                        shown.len()
+                    ))));
                 } else {
                     actions.push(save(&shown));
                 }
             }
-            let shown = rt.log.iter().filter(|e| self.matches(&profile, e)).count();
+            let shown = log
+                .entries
+                .iter()
+                .filter(|e| self.matches(&profile, e))
+                .count();
             ui.weak(format!(
                 "{} {} / {}{}",
                 shown,
                 lang.tr("shown", "条显示"),
-                rt.log.len(),
-                if rt.log_dropped > 0 {
+                log.entries.len(),
+                if log.dropped > 0 {
                     format!(
                         ", {} {}",
-                        rt.log_dropped,
+                        log.dropped,
                         lang.tr("not kept while paused", "暂停期间未记录")
                     )
                 } else {
@@ -119,15 +123,15 @@ impl MonitorPanel {
             ));
         });
         ui.separator();
-        let rows: Vec<&LogEntry> = rt
-            .log
+        let rows: Vec<&LogEntry> = log
+            .entries
             .iter()
             .filter(|e| self.matches(&profile, e))
             .collect();
         let row_h = ui.text_style_height(&egui::TextStyle::Monospace) + 2.0;
         egui::ScrollArea::both()
             .auto_shrink(false)
-            .stick_to_bottom(!rt.log_paused)
+            .stick_to_bottom(!log.paused)
             .show_rows(ui, row_h, rows.len(), |ui, range| {
                 for e in &rows[range] {
                     let text = line(&profile, e);
@@ -151,19 +155,16 @@ fn save(lines: &[String]) -> Action {
         .set_file_name("packets.txt")
         .save_file()
     else {
-        return Action::Say(
-            "save cancelled (no file chosen, or no file dialog on this system)".into(),
-            false,
-        );
+        return Action::Notify(Notice::info(
+            "save cancelled (no file chosen, or no file dialog on this system)",
+        ));
     };
-    let tmp = path.with_extension("tmp");
-    let result =
-        std::fs::write(&tmp, lines.join("\n") + "\n").and_then(|()| std::fs::rename(&tmp, &path));
-    match result {
-        Ok(()) => Action::Say(
-            format!("{} line(s) saved to {}", lines.len(), path.display()),
-            false,
-        ),
-        Err(e) => Action::Say(format!("cannot write {}: {e}", path.display()), true),
+    match crate::document::write_atomic(&path, (lines.join("\n") + "\n").as_bytes()) {
+        Ok(()) => Action::Notify(Notice::info(format!(
+            "{} line(s) saved to {}",
+            lines.len(),
+            path.display()
+        ))),
+        Err(e) => Action::Notify(Notice::error(e.to_string())),
     }
 }

@@ -1,12 +1,17 @@
 //! Presets: save the device's parameters to a RON file, open one and compare it with the device
 //! in a diff table, apply it with read-back verification and a progress bar.
 
-use super::runtime::{Reading, Runtime};
-use super::{Action, JobSpec};
+use super::Action;
+use super::jobs::{self, Job, JobError, JobOutput};
+use super::state::{AppState, Reading};
+use crate::document::DocumentError;
 use crate::i18n::Lang;
-use crate::preset::{CommandValues, Loaded, Preset, display_value, preset_commands};
+use crate::ops;
+use crate::preset::{CommandValues, Loaded, Preset, preset_commands};
+use crate::profile::Profile;
 use eframe::egui;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// The panel's state: the file, and the preset opened from it.
 #[derive(Default)]
@@ -18,51 +23,86 @@ pub struct PresetsPanel {
     /// The preset opened (checked against the profile).
     pub loaded: Option<Loaded>,
     /// Why the last open failed, with line and column.
-    pub error: Option<String>,
+    pub error: Option<DocumentError>,
+}
+
+/// Reads the device's parameters and saves them as a preset at `path`, with `note`
+/// ([`ops::preset::capture`]).
+fn save_job(profile: &Arc<Profile>, path: PathBuf, note: String) -> Job {
+    let profile = profile.clone();
+    Job::new("save preset", move |client, cancel, sink| {
+        let mut preset = ops::preset::capture(client, &profile, cancel, &mut |p| sink.progress(p))?;
+        preset.note = note;
+        preset.save_annotated(&path, &profile)?;
+        Ok(format!("saved to {}", path.display()))
+    })
+}
+
+/// Writes a (checked) preset, each command read back ([`ops::preset::apply_each`]); each
+/// command's checks go to the device model.
+fn apply_job(profile: &Arc<Profile>, preset: Preset) -> Job {
+    let profile = profile.clone();
+    Job::new("apply preset", move |client, cancel, sink| {
+        let mut total = 0;
+        let mut bad = 0;
+        ops::preset::apply_each(
+            client,
+            &profile,
+            &preset,
+            cancel,
+            &mut |p| sink.progress(p),
+            &mut |command, checks| {
+                total += checks.len();
+                bad += checks.iter().filter(|c| !c.ok()).count();
+                if let Some(cmd) = profile.command(command) {
+                    sink.send(JobOutput::Wrote(cmd.id, Ok(checks.to_vec())));
+                }
+            },
+        )?;
+        if bad == 0 {
+            Ok(format!("{total} field(s) written and verified"))
+        } else {
+            Err(JobError::Incomplete {
+                failed: bad,
+                total,
+                what: "field(s) do not hold the preset's value".into(),
+            })
+        }
+    })
 }
 
 /// The device's values of the preset commands, from the readings replies brought.
-fn device_values(rt: &Runtime) -> Vec<CommandValues> {
-    preset_commands(&rt.profile)
+fn device_values(rt: &AppState) -> Vec<CommandValues> {
+    preset_commands(&rt.device.profile)
         .into_iter()
         .filter_map(|(set, get)| {
-            let Some(Reading::Values(values, _)) = rt.readings.get(&get.id) else {
+            let Some(Reading::Values(values, _)) = rt.device.readings.get(&get.id) else {
                 return None;
             };
-            let fields = set
-                .request
-                .iter()
-                .filter_map(|f| {
-                    let (_, v) = values.iter().find(|(k, _)| k == &f.ident)?;
-                    Some((f.ident.clone(), display_value(f, v)))
-                })
-                .collect();
-            Some(CommandValues {
-                command: set.ident.clone(),
-                fields,
-            })
+            Some(ops::preset::command_values(set, values))
         })
         .collect()
 }
 
 impl PresetsPanel {
     /// Opens the preset at `path`, checking it against the profile.
-    pub fn open(&mut self, rt: &Runtime) {
-        match Preset::load(&PathBuf::from(self.path.trim()), &rt.profile) {
+    pub fn open(&mut self, rt: &AppState) {
+        match Preset::load(&PathBuf::from(self.path.trim()), &rt.device.profile) {
             Ok(l) => {
                 self.loaded = Some(l);
                 self.error = None;
             }
             Err(e) => {
                 self.loaded = None;
-                self.error = Some(e.to_string());
+                self.error = Some(e);
             }
         }
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
+        let profile = &rt.device.profile;
         let busy = rt.job_progress().is_some();
         let ready = rt.connected() && !busy;
         ui.horizontal_wrapped(|ui| {
@@ -98,11 +138,11 @@ impl PresetsPanel {
                 .clicked()
                 && let Some(p) = rfd::FileDialog::new()
                     .add_filter("RON", &["ron"])
-                    .set_file_name(format!("{}.ron", rt.profile.id))
+                    .set_file_name(format!("{}.ron", profile.id))
                     .save_file()
             {
                 self.path = p.display().to_string();
-                actions.push(Action::Job(JobSpec::SavePreset(p, self.note.clone())));
+                actions.push(Action::StartJob(save_job(profile, p, self.note.clone())));
             }
             if ui
                 .add_enabled(
@@ -111,7 +151,8 @@ impl PresetsPanel {
                 )
                 .clicked()
             {
-                actions.push(Action::Job(JobSpec::SavePreset(
+                actions.push(Action::StartJob(save_job(
+                    profile,
                     PathBuf::from(self.path.trim()),
                     self.note.clone(),
                 )));
@@ -120,18 +161,18 @@ impl PresetsPanel {
                 .button(lang.tr("Factory defaults", "出厂默认值"))
                 .clicked()
             {
-                let preset = Preset::defaults(&rt.profile, "factory defaults from the profile");
-                match preset.validate(&rt.profile) {
+                let preset = Preset::defaults(profile, "factory defaults from the profile");
+                match preset.validate(profile) {
                     Ok(writes) => {
                         self.loaded = Some(Loaded { preset, writes });
                         self.error = None;
                     }
-                    Err(e) => self.error = Some(e.to_string()),
+                    Err(e) => self.error = Some(e),
                 }
             }
         });
         if let Some(e) = &self.error {
-            ui.colored_label(egui::Color32::RED, e);
+            ui.colored_label(egui::Color32::RED, e.to_string());
         }
         ui.separator();
         let Some(loaded) = &self.loaded else {
@@ -155,13 +196,10 @@ impl PresetsPanel {
             ui.label(&p.note);
         }
         let device = device_values(rt);
-        let rows = p.diff(&rt.profile, &device);
+        let rows = p.diff(profile, &device);
         let differing = rows.iter().filter(|r| r.differs).count();
         ui.horizontal(|ui| {
-            let gets: Vec<u8> = preset_commands(&rt.profile)
-                .iter()
-                .map(|(_, g)| g.id)
-                .collect();
+            let gets: Vec<u8> = preset_commands(profile).iter().map(|(_, g)| g.id).collect();
             if ui
                 .add_enabled(
                     ready,
@@ -169,14 +207,14 @@ impl PresetsPanel {
                 )
                 .clicked()
             {
-                actions.push(Action::Job(JobSpec::Read(gets)));
+                actions.push(Action::StartJob(jobs::read(profile, gets)));
             }
             let apply = ui.add_enabled(
                 ready,
                 egui::Button::new(format!("{} ({differing})", lang.tr("Apply", "写入预设"))),
             );
             if apply.clicked() {
-                actions.push(Action::Job(JobSpec::ApplyPreset(Box::new(p.clone()))));
+                actions.push(Action::StartJob(apply_job(profile, p.clone())));
             }
         });
         egui::ScrollArea::vertical()

@@ -3,9 +3,10 @@
 //! operator prompts as a modal that the job waits on, a results table, a PASS/FAIL banner, and
 //! one JSON line per run appended to a log with the device's version and build info.
 
-use super::jobs::JobOutput;
-use super::runtime::Runtime;
-use super::{Action, JobWork};
+use super::Action;
+use super::jobs::{Job, JobError, JobOutput, LogError};
+use super::state::AppState;
+use crate::document::DocumentError;
 use crate::i18n::Lang;
 use crate::ops::selftest::{self, Plan, Report, StepKind, StepResult};
 use crate::profile::Profile;
@@ -37,13 +38,13 @@ pub struct SelfTestPanel {
     /// The plan opened (checked against the profile).
     pub plan: Option<Plan>,
     /// Why the last open failed, with line and column.
-    pub error: Option<String>,
+    pub error: Option<DocumentError>,
     /// Results of the run in progress (or the last), in step order.
     pub results: Vec<StepResult>,
     /// The last finished run.
     pub report: Option<Report>,
     /// Where the last record went, or why it could not be written.
-    pub logged: Option<Result<String, String>>,
+    pub logged: Option<Result<PathBuf, LogError>>,
     /// A run is in progress.
     pub running: bool,
     /// The prompt the job waits on.
@@ -74,7 +75,7 @@ pub enum Output {
     /// The job waits for the operator.
     Prompt(Prompt),
     /// The run ended: its report, and where its record went (or why it was not written).
-    Done(Box<Report>, Option<Result<String, String>>),
+    Done(Box<Report>, Option<Result<PathBuf, LogError>>),
 }
 
 impl Output {
@@ -154,15 +155,15 @@ fn what(kind: &StepKind) -> String {
 
 impl SelfTestPanel {
     /// Opens the plan at `path`, checking it against the profile.
-    pub fn open(&mut self, rt: &Runtime) {
-        match Plan::load(&PathBuf::from(self.path.trim()), &rt.profile) {
+    pub fn open(&mut self, rt: &AppState) {
+        match Plan::load(&PathBuf::from(self.path.trim()), &rt.device.profile) {
             Ok(p) => {
                 self.plan = Some(p);
                 self.error = None;
             }
             Err(e) => {
                 self.plan = None;
-                self.error = Some(e.to_string());
+                self.error = Some(e);
             }
         }
         self.results.clear();
@@ -170,15 +171,15 @@ impl SelfTestPanel {
         self.logged = None;
     }
 
-    fn start(&mut self, rt: &Runtime) -> Option<Action> {
+    fn start(&mut self, rt: &AppState) -> Option<Action> {
         let plan = self.plan.clone()?;
-        let profile = rt.profile.clone();
-        let log = self.log_path.trim().to_string();
+        let profile = rt.device.profile.clone();
+        let log = PathBuf::from(self.log_path.trim());
         self.results.clear();
         self.report = None;
         self.logged = None;
         self.running = true;
-        Some(Action::StartJob(JobWork::new(
+        Some(Action::StartJob(Job::new(
             "self-test",
             move |client, cancel, sink| {
                 let mut operator = |text: &str| -> bool {
@@ -207,13 +208,13 @@ impl SelfTestPanel {
                     &plan,
                     &mut operator,
                     cancel,
-                    &mut |p| sink.send(JobOutput::Progress(p)),
+                    &mut |p| sink.progress(p),
                     &mut |r| sink.send(JobOutput::SelfTest(Output::Step(r.clone()))),
                 );
-                let logged = (!log.is_empty()).then(|| {
-                    selftest::append_log(std::path::Path::new(&log), &report)
+                let logged = (!log.as_os_str().is_empty()).then(|| {
+                    selftest::append_log(&log, &report)
                         .map(|()| log.clone())
-                        .map_err(|e| format!("cannot append to {log}: {e}"))
+                        .map_err(|e| LogError::new(&log, &e))
                 });
                 let pass = report.pass;
                 let failed: Vec<String> = report.failed().map(|r| r.name.clone()).collect();
@@ -223,19 +224,19 @@ impl SelfTestPanel {
                     logged.clone(),
                 )));
                 if let Some(Err(e)) = logged {
-                    return Err(e);
+                    return Err(e.into());
                 }
                 match (pass, aborted) {
                     (true, _) => Ok("PASS".into()),
-                    (false, Some(a)) => Err(format!("FAIL: {a}")),
-                    (false, None) => Err(format!("FAIL: {}", failed.join(", "))),
+                    (false, Some(a)) => Err(JobError::Failed(a)),
+                    (false, None) => Err(JobError::Failed(failed.join(", "))),
                 }
             },
         )))
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
         let busy = rt.job_progress().is_some();
         if self.running
@@ -323,7 +324,7 @@ impl SelfTestPanel {
         }
         self.banner(ui, lang);
         ui.separator();
-        self.table(ui, lang, &rt.profile);
+        self.table(ui, lang, &rt.device.profile);
         self.prompt_modal(ui, lang);
         actions
     }
@@ -375,12 +376,13 @@ impl SelfTestPanel {
         match &self.logged {
             Some(Ok(p)) => {
                 ui.label(format!(
-                    "{} {p}",
-                    lang.tr("Record appended to", "记录已追加到")
+                    "{} {}",
+                    lang.tr("Record appended to", "记录已追加到"),
+                    p.display()
                 ));
             }
             Some(Err(e)) => {
-                ui.colored_label(egui::Color32::RED, e);
+                ui.colored_label(egui::Color32::RED, e.to_string());
             }
             None => {
                 ui.weak(lang.tr("Not logged (no log file).", "未记录(未指定日志文件)。"));

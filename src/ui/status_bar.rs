@@ -2,18 +2,18 @@
 //! progress.
 
 use super::Action;
-use super::runtime::Runtime;
+use super::state::AppState;
 use crate::i18n::Lang;
 use eframe::egui;
 
 /// Draws the status line.
-pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
     let mut actions = Vec::new();
     ui.horizontal(|ui| {
-        match &rt.conn {
-            Some(c) => {
-                ui.label(c.target.label());
-                if let Some(Ok(info)) = &rt.info {
+        match rt.link.target() {
+            Some(target) => {
+                ui.label(target.label());
+                if let Some(Ok(info)) = &rt.device.info {
                     ui.separator();
                     ui.label(format!(
                         "hw {:#04x} fw {} api {}",
@@ -40,7 +40,7 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
                 actions.push(Action::CancelJob);
             }
         }
-        if let Some(s) = &rt.status {
+        if let Some(s) = &rt.notice {
             ui.separator();
             let color = if s.error {
                 egui::Color32::RED
@@ -54,8 +54,8 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
 }
 
 /// The link's round trip and counters.
-fn link_stats(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
-    if let Some(rtt) = rt.stats.rtt {
+fn link_stats(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    if let Some(rtt) = rt.link.stats.rtt {
         ui.label(format!(
             "{} {:.1} ms",
             lang.tr("round trip", "往返"),
@@ -65,19 +65,19 @@ fn link_stats(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
     let warn = egui::Color32::from_rgb(220, 150, 0);
     let quiet = ui.visuals().weak_text_color();
     // A scan asks every id, and most never answer: on a servo bus silence is not an error.
-    let silence_expected = rt.profile.protocol == crate::profile::Protocol::Servo;
+    let silence_expected = rt.device.profile.protocol == crate::profile::Protocol::Servo;
     let details = format!(
         "{} {}, {} {}, {} {}, {} {}",
         lang.tr("retries", "重试"),
-        rt.stats.retries,
+        rt.link.stats.retries,
         lang.tr("frames sent", "已发送帧"),
-        rt.stats.sent,
+        rt.link.stats.sent,
         lang.tr("received", "已接收"),
-        rt.stats.received,
+        rt.link.stats.received,
         lang.tr("dropped events", "丢弃事件"),
-        rt.stats.dropped_events
+        rt.link.stats.dropped_events
     );
-    let n = rt.stats.timeouts;
+    let n = rt.link.stats.timeouts;
     let color = if n > 0 && !silence_expected {
         warn
     } else {
@@ -85,7 +85,7 @@ fn link_stats(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
     };
     ui.colored_label(color, format!("{} {n}", lang.tr("no answer", "无应答")))
         .on_hover_text(details.clone());
-    let n = rt.stats.frame_errors;
+    let n = rt.link.stats.frame_errors;
     let color = if n > 0 { warn } else { quiet };
     ui.colored_label(color, format!("{} {n}", lang.tr("frame errors", "帧错误")))
         .on_hover_text(details);

@@ -3,9 +3,9 @@
 //! readout, the other telemetry listed with live values, and CSV export.
 
 use super::Action;
-use super::JobSpec;
-use super::app::Saved;
-use super::runtime::{Reading, Runtime};
+use super::jobs;
+use super::settings::Settings;
+use super::state::{AppState, Notice, Reading};
 use crate::i18n::Lang;
 use crate::profile::CommandKind;
 use eframe::egui;
@@ -54,7 +54,7 @@ fn rate_label(rate: Option<f64>, lang: Lang) -> String {
 
 impl TelemetryPanel {
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, saved: &mut Saved, rt: &Runtime) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
         let lang = saved.lang;
         let mut actions = Vec::new();
         ui.horizontal_wrapped(|ui| {
@@ -73,20 +73,26 @@ impl TelemetryPanel {
                 })
                 .response
                 .labelled_by(label.id);
-            let pause = if rt.paused {
+            let paused = rt.link.polling_paused;
+            let pause = if paused {
                 lang.tr("Resume", "继续")
             } else {
                 lang.tr("Pause", "暂停")
             };
             if ui.button(pause).clicked() {
-                actions.push(Action::PausePolling(!rt.paused));
+                actions.push(Action::PausePolling(!paused));
             }
             let label = ui.label(lang.tr("Window", "时间窗"));
             egui::ComboBox::from_id_salt("window")
                 .selected_text(format!("{} s", saved.window_secs))
                 .show_ui(ui, |ui| {
                     for w in WINDOWS {
-                        ui.selectable_value(&mut saved.window_secs, w, format!("{w} s"));
+                        if ui
+                            .selectable_label(saved.window_secs == w, format!("{w} s"))
+                            .clicked()
+                        {
+                            actions.push(Action::SetPlotWindow(w));
+                        }
                     }
                 })
                 .response
@@ -97,15 +103,15 @@ impl TelemetryPanel {
             }
         });
         ui.separator();
-        let plots = &rt.profile.plots;
+        let plots = &rt.device.profile.plots;
         let height = ((ui.available_height() - 160.0) / plots.len().max(1) as f32).max(120.0);
-        let now = rt.t0.elapsed().as_secs_f64();
+        let now = rt.device.t0.elapsed().as_secs_f64();
         let window = saved.window_secs;
         let link = egui::Id::unique("telemetry-x");
         let mut hovered = None;
         for plot in plots {
             ui.label(egui::RichText::new(lang.tr(&plot.name.en, &plot.name.zh)).strong());
-            let set = rt.plots.get(&plot.id);
+            let set = rt.device.plots.get(&plot.id);
             let end = if self.follow {
                 now
             } else {
@@ -164,9 +170,10 @@ impl TelemetryPanel {
     }
 
     /// The profile's other telemetry, with the values the last reads brought.
-    fn other_telemetry(&self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+    fn other_telemetry(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
         let cmds: Vec<_> = rt
+            .device
             .profile
             .commands
             .iter()
@@ -182,7 +189,8 @@ impl TelemetryPanel {
                 )
                 .clicked()
             {
-                actions.push(Action::Job(JobSpec::Read(
+                actions.push(Action::StartJob(jobs::read(
+                    &rt.device.profile,
                     cmds.iter().map(|c| c.id).collect(),
                 )));
             }
@@ -198,7 +206,7 @@ impl TelemetryPanel {
                         for cmd in cmds {
                             ui.label(lang.tr(&cmd.name.en, &cmd.name.zh))
                                 .on_hover_text(&cmd.ident);
-                            match rt.readings.get(&cmd.id) {
+                            match rt.device.readings.get(&cmd.id) {
                                 Some(Reading::Values(values, at)) => {
                                     let text: Vec<String> = values
                                         .iter()
@@ -206,7 +214,7 @@ impl TelemetryPanel {
                                             let shown = cmd
                                                 .reply
                                                 .iter()
-                                                .find(|f| &f.ident == k)
+                                                .find(|f| f.ident == k)
                                                 .map_or(format!("{v:?}"), |f| {
                                                     format!("{}{}", f.format(v), f.unit_suffix())
                                                 });
@@ -219,7 +227,7 @@ impl TelemetryPanel {
                                     ));
                                 }
                                 Some(Reading::Failed(e)) => {
-                                    ui.colored_label(egui::Color32::RED, e);
+                                    ui.colored_label(egui::Color32::RED, e.to_string());
                                 }
                                 None => {
                                     ui.weak(lang.tr("not read yet", "尚未读取"));
@@ -234,29 +242,35 @@ impl TelemetryPanel {
 }
 
 /// Asks where to save and writes every plot's series as CSV.
-fn export_csv(rt: &Runtime) -> Action {
+fn export_csv(rt: &AppState) -> Action {
     let Some(path) = rfd::FileDialog::new()
         .set_file_name("telemetry.csv")
         .add_filter("CSV", &["csv"])
         .save_file()
     else {
-        return Action::Say(
-            "export cancelled (no file chosen, or no file dialog on this system)".into(),
-            false,
-        );
+        return Action::Notify(Notice::info(
+            "export cancelled (no file chosen, or no file dialog on this system)",
+        ));
     };
     match write_csv(rt, &path) {
-        Ok(n) => Action::Say(format!("{n} plot(s) written to {}", path.display()), false),
-        Err(e) => Action::Say(format!("cannot write {}: {e}", path.display()), true),
+        Ok(n) => Action::Notify(Notice::info(format!(
+            "{n} plot(s) written to {}",
+            path.display()
+        ))),
+        Err(e) => Action::Notify(Notice::error(e.to_string())),
     }
 }
 
-/// Writes every plotted series to `path` as one CSV (a column per `plot.field`, a row per time).
-pub fn write_csv(rt: &Runtime, path: &std::path::Path) -> std::io::Result<usize> {
+/// Writes every plotted series to `path` as one CSV (a column per `plot.field`, a row per time),
+/// atomically. Returns the number of plots written.
+pub fn write_csv(
+    rt: &AppState,
+    path: &std::path::Path,
+) -> Result<usize, crate::document::DocumentError> {
     let mut all = crate::series::SeriesSet::new(crate::series::DEFAULT_CAPACITY);
     let mut n = 0;
-    for plot in &rt.profile.plots {
-        let Some(set) = rt.plots.get(&plot.id) else {
+    for plot in &rt.device.profile.plots {
+        let Some(set) = rt.device.plots.get(&plot.id) else {
             continue;
         };
         n += 1;
@@ -268,9 +282,8 @@ pub fn write_csv(rt: &Runtime, path: &std::path::Path) -> std::io::Result<usize>
         }
     }
     let mut buf = Vec::new();
-    all.write_csv(&mut buf)?;
-    let tmp = path.with_extension("csv.tmp");
-    std::fs::write(&tmp, &buf)?;
-    std::fs::rename(&tmp, path)?;
+    all.write_csv(&mut buf)
+        .map_err(|e| crate::document::DocumentError::io(path, "write", &e))?;
+    crate::document::write_atomic(path, &buf)?;
     Ok(n)
 }

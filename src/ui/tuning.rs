@@ -3,11 +3,13 @@
 //! changes" shows the diff, writes only the changed commands (each with its full payload) and
 //! reads them back.
 
-use super::runtime::{Mark, Reading, Runtime};
-use super::{Action, JobSpec};
+use super::Action;
+use super::inputs::range_text;
+use super::jobs;
+use super::state::{AppState, Mark, Reading};
 use crate::i18n::Lang;
-use crate::profile::value::Allowed;
-use crate::profile::{Command, CommandKind, Field, Input, Value};
+use crate::ops::tuning::SetWrite;
+use crate::profile::{Command, CommandKind, Field, FieldError, Value};
 use eframe::egui;
 use std::collections::HashMap;
 
@@ -25,7 +27,38 @@ pub struct Change {
 }
 
 /// The writes of a "Write changes": each Set command with its full payload.
-pub type Writes = Vec<(u8, Vec<(String, Input)>)>;
+pub type Writes = Vec<SetWrite>;
+
+/// Why the edits cannot be written.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PendingError {
+    /// An edit the field refuses.
+    #[error(transparent)]
+    Value(#[from] FieldError),
+    /// A typed value that is not a number where one is needed.
+    #[error("{field}: not a number")]
+    NotANumber {
+        /// The field's ident.
+        field: String,
+    },
+    /// A parameter of the servo's user block that has not been read: the block is written
+    /// whole.
+    #[error("{field} has not been read: read all first, so that the whole block can be written")]
+    BlockNotRead {
+        /// The parameter's ident.
+        field: String,
+    },
+    /// A field of an edited command that has not been read: a Set sends every field.
+    #[error(
+        "{command}: {field} has not been read; read it first so that the whole command can be written"
+    )]
+    NotRead {
+        /// The Set command's ident.
+        command: String,
+        /// The field's ident.
+        field: String,
+    },
+}
 
 /// The panel's own state: what the technician typed.
 #[derive(Default)]
@@ -36,14 +69,6 @@ pub struct TuningPanel {
     confirm: Option<(Vec<Change>, Writes)>,
 }
 
-/// The device's value of a field, if a reply has brought one.
-fn device_value<'a>(rt: &'a Runtime, get: u8, field: &str) -> Option<&'a Value> {
-    match rt.readings.get(&get) {
-        Some(Reading::Values(values, _)) => values.iter().find(|(k, _)| k == field).map(|(_, v)| v),
-        _ => None,
-    }
-}
-
 /// A panel group: its id ("" for the commands without one), its name, its Get/Set pairs.
 struct Group<'p> {
     id: String,
@@ -52,8 +77,8 @@ struct Group<'p> {
 }
 
 /// The Get/Set pairs of the profile, grouped.
-fn groups(rt: &Runtime, lang: Lang) -> Vec<Group<'_>> {
-    let p = &rt.profile;
+fn groups(rt: &AppState, lang: Lang) -> Vec<Group<'_>> {
+    let p = &rt.device.profile;
     let pairs: Vec<(&Command, &Command)> = p
         .commands
         .iter()
@@ -92,36 +117,16 @@ fn groups(rt: &Runtime, lang: Lang) -> Vec<Group<'_>> {
     out
 }
 
-/// The allowed values, as shown: `0 – 100 %` or the labels.
-pub fn range_text(field: &Field) -> String {
-    match field.allowed() {
-        Allowed::Range(lo, hi) => {
-            format!(
-                "{} – {}{}",
-                field.format_number(lo),
-                field.format_number(hi),
-                field.unit_suffix()
-            )
-        }
-        Allowed::Labels(f) => f
-            .labels
-            .iter()
-            .map(|l| l.ident.as_str())
-            .collect::<Vec<_>>()
-            .join(" / "),
-    }
-}
-
 impl TuningPanel {
     /// What an edit parses to, if there is an edit.
-    fn edited(&self, get: u8, field: &Field) -> Option<Result<Value, String>> {
+    fn edited(&self, get: u8, field: &Field) -> Option<Result<Value, FieldError>> {
         let text = self.edits.get(&(get, field.ident.clone()))?;
-        Some(field.parse(text).map_err(|e| e.to_string()))
+        Some(field.parse(text))
     }
 
     /// Drops edits that now equal the device's value (after a verified write, or typed back).
-    fn prune(&mut self, rt: &Runtime) {
-        let profile = &rt.profile;
+    fn prune(&mut self, rt: &AppState) {
+        let profile = &rt.device.profile;
         self.edits.retain(|(get, ident), text| {
             let Some(field) = profile
                 .command_by_id(*get)
@@ -129,7 +134,7 @@ impl TuningPanel {
             else {
                 return false;
             };
-            match (field.parse(text), device_value(rt, *get, ident)) {
+            match (field.parse(text), rt.device.value(*get, ident)) {
                 (Ok(v), Some(d)) => &v != d,
                 _ => true,
             }
@@ -137,15 +142,15 @@ impl TuningPanel {
     }
 
     /// The writes the edits call for, or why they cannot be made.
-    pub fn pending(&self, rt: &Runtime) -> Result<(Vec<Change>, Writes), String> {
+    pub fn pending(&self, rt: &AppState) -> Result<(Vec<Change>, Writes), PendingError> {
         let mut changes = Vec::new();
         let mut writes = Vec::new();
-        for (get, set) in rt
-            .profile
+        let profile = &rt.device.profile;
+        for (get, set) in profile
             .commands
             .iter()
             .filter(|c| c.kind == CommandKind::Get)
-            .filter_map(|g| Some((g, rt.profile.command_by_id(g.pair?)?)))
+            .filter_map(|g| Some((g, profile.command_by_id(g.pair?)?)))
         {
             let touched = get
                 .reply
@@ -156,7 +161,7 @@ impl TuningPanel {
             }
             let mut inputs = Vec::new();
             for f in &get.reply {
-                let device = device_value(rt, get.id, &f.ident);
+                let device = rt.device.value(get.id, &f.ident);
                 let value = match self.edited(get.id, f) {
                     Some(Ok(v)) => {
                         if device != Some(&v) {
@@ -169,18 +174,18 @@ impl TuningPanel {
                         }
                         v
                     }
-                    Some(Err(e)) => return Err(e),
+                    Some(Err(e)) => return Err(e.into()),
                     None => match device {
                         Some(d) => d.clone(),
                         None => {
-                            return Err(format!(
-                                "{}: {} has not been read; read it first so that the whole command can be written",
-                                set.ident, f.ident
-                            ));
+                            return Err(PendingError::NotRead {
+                                command: set.ident.clone(),
+                                field: f.ident.clone(),
+                            });
                         }
                     },
                 };
-                inputs.push((f.ident.clone(), Input::Raw(value)));
+                inputs.push((f.ident.clone(), crate::profile::Input::Raw(value)));
             }
             writes.push((set.id, inputs));
         }
@@ -188,13 +193,14 @@ impl TuningPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
         self.prune(rt);
         let pending = self.pending(rt);
         let busy = rt.job_progress().is_some();
         ui.horizontal(|ui| {
             let gets: Vec<u8> = rt
+                .device
                 .profile
                 .commands
                 .iter()
@@ -208,7 +214,7 @@ impl TuningPanel {
                 )
                 .clicked()
             {
-                actions.push(Action::Job(JobSpec::Read(gets)));
+                actions.push(Action::StartJob(jobs::read(&rt.device.profile, gets)));
             }
             let n_changes = pending.as_ref().map_or(0, |(c, _)| c.len());
             let can_write =
@@ -235,7 +241,7 @@ impl TuningPanel {
                 self.edits.clear();
             }
             if let Err(e) = &pending {
-                ui.colored_label(egui::Color32::RED, e);
+                ui.colored_label(egui::Color32::RED, e.to_string());
             }
         });
         ui.separator();
@@ -249,7 +255,7 @@ impl TuningPanel {
                         .show(ui, |ui| self.group_grid(ui, lang, rt, &group));
                 }
             });
-        if let Some(action) = self.confirm_dialog(ui, lang) {
+        if let Some(action) = self.confirm_dialog(ui, lang, rt) {
             actions.push(action);
         }
         actions
@@ -257,7 +263,7 @@ impl TuningPanel {
 
     /// One grid per group, so that its columns line up: a header row per command, then its
     /// fields.
-    fn group_grid(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, group: &Group<'_>) {
+    fn group_grid(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, group: &Group<'_>) {
         egui::Grid::new(("fields", &group.id))
             .num_columns(6)
             .striped(true)
@@ -276,7 +282,7 @@ impl TuningPanel {
                             "{} {} / {} {}",
                             get.ident, get.id, set.ident, set.id
                         ));
-                    match rt.readings.get(&get.id) {
+                    match rt.device.readings.get(&get.id) {
                         Some(Reading::Failed(e)) => {
                             ui.colored_label(
                                 egui::Color32::RED,
@@ -296,12 +302,12 @@ impl TuningPanel {
             });
     }
 
-    fn field_row(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, get: u8, f: &Field) {
+    fn field_row(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, get: u8, f: &Field) {
         let key = (get, f.ident.clone());
         let name = ui
             .label(format!("   {}", lang.tr(&f.name.en, &f.name.zh)))
             .on_hover_text(&f.ident);
-        let device = device_value(rt, get, &f.ident);
+        let device = rt.device.value(get, &f.ident);
         match device {
             Some(v) => ui.monospace(f.format(v)),
             None => ui.weak(lang.tr("not read yet", "尚未读取")),
@@ -335,7 +341,7 @@ impl TuningPanel {
         }
         ui.label(&f.unit);
         ui.weak(range_text(f));
-        match (&parsed, rt.marks.get(&key)) {
+        match (&parsed, rt.device.marks.get(&key)) {
             (Some(Err(e)), _) => {
                 ui.colored_label(
                     egui::Color32::RED,
@@ -375,7 +381,7 @@ impl TuningPanel {
         }
     }
 
-    fn confirm_dialog(&mut self, ui: &mut egui::Ui, lang: Lang) -> Option<Action> {
+    fn confirm_dialog(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Option<Action> {
         let (changes, writes) = self.confirm.as_ref()?;
         let mut decision = None;
         let modal = egui::Modal::new(egui::Id::unique("confirm-write")).show(ui.ctx(), |ui| {
@@ -421,7 +427,7 @@ impl TuningPanel {
         match decision {
             Some(true) => {
                 let (_, writes) = self.confirm.take()?;
-                Some(Action::Job(JobSpec::Write(writes)))
+                Some(Action::StartJob(jobs::write(&rt.device.profile, writes)))
             }
             Some(false) => {
                 self.confirm = None;

@@ -4,7 +4,7 @@
 
 use botbench::i18n::Lang;
 use botbench::sim::{Device, Faults, PtyServer, SharedDevice};
-use botbench::ui::{App, PanelId, Saved, Target};
+use botbench::ui::{App, PanelId, Settings, Target};
 use eframe::egui;
 use egui_kittest::Harness;
 use std::sync::{Arc, Mutex};
@@ -46,24 +46,24 @@ pub fn serve<D: Device + 'static>(device: D) -> Served<D> {
 }
 
 /// Settings that open `path` at 115200 baud with `profile` on `panel`.
-pub fn settings(path: &str, profile: &str, panel: PanelId, lang: Lang) -> Saved {
-    Saved {
+pub fn settings(path: &str, profile: &str, panel: PanelId, lang: Lang) -> Settings {
+    Settings {
         target: Target::Port(path.to_string()),
         baud: 115_200,
         profile: profile.into(),
         panel,
         lang,
-        ..Saved::default()
+        ..Settings::default()
     }
 }
 
 /// The app with `saved` settings, in a 1400×1000 window: each step runs its logic and draws it.
-pub fn harness(saved: Saved) -> H {
+pub fn harness(saved: Settings) -> H {
     harness_with(saved, |_| {})
 }
 
 /// As [`harness`], with `prepare` run on the app once it has started.
-pub fn harness_with(saved: Saved, prepare: impl Fn(&mut App) + 'static) -> H {
+pub fn harness_with(saved: Settings, prepare: impl Fn(&mut App) + 'static) -> H {
     Harness::builder()
         .with_size(egui::vec2(1400.0, 1000.0))
         .build_ui_state(
@@ -113,8 +113,8 @@ pub fn step_until_or(
             let a = app(h);
             panic!(
                 "timed out waiting for {what}: link {:?}, status {:?}; {}",
-                a.rt.state,
-                a.rt.status.as_ref().map(|s| &s.text),
+                a.state.link.state,
+                a.state.notice.as_ref().map(|s| &s.text),
                 diagnose(a)
             );
         }

@@ -4,7 +4,7 @@
 //! and the tabs.
 //!
 //! Everything that talks to servos is an operation of [`crate::ops::servo`] or
-//! [`crate::ops::provision`], run as a job; motion commands and "Stop all" go straight to the
+//! [`crate::ops::servo::provision`], run as a job; motion commands and "Stop all" go straight to the
 //! link worker so that they never wait for a job.
 
 mod motion;
@@ -15,13 +15,13 @@ mod scan;
 mod setup;
 
 use super::Action;
-use super::jobs::{JobOutput, JobSink};
-use super::runtime::Runtime;
+use super::jobs::{JobOutput, JobSink, LogError};
+use super::state::{AppState, Notice};
 use crate::i18n::Lang;
-use crate::link::{LinkCommand, LinkState, ReplyTo, Request};
-use crate::ops::msp::Check;
-use crate::ops::provision::{ProvisionState, Record};
+use crate::link::{LinkCommand, ReplyTo, Request};
+use crate::ops::servo::provision::{ProvisionState, Record};
 use crate::ops::servo::{Location, ScanRow};
+use crate::ops::{Check, OpError};
 use eframe::egui;
 
 pub use params::ParamsState;
@@ -98,34 +98,34 @@ pub enum Output {
     /// A scan found a servo (or a possible duplicate).
     Found(ScanRow),
     /// A scan ended: every row, or why it stopped.
-    Scanned(Result<Vec<ScanRow>, String>),
+    Scanned(Result<Vec<ScanRow>, OpError>),
     /// One id was scanned again at one rate: what answers there now.
     Rescanned {
         /// Where.
         at: Servo,
         /// What answers (empty: nothing), or why the scan failed.
-        rows: Result<Vec<ScanRow>, String>,
+        rows: Result<Vec<ScanRow>, OpError>,
     },
     /// Parameters read from a servo: raw values by `data_id`, or why not.
     Values {
         /// Which servo.
         servo: Servo,
         /// The values.
-        values: Vec<(u8, Result<i64, String>)>,
+        values: Vec<(u8, Result<i64, OpError>)>,
     },
     /// Parameters written and read back, by `data_id`.
     Written {
         /// Which servo.
         servo: Servo,
         /// The checks, or why the write failed.
-        checks: Vec<(u8, Result<Check, String>)>,
+        checks: Vec<(u8, Result<Check, OpError>)>,
     },
     /// "Reset user data" ended: where the servo is now, or why not.
     Reset {
         /// The servo as it was.
         servo: Servo,
         /// Its factory location, verified, or why not.
-        result: Result<Location, String>,
+        result: Result<Location, OpError>,
     },
     /// An id change ended.
     IdSet {
@@ -134,14 +134,14 @@ pub enum Output {
         /// The id given.
         new: u8,
         /// Verified at the new id, or why not.
-        result: Result<(), String>,
+        result: Result<(), OpError>,
     },
     /// A baud change ended.
     BaudSet {
         /// The servo as it was.
         servo: Servo,
         /// Verified at this rate, or why not.
-        result: Result<u32, String>,
+        result: Result<u32, OpError>,
         /// Where the servo was found when the change could not be verified.
         found: Option<u32>,
     },
@@ -152,7 +152,7 @@ pub enum Output {
         /// The session's state afterwards (ids given out).
         state: ProvisionState,
         /// Why the record could not be logged, if it could not.
-        log_error: Option<String>,
+        log_error: Option<LogError>,
     },
 }
 
@@ -162,14 +162,12 @@ pub(crate) fn send(sink: &JobSink, out: Output) {
 }
 
 /// The rate the port is at now.
-pub(crate) fn port_baud(rt: &Runtime) -> Option<u32> {
-    match &rt.state {
-        Some(LinkState::Connected { baud, .. }) => Some(*baud),
-        _ => None,
-    }
+pub(crate) fn port_baud(rt: &AppState) -> Option<u32> {
+    rt.link.baud()
 }
 
-/// A request for the worker, bypassing the job queue (the answer, if any, is not awaited).
+/// A request (built by [`crate::ops::servo`]) for the worker, bypassing the job queue (the
+/// answer, if any, is not awaited).
 pub(crate) fn direct(request: Request) -> Action {
     Action::Link(LinkCommand::Request {
         request,
@@ -178,7 +176,7 @@ pub(crate) fn direct(request: Request) -> Action {
 }
 
 /// Switches the port to `baud` unless it is there already.
-pub(crate) fn follow(rt: &Runtime, baud: u32) -> Option<Action> {
+pub(crate) fn follow(rt: &AppState, baud: u32) -> Option<Action> {
     (port_baud(rt) != Some(baud)).then_some(Action::Link(LinkCommand::SetBaud { baud, ack: None }))
 }
 
@@ -226,7 +224,7 @@ impl ServoBenchPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
         self.header(ui, lang, rt, &mut actions);
         ui.separator();
@@ -274,7 +272,7 @@ impl ServoBenchPanel {
     }
 
     /// Stop all, the selected servo, the port's rate and the running job.
-    fn header(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, actions: &mut Vec<Action>) {
+    fn header(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
         ui.horizontal(|ui| {
             let stop = egui::Button::new(
                 egui::RichText::new(lang.tr("STOP ALL", "全部停止"))
@@ -335,8 +333,8 @@ impl ServoBenchPanel {
 
     /// The broadcasts of "Stop all": at the port's rate at once; with no job running, also at
     /// every other rate where the scan found servos, and the port then returns to its rate.
-    fn stop_all(&self, rt: &Runtime) -> Vec<Action> {
-        let requests = crate::ops::servo::stop_all_requests(&rt.profile);
+    fn stop_all(&self, rt: &AppState) -> Vec<Action> {
+        let requests = crate::ops::servo::stop_all_requests(&rt.device.profile);
         let mut out: Vec<Action> = requests.iter().cloned().map(direct).collect();
         let here = port_baud(rt);
         let mut rates: Vec<u32> = Vec::new();
@@ -360,15 +358,15 @@ impl ServoBenchPanel {
             .map(|b| b.to_string())
             .collect();
         all.dedup();
-        out.push(Action::Say(
-            format!("stop all broadcast at {} baud", all.join(", ")),
-            false,
-        ));
+        out.push(Action::Notify(Notice::info(format!(
+            "stop all broadcast at {} baud",
+            all.join(", ")
+        ))));
         out
     }
 
     /// Works on `servo` from now on: the port follows it; what was read of another servo goes.
-    fn select(&mut self, servo: Option<Servo>, rt: &Runtime, actions: &mut Vec<Action>) {
+    fn select(&mut self, servo: Option<Servo>, rt: &AppState, actions: &mut Vec<Action>) {
         if self.selected != servo {
             self.params = ParamsState {
                 preset_path: std::mem::take(&mut self.params.preset_path),

@@ -9,11 +9,13 @@ use super::selection_or_hint;
 use super::{Servo, direct, error_label, follow};
 use crate::i18n::Lang;
 use crate::link::{LinkCommand, Poll};
+use crate::ops::FieldValues;
+use crate::ops::OpError;
 use crate::ops::servo::{self as ops, Wheel};
 use crate::profile::{Field, Value};
 use crate::protocol::servo::cmd;
 use crate::ui::Action;
-use crate::ui::runtime::{Reading, Runtime};
+use crate::ui::state::{AppState, Notice, Reading};
 use eframe::egui;
 use egui_plot::{Line, Plot, PlotPoints};
 use std::time::{Duration, Instant};
@@ -105,8 +107,9 @@ impl Default for MotionState {
 }
 
 /// A command's request field by ident.
-fn field<'p>(rt: &'p Runtime, command: u8, ident: &str) -> Option<&'p Field> {
-    rt.profile
+fn field<'p>(rt: &'p AppState, command: u8, ident: &str) -> Option<&'p Field> {
+    rt.device
+        .profile
         .command_by_id(command)?
         .request
         .iter()
@@ -114,12 +117,16 @@ fn field<'p>(rt: &'p Runtime, command: u8, ident: &str) -> Option<&'p Field> {
 }
 
 /// What a person typed for a command's field, as a raw value, or why it does not fit.
-fn raw(rt: &Runtime, command: u8, ident: &str, text: &str) -> Result<i64, String> {
-    let f = field(rt, command, ident).ok_or_else(|| format!("the profile has no {ident}"))?;
-    match f.parse(text) {
-        Ok(Value::Int(v)) => Ok(v),
-        Ok(_) => Err(format!("{ident}: not a number")),
-        Err(e) => Err(e.to_string()),
+fn raw(rt: &AppState, command: u8, ident: &str, text: &str) -> Result<i64, OpError> {
+    let f = field(rt, command, ident)
+        .ok_or_else(|| OpError::unknown_param(&rt.device.profile, ident))?;
+    match f.parse(text)? {
+        Value::Int(v) => Ok(v),
+        _ => Err(crate::profile::FieldError::WrongType {
+            field: ident.to_string(),
+            expected: "a number".into(),
+        }
+        .into()),
     }
 }
 
@@ -156,21 +163,19 @@ impl MotionState {
     }
 
     /// Takes a new READ_ANGLE answer of `id` into the plot.
-    fn collect(&mut self, rt: &Runtime, id: u8) {
-        let Some(Reading::Values(values, at)) = rt.readings.get(&cmd::READ_ANGLE) else {
+    fn collect(&mut self, rt: &AppState, id: u8) {
+        let Some(Reading::Values(values, at)) = rt.device.readings.get(&cmd::READ_ANGLE) else {
             return;
         };
         if self.last_at == Some(*at) {
             return;
         }
         self.last_at = Some(*at);
-        let of = values.iter().find(|(k, _)| k == "servo_id").map(|(_, v)| v);
-        let angle = values.iter().find(|(k, _)| k == "angle").map(|(_, v)| v);
-        if let (Some(Value::Int(sid)), Some(Value::Int(a))) = (of, angle)
-            && *sid == i64::from(id)
+        if let (Some(sid), Some(a)) = (values.int("servo_id"), values.int("angle"))
+            && sid == i64::from(id)
         {
             let t = at.saturating_duration_since(self.t0).as_secs_f64();
-            self.series.push([t, *a as f64 * 0.1]);
+            self.series.push([t, a as f64 * 0.1]);
             if self.series.len() > MAX_POINTS {
                 self.series.drain(..self.series.len() - MAX_POINTS);
             }
@@ -182,7 +187,7 @@ impl MotionState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &Runtime,
+        rt: &AppState,
         busy: bool,
         selected: Option<Servo>,
         actions: &mut Vec<Action>,
@@ -197,13 +202,13 @@ impl MotionState {
                 "有任务在运行: 运动指令需等待任务结束。全部停止始终可用。",
             ));
         }
-        let send = |actions: &mut Vec<Action>, request: Result<crate::link::Request, String>| {
+        let send = |actions: &mut Vec<Action>, request: Result<crate::link::Request, OpError>| {
             match request {
                 Ok(r) => {
                     actions.extend(follow(rt, servo.baud));
                     actions.push(direct(r));
                 }
-                Err(e) => actions.push(Action::Say(e, true)),
+                Err(e) => actions.push(Action::Notify(Notice::error(e.to_string()))),
             }
         };
 
@@ -257,8 +262,7 @@ impl MotionState {
             {
                 send(
                     actions,
-                    ops::rotate_request(&rt.profile, servo.id, *a, *i, *p)
-                        .map_err(|e| e.to_string()),
+                    ops::rotate_request(&rt.device.profile, servo.id, *a, *i, *p),
                 );
             }
         });
@@ -266,7 +270,7 @@ impl MotionState {
             .into_iter()
             .filter_map(|r| r.as_ref().err())
         {
-            error_label(ui, e);
+            error_label(ui, e.to_string());
         }
 
         ui.horizontal(|ui| {
@@ -356,8 +360,13 @@ impl MotionState {
                 };
                 send(
                     actions,
-                    ops::spin_request(&rt.profile, servo.id, wheel, self.clockwise, *s as u16)
-                        .map_err(|e| e.to_string()),
+                    ops::spin_request(
+                        &rt.device.profile,
+                        servo.id,
+                        wheel,
+                        self.clockwise,
+                        *s as u16,
+                    ),
                 );
             }
         });
@@ -366,7 +375,7 @@ impl MotionState {
             .chain(needs_value.then_some(&value))
             .filter_map(|r| r.as_ref().err())
         {
-            error_label(ui, e);
+            error_label(ui, e.to_string());
         }
 
         ui.heading(lang.tr("Damping", "阻尼"));
@@ -388,30 +397,25 @@ impl MotionState {
             {
                 send(
                     actions,
-                    ops::damping_request(&rt.profile, servo.id, *p).map_err(|e| e.to_string()),
+                    ops::damping_request(&rt.device.profile, servo.id, *p),
                 );
             }
             if let Err(e) = &damping {
-                error_label(ui, e);
+                error_label(ui, e.to_string());
             }
         });
     }
 
     /// The latest angle and monitor values of the selected servo, nothing before they arrive.
-    fn readout(&self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, servo: Servo) {
-        let of_servo = |values: &[(String, Value)]| {
-            values
-                .iter()
-                .any(|(k, v)| k == "servo_id" && *v == Value::Int(servo.id.into()))
-        };
+    fn readout(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, servo: Servo) {
+        let of_servo = |values: &FieldValues| values.int("servo_id") == Some(servo.id.into());
         ui.horizontal(|ui| {
             ui.label(lang.tr("Angle now:", "当前角度:"));
-            match rt.readings.get(&cmd::READ_ANGLE) {
+            match rt.device.readings.get(&cmd::READ_ANGLE) {
                 Some(Reading::Values(values, at)) if of_servo(values) && self.live => {
-                    let a = values.iter().find(|(k, _)| k == "angle").map(|(_, v)| v);
-                    if let Some(Value::Int(a)) = a {
+                    if let Some(a) = values.int("angle") {
                         ui.label(
-                            egui::RichText::new(format!("{:.1}°", *a as f64 * 0.1))
+                            egui::RichText::new(format!("{:.1}°", a as f64 * 0.1))
                                 .size(20.0)
                                 .strong(),
                         );
@@ -422,7 +426,7 @@ impl MotionState {
                         ));
                     }
                 }
-                Some(Reading::Failed(e)) if self.live => error_label(ui, e),
+                Some(Reading::Failed(e)) if self.live => error_label(ui, e.to_string()),
                 _ => {
                     ui.weak(lang.tr("turn on Live angle", "请开启实时角度"));
                 }
@@ -431,14 +435,14 @@ impl MotionState {
         if !(self.live && self.monitor) {
             return;
         }
-        match rt.readings.get(&cmd::MONITOR) {
+        match rt.device.readings.get(&cmd::MONITOR) {
             Some(Reading::Values(values, _)) if of_servo(values) => {
-                let Some(mon) = rt.profile.command_by_id(cmd::MONITOR) else {
+                let Some(mon) = rt.device.profile.command_by_id(cmd::MONITOR) else {
                     return;
                 };
                 ui.horizontal_wrapped(|ui| {
                     for f in mon.reply.iter().skip(1) {
-                        if let Some((_, v)) = values.iter().find(|(k, _)| *k == f.ident) {
+                        if let Some(v) = values.get(&f.ident) {
                             let shown = if f.ident == "status" {
                                 match v {
                                     Value::Int(s) => format!("{s:#04x}"),

@@ -4,7 +4,7 @@
 
 use super::params::{ParamsState, editable};
 use crate::i18n::Lang;
-use crate::ops::servo_preset::ParamPreset;
+use crate::ops::servo::preset::ParamPreset;
 use crate::profile::{Profile, Value};
 use eframe::egui;
 
@@ -135,11 +135,7 @@ impl ParamsState {
             ),
             Err(e) => (
                 false,
-                format!(
-                    "{} {}: {e}",
-                    self.lang.tr("cannot save", "无法保存"),
-                    path.display()
-                ),
+                format!("{}: {e}", self.lang.tr("cannot save", "无法保存")),
             ),
         });
     }

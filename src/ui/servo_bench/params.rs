@@ -6,12 +6,14 @@
 use super::{Output, Servo, error_label, ok_label, send};
 use super::{header_row, selection_or_hint};
 use crate::i18n::Lang;
-use crate::ops::msp::Check;
 use crate::ops::servo::{self as ops, Location, PARAM_BAUD, PARAM_ID};
-use crate::profile::{Access, Input, Param, Profile, Value};
-use crate::ui::runtime::Runtime;
-use crate::ui::tuning::range_text;
-use crate::ui::{Action, JobWork};
+use crate::ops::{Check, OpError};
+use crate::profile::{Access, Param, Profile, Value};
+use crate::ui::Action;
+use crate::ui::inputs::range_text;
+use crate::ui::jobs::{Job, JobError};
+use crate::ui::state::AppState;
+use crate::ui::tuning::PendingError;
 use eframe::egui;
 use std::collections::BTreeMap;
 
@@ -23,14 +25,14 @@ pub enum ParamMark {
     /// The servo holds this raw value instead.
     Mismatch(i64),
     /// The write failed.
-    Failed(String),
+    Failed(OpError),
 }
 
 /// The parameters tab's state (for the selected servo).
 #[derive(Default)]
 pub struct ParamsState {
     /// Raw values read from the servo by `data_id`, or why the read failed.
-    pub values: BTreeMap<u8, Result<i64, String>>,
+    pub values: BTreeMap<u8, Result<i64, OpError>>,
     /// Edited text by `data_id`.
     pub edits: BTreeMap<u8, String>,
     /// Marks left by the last write.
@@ -72,7 +74,7 @@ impl ParamsState {
     }
 
     /// The values to write (raw, by `data_id`), or the first reason they cannot be written.
-    pub fn pending(&self, profile: &Profile) -> Result<Vec<(u8, i64)>, String> {
+    pub fn pending(&self, profile: &Profile) -> Result<Vec<(u8, i64)>, PendingError> {
         let mut out = Vec::new();
         for (id, text) in &self.edits {
             let Some(p) = profile.param(*id) else {
@@ -84,15 +86,19 @@ impl ParamsState {
                         out.push((*id, v));
                     }
                 }
-                Ok(_) => return Err(format!("{}: not a number", p.field.ident)),
-                Err(e) => return Err(e.to_string()),
+                Ok(_) => {
+                    return Err(PendingError::NotANumber {
+                        field: p.field.ident.clone(),
+                    });
+                }
+                Err(e) => return Err(e.into()),
             }
         }
         Ok(out)
     }
 
     /// The whole user block as it would be written: the servo's values with the edits applied.
-    fn block(&self, profile: &Profile) -> Result<Vec<(u8, i64)>, String> {
+    fn block(&self, profile: &Profile) -> Result<Vec<(u8, i64)>, PendingError> {
         let pending = self.pending(profile)?;
         profile
             .block_params()
@@ -100,23 +106,22 @@ impl ParamsState {
                 if let Some((_, v)) = pending.iter().find(|(id, _)| *id == p.id) {
                     return Ok((p.id, *v));
                 }
-                self.device(p.id).map(|v| (p.id, v)).ok_or_else(|| {
-                    format!(
-                        "{} has not been read: read all first, so that the whole block can be written",
-                        p.field.ident
-                    )
-                })
+                self.device(p.id)
+                    .map(|v| (p.id, v))
+                    .ok_or_else(|| PendingError::BlockNotRead {
+                        field: p.field.ident.clone(),
+                    })
             })
             .collect()
     }
 
-    pub(super) fn on_values(&mut self, values: Vec<(u8, Result<i64, String>)>) {
+    pub(super) fn on_values(&mut self, values: Vec<(u8, Result<i64, OpError>)>) {
         for (id, v) in values {
             self.values.insert(id, v);
         }
     }
 
-    pub(super) fn on_written(&mut self, checks: Vec<(u8, Result<Check, String>)>) {
+    pub(super) fn on_written(&mut self, checks: Vec<(u8, Result<Check, OpError>)>) {
         let (mut good, mut bad) = (0, 0);
         for (id, c) in checks {
             match c {
@@ -161,7 +166,7 @@ impl ParamsState {
         ));
     }
 
-    pub(super) fn on_reset(&mut self, result: Result<Location, String>) {
+    pub(super) fn on_reset(&mut self, result: Result<Location, OpError>) {
         let lang = self.lang;
         self.message = Some(match result {
             Ok(at) => (
@@ -189,7 +194,7 @@ impl ParamsState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &Runtime,
+        rt: &AppState,
         busy: bool,
         selected: Option<Servo>,
         actions: &mut Vec<Action>,
@@ -198,7 +203,7 @@ impl ParamsState {
             return;
         };
         self.lang = lang;
-        let profile = rt.profile.clone();
+        let profile = rt.device.profile.clone();
         self.prune(&profile);
         let pending = self.pending(&profile);
         let can = rt.connected() && !busy;
@@ -254,7 +259,7 @@ impl ParamsState {
                             "一次写入全部22个用户参数并回读",
                         )
                         .to_string(),
-                    Err(e) => e.clone(),
+                    Err(e) => e.to_string(),
                 })
                 .clicked()
                 && let Ok(values) = block
@@ -281,7 +286,7 @@ impl ParamsState {
             }
         });
         if let Err(e) = &pending {
-            error_label(ui, e);
+            error_label(ui, e.to_string());
         }
         self.preset_row(ui, lang, &profile);
         match &self.message {
@@ -333,7 +338,7 @@ impl ParamsState {
                     egui::Color32::from_rgb(210, 40, 40),
                     lang.tr("read failed", "读取失败"),
                 )
-                .on_hover_text(e);
+                .on_hover_text(e.to_string());
             }
             None => {
                 ui.weak(lang.tr("not read yet", "尚未读取"));
@@ -398,11 +403,11 @@ impl ParamsState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &Runtime,
+        rt: &AppState,
         servo: Servo,
         actions: &mut Vec<Action>,
     ) {
-        let home = ops::factory_location(&rt.profile);
+        let home = ops::factory_location(&rt.device.profile);
         let mut decision = None;
         let modal = egui::Modal::new(egui::Id::unique("servo-reset")).show(ui.ctx(), |ui| {
             ui.heading(lang.tr("Reset user data?", "重置用户数据?"));
@@ -446,58 +451,30 @@ impl ParamsState {
     }
 }
 
-/// Reads every parameter: the read-only ones one by one, the user block in one exchange.
-fn read_everything(
-    client: &crate::link::Client,
-    profile: &Profile,
-    id: u8,
-) -> Vec<(u8, Result<i64, String>)> {
-    let mut out = Vec::new();
-    for p in profile
-        .params
-        .iter()
-        .filter(|p| p.access == Access::ReadOnly)
-    {
-        out.push((
-            p.id,
-            ops::read_param(client, profile, id, p).map_err(|e| e.to_string()),
-        ));
-    }
-    match ops::read_block(client, profile, id) {
-        Ok(block) => out.extend(block.into_iter().map(|(pid, v)| (pid, Ok(v)))),
-        Err(e) => out.extend(profile.block_params().map(|p| (p.id, Err(e.to_string())))),
-    }
-    out
-}
-
-fn at_rate(client: &crate::link::Client, baud: u32) -> Result<(), String> {
-    client
-        .set_baud(baud)
-        .map_err(|e| format!("cannot switch the port to {baud} baud: {e}"))
-}
-
-fn read_all_job(rt: &Runtime, servo: Servo) -> Action {
-    let profile = rt.profile.clone();
-    Action::StartJob(JobWork::new("read parameters", move |client, _, sink| {
-        at_rate(client, servo.baud)?;
-        let values = read_everything(client, &profile, servo.id);
+fn read_all_job(rt: &AppState, servo: Servo) -> Action {
+    let profile = rt.device.profile.clone();
+    Action::StartJob(Job::new("read parameters", move |client, _, sink| {
+        ops::switch(client, servo.baud)?;
+        let values = ops::read_all(client, &profile, servo.id);
         let failed = values.iter().filter(|(_, v)| v.is_err()).count();
+        let total = values.len();
         send(sink, Output::Values { servo, values });
         if failed == 0 {
             Ok(format!("servo {} read", servo.id))
         } else {
-            Err(format!(
-                "{failed} parameter(s) of servo {} not read",
-                servo.id
-            ))
+            Err(JobError::Incomplete {
+                failed,
+                total,
+                what: format!("parameter(s) of servo {} not read", servo.id),
+            })
         }
     }))
 }
 
-fn read_block_job(rt: &Runtime, servo: Servo) -> Action {
-    let profile = rt.profile.clone();
-    Action::StartJob(JobWork::new("read user block", move |client, _, sink| {
-        at_rate(client, servo.baud)?;
+fn read_block_job(rt: &AppState, servo: Servo) -> Action {
+    let profile = rt.device.profile.clone();
+    Action::StartJob(Job::new("read user block", move |client, _, sink| {
+        ops::switch(client, servo.baud)?;
         match ops::read_block(client, &profile, servo.id) {
             Ok(block) => {
                 let values = block.into_iter().map(|(pid, v)| (pid, Ok(v))).collect();
@@ -505,66 +482,56 @@ fn read_block_job(rt: &Runtime, servo: Servo) -> Action {
                 Ok(format!("user block of servo {} read", servo.id))
             }
             Err(e) => {
-                let e = e.to_string();
                 let values = profile
                     .block_params()
                     .map(|p| (p.id, Err(e.clone())))
                     .collect();
                 send(sink, Output::Values { servo, values });
-                Err(e)
+                Err(e.into())
             }
         }
     }))
 }
 
-fn write_job(rt: &Runtime, servo: Servo, values: Vec<(u8, i64)>) -> Action {
-    let profile = rt.profile.clone();
-    Action::StartJob(JobWork::new(
-        "write parameters",
-        move |client, cancel, sink| {
-            at_rate(client, servo.baud)?;
-            let mut checks = Vec::new();
-            for (i, (pid, raw)) in values.iter().enumerate() {
-                if cancel.is_cancelled() {
-                    break;
-                }
-                let Some(p) = profile.param(*pid) else {
-                    continue;
-                };
-                sink.send(crate::ui::jobs::JobOutput::Progress(crate::ops::Progress {
-                    done: i as u64,
-                    total: values.len() as u64,
-                    message: p.field.ident.clone(),
-                }));
-                let c =
-                    ops::write_param(client, &profile, servo.id, p, Input::Raw(Value::Int(*raw)))
-                        .map_err(|e| e.to_string());
-                checks.push((*pid, c));
-            }
-            let bad = checks
-                .iter()
-                .filter(|(_, c)| !matches!(c, Ok(c) if c.ok()))
-                .count();
-            let n = checks.len();
-            send(sink, Output::Written { servo, checks });
-            if cancel.is_cancelled() {
-                Err(format!("cancelled after {n} of {}", values.len()))
-            } else if bad == 0 {
-                Ok(format!("{n} parameter(s) written and verified"))
-            } else {
-                Err(format!("{bad} of {n} parameter(s) not verified"))
-            }
-        },
-    ))
+fn write_job(rt: &AppState, servo: Servo, values: Vec<(u8, i64)>) -> Action {
+    let profile = rt.device.profile.clone();
+    Action::StartJob(Job::new("write parameters", move |client, cancel, sink| {
+        ops::switch(client, servo.baud)?;
+        let checks = ops::write_params(client, &profile, servo.id, &values, cancel, &mut |p| {
+            sink.progress(p)
+        });
+        let bad = checks
+            .iter()
+            .filter(|(_, c)| !matches!(c, Ok(c) if c.ok()))
+            .count();
+        let n = checks.len();
+        send(sink, Output::Written { servo, checks });
+        if cancel.is_cancelled() {
+            Err(JobError::CancelledAfter {
+                done: n,
+                total: values.len(),
+                what: "parameters",
+            })
+        } else if bad == 0 {
+            Ok(format!("{n} parameter(s) written and verified"))
+        } else {
+            Err(JobError::Incomplete {
+                failed: bad,
+                total: n,
+                what: "parameter(s) not verified".into(),
+            })
+        }
+    }))
 }
 
-fn block_job(rt: &Runtime, servo: Servo, values: Vec<(u8, i64)>) -> Action {
-    let profile = rt.profile.clone();
-    Action::StartJob(JobWork::new("write user block", move |client, _, sink| {
-        at_rate(client, servo.baud)?;
+fn block_job(rt: &AppState, servo: Servo, values: Vec<(u8, i64)>) -> Action {
+    let profile = rt.device.profile.clone();
+    Action::StartJob(Job::new("write user block", move |client, _, sink| {
+        ops::switch(client, servo.baud)?;
         match ops::write_block(client, &profile, servo.id, &values) {
             Ok(checks) => {
                 let bad = checks.iter().filter(|c| !c.ok()).count();
+                let total = checks.len();
                 let checks = checks
                     .into_iter()
                     .filter_map(|c| Some((profile.find_param(&c.field)?.id, Ok(c))))
@@ -573,28 +540,30 @@ fn block_job(rt: &Runtime, servo: Servo, values: Vec<(u8, i64)>) -> Action {
                 if bad == 0 {
                     Ok("user block written and verified".into())
                 } else {
-                    Err(format!("{bad} value(s) of the block not verified"))
+                    Err(JobError::Incomplete {
+                        failed: bad,
+                        total,
+                        what: "value(s) of the block not verified".into(),
+                    })
                 }
             }
             Err(e) => {
-                let e = e.to_string();
                 let checks = values
                     .iter()
                     .map(|(pid, _)| (*pid, Err(e.clone())))
                     .collect();
                 send(sink, Output::Written { servo, checks });
-                Err(e)
+                Err(e.into())
             }
         }
     }))
 }
 
-fn reset_job(rt: &Runtime, servo: Servo) -> Action {
-    let profile = rt.profile.clone();
-    Action::StartJob(JobWork::new("reset user data", move |client, _, sink| {
-        at_rate(client, servo.baud)?;
-        let result =
-            ops::reset_user_data(client, &profile, servo.id, servo.baud).map_err(|e| e.to_string());
+fn reset_job(rt: &AppState, servo: Servo) -> Action {
+    let profile = rt.device.profile.clone();
+    Action::StartJob(Job::new("reset user data", move |client, _, sink| {
+        ops::switch(client, servo.baud)?;
+        let result = ops::reset_user_data(client, &profile, servo.id, servo.baud);
         send(
             sink,
             Output::Reset {
@@ -603,7 +572,7 @@ fn reset_job(rt: &Runtime, servo: Servo) -> Action {
             },
         );
         let at = result?;
-        let values = read_everything(client, &profile, at.id);
+        let values = ops::read_all(client, &profile, at.id);
         let now = Servo {
             id: at.id,
             baud: at.baud,

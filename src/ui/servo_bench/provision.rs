@@ -3,10 +3,12 @@
 
 use super::header_row;
 use super::{Output, error_label, send};
+use crate::document::DocumentError;
 use crate::i18n::Lang;
-use crate::ops::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
-use crate::ui::runtime::Runtime;
-use crate::ui::{Action, JobWork};
+use crate::ops::servo::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
+use crate::ui::Action;
+use crate::ui::jobs::{Job, JobError, LogError};
+use crate::ui::state::AppState;
 use eframe::egui;
 use std::path::PathBuf;
 
@@ -18,22 +20,22 @@ pub struct ProvisionPanel {
     /// The plan loaded (checked against the profile).
     pub plan: Option<Plan>,
     /// Why the plan did not load (with line and column).
-    pub plan_error: Option<String>,
+    pub plan_error: Option<DocumentError>,
     /// The CSV log, as typed (empty: no log).
     pub log_path: String,
     /// Ids given out in this session.
     pub state: ProvisionState,
     /// Every record of this session, newest last.
     pub history: Vec<Record>,
-    /// Why the last record could not be logged.
-    pub log_error: Option<String>,
+    /// Why the last record could not be logged (or the log cannot be written).
+    pub log_error: Option<LogError>,
 }
 
 impl ProvisionPanel {
     /// Loads the plan at the path.
-    pub fn load(&mut self, rt: &Runtime) {
+    pub fn load(&mut self, rt: &AppState) {
         let path = PathBuf::from(self.plan_path.trim());
-        match Plan::load(&path, &rt.profile) {
+        match Plan::load(&path, &rt.device.profile) {
             Ok(plan) => {
                 self.plan = Some(plan);
                 self.plan_error = None;
@@ -41,7 +43,7 @@ impl ProvisionPanel {
             }
             Err(e) => {
                 self.plan = None;
-                self.plan_error = Some(e.to_string());
+                self.plan_error = Some(e);
             }
         }
     }
@@ -50,7 +52,7 @@ impl ProvisionPanel {
         &mut self,
         record: Record,
         state: ProvisionState,
-        log_error: Option<String>,
+        log_error: Option<LogError>,
     ) {
         self.state = state;
         self.log_error = log_error;
@@ -62,7 +64,7 @@ impl ProvisionPanel {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &Runtime,
+        rt: &AppState,
         busy: bool,
         actions: &mut Vec<Action>,
     ) {
@@ -89,7 +91,7 @@ impl ProvisionPanel {
             }
         });
         if let Some(e) = &self.plan_error {
-            error_label(ui, e);
+            error_label(ui, e.to_string());
         }
         ui.horizontal_wrapped(|ui| {
             let l = ui.label(lang.tr("CSV log", "CSV日志"));
@@ -147,9 +149,9 @@ impl ProvisionPanel {
         {
             let log =
                 Some(PathBuf::from(self.log_path.trim())).filter(|p| !p.as_os_str().is_empty());
-            match log.as_deref().map(prov::check_log) {
-                Some(Err(e)) => {
-                    self.log_error = Some(format!("cannot write the log: {e}"));
+            match log.as_deref().map(|path| (path, prov::check_log(path))) {
+                Some((path, Err(e))) => {
+                    self.log_error = Some(LogError::new(path, &e));
                 }
                 _ => {
                     self.log_error = None;
@@ -158,7 +160,7 @@ impl ProvisionPanel {
             }
         }
         if let Some(e) = &self.log_error {
-            error_label(ui, e);
+            error_label(ui, e.to_string());
         }
         ui.add_space(6.0);
         if let Some(last) = self.history.last() {
@@ -263,16 +265,16 @@ fn history(ui: &mut egui::Ui, lang: Lang, records: &[Record]) {
         });
 }
 
-fn job(rt: &Runtime, plan: Plan, mut state: ProvisionState, log: Option<PathBuf>) -> Action {
-    let profile = rt.profile.clone();
-    Action::StartJob(JobWork::new("provision", move |client, cancel, sink| {
+fn job(rt: &AppState, plan: Plan, mut state: ProvisionState, log: Option<PathBuf>) -> Action {
+    let profile = rt.device.profile.clone();
+    Action::StartJob(Job::new("provision", move |client, cancel, sink| {
         let record = prov::provision_next(client, &profile, &plan, &mut state, cancel, &mut |p| {
-            sink.send(crate::ui::jobs::JobOutput::Progress(p))
+            sink.progress(p)
         });
         let log_error = log.as_deref().and_then(|path| {
             prov::append_csv(path, &record)
                 .err()
-                .map(|e| format!("the record was not logged to {}: {e}", path.display()))
+                .map(|e| LogError::new(path, &e))
         });
         let summary = match &record.result {
             Outcome::Pass => Ok(format!(
@@ -280,7 +282,10 @@ fn job(rt: &Runtime, plan: Plan, mut state: ProvisionState, log: Option<PathBuf>
                 record.id.map_or("-".into(), |v| v.to_string()),
                 record.baud.map_or("-".into(), |v| v.to_string())
             )),
-            Outcome::Fail { step, reason } => Err(format!("FAIL at {step}: {reason}")),
+            Outcome::Fail { step, reason } => Err(JobError::StepFailed {
+                step: step.clone(),
+                reason: reason.clone(),
+            }),
         };
         send(
             sink,
@@ -291,7 +296,7 @@ fn job(rt: &Runtime, plan: Plan, mut state: ProvisionState, log: Option<PathBuf>
             },
         );
         match (summary, log_error) {
-            (Ok(_), Some(e)) => Err(e),
+            (Ok(_), Some(e)) => Err(e.into()),
             (s, _) => s,
         }
     }))

@@ -4,9 +4,11 @@
 use super::header_row;
 use super::{Output, Servo, error_label, ok_label, port_baud, send};
 use crate::i18n::Lang;
+use crate::ops::OpError;
 use crate::ops::servo::{self as ops, BAUDS, Presence, ScanPlan, ScanRow};
-use crate::ui::runtime::Runtime;
-use crate::ui::{Action, JobWork};
+use crate::ui::Action;
+use crate::ui::jobs::Job;
+use crate::ui::state::AppState;
 use eframe::egui;
 use std::ops::RangeInclusive;
 
@@ -21,7 +23,7 @@ pub struct ScanState {
     /// The servos found, in scan order.
     pub rows: Vec<ScanRow>,
     /// How the last scan ended (`None`: none yet, or running).
-    pub outcome: Option<Result<usize, String>>,
+    pub outcome: Option<Result<usize, OpError>>,
 }
 
 impl Default for ScanState {
@@ -50,29 +52,63 @@ pub fn status_bits(status: i64, lang: Lang) -> String {
     format!("{} {}", lang.tr("bits", "位"), bits.join(", "))
 }
 
+/// Why the typed id range cannot be scanned.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum IdRangeError {
+    /// The first or last id is not an id 0-254.
+    NotAnId {
+        /// Whether it is the first (or the last).
+        first: bool,
+        /// What was typed.
+        text: String,
+    },
+    /// The first id is above the last.
+    Reversed {
+        /// The first id.
+        first: u8,
+        /// The last id.
+        last: u8,
+    },
+}
+
+impl IdRangeError {
+    /// What is wrong, in `lang`.
+    pub fn text(&self, lang: Lang) -> String {
+        match self {
+            IdRangeError::NotAnId { first, text } => format!(
+                "{} '{text}' {}",
+                if *first {
+                    lang.tr("first id", "起始ID")
+                } else {
+                    lang.tr("last id", "结束ID")
+                },
+                lang.tr("is not an id 0-254", "不是0-254之间的ID")
+            ),
+            IdRangeError::Reversed { first, last } => format!(
+                "{} {first} > {last}",
+                lang.tr("the first id is above the last id:", "起始ID大于结束ID:")
+            ),
+        }
+    }
+}
+
 impl ScanState {
     /// The id range typed, or why it is not one.
-    pub fn ids(&self, lang: Lang) -> Result<RangeInclusive<u8>, String> {
-        let parse = |s: &str, what: &str| {
+    pub fn ids(&self) -> Result<RangeInclusive<u8>, IdRangeError> {
+        let parse = |s: &str, first: bool| {
             s.trim()
                 .parse::<u8>()
                 .ok()
                 .filter(|v| *v < crate::protocol::servo::BROADCAST_ID)
-                .ok_or_else(|| {
-                    format!(
-                        "{what} '{}' {}",
-                        s.trim(),
-                        lang.tr("is not an id 0-254", "不是0-254之间的ID")
-                    )
+                .ok_or_else(|| IdRangeError::NotAnId {
+                    first,
+                    text: s.trim().to_string(),
                 })
         };
-        let a = parse(&self.first, lang.tr("first id", "起始ID"))?;
-        let b = parse(&self.last, lang.tr("last id", "结束ID"))?;
+        let a = parse(&self.first, true)?;
+        let b = parse(&self.last, false)?;
         if a > b {
-            return Err(format!(
-                "{} {a} > {b}",
-                lang.tr("the first id is above the last id:", "起始ID大于结束ID:")
-            ));
+            return Err(IdRangeError::Reversed { first: a, last: b });
         }
         Ok(a..=b)
     }
@@ -96,7 +132,7 @@ impl ScanState {
         }
     }
 
-    pub(super) fn on_scanned(&mut self, result: Result<Vec<ScanRow>, String>) {
+    pub(super) fn on_scanned(&mut self, result: Result<Vec<ScanRow>, OpError>) {
         match result {
             Ok(rows) => {
                 self.outcome = Some(Ok(rows.len()));
@@ -107,7 +143,7 @@ impl ScanState {
         }
     }
 
-    pub(super) fn on_rescanned(&mut self, at: Servo, rows: Result<Vec<ScanRow>, String>) {
+    pub(super) fn on_rescanned(&mut self, at: Servo, rows: Result<Vec<ScanRow>, OpError>) {
         match rows {
             Ok(rows) => {
                 let pos = self
@@ -136,13 +172,13 @@ impl ScanState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &Runtime,
+        rt: &AppState,
         busy: bool,
         selected: Option<Servo>,
         actions: &mut Vec<Action>,
     ) -> Option<Servo> {
         let mut picked = None;
-        let ids = self.ids(lang);
+        let ids = self.ids();
         let bauds = self.chosen_bauds();
         ui.horizontal(|ui| {
             let l = ui.label(lang.tr("First id", "起始ID"));
@@ -152,7 +188,7 @@ impl ScanState {
             ui.add(egui::TextEdit::singleline(&mut self.last).desired_width(40.0))
                 .labelled_by(l.id);
             if let Err(e) = &ids {
-                error_label(ui, e);
+                error_label(ui, e.text(lang));
             }
         });
         ui.horizontal_wrapped(|ui| {
@@ -189,7 +225,7 @@ impl ScanState {
                 let plan = ScanPlan {
                     ids,
                     bauds: bauds.clone(),
-                    home_baud: port_baud(rt).unwrap_or(rt.profile.baud),
+                    home_baud: port_baud(rt).unwrap_or(rt.device.profile.baud),
                 };
                 actions.push(scan_job(rt, plan, None));
             }
@@ -296,7 +332,7 @@ impl ScanState {
                         let plan = ScanPlan {
                             ids: row.id..=row.id,
                             bauds: vec![row.baud],
-                            home_baud: port_baud(rt).unwrap_or(rt.profile.baud),
+                            home_baud: port_baud(rt).unwrap_or(rt.device.profile.baud),
                         };
                         actions.push(scan_job(rt, plan, Some(here)));
                     }
@@ -308,26 +344,25 @@ impl ScanState {
 }
 
 /// A scan as a job; `again` marks the rescan of one servo.
-fn scan_job(rt: &Runtime, plan: ScanPlan, again: Option<Servo>) -> Action {
-    let profile = rt.profile.clone();
+fn scan_job(rt: &AppState, plan: ScanPlan, again: Option<Servo>) -> Action {
+    let profile = rt.device.profile.clone();
     let title = if again.is_some() { "rescan" } else { "scan" };
-    Action::StartJob(JobWork::new(title, move |client, cancel, sink| {
+    Action::StartJob(Job::new(title, move |client, cancel, sink| {
         let result = ops::scan(
             client,
             &profile,
             &plan,
             cancel,
-            &mut |p| sink.send(crate::ui::jobs::JobOutput::Progress(p)),
+            &mut |p| sink.progress(p),
             &mut |row| {
                 if again.is_none() {
                     send(sink, Output::Found(row.clone()));
                 }
             },
-        )
-        .map_err(|e| e.to_string());
+        );
         let summary = match &result {
             Ok(rows) => Ok(format!("{} servo(s) found", rows.len())),
-            Err(e) => Err(e.clone()),
+            Err(e) => Err(e.clone().into()),
         };
         match again {
             Some(at) => send(sink, Output::Rescanned { at, rows: result }),

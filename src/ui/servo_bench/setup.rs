@@ -7,9 +7,11 @@ use super::scan::ScanState;
 use super::selection_or_hint;
 use super::{Output, Servo, error_label, ok_label, send};
 use crate::i18n::Lang;
+use crate::ops::OpError;
 use crate::ops::servo::{self as ops, BAUDS, Presence};
-use crate::ui::runtime::Runtime;
-use crate::ui::{Action, JobWork};
+use crate::ui::Action;
+use crate::ui::jobs::Job;
+use crate::ui::state::AppState;
 use eframe::egui;
 
 /// The tab's state.
@@ -25,49 +27,73 @@ pub struct SetupState {
     pub lang: Lang,
 }
 
-impl SetupState {
-    /// The new id typed, checked against what is known; `Err` says why it cannot be given.
-    pub fn check_id(&self, servo: Servo, scan: &ScanState) -> Result<u8, String> {
-        let lang = self.lang;
-        let text = self.new_id.trim();
-        let id: u8 = text.parse().map_err(|_| {
-            format!(
+/// Why the typed id cannot be given to the selected servo.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum IdRefusal {
+    /// Not an id.
+    NotAnId(String),
+    /// 255, the broadcast address.
+    Broadcast,
+    /// The id the servo has.
+    Same(u8),
+    /// An id that answers on the bus (by the scan).
+    InUse(u8),
+}
+
+impl IdRefusal {
+    /// Why, in `lang`.
+    pub fn text(&self, lang: Lang) -> String {
+        match self {
+            IdRefusal::NotAnId(text) => format!(
                 "'{text}' {}",
                 lang.tr("is not an id: give 1 to 254", "不是有效ID: 请输入1到254")
-            )
-        })?;
-        if id == crate::protocol::servo::BROADCAST_ID {
-            return Err(lang
+            ),
+            IdRefusal::Broadcast => lang
                 .tr(
                     "id 255 is the broadcast address and cannot be assigned",
                     "ID 255是广播地址, 不能分配",
                 )
-                .into());
-        }
-        if id == servo.id {
-            return Err(format!(
+                .into(),
+            IdRefusal::Same(id) => format!(
                 "{} {id}",
                 lang.tr("the servo already has id", "舵机已经是ID")
-            ));
-        }
-        if scan
-            .rows
-            .iter()
-            .any(|r| r.id == id && r.presence != Presence::Absent)
-        {
-            return Err(format!(
+            ),
+            IdRefusal::InUse(id) => format!(
                 "{} {id} {}",
                 lang.tr("id", "ID"),
                 lang.tr(
                     "already answers on the bus (see the scan)",
                     "已在总线上应答(见扫描结果)"
                 )
-            ));
+            ),
+        }
+    }
+}
+
+impl SetupState {
+    /// The new id typed, checked against what is known; `Err` says why it cannot be given.
+    pub fn check_id(&self, servo: Servo, scan: &ScanState) -> Result<u8, IdRefusal> {
+        let text = self.new_id.trim();
+        let id: u8 = text
+            .parse()
+            .map_err(|_| IdRefusal::NotAnId(text.to_string()))?;
+        if id == crate::protocol::servo::BROADCAST_ID {
+            return Err(IdRefusal::Broadcast);
+        }
+        if id == servo.id {
+            return Err(IdRefusal::Same(id));
+        }
+        if scan
+            .rows
+            .iter()
+            .any(|r| r.id == id && r.presence != Presence::Absent)
+        {
+            return Err(IdRefusal::InUse(id));
         }
         Ok(id)
     }
 
-    pub(super) fn on_id(&mut self, servo: Servo, new: u8, result: Result<(), String>) {
+    pub(super) fn on_id(&mut self, servo: Servo, new: u8, result: Result<(), OpError>) {
         let lang = self.lang;
         self.message = Some(match result {
             Ok(()) => {
@@ -93,7 +119,7 @@ impl SetupState {
     pub(super) fn on_baud(
         &mut self,
         servo: Servo,
-        result: Result<u32, String>,
+        result: Result<u32, OpError>,
         found: Option<u32>,
     ) {
         let lang = self.lang;
@@ -136,7 +162,7 @@ impl SetupState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &Runtime,
+        rt: &AppState,
         busy: bool,
         selected: Option<Servo>,
         scan: &ScanState,
@@ -172,7 +198,7 @@ impl SetupState {
             if let Err(e) = &check
                 && !self.new_id.trim().is_empty()
             {
-                error_label(ui, e);
+                error_label(ui, e.text(lang));
             }
         });
         ui.add_space(8.0);
@@ -221,14 +247,11 @@ impl SetupState {
     }
 }
 
-fn id_job(rt: &Runtime, servo: Servo, new: u8) -> Action {
-    let profile = rt.profile.clone();
-    Action::StartJob(JobWork::new("set id", move |client, cancel, sink| {
-        client
-            .set_baud(servo.baud)
-            .map_err(|e| format!("cannot switch the port to {} baud: {e}", servo.baud))?;
-        let result =
-            ops::set_id(client, &profile, servo.id, new, cancel).map_err(|e| e.to_string());
+fn id_job(rt: &AppState, servo: Servo, new: u8) -> Action {
+    let profile = rt.device.profile.clone();
+    Action::StartJob(Job::new("set id", move |client, cancel, sink| {
+        ops::switch(client, servo.baud)?;
+        let result = ops::set_id(client, &profile, servo.id, new, cancel);
         send(
             sink,
             Output::IdSet {
@@ -237,29 +260,27 @@ fn id_job(rt: &Runtime, servo: Servo, new: u8) -> Action {
                 result: result.clone(),
             },
         );
-        result.map(|()| format!("servo {} is now id {new} (verified)", servo.id))
+        result?;
+        Ok(format!("servo {} is now id {new} (verified)", servo.id))
     }))
 }
 
-fn baud_job(rt: &Runtime, servo: Servo, option: u8) -> Action {
-    let profile = rt.profile.clone();
-    Action::StartJob(JobWork::new("set baud rate", move |client, _, sink| {
-        client
-            .set_baud(servo.baud)
-            .map_err(|e| format!("cannot switch the port to {} baud: {e}", servo.baud))?;
-        let result = ops::set_baud(client, &profile, servo.id, option).map_err(|e| e.to_string());
-        // Where the servo is when the change was not verified (the operation left the port
-        // at the rate where it found it, if it did).
+fn baud_job(rt: &AppState, servo: Servo, option: u8) -> Action {
+    let profile = rt.device.profile.clone();
+    Action::StartJob(Job::new("set baud rate", move |client, _, sink| {
+        ops::switch(client, servo.baud)?;
+        let result = ops::set_baud(client, &profile, servo.id, option);
+        // Where the servo is when the change was not verified: the operation says where it
+        // found the servo after the change (and left the port there); after another failure it
+        // is looked for at every rate.
         let found = match &result {
             Ok(_) => None,
-            Err(_) => {
-                let found = ops::locate(client, servo.id).ok().flatten();
-                if found.is_none() {
-                    let _ = client.set_baud(servo.baud);
-                }
-                found
-            }
+            Err(OpError::NotAtNewRate { found, .. }) => *found,
+            Err(_) => ops::locate(client, servo.id).ok().flatten(),
         };
+        if result.is_err() && found.is_none() {
+            let _ = ops::switch(client, servo.baud);
+        }
         send(
             sink,
             Output::BaudSet {
@@ -268,6 +289,7 @@ fn baud_job(rt: &Runtime, servo: Servo, option: u8) -> Action {
                 found,
             },
         );
-        result.map(|b| format!("servo {} now at {b} baud (verified)", servo.id))
+        let b = result?;
+        Ok(format!("servo {} now at {b} baud (verified)", servo.id))
     }))
 }

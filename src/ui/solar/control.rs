@@ -1,12 +1,13 @@
 //! What the solar panel sends: controls (each range-checked before anything leaves), STOP, and
-//! the dead-man. Everything goes straight to the worker queue (`Action::Link`) with a reply id,
-//! so that it works while a job runs, and its answer is shown when it comes.
+//! the dead-man. Each request is built by [`crate::ops::exchange::request`] and goes straight to
+//! the worker queue (`Action::Link`) with a reply id, so that it works while a job runs, and its
+//! answer is shown when it comes.
 
 use super::super::Action;
-use super::super::runtime::Runtime;
-use crate::link::{LinkCommand, ReplyTo, Request};
+use super::super::state::AppState;
+use crate::link::{ExchangeError, LinkCommand, ReplyTo};
+use crate::ops::{OpError, exchange};
 use crate::profile::{Input, Value};
-use crate::protocol::Direction;
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
@@ -25,7 +26,21 @@ pub enum Outcome {
     /// The device acknowledged it.
     Acked(String),
     /// It was refused before sending, or the exchange failed.
-    Failed(String),
+    Failed(SendError),
+}
+
+/// Why a command sent from the panel did not get through.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SendError {
+    /// Refused before sending: a value the profile refuses, an unknown command.
+    #[error(transparent)]
+    Refused(#[from] OpError),
+    /// Not sent: the link is down.
+    #[error("not sent: the link is down")]
+    LinkDown,
+    /// Sent, and the exchange failed.
+    #[error(transparent)]
+    Exchange(#[from] ExchangeError),
 }
 
 /// Why the robot was last stopped by the app on its own.
@@ -85,18 +100,19 @@ impl Control {
     /// returns the action that sends it; a refusal is recorded as the command's outcome.
     /// One attempt only: a retry after a late answer would apply a relative command (rotate)
     /// twice. A failure is shown, and the operator decides.
-    pub fn send(&mut self, rt: &Runtime, id: u8, inputs: &[(String, Input)]) -> Option<Action> {
+    pub fn send(&mut self, rt: &AppState, id: u8, inputs: &[(String, Input)]) -> Option<Action> {
         self.send_with(rt, id, inputs, 1)
     }
 
     fn send_with(
         &mut self,
-        rt: &Runtime,
+        rt: &AppState,
         id: u8,
         inputs: &[(String, Input)],
         attempts: u8,
     ) -> Option<Action> {
-        let cmd = rt.profile.command_by_id(id)?;
+        let profile = &rt.device.profile;
+        let cmd = profile.command_by_id(id)?;
         let text = inputs
             .iter()
             .map(|(k, v)| match v {
@@ -106,37 +122,32 @@ impl Control {
             })
             .collect::<Vec<_>>()
             .join(", ");
-        let payload = match rt.profile.encode(cmd, Direction::HostToDevice, inputs) {
-            Ok(p) => p,
+        let request = match exchange::request(profile, cmd, inputs, attempts) {
+            Ok(r) => r,
             Err(e) => {
                 self.outcomes
-                    .insert(id, (Outcome::Failed(e.to_string()), Instant::now()));
+                    .insert(id, (Outcome::Failed(e.into()), Instant::now()));
                 return None;
             }
         };
         if !rt.connected() {
-            self.outcomes.insert(
-                id,
-                (
-                    Outcome::Failed("not sent: the link is down".into()),
-                    Instant::now(),
-                ),
-            );
+            self.outcomes
+                .insert(id, (Outcome::Failed(SendError::LinkDown), Instant::now()));
             return None;
         }
-        let reply_id = rt.request_id();
+        let reply_id = rt.link.reply_id();
         self.sent.insert(reply_id, id);
         self.last_sent = Some(reply_id);
         self.outcomes
             .insert(id, (Outcome::Waiting(text), Instant::now()));
         Some(Action::Link(LinkCommand::Request {
-            request: Request::for_command(&rt.profile, cmd, payload).attempts(attempts),
+            request,
             reply_to: ReplyTo::Event(reply_id),
         }))
     }
 
     /// STOP: speed 0, now. When the link is down it is sent as soon as the link is back.
-    pub fn stop(&mut self, rt: &Runtime) -> Option<Action> {
+    pub fn stop(&mut self, rt: &AppState) -> Option<Action> {
         if !rt.connected() {
             self.stop_pending = true;
             self.trip = Some((Trip::LinkLost, Instant::now()));
@@ -162,7 +173,7 @@ impl Control {
 
     /// Arms or disarms the dead-man; arming sets the robot's heartbeat interval to the same
     /// period, so that the robot's own watchdog (where its firmware has one) agrees.
-    pub fn arm(&mut self, rt: &Runtime, on: bool) -> Option<Action> {
+    pub fn arm(&mut self, rt: &AppState, on: bool) -> Option<Action> {
         self.deadman = on;
         if !on {
             return None;
@@ -191,19 +202,19 @@ impl Control {
 
     /// Called every frame, whichever panel is shown: takes answers, sends STOP when the
     /// dead-man runs out, and sends a pending STOP once the link is back.
-    pub fn tick(&mut self, rt: &Runtime) -> Vec<Action> {
+    pub fn tick(&mut self, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
         let answered: Vec<u64> = self
             .sent
             .keys()
-            .filter(|id| rt.replies.contains_key(id))
+            .filter(|id| rt.device.replies.contains_key(id))
             .copied()
             .collect();
         for reply_id in answered {
             let Some(cmd) = self.sent.remove(&reply_id) else {
                 continue;
             };
-            let outcome = match rt.replies.get(&reply_id) {
+            let outcome = match rt.device.replies.get(&reply_id) {
                 Some(Ok(_)) => {
                     let what = match self.outcomes.get(&cmd) {
                         Some((Outcome::Waiting(t), _)) => t.clone(),
@@ -217,7 +228,7 @@ impl Control {
                         // the robot did not answer is shown, and the operator presses again).
                         self.stop_pending = true;
                     }
-                    Outcome::Failed(e.clone())
+                    Outcome::Failed(e.clone().into())
                 }
                 None => continue,
             };
@@ -251,9 +262,9 @@ mod tests {
     use super::*;
     use crate::link::LinkState;
 
-    fn runtime() -> Runtime {
-        let mut rt = Runtime::new(&eframe::egui::Context::default(), "solar-cleanbot").unwrap();
-        rt.state = Some(LinkState::Connected {
+    fn runtime() -> AppState {
+        let mut rt = AppState::new(&eframe::egui::Context::default(), "solar-cleanbot").unwrap();
+        rt.link.state = Some(LinkState::Connected {
             port: "test".into(),
             baud: 115_200,
         });
@@ -278,7 +289,7 @@ mod tests {
         assert!(a.is_none());
         assert!(matches!(
             c.outcomes.get(&100),
-            Some((Outcome::Failed(e), _)) if e.contains("out of range")
+            Some((Outcome::Failed(e), _)) if e.to_string().contains("out of range")
         ));
         let a = c.send(&rt, 100, &[("speed".into(), Input::Text("-250".into()))]);
         assert_eq!(sent(&a.unwrap()), (100, (-250i16).to_le_bytes().to_vec()));
@@ -291,13 +302,13 @@ mod tests {
         let arm = c.arm(&rt, true).expect("the heartbeat is set");
         assert_eq!(sent(&arm), (98, 2i16.to_le_bytes().to_vec()));
         assert!(c.tick(&rt).is_empty(), "confirmed just now");
-        rt.state = Some(LinkState::Lost {
+        rt.link.state = Some(LinkState::Lost {
             reason: "unplugged".into(),
         });
         assert!(c.tick(&rt).is_empty(), "nothing can be sent");
         assert!(c.stop_pending);
         assert!(matches!(c.trip, Some((Trip::LinkLost, _))));
-        rt.state = Some(LinkState::Connected {
+        rt.link.state = Some(LinkState::Connected {
             port: "test".into(),
             baud: 115_200,
         });
@@ -309,10 +320,10 @@ mod tests {
 
         // STOP pressed while the link is down, without the dead-man, waits for the link too.
         let mut c = Control::default();
-        rt.state = Some(LinkState::Reconnecting { attempt: 1 });
+        rt.link.state = Some(LinkState::Reconnecting { attempt: 1 });
         assert!(c.stop(&rt).is_none());
         assert!(c.stop_pending);
-        rt.state = Some(LinkState::Connected {
+        rt.link.state = Some(LinkState::Connected {
             port: "test".into(),
             baud: 115_200,
         });
@@ -336,7 +347,14 @@ mod tests {
         let mut c = Control::default();
         // Unanswered on a working link: shown, not repeated on its own.
         let id = reply_id(c.stop(&rt).unwrap());
-        rt.replies.insert(id, Err("no answer".into()));
+        rt.device.replies.insert(
+            id,
+            Err(ExchangeError::Timeout {
+                command: 100,
+                attempts: 3,
+                waited_ms: 50,
+            }),
+        );
         assert!(c.tick(&rt).is_empty());
         assert!(!c.stop_pending);
         assert!(matches!(
@@ -345,11 +363,13 @@ mod tests {
         ));
         // Lost with the link: sent again when it is back.
         let id = reply_id(c.stop(&rt).unwrap());
-        rt.replies.insert(id, Err("link lost: unplugged".into()));
-        rt.state = None;
+        rt.device
+            .replies
+            .insert(id, Err(ExchangeError::Disconnected("unplugged".into())));
+        rt.link.state = None;
         assert!(c.tick(&rt).is_empty());
         assert!(c.stop_pending);
-        rt.state = Some(LinkState::Connected {
+        rt.link.state = Some(LinkState::Connected {
             port: "test".into(),
             baud: 115_200,
         });

@@ -9,7 +9,8 @@ mod control;
 pub use control::{Control, Outcome, Trip};
 
 use super::Action;
-use super::runtime::{Reading, Runtime};
+use super::inputs::{command_inputs, range_text};
+use super::state::{AppState, Reading};
 use crate::i18n::Lang;
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Value};
 use eframe::egui;
@@ -34,10 +35,6 @@ pub struct SolarPanel {
     points: Vec<[f64; 2]>,
 }
 
-/// What this panel's jobs report (it runs none: everything goes straight to the worker).
-#[derive(Debug, Clone)]
-pub enum Output {}
-
 const RED: egui::Color32 = egui::Color32::from_rgb(200, 30, 30);
 const GREEN: egui::Color32 = egui::Color32::from_rgb(0, 140, 60);
 
@@ -53,12 +50,12 @@ fn shown(f: &Field, v: &Value, lang: Lang) -> String {
 
 impl SolarPanel {
     /// Called every frame whichever panel is shown (STOP after a reconnect, the dead-man).
-    pub fn tick(&mut self, rt: &Runtime) -> Vec<Action> {
+    pub fn tick(&mut self, rt: &AppState) -> Vec<Action> {
         self.control.tick(rt)
     }
 
     /// The STOP button alone, for places outside the panel (the navigation).
-    pub fn stop_button(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+    pub fn stop_button(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let b = egui::Button::new(
             egui::RichText::new(lang.tr("STOP", "停止"))
                 .strong()
@@ -77,7 +74,7 @@ impl SolarPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
         ui.horizontal_wrapped(|ui| {
             actions.extend(self.stop_button(ui, lang, rt));
@@ -98,7 +95,7 @@ impl SolarPanel {
         actions
     }
 
-    fn stop_status(&self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
+    fn stop_status(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
         match self.control.outcomes.get(&control::CMD_SET_SPEED) {
             Some((Outcome::Acked(t), at)) if t.ends_with("speed=0") => {
                 ui.colored_label(
@@ -153,12 +150,12 @@ impl SolarPanel {
             }
             Some((Trip::LinkLost, _)) | None => {}
         }
-        if !rt.connected() && rt.conn.is_some() {
+        if !rt.connected() && rt.link.connection.is_some() {
             ui.colored_label(RED, lang.tr("link down", "链路中断"));
         }
     }
 
-    fn deadman(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, actions: &mut Vec<Action>) {
+    fn deadman(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
         ui.horizontal_wrapped(|ui| {
             let mut on = self.control.deadman;
             if ui
@@ -209,9 +206,9 @@ impl SolarPanel {
         ));
     }
 
-    fn readouts(&self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
+    fn readouts(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
         ui.strong(lang.tr("Readouts", "实时读数"));
-        let cmds = rt.profile.commands.iter().filter(|c| {
+        let cmds = rt.device.profile.commands.iter().filter(|c| {
             c.kind == CommandKind::Telemetry
                 && c.id > 9
                 && c.request.is_empty()
@@ -224,13 +221,13 @@ impl SolarPanel {
                 for cmd in cmds {
                     ui.label(lang.tr(&cmd.name.en, &cmd.name.zh))
                         .on_hover_text(format!("{} ({})", cmd.ident, cmd.id));
-                    match rt.readings.get(&cmd.id) {
+                    match rt.device.readings.get(&cmd.id) {
                         Some(Reading::Values(values, at)) => {
                             let stale = at.elapsed() > STALE;
                             // One field a line: wrapped runs of values overlap the next row.
                             ui.vertical(|ui| {
                                 for (k, v) in values {
-                                    let Some(f) = cmd.reply.iter().find(|f| &f.ident == k) else {
+                                    let Some(f) = cmd.reply.iter().find(|f| f.ident == k) else {
                                         continue;
                                     };
                                     let text = format!(
@@ -257,7 +254,7 @@ impl SolarPanel {
                             });
                         }
                         Some(Reading::Failed(e)) => {
-                            ui.colored_label(RED, e);
+                            ui.colored_label(RED, e.to_string());
                         }
                         None => {
                             ui.weak(lang.tr("no answer yet", "尚无应答"));
@@ -268,12 +265,12 @@ impl SolarPanel {
             });
     }
 
-    fn plots(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
-        let now = rt.t0.elapsed().as_secs_f64();
+    fn plots(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+        let now = rt.device.t0.elapsed().as_secs_f64();
         let width_px = ui.available_width().max(100.0) as usize;
-        for plot in &rt.profile.plots {
+        for plot in &rt.device.profile.plots {
             ui.label(egui::RichText::new(lang.tr(&plot.name.en, &plot.name.zh)).strong());
-            let set = rt.plots.get(&plot.id);
+            let set = rt.device.plots.get(&plot.id);
             let points = &mut self.points;
             Plot::new(("solar-plot", &plot.id))
                 .height(110.0)
@@ -298,31 +295,15 @@ impl SolarPanel {
         }
     }
 
-    /// The typed inputs of `cmd`, checked; an error names the first bad field.
-    fn inputs_of(&self, cmd: &Command) -> Result<Vec<(String, Input)>, String> {
-        cmd.request
-            .iter()
-            .map(|f| {
-                let text = self
-                    .inputs
-                    .get(&(cmd.id, f.ident.clone()))
-                    .map_or("", String::as_str);
-                if text.trim().is_empty() {
-                    return Err(format!(
-                        "{}: give a value ({})",
-                        f.ident,
-                        super::tuning::range_text(f)
-                    ));
-                }
-                f.parse(text).map_err(|e| e.to_string())?;
-                Ok((f.ident.clone(), Input::Text(text.to_string())))
-            })
-            .collect()
-    }
-
-    fn controls(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, actions: &mut Vec<Action>) {
+    fn controls(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        actions: &mut Vec<Action>,
+    ) {
         ui.strong(lang.tr("Controls", "控制"));
-        let profile = rt.profile.clone();
+        let profile = rt.device.profile.clone();
         let cmds = profile
             .commands
             .iter()
@@ -333,14 +314,14 @@ impl SolarPanel {
                     self.input(ui, lang, cmd, f);
                 }
             });
-            let inputs = self.inputs_of(cmd);
+            let inputs = command_inputs(cmd, &self.inputs);
             ui.horizontal_wrapped(|ui| {
                 let resp = ui.add_enabled(
                     rt.connected() && inputs.is_ok(),
                     egui::Button::new(lang.tr(&cmd.name.en, &cmd.name.zh)),
                 );
                 let resp = match &inputs {
-                    Err(e) => resp.on_disabled_hover_text(e),
+                    Err(e) => resp.on_disabled_hover_text(e.to_string()),
                     Ok(_) => resp.on_hover_text(format!("{} ({})", cmd.ident, cmd.id)),
                 };
                 if resp.clicked()
@@ -383,7 +364,7 @@ impl SolarPanel {
                             );
                         }
                         Some((Outcome::Failed(e), _)) => {
-                            ui.colored_label(RED, e);
+                            ui.colored_label(RED, e.to_string());
                         }
                         None => {}
                     }
@@ -405,7 +386,7 @@ impl SolarPanel {
             };
             let mut edit = egui::TextEdit::singleline(text)
                 .desired_width(width)
-                .hint_text(super::tuning::range_text(f));
+                .hint_text(range_text(f));
             if bad {
                 edit = edit.text_color(RED);
             }
@@ -433,15 +414,19 @@ impl SolarPanel {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &Runtime,
+        rt: &AppState,
         actions: &mut Vec<Action>,
     ) {
         let Some((id, inputs)) = &self.confirm else {
             return;
         };
-        let name = rt.profile.command_by_id(*id).map_or(String::new(), |c| {
-            lang.tr(&c.name.en, &c.name.zh).to_string()
-        });
+        let name = rt
+            .device
+            .profile
+            .command_by_id(*id)
+            .map_or(String::new(), |c| {
+                lang.tr(&c.name.en, &c.name.zh).to_string()
+            });
         let what = inputs
             .iter()
             .map(|(k, v)| match v {
@@ -486,10 +471,5 @@ impl SolarPanel {
             Some(false) => self.confirm = None,
             None => {}
         }
-    }
-
-    /// Takes what one of its jobs reported.
-    pub fn on_output(&mut self, out: Output) {
-        match out {}
     }
 }

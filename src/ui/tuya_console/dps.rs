@@ -2,12 +2,11 @@
 //! with range and unit, string, bitmap with its named bits lit, raw as hex). Commands go out as
 //! 0x06; only the MCU's 0x07 reports change what is shown, with the time of the last report.
 
-use super::{Action, Runtime, clock, fire};
+use super::{Action, AppState, clock, fire};
 use crate::i18n::Lang;
-use crate::link::Request;
-use crate::profile::{Access, DataPointDef, Input, Value};
-use crate::protocol::Direction;
-use crate::protocol::tuya::cmd;
+use crate::ops::OpError;
+use crate::ops::tuya as ops;
+use crate::profile::{Access, DataPointDef, Value};
 use crate::protocol::tuya::dp::DpType;
 use eframe::egui;
 use std::collections::HashMap;
@@ -38,7 +37,7 @@ pub enum Mark {
     /// No report came.
     NoReport(Value),
     /// Refused before sending.
-    Refused(String),
+    Refused(OpError),
 }
 
 /// The data points' edits and sends.
@@ -84,7 +83,7 @@ fn allowed(lang: Lang, def: &DataPointDef) -> String {
             def.field.labels.len(),
             lang.tr("choices", "个选项")
         ),
-        DpType::Value => super::super::tuning::range_text(&def.field),
+        DpType::Value => super::super::inputs::range_text(&def.field),
         DpType::String => lang.tr("text", "文本").into(),
         DpType::Bitmap => lang
             .tr("bit names joined by | or 0x..", "位名称用 | 连接,或 0x..")
@@ -95,22 +94,9 @@ fn allowed(lang: Lang, def: &DataPointDef) -> String {
 
 impl DpView {
     /// Sends `value` to data point `def` as a 0x06 command, checked against the profile first.
-    fn send(&mut self, rt: &Runtime, def: &DataPointDef, value: Value) -> Option<Action> {
-        let payload = rt
-            .profile
-            .command_by_id(cmd::DP_COMMAND)
-            .ok_or_else(|| "the profile has no data-point command".to_string())
-            .and_then(|c| {
-                rt.profile
-                    .encode(
-                        c,
-                        Direction::HostToDevice,
-                        &[(def.field.ident.clone(), Input::Raw(value.clone()))],
-                    )
-                    .map_err(|e| e.to_string())
-            });
-        match payload {
-            Ok(payload) => {
+    fn send(&mut self, rt: &AppState, def: &DataPointDef, value: Value) -> Option<Action> {
+        match ops::dp_request(&rt.device.profile, def, value.clone()) {
+            Ok(request) => {
                 self.marks.remove(&def.id);
                 self.pending.insert(
                     def.id,
@@ -119,7 +105,7 @@ impl DpView {
                         sent: Instant::now(),
                     },
                 );
-                Some(fire(Request::send_only(cmd::DP_COMMAND, payload)))
+                Some(fire(request))
             }
             Err(e) => {
                 self.marks.insert(def.id, Mark::Refused(e));
@@ -129,10 +115,10 @@ impl DpView {
     }
 
     /// Settles commands whose report came, or whose wait is over.
-    fn settle(&mut self, rt: &Runtime) {
+    fn settle(&mut self, rt: &AppState) {
         let mut settled = Vec::new();
         for (id, p) in &self.pending {
-            match rt.tuya.dps.get(id) {
+            match rt.device.tuya.dps.get(id) {
                 Some(st) if st.at >= p.sent => {
                     let mark = if st.value == p.value {
                         Mark::Confirmed
@@ -154,11 +140,11 @@ impl DpView {
     }
 
     /// Draws the section. `ota` is true while a firmware update holds the link.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime, ota: bool) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, ota: bool) -> Vec<Action> {
         let mut actions = Vec::new();
-        if self.generation != rt.tuya.generation {
+        if self.generation != rt.device.tuya.generation {
             // A new connection: what was sent on the last one says nothing of this one.
-            self.generation = rt.tuya.generation;
+            self.generation = rt.device.tuya.generation;
             self.pending.clear();
             self.marks.clear();
             self.log_from = 0;
@@ -180,14 +166,9 @@ impl DpView {
                 ))
                 .clicked()
             {
-                actions.push(fire(Request::new(cmd::QUERY_STATUS, Vec::new()).reply(
-                    crate::link::ReplySpec::Burst {
-                        each: crate::link::Match::command(cmd::DP_REPORT),
-                        quiet: crate::ops::tuya::REPORT_QUIET,
-                    },
-                )));
+                actions.push(fire(ops::query_request()));
             }
-            if let Some(t) = &rt.tuya.last_query {
+            if let Some(t) = &rt.device.tuya.last_query {
                 ui.weak(format!(
                     "{} {}",
                     lang.tr("last query at", "最近查询于"),
@@ -209,7 +190,7 @@ impl DpView {
             "命令以0x06下发。只显示MCU上报(0x07)的值。",
         ));
         ui.add_space(4.0);
-        let defs = rt.profile.data_points.clone();
+        let defs = rt.device.profile.data_points.clone();
         egui::Grid::new("tuya-dps")
             .num_columns(6)
             .striped(true)
@@ -238,7 +219,7 @@ impl DpView {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &Runtime,
+        rt: &AppState,
         def: &DataPointDef,
         can_send: bool,
     ) -> Option<Action> {
@@ -246,7 +227,7 @@ impl DpView {
         let name = ui
             .label(format!("{} {}", def.id, lang.tr(&f.name.en, &f.name.zh)))
             .on_hover_text(format!("{} ({})", f.ident, def.dp_type.name()));
-        let reported = rt.tuya.dps.get(&def.id);
+        let reported = rt.device.tuya.dps.get(&def.id);
         match reported {
             Some(st) if def.dp_type == DpType::Bitmap => bits(ui, lang, def, &st.value),
             Some(st) => {
@@ -327,7 +308,7 @@ impl DpView {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &Runtime,
+        rt: &AppState,
         def: &DataPointDef,
         label: egui::Id,
         can_send: bool,
@@ -428,8 +409,9 @@ impl DpView {
     }
 
     /// The report log, newest last.
-    fn log(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
+    fn log(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
         let lines: Vec<_> = rt
+            .device
             .tuya
             .log
             .iter()
@@ -442,12 +424,12 @@ impl DpView {
                 lines.len()
             ));
             if ui.button(lang.tr("Clear log", "清空记录")).clicked() {
-                self.log_from = rt.tuya.log_seq;
+                self.log_from = rt.device.tuya.log_seq;
             }
             ui.weak(format!(
                 "{} {}",
                 lang.tr("keeps the last", "保留最近"),
-                super::session::LOG_CAPACITY
+                crate::ui::state::REPORT_LOG_CAPACITY
             ));
         });
         egui::ScrollArea::vertical()
@@ -458,7 +440,7 @@ impl DpView {
                 for l in lines {
                     match &l.item {
                         Ok((id, ident, v)) => {
-                            let text = match rt.profile.data_point(*id) {
+                            let text = match rt.device.profile.data_point(*id) {
                                 Some(def) => shown(lang, def, v),
                                 None => format!("{v:?}"),
                             };

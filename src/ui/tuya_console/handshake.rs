@@ -1,11 +1,11 @@
 //! The start-up handshake step by step, where it stopped and that it retries, the heartbeat,
 //! MCU restarts, and the Wi-Fi state reported to the MCU.
 
-use super::{Action, Runtime, clock, fire, wifi_state_name};
+use super::{Action, AppState, clock, fire, wifi_state_name};
 use crate::i18n::Lang;
 use crate::link::session::tuya::HandshakeStep;
-use crate::link::{LinkCommand, Request, TuyaModuleOptions};
-use crate::protocol::tuya::cmd;
+use crate::link::{LinkCommand, TuyaModuleOptions};
+
 use eframe::egui;
 
 const GREEN: egui::Color32 = egui::Color32::from_rgb(40, 160, 60);
@@ -32,8 +32,8 @@ fn config_mode(mode: i64, lang: Lang) -> String {
 }
 
 /// One line above the sections: the handshake's state, the last heartbeat, the product.
-pub fn summary(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
-    let s = &rt.tuya;
+pub fn summary(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    let s = &rt.device.tuya;
     ui.horizontal_wrapped(|ui| {
         if !rt.connected() {
             ui.weak(lang.tr("not connected", "未连接"));
@@ -83,11 +83,11 @@ pub fn summary(ui: &mut egui::Ui, lang: Lang, rt: &Runtime) {
 pub fn show(
     ui: &mut egui::Ui,
     lang: Lang,
-    rt: &Runtime,
+    rt: &AppState,
     opts: &mut TuyaModuleOptions,
 ) -> Vec<Action> {
     let mut actions = Vec::new();
-    let s = &rt.tuya;
+    let s = &rt.device.tuya;
     ui.horizontal(|ui| {
         if ui
             .add_enabled(
@@ -284,7 +284,7 @@ pub fn show(
 fn wifi_state(
     ui: &mut egui::Ui,
     lang: Lang,
-    rt: &Runtime,
+    rt: &AppState,
     opts: &mut TuyaModuleOptions,
 ) -> Vec<Action> {
     let mut actions = Vec::new();
@@ -313,12 +313,12 @@ fn wifi_state(
             && rt.connected()
         {
             opts.wifi_state = state;
-            actions.push(fire(Request::new(cmd::WIFI_STATE, vec![state])));
+            actions.push(fire(crate::ops::tuya::wifi_state_request(state)));
         }
     });
-    match &rt.tuya.wifi_sent {
+    match &rt.device.tuya.wifi_sent {
         Some((state, t)) => {
-            let acked = rt.tuya.wifi_acked.as_ref().filter(|a| *a >= t);
+            let acked = rt.device.tuya.wifi_acked.as_ref().filter(|a| *a >= t);
             let text = format!(
                 "{} {} {} {}; {}",
                 lang.tr("Last reported:", "最近上报:"),
@@ -341,7 +341,7 @@ fn wifi_state(
             ui.weak(lang.tr("No Wi-Fi state reported yet.", "尚未上报WiFi状态。"));
         }
     }
-    if matches!(rt.tuya.work_mode, Some(Some(_))) {
+    if matches!(rt.device.tuya.work_mode, Some(Some(_))) {
         ui.weak(lang.tr(
             "This MCU lets the module drive the LED: it does not need the Wi-Fi state.",
             "该MCU由模块自行处理指示灯,无需上报WiFi状态。",

@@ -2,7 +2,7 @@
 //! time, the Wi-Fi production test's result and signal, the network status, the MAC), and each
 //! request answered, reset-Wi-Fi acks shown clearly.
 
-use super::{Runtime, clock, wifi_state_name};
+use super::{AppState, clock, wifi_state_name};
 use crate::i18n::Lang;
 use crate::link::TuyaModuleOptions;
 use crate::protocol::tuya::cmd;
@@ -21,18 +21,41 @@ pub struct RequestsView {
     pub mac_text: Option<String>,
 }
 
+/// Why a typed time or MAC cannot be answered.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EntryError {
+    /// Not a time in the format.
+    #[error("'{text}': {error}; use YYYY-MM-DD HH:MM:SS")]
+    Time {
+        /// What was typed.
+        text: String,
+        /// Why it does not read.
+        error: chrono::ParseError,
+    },
+    /// A year the answer's year byte cannot hold.
+    #[error("year {0} is outside 2000-2255")]
+    Year(i32),
+    /// Not six hex bytes.
+    #[error("'{0}': expected six hex bytes such as 02:b0:7b:00:00:01")]
+    Mac(String),
+}
+
 /// Reads a chosen local time; the answer's year byte holds 2000-2255.
-pub fn parse_time(text: &str) -> Result<NaiveDateTime, String> {
-    let t = NaiveDateTime::parse_from_str(text.trim(), TIME_FORMAT)
-        .map_err(|e| format!("'{}': {e}; use YYYY-MM-DD HH:MM:SS", text.trim()))?;
+pub fn parse_time(text: &str) -> Result<NaiveDateTime, EntryError> {
+    let t = NaiveDateTime::parse_from_str(text.trim(), TIME_FORMAT).map_err(|error| {
+        EntryError::Time {
+            text: text.trim().to_string(),
+            error,
+        }
+    })?;
     if !(2000..=2255).contains(&t.year()) {
-        return Err(format!("year {} is outside 2000-2255", t.year()));
+        return Err(EntryError::Year(t.year()));
     }
     Ok(t)
 }
 
 /// Reads a MAC address: six hex bytes separated by `:` or `-`.
-pub fn parse_mac(text: &str) -> Result<[u8; 6], String> {
+pub fn parse_mac(text: &str) -> Result<[u8; 6], EntryError> {
     let parts: Vec<&str> = text.trim().split([':', '-']).collect();
     let bytes: Vec<u8> = parts
         .iter()
@@ -45,12 +68,7 @@ pub fn parse_mac(text: &str) -> Result<[u8; 6], String> {
     <[u8; 6]>::try_from(bytes.as_slice())
         .ok()
         .filter(|_| parts.len() == 6)
-        .ok_or_else(|| {
-            format!(
-                "'{}': expected six hex bytes such as 02:b0:7b:00:00:01",
-                text.trim()
-            )
-        })
+        .ok_or_else(|| EntryError::Mac(text.trim().to_string()))
 }
 
 fn mac_text(mac: &[u8]) -> String {
@@ -81,7 +99,7 @@ fn test_failure(reason: u8, lang: Lang) -> &'static str {
 }
 
 /// The module's answer, as a person reads it.
-fn answer_text(rt: &Runtime, lang: Lang, command: u8, answer: &[u8]) -> String {
+fn answer_text(rt: &AppState, lang: Lang, command: u8, answer: &[u8]) -> String {
     match (command, answer) {
         (cmd::RESET_WIFI | cmd::RESET_WIFI_MODE, _) => {
             lang.tr("acknowledged", "已应答确认").to_string()
@@ -124,7 +142,7 @@ impl RequestsView {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &Runtime,
+        rt: &AppState,
         opts: &mut TuyaModuleOptions,
     ) {
         ui.strong(lang.tr("What the module answers", "模块的应答"));
@@ -200,9 +218,12 @@ impl RequestsView {
                 ui.end_row();
             });
         ui.separator();
-        let s = &rt.tuya;
+        let s = &rt.device.tuya;
         if let (n, Some(last)) = &s.resets {
-            let mode = match (last.command, rt.profile.command_by_id(cmd::RESET_WIFI_MODE)) {
+            let mode = match (
+                last.command,
+                rt.device.profile.command_by_id(cmd::RESET_WIFI_MODE),
+            ) {
                 (cmd::RESET_WIFI_MODE, Some(_)) => {
                     format!(" ({})", lang.tr("into a pairing mode", "进入配网模式"))
                 }
@@ -243,6 +264,7 @@ impl RequestsView {
                 for r in s.requests.iter().rev() {
                     ui.monospace(clock(&r.clock));
                     let name = rt
+                        .device
                         .profile
                         .command_by_id(r.command)
                         .map_or(r.name.as_str(), |c| lang.tr(&c.name.en, &c.name.zh));

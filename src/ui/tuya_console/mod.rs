@@ -1,18 +1,18 @@
 //! The Tuya console: botbench as the Wi-Fi module. The handshake step by step, the data points
 //! generated from the profile, the MCU's own requests and the module's answers, and the MCU
-//! firmware update (OTA). What the link reported is kept by the runtime ([`Session`]); this
-//! panel keeps only what the technician chose and typed.
+//! firmware update (OTA). What the link reported is kept by the device model
+//! ([`super::state::TuyaModel`]); this panel keeps only what the technician chose and typed.
 
 mod dps;
 mod handshake;
 mod mcu_requests;
 mod ota;
-mod session;
 
-pub use session::Session;
+pub use ota::FirmwareFileError;
 
 use super::Action;
-use super::runtime::Runtime;
+use super::jobs::JobError;
+use super::state::AppState;
 use crate::i18n::Lang;
 use crate::link::{LinkCommand, ReplyTo, Request, TuyaModuleOptions};
 use crate::ops::tuya::OtaReport;
@@ -70,7 +70,7 @@ pub enum Output {
     /// How far the firmware update is.
     OtaProgress(ota::OtaProgress),
     /// The firmware update ended.
-    OtaDone(Result<OtaReport, String>),
+    OtaDone(Result<OtaReport, JobError>),
 }
 
 /// A time as shown: `12:03:04.512`.
@@ -78,8 +78,8 @@ pub(crate) fn clock(t: &DateTime<Local>) -> String {
     t.format("%H:%M:%S%.3f").to_string()
 }
 
-/// A request for the worker whose answer nobody waits for (what it brings is seen in the
-/// session: reports, acks).
+/// A request (built by [`crate::ops::tuya`]) for the worker, whose answer nobody waits for: what
+/// it brings is seen in the device model (reports, acks).
 pub(crate) fn fire(request: Request) -> Action {
     Action::Link(LinkCommand::Request {
         request,
@@ -88,8 +88,9 @@ pub(crate) fn fire(request: Request) -> Action {
 }
 
 /// The label of a state 0-6 (Wi-Fi state, network status), from the profile's Wi-Fi command.
-pub(crate) fn wifi_state_name(rt: &Runtime, lang: Lang, state: u8) -> String {
-    rt.profile
+pub(crate) fn wifi_state_name(rt: &AppState, lang: Lang, state: u8) -> String {
+    rt.device
+        .profile
         .command_by_id(crate::protocol::tuya::cmd::WIFI_STATE)
         .and_then(|c| c.request.first())
         .and_then(|f| f.label(i64::from(state)))
@@ -101,11 +102,11 @@ pub(crate) fn wifi_state_name(rt: &Runtime, lang: Lang, state: u8) -> String {
 
 impl TuyaConsolePanel {
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
         // A new connection has a new worker with default answers: give it ours.
-        if rt.connected() && self.synced != Some(rt.tuya.generation) {
-            self.synced = Some(rt.tuya.generation);
+        if rt.connected() && self.synced != Some(rt.device.tuya.generation) {
+            self.synced = Some(rt.device.tuya.generation);
             actions.push(Action::Link(LinkCommand::TuyaOptions(self.opts.clone())));
         }
         handshake::summary(ui, lang, rt);

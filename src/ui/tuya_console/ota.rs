@@ -1,12 +1,11 @@
 //! The MCU firmware update: choose a file, check it, confirm, send it in packets of the size the
 //! MCU asks for, with a progress bar, rate and time left, cancel, and the result.
 
-use super::{Action, Output, Runtime};
+use super::{Action, AppState, Output};
 use crate::i18n::Lang;
-use crate::ops::msp::OpError;
+use crate::ops::OpError;
 use crate::ops::tuya::{self as ops, OtaTiming};
-use crate::ui::JobWork;
-use crate::ui::jobs::JobOutput;
+use crate::ui::jobs::{Job, JobError, JobOutput};
 use eframe::egui;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -34,35 +33,75 @@ pub struct OtaView {
     /// The firmware file's path.
     pub path: String,
     /// Why the file cannot be sent.
-    pub error: Option<String>,
+    pub error: Option<FirmwareFileError>,
     /// The file checked and awaiting confirmation, with its size.
     confirm: Option<(PathBuf, u64)>,
     /// The running update's progress.
     pub progress: Option<OtaProgress>,
     /// The last update's result.
-    pub result: Option<Result<ops::OtaReport, String>>,
+    pub result: Option<Result<ops::OtaReport, JobError>>,
     /// An update was started and has not ended.
     pub running: bool,
 }
 
+/// Why a firmware file cannot be sent.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FirmwareFileError {
+    /// No file chosen.
+    #[error("choose a firmware file first")]
+    NoneChosen,
+    /// The file cannot be read.
+    #[error("{}: {reason}", path.display())]
+    Unreadable {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        reason: String,
+    },
+    /// Not a file (a folder, a device).
+    #[error("{}: not a file", path.display())]
+    NotAFile {
+        /// The path.
+        path: PathBuf,
+    },
+    /// An empty file.
+    #[error("{}: the firmware file is empty; nothing to send", path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A file larger than the update can announce (a 32-bit size).
+    #[error("{}: {size} bytes is over the 4 GiB the update can announce", path.display())]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size.
+        size: u64,
+    },
+}
+
 /// The size of a firmware file that can be sent, or why it cannot.
-pub fn check_file(path: &Path) -> Result<u64, String> {
+pub fn check_file(path: &Path) -> Result<u64, FirmwareFileError> {
     if path.as_os_str().is_empty() {
-        return Err("choose a firmware file first".into());
+        return Err(FirmwareFileError::NoneChosen);
     }
-    let meta = std::fs::metadata(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let meta = std::fs::metadata(path).map_err(|e| FirmwareFileError::Unreadable {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
     if !meta.is_file() {
-        return Err(format!("{}: not a file", path.display()));
+        return Err(FirmwareFileError::NotAFile {
+            path: path.to_path_buf(),
+        });
     }
     match meta.len() {
-        0 => Err(format!(
-            "{}: the firmware file is empty; nothing to send",
-            path.display()
-        )),
-        n if n > u64::from(u32::MAX) => Err(format!(
-            "{}: {n} bytes is over the 4 GiB the update can announce",
-            path.display()
-        )),
+        0 => Err(FirmwareFileError::Empty {
+            path: path.to_path_buf(),
+        }),
+        n if n > u64::from(u32::MAX) => Err(FirmwareFileError::TooLarge {
+            path: path.to_path_buf(),
+            size: n,
+        }),
         n => Ok(n),
     }
 }
@@ -77,9 +116,9 @@ fn duration(secs: f64) -> String {
     }
 }
 
-fn work(path: PathBuf) -> JobWork {
-    JobWork::new("OTA", move |client, cancel, sink| {
-        let done = |r: Result<ops::OtaReport, String>| {
+fn work(path: PathBuf) -> Job {
+    Job::new("OTA", move |client, cancel, sink| {
+        let done = |r: Result<ops::OtaReport, JobError>| {
             sink.send(JobOutput::Tuya(Output::OtaDone(r.clone())));
             r.map(|rep| {
                 format!(
@@ -90,7 +129,12 @@ fn work(path: PathBuf) -> JobWork {
         };
         let image = match std::fs::read(&path) {
             Ok(i) => i,
-            Err(e) => return done(Err(format!("{}: {e}", path.display()))),
+            Err(e) => {
+                return done(Err(JobError::File {
+                    path: path.clone(),
+                    reason: e.to_string(),
+                }));
+            }
         };
         let started = Instant::now();
         let mut packet = None;
@@ -108,21 +152,21 @@ fn work(path: PathBuf) -> JobWork {
                 left: p.total.saturating_sub(p.done) as f64 / rate.max(1.0),
                 packet,
             })));
-            sink.send(JobOutput::Progress(p));
+            sink.progress(p);
         });
         done(result.map_err(|e| match e {
-            OpError::Cancelled => format!(
-                "cancelled after offset {acked} of {} bytes: the MCU holds an incomplete image",
-                image.len()
-            ),
-            e => e.to_string(),
+            OpError::Cancelled => JobError::UpdateCancelled {
+                offset: acked,
+                size: image.len(),
+            },
+            e => e.into(),
         }))
     })
 }
 
 impl OtaView {
     /// Whether an update holds the link now.
-    pub fn active(&self, rt: &Runtime) -> bool {
+    pub fn active(&self, rt: &AppState) -> bool {
         self.running && rt.job_progress().is_some()
     }
 
@@ -138,7 +182,7 @@ impl OtaView {
     }
 
     /// Draws the section.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Runtime) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
         let busy = rt.job_progress().is_some();
         let active = self.active(rt);

@@ -1,5 +1,7 @@
-//! Presets: a device's tunable parameters saved to a versioned RON file, compared with a device,
-//! and written back with read-back verification.
+//! Presets: a device's tunable parameters as a versioned RON document: its schema, its check
+//! against a profile, its comparison with a device's values, and its text. Capturing one from a
+//! device and applying one (with read-back verification) are operations:
+//! [`crate::ops::preset`].
 //!
 //! A preset names each Set command by its canonical ident and gives every field of it as display
 //! text ("2.75", not 275; labels such as `on`), so that a technician can read and edit it. The
@@ -21,17 +23,12 @@
 //! )
 //! ```
 
-use crate::link::{Client, DeviceInfo};
-use crate::ops::msp::{self as ops, Check, OpError};
-use crate::ops::{Cancel, Progress};
-use crate::profile::locate::line_col;
-use crate::profile::value::Typed as Text;
+use crate::document::{self, DocumentError, ErrorKind, Problem, Source, Step};
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Profile, Value};
-use crate::protocol::msp;
-use serde::Deserialize;
-use serde::de::{self, Deserializer, MapAccess, Visitor};
-use std::fmt;
+use shape::{Doc, Head};
 use std::path::Path;
+
+mod shape;
 
 /// The newest preset format this build reads and writes.
 pub const VERSION: u32 = 1;
@@ -72,7 +69,7 @@ impl CommandValues {
     }
 }
 
-/// One Set command of a checked preset, ready for [`ops::write_verified`].
+/// One Set command of a checked preset, ready for [`crate::ops::exchange::write_verified`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct SetWrite {
     /// The Set command's canonical ident.
@@ -89,57 +86,6 @@ pub struct Loaded {
     /// What applying it writes, per Set command.
     pub writes: Vec<SetWrite>,
 }
-
-/// What kind of problem a preset has.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ErrorKind {
-    /// The file cannot be read or written.
-    Io,
-    /// Not valid preset RON.
-    Syntax,
-    /// No version, or a newer one than this build reads.
-    Version,
-    /// Made for another profile.
-    Profile,
-    /// An unknown command or field, a missing field, or a value the field refuses.
-    Value,
-}
-
-pub use crate::profile::locate::Problem;
-
-/// Why a preset cannot be used. Nothing has been written when this is returned.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct PresetError {
-    /// The file (or the name given to [`Preset::parse`]).
-    pub file: String,
-    /// What kind of problem (of the first, when there are several).
-    pub kind: ErrorKind,
-    /// The problems, at least one.
-    pub problems: Vec<Problem>,
-}
-
-impl PresetError {
-    fn one(file: &str, kind: ErrorKind, (line, col): (usize, usize), message: String) -> Self {
-        Self {
-            file: file.to_string(),
-            kind,
-            problems: vec![Problem { line, col, message }],
-        }
-    }
-
-    /// The first problem's message.
-    pub fn message(&self) -> &str {
-        self.problems.first().map_or("", |p| p.message.as_str())
-    }
-}
-
-impl fmt::Display for PresetError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        crate::profile::locate::write_problems(f, &self.file, &self.problems)
-    }
-}
-
-impl std::error::Error for PresetError {}
 
 /// A field of the preset compared with the device.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
@@ -192,11 +138,6 @@ pub fn display_value(field: &Field, value: &Value) -> String {
     }
 }
 
-/// "hw 0x03 fw 1.4.2"
-pub fn describe_device(info: &DeviceInfo) -> String {
-    format!("hw {:#04x} fw {}", info.hw, info.firmware)
-}
-
 impl Preset {
     /// An empty preset for `profile`, created now.
     pub fn new(profile: &str, note: &str) -> Self {
@@ -233,60 +174,47 @@ impl Preset {
     }
 
     /// Reads a preset file and checks it against `profile`.
-    pub fn load(path: &Path, profile: &Profile) -> Result<Loaded, PresetError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            PresetError::one(&file, ErrorKind::Io, (0, 0), format!("cannot read: {e}"))
-        })?;
-        Self::parse(&file, &text, profile)
+    pub fn load(path: &Path, profile: &Profile) -> Result<Loaded, DocumentError> {
+        document::load(path, |name, text| Self::parse(name, text, profile))
     }
 
     /// Parses preset text (`name` names it in errors) and checks it against `profile`.
-    pub fn parse(name: &str, text: &str, profile: &Profile) -> Result<Loaded, PresetError> {
+    pub fn parse(name: &str, text: &str, profile: &Profile) -> Result<Loaded, DocumentError> {
         let preset = Self::parse_unchecked(name, text)?;
-        let writes = preset.check(profile, name, Some(text))?;
+        let writes = preset.check(profile, &Source::new(name, text))?;
         Ok(Loaded { preset, writes })
     }
 
     /// Parses preset text, checking its syntax and version only.
-    pub fn parse_unchecked(name: &str, text: &str) -> Result<Preset, PresetError> {
+    pub fn parse_unchecked(name: &str, text: &str) -> Result<Preset, DocumentError> {
+        let src = Source::new(name, text);
         // `device: "..."` and `device: Some("...")` both read.
-        let options = ron::Options::default()
-            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
-        let doc: Doc = match options.from_str(text) {
+        let doc: Doc = match src.parse() {
             Ok(doc) => doc,
             Err(e) => {
                 // A newer format may not parse; say so rather than show its syntax error.
-                if let Ok(Head {
-                    version: Some(v), ..
-                }) = options.from_str::<Head>(text)
+                if let Ok(Head { version: Some(v) }) = src.parse::<Head>()
                     && v > VERSION
                 {
-                    return Err(newer(name, text, v));
+                    return Err(newer(&src, v));
                 }
-                return Err(PresetError::one(
-                    name,
-                    ErrorKind::Syntax,
-                    (e.span.start.line, e.span.start.col),
-                    e.code.to_string(),
-                ));
+                return Err(e);
             }
         };
         match doc.version {
             None => {
-                return Err(PresetError::one(
+                return Err(DocumentError::one(
                     name,
                     ErrorKind::Version,
                     (1, 1),
                     format!("no `version`: a preset starts with `version: {VERSION},`"),
                 ));
             }
-            Some(v) if v > VERSION => return Err(newer(name, text, v)),
+            Some(v) if v > VERSION => return Err(newer(&src, v)),
             Some(0) => {
-                return Err(PresetError::one(
-                    name,
+                return Err(src.error(
                     ErrorKind::Version,
-                    find_key(text, "version"),
+                    &[Step::Key("version")],
                     format!(
                         "version 0 is not a preset version; this botbench reads version {VERSION}"
                     ),
@@ -306,22 +234,16 @@ impl Preset {
 
     /// Checks the preset against `profile`: the profile id, every command and field, every value.
     /// Returns what applying it writes.
-    pub fn validate(&self, profile: &Profile) -> Result<Vec<SetWrite>, PresetError> {
-        self.check(profile, "preset", None)
+    pub fn validate(&self, profile: &Profile) -> Result<Vec<SetWrite>, DocumentError> {
+        self.check(profile, &Source::new("preset", ""))
     }
 
-    fn check(
-        &self,
-        profile: &Profile,
-        name: &str,
-        text: Option<&str>,
-    ) -> Result<Vec<SetWrite>, PresetError> {
-        let text = text.unwrap_or("");
+    /// [`Preset::validate`], placing each problem in `src`, the text the preset was read from.
+    fn check(&self, profile: &Profile, src: &Source) -> Result<Vec<SetWrite>, DocumentError> {
         if self.profile != profile.id {
-            return Err(PresetError::one(
-                name,
+            return Err(src.error(
                 ErrorKind::Profile,
-                find_key(text, "profile"),
+                &[Step::Key("profile")],
                 format!(
                     "this preset is for {}; the connected device uses {}",
                     if self.profile.is_empty() {
@@ -338,14 +260,9 @@ impl Preset {
         let mut writes = Vec::new();
         let mut seen: Vec<&str> = Vec::new();
         for cv in &self.values {
-            let at_cmd = find_entry(text, &cv.command, None);
-            let mut problem = |at: (usize, usize), message: String| {
-                problems.push(Problem {
-                    line: at.0,
-                    col: at.1,
-                    message,
-                })
-            };
+            let at_cmd = src.locate(&[Step::Key("values"), Step::Entry(cv.command.clone())]);
+            let mut problem =
+                |at: (usize, usize), message: String| problems.push(Problem::at(at, message));
             let Some(cmd) = profile
                 .commands
                 .iter()
@@ -388,7 +305,11 @@ impl Preset {
             let mut inputs = Vec::new();
             let mut ok = true;
             for (key, text_value) in &cv.fields {
-                let at = find_entry(text, &cv.command, Some(key));
+                let at = src.locate(&[
+                    Step::Key("values"),
+                    Step::Entry(cv.command.clone()),
+                    Step::Entry(key.clone()),
+                ]);
                 let Some(field) = set
                     .request
                     .iter()
@@ -458,44 +379,20 @@ impl Preset {
             }
         }
         if self.values.is_empty() {
-            problems.push(Problem {
-                line: find_key(text, "values").0,
-                col: find_key(text, "values").1,
-                message: format!(
+            problems.push(src.problem(
+                &[Step::Key("values")],
+                format!(
                     "the preset holds no values; it can hold {}",
                     list(allowed.iter().map(|(s, _)| s.ident.as_str()))
                 ),
-            });
+            ));
         }
-        if problems.is_empty() {
-            Ok(writes)
-        } else {
-            Err(PresetError {
-                file: name.to_string(),
-                kind: ErrorKind::Value,
-                problems,
-            })
-        }
+        src.check(ErrorKind::Value, problems)?;
+        Ok(writes)
     }
 
-    /// Reads every Get command that has a Set partner and returns the values as a preset, keyed
-    /// by the Set's ident. The device's identity is asked with CMD_VERSION where the profile has
-    /// it (MSP).
-    pub fn capture(
-        client: &Client,
-        profile: &Profile,
-        cancel: &Cancel,
-        progress: &mut dyn FnMut(Progress),
-    ) -> Result<Preset, OpError> {
-        let mut preset = Preset::new(&profile.id, "");
-        preset.device = device_description(client, profile);
-        let values = read_device(client, profile, cancel, progress)?;
-        preset.values = values;
-        Ok(preset)
-    }
-
-    /// Compares the preset with values read from the device (e.g. [`Preset::capture`]'s or
-    /// [`read_device`]'s). Values are compared as raw values, so "2.8" equals "2.80".
+    /// Compares the preset with values read from the device (e.g. by
+    /// [`crate::ops::preset::capture`] or [`crate::ops::preset::read_device`]). Values are compared as raw values, so "2.8" equals "2.80".
     pub fn diff(&self, profile: &Profile, device: &[CommandValues]) -> Vec<DiffRow> {
         let mut rows = Vec::new();
         for cv in &self.values {
@@ -528,62 +425,6 @@ impl Preset {
             }
         }
         rows
-    }
-
-    /// Checks the preset, then writes each Set command's full payload with
-    /// [`ops::write_verified`], reporting progress per command. Returns every read-back check;
-    /// a mismatch is a check that is not `ok()`, not an error. When cancelled it stops between
-    /// commands and returns the checks of what was written.
-    pub fn apply(
-        &self,
-        client: &Client,
-        profile: &Profile,
-        cancel: &Cancel,
-        progress: &mut dyn FnMut(Progress),
-    ) -> Result<Vec<Check>, OpError> {
-        let mut all = Vec::new();
-        self.apply_each(client, profile, cancel, progress, &mut |_, checks| {
-            all.extend_from_slice(checks)
-        })?;
-        Ok(all)
-    }
-
-    /// [`Preset::apply`], telling `written` each command's checks as it is written. Progress is
-    /// reported before the first command and after each; a cancel raised then stops before the
-    /// next command.
-    pub fn apply_each(
-        &self,
-        client: &Client,
-        profile: &Profile,
-        cancel: &Cancel,
-        progress: &mut dyn FnMut(Progress),
-        written: &mut dyn FnMut(&str, &[Check]),
-    ) -> Result<(), OpError> {
-        let writes = self
-            .validate(profile)
-            .map_err(|e| OpError::Input(e.to_string()))?;
-        let total = writes.len() as u64;
-        progress(Progress {
-            done: 0,
-            total,
-            message: "checked; writing".into(),
-        });
-        for (i, w) in writes.iter().enumerate() {
-            if cancel.is_cancelled() {
-                break;
-            }
-            let set = profile.command(&w.command).ok_or_else(|| {
-                OpError::Input(format!("{} has no command '{}'", profile.id, w.command))
-            })?;
-            let checks = ops::write_verified(client, profile, set, &w.inputs)?;
-            written(&set.ident, &checks);
-            progress(Progress {
-                done: i as u64 + 1,
-                total,
-                message: format!("wrote {}", set.ident),
-            });
-        }
-        Ok(())
     }
 
     /// The preset as RON text with a header comment; with `profile`, each field carries a
@@ -634,61 +475,14 @@ impl Preset {
     }
 
     /// Writes the preset (plain, without field comments), atomically.
-    pub fn save(&self, path: &Path) -> Result<(), PresetError> {
-        write_atomic(path, &self.to_ron(None))
+    pub fn save(&self, path: &Path) -> Result<(), DocumentError> {
+        document::write_atomic(path, self.to_ron(None).as_bytes())
     }
 
     /// Writes the preset with field comments from `profile`, atomically.
-    pub fn save_annotated(&self, path: &Path, profile: &Profile) -> Result<(), PresetError> {
-        write_atomic(path, &self.to_ron(Some(profile)))
+    pub fn save_annotated(&self, path: &Path, profile: &Profile) -> Result<(), DocumentError> {
+        document::write_atomic(path, self.to_ron(Some(profile)).as_bytes())
     }
-}
-
-/// Reads every presettable Get of the profile, as display values keyed by the Set's ident.
-pub fn read_device(
-    client: &Client,
-    profile: &Profile,
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(Progress),
-) -> Result<Vec<CommandValues>, OpError> {
-    let pairs = preset_commands(profile);
-    let total = pairs.len() as u64;
-    let mut values = Vec::new();
-    for (i, (set, get)) in pairs.iter().enumerate() {
-        if cancel.is_cancelled() {
-            return Err(OpError::Cancelled);
-        }
-        let read = ops::read(client, profile, get, &[])?;
-        let fields = set
-            .request
-            .iter()
-            .filter_map(|f| {
-                read.iter()
-                    .find(|(k, _)| k.eq_ignore_ascii_case(&f.ident))
-                    .map(|(_, v)| (f.ident.clone(), display_value(f, v)))
-            })
-            .collect();
-        values.push(CommandValues {
-            command: set.ident.clone(),
-            fields,
-        });
-        progress(Progress {
-            done: i as u64 + 1,
-            total,
-            message: format!("read {}", get.ident),
-        });
-    }
-    Ok(values)
-}
-
-fn device_description(client: &Client, profile: &Profile) -> Option<String> {
-    if profile.protocol != crate::profile::Protocol::Msp {
-        return None;
-    }
-    let cmd = profile.command_by_id(msp::CMD_VERSION)?;
-    let reply = ops::send(client, profile, cmd, &[]).ok()?;
-    let info = DeviceInfo::from_version(profile, reply.payload().unwrap_or_default()).ok()?;
-    Some(describe_device(&info))
 }
 
 fn describe_field(f: &Field) -> String {
@@ -735,164 +529,12 @@ fn now() -> String {
     chrono::Local::now().to_rfc3339_opts(chrono::SecondsFormat::Secs, false)
 }
 
-fn newer(name: &str, text: &str, v: u32) -> PresetError {
-    PresetError::one(
-        name,
+fn newer(src: &Source, v: u32) -> DocumentError {
+    src.error(
         ErrorKind::Version,
-        find_key(text, "version"),
+        &[Step::Key("version")],
         format!(
             "preset version {v} is newer than this botbench reads (version {VERSION}); update botbench"
         ),
     )
-}
-
-/// Writes `text` to a temporary file beside `path`, then renames it over `path`.
-fn write_atomic(path: &Path, text: &str) -> Result<(), PresetError> {
-    use std::io::Write;
-    let file = path.display().to_string();
-    let io = |what: &str, e: std::io::Error| {
-        PresetError::one(&file, ErrorKind::Io, (0, 0), format!("cannot {what}: {e}"))
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let stem = path
-        .file_name()
-        .map_or_else(|| "preset".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = dir.join(format!(".{stem}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp).map_err(|e| io("create a temporary file", e))?;
-        f.write_all(text.as_bytes())
-            .and_then(|()| f.sync_all())
-            .map_err(|e| io("write", e))?;
-        drop(f);
-        std::fs::rename(&tmp, path).map_err(|e| io("replace the file", e))
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
-
-/// The line and column of a top-level `key:` outside comments, or (1, 1).
-fn find_key(text: &str, key: &str) -> (usize, usize) {
-    find_outside_comments(text, key, 0, |rest| rest.trim_start().starts_with(':'))
-        .map_or((1, 1), |pos| line_col(text, pos))
-}
-
-/// Where a command's key (and, given `field`, that field's key after it) sits in the text.
-fn find_entry(text: &str, command: &str, field: Option<&str>) -> (usize, usize) {
-    let quoted = |s: &str| ron::to_string(s).unwrap_or_else(|_| format!("\"{s}\""));
-    let Some(cmd_at) = find_outside_comments(text, &quoted(command), 0, |_| true) else {
-        return (0, 0);
-    };
-    let pos = match field {
-        Some(f) => find_outside_comments(text, &quoted(f), cmd_at, |_| true).unwrap_or(cmd_at),
-        None => cmd_at,
-    };
-    line_col(text, pos)
-}
-
-fn find_outside_comments(
-    text: &str,
-    needle: &str,
-    from: usize,
-    followed: impl Fn(&str) -> bool,
-) -> Option<usize> {
-    let mut start = from;
-    while let Some(i) = text.get(start..)?.find(needle) {
-        let pos = start + i;
-        let line_start = text[..pos].rfind('\n').map_or(0, |n| n + 1);
-        let in_comment = text[line_start..pos].contains("//");
-        if !in_comment && followed(&text[pos + needle.len()..]) {
-            return Some(pos);
-        }
-        start = pos + needle.len();
-    }
-    None
-}
-
-// ---- The file's shape ----
-
-/// The document as written; `version` is optional here so that its absence gets a clear message.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields, rename = "preset")]
-struct Doc {
-    #[serde(default)]
-    version: Option<u32>,
-    profile: String,
-    #[serde(default)]
-    note: String,
-    #[serde(default)]
-    created: String,
-    #[serde(default)]
-    device: Option<String>,
-    values: Values,
-}
-
-/// Just the version, to explain a newer file that does not parse as this version.
-#[derive(Deserialize)]
-struct Head {
-    #[serde(default)]
-    version: Option<u32>,
-}
-
-/// `{ "COMMAND": { "field": "value", ... }, ... }`, in the file's order.
-struct Values(Vec<CommandValues>);
-
-impl<'de> Deserialize<'de> for Values {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl<'de> Visitor<'de> for V {
-            type Value = Values;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str(
-                    r#"a map of Set commands, e.g. { "MSP_SET_PWMVALUE": { "pwmValue": "85" } }"#,
-                )
-            }
-            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Values, A::Error> {
-                let mut out: Vec<CommandValues> = Vec::new();
-                while let Some(command) = map.next_key::<String>()? {
-                    if out.iter().any(|c| c.command.eq_ignore_ascii_case(&command)) {
-                        return Err(de::Error::custom(format!(
-                            "command \"{command}\" is given twice"
-                        )));
-                    }
-                    let Fields(fields) = map.next_value()?;
-                    out.push(CommandValues { command, fields });
-                }
-                Ok(Values(out))
-            }
-        }
-        d.deserialize_map(V)
-    }
-}
-
-struct Fields(Vec<(String, String)>);
-
-impl<'de> Deserialize<'de> for Fields {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl<'de> Visitor<'de> for V {
-            type Value = Fields;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str(r#"a map of fields to values, e.g. { "pwmValue": "85" }"#)
-            }
-            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Fields, A::Error> {
-                let mut out: Vec<(String, String)> = Vec::new();
-                while let Some(field) = map.next_key::<String>()? {
-                    if out.iter().any(|(k, _)| k.eq_ignore_ascii_case(&field)) {
-                        return Err(de::Error::custom(format!(
-                            "field \"{field}\" is given twice"
-                        )));
-                    }
-                    let Text(value) = map.next_value()?;
-                    out.push((field, value));
-                }
-                Ok(Fields(out))
-            }
-        }
-        d.deserialize_map(V)
-    }
 }

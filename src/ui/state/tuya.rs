@@ -1,6 +1,7 @@
-//! What the Tuya link has said, kept by the runtime as it arrives (bounded), so that nothing is
-//! lost while another panel is shown: the handshake's steps, heartbeats, each data point's last
-//! report, the report log, and the MCU's own requests with the module's answers.
+//! The Tuya part of the device model: what the module session (the link's) has said, kept as it
+//! arrives (bounded), so that nothing is lost while another panel is shown: the handshake's
+//! steps, heartbeats, each data point's last report, the report log, and the MCU's own requests
+//! with the module's answers.
 
 use crate::link::LogEntry;
 use crate::link::session::tuya::{HandshakeStep, ProductInfo, TuyaEvent};
@@ -8,7 +9,7 @@ use crate::packet::{Header, Packet};
 use crate::profile::{Profile, Value};
 use crate::protocol::Direction;
 use crate::protocol::tuya::cmd;
-use crate::protocol::tuya::dp::{self, DpValue};
+use crate::protocol::tuya::dp::{self, DpError, DpType, DpValue};
 use chrono::{DateTime, Local};
 use std::collections::{BTreeMap, VecDeque};
 use std::time::Instant;
@@ -48,7 +49,35 @@ pub struct LogLine {
     /// When.
     pub clock: DateTime<Local>,
     /// The data point's id, ident and value, or what was wrong with it.
-    pub item: Result<(u8, String, Value), String>,
+    pub item: Result<(u8, String, Value), ReportError>,
+}
+
+/// What is wrong with a report (0x07): it is logged, and its values are not shown.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ReportError {
+    /// The report's bytes are not data points.
+    #[error("malformed report: {0}")]
+    Malformed(DpError),
+    /// A data point the profile does not have.
+    #[error("data point {id} is not in the profile ({} {value:?})", value.dp_type().name())]
+    NotInProfile {
+        /// Its id.
+        id: u8,
+        /// Its value as reported.
+        value: DpValue,
+    },
+    /// A data point reported with another type than the profile's.
+    #[error("data point {id} ({ident}): type {} on the wire, the profile says {}", wire.name(), profile.name())]
+    WrongType {
+        /// Its id.
+        id: u8,
+        /// Its ident in the profile.
+        ident: String,
+        /// The type reported.
+        wire: DpType,
+        /// The profile's type.
+        profile: DpType,
+    },
 }
 
 /// An MCU request the module answered.
@@ -66,7 +95,7 @@ pub struct RequestLine {
 
 /// What the Tuya link has reported since the connection.
 #[derive(Debug, Clone, Default)]
-pub struct Session {
+pub struct TuyaModel {
     /// Counts connections: a new one starts a new session.
     pub generation: u64,
     /// The current (or last) handshake attempt, step by step, in [`HandshakeStep::ALL`] order.
@@ -127,7 +156,7 @@ pub fn dp_raw_value(v: &DpValue) -> Value {
     }
 }
 
-impl Session {
+impl TuyaModel {
     /// A new session for the connection after `self`'s.
     pub fn next(&self) -> Self {
         Self {
@@ -236,25 +265,22 @@ impl Session {
         let points = match dp::decode(&p.payload) {
             Ok(points) => points,
             Err(e) => {
-                self.log(clock, Err(format!("malformed report: {e}")));
+                self.log(clock, Err(ReportError::Malformed(e)));
                 return;
             }
         };
         for point in points {
             let item = match profile.data_point(point.id) {
-                None => Err(format!(
-                    "data point {} is not in the profile ({} {:?})",
-                    point.id,
-                    point.value.dp_type().name(),
-                    point.value
-                )),
-                Some(def) if def.dp_type != point.value.dp_type() => Err(format!(
-                    "data point {} ({}): type {} on the wire, the profile says {}",
-                    point.id,
-                    def.field.ident,
-                    point.value.dp_type().name(),
-                    def.dp_type.name()
-                )),
+                None => Err(ReportError::NotInProfile {
+                    id: point.id,
+                    value: point.value.clone(),
+                }),
+                Some(def) if def.dp_type != point.value.dp_type() => Err(ReportError::WrongType {
+                    id: point.id,
+                    ident: def.field.ident.clone(),
+                    wire: point.value.dp_type(),
+                    profile: def.dp_type,
+                }),
                 Some(def) => {
                     let value = dp_raw_value(&point.value);
                     self.dps.insert(
@@ -272,7 +298,7 @@ impl Session {
         }
     }
 
-    fn log(&mut self, clock: DateTime<Local>, item: Result<(u8, String, Value), String>) {
+    fn log(&mut self, clock: DateTime<Local>, item: Result<(u8, String, Value), ReportError>) {
         if self.log.len() >= LOG_CAPACITY {
             self.log.pop_front();
         }
@@ -300,7 +326,7 @@ mod tests {
 
     #[test]
     fn product_info_that_is_not_json_does_not_stop_the_handshake_but_no_answer_does() {
-        let mut s = Session::default();
+        let mut s = TuyaModel::default();
         s.on_event(step(HandshakeStep::Heartbeat, true));
         s.on_event(TuyaEvent::ProductInfo(parse_product_info(b"{\"p\":")));
         s.on_event(step(HandshakeStep::ProductInfo, false));
@@ -322,7 +348,7 @@ mod tests {
     #[test]
     fn the_logs_are_bounded_and_a_wrong_typed_report_is_logged_not_shown() {
         let profile = crate::sim::tuya_mcu::builtin_vacuum_profile();
-        let mut s = Session::default();
+        let mut s = TuyaModel::default();
         let frame = |data: Vec<u8>| {
             Packet::tuya(crate::protocol::tuya::Frame::from_mcu(cmd::DP_REPORT, data))
         };

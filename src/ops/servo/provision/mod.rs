@@ -20,17 +20,17 @@
 //! [`Outcome::Pass`] only when every step was verified on the servo, and otherwise names the
 //! step that failed and why.
 
-use super::msp::OpError;
-use super::servo::{self, BAUDS, PARAM_BAUD, PARAM_ID, Presence};
-use super::{Cancel, Progress};
+mod log;
+mod plan;
+
+pub use log::{append_csv, check_log, log_columns, log_row};
+pub use plan::{IdSequence, Issue, Plan, Resolved};
+
 use crate::link::{Client, ExchangeError};
-use crate::profile::locate::{Step, locate};
-use crate::profile::value::Typed as DisplayText;
-use crate::profile::{Access, Input, Param, Profile, Value};
-use serde::{Deserialize, Serialize};
-use std::fmt;
-use std::io::{BufRead, Write};
-use std::path::Path;
+use crate::ops::servo::{self, BAUDS, PARAM_BAUD, PARAM_ID, Presence, switch};
+use crate::ops::{Cancel, OpError, Progress};
+use crate::profile::{Input, Param, Profile, Value};
+use serde::Serialize;
 
 /// The `data_id` of the serial number.
 pub const PARAM_SERIAL: u8 = 8;
@@ -53,266 +53,6 @@ pub mod step {
     pub const RECORD: &str = "record";
     /// The plan does not fit the profile.
     pub const PLAN: &str = "plan";
-}
-
-/// The ids a plan gives out.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub enum IdSequence {
-    /// The next free id from this one upward (to 254).
-    Start(u8),
-    /// These ids, in order, skipping those in use.
-    List(Vec<u8>),
-}
-
-impl IdSequence {
-    /// Every id the sequence may give, in order.
-    pub fn candidates(&self) -> Vec<u8> {
-        match self {
-            IdSequence::Start(first) => (*first..crate::protocol::servo::BROADCAST_ID).collect(),
-            IdSequence::List(ids) => ids.clone(),
-        }
-    }
-}
-
-/// A provisioning plan, as written in its RON file.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Plan {
-    /// The baud rate every servo leaves with: one of [`BAUDS`].
-    pub target_baud: u32,
-    /// The ids to give out.
-    pub ids: IdSequence,
-    /// (parameter ident, display value) to write, in order, e.g. `("over_temprature", "70")`.
-    pub params: Vec<(String, String)>,
-    /// Further parameters to read and record in the log, e.g. `firmware_version`.
-    pub record: Vec<String>,
-}
-
-/// A plan that does not parse or does not fit the profile. Nothing has been written.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct PlanError {
-    /// The file (or the name given to [`Plan::parse`]).
-    pub file: String,
-    /// 1-based line, 0 when unknown.
-    pub line: usize,
-    /// 1-based column, 0 when unknown.
-    pub col: usize,
-    /// What is wrong.
-    pub message: String,
-}
-
-/// A RON file's name (for errors) and text, or why it cannot be read.
-pub(crate) fn read_source(path: &Path) -> Result<(String, String), PlanError> {
-    let file = path.display().to_string();
-    match std::fs::read_to_string(path) {
-        Ok(text) => Ok((file, text)),
-        Err(e) => Err(PlanError {
-            file,
-            line: 0,
-            col: 0,
-            message: format!("cannot read: {e}"),
-        }),
-    }
-}
-
-impl fmt::Display for PlanError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.line == 0 {
-            write!(f, "{}: {}", self.file, self.message)
-        } else {
-            write!(
-                f,
-                "{}:{}:{}: {}",
-                self.file, self.line, self.col, self.message
-            )
-        }
-    }
-}
-
-impl std::error::Error for PlanError {}
-
-/// A problem with a plan and where it is.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Issue {
-    /// The path to the offending value.
-    pub path: Vec<Step>,
-    /// What is wrong.
-    pub message: String,
-}
-
-/// A plan resolved against a profile: what [`provision_next`] writes and reads.
-#[derive(Debug, Clone)]
-pub struct Resolved<'p> {
-    /// The baud option (1-8) of the target rate.
-    pub option: u8,
-    /// The parameters to write, with their raw values.
-    pub writes: Vec<(&'p Param, i64)>,
-    /// The parameters to record.
-    pub record: Vec<&'p Param>,
-}
-
-/// The plan file's shape.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Doc {
-    target_baud: u32,
-    ids: IdSequence,
-    #[serde(default)]
-    params: Vec<(String, DisplayText)>,
-    #[serde(default)]
-    record: Vec<String>,
-}
-
-impl Plan {
-    /// Reads a plan file and checks it against the servo `profile`.
-    pub fn load(path: &Path, profile: &Profile) -> Result<Plan, PlanError> {
-        let (file, text) = read_source(path)?;
-        Self::parse(&file, &text, profile)
-    }
-
-    /// Parses plan text (`name` names it in errors) and checks it against `profile`.
-    pub fn parse(name: &str, text: &str, profile: &Profile) -> Result<Plan, PlanError> {
-        let doc: Doc = ron::Options::default()
-            .from_str(text)
-            .map_err(|e| PlanError {
-                file: name.to_string(),
-                line: e.span.start.line,
-                col: e.span.start.col,
-                message: e.code.to_string(),
-            })?;
-        let plan = Plan {
-            target_baud: doc.target_baud,
-            ids: doc.ids,
-            params: doc.params.into_iter().map(|(k, v)| (k, v.0)).collect(),
-            record: doc.record,
-        };
-        if let Err(issue) = plan.resolve(profile) {
-            let (line, col) = locate(text, &issue.path);
-            return Err(PlanError {
-                file: name.to_string(),
-                line,
-                col,
-                message: issue.message,
-            });
-        }
-        Ok(plan)
-    }
-
-    /// Checks the plan against the servo `profile`: the baud rate, the ids, every parameter
-    /// (known, writable, not the id or baud rate, its value in range) and every recorded one.
-    pub fn resolve<'p>(&self, profile: &'p Profile) -> Result<Resolved<'p>, Issue> {
-        let issue = |path: Vec<Step>, message: String| Issue { path, message };
-        let Some(option) = servo::option_of_baud(self.target_baud) else {
-            return Err(issue(
-                vec![Step::Key("target_baud")],
-                format!(
-                    "{} is not a servo baud rate; allowed: {}",
-                    self.target_baud,
-                    BAUDS.map(|b| b.to_string()).join(", ")
-                ),
-            ));
-        };
-        if let Some(baud) = profile.param(PARAM_BAUD) {
-            baud.field
-                .check(&Value::Int(option.into()))
-                .map_err(|e| issue(vec![Step::Key("target_baud")], e.to_string()))?;
-        }
-        let ids_at = vec![Step::Key("ids")];
-        match &self.ids {
-            IdSequence::Start(0) => {
-                return Err(issue(
-                    ids_at,
-                    "ids cannot start at 0: 0 is the factory id of a fresh servo".into(),
-                ));
-            }
-            IdSequence::Start(255) => {
-                return Err(issue(
-                    ids_at,
-                    "id 255 is the broadcast address and cannot be assigned".into(),
-                ));
-            }
-            IdSequence::Start(_) => {}
-            IdSequence::List(ids) => {
-                if ids.is_empty() {
-                    return Err(issue(ids_at, "the id list is empty".into()));
-                }
-                for (i, &id) in ids.iter().enumerate() {
-                    if id == 0 || id == 255 {
-                        return Err(issue(
-                            ids_at,
-                            format!("id {id} cannot be assigned: give ids 1 to 254"),
-                        ));
-                    }
-                    if ids[..i].contains(&id) {
-                        return Err(issue(ids_at, format!("id {id} is listed twice")));
-                    }
-                }
-            }
-        }
-        let known = || {
-            profile
-                .params
-                .iter()
-                .map(|p| p.field.ident.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let mut writes: Vec<(&Param, i64)> = Vec::new();
-        for (i, (name, value)) in self.params.iter().enumerate() {
-            let at = vec![Step::Key("params"), Step::Index(i)];
-            let Some(param) = profile.find_param(name) else {
-                return Err(issue(
-                    at,
-                    format!("no servo parameter '{name}'; known: {}", known()),
-                ));
-            };
-            let ident = &param.field.ident;
-            if param.access == Access::ReadOnly {
-                return Err(issue(
-                    at,
-                    format!("{ident} is read-only and cannot be written"),
-                ));
-            }
-            if param.id == PARAM_ID || param.id == PARAM_BAUD {
-                return Err(issue(
-                    at,
-                    format!("{ident} is set by the plan's `ids` and `target_baud`, not by params"),
-                ));
-            }
-            if writes.iter().any(|(p, _)| p.id == param.id) {
-                return Err(issue(at, format!("{ident} is given twice")));
-            }
-            let raw = match param.field.parse(value) {
-                Ok(Value::Int(raw)) => raw,
-                Ok(_) => {
-                    return Err(issue(at, format!("{ident}: '{value}' is not a number")));
-                }
-                Err(e) => return Err(issue(at, e.to_string())),
-            };
-            writes.push((param, raw));
-        }
-        let mut record: Vec<&Param> = Vec::new();
-        for (i, name) in self.record.iter().enumerate() {
-            let at = vec![Step::Key("record"), Step::Index(i)];
-            let Some(param) = profile.find_param(name) else {
-                return Err(issue(
-                    at,
-                    format!("no servo parameter '{name}' to record; known: {}", known()),
-                ));
-            };
-            if record.iter().any(|p| p.id == param.id) {
-                return Err(issue(
-                    at,
-                    format!("{} is recorded twice", param.field.ident),
-                ));
-            }
-            record.push(param);
-        }
-        Ok(Resolved {
-            option,
-            writes,
-            record,
-        })
-    }
 }
 
 /// What provisioning remembers between servos.
@@ -385,12 +125,6 @@ fn reason(e: &OpError, id: u8, baud: u32) -> String {
     }
 }
 
-fn switch(client: &Client, baud: u32) -> Result<(), String> {
-    client
-        .set_baud(baud)
-        .map_err(|e| format!("cannot switch the port to {baud} baud: {e}"))
-}
-
 fn fail(record: &mut Record, step: &str, reason: String) {
     record.result = Outcome::Fail {
         step: step.to_string(),
@@ -400,11 +134,11 @@ fn fail(record: &mut Record, step: &str, reason: String) {
 
 /// Finds the fresh servos (id 0): pings id 0 at `bauds` in order and returns each rate where
 /// something answered, and how.
-pub fn find_fresh(client: &Client, bauds: &[u32]) -> Result<Vec<(u32, Presence)>, String> {
+pub fn find_fresh(client: &Client, bauds: &[u32]) -> Result<Vec<(u32, Presence)>, OpError> {
     let mut out = Vec::new();
     for &b in bauds {
         switch(client, b)?;
-        let presence = servo::ping(client, 0, 2).map_err(|e| e.to_string())?;
+        let presence = servo::ping(client, 0, 2)?;
         if presence != Presence::Absent {
             out.push((b, presence));
         }
@@ -498,7 +232,7 @@ fn run(
     check_cancel!(step::DETECT);
     let found = match find_fresh(client, &search_order(target)) {
         Ok(f) => f,
-        Err(e) => return fail(record, step::DETECT, e),
+        Err(e) => return fail(record, step::DETECT, e.to_string()),
     };
     let baud = match found.as_slice() {
         [] => {
@@ -531,7 +265,7 @@ fn run(
         }
     };
     if let Err(e) = switch(client, baud) {
-        return fail(record, step::DETECT, e);
+        return fail(record, step::DETECT, e.to_string());
     }
     record.baud = Some(baud);
 
@@ -572,11 +306,11 @@ fn run(
             }
             // In use: never offered again.
             Ok(false) => state.next = i + 1,
-            Err(e) => return fail(record, step::ASSIGN_ID, e),
+            Err(e) => return fail(record, step::ASSIGN_ID, e.to_string()),
         }
     }
     if let Err(e) = switch(client, baud) {
-        return fail(record, step::ASSIGN_ID, e);
+        return fail(record, step::ASSIGN_ID, e.to_string());
     }
     let Some((index, id)) = chosen else {
         return fail(
@@ -728,15 +462,15 @@ fn run(
 fn read(client: &Client, profile: &Profile, id: u8, pid: u8) -> Result<i64, OpError> {
     let param = profile
         .param(pid)
-        .ok_or_else(|| OpError::Input(format!("the profile has no parameter {pid}")))?;
+        .ok_or_else(|| OpError::unknown_param(profile, pid))?;
     servo::read_param(client, profile, id, param)
 }
 
 /// Whether `id` is silent at every one of `bauds`.
-fn id_is_free(client: &Client, id: u8, bauds: &[u32]) -> Result<bool, String> {
+fn id_is_free(client: &Client, id: u8, bauds: &[u32]) -> Result<bool, OpError> {
     for &b in bauds {
         switch(client, b)?;
-        if servo::ping(client, id, 2).map_err(|e| e.to_string())? != Presence::Absent {
+        if servo::ping(client, id, 2)? != Presence::Absent {
             return Ok(false);
         }
     }
@@ -753,107 +487,4 @@ fn mismatch(param: &Param, written: &Value, read: &Value) -> String {
         f.format(read),
         f.unit_suffix()
     )
-}
-
-// ---- The log ----
-
-/// The log's header for a plan that records `recorded`.
-pub fn csv_header(recorded: &[String]) -> String {
-    let mut cols: Vec<String> = [
-        "time",
-        "serial",
-        "id",
-        "baud",
-        "result",
-        "step",
-        "reason",
-        "mismatches",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    cols.extend(recorded.iter().map(|r| csv_field(r)));
-    cols.join(",")
-}
-
-/// One record as a log line (without its newline).
-pub fn csv_line(record: &Record) -> String {
-    let opt = |v: Option<String>| v.unwrap_or_default();
-    let (result, step, reason) = match &record.result {
-        Outcome::Pass => ("PASS", "", ""),
-        Outcome::Fail { step, reason } => ("FAIL", step.as_str(), reason.as_str()),
-    };
-    let mut cols = vec![
-        csv_field(&record.time),
-        opt(record.serial.map(|s| s.to_string())),
-        opt(record.id.map(|s| s.to_string())),
-        opt(record.baud.map(|s| s.to_string())),
-        result.to_string(),
-        csv_field(step),
-        csv_field(reason),
-        csv_field(&record.mismatches.join("; ")),
-    ];
-    cols.extend(
-        record
-            .recorded
-            .iter()
-            .map(|(_, v)| csv_field(v.as_deref().unwrap_or(""))),
-    );
-    cols.join(",")
-}
-
-/// A CSV field, quoted when it holds a comma, a quote, a line break or edge spaces.
-pub fn csv_field(s: &str) -> String {
-    let needs = s.contains([',', '"', '\n', '\r']) || s.trim() != s;
-    if needs {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
-/// Appends `record` to the CSV log at `path`, writing the header first when the file is new or
-/// empty, and syncs it to disk. A log whose header is for other recorded parameters is refused
-/// rather than mixed.
-pub fn append_csv(path: &Path, record: &Record) -> std::io::Result<()> {
-    let names: Vec<String> = record.recorded.iter().map(|(k, _)| k.clone()).collect();
-    let header = csv_header(&names);
-    let mut file = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .read(true)
-        .open(path)?;
-    let len = file.metadata()?.len();
-    let mut text = String::new();
-    if len == 0 {
-        text.push_str(&header);
-        text.push('\n');
-    } else {
-        let mut first = String::new();
-        std::io::BufReader::new(std::fs::File::open(path)?).read_line(&mut first)?;
-        let first = first.trim_end_matches(['\n', '\r']);
-        if first != header {
-            return Err(std::io::Error::new(
-                std::io::ErrorKind::InvalidData,
-                format!(
-                    "{} has another header ({first}); this plan logs {header}: use another log file",
-                    path.display()
-                ),
-            ));
-        }
-    }
-    text.push_str(&csv_line(record));
-    text.push('\n');
-    file.write_all(text.as_bytes())?;
-    file.sync_all()
-}
-
-/// Checks that the log at `path` can be appended to (created if missing), before any servo is
-/// touched.
-pub fn check_log(path: &Path) -> std::io::Result<()> {
-    std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(path)
-        .map(drop)
 }

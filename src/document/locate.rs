@@ -1,5 +1,6 @@
 //! Finds where a value sits in RON text, so that an inconsistency found after parsing can be
-//! reported with its line and column, as a syntax error is.
+//! reported with its line and column, as a syntax error is. Comments, strings and raw strings
+//! are skipped; a path that leaves the text stops at the deepest step found.
 
 /// One step of a path into a RON document.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -8,6 +9,9 @@ pub enum Step {
     Key(&'static str),
     /// A list element by index.
     Index(usize),
+    /// A map entry by its string key, as written (`{ "MSP_SET_PWMVALUE": ... }`). It is placed
+    /// at its key, which is where a person looks for it; a further step goes into its value.
+    Entry(String),
 }
 
 /// The 1-based line and column of the value at `path`, or of the deepest step found.
@@ -15,6 +19,7 @@ pub fn locate(src: &str, path: &[Step]) -> (usize, usize) {
     let mut c = Cursor {
         s: src.as_bytes(),
         pos: 0,
+        key: None,
     };
     c.skip_ws();
     let mut best = c.pos;
@@ -22,11 +27,12 @@ pub fn locate(src: &str, path: &[Step]) -> (usize, usize) {
         let found = match step {
             Step::Key(k) => c.enter_struct() && c.find_key(k),
             Step::Index(i) => c.find_index(*i),
+            Step::Entry(k) => c.find_entry(k),
         };
         if !found {
             break;
         }
-        best = c.pos;
+        best = c.key.take().unwrap_or(c.pos);
     }
     line_col(src, best)
 }
@@ -50,6 +56,8 @@ fn floor_char_boundary(s: &str, mut i: usize) -> usize {
 struct Cursor<'a> {
     s: &'a [u8],
     pos: usize,
+    /// Where the map entry just found starts (its key), when the last step was an entry.
+    key: Option<usize>,
 }
 
 impl Cursor<'_> {
@@ -228,8 +236,8 @@ impl Cursor<'_> {
         }
     }
 
-    /// At a list value (or `Some([`): moves to element `index`.
-    fn find_index(&mut self, index: usize) -> bool {
+    /// At a group opened by `open` (or `Some(` and then it): moves inside it.
+    fn enter(&mut self, open: u8) -> bool {
         self.skip_ws();
         if self.s[self.pos..].starts_with(b"Some") {
             self.ident();
@@ -240,21 +248,33 @@ impl Cursor<'_> {
             self.pos += 1;
             self.skip_ws();
         }
-        if self.peek() != Some(b'[') {
+        if self.peek() != Some(open) {
             return false;
         }
         self.pos += 1;
-        let mut n = 0;
+        true
+    }
+
+    /// Inside a group closed by `close`: moves to the next item (past commas); false at its end.
+    fn next_item(&mut self, close: u8) -> bool {
         loop {
             self.skip_ws();
             match self.peek() {
-                None | Some(b']') => return false,
-                Some(b',') => {
-                    self.pos += 1;
-                    continue;
-                }
-                _ => {}
+                None => return false,
+                Some(b) if b == close => return false,
+                Some(b',') => self.pos += 1,
+                _ => return true,
             }
+        }
+    }
+
+    /// At a list value (or `Some([`): moves to element `index`.
+    fn find_index(&mut self, index: usize) -> bool {
+        if !self.enter(b'[') {
+            return false;
+        }
+        let mut n = 0;
+        while self.next_item(b']') {
             if n == index {
                 return true;
             }
@@ -265,42 +285,40 @@ impl Cursor<'_> {
             }
             n += 1;
         }
+        false
     }
-}
 
-/// One problem in a RON document (a preset, a test plan), where it is.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Problem {
-    /// 1-based line, 0 when unknown.
-    pub line: usize,
-    /// 1-based column, 0 when unknown.
-    pub col: usize,
-    /// What is wrong.
-    pub message: String,
-}
-
-/// Writes the problems of `file` as `file:line:col: message`, one, or a count then one a line.
-pub fn write_problems(
-    f: &mut std::fmt::Formatter<'_>,
-    file: &str,
-    problems: &[Problem],
-) -> std::fmt::Result {
-    let at = |p: &Problem| {
-        if p.line == 0 {
-            format!("{file}: {}", p.message)
-        } else {
-            format!("{file}:{}:{}: {}", p.line, p.col, p.message)
+    /// At a map value (or `Some({`): moves to the value of the entry whose key is the string
+    /// `key`.
+    fn find_entry(&mut self, key: &str) -> bool {
+        if !self.enter(b'{') {
+            return false;
         }
-    };
-    match problems {
-        [one] => write!(f, "{}", at(one)),
-        many => {
-            write!(f, "{file}: {} problems:", many.len())?;
-            for p in many {
-                write!(f, "\n  {}", at(p))?;
+        let quoted = ron::to_string(key).unwrap_or_else(|_| format!("\"{key}\""));
+        while self.next_item(b'}') {
+            let start = self.pos;
+            self.skip_value();
+            if self.pos == start {
+                return false;
             }
-            Ok(())
+            let matched = &self.s[start..self.pos] == quoted.as_bytes();
+            self.skip_ws();
+            if self.peek() != Some(b':') {
+                return false;
+            }
+            self.pos += 1;
+            self.skip_ws();
+            if matched {
+                self.key = Some(start);
+                return true;
+            }
+            let before = self.pos;
+            self.skip_value();
+            if self.pos == before {
+                return false;
+            }
         }
+        false
     }
 }
 
@@ -336,6 +354,20 @@ Profile(
             Key("range"),
         ];
         assert_eq!(locate(SRC, &range), (8, 65));
+    }
+
+    #[test]
+    fn finds_map_entries_by_their_string_key() {
+        use Step::*;
+        let src = "// \"A\": { in a comment\n(\n    values: {\n        \"A\": { \"x\": \"1\" },\n        \"B\": {\n            \"x\": \"2\", \"y\": \"3\",\n        },\n    },\n)";
+        let at = |path: &[Step]| locate(src, path);
+        assert_eq!(at(&[Key("values"), Entry("A".into())]), (4, 9));
+        assert_eq!(
+            at(&[Key("values"), Entry("B".into()), Entry("y".into())]),
+            (6, 23)
+        );
+        // A key not there: the deepest step found.
+        assert_eq!(at(&[Key("values"), Entry("C".into())]), (3, 13));
     }
 
     #[test]

@@ -12,13 +12,11 @@
 //! )
 //! ```
 
-use super::provision::PlanError as PresetError;
-use super::servo::{PARAM_BAUD, PARAM_ID};
-use crate::profile::locate::{Step, locate};
+use super::{PARAM_BAUD, PARAM_ID};
+use crate::document::{self, DocumentError, ErrorKind, Source, Step};
 use crate::profile::value::Typed;
 use crate::profile::{Access, Profile, Value};
 use serde::Deserialize;
-use std::io::Write;
 use std::path::Path;
 
 /// The preset format this build reads and writes.
@@ -49,25 +47,18 @@ pub fn in_preset(p: &crate::profile::Param) -> bool {
 
 impl ParamPreset {
     /// Reads a preset file and checks it against the servo `profile`.
-    pub fn load(path: &Path, profile: &Profile) -> Result<Self, PresetError> {
-        let (file, text) = super::provision::read_source(path)?;
-        Self::parse(&file, &text, profile)
+    pub fn load(path: &Path, profile: &Profile) -> Result<Self, DocumentError> {
+        document::load(path, |name, text| Self::parse(name, text, profile))
     }
 
     /// Parses preset text (`name` names it in errors) and checks every value against `profile`.
-    pub fn parse(name: &str, text: &str, profile: &Profile) -> Result<Self, PresetError> {
-        let err = |(line, col): (usize, usize), message: String| PresetError {
-            file: name.to_string(),
-            line,
-            col,
-            message,
-        };
-        let doc: Doc = ron::Options::default()
-            .from_str(text)
-            .map_err(|e| err((e.span.start.line, e.span.start.col), e.code.to_string()))?;
+    pub fn parse(name: &str, text: &str, profile: &Profile) -> Result<Self, DocumentError> {
+        let src = Source::new(name, text);
+        let doc: Doc = src.parse()?;
         if doc.version != VERSION {
-            return Err(err(
-                locate(text, &[Step::Key("version")]),
+            return Err(src.error(
+                ErrorKind::Version,
+                &[Step::Key("version")],
                 format!(
                     "version {} is not one this build reads (it reads {VERSION})",
                     doc.version
@@ -79,8 +70,9 @@ impl ParamPreset {
             params: doc.params.into_iter().map(|(k, v)| (k, v.0)).collect(),
         };
         if let Err((i, message)) = preset.resolve(profile) {
-            return Err(err(
-                locate(text, &[Step::Key("params"), Step::Index(i)]),
+            return Err(src.error(
+                ErrorKind::Value,
+                &[Step::Key("params"), Step::Index(i)],
                 message,
             ));
         }
@@ -160,27 +152,9 @@ impl ParamPreset {
         out
     }
 
-    /// Saves the preset (a temporary file, then renamed over `path`).
-    pub fn save(&self, path: &Path, profile: &Profile) -> std::io::Result<()> {
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-            _ => std::path::PathBuf::from("."),
-        };
-        let stem = path
-            .file_name()
-            .map_or_else(|| "preset".into(), |n| n.to_string_lossy().into_owned());
-        let tmp = dir.join(format!(".{stem}.{}.tmp", std::process::id()));
-        let result = (|| {
-            let mut f = std::fs::File::create(&tmp)?;
-            f.write_all(self.to_ron(profile).as_bytes())?;
-            f.sync_all()?;
-            drop(f);
-            std::fs::rename(&tmp, path)
-        })();
-        if result.is_err() {
-            let _ = std::fs::remove_file(&tmp);
-        }
-        result
+    /// Saves the preset, atomically.
+    pub fn save(&self, path: &Path, profile: &Profile) -> Result<(), DocumentError> {
+        document::write_atomic(path, self.to_ron(profile).as_bytes())
     }
 }
 
@@ -217,12 +191,12 @@ mod tests {
         let p = profile();
         let text = "(\n    version: 1,\n    params: [\n        (\"over_temprature\", \"70\"),\n        (\"angle_limit_switch\", \"maybe\"),\n    ],\n)\n";
         let e = ParamPreset::parse("t.ron", text, &p).unwrap_err();
-        assert_eq!((e.line, e.col), (5, 9), "{e}");
-        assert!(e.message.contains("angle_limit_switch"), "{e}");
+        assert_eq!(e.at(), (5, 9), "{e}");
+        assert!(e.message().contains("angle_limit_switch"), "{e}");
         let e = ParamPreset::parse("t.ron", "(version: 1, params: [(\"servo_id\", 3)])", &p)
             .unwrap_err();
-        assert!(e.message.contains("Set ID"), "{e}");
+        assert!(e.message().contains("Set ID"), "{e}");
         let e = ParamPreset::parse("t.ron", "(version: 1, params: [(\"x\" 3)])", &p).unwrap_err();
-        assert_eq!(e.line, 1, "{e}");
+        assert_eq!(e.at().0, 1, "{e}");
     }
 }

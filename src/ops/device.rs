@@ -1,0 +1,79 @@
+//! The MSP core commands: ping, the device's identity (CMD_VERSION with CMD_BUILD_INFO) and its
+//! power state. Layouts: `assets/profiles/*.ron`, from the MSP protocol document.
+
+use super::{OpError, exchange};
+use crate::link::{Client, DeviceInfo, session};
+use crate::profile::{Command, Profile};
+use crate::protocol::msp;
+use std::time::Duration;
+
+/// A ping's answer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Ping {
+    /// From the request's first byte written to the answer's last byte read.
+    pub rtt: Duration,
+    /// Attempts used.
+    pub attempts: u8,
+}
+
+fn core<'p>(profile: &'p Profile, id: u8, ident: &str) -> Result<&'p Command, OpError> {
+    profile
+        .command_by_id(id)
+        .ok_or_else(|| OpError::unknown_command(profile, ident))
+}
+
+/// CMD_PING, with its round trip.
+pub fn ping(client: &Client, profile: &Profile) -> Result<Ping, OpError> {
+    let cmd = core(profile, msp::CMD_PING, "CMD_PING")?;
+    let reply = exchange::send(client, profile, cmd, &[])?;
+    Ok(Ping {
+        rtt: reply.rtt,
+        attempts: reply.attempts,
+    })
+}
+
+/// What CMD_VERSION says of the device (no build date).
+pub fn version(client: &Client, profile: &Profile) -> Result<DeviceInfo, OpError> {
+    let cmd = core(profile, msp::CMD_VERSION, "CMD_VERSION")?;
+    let reply = exchange::send(client, profile, cmd, &[])?;
+    DeviceInfo::from_version(profile, reply.payload().unwrap_or_default())
+        .map_err(OpError::Identity)
+}
+
+/// What the device says of itself: CMD_VERSION, then CMD_BUILD_INFO where the device answers it
+/// (its build date stays `None` when it does not).
+pub fn identify(client: &Client, profile: &Profile) -> Result<DeviceInfo, OpError> {
+    let mut info = version(client, profile)?;
+    if let Some(cmd) = profile.command_by_id(msp::CMD_BUILD_INFO)
+        && let Ok(reply) = exchange::send(client, profile, cmd, &[])
+    {
+        info.build_date = session::build_date(reply.payload().unwrap_or_default());
+    }
+    Ok(info)
+}
+
+/// CMD_GET_POWER_STATE's raw answer: no layout is published for it, so its bytes are kept as
+/// sent.
+pub fn power_state(client: &Client, profile: &Profile) -> Result<Vec<u8>, OpError> {
+    let cmd = core(profile, msp::CMD_GET_POWER_STATE, "CMD_GET_POWER_STATE")?;
+    let reply = exchange::send(client, profile, cmd, &[])?;
+    Ok(reply.payload().unwrap_or_default().to_vec())
+}
+
+/// The device in a few words, for a preset's header: `hw 0x03 fw 1.4.2`.
+pub fn short_description(info: &DeviceInfo) -> String {
+    format!("hw {:#04x} fw {}", info.hw, info.firmware)
+}
+
+/// The device in full, for a test record: `hw 0x03 fw 1.4.2 api 2.4 build 7 (2025-06-01
+/// 10:00:00)`, the date where the device gave one.
+pub fn description(info: &DeviceInfo) -> String {
+    let mut s = format!(
+        "hw {:#04x} fw {} api {} build {}",
+        info.hw, info.firmware, info.api, info.build
+    );
+    if let Some(d) = &info.build_date {
+        s.push_str(&format!(" ({d})"));
+    }
+    s
+}

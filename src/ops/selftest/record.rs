@@ -1,0 +1,63 @@
+//! What a run records: each step's result, the run's report, and the JSON-lines log it is
+//! appended to.
+
+use crate::link::DeviceInfo;
+use serde::Serialize;
+use std::io::Write;
+use std::path::Path;
+
+/// The result of one step.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StepResult {
+    /// The step's name.
+    pub name: String,
+    /// Its kind (`Range`, `Stable`, `Rises`, `Operator`, `Reads`).
+    pub kind: String,
+    /// Whether it passed.
+    pub pass: bool,
+    /// Measured values against thresholds, or what went wrong.
+    pub detail: String,
+}
+
+/// The result of a run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Report {
+    /// The plan's name.
+    pub plan: String,
+    /// The profile.
+    pub profile: String,
+    /// "hw 0x03 fw 1.4.2 api 2.4 build 7 (2025-06-01 10:00:00)", from CMD_VERSION and
+    /// CMD_BUILD_INFO; `None` when the device did not say.
+    pub device: Option<String>,
+    /// What CMD_VERSION and CMD_BUILD_INFO said.
+    pub device_info: Option<DeviceInfo>,
+    /// When the run started (RFC 3339).
+    pub started: String,
+    /// How long it took, in ms.
+    pub duration_ms: u64,
+    /// The steps run, in order.
+    pub results: Vec<StepResult>,
+    /// Why the run ended before its last step (link lost, no answer, cancelled, operator abort).
+    pub aborted: Option<String>,
+    /// Every step ran and passed.
+    pub pass: bool,
+}
+
+impl Report {
+    /// The steps that failed.
+    pub fn failed(&self) -> impl Iterator<Item = &StepResult> {
+        self.results.iter().filter(|r| !r.pass)
+    }
+}
+
+/// Appends the report to a JSON-lines log: one JSON document per run.
+pub fn append_log(path: &Path, report: &Report) -> std::io::Result<()> {
+    let line = serde_json::to_string(report).map_err(std::io::Error::other)?;
+    let mut f = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)?;
+    // One write per line, so that two stations appending to a shared log do not interleave.
+    f.write_all(format!("{line}\n").as_bytes())?;
+    f.sync_all()
+}

@@ -1,0 +1,245 @@
+//! A servo's parameters: one at a time (read, and write with read-back), or the 32-byte user
+//! block in one exchange.
+
+use super::{PARAM_BAUD, PARAM_ID, command, param_by_id};
+use crate::link::{Client, Match, ReplySpec, Request};
+use crate::ops::{Cancel, Check, OpError, Progress};
+use crate::profile::model::Access;
+use crate::profile::{Input, Param, Profile, Value};
+use crate::protocol::Direction;
+use crate::protocol::servo::cmd;
+
+/// Reads one parameter of servo `id`.
+pub fn read_param(
+    client: &Client,
+    profile: &Profile,
+    id: u8,
+    param: &Param,
+) -> Result<i64, OpError> {
+    let read = command(profile, cmd::READ_DATA)?;
+    // The answer must name this parameter: a late answer to an earlier read is not this one.
+    let answer = Match::servo(cmd::READ_DATA, &[id]).with_prefix(vec![id, param.id]);
+    let req = Request::for_command(profile, read, vec![id, param.id])
+        .reply(ReplySpec::Required(answer))
+        .attempts(2);
+    let reply = client.request(req)?;
+    let payload = reply.payload().unwrap_or_default();
+    if payload.get(1) != Some(&param.id) {
+        return Err(OpError::Verify(format!(
+            "servo {id} answered parameter {:?} for {}",
+            payload.get(1),
+            param.id
+        )));
+    }
+    let d = profile
+        .decode(read, Direction::DeviceToHost, payload)
+        .map_err(|e| OpError::answer(&read.ident, e))?;
+    match d.values.get(2).map(|v| &v.value) {
+        Some(Value::Int(v)) => Ok(*v),
+        _ => Err(OpError::Verify(format!(
+            "servo {id}: no value for {}",
+            param.field.ident
+        ))),
+    }
+}
+
+/// Writes one user parameter of servo `id` and reads it back.
+pub fn write_param(
+    client: &Client,
+    profile: &Profile,
+    id: u8,
+    param: &Param,
+    input: Input,
+) -> Result<Check, OpError> {
+    if param.access == Access::ReadOnly {
+        return Err(OpError::ReadOnly {
+            param: param.field.ident.clone(),
+        });
+    }
+    let write = command(profile, cmd::WRITE_DATA)?;
+    let inputs = vec![
+        ("servo_id".to_string(), Input::Raw(Value::Int(id.into()))),
+        (
+            "data_id".to_string(),
+            Input::Raw(Value::Int(param.id.into())),
+        ),
+        ("data".to_string(), input),
+    ];
+    let payload = profile.encode(write, Direction::HostToDevice, &inputs)?;
+    let written = profile
+        .decode(write, Direction::HostToDevice, &payload)
+        .ok()
+        .and_then(|d| d.values.get(2).map(|v| v.value.clone()))
+        .unwrap_or(Value::Bytes(Vec::new()));
+    let answer = Match::servo(cmd::WRITE_DATA, &[id]).with_prefix(vec![id, param.id]);
+    let req = Request::for_command(profile, write, payload).reply(ReplySpec::Required(answer));
+    let reply = client.request(req)?;
+    if reply.payload().and_then(|p| p.get(2)) != Some(&1) {
+        return Err(OpError::Verify(format!(
+            "servo {id} refused {} = {}",
+            param.field.ident,
+            param.field.format(&written)
+        )));
+    }
+    let read = read_param(client, profile, id, param)?;
+    Ok(Check {
+        field: param.field.ident.clone(),
+        written,
+        read: Value::Int(read),
+    })
+}
+
+/// The user parameters (32-53) of the 32-byte block, in block order.
+fn block_params(profile: &Profile) -> Vec<&Param> {
+    profile.block_params().collect()
+}
+
+/// Reads the 32-byte user block (parameters 32-53) in one exchange: raw values by `data_id`, in
+/// block order.
+pub fn read_block(client: &Client, profile: &Profile, id: u8) -> Result<Vec<(u8, i64)>, OpError> {
+    let read = command(profile, cmd::READ_BATCH_DATA)?;
+    let req = Request::for_command(profile, read, vec![id])
+        .reply(ReplySpec::Required(Match::servo(
+            cmd::READ_BATCH_DATA,
+            &[id],
+        )))
+        .attempts(2);
+    let reply = client.request(req)?;
+    let d = profile
+        .decode(
+            read,
+            Direction::DeviceToHost,
+            reply.payload().unwrap_or_default(),
+        )
+        .map_err(|e| OpError::answer(&read.ident, e))?;
+    let params = block_params(profile);
+    let values = d.values.get(1..).unwrap_or_default();
+    if values.len() != params.len() {
+        return Err(OpError::Verify(format!(
+            "servo {id}: the user block holds {} values, the profile {}",
+            values.len(),
+            params.len()
+        )));
+    }
+    params
+        .iter()
+        .zip(values)
+        .map(|(p, v)| match v.value {
+            Value::Int(raw) => Ok((p.id, raw)),
+            _ => Err(OpError::Verify(format!(
+                "servo {id}: no value for {}",
+                p.field.ident
+            ))),
+        })
+        .collect()
+}
+
+/// Writes the whole 32-byte user block of servo `id` in one exchange, then reads it back.
+/// `values` must give every user parameter (raw, by `data_id`); each is checked against the
+/// profile first. The block also holds the id (34) and the baud option (36): they must be what
+/// the servo holds now (they are changed with [`set_id`] and [`set_baud`], which follow the servo).
+pub fn write_block(
+    client: &Client,
+    profile: &Profile,
+    id: u8,
+    values: &[(u8, i64)],
+) -> Result<Vec<Check>, OpError> {
+    let write = command(profile, cmd::WRITE_BATCH_DATA)?;
+    let params = block_params(profile);
+    let mut inputs = vec![("servo_id".to_string(), Input::Raw(Value::Int(id.into())))];
+    for p in &params {
+        let Some(&(_, raw)) = values.iter().find(|(pid, _)| *pid == p.id) else {
+            return Err(OpError::MissingValue {
+                param: p.field.ident.clone(),
+                data_id: p.id,
+            });
+        };
+        p.field.check(&Value::Int(raw))?;
+        inputs.push((p.field.ident.clone(), Input::Raw(Value::Int(raw))));
+    }
+    let before = read_block(client, profile, id)?;
+    for pid in [PARAM_ID, PARAM_BAUD] {
+        let now = before.iter().find(|(p, _)| *p == pid).map(|(_, v)| *v);
+        let new = values.iter().find(|(p, _)| *p == pid).map(|(_, v)| *v);
+        if now != new {
+            return Err(OpError::FollowedChange {
+                param: param_by_id(profile, pid)?.field.ident.clone(),
+                now,
+                new,
+            });
+        }
+    }
+    let payload = profile.encode(write, Direction::HostToDevice, &inputs)?;
+    let req = Request::for_command(profile, write, payload).reply(ReplySpec::Required(
+        Match::servo(cmd::WRITE_BATCH_DATA, &[id]),
+    ));
+    let reply = client.request(req)?;
+    if reply.payload().and_then(|p| p.get(1)) != Some(&1) {
+        return Err(OpError::Verify(format!(
+            "servo {id} refused the user block"
+        )));
+    }
+    let after = read_block(client, profile, id)?;
+    Ok(params
+        .iter()
+        .map(|p| {
+            let written = values.iter().find(|(pid, _)| *pid == p.id).map(|(_, v)| *v);
+            let read = after.iter().find(|(pid, _)| *pid == p.id).map(|(_, v)| *v);
+            Check {
+                field: p.field.ident.clone(),
+                written: written.map_or(Value::Bytes(Vec::new()), Value::Int),
+                read: read.map_or(Value::Bytes(Vec::new()), Value::Int),
+            }
+        })
+        .collect())
+}
+
+/// Every parameter of servo `id`: the read-only ones one by one, the user block in one
+/// exchange. Raw values by `data_id`, each with why it could not be read.
+pub fn read_all(client: &Client, profile: &Profile, id: u8) -> Vec<(u8, Result<i64, OpError>)> {
+    let mut out = Vec::new();
+    for p in profile
+        .params
+        .iter()
+        .filter(|p| p.access == Access::ReadOnly)
+    {
+        out.push((p.id, read_param(client, profile, id, p)));
+    }
+    match read_block(client, profile, id) {
+        Ok(block) => out.extend(block.into_iter().map(|(pid, v)| (pid, Ok(v)))),
+        Err(e) => out.extend(profile.block_params().map(|p| (p.id, Err(e.clone())))),
+    }
+    out
+}
+
+/// Writes each of `values` (raw, by `data_id`) to servo `id` with [`write_param`], each read
+/// back. A failed or mismatched write does not stop the others; a cancel stops between
+/// parameters. Returns each parameter's check, or why it failed, in order.
+pub fn write_params(
+    client: &Client,
+    profile: &Profile,
+    id: u8,
+    values: &[(u8, i64)],
+    cancel: &Cancel,
+    progress: &mut dyn FnMut(Progress),
+) -> Vec<(u8, Result<Check, OpError>)> {
+    let mut checks = Vec::new();
+    for (i, (pid, raw)) in values.iter().enumerate() {
+        if cancel.is_cancelled() {
+            break;
+        }
+        let Some(p) = profile.param(*pid) else {
+            continue;
+        };
+        progress(Progress {
+            done: i as u64,
+            total: values.len() as u64,
+            message: p.field.ident.clone(),
+        });
+        checks.push((
+            *pid,
+            write_param(client, profile, id, p, Input::Raw(Value::Int(*raw))),
+        ));
+    }
+    checks
+}

@@ -1,0 +1,249 @@
+//! Where a servo is on the bus: its id and baud rate changed (each verified, the port following
+//! the servo), its user data reset to the factory id and rate, a lost servo found again.
+
+use super::{
+    BAUDS, PARAM_BAUD, PARAM_ID, Presence, baud_of_option, command, param_by_id, ping, ping_detail,
+    read_param, switch,
+};
+use crate::link::{Client, ExchangeError, Match, ReplySpec, Request};
+use crate::ops::{Cancel, OpError};
+use crate::profile::{Profile, Value};
+use crate::protocol::servo::cmd;
+
+/// Gives servo `old` the id `new`, refusing 255 and any id that already answers; a fresh servo
+/// (id 0) must be alone on the bus. Verified at the new id afterwards.
+pub fn set_id(
+    client: &Client,
+    profile: &Profile,
+    old: u8,
+    new: u8,
+    cancel: &Cancel,
+) -> Result<(), OpError> {
+    if new == crate::protocol::servo::BROADCAST_ID {
+        return Err(OpError::BroadcastId);
+    }
+    if new == old {
+        return Err(OpError::SameId { id: new });
+    }
+    match ping(client, new, 2)? {
+        Presence::Absent => {}
+        Presence::Present => {
+            return Err(OpError::IdInUse {
+                id: new,
+                garbled: None,
+            });
+        }
+        Presence::PossibleDuplicate(e) => {
+            return Err(OpError::IdInUse {
+                id: new,
+                garbled: Some(e),
+            });
+        }
+    }
+    if old == 0 {
+        let found = ids_on_bus(client, cancel)?;
+        if found != [0] {
+            return Err(OpError::NotAlone { answering: found });
+        }
+    }
+    match ping(client, old, 2)? {
+        Presence::Present => {}
+        Presence::Absent => return Err(OpError::Verify(format!("no servo answers at id {old}"))),
+        Presence::PossibleDuplicate(e) => {
+            return Err(OpError::Verify(format!(
+                "more than one servo may share id {old}: {e}"
+            )));
+        }
+    }
+    let write = command(profile, cmd::WRITE_DATA)?;
+    let req = Request::new(cmd::WRITE_DATA, vec![old, PARAM_ID, new])
+        .reply(ReplySpec::Required(Match::servo(write.id, &[old, new])));
+    let reply = client.request(req)?;
+    if reply.payload().and_then(|p| p.get(2)) != Some(&1) {
+        return Err(OpError::Verify(format!("servo {old} refused the id {new}")));
+    }
+    let id_param = param_by_id(profile, PARAM_ID)?;
+    let now = read_param(client, profile, new, id_param)
+        .map_err(|e| OpError::Verify(format!("no answer at the new id {new}: {e}")))?;
+    if now != i64::from(new) {
+        return Err(OpError::Verify(format!("servo at {new} reports id {now}")));
+    }
+    // Two attempts: one garbled tail of a late answer is not a servo.
+    if ping(client, old, 2)? != Presence::Absent {
+        return Err(OpError::Verify(format!(
+            "something still answers at the old id {old}"
+        )));
+    }
+    Ok(())
+}
+
+/// The ids that answer at the current baud rate.
+fn ids_on_bus(client: &Client, cancel: &Cancel) -> Result<Vec<u8>, OpError> {
+    let mut out = Vec::new();
+    for id in 0..crate::protocol::servo::BROADCAST_ID {
+        if cancel.is_cancelled() {
+            return Err(OpError::Cancelled);
+        }
+        let (presence, late) = ping_detail(client, id, 1)?;
+        if presence != Presence::Absent {
+            out.push(id);
+        }
+        // A late answer still proves that servo is there.
+        if let Some(other) = late.filter(|o| !out.contains(o)) {
+            out.push(other);
+        }
+    }
+    out.sort_unstable();
+    Ok(out)
+}
+
+/// Where a servo was found after a baud change that could not be verified.
+fn recover(client: &Client, id: u8) -> Result<Option<u32>, OpError> {
+    for &b in &BAUDS {
+        switch(client, b)?;
+        if ping(client, id, 2)? == Presence::Present {
+            return Ok(Some(b));
+        }
+    }
+    Ok(None)
+}
+
+/// Sets servo `id`'s baud option (1-8), switches the port to the new rate and verifies there.
+/// If the servo is not found at the new rate, every rate is scanned for it: the error says where
+/// it is, and the port is left at that rate.
+pub fn set_baud(client: &Client, profile: &Profile, id: u8, option: u8) -> Result<u32, OpError> {
+    let Some(baud) = baud_of_option(option) else {
+        return Err(OpError::OutOfRange {
+            what: "baud option",
+            value: option.into(),
+            min: 1,
+            max: BAUDS.len() as i64,
+            note: format!(" ({})", BAUDS.map(|b| b.to_string()).join(", ")),
+        });
+    };
+    let baud_param = param_by_id(profile, PARAM_BAUD)?;
+    baud_param.field.check(&Value::Int(option.into()))?;
+    match ping(client, id, 2)? {
+        Presence::Present => {}
+        other => {
+            return Err(OpError::Verify(format!(
+                "servo {id} is not answering cleanly: {other:?}"
+            )));
+        }
+    }
+    // The servo switches at once and may answer at the new rate: its answer is not awaited here.
+    let req = Request::new(cmd::WRITE_DATA, vec![id, PARAM_BAUD, option])
+        .reply(ReplySpec::Optional(Match::servo(cmd::WRITE_DATA, &[id])))
+        .attempts(1);
+    match client.request(req) {
+        Ok(_) | Err(ExchangeError::Garbled { .. } | ExchangeError::Timeout { .. }) => {}
+        Err(e) => return Err(e.into()),
+    }
+    switch(client, baud)?;
+    let verified = ping(client, id, 3)? == Presence::Present
+        && read_param(client, profile, id, baud_param).ok() == Some(i64::from(option));
+    if verified {
+        return Ok(baud);
+    }
+    Err(OpError::NotAtNewRate {
+        id,
+        baud,
+        found: recover(client, id)?,
+    })
+}
+
+/// Where a servo is after [`reset_user_data`]: its factory id and baud rate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Location {
+    /// Its id.
+    pub id: u8,
+    /// Its baud rate.
+    pub baud: u32,
+}
+
+/// The id and baud rate the user parameters reset to (the profile's defaults of 34 and 36).
+pub fn factory_location(profile: &Profile) -> Location {
+    let id = profile
+        .param(PARAM_ID)
+        .and_then(|p| p.field.default)
+        .and_then(|v| u8::try_from(v).ok())
+        .unwrap_or(0);
+    let baud = profile
+        .param(PARAM_BAUD)
+        .and_then(|p| p.field.default)
+        .and_then(|v| u8::try_from(v).ok())
+        .and_then(baud_of_option)
+        .unwrap_or(profile.baud);
+    Location { id, baud }
+}
+
+/// Restores servo `id`'s user parameters (32-53) to the factory defaults. That includes its id
+/// and baud rate: refused when another servo already answers at the factory id and rate (the two
+/// would then share an id). The servo is then looked for at its factory id and rate, and the port
+/// is left there; if it is not found, the error says so. `baud` is the rate the servo talks at
+/// now.
+pub fn reset_user_data(
+    client: &Client,
+    profile: &Profile,
+    id: u8,
+    baud: u32,
+) -> Result<Location, OpError> {
+    let reset = command(profile, cmd::RESET_USER_DATA)?;
+    let home = factory_location(profile);
+    let switch = |b: u32| switch(client, b);
+    if home != (Location { id, baud }) {
+        switch(home.baud)?;
+        let there = ping(client, home.id, 2)?;
+        switch(baud)?;
+        if there != Presence::Absent {
+            return Err(OpError::FactoryIdTaken {
+                id: home.id,
+                baud: home.baud,
+            });
+        }
+    }
+    match ping(client, id, 2)? {
+        Presence::Present => {}
+        other => {
+            return Err(OpError::Verify(format!(
+                "servo {id} is not answering cleanly: {other:?}"
+            )));
+        }
+    }
+    // The servo may answer from its new id and at its new rate: the answer is not awaited here.
+    let req = Request::for_command(profile, reset, vec![id])
+        .reply(ReplySpec::Optional(Match::servo(
+            cmd::RESET_USER_DATA,
+            &[id, home.id],
+        )))
+        .attempts(1);
+    match client.request(req) {
+        Ok(r) if r.payload().and_then(|p| p.get(1)) == Some(&0) => {
+            return Err(OpError::Verify(format!("servo {id} refused the reset")));
+        }
+        Ok(_) | Err(ExchangeError::Garbled { .. } | ExchangeError::Timeout { .. }) => {}
+        Err(e) => return Err(e.into()),
+    }
+    switch(home.baud)?;
+    if ping(client, home.id, 3)? == Presence::Present {
+        return Ok(home);
+    }
+    match recover(client, home.id)? {
+        Some(b) => Err(OpError::Verify(format!(
+            "after the reset servo {} answers at {b} baud, not at {} (the port is now at {b})",
+            home.id, home.baud
+        ))),
+        None => {
+            let _ = switch(baud);
+            Err(OpError::Verify(format!(
+                "after the reset no servo answers at the factory id {} at any rate",
+                home.id
+            )))
+        }
+    }
+}
+
+/// Looks for servo `id` at every baud rate; the port is left where it answered. Returns that rate.
+pub fn locate(client: &Client, id: u8) -> Result<Option<u32>, OpError> {
+    recover(client, id)
+}

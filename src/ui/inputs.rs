@@ -1,0 +1,66 @@
+//! Values typed into a command's fields, checked as typed against the profile (range, labels,
+//! step), and the allowed values as a person reads them.
+
+use crate::profile::value::Allowed;
+use crate::profile::{Command, Field, FieldError, Input};
+use std::collections::HashMap;
+
+/// Why what was typed cannot be sent.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum InputError {
+    /// Nothing typed for a field.
+    #[error("{field}: give a value ({allowed})")]
+    Missing {
+        /// The field's ident.
+        field: String,
+        /// What it takes, as [`range_text`] says.
+        allowed: String,
+    },
+    /// A value the field refuses.
+    #[error(transparent)]
+    Value(#[from] FieldError),
+}
+
+/// The inputs of `cmd` from the text typed for each field (by (command id, field ident)), each
+/// checked; the error names the first field that cannot be sent.
+pub fn command_inputs(
+    cmd: &Command,
+    typed: &HashMap<(u8, String), String>,
+) -> Result<Vec<(String, Input)>, InputError> {
+    cmd.request
+        .iter()
+        .map(|f| {
+            let text = typed
+                .get(&(cmd.id, f.ident.clone()))
+                .map_or("", String::as_str);
+            if text.trim().is_empty() {
+                return Err(InputError::Missing {
+                    field: f.ident.clone(),
+                    allowed: range_text(f),
+                });
+            }
+            f.parse(text)?;
+            Ok((f.ident.clone(), Input::Text(text.to_string())))
+        })
+        .collect()
+}
+
+/// The allowed values, as shown: `0 – 100 %` or the labels.
+pub fn range_text(field: &Field) -> String {
+    match field.allowed() {
+        Allowed::Range(lo, hi) => {
+            format!(
+                "{} – {}{}",
+                field.format_number(lo),
+                field.format_number(hi),
+                field.unit_suffix()
+            )
+        }
+        Allowed::Labels(f) => f
+            .labels
+            .iter()
+            .map(|l| l.ident.as_str())
+            .collect::<Vec<_>>()
+            .join(" / "),
+    }
+}

@@ -1,0 +1,284 @@
+//! What the window knows at run time (never saved), split by what it is: the link's status, the
+//! device model as replies brought it, the packet log, the running job and the status line.
+//! Panels read it; it changes only through the app (link events, job output, actions), once per
+//! frame.
+
+mod link;
+mod model;
+mod packets;
+mod tuya;
+
+pub use link::{Connection, LinkStatus, Target};
+pub use model::{DeviceModel, Mark, Reading, ReadingError};
+pub use packets::{LOG_CAPACITY, PacketLog};
+pub use tuya::{
+    DpState, LOG_CAPACITY as REPORT_LOG_CAPACITY, LogLine, ReportError, RequestLine, StepResult,
+    TuyaModel,
+};
+
+use super::jobs::{Job, JobError, JobOutput, RunningJob};
+use crate::link::{Link, LinkCommand, LinkEvent, LinkState, LinkStats, Opener};
+use crate::profile::{ProfileError, Registry};
+use crate::sim::{Faults, SimKind, SimOptions, SimTransport};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// The longest the UI thread spends draining link events in one frame.
+pub const EVENT_BUDGET: Duration = Duration::from_millis(4);
+
+/// A status-line message.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Notice {
+    /// The text.
+    pub text: String,
+    /// An error (shown red).
+    pub error: bool,
+    /// When.
+    pub at: Instant,
+}
+
+impl Notice {
+    /// A message that something happened.
+    pub fn info(text: impl Into<String>) -> Self {
+        Self {
+            text: text.into(),
+            error: false,
+            at: Instant::now(),
+        }
+    }
+
+    /// A message that something went wrong.
+    pub fn error(text: impl Into<String>) -> Self {
+        Self {
+            error: true,
+            ..Self::info(text)
+        }
+    }
+}
+
+/// Why a link could not be opened.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ConnectError {
+    /// The profile cannot be loaded.
+    #[error(transparent)]
+    Profile(#[from] ProfileError),
+    /// The built-in simulator asked for does not exist.
+    #[error("{0}")]
+    Simulator(String),
+    /// The worker could not start.
+    #[error(transparent)]
+    Link(#[from] crate::link::LinkError),
+}
+
+/// The run-time state.
+pub struct AppState {
+    /// Every profile.
+    pub registry: Registry,
+    /// The link.
+    pub link: LinkStatus,
+    /// The device as its replies brought it.
+    pub device: DeviceModel,
+    /// Every frame sent and received.
+    pub packets: PacketLog,
+    /// The running (or last) job.
+    pub job: Option<RunningJob>,
+    /// The status line.
+    pub notice: Option<Notice>,
+    /// Wakes the UI from the worker and from jobs.
+    pub ctx: eframe::egui::Context,
+}
+
+impl AppState {
+    /// The state with the profile `profile_id` (the window cleaner's if it does not load) and no
+    /// link yet.
+    pub fn new(ctx: &eframe::egui::Context, profile_id: &str) -> Result<Self, ProfileError> {
+        let registry = Registry::load()?;
+        let profile = registry
+            .get(profile_id)
+            .or_else(|_| registry.get("window-cleaner"))?;
+        Ok(Self {
+            registry,
+            link: LinkStatus::default(),
+            device: DeviceModel::new(profile),
+            packets: PacketLog::default(),
+            job: None,
+            notice: None,
+            ctx: ctx.clone(),
+        })
+    }
+
+    /// Whether the link is up.
+    pub fn connected(&self) -> bool {
+        self.link.connected()
+    }
+
+    /// Shows a message in the status line.
+    pub fn notify(&mut self, notice: Notice) {
+        self.notice = Some(notice);
+    }
+
+    /// Opens a link to `target` with `profile_id`, closing any other; the device model starts
+    /// over.
+    pub fn connect(
+        &mut self,
+        target: Target,
+        baud: u32,
+        profile_id: &str,
+    ) -> Result<(), ConnectError> {
+        self.disconnect();
+        let profile = self.registry.get(profile_id)?;
+        let opener: Opener = match &target {
+            Target::Demo(kind) => {
+                let kind: SimKind = kind.parse().map_err(ConnectError::Simulator)?;
+                let opts = SimOptions {
+                    baud: Some(baud),
+                    ..SimOptions::default()
+                };
+                Box::new(move || {
+                    SimTransport::of_kind(kind, &opts, Faults::default())
+                        .map(|t| Box::new(t) as Box<dyn crate::link::Transport>)
+                        .map_err(|e| crate::link::LinkError::Open {
+                            path: kind.to_string(),
+                            reason: e,
+                        })
+                })
+            }
+            Target::Port(path) => crate::link::serial::opener(path, baud),
+        };
+        let ctx = self.ctx.clone();
+        // Background events (polled telemetry, the packet log) repaint at most 5 times a second;
+        // a live plot asks for its own frame rate, and jobs wake the UI at once.
+        let waker: crate::link::Waker =
+            Arc::new(move || ctx.request_repaint_after(Duration::from_millis(200)));
+        let link = Link::open(
+            opener,
+            profile.clone(),
+            self.link.options.clone(),
+            Some(waker),
+        )?;
+        self.device.reset(profile);
+        self.link.connection = Some(Connection { link, target });
+        self.link.state = None;
+        Ok(())
+    }
+
+    /// Closes the link (a running job is cancelled).
+    pub fn disconnect(&mut self) {
+        if let Some(job) = &self.job {
+            job.cancel.cancel();
+        }
+        self.link.connection = None;
+        self.link.state = None;
+        self.link.stats = LinkStats::default();
+    }
+
+    /// Sends a command to the worker, if connected.
+    pub fn send(&self, cmd: LinkCommand) {
+        if let Some(c) = &self.link.connection {
+            c.link.send(cmd);
+        }
+    }
+
+    /// Drains worker events for at most [`EVENT_BUDGET`]; returns whether more are waiting.
+    pub fn drain_link_events(&mut self) -> bool {
+        let started = Instant::now();
+        loop {
+            let Some(conn) = &self.link.connection else {
+                return false;
+            };
+            let Ok(ev) = conn.link.events().try_recv() else {
+                return false;
+            };
+            self.on_link_event(ev);
+            if started.elapsed() >= EVENT_BUDGET {
+                return true;
+            }
+        }
+    }
+
+    /// Takes one worker event: each to the part of the state it concerns.
+    fn on_link_event(&mut self, ev: LinkEvent) {
+        match ev {
+            LinkEvent::State(s) => {
+                match &s {
+                    LinkState::Lost { reason } => {
+                        self.notify(Notice::error(format!("link lost: {reason}")))
+                    }
+                    LinkState::Connected { port, baud } => {
+                        if !self.link.connected() {
+                            self.link.just_connected = true;
+                        }
+                        self.notify(Notice::info(format!("connected to {port} at {baud} baud")))
+                    }
+                    _ => {}
+                }
+                self.link.state = Some(s);
+            }
+            LinkEvent::Stats(s) => self.link.stats = s,
+            LinkEvent::Identified(r) => self.device.info = Some(r.map_err(Into::into)),
+            LinkEvent::Frame(entry) => {
+                self.device.tuya.on_frame(&entry);
+                self.packets.push(entry)
+            }
+            LinkEvent::Report(p) => self.device.on_report(p),
+            LinkEvent::Telemetry {
+                command,
+                at,
+                result,
+            } => self.device.on_telemetry(command, at, result),
+            LinkEvent::Reply { id, result } => self.device.on_reply(id, result),
+            LinkEvent::Tuya(ev) => self.device.tuya.on_event(ev),
+        }
+    }
+
+    /// Starts `job` on the link unless one is running; says why not in the status line.
+    pub fn start_job(&mut self, job: Job) {
+        if self.job.as_ref().is_some_and(|j| !j.is_done()) {
+            self.notify(Notice::error(
+                "wait for the running job to finish, or cancel it",
+            ));
+            return;
+        }
+        let Some(conn) = &self.link.connection else {
+            self.notify(Notice::error("not connected"));
+            return;
+        };
+        match RunningJob::spawn(job, conn.link.client(), &self.ctx) {
+            Ok(job) => self.job = Some(job),
+            Err(e) => self.notify(Notice::error(e.to_string())),
+        }
+    }
+
+    /// Raises the running job's cancel flag.
+    pub fn cancel_job(&self) {
+        if let Some(j) = &self.job {
+            j.cancel.cancel();
+        }
+    }
+
+    /// What the running job has reported since the last frame (its progress is also kept on
+    /// the job).
+    pub fn take_job_output(&mut self) -> Vec<JobOutput> {
+        self.job.as_mut().map(RunningJob::drain).unwrap_or_default()
+    }
+
+    /// The running job's title and progress, if a job runs.
+    pub fn job_progress(&self) -> Option<(&str, f32, String)> {
+        let job = self.job.as_ref().filter(|j| !j.is_done())?;
+        let (f, msg) = job
+            .progress
+            .as_ref()
+            .map_or((0.0, String::new()), |p| (p.fraction(), p.message.clone()));
+        Some((&job.title, f, msg))
+    }
+
+    /// The status line's message for a job that ended.
+    pub fn job_done(&mut self, result: Result<String, JobError>) {
+        let title = self.job.as_ref().map_or("job", |j| j.title.as_str());
+        let notice = match result {
+            Ok(summary) => Notice::info(format!("{title}: {summary}")),
+            Err(e) => Notice::error(format!("{title}: {e}")),
+        };
+        self.notify(notice);
+    }
+}

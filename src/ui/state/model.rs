@@ -1,0 +1,212 @@
+//! The device as its replies brought it: what each command last answered, what the last writes
+//! left, the plotted telemetry, the reports it sent on its own, and (Tuya) what the module
+//! session reported. Nothing is here before a reply brings it.
+
+use super::tuya::TuyaModel;
+use crate::link::{DeviceInfo, ExchangeError, Reply};
+use crate::ops::{Check, FieldValues, OpError};
+use crate::packet::Packet;
+use crate::profile::{Profile, Value};
+use crate::series::SeriesSet;
+use std::collections::{HashMap, VecDeque};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// How many reports the device sent on its own are kept.
+pub const REPORTS_CAPACITY: usize = 2000;
+/// How many results of requests answered as events are kept.
+pub const REPLIES_CAPACITY: usize = 256;
+
+/// A reading of one command: the values its reply brought, or why there are none.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Reading {
+    /// Values, raw, in wire order, and when they came.
+    Values(FieldValues, Instant),
+    /// The read failed, or a write left the values unknown.
+    Failed(ReadingError),
+}
+
+/// Why a command has no values to show.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ReadingError {
+    /// The read (or the poll) failed.
+    #[error("{0}")]
+    Read(OpError),
+    /// A write failed: nothing is known of what the device holds now.
+    #[error("write failed: {0}; read again")]
+    WriteFailed(OpError),
+}
+
+/// What a field shows after a write.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Mark {
+    /// The device holds what was written.
+    Verified,
+    /// The device holds something else.
+    Mismatch(Value),
+}
+
+/// The device model.
+pub struct DeviceModel {
+    /// The profile in use.
+    pub profile: Arc<Profile>,
+    /// MSP: what CMD_VERSION said when the link came up.
+    pub info: Option<Result<DeviceInfo, OpError>>,
+    /// The latest reading of each command, by command id.
+    pub readings: HashMap<u8, Reading>,
+    /// Marks left by the last write, by (Get command id, field ident).
+    pub marks: HashMap<(u8, String), Mark>,
+    /// Plotted telemetry, by plot id.
+    pub plots: HashMap<String, SeriesSet>,
+    /// When plotting started (t = 0 of the series); also marks the connection.
+    pub t0: Instant,
+    /// Reports the device sent on its own (Tuya data points, MSP async), oldest first.
+    pub reports: VecDeque<(Instant, Packet)>,
+    /// Results of requests sent with `ReplyTo::Event(id)` (see
+    /// [`super::LinkStatus::reply_id`]), by id; the oldest are dropped beyond
+    /// [`REPLIES_CAPACITY`].
+    pub replies: HashMap<u64, Result<Reply, ExchangeError>>,
+    /// Tuya: what the module session has reported.
+    pub tuya: TuyaModel,
+}
+
+impl DeviceModel {
+    /// A model of a device with `profile`, knowing nothing yet.
+    pub fn new(profile: Arc<Profile>) -> Self {
+        Self {
+            profile,
+            info: None,
+            readings: HashMap::new(),
+            marks: HashMap::new(),
+            plots: HashMap::new(),
+            t0: Instant::now(),
+            reports: VecDeque::new(),
+            replies: HashMap::new(),
+            tuya: TuyaModel::default(),
+        }
+    }
+
+    /// Forgets everything for a new connection with `profile`.
+    pub fn reset(&mut self, profile: Arc<Profile>) {
+        self.profile = profile;
+        self.readings.clear();
+        self.marks.clear();
+        self.plots.clear();
+        self.info = None;
+        self.tuya = self.tuya.next();
+        self.t0 = Instant::now();
+    }
+
+    /// The device's value of field `field` of command `get`, if a reply has brought one.
+    pub fn value(&self, get: u8, field: &str) -> Option<&Value> {
+        match self.readings.get(&get) {
+            Some(Reading::Values(values, _)) => values.get(field),
+            _ => None,
+        }
+    }
+
+    /// Takes a read's result (a job's).
+    pub fn on_read(&mut self, command: u8, result: Result<FieldValues, OpError>) {
+        let reading = match result {
+            Ok(values) => Reading::Values(values, Instant::now()),
+            Err(e) => Reading::Failed(ReadingError::Read(e)),
+        };
+        self.readings.insert(command, reading);
+    }
+
+    /// Takes a polled telemetry answer: its values, and the plotted fields' samples.
+    pub fn on_telemetry(
+        &mut self,
+        command: u8,
+        at: Instant,
+        result: Result<Packet, ExchangeError>,
+    ) {
+        let p = match result {
+            Ok(p) => p,
+            Err(e) => {
+                self.readings
+                    .insert(command, Reading::Failed(ReadingError::Read(e.into())));
+                return;
+            }
+        };
+        let profile = self.profile.clone();
+        let Some(cmd) = profile.command_by_id(command) else {
+            return;
+        };
+        let d = match profile.decode(cmd, p.direction, &p.payload) {
+            Ok(d) => d,
+            Err(e) => {
+                let e = OpError::answer(&cmd.ident, e);
+                self.readings
+                    .insert(command, Reading::Failed(ReadingError::Read(e)));
+                return;
+            }
+        };
+        let t = at.saturating_duration_since(self.t0).as_secs_f64();
+        for plot in &profile.plots {
+            if !plot.command.eq_ignore_ascii_case(&cmd.ident) {
+                continue;
+            }
+            let set = self.plots.entry(plot.id.clone()).or_default();
+            for name in &plot.fields {
+                if let Some(v) = d.values.iter().find(|v| v.ident.eq_ignore_ascii_case(name))
+                    && let Value::Int(raw) = v.value
+                {
+                    let _ = set.push(name, t, raw as f64 * v.field.scale);
+                }
+            }
+        }
+        self.readings
+            .insert(command, Reading::Values(FieldValues::from(d), at));
+    }
+
+    /// Takes a write's checks (or why it failed): the Get's values as read back, and a mark
+    /// on each field.
+    pub fn on_written(&mut self, set: u8, result: Result<Vec<Check>, OpError>) {
+        let Some(get) = self.profile.command_by_id(set).and_then(|s| s.pair) else {
+            return;
+        };
+        match result {
+            Ok(checks) => {
+                let values: FieldValues = checks
+                    .iter()
+                    .map(|c| (c.field.clone(), c.read.clone()))
+                    .collect();
+                for c in &checks {
+                    let mark = if c.ok() {
+                        Mark::Verified
+                    } else {
+                        Mark::Mismatch(c.read.clone())
+                    };
+                    self.marks.insert((get, c.field.clone()), mark);
+                }
+                self.readings
+                    .insert(get, Reading::Values(values, Instant::now()));
+            }
+            Err(e) => {
+                // Nothing is known of what the device holds now: read it again before trusting it.
+                self.readings
+                    .insert(get, Reading::Failed(ReadingError::WriteFailed(e)));
+            }
+        }
+    }
+
+    /// Keeps a report the device sent on its own (and gives a Tuya report to the module model).
+    pub fn on_report(&mut self, p: Packet) {
+        self.tuya.on_report(&self.profile, &p);
+        if self.reports.len() >= REPORTS_CAPACITY {
+            self.reports.pop_front();
+        }
+        self.reports.push_back((Instant::now(), p));
+    }
+
+    /// Keeps the result of a request answered as an event.
+    pub fn on_reply(&mut self, id: u64, result: Result<Reply, ExchangeError>) {
+        if self.replies.len() >= REPLIES_CAPACITY
+            && let Some(oldest) = self.replies.keys().min().copied()
+        {
+            self.replies.remove(&oldest);
+        }
+        self.replies.insert(id, result);
+    }
+}
