@@ -123,26 +123,12 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
         Some((profile, ..)) => (args.port.open_with(profile.clone(), true)?, profile.clone()),
         None => args.port.open("window-cleaner", Protocol::Msp, true)?,
     };
-    // The session asks CMD_VERSION first, to learn the device code.
-    let deadline = Instant::now() + Duration::from_secs(3);
-    let mut identified = None;
-    while identified.is_none() && Instant::now() < deadline {
-        match link
-            .events()
-            .recv_timeout(deadline.saturating_duration_since(Instant::now()))
-        {
-            Ok(LinkEvent::Identified(r)) => identified = Some(r),
-            Ok(LinkEvent::State(crate::link::LinkState::Lost { reason })) => {
-                return Err(CliError::device(format!("link lost: {reason}")));
-            }
-            Ok(_) => {}
-            Err(_) => break,
-        }
-    }
+    // The session asks CMD_VERSION first, to learn the device code; later requests wait for it.
     let client = link.client();
+    let identified = client.device_info();
     match args.cmd {
         MspCmd::Version => match identified {
-            Some(Ok(info)) => {
+            Ok(info) => {
                 if json {
                     println!("{}", serde_json::to_string(&info).unwrap_or_default());
                 } else {
@@ -164,8 +150,7 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
                 }
                 Ok(0)
             }
-            Some(Err(e)) => Err(exchange_error(e)),
-            None => Err(CliError::device("no answer to CMD_VERSION")),
+            Err(e) => Err(exchange_error(e)),
         },
         MspCmd::Ping => {
             let r = crate::ops::device::ping(&client, &profile).map_err(op_error)?;

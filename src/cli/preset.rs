@@ -2,13 +2,12 @@
 
 use super::port::{PortArgs, op_error, print_checks};
 use super::{CliError, CliResult, registry};
-use crate::link::{DeviceInfo, Link, LinkEvent, LinkState};
+use crate::link::{DeviceInfo, Link};
 use crate::ops::{self, Cancel, Progress};
 use crate::preset::{self, Preset};
 use crate::profile::{Profile, Protocol};
 use clap::Subcommand;
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
 
 /// The profile used when `--profile` is not given.
 const DEFAULT_PROFILE: &str = "window-cleaner";
@@ -61,21 +60,11 @@ fn load(file: &std::path::Path, port: &PortArgs) -> Result<(Preset, Profile), Cl
 /// Opens the port and waits for the session to learn the device (its code) from CMD_VERSION.
 fn connect(port: &PortArgs) -> Result<(Link, std::sync::Arc<Profile>, DeviceInfo), CliError> {
     let (link, profile) = port.open(DEFAULT_PROFILE, Protocol::Msp, true)?;
-    let deadline = Instant::now() + Duration::from_secs(3);
-    loop {
-        let left = deadline.saturating_duration_since(Instant::now());
-        match link.events().recv_timeout(left) {
-            Ok(LinkEvent::Identified(Ok(info))) => return Ok((link, profile, info)),
-            Ok(LinkEvent::Identified(Err(e))) => {
-                return Err(CliError::device(format!("no answer to CMD_VERSION: {e}")));
-            }
-            Ok(LinkEvent::State(LinkState::Lost { reason })) => {
-                return Err(CliError::device(format!("link lost: {reason}")));
-            }
-            Ok(_) => {}
-            Err(_) => return Err(CliError::device("no answer to CMD_VERSION")),
-        }
-    }
+    let info = link
+        .client()
+        .device_info()
+        .map_err(|e| CliError::device(format!("no answer to CMD_VERSION: {e}")))?;
+    Ok((link, profile, info))
 }
 
 fn no_progress(_: Progress) {}

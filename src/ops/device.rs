@@ -2,7 +2,7 @@
 //! power state. Layouts: `assets/profiles/*.ron`, from the MSP protocol document.
 
 use super::{OpError, exchange};
-use crate::link::{Client, DeviceInfo, session};
+use crate::link::{Client, DeviceInfo};
 use crate::profile::{Command, Profile};
 use crate::protocol::msp;
 use std::time::Duration;
@@ -32,24 +32,13 @@ pub fn ping(client: &Client, profile: &Profile) -> Result<Ping, OpError> {
     })
 }
 
-/// What CMD_VERSION says of the device (no build date).
-pub fn version(client: &Client, profile: &Profile) -> Result<DeviceInfo, OpError> {
-    let cmd = core(profile, msp::CMD_VERSION, "CMD_VERSION")?;
-    let reply = exchange::send(client, profile, cmd, &[])?;
-    DeviceInfo::from_version(profile, reply.payload().unwrap_or_default())
-        .map_err(OpError::Identity)
-}
-
-/// What the device says of itself: CMD_VERSION, then CMD_BUILD_INFO where the device answers it
-/// (its build date stays `None` when it does not).
-pub fn identify(client: &Client, profile: &Profile) -> Result<DeviceInfo, OpError> {
-    let mut info = version(client, profile)?;
-    if let Some(cmd) = profile.command_by_id(msp::CMD_BUILD_INFO)
-        && let Ok(reply) = exchange::send(client, profile, cmd, &[])
-    {
-        info.build_date = session::build_date(reply.payload().unwrap_or_default());
-    }
-    Ok(info)
+/// What the device says of itself (CMD_VERSION, then CMD_BUILD_INFO where the device answers
+/// it): the link identifies the device once per connection, and this hands out that result
+/// without a new exchange (waiting for it while it is under way; a failed identification is
+/// tried again). Errors: the device did not answer CMD_VERSION or its answer does not fit the
+/// profile ([`OpError::Exchange`]).
+pub fn identify(client: &Client) -> Result<DeviceInfo, OpError> {
+    Ok(client.device_info()?)
 }
 
 /// CMD_GET_POWER_STATE's raw answer: no layout is published for it, so its bytes are kept as

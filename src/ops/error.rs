@@ -153,9 +153,6 @@ pub enum OpError {
         /// What does not fit.
         error: Box<FieldError>,
     },
-    /// The device's answer to CMD_VERSION cannot be read.
-    #[error("{0}")]
-    Identity(String),
     /// A servo that did not answer at the rate it was just given; `found` is the rate it was
     /// found at instead (the port is left there), if any.
     #[error("servo {id} did not answer at {baud} baud{}", found.map_or(", nor at any other rate".to_string(), |b| format!("; it was found at {b} baud (the port is now at {b})")))]

@@ -56,7 +56,7 @@ pub fn capture(
 ) -> Result<Preset, OpError> {
     let mut preset = Preset::new(&profile.id, "");
     if profile.protocol == Protocol::Msp {
-        preset.device = device::version(client, profile)
+        preset.device = device::identify(client)
             .ok()
             .map(|info| device::short_description(&info));
     }

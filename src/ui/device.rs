@@ -46,7 +46,7 @@ pub enum Output {
 fn read_job(profile: &std::sync::Arc<Profile>) -> Action {
     let p = profile.clone();
     Action::StartJob(Job::new("version", move |client, cancel, sink| {
-        let v = ops::identify(client, &p);
+        let v = ops::identify(client);
         sink.send(JobOutput::Device(Output::Version(v.clone())));
         if cancel.is_cancelled() {
             return Err(OpError::Cancelled.into());

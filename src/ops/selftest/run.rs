@@ -102,7 +102,7 @@ pub fn run_each(
         total,
         message: "identifying the device".into(),
     });
-    match crate::ops::device::identify(client, profile) {
+    match crate::ops::device::identify(client) {
         Ok(info) => {
             report.device = Some(crate::ops::device::description(&info));
             report.device_info = Some(info);
