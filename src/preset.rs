@@ -27,7 +27,7 @@ use crate::ops::{Cancel, Progress};
 use crate::profile::locate::line_col;
 use crate::profile::value::Typed as Text;
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Profile, Value};
-use crate::protocol::msp;
+use crate::protocol::{Direction, msp};
 use serde::Deserialize;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use std::fmt;
@@ -451,6 +451,11 @@ impl Preset {
             if ok {
                 // In wire order, whatever the file's order.
                 inputs.sort_by_key(|(k, _)| set.request.iter().position(|f| &f.ident == k));
+                // The profile's relations (a minimum above its maximum), named at load.
+                if let Err(e) = profile.encode(set, Direction::HostToDevice, &inputs) {
+                    problem(at_cmd, format!("{}: {e}", set.ident));
+                    continue;
+                }
                 writes.push(SetWrite {
                     command: set.ident.clone(),
                     inputs,

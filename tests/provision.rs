@@ -388,7 +388,7 @@ fn bad_plans_are_refused_at_load_with_line_and_column() {
         ("ids: Start(1)", "ids: Start(0)", "cannot start at 0"),
         (
             r#"("soft_start_time", "1500")"#,
-            r#"("servo_id", "3")"#,
+            r#"("assigned_id", "3")"#,
             "set by the plan's `ids`",
         ),
         (

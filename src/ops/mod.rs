@@ -6,6 +6,7 @@ pub mod msp;
 pub mod provision;
 pub mod selftest;
 pub mod servo;
+pub mod servo_monitor;
 pub mod servo_preset;
 pub mod tuya;
 

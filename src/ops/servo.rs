@@ -91,13 +91,24 @@ pub struct ScanRow {
     pub serial: Option<i64>,
     /// Voltage in mV (parameter 1).
     pub voltage_mv: Option<i64>,
-    /// Temperature (parameter 4).
+    /// Temperature (parameter 4), raw: °C or a thermistor reading, as the profile says
+    /// ([`ScanRow::temperature_text`] shows it).
     pub temperature: Option<i64>,
     /// The raw status byte (parameter 5); its bit order is published inconsistently.
     pub status: Option<i64>,
 }
 
 impl ScanRow {
+    /// The temperature as the profile shows parameter 4: `32 °C`, or `32.0 °C (raw 1779)` for a
+    /// thermistor reading; `-` when not read.
+    pub fn temperature_text(&self, profile: &Profile) -> String {
+        match (self.temperature, profile.param(4)) {
+            (Some(v), Some(p)) => p.field.display(&Value::Int(v)),
+            (Some(v), None) => v.to_string(),
+            (None, _) => "-".into(),
+        }
+    }
+
     /// The status byte as hex, e.g. `0x00`.
     pub fn status_hex(&self) -> String {
         self.status.map_or("-".into(), |s| format!("{s:#04x}"))
@@ -280,6 +291,15 @@ pub fn write_param(
         .ok()
         .and_then(|d| d.values.get(2).map(|v| v.value.clone()))
         .unwrap_or(Value::Bytes(Vec::new()));
+    // A relation with other parameters (angle limits low ≤ high) is checked against what the
+    // servo holds now, before anything is written.
+    if let Value::Int(raw) = written {
+        let mut values = vec![(param.id, raw)];
+        for other in profile.related_params(param.id) {
+            values.push((other.id, read_param(client, profile, id, other)?));
+        }
+        profile.check_param_relations(&values)?;
+    }
     let answer = Match::servo(cmd::WRITE_DATA, &[id]).with_prefix(vec![id, param.id]);
     let req = Request::for_command(profile, write, payload).reply(ReplySpec::Required(answer));
     let reply = client.request(req)?;

@@ -140,6 +140,98 @@ pub enum FieldError {
     /// A malformed data-point list.
     #[error("{0}")]
     Dp(#[from] crate::protocol::tuya::dp::DpError),
+    /// Bytes left over after the layout's last field (firmware that sends more than the
+    /// profile knows).
+    #[error("{} byte(s) past the layout's last field: {}", extra.len(), hex::format(extra))]
+    LongPayload {
+        /// The bytes left over.
+        extra: Vec<u8>,
+    },
+    /// A payload that does not fit its layout: the fault, what was read before it, the raw
+    /// bytes. Never shown as clean values.
+    #[error("{0}")]
+    Misfit(Box<Misfit>),
+    /// Records of a synchronous command (servo 25) that do not fit their sub-command.
+    #[error("{field}: {message}")]
+    Records {
+        /// The field's ident.
+        field: String,
+        /// What does not fit.
+        message: String,
+    },
+    /// Two values that break a relation of the profile (a minimum above its maximum).
+    #[error("{0}")]
+    Relation(Box<Broken>),
+}
+
+/// Two values that break a relation of the profile, both named.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{low_name} ({low}) {low_value} must be {sign} {high_name} ({high}) {high_value}")]
+pub struct Broken {
+    /// The smaller side's ident.
+    pub low: String,
+    /// Its name.
+    pub low_name: String,
+    /// Its value, as displayed.
+    pub low_value: String,
+    /// `≤` or `<`.
+    pub sign: &'static str,
+    /// The larger side's ident.
+    pub high: String,
+    /// Its name.
+    pub high_name: String,
+    /// Its value, as displayed.
+    pub high_value: String,
+}
+
+/// A payload that does not fit the profile's layout. Its text leaves out the command, which
+/// whoever shows it names.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Misfit {
+    /// The command's ident.
+    pub command: String,
+    /// What went wrong: a field the payload ends inside ([`FieldError::ShortPayload`]), bytes
+    /// left over ([`FieldError::LongPayload`]), or a value that cannot be read.
+    pub fault: FieldError,
+    /// The values read before the fault: (ident, raw value, as displayed).
+    pub decoded: Vec<(String, Value, String)>,
+    /// The payload as received.
+    pub payload: Vec<u8>,
+    /// The payload lengths the layout takes: (fewest, most; `None`: no limit).
+    pub expected: (usize, Option<usize>),
+}
+
+impl Misfit {
+    /// `5 bytes`, `3 to 5 bytes`, `at least 3 bytes`.
+    pub fn expected_text(&self) -> String {
+        match self.expected {
+            (lo, Some(hi)) if lo == hi => format!("{lo} byte(s)"),
+            (lo, Some(hi)) => format!("{lo} to {hi} bytes"),
+            (lo, None) => format!("at least {lo} byte(s)"),
+        }
+    }
+}
+
+impl std::fmt::Display for Misfit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}-byte payload where the layout takes {}: {}; raw [{}]",
+            self.payload.len(),
+            self.expected_text(),
+            self.fault,
+            hex::format(&self.payload)
+        )?;
+        if !self.decoded.is_empty() {
+            let read: Vec<String> = self
+                .decoded
+                .iter()
+                .map(|(k, _, d)| format!("{k}={d}"))
+                .collect();
+            write!(f, "; read before the fault: {}", read.join(", "))?;
+        }
+        Ok(())
+    }
 }
 
 impl Field {
@@ -174,12 +266,33 @@ impl Field {
         self.labels.iter().find(|l| l.value == raw)
     }
 
-    /// A value as shown to a person: scaled number, label, set bits, text or hex.
+    /// The displayed number of a raw integer, after scale or conversion; `None` where a
+    /// conversion is undefined for it.
+    pub fn display_number(&self, raw: i64) -> Option<f64> {
+        match self.convert {
+            Some(c) => c.apply(raw),
+            None => Some(raw as f64 * self.scale),
+        }
+    }
+
+    /// A converted value as shown, without unit: `25.0 (raw 2048)`, `n/a (raw 0)`.
+    fn format_converted(&self, c: super::model::Conversion, raw: i64) -> String {
+        match c.apply(raw) {
+            Some(v) => format!("{v:.*} (raw {raw})", c.decimals()),
+            None => format!("n/a (raw {raw})"),
+        }
+    }
+
+    /// A value as shown to a person: scaled number, label, set bits, text or hex; a converted
+    /// value with its raw value beside it, `25.0 (raw 2048)`. [`Field::parse`] reads it back.
     pub fn format(&self, value: &Value) -> String {
         match value {
             Value::Int(raw) => {
                 if let Some(label) = self.label(*raw) {
                     return label.ident.clone();
+                }
+                if let Some(c) = self.convert {
+                    return self.format_converted(c, *raw);
                 }
                 if !self.bits.is_empty() {
                     let set: Vec<&str> = self
@@ -197,6 +310,20 @@ impl Field {
             }
             Value::Text(s) => s.clone(),
             Value::Bytes(b) => hex::format(b),
+        }
+    }
+
+    /// A value as shown with its unit: `2.75`, `90.0 °`, `25.0 °C (raw 2048)`, `on`.
+    pub fn display(&self, value: &Value) -> String {
+        match value {
+            Value::Int(raw) if self.label(*raw).is_none() => match self.convert {
+                Some(c) => match c.apply(*raw) {
+                    Some(v) => format!("{v:.*}{} (raw {raw})", c.decimals(), self.unit_suffix()),
+                    None => format!("n/a (raw {raw})"),
+                },
+                None => format!("{}{}", self.format(value), self.unit_suffix()),
+            },
+            _ => self.format(value),
         }
     }
 
@@ -274,6 +401,9 @@ impl Field {
     }
 
     fn parse_int(&self, text: &str) -> Result<i64, FieldError> {
+        if let Some(c) = self.convert {
+            return self.parse_converted(c, text);
+        }
         if let Some(label) = self
             .labels
             .iter()
@@ -341,6 +471,26 @@ impl Field {
                 max: self.format_number(self.ty.int_bounds().map_or(0, |b| b.1)),
                 unit: self.unit_suffix(),
             },
+        })
+    }
+
+    /// A converted field takes `raw N` (or what [`Field::format`] shows, `25.0 (raw 2048)`) for
+    /// a raw value, else a number in converted units, to the nearest raw value.
+    fn parse_converted(&self, c: super::model::Conversion, text: &str) -> Result<i64, FieldError> {
+        let raw_part = text
+            .split_once("raw")
+            .map(|(_, r)| r.trim_matches(|ch: char| ch == ')' || ch == ':' || ch.is_whitespace()));
+        if let Some(r) = raw_part {
+            return r.parse::<i64>().map_err(|_| self.not_a_number(text));
+        }
+        let v: f64 = text
+            .trim_end_matches(self.unit.as_str())
+            .trim()
+            .parse()
+            .map_err(|_| self.not_a_number(text))?;
+        c.invert(v).ok_or_else(|| FieldError::WrongType {
+            field: self.ident.clone(),
+            expected: format!("a value the sensor can read ('{text}' is beyond it), or `raw N`"),
         })
     }
 

@@ -382,12 +382,15 @@ impl Runtime {
         let Some(cmd) = self.profile.command_by_id(command) else {
             return;
         };
-        let Ok(d) = self.profile.decode(cmd, p.direction, &p.payload) else {
-            self.readings.insert(
-                command,
-                Reading::Failed("the answer does not fit the profile".into()),
-            );
-            return;
+        // A payload that does not fit is shown as such: the fault, the values read before it
+        // and the raw bytes (FieldError::Misfit), never as clean values.
+        let d = match self.profile.decode(cmd, p.direction, &p.payload) {
+            Ok(d) => d,
+            Err(e) => {
+                self.readings
+                    .insert(command, Reading::Failed(e.to_string()));
+                return;
+            }
         };
         let values: Vec<(String, Value)> = d
             .values
