@@ -7,6 +7,7 @@ pub use model::*;
 pub mod codec;
 pub mod convert;
 pub mod encode;
+pub mod fault;
 pub mod locate;
 pub mod registry;
 pub mod relation;

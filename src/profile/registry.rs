@@ -158,7 +158,9 @@ struct Head {
 #[serde(deny_unknown_fields)]
 struct Variant {
     id: String,
-    base: String,
+    /// Read through [`Head`]; here so that the file may hold it.
+    #[serde(rename = "base")]
+    _base: String,
     name: Text,
     #[serde(default)]
     device_code: Option<DeviceCode>,
@@ -197,7 +199,6 @@ impl Variant {
     fn apply(self, mut p: Profile) -> (Profile, Origin) {
         p.id = self.id;
         p.name = self.name;
-        let _ = self.base;
         if self.device_code.is_some() {
             p.device_code = self.device_code;
         }
