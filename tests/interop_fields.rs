@@ -10,6 +10,7 @@ use botbench::protocol::Direction;
 use botbench::sim::servo_bus::SimServo;
 use std::process::{Command, Output};
 use std::sync::Arc;
+use std::time::Duration;
 
 mod common;
 
@@ -233,12 +234,15 @@ fn a_minimum_above_its_maximum_is_refused_naming_both_fields() {
 
 #[test]
 fn a_servo_angle_limit_is_checked_against_the_other_one_the_servo_holds() {
-    let bench = common::Bench::new(vec![
-        SimServo::fresh(1)
-            .with_id(1)
-            .with_param(51, 300)
-            .with_param(52, -300),
-    ]);
+    let bench = common::Bench::with_margin(
+        vec![
+            SimServo::fresh(1)
+                .with_id(1)
+                .with_param(51, 300)
+                .with_param(52, -300),
+        ],
+        Duration::from_millis(200),
+    );
     let client = bench.client();
     let p = &bench.profile;
     let low = p.find_param("angle_limit_low").unwrap();

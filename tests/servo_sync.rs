@@ -196,11 +196,14 @@ fn parameter_4_and_monitor_agree_on_the_temperature_in_either_form() {
 
 #[test]
 fn through_a_pty_one_exchange_reads_every_servo_and_the_temperatures_agree() {
-    let bench = common::Bench::new(vec![
-        SimServo::fresh(11).with_id(1).with_temperature(40),
-        SimServo::fresh(12).with_id(2).with_temperature(55),
-        SimServo::fresh(13).with_id(5).with_temperature(61),
-    ]);
+    let bench = common::Bench::with_margin(
+        vec![
+            SimServo::fresh(11).with_id(1).with_temperature(40),
+            SimServo::fresh(12).with_id(2).with_temperature(55),
+            SimServo::fresh(13).with_id(5).with_temperature(61),
+        ],
+        Duration::from_millis(200),
+    );
     let client = bench.client();
     let p = &bench.profile;
     let rows = monitor_all(&client, p, &[1, 2, 3, 5]).unwrap();
