@@ -6,7 +6,7 @@
 mod common;
 
 use botbench::ops::servo as ops;
-use botbench::ops::servo_monitor::{monitor_all, read_monitor};
+use botbench::ops::servo_monitor::{Reading, monitor_all, read_monitor};
 use botbench::profile::registry::{BUILTIN, parse};
 use botbench::profile::{Input, Value};
 use botbench::protocol::Direction;
@@ -209,16 +209,16 @@ fn through_a_pty_one_exchange_reads_every_servo_and_the_temperatures_agree() {
     let rows = monitor_all(&client, p, &[1, 2, 3, 5]).unwrap();
     let ids: Vec<(u8, bool)> = rows
         .iter()
-        .map(|r| (r.id, matches!(r.reading, Some(Ok(_)))))
+        .map(|r| (r.id, matches!(r.reading, Reading::Values(_))))
         .collect();
     assert_eq!(ids, [(1, true), (2, true), (3, false), (5, true)]);
     for (row, celsius) in rows
         .iter()
-        .filter(|r| r.reading.is_some())
+        .filter(|r| r.reading != Reading::NoAnswer)
         .zip([40.0, 55.0, 61.0])
     {
-        let Some(Ok(m)) = &row.reading else {
-            unreachable!()
+        let Reading::Values(m) = &row.reading else {
+            panic!("{row:?}")
         };
         let t22 = m.temperature_c.unwrap();
         let raw4 = ops::read_param(&client, p, row.id, p.param(4).unwrap()).unwrap();
@@ -259,4 +259,53 @@ fn through_a_pty_one_exchange_reads_every_servo_and_the_temperatures_agree() {
         bus.servo_by_serial(13).unwrap().angle_at(Instant::now()),
         0.0
     );
+}
+
+#[test]
+fn servo_monitor_on_the_command_line_reads_every_servo_in_one_exchange() {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+    let bin = env!("CARGO_BIN_EXE_botbench");
+    let mut sim = Command::new(bin)
+        .args(["sim", "servo-bus", "--servos", "1,2,3"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("botbench sim starts");
+    let mut pty = String::new();
+    BufReader::new(sim.stdout.take().unwrap())
+        .read_line(&mut pty)
+        .unwrap();
+    let monitor = |ids: &str, json: bool| {
+        let mut args = vec![
+            "servo",
+            "--margin-ms",
+            "200",
+            "--port",
+            pty.trim(),
+            "monitor",
+            ids,
+        ];
+        if json {
+            args.push("--json");
+        }
+        Command::new(bin)
+            .args(&args)
+            .env("BOTBENCH_PROFILE_DIR", "/nonexistent")
+            .output()
+            .unwrap()
+    };
+    let text = monitor("1-3", false);
+    let json = monitor("2,7", true);
+    let _ = sim.kill();
+    let _ = sim.wait();
+    let out = String::from_utf8_lossy(&text.stdout);
+    assert_eq!(text.status.code(), Some(0), "{out}");
+    assert_eq!(out.matches("32.0 (1779)").count(), 3, "{out}");
+    assert_eq!(json.status.code(), Some(1), "servo 7 does not answer");
+    let doc: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(doc["servos"][0]["id"], 2);
+    assert_eq!(doc["servos"][0]["answer"], "values");
+    assert_eq!(doc["servos"][0]["temperature_raw"], 1779);
+    assert_eq!(doc["servos"][1]["answer"], "no_answer");
 }

@@ -258,9 +258,11 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
         }
         ServoCmd::Monitor { ids } => {
             let ids = parse_id_list(&ids)?;
-            let rows = crate::ops::servo_monitor::monitor_all(&client, &profile, &ids)
-                .map_err(op_error)?;
-            let missing = rows.iter().any(|r| !matches!(r.reading, Some(Ok(_))));
+            use crate::ops::servo_monitor::{Reading, monitor_all};
+            let rows = monitor_all(&client, &profile, &ids).map_err(op_error)?;
+            let missing = rows
+                .iter()
+                .any(|r| !matches!(r.reading, Reading::Values(_)));
             if json {
                 println!("{}", serde_json::json!({ "servos": rows }));
             } else {
@@ -270,8 +272,8 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
                 );
                 for r in &rows {
                     match &r.reading {
-                        Some(Ok(m)) => println!(
-                            "{:>3} {:>6} {:>6} {:>6} {:>18} {:>#6x} {:>10.1} {:>6}",
+                        Reading::Values(m) => println!(
+                            "{:>3} {:>6} {:>6} {:>6} {:>18} {:>6} {:>10.1} {:>6}",
                             r.id,
                             m.voltage_mv,
                             m.current_ma,
@@ -281,12 +283,12 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
                                 m.temperature_c.map_or("n/a".into(), |t| format!("{t:.1}")),
                                 m.temperature_raw
                             ),
-                            m.status,
+                            format!("{:#04x}", m.status),
                             m.angle_deg,
                             m.turns
                         ),
-                        Some(Err(e)) => println!("{:>3} !! {e}", r.id),
-                        None => println!("{:>3} no answer", r.id),
+                        Reading::Misfit { error } => println!("{:>3} !! {error}", r.id),
+                        Reading::NoAnswer => println!("{:>3} no answer", r.id),
                     }
                 }
             }

@@ -35,14 +35,29 @@ pub struct Monitor {
     pub turns: i64,
 }
 
+/// What a servo answered (JSON: `"answer": "values" | "misfit" | "no_answer"`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "answer", rename_all = "snake_case")]
+pub enum Reading {
+    /// Its values.
+    Values(Monitor),
+    /// Its answer does not fit the profile's MONITOR layout.
+    Misfit {
+        /// The fault, the values read before it and the raw bytes.
+        error: String,
+    },
+    /// It did not answer.
+    NoAnswer,
+}
+
 /// A servo asked, and what it answered.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MonitorRow {
     /// The servo id.
     pub id: u8,
-    /// Its values; `Err` when its answer does not fit the profile (with the raw bytes);
-    /// `None` when it did not answer.
-    pub reading: Option<Result<Monitor, String>>,
+    /// What it answered.
+    #[serde(flatten)]
+    pub reading: Reading,
 }
 
 /// The request for the live values of `ids`, in one frame.
@@ -84,7 +99,10 @@ pub fn monitor_all(
 ) -> Result<Vec<MonitorRow>, OpError> {
     let mut rows: Vec<MonitorRow> = ids
         .iter()
-        .map(|&id| MonitorRow { id, reading: None })
+        .map(|&id| MonitorRow {
+            id,
+            reading: Reading::NoAnswer,
+        })
         .collect();
     for chunk in ids.chunks(MAX_SERVOS) {
         let req = sync_monitor_request(profile, chunk)?;
@@ -97,8 +115,14 @@ pub fn monitor_all(
             let Some(&id) = p.payload.first() else {
                 continue;
             };
-            if let Some(row) = rows.iter_mut().find(|r| r.id == id && r.reading.is_none()) {
-                row.reading = Some(read_monitor(profile, &p.payload));
+            if let Some(row) = rows
+                .iter_mut()
+                .find(|r| r.id == id && r.reading == Reading::NoAnswer)
+            {
+                row.reading = match read_monitor(profile, &p.payload) {
+                    Ok(m) => Reading::Values(m),
+                    Err(error) => Reading::Misfit { error },
+                };
             }
         }
     }
