@@ -436,3 +436,16 @@ fn tuning_and_presets_refuse_a_broken_relation_before_anything_is_sent() {
         "{msg}"
     );
 }
+
+#[test]
+fn a_longer_cmd_version_identifies_the_device_and_keeps_its_extra_bytes() {
+    use botbench::link::DeviceInfo;
+    let p = profile("window-cleaner");
+    let info = DeviceInfo::from_version(&p, &[3, 1, 4, 2, 1, 0, 7, 0x0f, 0xaa]).unwrap();
+    assert_eq!((info.hw, info.flags), (3, Some(0x0f)));
+    assert_eq!(info.extra.as_deref(), Some("aa"));
+    let info = DeviceInfo::from_version(&p, &[3, 1, 4, 2, 1, 0, 7]).unwrap();
+    assert_eq!((info.flags, info.extra), (None, None));
+    let err = DeviceInfo::from_version(&p, &[3, 1, 4, 2, 1]).unwrap_err();
+    assert!(err.contains("raw [03 01 04 02 01]"), "{err}");
+}

@@ -158,6 +158,9 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
                     println!("api        {}", info.api);
                     println!("build      {}", info.build);
                     println!("build date {}", info.build_date.as_deref().unwrap_or("-"));
+                    if let Some(extra) = &info.extra {
+                        println!("!! bytes past the profile's CMD_VERSION layout: {extra}");
+                    }
                     match info.flags {
                         Some(f) => println!(
                             "flags      {f:#04x}: config page {}, PID page {}, charging module {}, collision switches {}",
