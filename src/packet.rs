@@ -108,10 +108,31 @@ impl Packet {
         profile.command_by_id(self.command)
     }
 
-    /// The payload decoded by the profile; `None` when the profile lacks the command.
+    /// The payload decoded by the profile, strictly (a payload that does not fit the layout is
+    /// [`FieldError::Misfit`]); `None` when the profile lacks the command.
     pub fn decode<'p>(&self, profile: &'p Profile) -> Option<Result<Decoded<'p>, FieldError>> {
         let cmd = self.command_in(profile)?;
         Some(profile.decode(cmd, self.direction, &self.payload))
+    }
+
+    /// As much of the payload as fits the profile's layout, and whether it did
+    /// ([`Decoded::misfit`]); `None` when the profile lacks the command.
+    pub fn decode_lenient<'p>(&self, profile: &'p Profile) -> Option<Decoded<'p>> {
+        let cmd = self.command_in(profile)?;
+        Some(profile.decode_lenient(cmd, self.direction, &self.payload))
+    }
+
+    /// Servo: who the frame is for (a request) or from (a reply); `None` for the other
+    /// protocols. The first content byte is not a servo id in commands 18, 19 and 25.
+    pub fn servo_target(&self) -> Option<servo::Target> {
+        matches!(self.header, Header::Servo).then(|| {
+            servo::Frame {
+                direction: self.direction,
+                command: self.command,
+                content: self.payload.clone(),
+            }
+            .target()
+        })
     }
 
     /// One line for a log: `MSP_GET_PWMVALUE pwmValue=85 %`.
@@ -130,16 +151,18 @@ impl Packet {
         {
             s.push_str(" (async)");
         }
-        match profile.decode(cmd, self.direction, &self.payload) {
-            Ok(d) => {
-                for v in &d.values {
-                    s.push_str(&format!(" {}={}", v.ident, v.display()));
-                }
-                if !d.trailing.is_empty() {
-                    s.push_str(&format!(" +[{}]", hex::format(&d.trailing)));
-                }
-            }
-            Err(e) => s.push_str(&format!(" !{e} [{}]", hex::format(&self.payload))),
+        let d = profile.decode_lenient(cmd, self.direction, &self.payload);
+        for v in &d.values {
+            s.push_str(&format!(" {}={}", v.ident, v.display()));
+        }
+        if let Some(m) = d.misfit() {
+            s.push_str(&format!(
+                " !{}-byte payload, layout {}: {} [{}]",
+                m.payload.len(),
+                m.expected_text(),
+                m.fault,
+                hex::format(&self.payload)
+            ));
         }
         s
     }

@@ -32,7 +32,13 @@ fn every_builtin_profile_loads() {
     let reg = Registry::builtin().expect("built-ins are consistent");
     assert_eq!(
         reg.names(),
-        ["window-cleaner", "solar-cleanbot", "servo", "tuya-vacuum"]
+        [
+            "window-cleaner",
+            "window-cleaner-configurator",
+            "solar-cleanbot",
+            "servo",
+            "tuya-vacuum"
+        ]
     );
 }
 

@@ -385,10 +385,15 @@ fn bad_plans_are_refused_at_load_with_line_and_column() {
             "target_baud: 400000",
             "400000 is not a servo baud rate",
         ),
+        (
+            r#"("over_volt_high", "12500")"#,
+            r#"("over_volt_high", "4500")"#,
+            "(over_volt_low) 5000 mV must be ≤ Voltage upper limit (over_volt_high) 4500 mV",
+        ),
         ("ids: Start(1)", "ids: Start(0)", "cannot start at 0"),
         (
             r#"("soft_start_time", "1500")"#,
-            r#"("servo_id", "3")"#,
+            r#"("assigned_id", "3")"#,
             "set by the plan's `ids`",
         ),
         (

@@ -44,7 +44,9 @@ pub(crate) enum FrameCmd {
     /// Print every frame (and every frame error) found in hex bytes.
     ///
     /// Hex may be written `12 4c 01`, `0x12,0x4C,0x01` or `124c01`. Exit code 1 when a frame
-    /// error (bad checksum, junk, truncation) was found, 2 when the input is not hex.
+    /// error (bad checksum, junk, truncation) was found, or a payload that does not fit its
+    /// command's layout (too short, too long: the fields read before the fault are printed,
+    /// with the raw bytes); 2 when the input is not hex.
     Decode {
         /// The protocol.
         protocol: Proto,
@@ -119,7 +121,11 @@ pub(crate) fn run(cmd: FrameCmd) -> CliResult {
             let items = decode_all(protocol.protocol(), dir, &bytes);
             let mut errors = 0;
             for item in &items {
-                if item.result.is_err() {
+                let misfit = match &item.result {
+                    Ok(p) => p.decode_lenient(&profile).is_some_and(|d| !d.fits()),
+                    Err(_) => true,
+                };
+                if misfit {
                     errors += 1;
                 }
                 if json {
@@ -306,35 +312,39 @@ fn header_json(h: &Header) -> Json {
 }
 
 fn value_json(v: &FieldValue<'_>) -> Json {
-    json!({
+    let mut doc = json!({
         "field": v.ident,
         "value": v.value,
         "display": v.display(),
         "unit": v.field.unit,
-    })
+    });
+    // A converted field (a thermistor reading): `value` is the raw reading, `converted` the
+    // value it stands for in `unit` (null where the conversion is undefined).
+    if v.field.convert.is_some() {
+        doc["converted"] = json!(v.converted());
+    }
+    doc
 }
 
 fn item_json(profile: &Profile, item: &Item) -> Json {
     match &item.result {
         Ok(p) => {
             let cmd = p.command_in(profile);
-            let (fields, field_error, trailing) = match p.decode(profile) {
-                Some(Ok(d)) => (
-                    d.values.iter().map(value_json).collect::<Vec<_>>(),
-                    Json::Null,
-                    if d.trailing.is_empty() {
-                        Json::Null
-                    } else {
-                        json!(hex::format(&d.trailing))
-                    },
-                ),
-                Some(Err(e)) => (Vec::new(), json!(e.to_string()), Json::Null),
-                None => (Vec::new(), Json::Null, Json::Null),
+            let decoded = p.decode_lenient(profile);
+            let misfit = decoded.as_ref().and_then(|d| d.misfit());
+            let fields = decoded
+                .as_ref()
+                .map_or_else(Vec::new, |d| d.values.iter().map(value_json).collect());
+            let trailing = match decoded.as_ref() {
+                Some(d) if !d.trailing.is_empty() => json!(hex::format(&d.trailing)),
+                _ => Json::Null,
             };
-            json!({
+            let mut doc = json!({
                 "offset": item.offset,
                 "len": item.len,
-                "ok": true,
+                // A valid frame whose payload does not fit its layout is not clean: `ok` is
+                // false, `error` is "layout", and `fields` are those read before the fault.
+                "ok": misfit.is_none(),
                 "direction": p.direction,
                 "header": header_json(&p.header),
                 "command": p.command,
@@ -343,10 +353,20 @@ fn item_json(profile: &Profile, item: &Item) -> Json {
                 "name_zh": cmd.map(|c| c.name.zh.clone()),
                 "payload": hex::format(&p.payload),
                 "fields": fields,
-                "field_error": field_error,
+                "field_error": misfit.as_ref().map(|m| m.fault.to_string()),
                 "trailing": trailing,
                 "hex": hex::format(&p.wire),
-            })
+            });
+            if let Some(m) = &misfit {
+                doc["error"] = json!("layout");
+                doc["message"] = json!(m.to_string());
+                doc["payload_len"] = json!(m.payload.len());
+                doc["expected_len"] = json!({"min": m.expected.0, "max": m.expected.1});
+            }
+            if let Some(t) = p.servo_target() {
+                doc["target"] = json!(t);
+            }
+            doc
         }
         Err(e) => {
             let mut doc = json!({
@@ -391,7 +411,15 @@ fn item_text(profile: &Profile, item: &Item) -> String {
                 Header::MspReply {
                     kind: msp::ReplyKind::Async,
                 } => "async".into(),
-                Header::Servo if p.direction == Direction::HostToDevice => "request".into(),
+                Header::Servo if p.direction == Direction::HostToDevice => match p.servo_target() {
+                    Some(servo::Target::Servo { id }) => format!("request to servo {id}"),
+                    Some(servo::Target::Broadcast) => "request to every servo (broadcast)".into(),
+                    Some(servo::Target::Bus) => "request to every servo (bus-wide command)".into(),
+                    Some(servo::Target::Sync { sub_command, ids }) => {
+                        format!("synchronous request: command {sub_command} to servos {ids:?}")
+                    }
+                    None => "request".into(),
+                },
                 Header::Servo => "reply".into(),
                 Header::Tuya { .. } if p.direction == Direction::HostToDevice => "module".into(),
                 Header::Tuya { .. } => "mcu".into(),
@@ -407,23 +435,21 @@ fn item_text(profile: &Profile, item: &Item) -> String {
                 p.command,
                 hex::format(&p.wire)
             ));
-            match p.decode(profile) {
-                Some(Ok(d)) => {
+            match p.decode_lenient(profile) {
+                Some(d) => {
                     for v in &d.values {
                         s.push_str(&format!("       {} = {}\n", v.ident, v.display()));
                     }
-                    if !d.trailing.is_empty() {
+                    if let Some(m) = d.misfit() {
                         s.push_str(&format!(
-                            "       + {} trailing byte(s): {}\n",
-                            d.trailing.len(),
-                            hex::format(&d.trailing)
+                            "       !! payload of {} byte(s), the layout takes {}: {}\n       payload = {}\n",
+                            m.payload.len(),
+                            m.expected_text(),
+                            m.fault,
+                            hex::format(&p.payload)
                         ));
                     }
                 }
-                Some(Err(e)) => s.push_str(&format!(
-                    "       !! payload: {e}\n       payload = {}\n",
-                    hex::format(&p.payload)
-                )),
                 None if !p.payload.is_empty() => {
                     s.push_str(&format!("       payload = {}\n", hex::format(&p.payload)))
                 }

@@ -173,7 +173,7 @@ fn profiles(json: bool) -> CliResult {
             println!("{doc}");
         } else {
             println!(
-                "{:<16} {:<6} {:>7} baud  {:>3} commands  {} / {}  ({source})",
+                "{:<28} {:<6} {:>7} baud  {:>3} commands  {} / {}  ({source})",
                 p.id,
                 p.protocol.name(),
                 p.baud,

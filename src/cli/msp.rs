@@ -71,34 +71,41 @@ fn command<'p>(profile: &'p Profile, name: &str) -> Result<&'p Command, CliError
         .ok_or_else(|| CliError::input(format!("{} has no command '{name}'", profile.id)))
 }
 
-fn print_fields(
-    profile: &Profile,
-    cmd: &Command,
-    payload: &[u8],
-    json: bool,
-) -> Result<(), CliError> {
-    let d = profile
-        .decode(cmd, Direction::DeviceToHost, payload)
-        .map_err(|e| {
-            CliError::device(format!(
-                "{}: the answer does not fit the profile: {e}",
-                cmd.ident
-            ))
-        })?;
+/// Prints an answer's fields. A payload that does not fit the layout is shown as such: the
+/// fields read before the fault, the fault and the raw bytes; the exit code is then 1.
+fn print_fields(profile: &Profile, cmd: &Command, payload: &[u8], json: bool) -> u8 {
+    let d = profile.decode_lenient(cmd, Direction::DeviceToHost, payload);
+    let misfit = d.misfit();
     if json {
-        let doc = serde_json::json!({
+        let mut doc = serde_json::json!({
             "command": cmd.ident,
+            "ok": misfit.is_none(),
             "fields": d.values.iter().map(|v| serde_json::json!({
                 "field": v.ident, "value": v.value, "display": v.display(), "unit": v.field.unit,
             })).collect::<Vec<_>>(),
         });
+        if let Some(m) = &misfit {
+            doc["error"] = serde_json::json!(m.fault.to_string());
+            doc["payload"] = serde_json::json!(crate::protocol::hex::format(&m.payload));
+            doc["payload_len"] = serde_json::json!(m.payload.len());
+            doc["expected_len"] = serde_json::json!({"min": m.expected.0, "max": m.expected.1});
+        }
         println!("{doc}");
     } else {
         for v in &d.values {
             println!("{:<24} {}", v.ident, v.display());
         }
+        if let Some(m) = &misfit {
+            println!(
+                "!! {}-byte answer where the layout takes {}: {}\n!! payload = {}",
+                m.payload.len(),
+                m.expected_text(),
+                m.fault,
+                crate::protocol::hex::format(&m.payload)
+            );
+        }
     }
-    Ok(())
+    u8::from(misfit.is_some())
 }
 
 pub(crate) fn run(args: MspArgs) -> CliResult {
@@ -137,6 +144,9 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
                     println!("api        {}", info.api);
                     println!("build      {}", info.build);
                     println!("build date {}", info.build_date.as_deref().unwrap_or("-"));
+                    if let Some(extra) = &info.extra {
+                        println!("!! bytes past the profile's CMD_VERSION layout: {extra}");
+                    }
                     match info.flags {
                         Some(f) => println!(
                             "flags      {f:#04x}: config page {}, PID page {}, charging module {}, collision switches {}",
@@ -167,8 +177,12 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
         MspCmd::Get { command: name } => {
             let cmd = command(&profile, &name)?;
             let reply = ops::send(&client, &profile, cmd, &[]).map_err(op_error)?;
-            print_fields(&profile, cmd, reply.payload().unwrap_or_default(), json)?;
-            Ok(0)
+            Ok(print_fields(
+                &profile,
+                cmd,
+                reply.payload().unwrap_or_default(),
+                json,
+            ))
         }
         MspCmd::Set {
             command: name,

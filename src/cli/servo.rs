@@ -26,6 +26,13 @@ enum ServoCmd {
         #[arg(long)]
         bauds: Option<String>,
     },
+    /// The live values of several servos in one exchange (voltage, current, power,
+    /// temperature with its raw reading, status, angle): the synchronous MONITOR, command 25.
+    /// Newer servos only; exit 1 when one did not answer.
+    Monitor {
+        /// Servo ids: `1,2,3`, `0-5`, `1,4-6`.
+        ids: String,
+    },
     /// Is servo ID there?
     Ping {
         /// Servo id.
@@ -112,6 +119,21 @@ fn parse_ids(s: &str) -> Result<std::ops::RangeInclusive<u8>, CliError> {
         return Err(bad());
     }
     Ok(a..=b)
+}
+
+fn parse_id_list(s: &str) -> Result<Vec<u8>, CliError> {
+    let mut ids = Vec::new();
+    for part in s.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        for id in parse_ids(part)? {
+            if !ids.contains(&id) {
+                ids.push(id);
+            }
+        }
+    }
+    if ids.is_empty() {
+        return Err(CliError::input(format!("'{s}' names no servo id")));
+    }
+    Ok(ids)
 }
 
 fn parse_bauds(s: Option<&str>, current: u32) -> Result<Vec<u32>, CliError> {
@@ -203,7 +225,7 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
                 );
             } else {
                 println!(
-                    "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>5} {:>6}  presence",
+                    "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>18} {:>6}  presence",
                     "id", "baud", "type", "firmware", "serial", "mV", "temp", "status"
                 );
                 for r in &rows {
@@ -214,14 +236,14 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
                         Presence::Absent => "absent".to_string(),
                     };
                     println!(
-                        "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>5} {:>6}  {presence}",
+                        "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>18} {:>6}  {presence}",
                         r.id,
                         r.baud,
                         o(r.servo_type),
                         o(r.firmware),
                         o(r.serial),
                         o(r.voltage_mv),
-                        o(r.temperature),
+                        r.temperature_text(&profile),
                         r.status_hex()
                     );
                 }
@@ -232,6 +254,44 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
                 );
             }
             Ok(0)
+        }
+        ServoCmd::Monitor { ids } => {
+            let ids = parse_id_list(&ids)?;
+            use crate::ops::servo::monitor::{Reading, monitor_all};
+            let rows = monitor_all(&client, &profile, &ids).map_err(op_error)?;
+            let missing = rows
+                .iter()
+                .any(|r| !matches!(r.reading, Reading::Values(_)));
+            if json {
+                println!("{}", serde_json::json!({ "servos": rows }));
+            } else {
+                println!(
+                    "{:>3} {:>6} {:>6} {:>6} {:>18} {:>6} {:>10} {:>6}",
+                    "id", "mV", "mA", "mW", "temp °C (raw)", "status", "angle °", "turns"
+                );
+                for r in &rows {
+                    match &r.reading {
+                        Reading::Values(m) => println!(
+                            "{:>3} {:>6} {:>6} {:>6} {:>18} {:>6} {:>10.1} {:>6}",
+                            r.id,
+                            m.voltage_mv,
+                            m.current_ma,
+                            m.power_mw,
+                            format!(
+                                "{} ({})",
+                                m.temperature_c.map_or("n/a".into(), |t| format!("{t:.1}")),
+                                m.temperature_raw
+                            ),
+                            format!("{:#04x}", m.status),
+                            m.angle_deg,
+                            m.turns
+                        ),
+                        Reading::Misfit { error } => println!("{:>3} !! {error}", r.id),
+                        Reading::NoAnswer => println!("{:>3} no answer", r.id),
+                    }
+                }
+            }
+            Ok(u8::from(missing))
         }
         ServoCmd::Ping { id } => {
             let p = ops::ping(&client, id, 3).map_err(op_error)?;
@@ -254,17 +314,17 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
             }
             if json {
                 let doc: Vec<_> = out.iter().map(|(p, v)| serde_json::json!({
-                    "param": p.field.ident, "id": p.id, "value": v, "display": p.field.format(&Value::Int(*v)), "unit": p.field.unit,
+                    "param": p.field.ident, "id": p.id, "value": v, "display": p.field.display(&Value::Int(*v)), "unit": p.field.unit,
+                    "converted": p.field.convert.and_then(|c| c.apply(*v)),
                 })).collect();
                 println!("{}", serde_json::json!({"servo": id, "params": doc}));
             } else {
                 for (p, v) in out {
                     println!(
-                        "{:>3} {:<22} {}{}",
+                        "{:>3} {:<22} {}",
                         p.id,
                         p.field.ident,
-                        p.field.format(&Value::Int(v)),
-                        p.field.unit_suffix()
+                        p.field.display(&Value::Int(v))
                     );
                 }
             }

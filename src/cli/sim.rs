@@ -4,6 +4,7 @@
 //! port: `port=$(botbench sim window-cleaner | head -1)`.
 
 use super::{CliError, CliResult};
+use crate::sim::msp_device::MspCore;
 use crate::sim::tuya_mcu::TuyaMcu;
 use crate::sim::window_cleaner::WindowCleaner;
 use crate::sim::{Faults, PtyServer, SharedDevice, SimKind, SimOptions, build};
@@ -36,6 +37,11 @@ pub(crate) struct SimArgs {
     /// Servo bus only: the servo IDs on the bus, e.g. `0,1,5`.
     #[arg(long, value_delimiter = ',')]
     servos: Vec<u8>,
+    /// Window cleaner and servo bus: answer as firmware described by this profile (a name or
+    /// a .ron file) instead of the built-in one, e.g. `window-cleaner-configurator`, or a
+    /// firmware whose payloads differ from botbench's profile.
+    #[arg(long)]
+    profile: Option<String>,
 }
 
 pub(crate) fn run(args: SimArgs) -> CliResult {
@@ -57,20 +63,66 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         seed: args.seed,
         servos: args.servos,
     };
+    let firmware = match &args.profile {
+        None => None,
+        Some(name) => {
+            let p = super::registry()?.get(name).map_err(CliError::input)?;
+            if p.protocol != kind.profile_protocol() {
+                return Err(CliError::input(format!(
+                    "profile '{}' speaks {}, a {} speaks {}",
+                    p.id,
+                    p.protocol.name(),
+                    kind.name(),
+                    kind.profile_protocol().name()
+                )));
+            }
+            Some(p)
+        }
+    };
     // The Tuya MCU and the window cleaner take commands on stdin (see `control`), so keep a
     // typed handle to them.
-    let (device, control): (SharedDevice, Option<Control>) = match kind {
-        SimKind::TuyaVacuum => {
-            let mcu = Arc::new(Mutex::new(crate::sim::tuya_mcu(&opts)));
-            (mcu.clone(), Some(Control::Tuya(mcu)))
-        }
-        SimKind::WindowCleaner => {
-            let wc = Arc::new(Mutex::new(
-                WindowCleaner::new(&opts).map_err(CliError::input)?,
-            ));
+    let (device, control): (SharedDevice, Option<Control>) = match (kind, firmware) {
+        (SimKind::WindowCleaner, Some(p)) => {
+            let baud = opts.baud.unwrap_or(p.baud);
+            let mut core = MspCore::new(p, crate::sim::window_cleaner::DEVICE_CODE, baud);
+            if let Some(l) = opts.latency {
+                core.latency = l;
+            }
+            let wc = Arc::new(Mutex::new(WindowCleaner::with_core(core, opts.seed)));
             (wc.clone(), Some(Control::WindowCleaner(wc)))
         }
-        _ => (build(kind, &opts).map_err(CliError::input)?, None),
+        (SimKind::ServoBus, Some(p)) => {
+            let bus = crate::sim::servo_bus::ServoBus::with_profile_ids(
+                p,
+                if opts.servos.is_empty() {
+                    &[1]
+                } else {
+                    &opts.servos
+                },
+                opts.baud.unwrap_or_else(|| kind.default_baud()),
+            )
+            .map_err(CliError::input)?
+            .with_seed(opts.seed);
+            (Arc::new(Mutex::new(bus)), None)
+        }
+        (_, Some(_)) => {
+            return Err(CliError::input(
+                "--profile is for the window-cleaner and servo-bus simulators",
+            ));
+        }
+        (kind, None) => match kind {
+            SimKind::TuyaVacuum => {
+                let mcu = Arc::new(Mutex::new(crate::sim::tuya_mcu(&opts)));
+                (mcu.clone(), Some(Control::Tuya(mcu)))
+            }
+            SimKind::WindowCleaner => {
+                let wc = Arc::new(Mutex::new(
+                    WindowCleaner::new(&opts).map_err(CliError::input)?,
+                ));
+                (wc.clone(), Some(Control::WindowCleaner(wc)))
+            }
+            _ => (build(kind, &opts).map_err(CliError::input)?, None),
+        },
     };
     let server = PtyServer::start(device, faults).map_err(CliError::device)?;
     let mut out = std::io::stdout().lock();

@@ -70,6 +70,11 @@ impl Request {
     }
 }
 
+/// How long the line stays quiet before a synchronous MONITOR's answers are taken as complete:
+/// each servo answers after the one before (21 bytes: 22 ms at 9600 baud), a missing one leaves
+/// a gap.
+pub const SYNC_QUIET: Duration = Duration::from_millis(60);
+
 /// Which incoming frame answers a request.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Match {
@@ -233,14 +238,26 @@ impl Request {
         match profile.protocol {
             Protocol::Msp => {}
             Protocol::Servo => {
-                let id = r.payload.first().copied().unwrap_or(0);
-                let m = Match::servo(cmd.id, &[id]);
-                r.reply = if id == crate::protocol::servo::BROADCAST_ID {
-                    ReplySpec::None
-                } else if cmd.reply_optional {
-                    ReplySpec::Optional(m)
-                } else {
-                    ReplySpec::Required(m)
+                use crate::protocol::servo::{Frame, Target, cmd::MONITOR};
+                // The first content byte is not always a servo id (commands 18, 19, 25).
+                r.reply = match Frame::request(cmd.id, r.payload.clone()).target() {
+                    Target::Servo { id } => {
+                        let m = Match::servo(cmd.id, &[id]);
+                        if cmd.reply_optional {
+                            ReplySpec::Optional(m)
+                        } else {
+                            ReplySpec::Required(m)
+                        }
+                    }
+                    // One MONITOR reply from each servo named, in turn.
+                    Target::Sync {
+                        sub_command: MONITOR,
+                        ids,
+                    } if !ids.is_empty() => ReplySpec::Burst {
+                        each: Match::servo(MONITOR, &ids),
+                        quiet: SYNC_QUIET,
+                    },
+                    Target::Sync { .. } | Target::Broadcast | Target::Bus => ReplySpec::None,
                 };
             }
             Protocol::Tuya => {

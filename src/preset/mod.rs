@@ -25,6 +25,7 @@
 
 use crate::document::{self, DocumentError, ErrorKind, Problem, Source, Step};
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Profile, Value};
+use crate::protocol::Direction;
 use shape::{Doc, Head};
 use std::path::Path;
 
@@ -372,6 +373,11 @@ impl Preset {
             if ok {
                 // In wire order, whatever the file's order.
                 inputs.sort_by_key(|(k, _)| set.request.iter().position(|f| &f.ident == k));
+                // The profile's relations (a minimum above its maximum), named at load.
+                if let Err(e) = profile.encode(set, Direction::HostToDevice, &inputs) {
+                    problem(at_cmd, format!("{}: {e}", set.ident));
+                    continue;
+                }
                 writes.push(SetWrite {
                     command: set.ident.clone(),
                     inputs,

@@ -1,17 +1,22 @@
-//! The one field codec: payload bytes to named, typed values and back, per the profile.
+//! The one field codec, decoding side: payload bytes to named, typed values, per the profile.
+//! Encoding is in [`super::encode`].
 
 use super::model::{
-    Access, ByteOrder, Command, DataPointDef, Field, FieldType, Initiator, Param, Profile,
+    Access, ByteOrder, Command, DataPointDef, Field, FieldType, Initiator, Len, Param, Profile,
 };
-use super::value::{FieldError, Value};
+use super::value::{FieldError, Misfit, Value};
 use crate::protocol::Direction;
+use crate::protocol::hex;
 use crate::protocol::tuya::dp::{self, DataPoint, DpType, DpValue};
 use serde::Serialize;
+
+pub use super::encode::Input;
 
 /// One decoded value and the field it belongs to.
 #[derive(Debug, Clone, Serialize)]
 pub struct FieldValue<'p> {
-    /// The field's canonical ident (a parameter's or data point's for nested values).
+    /// The field's canonical ident (a parameter's or data point's for nested values; `ident[i]`
+    /// for record `i` of a synchronous command).
     pub ident: String,
     /// The field's definition.
     #[serde(skip)]
@@ -21,25 +26,49 @@ pub struct FieldValue<'p> {
 }
 
 impl FieldValue<'_> {
-    /// The value as shown: scaled, labelled, with its unit.
+    /// The value as shown: scaled or converted (raw beside it), labelled, with its unit.
     pub fn display(&self) -> String {
-        let text = self.field.format(&self.value);
-        match self.value {
-            Value::Int(raw) if self.field.label(raw).is_none() => {
-                format!("{text}{}", self.field.unit_suffix())
-            }
-            _ => text,
+        self.field.display(&self.value)
+    }
+
+    /// The converted number, for a field with a conversion (`None` where it is undefined).
+    pub fn converted(&self) -> Option<f64> {
+        match (self.field.convert, &self.value) {
+            (Some(c), Value::Int(raw)) => c.apply(*raw),
+            _ => None,
         }
     }
 }
 
-/// A decoded payload.
+fn ser_error<S: serde::Serializer>(e: &Option<FieldError>, s: S) -> Result<S::Ok, S::Error> {
+    match e {
+        Some(e) => s.serialize_some(&e.to_string()),
+        None => s.serialize_none(),
+    }
+}
+
+fn ser_hex<S: serde::Serializer>(bytes: &[u8], s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(&hex::format(bytes))
+}
+
+/// A decoded payload: the values read, and whether the payload fit the layout.
 #[derive(Debug, Clone, Serialize)]
 pub struct Decoded<'p> {
-    /// The values, in wire order.
+    /// The command's ident (empty for a bare field list).
+    pub command: String,
+    /// The values, in wire order: every value read before a fault.
     pub values: Vec<FieldValue<'p>>,
     /// Bytes past the last field (firmware that sends more than the profile knows).
+    #[serde(serialize_with = "ser_hex")]
     pub trailing: Vec<u8>,
+    /// The field that could not be read, where decoding stopped; `None` when all were read.
+    #[serde(serialize_with = "ser_error")]
+    pub error: Option<FieldError>,
+    /// The payload as received.
+    #[serde(serialize_with = "ser_hex")]
+    pub payload: Vec<u8>,
+    /// The payload lengths the layout takes: (fewest, most; `None`: no limit).
+    pub expected: (usize, Option<usize>),
 }
 
 impl Decoded<'_> {
@@ -50,39 +79,56 @@ impl Decoded<'_> {
             _ => None,
         })
     }
-}
 
-/// A value to encode: typed by a person, or raw from a program.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Input {
-    /// Display units, labels, hex, as [`Field::parse`] reads them.
-    Text(String),
-    /// A raw value, checked against the field.
-    Raw(Value),
-}
+    /// Whether the payload fit the layout exactly: every field read, nothing left over.
+    pub fn fits(&self) -> bool {
+        self.error.is_none() && self.trailing.is_empty()
+    }
 
-impl From<&str> for Input {
-    fn from(s: &str) -> Self {
-        Input::Text(s.to_string())
+    /// The misfit, when the payload did not fit: the fault (a field it ends inside, or the
+    /// bytes left over), the values read before it and the raw bytes.
+    pub fn misfit(&self) -> Option<Misfit> {
+        let fault = match (&self.error, self.trailing.is_empty()) {
+            (Some(e), _) => e.clone(),
+            (None, false) => FieldError::LongPayload {
+                extra: self.trailing.clone(),
+            },
+            (None, true) => return None,
+        };
+        Some(Misfit {
+            command: self.command.clone(),
+            fault,
+            decoded: self
+                .values
+                .iter()
+                .map(|v| (v.ident.clone(), v.value.clone(), v.display()))
+                .collect(),
+            payload: self.payload.clone(),
+            expected: self.expected,
+        })
     }
 }
 
-impl From<i64> for Input {
-    fn from(v: i64) -> Self {
-        Input::Raw(Value::Int(v))
-    }
-}
-
-impl Input {
-    fn resolve(&self, field: &Field) -> Result<Value, FieldError> {
-        match self {
-            Input::Text(t) => field.parse(t),
-            Input::Raw(v) => {
-                field.check(v)?;
-                Ok(v.clone())
+/// The payload lengths a layout takes, (fewest, most; `None`: no limit). A parameter value
+/// counts 1 to 4 bytes; optional and omittable fields count towards the most only.
+pub fn layout_len(fields: &[Field]) -> (usize, Option<usize>) {
+    let (mut lo, mut hi) = (0usize, Some(0usize));
+    for f in fields {
+        let (a, b) = match f.ty {
+            FieldType::ParamValue => (1, Some(4)),
+            FieldType::DataPoints | FieldType::Records => (0, None),
+            FieldType::Bytes(Len::Rest) | FieldType::Str(Len::Rest) => (0, None),
+            ty => {
+                let w = ty.width().unwrap_or(0);
+                (w, Some(w))
             }
+        };
+        if !f.optional && f.omitted_when.is_none() {
+            lo += a;
         }
+        hi = hi.zip(b).map(|(h, b)| h + b);
     }
+    (lo, hi)
 }
 
 impl Profile {
@@ -131,51 +177,128 @@ impl Profile {
         self.params.iter().filter(|p| p.access == Access::ReadWrite)
     }
 
-    /// Decodes the payload of a frame of `cmd` travelling in `dir`.
+    /// Decodes the payload of a frame of `cmd` travelling in `dir`, strictly: a payload that
+    /// does not fit the layout (too short, too long, a value that cannot be read) is
+    /// [`FieldError::Misfit`], which carries the fault, the values read before it and the raw
+    /// bytes. Use [`Profile::decode_lenient`] to show what could be read.
     pub fn decode<'p>(
         &'p self,
         cmd: &'p Command,
         dir: Direction,
         payload: &[u8],
     ) -> Result<Decoded<'p>, FieldError> {
-        self.decode_fields(self.fields(cmd, dir), payload)
+        let d = self.decode_lenient(cmd, dir, payload);
+        match d.misfit() {
+            Some(m) => Err(FieldError::Misfit(Box::new(m))),
+            None => Ok(d),
+        }
     }
 
-    /// Decodes `payload` by a field list.
+    /// Decodes as much of the payload as fits: the values before the first fault, the fault,
+    /// and any bytes left over. Never fails; [`Decoded::fits`] tells whether it was clean.
+    pub fn decode_lenient<'p>(
+        &'p self,
+        cmd: &'p Command,
+        dir: Direction,
+        payload: &[u8],
+    ) -> Decoded<'p> {
+        let mut d = self.decode_fields_lenient(self.fields(cmd, dir), payload);
+        d.command = cmd.ident.clone();
+        d
+    }
+
+    /// Decodes `payload` by a field list, strictly (see [`Profile::decode`]).
     pub fn decode_fields<'p>(
         &'p self,
         fields: &'p [Field],
         payload: &[u8],
     ) -> Result<Decoded<'p>, FieldError> {
-        let order = self.protocol.byte_order();
+        let d = self.decode_fields_lenient(fields, payload);
+        match d.misfit() {
+            Some(m) => Err(FieldError::Misfit(Box::new(m))),
+            None => Ok(d),
+        }
+    }
+
+    /// Decodes as much of `payload` as fits a field list (see [`Profile::decode_lenient`]).
+    pub fn decode_fields_lenient<'p>(&'p self, fields: &'p [Field], payload: &[u8]) -> Decoded<'p> {
         let mut r = Reader {
             buf: payload,
             at: 0,
         };
         let mut values = Vec::new();
+        let error = self.read_fields(fields, &mut r, &mut values, "").err();
+        Decoded {
+            command: String::new(),
+            values,
+            trailing: if error.is_none() {
+                r.rest().to_vec()
+            } else {
+                Vec::new()
+            },
+            error,
+            payload: payload.to_vec(),
+            expected: layout_len(fields),
+        }
+    }
+
+    /// Reads `fields` from `r` into `values`, each ident followed by `suffix` (`[i]` in a
+    /// record). Stops at the first fault.
+    fn read_fields<'p>(
+        &'p self,
+        fields: &'p [Field],
+        r: &mut Reader<'_>,
+        values: &mut Vec<FieldValue<'p>>,
+        suffix: &str,
+    ) -> Result<(), FieldError> {
+        let order = self.protocol.byte_order();
+        let named = |f: &Field| format!("{}{suffix}", f.ident);
+        // A field the firmware leaves out holds its `omitted_when` value: the payload is then
+        // exactly that field's width shorter than the layout.
+        let omitted = fields
+            .iter()
+            .find(|f| f.omitted_when.is_some())
+            .filter(|f| {
+                let (_, full) = layout_len(fields);
+                full.zip(f.ty.width())
+                    .is_some_and(|(full, w)| r.left() + w == full)
+            });
         let mut param: Option<u8> = None;
+        let mut sub: Option<u8> = None;
+        let mut record_len: Option<usize> = None;
+        let mut count: Option<usize> = None;
         for field in fields {
             if r.left() == 0 && field.optional {
                 break;
+            }
+            if let (Some(o), Some(v)) = (omitted, field.omitted_when)
+                && std::ptr::eq(o, field)
+            {
+                values.push(FieldValue {
+                    ident: named(field),
+                    field,
+                    value: Value::Int(v),
+                });
+                continue;
             }
             match field.ty {
                 FieldType::ParamId => {
                     let id = r.take(field, 1)?[0];
                     param = Some(id);
                     values.push(FieldValue {
-                        ident: field.ident.clone(),
+                        ident: named(field),
                         field,
                         value: Value::Int(id as i64),
                     });
                 }
                 FieldType::ParamValue => match param.and_then(|id| self.param(id)) {
                     Some(p) => values.push(FieldValue {
-                        ident: p.field.ident.clone(),
+                        ident: named(&p.field),
                         field: &p.field,
-                        value: read_scalar(&mut r, &p.field, order)?,
+                        value: read_scalar(r, &p.field, order)?,
                     }),
                     None => values.push(FieldValue {
-                        ident: field.ident.clone(),
+                        ident: named(field),
                         field,
                         value: Value::Bytes(r.rest().to_vec()),
                     }),
@@ -185,7 +308,7 @@ impl Profile {
                     let mut br = Reader { buf: block, at: 0 };
                     for p in self.block_params() {
                         values.push(FieldValue {
-                            ident: p.field.ident.clone(),
+                            ident: named(&p.field),
                             field: &p.field,
                             value: read_scalar(&mut br, &p.field, order)?,
                         });
@@ -196,17 +319,92 @@ impl Profile {
                         values.push(self.dp_value(point)?);
                     }
                 }
-                _ => values.push(FieldValue {
-                    ident: field.ident.clone(),
+                FieldType::Records => {
+                    self.read_records(field, (sub, record_len, count), r, values)?;
+                }
+                _ => {
+                    let value = read_scalar(r, field, order)?;
+                    if let Value::Int(v) = value {
+                        match field.ty {
+                            FieldType::CommandId => sub = Some(v as u8),
+                            FieldType::RecordLen => record_len = Some(v as usize),
+                            FieldType::RecordCount => count = Some(v as usize),
+                            _ => {}
+                        }
+                    }
+                    values.push(FieldValue {
+                        ident: named(field),
+                        field,
+                        value,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads the records of a synchronous command: each as the request of command `sub`, its
+    /// values named `ident[i]`; as raw bytes `records[i]` when the profile lacks `sub`.
+    fn read_records<'p>(
+        &'p self,
+        field: &'p Field,
+        (sub, len, count): (Option<u8>, Option<usize>, Option<usize>),
+        r: &mut Reader<'_>,
+        values: &mut Vec<FieldValue<'p>>,
+    ) -> Result<(), FieldError> {
+        let fault = |message: String| FieldError::Records {
+            field: field.ident.clone(),
+            message,
+        };
+        let (Some(sub), Some(len), Some(count)) = (sub, len, count) else {
+            return Err(fault(
+                "no sub-command, record length and count before the records".into(),
+            ));
+        };
+        let rest = r.rest();
+        let layout = self.command_by_id(sub).map(|c| (c, c.request.as_slice()));
+        if let Some((c, fields)) = layout {
+            let width = layout_len(fields);
+            if width != (len, Some(len)) {
+                return Err(fault(format!(
+                    "records of {len} byte(s), but a {} ({sub}) request takes {}",
+                    c.ident,
+                    match width {
+                        (lo, Some(hi)) if lo == hi => format!("{lo}"),
+                        _ => "a variable length".into(),
+                    }
+                )));
+            }
+        }
+        if len == 0 && count > 0 {
+            return Err(fault(format!("{count} record(s) of 0 bytes")));
+        }
+        for i in 0..count {
+            let Some(bytes) = rest.get(i * len..(i + 1) * len) else {
+                return Err(fault(format!(
+                    "{count} record(s) of {len} byte(s) take {} bytes, {} left",
+                    count * len,
+                    rest.len()
+                )));
+            };
+            match layout {
+                Some((_, fields)) => {
+                    let mut rr = Reader { buf: bytes, at: 0 };
+                    self.read_fields(fields, &mut rr, values, &format!("[{i}]"))?;
+                }
+                None => values.push(FieldValue {
+                    ident: format!("{}[{i}]", field.ident),
                     field,
-                    value: read_scalar(&mut r, field, order)?,
+                    value: Value::Bytes(bytes.to_vec()),
                 }),
             }
         }
-        Ok(Decoded {
-            values,
-            trailing: r.rest().to_vec(),
-        })
+        if rest.len() > count * len {
+            return Err(FieldError::LongPayload {
+                extra: rest[count * len..].to_vec(),
+            });
+        }
+        Ok(())
     }
 
     fn dp_value(&self, point: DataPoint) -> Result<FieldValue<'_>, FieldError> {
@@ -237,141 +435,7 @@ impl Profile {
         })
     }
 
-    /// Builds the payload of a frame of `cmd` travelling in `dir` from named inputs.
-    ///
-    /// Every input is checked against its field before a byte is produced; a name that is not a
-    /// field, a missing field, or a read-only parameter or data point sent to the device is an
-    /// error.
-    pub fn encode(
-        &self,
-        cmd: &Command,
-        dir: Direction,
-        inputs: &[(String, Input)],
-    ) -> Result<Vec<u8>, FieldError> {
-        let fields = self.fields(cmd, dir);
-        let to_device = dir == Direction::HostToDevice;
-        let order = self.protocol.byte_order();
-        let mut used = vec![false; inputs.len()];
-        let mut find = |ident: &str| -> Option<&Input> {
-            // The first unused input of that name: a block parameter may share a name with a
-            // frame field (WRITE_BATCH_DATA's `servo_id`), and order then tells them apart.
-            let i =
-                (0..inputs.len()).find(|&i| !used[i] && inputs[i].0.eq_ignore_ascii_case(ident))?;
-            used[i] = true;
-            Some(&inputs[i].1)
-        };
-        let mut missing: Option<FieldError> = None;
-        let mut note_missing = |f: &str| {
-            missing.get_or_insert_with(|| FieldError::MissingField {
-                command: cmd.ident.clone(),
-                field: f.to_string(),
-            });
-        };
-        let mut out = Vec::new();
-        let mut param: Option<&Param> = None;
-        let mut has_dps = false;
-        for field in fields {
-            match field.ty {
-                FieldType::ParamId => {
-                    let Some(input) = find(&field.ident) else {
-                        note_missing(&field.ident);
-                        continue;
-                    };
-                    let p = match input {
-                        Input::Text(t) => self.find_param(t),
-                        Input::Raw(Value::Int(i)) => {
-                            u8::try_from(*i).ok().and_then(|i| self.param(i))
-                        }
-                        Input::Raw(_) => None,
-                    }
-                    .ok_or_else(|| FieldError::Unknown {
-                        what: "parameter",
-                        id: match input {
-                            Input::Text(t) => t.clone(),
-                            Input::Raw(v) => format!("{v:?}"),
-                        },
-                    })?;
-                    param = Some(p);
-                    out.push(p.id);
-                }
-                FieldType::ParamValue => {
-                    let Some(p) = param else {
-                        continue;
-                    };
-                    if to_device && p.access == Access::ReadOnly {
-                        return Err(FieldError::ReadOnly {
-                            field: p.field.ident.clone(),
-                        });
-                    }
-                    let Some(input) = find(&field.ident).or_else(|| find(&p.field.ident)) else {
-                        note_missing(&field.ident);
-                        continue;
-                    };
-                    write_scalar(&mut out, &p.field, &input.resolve(&p.field)?, order);
-                }
-                FieldType::ParamBlock => {
-                    for p in self.block_params() {
-                        let Some(input) = find(&p.field.ident) else {
-                            note_missing(&p.field.ident);
-                            continue;
-                        };
-                        write_scalar(&mut out, &p.field, &input.resolve(&p.field)?, order);
-                    }
-                }
-                FieldType::DataPoints => {
-                    has_dps = true;
-                }
-                _ => match find(&field.ident) {
-                    Some(input) => write_scalar(&mut out, field, &input.resolve(field)?, order),
-                    None if field.optional => break,
-                    None => note_missing(&field.ident),
-                },
-            }
-        }
-        if has_dps {
-            let mut points = Vec::new();
-            for (i, (name, input)) in inputs.iter().enumerate() {
-                if used[i] {
-                    continue;
-                }
-                let def = self
-                    .find_data_point(name)
-                    .ok_or_else(|| FieldError::UnknownField {
-                        command: cmd.ident.clone(),
-                        field: name.clone(),
-                        known: self.known_dps(),
-                    })?;
-                if to_device && def.access == Access::ReadOnly {
-                    return Err(FieldError::ReadOnly {
-                        field: def.field.ident.clone(),
-                    });
-                }
-                points.push(DataPoint {
-                    id: def.id,
-                    value: dp_value_of(def, input.resolve(&def.field)?),
-                });
-                used[i] = true;
-            }
-            out.extend(dp::encode(&points)?);
-        }
-        if let Some(i) = used.iter().position(|u| !u) {
-            return Err(FieldError::UnknownField {
-                command: cmd.ident.clone(),
-                field: inputs[i].0.clone(),
-                known: fields
-                    .iter()
-                    .map(|f| f.ident.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            });
-        }
-        match missing {
-            Some(e) => Err(e),
-            None => Ok(out),
-        }
-    }
-
-    fn known_dps(&self) -> String {
+    pub(super) fn known_dps(&self) -> String {
         self.data_points
             .iter()
             .map(|d| d.field.ident.as_str())
@@ -414,7 +478,7 @@ pub fn parse_id(text: &str) -> Option<u8> {
     }
 }
 
-struct Reader<'a> {
+pub(super) struct Reader<'a> {
     buf: &'a [u8],
     at: usize,
 }
@@ -465,7 +529,8 @@ fn read_scalar(r: &mut Reader<'_>, field: &Field, order: ByteOrder) -> Result<Va
     })
 }
 
-fn int_from(bytes: &[u8], ty: FieldType, order: ByteOrder) -> i64 {
+/// An integer of type `ty` from its bytes in `order` (at most 4), sign-extended where signed.
+pub fn int_from(bytes: &[u8], ty: FieldType, order: ByteOrder) -> i64 {
     let mut b = [0u8; 4];
     let n = bytes.len().min(4);
     b[..n].copy_from_slice(&bytes[..n]);
@@ -481,7 +546,7 @@ fn int_from(bytes: &[u8], ty: FieldType, order: ByteOrder) -> i64 {
     }
 }
 
-fn write_scalar(out: &mut Vec<u8>, field: &Field, value: &Value, order: ByteOrder) {
+pub(super) fn write_scalar(out: &mut Vec<u8>, field: &Field, value: &Value, order: ByteOrder) {
     match value {
         Value::Int(v) => {
             let n = field.ty.width().unwrap_or(1).min(4);

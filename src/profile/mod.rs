@@ -5,10 +5,14 @@ pub mod model;
 
 pub use model::*;
 pub mod codec;
+pub mod convert;
+pub mod encode;
+pub mod fault;
 pub mod registry;
+pub mod relation;
 pub mod validate;
 pub mod value;
 
 pub use codec::{Decoded, FieldValue, Input};
 pub use registry::{ProfileError, Registry, Source};
-pub use value::{FieldError, Value};
+pub use value::{FieldError, Misfit, Value};

@@ -108,6 +108,70 @@ pub struct Profile {
     /// reports that bit clear.
     #[serde(default)]
     pub panels: Vec<PanelRule>,
+    /// Relations between fields that every write must keep (minimum ≤ default ≤ maximum...).
+    #[serde(default)]
+    pub relations: Vec<Relation>,
+}
+
+impl Profile {
+    /// A profile with no commands, parameters or data points: what a simulator falls back to
+    /// should its built-in profile ever fail to parse.
+    pub fn empty(id: &str, protocol: Protocol, baud: u32) -> Self {
+        Self {
+            id: id.to_string(),
+            name: Text {
+                en: id.to_string(),
+                zh: id.to_string(),
+            },
+            protocol,
+            baud,
+            device_code: None,
+            groups: Vec::new(),
+            commands: Vec::new(),
+            params: Vec::new(),
+            data_points: Vec::new(),
+            plots: Vec::new(),
+            panels: Vec::new(),
+            relations: Vec::new(),
+        }
+    }
+}
+
+/// How two values compare in a [`Relation`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum RelOp {
+    /// `low ≤ high`.
+    #[default]
+    Le,
+    /// `low < high`.
+    Lt,
+}
+
+impl RelOp {
+    /// The sign, `≤` or `<`.
+    pub fn sign(self) -> &'static str {
+        match self {
+            RelOp::Le => "≤",
+            RelOp::Lt => "<",
+        }
+    }
+}
+
+/// Two fields whose values must keep an order, compared in display units (after scale and
+/// conversion). Each side is `COMMAND.field` (a field of one command's payload: a Get's
+/// reply, which its Set sends too) or, in a servo profile, a parameter's ident. Both sides name
+/// fields of one command, or two parameters. Checked at load (unknown fields, fields of two
+/// commands, the fields' defaults) and before every write.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Relation {
+    /// The side that must be smaller, e.g. `MSP_GET_USE_FAN_OUTPUT_PID.minTarget`.
+    pub low: String,
+    /// `Le` (the default) or `Lt`.
+    #[serde(default)]
+    pub op: RelOp,
+    /// The side that must be larger.
+    pub high: String,
 }
 
 /// The panels a profile can name.
@@ -208,7 +272,9 @@ pub struct Command {
     /// The robot moves: ask the operator first.
     #[serde(default)]
     pub confirm: bool,
-    /// The initiator's payload. A Set with none sends its Get's reply layout.
+    /// The initiator's payload. A Set with none sends its Get's reply layout; a Set with its own
+    /// (firmware that takes fewer fields than its Get answers with) sends that, and every field
+    /// of it must be a field of the Get's reply, so that the write can be read back.
     #[serde(default)]
     pub request: Vec<Field>,
     /// The answer's payload.
@@ -245,6 +311,17 @@ pub enum FieldType {
     ParamBlock,
     /// Tuya: a list of data points, each named by the profile's `data_points`.
     DataPoints,
+    /// Servo, command 25: the number of a command of the profile (one byte), whose request
+    /// layout the records of the following `Records` field have.
+    CommandId,
+    /// Servo, command 25: the length of each record (one byte); computed when encoding.
+    RecordLen,
+    /// Servo, command 25: the number of records (one byte); computed when encoding.
+    RecordCount,
+    /// Servo, command 25: the rest of the payload, `RecordCount` records of `RecordLen` bytes,
+    /// each laid out as the request of the `CommandId` command. Record `i`'s values are named
+    /// `ident[i]` (`servo_id[0]`, `angle[0]`, `servo_id[1]`...).
+    Records,
 }
 
 /// The length of a bytes or text field.
@@ -267,6 +344,9 @@ impl FieldType {
             FieldType::U32 => (0, u32::MAX as i64),
             FieldType::I32 => (i32::MIN as i64, i32::MAX as i64),
             FieldType::Bool => (0, 1),
+            FieldType::CommandId | FieldType::RecordLen | FieldType::RecordCount => {
+                (0, u8::MAX as i64)
+            }
             _ => return None,
         })
     }
@@ -274,7 +354,13 @@ impl FieldType {
     /// The width on the wire of a fixed-size type.
     pub fn width(self) -> Option<usize> {
         Some(match self {
-            FieldType::U8 | FieldType::I8 | FieldType::Bool | FieldType::ParamId => 1,
+            FieldType::U8
+            | FieldType::I8
+            | FieldType::Bool
+            | FieldType::ParamId
+            | FieldType::CommandId
+            | FieldType::RecordLen
+            | FieldType::RecordCount => 1,
             FieldType::U16 | FieldType::I16 => 2,
             FieldType::U32 | FieldType::I32 => 4,
             FieldType::Bytes(Len::Fixed(n)) | FieldType::Str(Len::Fixed(n)) => n,
@@ -324,6 +410,32 @@ pub struct Field {
     /// The field may be missing at the end of a payload (older firmware).
     #[serde(default)]
     pub optional: bool,
+    /// The firmware leaves the field out of the payload when it holds this raw value (the
+    /// earlier configurator drops SET 224's second byte when it is 0). A payload one field
+    /// shorter than the layout then reads as this value. At most one such field per layout, in
+    /// a layout of fixed-size fields.
+    #[serde(default)]
+    pub omitted_when: Option<i64>,
+    /// What the raw value stands for, when it is not `raw × scale` (a thermistor reading to be
+    /// converted to °C). The converted value is shown with `unit`, the raw value beside it.
+    #[serde(default)]
+    pub convert: Option<Conversion>,
+}
+
+/// A conversion from a field's raw value to the value shown.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Conversion {
+    /// A `full_scale`-count ADC reading of an NTC thermistor (its B constant `beta`, in K,
+    /// nominal at 25 °C) in a divider with a resistor of its nominal resistance, to °C:
+    /// `T = 1 / (ln(raw / (full_scale − raw)) / beta + 1 / 298.15) − 273.15`, as the servo
+    /// vendor's SDK (1.3.x, Python and C) converts parameter 4 and the MONITOR temperature with
+    /// `beta: 3435.0, full_scale: 4096`. Undefined for raw 0 and raw ≥ `full_scale`.
+    Ntc {
+        /// The B constant, K.
+        beta: f64,
+        /// The ADC's full scale, counts (4096 for 12 bits).
+        full_scale: u32,
+    },
 }
 
 /// A named value of an enum field.

@@ -1,8 +1,9 @@
 //! Loading profiles: the built-in ones, a user's overrides, and files named on the command line.
 
-use super::model::{Command, Profile};
+use super::model::{Command, DeviceCode, Profile, Relation, Text};
 use super::validate::validate;
 use crate::document::{Step, locate};
+use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -11,6 +12,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
     (
         "window-cleaner",
         include_str!("../../assets/profiles/window-cleaner.ron"),
+    ),
+    (
+        "window-cleaner-configurator",
+        include_str!("../../assets/profiles/window-cleaner-configurator.ron"),
     ),
     (
         "solar-cleanbot",
@@ -50,20 +55,75 @@ pub enum Source {
 }
 
 /// Parses and checks a profile. `file` names it in errors; `expected_id`, where given, must be
-/// the profile's `id` (a file's stem).
+/// the profile's `id` (a file's stem). A profile with a `base` is a variant of that built-in
+/// profile ([`Variant`]).
 pub fn parse(file: &str, src: &str, expected_id: Option<&str>) -> Result<Profile, ProfileError> {
-    let mut profile: Profile = ron::Options::default()
-        .from_str(src)
-        .map_err(|e| ProfileError {
-            file: file.to_string(),
-            line: e.span.start.line,
-            col: e.span.start.col,
-            message: e.code.to_string(),
-        })?;
+    let syntax = |file: &str, e: ron::error::SpannedError| ProfileError {
+        file: file.to_string(),
+        line: e.span.start.line,
+        col: e.span.start.col,
+        message: e.code.to_string(),
+    };
+    // `base: "window-cleaner"` as written, without `Some(...)`. A file that cannot be read so
+    // far is read as a whole profile below, which reports where it fails.
+    let base = ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .from_str::<Head>(src)
+        .ok()
+        .and_then(|h| h.base);
+    let (mut profile, origin) = match base {
+        None => {
+            let p: Profile = ron::Options::default()
+                .from_str(src)
+                .map_err(|e| syntax(file, e))?;
+            (p, None)
+        }
+        Some(base) => {
+            let v: Variant = ron::Options::default()
+                .from_str(src)
+                .map_err(|e| syntax(file, e))?;
+            let (base_name, base_src) =
+                BUILTIN
+                    .iter()
+                    .find(|(n, _)| *n == base)
+                    .ok_or_else(|| ProfileError {
+                        file: file.to_string(),
+                        line: locate(src, &[Step::Key("base")]).0,
+                        col: locate(src, &[Step::Key("base")]).1,
+                        message: format!(
+                            "no built-in profile '{base}' to be a variant of; built in: {}",
+                            BUILTIN
+                                .iter()
+                                .map(|(n, _)| *n)
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    })?;
+            let base_file = format!("builtin:assets/profiles/{base_name}.ron");
+            let p: Profile = ron::Options::default()
+                .from_str(base_src)
+                .map_err(|e| syntax(&base_file, e))?;
+            let (p, origin) = v.apply(p);
+            (p, Some((base_file, *base_src, origin)))
+        }
+    };
     let at = |path: &[Step], message: String| {
-        let (line, col) = locate(src, path);
+        // An inconsistency in what a variant took from its base points into the base.
+        let (where_file, where_src, path, message) = match &origin {
+            Some((base_file, base_src, origin)) => match origin.locate(path) {
+                Some(p) => (file.to_string(), src, p, message),
+                None => (
+                    base_file.clone(),
+                    *base_src,
+                    path.to_vec(),
+                    format!("{message} (in the base of {file})"),
+                ),
+            },
+            None => (file.to_string(), src, path.to_vec(), message),
+        };
+        let (line, col) = locate(where_src, &path);
         ProfileError {
-            file: file.to_string(),
+            file: where_file,
             line,
             col,
             message,
@@ -82,6 +142,91 @@ pub fn parse(file: &str, src: &str, expected_id: Option<&str>) -> Result<Profile
     }
     validate(&mut profile).map_err(|issue| at(&issue.path, issue.message))?;
     Ok(profile)
+}
+
+/// Whether a profile file names a base.
+#[derive(Deserialize)]
+struct Head {
+    #[serde(default)]
+    base: Option<String>,
+}
+
+/// A firmware variant of a built-in profile: its own id and name, and the commands (and, if
+/// given, the device code and relations) that differ. A command replaces the base's command of
+/// the same id; a new id is added. Everything else is the base's.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Variant {
+    id: String,
+    /// Read through [`Head`]; here so that the file may hold it.
+    #[serde(rename = "base")]
+    _base: String,
+    name: Text,
+    #[serde(default)]
+    device_code: Option<DeviceCode>,
+    #[serde(default)]
+    commands: Vec<Command>,
+    #[serde(default)]
+    relations: Option<Vec<Relation>>,
+}
+
+/// Which parts of a merged profile came from the variant's file.
+struct Origin {
+    /// For each command of the merged profile, its index in the variant's `commands`.
+    commands: Vec<Option<usize>>,
+    relations: bool,
+}
+
+impl Origin {
+    /// The path in the variant's file of a merged profile's path, or `None` if it is the
+    /// base's.
+    fn locate(&self, path: &[Step]) -> Option<Vec<Step>> {
+        match path {
+            [Step::Key("commands"), Step::Index(k), rest @ ..] => {
+                let j = self.commands.get(*k).copied().flatten()?;
+                let mut p = vec![Step::Key("commands"), Step::Index(j)];
+                p.extend_from_slice(rest);
+                Some(p)
+            }
+            [Step::Key("relations"), ..] if self.relations => Some(path.to_vec()),
+            [Step::Key("id" | "name" | "device_code" | "base"), ..] => Some(path.to_vec()),
+            _ => None,
+        }
+    }
+}
+
+impl Variant {
+    fn apply(self, mut p: Profile) -> (Profile, Origin) {
+        p.id = self.id;
+        p.name = self.name;
+        if self.device_code.is_some() {
+            p.device_code = self.device_code;
+        }
+        let mut commands: Vec<Option<usize>> = vec![None; p.commands.len()];
+        for (j, c) in self.commands.into_iter().enumerate() {
+            match p.commands.iter().position(|x| x.id == c.id) {
+                Some(k) => {
+                    p.commands[k] = c;
+                    commands[k] = Some(j);
+                }
+                None => {
+                    p.commands.push(c);
+                    commands.push(Some(j));
+                }
+            }
+        }
+        let relations = self.relations.is_some();
+        if let Some(r) = self.relations {
+            p.relations = r;
+        }
+        (
+            p,
+            Origin {
+                commands,
+                relations,
+            },
+        )
+    }
 }
 
 /// Reads and checks a profile file; its stem must be its id.

@@ -5,6 +5,10 @@ use crate::document::Step::{self, Index, Key};
 use crate::protocol::tuya::dp::DpType;
 use std::collections::HashSet;
 
+mod layout;
+
+use layout::{check_decoded_names, check_omitted, check_sync_field, inherit_set_layouts};
+
 /// An inconsistency, with the path to the offending value.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Issue {
@@ -14,7 +18,7 @@ pub struct Issue {
     pub message: String,
 }
 
-fn issue(path: Vec<Step>, message: impl Into<String>) -> Issue {
+pub(super) fn issue(path: Vec<Step>, message: impl Into<String>) -> Issue {
     Issue {
         path,
         message: message.into(),
@@ -55,10 +59,13 @@ pub fn validate(profile: &mut Profile) -> Result<(), Issue> {
     }
     check_commands(profile)?;
     inherit_set_layouts(profile)?;
+    // Before `check_params` puts the parameters in id order: paths point into the source.
+    check_decoded_names(profile)?;
     check_params(profile)?;
     check_data_points(profile)?;
     check_plots(profile)?;
     check_panels(profile)?;
+    super::relation::validate_relations(profile)?;
     Ok(())
 }
 
@@ -173,39 +180,7 @@ fn check_commands(p: &Profile) -> Result<(), Issue> {
     Ok(())
 }
 
-fn inherit_set_layouts(p: &mut Profile) -> Result<(), Issue> {
-    for i in 0..p.commands.len() {
-        let c = &p.commands[i];
-        if c.kind != CommandKind::Set {
-            continue;
-        }
-        let Some(get) = p.commands.iter().find(|x| Some(x.id) == c.pair) else {
-            continue;
-        };
-        if c.request.is_empty() {
-            let fields = get.reply.clone();
-            p.commands[i].request = fields;
-        } else {
-            let same = c.request.len() == get.reply.len()
-                && c.request
-                    .iter()
-                    .zip(&get.reply)
-                    .all(|(a, b)| a.ty == b.ty && a.ident == b.ident);
-            if !same {
-                return Err(issue(
-                    vec![Key("commands"), Index(i), Key("request")],
-                    format!(
-                        "{}: request differs from the reply layout of its Get {}",
-                        c.ident, get.ident
-                    ),
-                ));
-            }
-        }
-    }
-    Ok(())
-}
-
-type PathFn<'a> = dyn Fn(usize, Option<&'static str>) -> Vec<Step> + 'a;
+pub(super) type PathFn<'a> = dyn Fn(usize, Option<&'static str>) -> Vec<Step> + 'a;
 
 fn check_fields(p: &Profile, fields: &[Field], at: &PathFn<'_>) -> Result<(), Issue> {
     let mut idents = HashSet::new();
@@ -216,6 +191,15 @@ fn check_fields(p: &Profile, fields: &[Field], at: &PathFn<'_>) -> Result<(), Is
             return Err(issue(
                 at(j, Some("ident")),
                 format!("duplicate or empty field ident '{}'", f.ident),
+            ));
+        }
+        if f.ident.contains(['.', '[', ']', '=']) {
+            return Err(issue(
+                at(j, Some("ident")),
+                format!(
+                    "field ident '{}': '.', '[', ']' and '=' are kept for relations, records and FIELD=VALUE",
+                    f.ident
+                ),
             ));
         }
         check_field(f, &|k| at(j, k))?;
@@ -268,8 +252,9 @@ fn check_fields(p: &Profile, fields: &[Field], at: &PathFn<'_>) -> Result<(), Is
                 format!("{}: DataPoints are for Tuya profiles only", f.ident),
             ));
         }
+        check_sync_field(p, fields, j, at)?;
     }
-    Ok(())
+    check_omitted(fields, at)
 }
 
 /// Checks one field's own consistency: scale, range, default, labels, bits.
@@ -346,6 +331,27 @@ pub fn check_field(f: &Field, at: &dyn Fn(Option<&'static str>) -> Vec<Step>) ->
         && let Err(e) = f.check(&super::Value::Int(d))
     {
         return Err(issue(at(Some("default")), format!("default: {e}")));
+    }
+    if let Some(v) = f.omitted_when
+        && let Err(e) = f.check(&super::Value::Int(v))
+    {
+        return Err(issue(
+            at(Some("omitted_when")),
+            format!("omitted_when: {e}"),
+        ));
+    }
+    if let Some(c) = f.convert {
+        let super::model::Conversion::Ntc { beta, full_scale } = c;
+        if bounds.is_none() || f.scale != 1.0 || !(beta.is_finite() && beta > 0.0) || full_scale < 2
+        {
+            return Err(issue(
+                at(Some("convert")),
+                format!(
+                    "{}: a conversion needs an integer field of scale 1, a positive beta and a full scale of 2 or more",
+                    f.ident
+                ),
+            ));
+        }
     }
     Ok(())
 }

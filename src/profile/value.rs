@@ -4,6 +4,8 @@ use super::model::{Field, FieldType, Len};
 use crate::protocol::hex;
 use serde::Serialize;
 
+pub use super::fault::{Broken, Misfit};
+
 /// A field's value, raw: integers in wire units (before scaling).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 #[serde(untagged)]
@@ -140,6 +142,28 @@ pub enum FieldError {
     /// A malformed data-point list.
     #[error("{0}")]
     Dp(#[from] crate::protocol::tuya::dp::DpError),
+    /// Bytes left over after the layout's last field (firmware that sends more than the
+    /// profile knows).
+    #[error("{} byte(s) past the layout's last field: {}", extra.len(), hex::format(extra))]
+    LongPayload {
+        /// The bytes left over.
+        extra: Vec<u8>,
+    },
+    /// A payload that does not fit its layout: the fault, what was read before it, the raw
+    /// bytes. Never shown as clean values.
+    #[error("{0}")]
+    Misfit(Box<Misfit>),
+    /// Records of a synchronous command (servo 25) that do not fit their sub-command.
+    #[error("{field}: {message}")]
+    Records {
+        /// The field's ident.
+        field: String,
+        /// What does not fit.
+        message: String,
+    },
+    /// Two values that break a relation of the profile (a minimum above its maximum).
+    #[error("{0}")]
+    Relation(Box<Broken>),
 }
 
 impl Field {
@@ -174,12 +198,33 @@ impl Field {
         self.labels.iter().find(|l| l.value == raw)
     }
 
-    /// A value as shown to a person: scaled number, label, set bits, text or hex.
+    /// The displayed number of a raw integer, after scale or conversion; `None` where a
+    /// conversion is undefined for it.
+    pub fn display_number(&self, raw: i64) -> Option<f64> {
+        match self.convert {
+            Some(c) => c.apply(raw),
+            None => Some(raw as f64 * self.scale),
+        }
+    }
+
+    /// A converted value as shown, without unit: `25.0 (raw 2048)`, `n/a (raw 0)`.
+    fn format_converted(&self, c: super::model::Conversion, raw: i64) -> String {
+        match c.apply(raw) {
+            Some(v) => format!("{v:.*} (raw {raw})", c.decimals()),
+            None => format!("n/a (raw {raw})"),
+        }
+    }
+
+    /// A value as shown to a person: scaled number, label, set bits, text or hex; a converted
+    /// value with its raw value beside it, `25.0 (raw 2048)`. [`Field::parse`] reads it back.
     pub fn format(&self, value: &Value) -> String {
         match value {
             Value::Int(raw) => {
                 if let Some(label) = self.label(*raw) {
                     return label.ident.clone();
+                }
+                if let Some(c) = self.convert {
+                    return self.format_converted(c, *raw);
                 }
                 if !self.bits.is_empty() {
                     let set: Vec<&str> = self
@@ -197,6 +242,20 @@ impl Field {
             }
             Value::Text(s) => s.clone(),
             Value::Bytes(b) => hex::format(b),
+        }
+    }
+
+    /// A value as shown with its unit: `2.75`, `90.0 °`, `25.0 °C (raw 2048)`, `on`.
+    pub fn display(&self, value: &Value) -> String {
+        match value {
+            Value::Int(raw) if self.label(*raw).is_none() => match self.convert {
+                Some(c) => match c.apply(*raw) {
+                    Some(v) => format!("{v:.*}{} (raw {raw})", c.decimals(), self.unit_suffix()),
+                    None => format!("n/a (raw {raw})"),
+                },
+                None => format!("{}{}", self.format(value), self.unit_suffix()),
+            },
+            _ => self.format(value),
         }
     }
 
@@ -274,6 +333,9 @@ impl Field {
     }
 
     fn parse_int(&self, text: &str) -> Result<i64, FieldError> {
+        if let Some(c) = self.convert {
+            return self.parse_converted(c, text);
+        }
         if let Some(label) = self
             .labels
             .iter()
@@ -341,6 +403,26 @@ impl Field {
                 max: self.format_number(self.ty.int_bounds().map_or(0, |b| b.1)),
                 unit: self.unit_suffix(),
             },
+        })
+    }
+
+    /// A converted field takes `raw N` (or what [`Field::format`] shows, `25.0 (raw 2048)`) for
+    /// a raw value, else a number in converted units, to the nearest raw value.
+    fn parse_converted(&self, c: super::model::Conversion, text: &str) -> Result<i64, FieldError> {
+        let raw_part = text
+            .split_once("raw")
+            .map(|(_, r)| r.trim_matches(|ch: char| ch == ')' || ch == ':' || ch.is_whitespace()));
+        if let Some(r) = raw_part {
+            return r.parse::<i64>().map_err(|_| self.not_a_number(text));
+        }
+        let v: f64 = text
+            .trim_end_matches(self.unit.as_str())
+            .trim()
+            .parse()
+            .map_err(|_| self.not_a_number(text))?;
+        c.invert(v).ok_or_else(|| FieldError::WrongType {
+            field: self.ident.clone(),
+            expected: format!("a value the sensor can read ('{text}' is beyond it), or `raw N`"),
         })
     }
 

@@ -51,6 +51,16 @@ impl SimKind {
         }
     }
 
+    /// The protocol it speaks.
+    pub fn profile_protocol(self) -> crate::profile::Protocol {
+        use crate::profile::Protocol;
+        match self {
+            SimKind::WindowCleaner | SimKind::SolarCleanbot => Protocol::Msp,
+            SimKind::ServoBus => Protocol::Servo,
+            SimKind::TuyaVacuum => Protocol::Tuya,
+        }
+    }
+
     /// What a transport to it calls itself: `simulated window cleaner`.
     pub fn describe(self) -> &'static str {
         match self {
@@ -129,11 +139,10 @@ pub fn build(kind: SimKind, opts: &SimOptions) -> Result<SharedDevice, String> {
             } else {
                 &opts.servos
             };
-            if ids.contains(&crate::protocol::servo::BROADCAST_ID) {
-                return Err("servo id 255 is the broadcast address; ids are 0-254".into());
-            }
             let baud = opts.baud.unwrap_or(kind.default_baud());
-            let mut bus = ServoBus::with_ids(ids, baud).with_seed(opts.seed);
+            let mut bus =
+                ServoBus::with_profile_ids(super::servo_bus::builtin_servo_profile(), ids, baud)?
+                    .with_seed(opts.seed);
             if let Some(l) = opts.latency {
                 bus = bus.with_latency(l);
             }

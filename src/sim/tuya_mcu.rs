@@ -8,7 +8,7 @@
 
 use super::{Device, Outgoing};
 use crate::profile::registry::{BUILTIN, parse};
-use crate::profile::{Access, DataPointDef, Profile, Protocol, Text, Value};
+use crate::profile::{Access, DataPointDef, Profile, Protocol, Value};
 use crate::protocol::tuya::dp::{DataPoint, DpType, DpValue, encode_one};
 use crate::protocol::tuya::{Frame, TuyaDecoder, VERSION_MODULE, cmd};
 use std::collections::{BTreeMap, VecDeque};
@@ -191,22 +191,7 @@ pub fn builtin_vacuum_profile() -> Arc<Profile> {
                 src,
                 Some("tuya-vacuum"),
             );
-            Arc::new(parsed.unwrap_or_else(|_| Profile {
-                id: "tuya-vacuum".into(),
-                name: Text {
-                    en: "tuya-vacuum".into(),
-                    zh: "tuya-vacuum".into(),
-                },
-                protocol: Protocol::Tuya,
-                baud: 9600,
-                device_code: None,
-                groups: Vec::new(),
-                commands: Vec::new(),
-                params: Vec::new(),
-                data_points: Vec::new(),
-                plots: Vec::new(),
-                panels: Vec::new(),
-            }))
+            Arc::new(parsed.unwrap_or_else(|_| Profile::empty("tuya-vacuum", Protocol::Tuya, 9600)))
         })
         .clone()
 }

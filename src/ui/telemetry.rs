@@ -215,9 +215,7 @@ impl TelemetryPanel {
                                                 .reply
                                                 .iter()
                                                 .find(|f| f.ident == k)
-                                                .map_or(format!("{v:?}"), |f| {
-                                                    format!("{}{}", f.format(v), f.unit_suffix())
-                                                });
+                                                .map_or(format!("{v:?}"), |f| f.display(v));
                                             format!("{k}={shown}")
                                         })
                                         .collect();

@@ -26,6 +26,10 @@ pub struct DeviceInfo {
     pub flags: Option<u8>,
     /// Build date and time from CMD_BUILD_INFO, where the device answers it.
     pub build_date: Option<String>,
+    /// Bytes past the profile's CMD_VERSION layout (newer firmware), as hex: the device is
+    /// identified by the fields it has, and the extra bytes are shown, never dropped silently.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub extra: Option<String>,
 }
 
 impl DeviceInfo {
@@ -38,9 +42,14 @@ impl DeviceInfo {
         let cmd = profile
             .command_by_id(msp::CMD_VERSION)
             .ok_or("the profile has no CMD_VERSION")?;
-        let d = profile
-            .decode(cmd, Direction::DeviceToHost, payload)
-            .map_err(|e| e.to_string())?;
+        // Strict but for bytes past the layout: those are kept in `extra`.
+        let d = profile.decode_lenient(cmd, Direction::DeviceToHost, payload);
+        if let Some(e) = &d.error {
+            return Err(format!(
+                "CMD_VERSION answer does not fit the profile: {e}; raw [{}]",
+                crate::protocol::hex::format(payload)
+            ));
+        }
         let v = |i: usize| -> i64 {
             d.values
                 .get(i)
@@ -63,6 +72,7 @@ impl DeviceInfo {
             build: v(6) as u8,
             flags: (d.values.len() > 7).then(|| v(7) as u8),
             build_date: None,
+            extra: (!d.trailing.is_empty()).then(|| crate::protocol::hex::format(&d.trailing)),
         })
     }
 

@@ -1,6 +1,7 @@
 //! Bus-servo operations: ping, scan, parameters, id and baud provisioning, motion, and
 //! production provisioning. One file per group; the operations are re-exported here.
 
+pub mod monitor;
 mod motion;
 mod params;
 pub mod preset;

@@ -71,6 +71,15 @@ pub fn write_param(
         .ok()
         .and_then(|d| d.values.get(2).map(|v| v.value.clone()))
         .unwrap_or(Value::Bytes(Vec::new()));
+    // A relation with other parameters (angle limits low ≤ high) is checked against what the
+    // servo holds now, before anything is written.
+    if let Value::Int(raw) = written {
+        let mut values = vec![(param.id, raw)];
+        for other in profile.related_params(param.id) {
+            values.push((other.id, read_param(client, profile, id, other)?));
+        }
+        profile.check_param_relations(&values)?;
+    }
     let answer = Match::servo(cmd::WRITE_DATA, &[id]).with_prefix(vec![id, param.id]);
     let req = Request::for_command(profile, write, payload).reply(ReplySpec::Required(answer));
     let reply = client.request(req)?;

@@ -176,7 +176,7 @@ mod tests {
             preset
                 .params
                 .iter()
-                .all(|(k, _)| k != "servo_id" && k != "baudrate")
+                .all(|(k, _)| k != "assigned_id" && k != "baudrate")
         );
         let back = ParamPreset::parse("t.ron", &preset.to_ron(&p), &p).unwrap();
         assert_eq!(back, preset);
@@ -193,7 +193,7 @@ mod tests {
         let e = ParamPreset::parse("t.ron", text, &p).unwrap_err();
         assert_eq!(e.at(), (5, 9), "{e}");
         assert!(e.message().contains("angle_limit_switch"), "{e}");
-        let e = ParamPreset::parse("t.ron", "(version: 1, params: [(\"servo_id\", 3)])", &p)
+        let e = ParamPreset::parse("t.ron", "(version: 1, params: [(\"assigned_id\", 3)])", &p)
             .unwrap_err();
         assert!(e.message().contains("Set ID"), "{e}");
         let e = ParamPreset::parse("t.ron", "(version: 1, params: [(\"x\" 3)])", &p).unwrap_err();

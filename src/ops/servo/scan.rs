@@ -3,7 +3,7 @@
 use super::{Presence, param_by_id, ping, ping_detail, read_param, switch};
 use crate::link::Client;
 use crate::ops::{Cancel, OpError, Progress};
-use crate::profile::Profile;
+use crate::profile::{Profile, Value};
 use serde::Serialize;
 use std::ops::RangeInclusive;
 
@@ -24,13 +24,24 @@ pub struct ScanRow {
     pub serial: Option<i64>,
     /// Voltage in mV (parameter 1).
     pub voltage_mv: Option<i64>,
-    /// Temperature (parameter 4).
+    /// Temperature (parameter 4), raw: °C or a thermistor reading, as the profile says
+    /// ([`ScanRow::temperature_text`] shows it).
     pub temperature: Option<i64>,
     /// The raw status byte (parameter 5); its bit order is published inconsistently.
     pub status: Option<i64>,
 }
 
 impl ScanRow {
+    /// The temperature as the profile shows parameter 4: `32 °C`, or `32.0 °C (raw 1779)` for a
+    /// thermistor reading; `-` when not read.
+    pub fn temperature_text(&self, profile: &Profile) -> String {
+        match (self.temperature, profile.param(4)) {
+            (Some(v), Some(p)) => p.field.display(&Value::Int(v)),
+            (Some(v), None) => v.to_string(),
+            (None, _) => "-".into(),
+        }
+    }
+
     /// The status byte as hex, e.g. `0x00`.
     pub fn status_hex(&self) -> String {
         self.status.map_or("-".into(), |s| format!("{s:#04x}"))

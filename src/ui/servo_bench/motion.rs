@@ -449,7 +449,7 @@ impl MotionState {
                                     _ => f.format(v),
                                 }
                             } else {
-                                format!("{}{}", f.format(v), f.unit_suffix())
+                                f.display(v)
                             };
                             ui.label(format!("{}: {shown}", lang.tr(&f.name.en, &f.name.zh)));
                             ui.separator();

@@ -299,7 +299,7 @@ impl ScanState {
                     ui.label(opt(row.firmware));
                     ui.label(opt(row.serial));
                     ui.label(row.voltage_mv.map_or("-".into(), |v| format!("{v} mV")));
-                    ui.label(row.temperature.map_or("-".into(), |v| format!("{v} °C")));
+                    ui.label(row.temperature_text(&rt.device.profile));
                     ui.monospace(row.status_hex());
                     ui.label(row.status.map_or("-".into(), |s| status_bits(s, lang)));
                     match &row.presence {

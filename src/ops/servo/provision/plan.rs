@@ -186,6 +186,11 @@ impl Plan {
                 Err(e) => return Err(issue(at, e.to_string())),
             };
             writes.push((param, raw));
+            // The profile's relations between the plan's own values (voltage low ≤ high).
+            let values: Vec<(u8, i64)> = writes.iter().map(|(p, v)| (p.id, *v)).collect();
+            if let Err(e) = profile.check_param_relations(&values) {
+                return Err(issue(at, e.to_string()));
+            }
         }
         let mut record: Vec<&Param> = Vec::new();
         for (i, name) in self.record.iter().enumerate() {

@@ -1,0 +1,94 @@
+//! The servo vendor's own SDK drives `botbench sim servo-bus` through a pty
+//! (`tests/sdk/sdk_drive_sim.py`, tests/sdk/README.md) and every check it makes must pass.
+//!
+//! Needs the SDK in a Python virtual environment: `BOTBENCH_SDK_PYTHON` names its interpreter,
+//! else `/work/sdk-venv/bin/python` (the README's set-up) is tried. Without it the test says so
+//! on stderr and passes without running: CI installs the SDK (two `pip` wheels) to run it. It
+//! takes about 20 s (the SDK waits up to 100 ms for every reply).
+
+use std::io::{BufRead, BufReader};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+
+/// The SDK's interpreter, if it is installed.
+fn sdk_python() -> Result<PathBuf, String> {
+    let python = std::env::var_os("BOTBENCH_SDK_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("/work/sdk-venv/bin/python"));
+    let ok = Command::new(&python)
+        .args(["-c", "import fashionstar_uart_sdk, serial"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if ok {
+        Ok(python)
+    } else {
+        Err(format!(
+            "{} cannot import fashionstar_uart_sdk and serial (set BOTBENCH_SDK_PYTHON; set-up in tests/sdk/README.md)",
+            python.display()
+        ))
+    }
+}
+
+/// The simulator, stopped when dropped.
+struct Sim(Child);
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+#[test]
+fn the_vendor_sdk_gets_correct_answers_from_the_servo_bus_simulator() {
+    let python = match sdk_python() {
+        Ok(p) => p,
+        Err(why) => {
+            eprintln!(
+                "SKIPPED the_vendor_sdk_gets_correct_answers_from_the_servo_bus_simulator: {why}"
+            );
+            return;
+        }
+    };
+    let mut sim = Sim(Command::new(env!("CARGO_BIN_EXE_botbench"))
+        .args(["sim", "servo-bus", "--servos", "1,2,3"])
+        .env("BOTBENCH_PROFILE_DIR", "/nonexistent")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("botbench sim starts"));
+    let mut pty = String::new();
+    BufReader::new(sim.0.stdout.take().expect("stdout"))
+        .read_line(&mut pty)
+        .expect("the simulator prints its pty");
+    let pty = pty.trim();
+    assert!(pty.starts_with("/dev/"), "first line: '{pty}'");
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/sdk/sdk_drive_sim.py");
+    let out = Command::new(&python)
+        .args([script, pty, "--ids", "1,2,3"])
+        .output()
+        .expect("the driver runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let summary: serde_json::Value = stdout
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .find(|d| d["kind"] == "summary")
+        .unwrap_or_else(|| {
+            panic!(
+                "no summary; stderr:\n{}",
+                String::from_utf8_lossy(&out.stderr)
+            )
+        });
+    eprintln!("{summary}");
+    let failed: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.contains("\"ok\": false"))
+        .collect();
+    assert_eq!(summary["failed"], serde_json::json!([]), "{failed:#?}");
+    assert!(out.status.success(), "driver exit {:?}", out.status);
+    // Every step the SDK can do was checked: only the SDK's own defects and steps with nothing
+    // to observe are unchecked.
+    assert!(summary["ok"].as_u64().unwrap_or(0) >= 59, "{summary}");
+}
