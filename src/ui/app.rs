@@ -7,7 +7,7 @@ use super::jobs::{self, JobOutput};
 use super::settings::Settings;
 use super::state::{AppState, Notice, Target};
 use super::{
-    Action, actions, connection, device, monitor, presets, selftest, servo_bench, solar,
+    Action, actions, connection, demo_hint, device, monitor, presets, selftest, servo_bench, solar,
     status_bar, telemetry, tuning, tuya_console,
 };
 use crate::i18n::Lang;
@@ -15,6 +15,9 @@ use crate::link::LinkCommand;
 use crate::profile::{PanelKind, ProfileError, Protocol};
 use eframe::egui;
 use serde::{Deserialize, Serialize};
+
+/// The start of the window's title: `botbench 0.1.0`.
+pub const TITLE: &str = concat!("botbench ", env!("CARGO_PKG_VERSION"));
 
 /// The panels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -168,11 +171,11 @@ impl App {
         }
         let title = match self.state.link.target() {
             Some(t) => format!(
-                "botbench — {} — {}",
+                "{TITLE} — {} — {}",
                 t.label(),
                 self.state.device.profile.name.en
             ),
-            None => "botbench — not connected".to_string(),
+            None => format!("{TITLE} — not connected"),
         };
         // Only on a change: a viewport command every frame would keep the window repainting.
         if self.title != title {
@@ -215,6 +218,7 @@ impl App {
         let mut actions = Vec::new();
         egui::Panel::top("connection").show(ui, |ui| {
             actions.extend(self.connection.show(ui, settings, state));
+            demo_hint::show(ui, lang, state);
         });
         egui::Panel::bottom("status").show(ui, |ui| {
             actions.extend(status_bar::show(ui, lang, state));
