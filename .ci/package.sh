@@ -5,7 +5,7 @@
 # it: no Rust toolchain on PATH, no source checkout in reach (an empty folder, a fresh HOME):
 # --version, profiles, a shipped preset found by its relative path, and the window opened on
 # the demo device by the desktop entry's Exec under Xvfb (Xvfb, xdotool, ImageMagick and Mesa
-# are installed by .ci/screenshot.sh, which runs first).
+# are installed by .ci/screenshot.sh, which runs first; the package itself pulls in Mesa).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 step() { echo "== $1 ($((SECONDS - t0)) s)"; }
@@ -24,13 +24,20 @@ echo "$deb: $(du -k "$deb" | cut -f1) KiB"
 dpkg-deb --contents "$deb" | awk '{ print $6 }'
 
 step "dpkg -i"
-dpkg -i "$deb"
+# The libraries it names (X11, EGL, Mesa) are there after .ci/screenshot.sh; if not, apt brings
+# them, as `apt install ./botbench_….deb` does on a line PC.
+dpkg -i "$deb" || {
+    DEBIAN_FRONTEND=noninteractive apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -f -y -qq >/dev/null
+}
+dpkg-query -W -f='${Status} ${Version}\n' botbench | grep -q '^install ok installed '
 test "$(command -v botbench)" = /usr/bin/botbench || test -x /usr/bin/botbench
 
 # The installed app, as a line PC runs it.
 home=$(mktemp -d)
 trap 'kill $sim 2>/dev/null || true; rm -rf "$home"' EXIT
 sim=
+root=$PWD
 cd "$home"
 run() { env -i PATH=/usr/bin:/bin HOME="$home" LANG=C.UTF-8 "$@"; }
 
@@ -58,6 +65,11 @@ cat diff.txt
 kill $sim; wait $sim 2>/dev/null || true; sim=
 
 step "the window from the desktop entry, under Xvfb"
+if ! command -v xvfb-run >/dev/null || ! command -v xdotool >/dev/null || [ ! -x /usr/bin/convert ]; then
+    echo "== installing Xvfb, xdotool and ImageMagick (when run without .ci/screenshot.sh first)"
+    DEBIAN_FRONTEND=noninteractive apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq xvfb xauth imagemagick xdotool >/dev/null
+fi
 exec_line=$(sed -n 's/^Exec=//p' /usr/share/applications/botbench.desktop)
 exe=$(PATH=/usr/bin:/bin command -v "${exec_line%% *}")
 [ "$exe" = /usr/bin/botbench ] || { echo "the desktop entry runs $exe"; exit 1; }
@@ -94,4 +106,6 @@ xvfb-run -a -s "-screen 0 1280x800x24" ./window.sh || {
 sd=$(/usr/bin/convert window.png -format "%[fx:standard_deviation]" info:)
 echo "window screenshot: standard deviation $sd"
 awk -v sd="$sd" 'BEGIN { exit !(sd > 0.02) }' || { echo "the window is blank"; exit 1; }
+mkdir -p "$root/target/screenshots"
+cp window.png "$root/target/screenshots/installed.png"
 step "package checked"
