@@ -257,6 +257,12 @@ impl App {
         }
     }
 
+    /// The window's title: `botbench 0.1.0 — Demo (…) — Window cleaner`, or
+    /// `botbench 0.1.0 — not connected`.
+    pub fn title(&self) -> &str {
+        &self.title
+    }
+
     /// The panels the profile has.
     pub fn panels(&self) -> Vec<PanelId> {
         let profile = &self.state.device.profile;
