@@ -70,6 +70,9 @@ if ! command -v xvfb-run >/dev/null || ! command -v xdotool >/dev/null || [ ! -x
     DEBIAN_FRONTEND=noninteractive apt-get update -qq
     DEBIAN_FRONTEND=noninteractive apt-get install -y -qq xvfb xauth imagemagick xdotool >/dev/null
 fi
+if command -v desktop-file-validate >/dev/null; then
+    desktop-file-validate /usr/share/applications/botbench.desktop
+fi
 exec_line=$(sed -n 's/^Exec=//p' /usr/share/applications/botbench.desktop)
 exe=$(PATH=/usr/bin:/bin command -v "${exec_line%% *}")
 [ "$exe" = /usr/bin/botbench ] || { echo "the desktop entry runs $exe"; exit 1; }
