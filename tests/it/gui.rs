@@ -10,8 +10,7 @@ use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use std::sync::{Arc, Mutex};
 
-mod gui_harness;
-use gui_harness::{H, Served, app, serve, settings, step_until};
+use crate::support::gui::{H, Served, app, serve, settings, step_until};
 use std::time::Duration;
 
 fn bench() -> Served<WindowCleaner> {
@@ -23,7 +22,7 @@ fn bench() -> Served<WindowCleaner> {
 fn harness(path: &str, panel: PanelId) -> H {
     let mut saved = settings(path, "window-cleaner", panel, Lang::En);
     saved.margin_ms = Some(100);
-    gui_harness::harness(saved)
+    crate::support::gui::harness(saved)
 }
 
 fn all_read(app: &App) -> bool {
@@ -288,12 +287,13 @@ fn a_slow_device_is_read_once_the_answer_margin_allows_for_it() {
         extra_latency: Duration::from_millis(150),
         ..Faults::default()
     };
-    let served = gui_harness::serve_with(WindowCleaner::new(&SimOptions::default()).unwrap(), slow);
+    let served =
+        crate::support::gui::serve_with(WindowCleaner::new(&SimOptions::default()).unwrap(), slow);
     // The protocol's own 20 ms is too short for it, even over three attempts: reads fail, and
     // say so.
     let saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
     assert_eq!(saved.margin_ms, None, "the protocol's own margin");
-    let mut h = gui_harness::harness(saved);
+    let mut h = crate::support::gui::harness(saved);
     step_until(&mut h, "the first read to fail", |a| {
         matches!(a.state.device.readings.get(&130), Some(Reading::Failed(_)))
     });
@@ -301,6 +301,6 @@ fn a_slow_device_is_read_once_the_answer_margin_allows_for_it() {
     // 300 ms chosen in the connection bar: every parameter is read.
     let mut saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
     saved.margin_ms = Some(300);
-    let mut h = gui_harness::harness(saved);
+    let mut h = crate::support::gui::harness(saved);
     step_until(&mut h, "every parameter read", all_read);
 }

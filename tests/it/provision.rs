@@ -7,8 +7,7 @@ use botbench::sim::servo_bus::SimServo;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-mod common;
-use common::Bench;
+use crate::support::servo::Bench;
 
 impl Bench {
     fn provision_with(
@@ -41,7 +40,7 @@ impl Bench {
     }
 }
 
-const PLAN: &str = include_str!("../presets/servo-provision-plan.ron");
+const PLAN: &str = include_str!("../../presets/servo-provision-plan.ron");
 
 fn plan(profile: &Profile) -> Plan {
     Plan::parse("plan.ron", PLAN, profile).unwrap()

@@ -10,8 +10,7 @@ use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use std::time::Duration;
 
-mod gui_harness;
-use gui_harness::{H, Served, app, serve, settings};
+use crate::support::gui::{H, Served, app, serve, settings};
 
 type Bench<D> = Served<D>;
 
@@ -33,12 +32,12 @@ fn solar() -> Bench<SolarCleanbot> {
 fn harness(path: &str, profile: &str, panel: PanelId, lang: Lang) -> H {
     let mut saved = settings(path, profile, panel, lang);
     saved.margin_ms = Some(100);
-    gui_harness::harness(saved)
+    crate::support::gui::harness(saved)
 }
 
 /// Steps the UI in real time until `done` holds; on timeout says what the panels hold.
 fn step_until(h: &mut H, what: &str, done: impl Fn(&App) -> bool) {
-    gui_harness::step_until_or(h, what, done, |a| {
+    crate::support::gui::step_until_or(h, what, done, |a| {
         format!(
             "info {:?}, solar inputs {:?}, outcomes {:?}, self-test running {} results {:?} \
              error {:?}",

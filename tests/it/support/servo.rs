@@ -19,8 +19,6 @@ pub struct Bench {
 
 impl Bench {
     /// A bus of `servos`, served at 115200 baud.
-    // Not every test binary that includes this module calls it.
-    #[allow(dead_code)]
     pub fn new(servos: Vec<SimServo>) -> Self {
         Self::with_margin(servos, std::time::Duration::from_millis(5))
     }

@@ -11,8 +11,7 @@ use egui_kittest::kittest::{NodeT, Queryable};
 use std::sync::Mutex;
 use std::time::Instant;
 
-mod gui_harness;
-use gui_harness::{H, Served, app, serve, settings, step_until};
+use crate::support::gui::{H, Served, app, serve, settings, step_until};
 
 struct Bench {
     served: Served<ServoBus>,
@@ -43,7 +42,7 @@ impl Bench {
 
 fn harness(b: &Bench, lang: Lang) -> H {
     let saved = settings(b.served.path(), "servo", PanelId::ServoBench, lang);
-    let mut h = gui_harness::harness_with(saved.clone(), move |app| {
+    let mut h = crate::support::gui::harness_with(saved.clone(), move |app| {
         // Generous for a loaded test machine (the tests share 2 cores with builds).
         app.apply(Action::Connect {
             target: saved.target.clone(),
@@ -600,7 +599,7 @@ fn a_new_connection_forgets_the_servos_found_on_the_last_one() {
     assert_eq!(app(&h).servo.scan.rows.len(), 1);
     assert!(app(&h).servo.selected.is_some(), "a lone servo is selected");
     let margin_ms = app(&h).settings.margin_ms;
-    gui_harness::app_mut(&mut h).apply(Action::Connect {
+    crate::support::gui::app_mut(&mut h).apply(Action::Connect {
         target: botbench::ui::Target::Port(other.path().to_string()),
         baud: 115_200,
         profile: "servo".into(),

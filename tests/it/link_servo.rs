@@ -6,8 +6,7 @@ use botbench::ops::servo::{self as ops, Presence, ScanPlan};
 use botbench::profile::Input;
 use botbench::sim::servo_bus::SimServo;
 
-mod common;
-use common::Bench;
+use crate::support::servo::Bench;
 
 impl Bench {
     fn scan(&self, bauds: &[u32]) -> Vec<(u8, u32, Presence)> {

@@ -12,8 +12,6 @@ use std::process::{Command, Output};
 use std::sync::Arc;
 use std::time::Duration;
 
-mod common;
-
 fn botbench(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_botbench"))
         .args(args)
@@ -234,7 +232,7 @@ fn a_minimum_above_its_maximum_is_refused_naming_both_fields() {
 
 #[test]
 fn a_servo_angle_limit_is_checked_against_the_other_one_the_servo_holds() {
-    let bench = common::Bench::with_margin(
+    let bench = crate::support::servo::Bench::with_margin(
         vec![
             SimServo::fresh(1)
                 .with_id(1)

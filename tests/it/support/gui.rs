@@ -1,6 +1,5 @@
 //! What the GUI tests share: the real app in an egui_kittest harness, connected to a simulator
 //! served on a pseudo-terminal, stepped in real time until a condition holds.
-#![allow(dead_code)] // each test binary uses its own part
 
 use botbench::i18n::Lang;
 use botbench::sim::{Device, Faults, PtyServer, SharedDevice};

@@ -16,10 +16,9 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 const BAUD: u32 = 115_200;
-const VACUUM: &str = include_str!("../assets/profiles/tuya-vacuum.ron");
+const VACUUM: &str = include_str!("../../assets/profiles/tuya-vacuum.ron");
 
-mod gui_harness;
-use gui_harness::{H, Served, app, app_mut, serve_with, settings, step_until};
+use crate::support::gui::{H, Served, app, app_mut, serve_with, settings, step_until};
 
 type Bench = Served<TuyaMcu>;
 
@@ -68,7 +67,7 @@ fn writable_profile(dir: &std::path::Path) -> (String, Bench) {
 fn harness(path: &str, profile: &str) -> H {
     let mut saved = settings(path, profile, PanelId::TuyaConsole, Lang::En);
     saved.baud = BAUD;
-    gui_harness::harness(saved)
+    crate::support::gui::harness(saved)
 }
 
 fn handshake(h: &mut H) {

@@ -3,8 +3,6 @@
 //! the synchronous-MONITOR operation. Also: parameter 4 and MONITOR agree on the temperature,
 //! whichever form (°C or a thermistor reading) the profile says the firmware sends.
 
-mod common;
-
 use botbench::ops::servo as ops;
 use botbench::ops::servo::monitor::{Reading, monitor_all, read_monitor};
 use botbench::profile::registry::{BUILTIN, parse};
@@ -196,7 +194,7 @@ fn parameter_4_and_monitor_agree_on_the_temperature_in_either_form() {
 
 #[test]
 fn through_a_pty_one_exchange_reads_every_servo_and_the_temperatures_agree() {
-    let bench = common::Bench::with_margin(
+    let bench = crate::support::servo::Bench::with_margin(
         vec![
             SimServo::fresh(11).with_id(1).with_temperature(40),
             SimServo::fresh(12).with_id(2).with_temperature(55),
