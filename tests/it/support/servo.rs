@@ -1,18 +1,18 @@
 //! A simulated servo bus on a pseudo-terminal with a link open to it, for the servo tests.
 
-use botbench::link::{Client, Link, LinkOptions, serial};
-use botbench::profile::{Profile, Registry};
+use super::{Served, open_link, profile, serve};
+use botbench::link::{Client, Link, LinkOptions};
+use botbench::profile::Profile;
 use botbench::sim::servo_bus::{ServoBus, SimServo};
-use botbench::sim::{Faults, PtyServer, SharedDevice};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, MutexGuard};
 
-/// The bus, the pty serving it, and a link to it.
+/// The bus, the pty serving it, and a link to it with the servo protocol's own answer margin.
+/// The link closes first.
 pub struct Bench {
-    _server: PtyServer,
-    /// The simulated bus, to inspect and change.
-    pub bus: Arc<Mutex<ServoBus>>,
     /// The link.
     pub link: Link,
+    /// The simulated bus on its pty.
+    pub served: Served<ServoBus>,
     /// The built-in servo profile.
     pub profile: Arc<Profile>,
 }
@@ -20,32 +20,17 @@ pub struct Bench {
 impl Bench {
     /// A bus of `servos`, served at 115200 baud.
     pub fn new(servos: Vec<SimServo>) -> Self {
-        Self::with_margin(servos, std::time::Duration::from_millis(5))
-    }
-
-    /// The same, the link giving a servo `margin` beyond the wire time to answer (more for a
-    /// test whose outcome must not depend on the machine's load).
-    pub fn with_margin(servos: Vec<SimServo>, margin: std::time::Duration) -> Self {
-        let profile = Registry::builtin().unwrap().get("servo").unwrap();
-        let bus = Arc::new(Mutex::new(ServoBus::new(servos)));
-        let shared: SharedDevice = bus.clone();
-        let server = PtyServer::start(shared, Faults::default()).unwrap();
-        let options = LinkOptions {
-            // Generous for a loaded test machine; the benchmark uses the default.
-            margin: Some(margin),
-            ..LinkOptions::default()
-        };
-        let link = Link::open(
-            serial::opener(server.path(), 115_200),
+        let profile = profile("servo");
+        let served = serve(ServoBus::new(servos));
+        let link = open_link(
+            served.path(),
+            115_200,
             profile.clone(),
-            options,
-            None,
-        )
-        .unwrap();
+            LinkOptions::default(),
+        );
         Self {
-            _server: server,
-            bus,
             link,
+            served,
             profile,
         }
     }
@@ -53,5 +38,25 @@ impl Bench {
     /// A blocking client of the link.
     pub fn client(&self) -> Client {
         self.link.client()
+    }
+
+    /// The simulated bus, locked.
+    pub fn bus(&self) -> MutexGuard<'_, ServoBus> {
+        self.served.sim()
+    }
+
+    /// The servo with serial number `serial`, as it is now.
+    pub fn servo(&self, serial: u32) -> SimServo {
+        self.served.servo(serial)
+    }
+}
+
+impl Served<ServoBus> {
+    /// The servo with serial number `serial`, as it is now.
+    pub fn servo(&self, serial: u32) -> SimServo {
+        self.sim()
+            .servo_by_serial(serial)
+            .unwrap_or_else(|| panic!("no servo {serial} on the bus"))
+            .clone()
     }
 }
