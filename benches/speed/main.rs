@@ -5,6 +5,9 @@
 //! criterion's options follow, e.g. `--warm-up-time 1 --measurement-time 3`. `cargo test
 //! --all-targets` runs each once, quickly, without `--bench`.
 
+// Tests and benchmarks stop at the first thing that is not as set up: a panic is their report.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod decoders;
 mod series;
 mod ui_frame;

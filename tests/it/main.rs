@@ -3,6 +3,9 @@
 //! (environment, current directory, fixed paths or ports): each gets its own temporary
 //! directory and passes its configuration in.
 
+// Tests and benchmarks stop at the first thing that is not as set up: a panic is their report.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod support;
 
 mod cli_frame;
