@@ -18,9 +18,20 @@
 //! - [`sim`]: device simulators on a simulated wire or a pseudo-terminal, including the field's
 //!   misbehaviour.
 //! - [`ui`]: the eframe window; [`cli`]: the command line; [`bench`]: end-to-end figures.
+//! - [`system`]: what differs between operating systems (port listing, the latency timer, why
+//!   a port cannot be opened, where the shipped examples are), behind `cfg` in one file.
 //!
 //! The window never touches the port: panels return actions, the app turns them into link
 //! commands and jobs, and the worker answers with events over bounded channels.
+
+/// The build: `0.1.0 (1a2b3c4d5)`, the crate's version and the git commit it was built from
+/// (`unknown` outside git; see `build.rs`). `botbench --version` prints it.
+pub const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (",
+    env!("BOTBENCH_COMMIT"),
+    ")"
+);
 
 pub mod bench;
 pub mod cli;
@@ -34,4 +45,5 @@ pub mod profile;
 pub mod protocol;
 pub mod series;
 pub mod sim;
+pub mod system;
 pub mod ui;

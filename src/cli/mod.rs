@@ -47,7 +47,7 @@ pub type CliResult = Result<u8, CliError>;
 
 /// botbench: tune, provision and test serial-connected robots.
 #[derive(Debug, Parser)]
-#[command(name = "botbench", version, about, long_about = None)]
+#[command(name = "botbench", version = crate::VERSION, about, long_about = None)]
 pub struct Cli {
     #[command(subcommand)]
     command: Option<Cmd>,

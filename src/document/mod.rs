@@ -205,11 +205,14 @@ pub fn read(path: &Path) -> Result<String, DocumentError> {
 }
 
 /// Reads the document at `path` and parses it with `parse`, which is given the name errors use
-/// (the path) and the text.
+/// (the path) and the text. A relative path that is not in the working folder but is among the
+/// shipped examples (`presets/window-cleaner-selftest.ron` on an installed machine) is read from
+/// there ([`crate::system::shipped_or_given`]), and errors name the file read.
 pub fn load<T>(
     path: &Path,
     parse: impl FnOnce(&str, &str) -> Result<T, DocumentError>,
 ) -> Result<T, DocumentError> {
+    let path = &crate::system::shipped_or_given(path);
     let text = read(path)?;
     parse(&path.display().to_string(), &text)
 }

@@ -1,81 +1,11 @@
 //! Real serial ports (and pseudo-terminals) through the serialport crate.
 
 use super::transport::{LinkError, Transport};
-use serialport::{SerialPort, SerialPortType};
+use serialport::SerialPort;
 use std::io::{ErrorKind, Read, Write};
 use std::time::{Duration, Instant};
 
-/// A port as the OS lists it.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
-pub struct PortInfo {
-    /// The path to open.
-    pub path: String,
-    /// `usb`, `pci`, `bluetooth` or `unknown`.
-    pub kind: &'static str,
-    /// USB vendor id.
-    pub vid: Option<u16>,
-    /// USB product id.
-    pub pid: Option<u16>,
-    /// USB serial number, where the OS gives one.
-    pub serial_number: Option<String>,
-    /// USB manufacturer.
-    pub manufacturer: Option<String>,
-    /// USB product name.
-    pub product: Option<String>,
-}
-
-impl PortInfo {
-    /// One line for a picker: `/dev/ttyUSB0  USB 1a86:7523 CH340 (sn 1234)`.
-    pub fn label(&self) -> String {
-        let mut s = self.path.clone();
-        if let (Some(v), Some(p)) = (self.vid, self.pid) {
-            s.push_str(&format!("  USB {v:04x}:{p:04x}"));
-        }
-        if let Some(prod) = &self.product {
-            s.push_str(&format!(" {prod}"));
-        }
-        if let Some(sn) = &self.serial_number {
-            s.push_str(&format!(" (sn {sn})"));
-        }
-        s
-    }
-}
-
-/// The serial ports the OS knows of (without libudev this reads sysfs; pseudo-terminals are not
-/// listed but can be opened by path).
-pub fn list_ports() -> Vec<PortInfo> {
-    let Ok(ports) = serialport::available_ports() else {
-        return Vec::new();
-    };
-    ports
-        .into_iter()
-        .map(|p| {
-            let mut info = PortInfo {
-                path: p.port_name,
-                kind: "unknown",
-                vid: None,
-                pid: None,
-                serial_number: None,
-                manufacturer: None,
-                product: None,
-            };
-            match p.port_type {
-                SerialPortType::UsbPort(u) => {
-                    info.kind = "usb";
-                    info.vid = Some(u.vid);
-                    info.pid = Some(u.pid);
-                    info.serial_number = u.serial_number;
-                    info.manufacturer = u.manufacturer;
-                    info.product = u.product;
-                }
-                SerialPortType::PciPort => info.kind = "pci",
-                SerialPortType::BluetoothPort => info.kind = "bluetooth",
-                SerialPortType::Unknown => {}
-            }
-            info
-        })
-        .collect()
-}
+pub use crate::system::{PortInfo, list_ports};
 
 /// A serial port or pseudo-terminal.
 pub struct SerialTransport {
@@ -115,19 +45,7 @@ impl SerialTransport {
         let port = serialport::new(path, baud)
             .timeout(Duration::from_millis(10))
             .open()
-            .map_err(|e| {
-                let reason = match e.kind {
-                    serialport::ErrorKind::NoDevice => format!("no such device ({e})"),
-                    _ if e.to_string().contains("Not a typewriter") => {
-                        "not a serial port (not a terminal device)".to_string()
-                    }
-                    _ if e.to_string().contains("Device or resource busy") => {
-                        "in use by another program".to_string()
-                    }
-                    _ => e.to_string(),
-                };
-                open_err(reason)
-            })?;
+            .map_err(|e| open_err(crate::system::open_failure(path, &e)))?;
         Ok(Self {
             port,
             path: path.to_string(),

@@ -7,7 +7,7 @@ use super::jobs::{self, JobOutput};
 use super::settings::Settings;
 use super::state::{AppState, Notice, Target};
 use super::{
-    Action, actions, connection, device, monitor, presets, selftest, servo_bench, solar,
+    Action, actions, connection, demo_hint, device, monitor, presets, selftest, servo_bench, solar,
     status_bar, telemetry, tuning, tuya_console,
 };
 use crate::i18n::Lang;
@@ -15,6 +15,9 @@ use crate::link::LinkCommand;
 use crate::profile::{PanelKind, ProfileError};
 use eframe::egui;
 use serde::{Deserialize, Serialize};
+
+/// The start of the window's title: `botbench 0.1.0`.
+pub const TITLE: &str = concat!("botbench ", env!("CARGO_PKG_VERSION"));
 
 /// The panels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -170,11 +173,11 @@ impl App {
         }
         let title = match self.state.link.target() {
             Some(t) => format!(
-                "botbench — {} — {}",
+                "{TITLE} — {} — {}",
                 t.label(),
                 self.state.device.profile.name.en
             ),
-            None => "botbench — not connected".to_string(),
+            None => format!("{TITLE} — not connected"),
         };
         // Only on a change: a viewport command every frame would keep the window repainting.
         if self.title != title {
@@ -217,6 +220,7 @@ impl App {
         let mut actions = Vec::new();
         egui::Panel::top("connection").show(ui, |ui| {
             actions.extend(self.connection.show(ui, settings, state));
+            demo_hint::show(ui, lang, state);
         });
         egui::Panel::bottom("status").show(ui, |ui| {
             actions.extend(status_bar::show(ui, lang, state));
@@ -253,6 +257,12 @@ impl App {
         for a in actions {
             self.apply(a);
         }
+    }
+
+    /// The window's title: `botbench 0.1.0 — built-in simulated window-cleaner — Window-cleaning
+    /// robot`, or `botbench 0.1.0 — not connected`.
+    pub fn title(&self) -> &str {
+        &self.title
     }
 
     /// The panels the profile lists, then the packet monitor. A panel whose CMD_VERSION

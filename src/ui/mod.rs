@@ -7,6 +7,7 @@
 mod actions;
 pub mod app;
 mod connection;
+pub mod demo_hint;
 mod device;
 mod inputs;
 pub mod jobs;
@@ -83,6 +84,16 @@ pub enum UiError {
     Window(String),
 }
 
+/// A file dialog for RON documents (presets, plans) that starts in the shipped examples' folder
+/// (`/usr/share/botbench/presets` when installed).
+pub(crate) fn ron_dialog() -> rfd::FileDialog {
+    let d = rfd::FileDialog::new().add_filter("RON", &["ron"]);
+    match crate::system::presets_dir() {
+        Some(dir) => d.set_directory(dir),
+        None => d,
+    }
+}
+
 /// Opens the window. `target`, `baud` and `profile` override the saved settings.
 pub fn run(
     target: Option<Target>,
@@ -94,7 +105,7 @@ pub fn run(
         viewport: eframe::egui::ViewportBuilder::default()
             .with_inner_size([1200.0, 780.0])
             .with_min_inner_size([800.0, 500.0])
-            .with_title("botbench"),
+            .with_title(app::TITLE),
         ..Default::default()
     };
     eframe::run_native(

@@ -114,9 +114,7 @@ impl PresetsPanel {
             )
             .labelled_by(label.id);
             if ui.button(lang.tr("Browse…", "浏览…")).clicked()
-                && let Some(p) = rfd::FileDialog::new()
-                    .add_filter("RON", &["ron"])
-                    .pick_file()
+                && let Some(p) = super::ron_dialog().pick_file()
             {
                 self.path = p.display().to_string();
                 self.open(rt);

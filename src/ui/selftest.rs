@@ -257,9 +257,7 @@ impl SelfTestPanel {
                     egui::Button::new(lang.tr("Browse…", "浏览…")),
                 )
                 .clicked()
-                && let Some(p) = rfd::FileDialog::new()
-                    .add_filter("RON", &["ron"])
-                    .pick_file()
+                && let Some(p) = super::ron_dialog().pick_file()
             {
                 self.path = p.display().to_string();
                 self.open(rt);

@@ -73,9 +73,7 @@ impl ProvisionPanel {
             ui.add(egui::TextEdit::singleline(&mut self.plan_path).desired_width(320.0))
                 .labelled_by(l.id);
             if ui.button(lang.tr("Browse…", "浏览…")).clicked()
-                && let Some(p) = rfd::FileDialog::new()
-                    .add_filter("RON", &["ron"])
-                    .pick_file()
+                && let Some(p) = crate::ui::ron_dialog().pick_file()
             {
                 self.plan_path = p.display().to_string();
                 self.load(rt);

@@ -1,0 +1,571 @@
+//! What differs between operating systems, in one place: the serial ports the OS lists, a USB
+//! adapter's latency timer, why a port cannot be opened (permissions, another program holding
+//! it), and where the shipped example files (presets, plans, profiles) are.
+//!
+//! Verified on Linux (Debian 12) only. Elsewhere this file compiles to the fallbacks under
+//! `cfg(not(target_os = "linux"))`: port listing through the serialport crate (which has its own
+//! Windows and macOS code), no latency timer, the OS's own words for an open failure, and the
+//! example files next to the executable. A Windows or macOS build starts here.
+
+use serialport::SerialPortType;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// A port as the OS lists it.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct PortInfo {
+    /// The path to open.
+    pub path: String,
+    /// `usb`, `pci`, `bluetooth` or `unknown`.
+    pub kind: &'static str,
+    /// USB vendor id.
+    pub vid: Option<u16>,
+    /// USB product id.
+    pub pid: Option<u16>,
+    /// USB serial number, where the OS gives one.
+    pub serial_number: Option<String>,
+    /// USB manufacturer.
+    pub manufacturer: Option<String>,
+    /// USB product name.
+    pub product: Option<String>,
+}
+
+impl PortInfo {
+    /// One line for a picker: `/dev/ttyUSB0  USB 1a86:7523 CH340 (sn 1234)`.
+    pub fn label(&self) -> String {
+        let mut s = self.path.clone();
+        if let (Some(v), Some(p)) = (self.vid, self.pid) {
+            s.push_str(&format!("  USB {v:04x}:{p:04x}"));
+        }
+        if let Some(prod) = &self.product {
+            s.push_str(&format!(" {prod}"));
+        }
+        if let Some(sn) = &self.serial_number {
+            s.push_str(&format!(" (sn {sn})"));
+        }
+        s
+    }
+}
+
+/// The serial ports the OS knows of (on Linux, without libudev, this reads sysfs; pseudo-terminals
+/// are not listed but can be opened by path).
+pub fn list_ports() -> Vec<PortInfo> {
+    let Ok(ports) = serialport::available_ports() else {
+        return Vec::new();
+    };
+    ports
+        .into_iter()
+        .map(|p| {
+            let mut info = PortInfo {
+                path: p.port_name,
+                kind: "unknown",
+                vid: None,
+                pid: None,
+                serial_number: None,
+                manufacturer: None,
+                product: None,
+            };
+            match p.port_type {
+                SerialPortType::UsbPort(u) => {
+                    info.kind = "usb";
+                    info.vid = Some(u.vid);
+                    info.pid = Some(u.pid);
+                    info.serial_number = u.serial_number;
+                    info.manufacturer = u.manufacturer;
+                    info.product = u.product;
+                }
+                SerialPortType::PciPort => info.kind = "pci",
+                SerialPortType::BluetoothPort => info.kind = "bluetooth",
+                SerialPortType::Unknown => {}
+            }
+            info
+        })
+        .collect()
+}
+
+/// The latency timer of the USB serial adapter behind `path` (FTDI: 16 ms unless set to 1 ms):
+/// on Linux the `latency_timer` attribute of its USB serial device in sysfs
+/// (`/sys/class/tty/ttyUSB0/device/latency_timer`, in ms). `Err` says why there is none: not such
+/// an adapter (a CH340, a pty), an unreadable attribute, or another system.
+pub fn latency_timer(path: &str) -> Result<Duration, String> {
+    #[cfg(target_os = "linux")]
+    {
+        latency_timer_in(Path::new("/sys/class/tty"), path)
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        Err(format!("{path}: the latency timer is read on Linux only"))
+    }
+}
+
+/// [`latency_timer`] with the sysfs `class/tty` folder given (tests use a fake one).
+#[cfg(target_os = "linux")]
+fn latency_timer_in(class_tty: &Path, path: &str) -> Result<Duration, String> {
+    // /dev/serial/by-id/... is a link to /dev/ttyUSB0.
+    let real = std::fs::canonicalize(path).unwrap_or_else(|_| PathBuf::from(path));
+    let Some(name) = real.file_name() else {
+        return Err(format!("{path}: not a device path"));
+    };
+    let attr = class_tty.join(name).join("device/latency_timer");
+    match std::fs::read_to_string(&attr) {
+        Ok(text) => text
+            .trim()
+            .parse::<u64>()
+            .map(Duration::from_millis)
+            .map_err(|_| format!("{}: not a number: {:?}", attr.display(), text.trim())),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(format!(
+            "{path}: no latency timer (not an FTDI-style USB serial adapter)"
+        )),
+        Err(e) => Err(format!("{}: {e}", attr.display())),
+    }
+}
+
+/// Why `path` could not be opened, in words that say the fix: for lack of permission, the group
+/// that owns the device and how to join it; for a busy port, which program holds it where this
+/// user can see it (brltty and ModemManager by name, with their own fix). `error` is what the
+/// serialport crate said.
+pub fn open_failure(path: &str, error: &serialport::Error) -> String {
+    use serialport::ErrorKind as K;
+    let text = error.to_string();
+    match error.kind {
+        K::Io(std::io::ErrorKind::PermissionDenied) => permission_denied(path),
+        // serialport reports EBUSY (another opener set TIOCEXCL) and a held flock as NoDevice.
+        K::NoDevice if text.contains("busy") || text.contains("lock") => busy(path),
+        K::NoDevice => format!("no such device ({text})"),
+        _ if text.contains("Not a typewriter") => {
+            "not a serial port (not a terminal device)".to_string()
+        }
+        _ => text,
+    }
+}
+
+/// A process that has a device open.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Holder {
+    /// Its process id.
+    pub pid: u32,
+    /// Its command name (`/proc/PID/comm`: at most 15 bytes).
+    pub name: String,
+}
+
+/// The other processes that have `path` open, among those this user may look into (all of them
+/// for root). Linux: a scan of `/proc/*/fd`; elsewhere nothing is found.
+pub fn holders(path: &str) -> Vec<Holder> {
+    #[cfg(target_os = "linux")]
+    {
+        let Ok(target) = std::fs::canonicalize(path) else {
+            return Vec::new();
+        };
+        let me = std::process::id();
+        let Ok(procs) = std::fs::read_dir("/proc") else {
+            return Vec::new();
+        };
+        let mut found = Vec::new();
+        for entry in procs.flatten() {
+            let Some(pid) = entry
+                .file_name()
+                .to_str()
+                .and_then(|s| s.parse::<u32>().ok())
+            else {
+                continue;
+            };
+            if pid == me {
+                continue;
+            }
+            let Ok(fds) = std::fs::read_dir(entry.path().join("fd")) else {
+                continue;
+            };
+            let holds = fds
+                .flatten()
+                .any(|fd| std::fs::read_link(fd.path()).is_ok_and(|l| l == target));
+            if holds {
+                let name = std::fs::read_to_string(entry.path().join("comm"))
+                    .map(|s| s.trim().to_string())
+                    .unwrap_or_else(|_| "?".into());
+                found.push(Holder { pid, name });
+            }
+        }
+        found.sort_by_key(|h| h.pid);
+        found
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        let _ = path;
+        Vec::new()
+    }
+}
+
+/// The message for a busy port.
+fn busy(path: &str) -> String {
+    let holders = holders(path);
+    if holders.is_empty() {
+        return format!(
+            "busy: another program has it open (not one this user can see; \
+             `sudo fuser -v {path}` names it)"
+        );
+    }
+    let mut s = String::from("busy: another program has it open:");
+    for h in &holders {
+        s.push_str(&format!("\n  {} (pid {})", h.name, h.pid));
+        match h.name.as_str() {
+            "brltty" => s.push_str(
+                " — the braille display daemon, which claims CH340/CH341 adapters on Ubuntu; \
+                 without a braille display, remove it: sudo apt remove brltty",
+            ),
+            "ModemManager" => s.push_str(
+                " — it probes a new USB modem-like port for a few seconds after it appears: \
+                 try again in a moment, or stop it: sudo systemctl stop ModemManager",
+            ),
+            _ => s.push_str(" — close it, then try again"),
+        }
+    }
+    s
+}
+
+/// The message for a port this user may not open.
+#[cfg(target_os = "linux")]
+fn permission_denied(path: &str) -> String {
+    use std::os::unix::fs::{MetadataExt, PermissionsExt};
+    let Ok(meta) = std::fs::metadata(path) else {
+        return "permission denied".into();
+    };
+    let groups = read_table("/etc/group");
+    let group = groups
+        .iter()
+        .find(|g| g.get(2).and_then(|id| id.parse::<u32>().ok()) == Some(meta.gid()))
+        .and_then(|g| g.first().cloned())
+        .unwrap_or_else(|| meta.gid().to_string());
+    let user = user_name();
+    let listed = groups.iter().any(|g| {
+        g.first() == Some(&group)
+            && g.get(3)
+                .is_some_and(|m| m.split(',').any(|u| u.trim() == user))
+    });
+    let access = Access {
+        group,
+        mode: meta.permissions().mode() & 0o7777,
+        user,
+        listed,
+        in_session: session_gids().contains(&meta.gid()),
+    };
+    access.message(path)
+}
+
+/// Who may open a device, and who is asking.
+#[cfg(target_os = "linux")]
+#[derive(Debug, Clone)]
+struct Access {
+    /// The group that owns the device node.
+    group: String,
+    /// The node's permission bits.
+    mode: u32,
+    /// This process's user.
+    user: String,
+    /// The user is a member of `group` in /etc/group.
+    listed: bool,
+    /// This process runs with `group` (a login since the user was added).
+    in_session: bool,
+}
+
+#[cfg(target_os = "linux")]
+impl Access {
+    /// Why `path` was refused, and the fix.
+    fn message(&self, path: &str) -> String {
+        let Access {
+            group, mode, user, ..
+        } = self;
+        let head = format!("permission denied: {path} belongs to group '{group}' (mode {mode:o})");
+        if mode & 0o060 != 0o060 {
+            format!(
+                "{head}, whose members may not read and write it: a udev rule giving it to group \
+                 dialout with MODE=\"0660\" fixes that"
+            )
+        } else if self.listed && !self.in_session {
+            format!(
+                "{head}; user '{user}' was added to '{group}' after this login started: log out \
+                 and back in (or run `newgrp {group}` in this terminal)"
+            )
+        } else {
+            format!(
+                "{head} and user '{user}' is not in it: run `sudo usermod -aG {group} {user}`, \
+                 then log out and back in (a new login picks up the group)"
+            )
+        }
+    }
+}
+
+/// The message for a port this user may not open.
+#[cfg(not(target_os = "linux"))]
+fn permission_denied(_path: &str) -> String {
+    "permission denied (on Windows another program may hold the port)".into()
+}
+
+/// The lines of a colon-separated table (`/etc/group`, `/etc/passwd`), split.
+#[cfg(target_os = "linux")]
+fn read_table(path: &str) -> Vec<Vec<String>> {
+    std::fs::read_to_string(path)
+        .unwrap_or_default()
+        .lines()
+        .map(|l| l.split(':').map(str::to_string).collect())
+        .collect()
+}
+
+/// A field of `/proc/self/status` (`Uid`, `Groups`…), split on whitespace.
+#[cfg(target_os = "linux")]
+fn self_status(key: &str) -> Vec<u32> {
+    std::fs::read_to_string("/proc/self/status")
+        .unwrap_or_default()
+        .lines()
+        .find_map(|l| l.strip_prefix(key)?.strip_prefix(':').map(str::to_string))
+        .map(|v| {
+            v.split_whitespace()
+                .filter_map(|n| n.parse().ok())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// The groups this process runs with: its effective group and its supplementary groups.
+#[cfg(target_os = "linux")]
+fn session_gids() -> Vec<u32> {
+    let mut gids = self_status("Groups");
+    gids.extend(self_status("Gid").get(1));
+    gids
+}
+
+/// This process's user name (its effective uid in /etc/passwd, else `$USER`).
+#[cfg(target_os = "linux")]
+fn user_name() -> String {
+    let uid = self_status("Uid").get(1).copied();
+    read_table("/etc/passwd")
+        .into_iter()
+        .find(|u| u.get(2).and_then(|id| id.parse().ok()) == uid)
+        .and_then(|u| u.into_iter().next())
+        .or_else(|| std::env::var("USER").ok())
+        .unwrap_or_else(|| "$USER".into())
+}
+
+/// The environment variable naming the folder of the example files, over every other choice.
+pub const DATA_DIR_ENV: &str = "BOTBENCH_DATA_DIR";
+
+/// Where the Debian package puts the example files.
+#[cfg(unix)]
+pub const INSTALLED_DATA_DIR: &str = "/usr/share/botbench";
+
+/// The folder of the shipped example files (`presets/`: presets and plans; `profiles/`: the
+/// built-in profiles, to copy and edit): `$BOTBENCH_DATA_DIR` if set; else, from the
+/// executable's folder, `../share/botbench` (installed: `/usr/bin` → `/usr/share/botbench`),
+/// the folder itself when it holds `presets/` (an unpacked archive), or the source checkout
+/// above it (a development build in `target/release`); else [`INSTALLED_DATA_DIR`].
+pub fn data_dir() -> Option<PathBuf> {
+    let exe = std::env::current_exe().ok();
+    data_dir_from(
+        std::env::var_os(DATA_DIR_ENV).map(PathBuf::from),
+        exe.as_deref(),
+    )
+}
+
+/// [`data_dir`] with its inputs given.
+fn data_dir_from(env: Option<PathBuf>, exe: Option<&Path>) -> Option<PathBuf> {
+    if let Some(dir) = env.filter(|d| !d.as_os_str().is_empty()) {
+        return Some(dir);
+    }
+    if let Some(bin) = exe.and_then(Path::parent) {
+        let share = bin.join("../share/botbench");
+        if share.join("presets").is_dir() {
+            return Some(share.canonicalize().unwrap_or(share));
+        }
+        if bin.join("presets").is_dir() {
+            return Some(bin.to_path_buf());
+        }
+        if let Some(checkout) = bin
+            .ancestors()
+            .find(|d| d.join("Cargo.toml").is_file() && d.join("presets").is_dir())
+        {
+            return Some(checkout.to_path_buf());
+        }
+    }
+    #[cfg(unix)]
+    {
+        Some(PathBuf::from(INSTALLED_DATA_DIR))
+    }
+    #[cfg(not(unix))]
+    {
+        None
+    }
+}
+
+/// `path` as given when it exists or is absolute; a relative path that is not here but is in
+/// the shipped examples ([`data_dir`]) is taken from there, so that
+/// `presets/window-cleaner-selftest.ron` opens on an installed machine in any folder.
+pub fn shipped_or_given(path: &Path) -> PathBuf {
+    shipped_or_given_in(data_dir().as_deref(), path)
+}
+
+/// [`shipped_or_given`] with the data folder given.
+fn shipped_or_given_in(data: Option<&Path>, path: &Path) -> PathBuf {
+    if path.is_absolute() || path.exists() {
+        return path.to_path_buf();
+    }
+    data.map(|d| d.join(path))
+        .filter(|p| p.is_file())
+        .unwrap_or_else(|| path.to_path_buf())
+}
+
+/// The folder of the shipped presets and plans, for a file dialog to start in (where it exists).
+pub fn presets_dir() -> Option<PathBuf> {
+    data_dir().map(|d| d.join("presets")).filter(|d| d.is_dir())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_data_dir_follows_the_environment_then_the_executable() {
+        let root = tempfile::tempdir().unwrap();
+        let r = root.path();
+        // Installed: PREFIX/bin/botbench and PREFIX/share/botbench/presets.
+        std::fs::create_dir_all(r.join("usr/bin")).unwrap();
+        std::fs::create_dir_all(r.join("usr/share/botbench/presets")).unwrap();
+        let exe = r.join("usr/bin/botbench");
+        let share = r.join("usr/share/botbench").canonicalize().unwrap();
+        assert_eq!(data_dir_from(None, Some(&exe)), Some(share));
+        // The environment wins.
+        let env = r.join("elsewhere");
+        assert_eq!(data_dir_from(Some(env.clone()), Some(&exe)), Some(env));
+        // An unpacked archive: presets/ beside the executable.
+        std::fs::create_dir_all(r.join("portable/presets")).unwrap();
+        let portable = r.join("portable/botbench");
+        assert_eq!(
+            data_dir_from(None, Some(&portable)),
+            Some(r.join("portable"))
+        );
+        // A development build: the checkout above target/release.
+        std::fs::create_dir_all(r.join("src/target/release")).unwrap();
+        std::fs::create_dir_all(r.join("src/presets")).unwrap();
+        std::fs::write(r.join("src/Cargo.toml"), "").unwrap();
+        let dev = r.join("src/target/release/botbench");
+        assert_eq!(data_dir_from(None, Some(&dev)), Some(r.join("src")));
+        // Nothing found: the package's folder.
+        let lost = r.join("lost/botbench");
+        #[cfg(unix)]
+        assert_eq!(
+            data_dir_from(None, Some(&lost)),
+            Some(PathBuf::from(INSTALLED_DATA_DIR))
+        );
+    }
+
+    #[test]
+    fn a_relative_path_not_found_here_comes_from_the_examples() {
+        let data = tempfile::tempdir().unwrap();
+        std::fs::create_dir_all(data.path().join("presets")).unwrap();
+        let shipped = data.path().join("presets/plan.ron");
+        std::fs::write(&shipped, "()").unwrap();
+        let d = Some(data.path());
+        assert_eq!(
+            shipped_or_given_in(d, Path::new("presets/plan.ron")),
+            shipped
+        );
+        // Found here (relative to the working folder): kept.
+        assert_eq!(
+            shipped_or_given_in(d, Path::new("Cargo.toml")),
+            PathBuf::from("Cargo.toml")
+        );
+        // Found nowhere: kept, for the error to name it as given.
+        let missing = Path::new("presets/missing.ron");
+        assert_eq!(shipped_or_given_in(d, missing), missing.to_path_buf());
+        assert_eq!(shipped_or_given_in(None, missing), missing.to_path_buf());
+        // Absolute: kept.
+        let abs = data.path().join("plan.ron");
+        assert_eq!(shipped_or_given_in(d, &abs), abs);
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_refused_port_says_which_group_to_join_or_to_log_in_again() {
+        let mut a = Access {
+            group: "dialout".into(),
+            mode: 0o660,
+            user: "ana".into(),
+            listed: false,
+            in_session: false,
+        };
+        let m = a.message("/dev/ttyUSB0");
+        assert!(
+            m.starts_with("permission denied: /dev/ttyUSB0 belongs to group 'dialout' (mode 660)"),
+            "{m}"
+        );
+        assert!(m.contains("sudo usermod -aG dialout ana"), "{m}");
+        assert!(m.contains("log out and back in"), "{m}");
+        // Added to the group, but this login is older.
+        a.listed = true;
+        let m = a.message("/dev/ttyUSB0");
+        assert!(m.contains("was added to 'dialout' after this login"), "{m}");
+        assert!(m.contains("newgrp dialout"), "{m}");
+        assert!(!m.contains("usermod"), "{m}");
+        // A node its group may not open: joining the group would not help.
+        a.mode = 0o600;
+        let m = a.message("/dev/ttyUSB0");
+        assert!(m.contains("udev rule"), "{m}");
+        assert!(!m.contains("usermod"), "{m}");
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn the_latency_timer_is_read_from_sysfs() {
+        let sys = tempfile::tempdir().unwrap();
+        let dev = sys.path().join("ttyUSB0/device");
+        std::fs::create_dir_all(&dev).unwrap();
+        std::fs::write(dev.join("latency_timer"), "16\n").unwrap();
+        assert_eq!(
+            latency_timer_in(sys.path(), "/dev/ttyUSB0"),
+            Ok(Duration::from_millis(16))
+        );
+        std::fs::write(dev.join("latency_timer"), "fast\n").unwrap();
+        let e = latency_timer_in(sys.path(), "/dev/ttyUSB0").unwrap_err();
+        assert!(e.contains("not a number"), "{e}");
+        // A CH340 (or a pty) has none.
+        let e = latency_timer_in(sys.path(), "/dev/ttyACM0").unwrap_err();
+        assert!(e.contains("no latency timer"), "{e}");
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn holders_names_the_other_processes_that_have_a_port_open() {
+        use serialport::SerialPort;
+        let (master, slave) = serialport::TTYPort::pair().unwrap();
+        let path = slave.name().unwrap();
+        drop(slave);
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(&path)
+            .unwrap();
+        // This process is not its own holder.
+        let me = std::process::id();
+        assert!(holders(&path).iter().all(|h| h.pid != me));
+        let mut child = std::process::Command::new("sleep")
+            .arg("60")
+            .stdin(file)
+            .spawn()
+            .unwrap();
+        // Until it has become `sleep`, the child is a copy of this test.
+        let comm = format!("/proc/{}/comm", child.id());
+        for _ in 0..1000 {
+            if std::fs::read_to_string(&comm).is_ok_and(|c| c.trim() == "sleep") {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        let found = holders(&path);
+        let _ = child.kill();
+        let _ = child.wait();
+        drop(master);
+        let sleep = Holder {
+            pid: child.id(),
+            name: "sleep".into(),
+        };
+        assert!(found.contains(&sleep), "{found:?}");
+    }
+}
