@@ -5,24 +5,11 @@
 //! The port given is one that cannot be opened: a command that opened it before looking at its
 //! input fails on the port instead of naming the bad input, so each case proves the order too.
 
+use crate::support::cli::run;
 use std::path::Path;
-use std::process::Command;
 
 /// A port path that does not exist: opening it fails.
 const NO_PORT: &str = "/nonexistent/botbench-edges-tty";
-
-/// Runs botbench; returns (exit code, stdout, stderr).
-fn botbench(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_botbench"))
-        .args(args)
-        .output()
-        .expect("runs botbench");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 /// Stands for `--port NO_PORT` in a command line (the port options go before the subcommand
 /// of `msp`, `servo` and `tuya`, after that of `preset`).
@@ -46,7 +33,8 @@ fn with_port<'a>(args: &[&'a str]) -> Vec<&'a str> {
 /// one of `says`, and no word about the port (it was never opened).
 fn refused_before_the_port(args: &[&str], says: &[&str]) -> String {
     let all = with_port(args);
-    let (code, out, err) = botbench(&all);
+    let ran = run(&all);
+    let (code, out, err) = (ran.code, ran.out, ran.err);
     assert_eq!(
         code, 2,
         "{all:?}: exit {code}\nstdout: {out}\nstderr: {err}"
@@ -66,7 +54,8 @@ fn refused_before_the_port(args: &[&str], says: &[&str]) -> String {
 /// its input was taken.
 fn reaches_the_port(args: &[&str]) {
     let all = with_port(args);
-    let (code, _, err) = botbench(&all);
+    let ran = run(&all);
+    let (code, err) = (ran.code, ran.err);
     assert_eq!(code, 2, "{all:?}: {err}");
     assert!(
         err.contains(NO_PORT),
@@ -201,7 +190,7 @@ fn junk(dir: &Path, name: &str, len: usize) -> String {
 fn files_are_read_within_a_bound_and_messages_quote_a_line_at_most() {
     // Item 5: `preset apply /dev/zero` read until memory ran out; a 100 MB junk preset gave a
     // 104 MB message.
-    let dir = tempfile::tempdir().unwrap();
+    let dir = crate::support::temp_dir();
     let big = junk(dir.path(), "big.ron", 3 << 20);
     let small = junk(dir.path(), "small.ron", 900 << 10);
     let plan = junk(dir.path(), "plan.ron", 900 << 10);
@@ -250,7 +239,7 @@ fn files_are_read_within_a_bound_and_messages_quote_a_line_at_most() {
 #[test]
 fn a_save_to_where_it_cannot_be_written_is_refused_before_the_device_is_read() {
     // Item 6: `preset save` to a folder read the whole device, then exited 1.
-    let dir = tempfile::tempdir().unwrap();
+    let dir = crate::support::temp_dir();
     let folder = dir.path().display().to_string();
     let missing = dir.path().join("no/such/folder/p.ron");
     let trailing = format!("{folder}/new/");
@@ -269,4 +258,56 @@ fn a_save_to_where_it_cannot_be_written_is_refused_before_the_device_is_read() {
         .map(|e| e.unwrap().file_name())
         .collect();
     assert!(left.is_empty(), "left behind: {left:?}");
+}
+
+#[test]
+fn a_set_given_some_fields_keeps_the_devices_values_for_the_rest() {
+    // Fields left out were written with the profile's defaults, over the device's tuning.
+    let sim = crate::support::cli::SimProcess::start(&["window-cleaner"]);
+    let msp = |args: &[&str]| {
+        let mut all = vec![
+            "msp",
+            "--port",
+            &sim.path,
+            "--margin-ms",
+            crate::support::cli::MARGIN_MS,
+            "--json",
+        ];
+        all.extend(args);
+        run(&all)
+    };
+    let set = "MSP_SET_USE_FAN_LEVEL_DYNAMIC_COMP";
+    let ran = msp(&["set", set, "pwmvalueMax=95", "pwmvalueMin=60"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    // Only the minimum given: the maximum is the device's 95, not the profile's default 100.
+    let ran = msp(&["set", set, "pwmvalueMin=70"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    let fields = ran.json()["fields"].clone();
+    let kept: Vec<(String, bool)> = fields
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            (
+                f["field"].as_str().unwrap().to_string(),
+                f["kept"].as_bool().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        kept,
+        [
+            ("pwmvalueMax".to_string(), true),
+            ("pwmvalueMin".to_string(), false)
+        ]
+    );
+    let ran = msp(&["get", "MSP_GET_USE_FAN_LEVEL_DYNAMIC_COMP"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    let values: Vec<i64> = ran.json()["fields"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["value"].as_i64().unwrap())
+        .collect();
+    assert_eq!(values, [95, 70]);
 }
