@@ -401,10 +401,7 @@ fn a_refused_value_is_told_what_is_wrong_and_what_is_allowed() {
     let wc = reg.get("window-cleaner").unwrap();
     let set = wc.command("MSP_SET_PWMVALUE").unwrap();
     let encode = |inputs: &[(&str, &str)]| {
-        let inputs: Vec<(String, Input)> = inputs
-            .iter()
-            .map(|(k, v)| (k.to_string(), Input::from(*v)))
-            .collect();
+        let inputs = crate::support::inputs(inputs);
         wc.encode(set, Direction::HostToDevice, &inputs)
             .unwrap_err()
             .to_string()
@@ -439,10 +436,7 @@ fn a_refused_value_is_told_what_is_wrong_and_what_is_allowed() {
     let tuya = reg.get("tuya-vacuum").unwrap();
     let dp = tuya.command("6").unwrap();
     let dps = |inputs: &[(&str, &str)]| {
-        let inputs: Vec<(String, Input)> = inputs
-            .iter()
-            .map(|(k, v)| (k.to_string(), Input::from(*v)))
-            .collect();
+        let inputs = crate::support::inputs(inputs);
         tuya.encode(dp, Direction::HostToDevice, &inputs)
     };
     let e = dps(&[("power", "maybe")]).unwrap_err().to_string();
