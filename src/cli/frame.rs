@@ -77,7 +77,7 @@ pub(crate) enum FrameCmd {
         /// The device profile (default: the protocol's usual one).
         #[arg(long)]
         profile: Option<String>,
-        /// MSP: the device code (default: the command's, else the profile's).
+        /// MSP: the device code, 0 to 255 (default: the command's, else the profile's).
         #[arg(long, value_parser = parse_u8)]
         device: Option<u8>,
         /// Build the answer to the command instead of the command itself.

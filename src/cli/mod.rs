@@ -3,6 +3,7 @@
 //! Exit codes: 0 success; 1 the device (or the data) failed, disagreed or did not answer;
 //! 2 bad input (usage, out-of-range value, malformed file).
 
+mod checks;
 mod frame;
 mod msp;
 mod port;
@@ -58,10 +59,10 @@ enum Cmd {
     /// Open the window (the default): on the built-in demo device unless --port is given.
     Gui {
         /// A serial port to connect to.
-        #[arg(long, short)]
+        #[arg(long, short, value_parser = checks::port_path)]
         port: Option<String>,
-        /// Baud rate.
-        #[arg(long, short)]
+        /// Baud rate, 300 to 4000000.
+        #[arg(long, short, value_parser = checks::baud)]
         baud: Option<u32>,
         /// Device profile.
         #[arg(long)]
@@ -125,10 +126,31 @@ pub fn main() -> ExitCode {
     match run(cli) {
         Ok(code) => ExitCode::from(code),
         Err(e) => {
-            eprintln!("botbench: {}", e.message);
+            eprintln!("botbench: {}", bounded(&e.message));
             ExitCode::from(e.code)
         }
     }
+}
+
+/// The most lines of one error message (a document's problems, one a line).
+const MESSAGE_LINES: usize = 40;
+
+/// A message kept to a screen: each line clipped (input it quotes kept to a line or so), at
+/// most [`MESSAGE_LINES`] lines.
+fn bounded(message: &str) -> String {
+    let lines: Vec<&str> = message.lines().collect();
+    let mut out: Vec<String> = lines
+        .iter()
+        .take(MESSAGE_LINES)
+        .map(|l| crate::document::clip_message(l))
+        .collect();
+    if lines.len() > MESSAGE_LINES {
+        out.push(format!(
+            "  … and {} more lines",
+            lines.len() - MESSAGE_LINES
+        ));
+    }
+    out.join("\n")
 }
 
 fn run(cli: Cli) -> CliResult {

@@ -1,12 +1,13 @@
 //! `botbench msp`: the window cleaner and the solar cleanbot from the command line.
 
-use super::port::{PortArgs, exchange_error, op_error, parse_assignments, print_checks};
+use super::checks::{self, Rate};
+use super::port::{PortArgs, exchange_error, op_error, parse_assignments, print_checks_kept};
 use super::{CliError, CliResult};
 use crate::link::{LinkCommand, LinkEvent};
 
-use crate::ops::exchange as ops;
+use crate::ops::exchange::{self as ops, Use};
 use crate::ops::selftest::{self, Operator, Plan};
-use crate::profile::{Command, Profile, Protocol};
+use crate::profile::{Command, Input, Profile, Protocol};
 use crate::protocol::Direction;
 use clap::Subcommand;
 use std::path::PathBuf;
@@ -32,6 +33,9 @@ enum MspCmd {
         command: String,
     },
     /// Send a Set (or Action) command; a Set is read back through its Get, exit 1 on a mismatch.
+    ///
+    /// Fields of a Set left out keep the device's current values: its Get is read first, and
+    /// the output marks them `kept`.
     Set {
         /// Command name or number.
         command: String,
@@ -39,16 +43,17 @@ enum MspCmd {
         #[arg(value_name = "FIELD=VALUE")]
         fields: Vec<String>,
     },
-    /// Poll telemetry commands and print each answer as a line.
+    /// Poll Get or Telemetry commands and print each answer as a line.
     Watch {
         /// Command names or numbers.
         #[arg(required = true)]
         commands: Vec<String>,
-        /// Polls per second for each command (default: as fast as the wire allows).
-        #[arg(long)]
-        rate: Option<f64>,
-        /// Stop after this many answers.
-        #[arg(long)]
+        /// Polls per second for each command, 0.1 to 1000, or max: as fast as the wire allows
+        /// (the default).
+        #[arg(long, default_value = "max", value_parser = checks::rate)]
+        rate: Rate,
+        /// Stop after this many answers, 1 to 1000000000 (default: until Ctrl-C).
+        #[arg(long, value_parser = checks::count)]
         count: Option<u64>,
     },
     /// Run a production self-test plan (RON); exit 1 on FAIL. The plan is checked first.
@@ -66,9 +71,97 @@ enum MspCmd {
 }
 
 fn command<'p>(profile: &'p Profile, name: &str) -> Result<&'p Command, CliError> {
-    profile
-        .command(name)
-        .ok_or_else(|| CliError::input(format!("{} has no command '{name}'", profile.id)))
+    profile.command(name).ok_or_else(|| {
+        CliError::input(format!(
+            "{} has no command '{}' (`botbench frame decode` and the profile list them; names \
+             such as MSP_GET_PWMVALUE, or numbers)",
+            profile.id,
+            crate::document::quote(name)
+        ))
+    })
+}
+
+/// An `msp` subcommand with everything it was given checked, before the port is opened.
+enum Checked<'p> {
+    Version,
+    Ping,
+    Get(&'p Command),
+    Set(&'p Command, Vec<(String, Input)>),
+    Watch {
+        commands: Vec<&'p Command>,
+        interval: Option<Duration>,
+        count: Option<u64>,
+    },
+    Selftest {
+        plan: Box<Plan>,
+        log: Option<PathBuf>,
+        yes: bool,
+    },
+}
+
+/// Checks every name, value and file of `cmd` against `profile`: the command's kind fits the
+/// subcommand, its request can be built, every field given is one of its fields, once, with a
+/// value it takes.
+fn check<'p>(cmd: &MspCmd, profile: &'p Profile) -> Result<Checked<'p>, CliError> {
+    Ok(match cmd {
+        MspCmd::Version => Checked::Version,
+        MspCmd::Ping => Checked::Ping,
+        MspCmd::Get { command: name } => {
+            let cmd = command(profile, name)?;
+            ops::check_kind(profile, cmd, Use::Read).map_err(op_error)?;
+            ops::request(profile, cmd, &[], 1).map_err(op_error)?;
+            Checked::Get(cmd)
+        }
+        MspCmd::Set {
+            command: name,
+            fields,
+        } => {
+            let cmd = command(profile, name)?;
+            let inputs = parse_assignments(fields, "FIELD")?;
+            let omitted = ops::check_write(profile, cmd, &inputs).map_err(op_error)?;
+            // Given whole (or an action), the request is built now: relations, missing fields.
+            if omitted.is_empty() || cmd.kind != crate::profile::CommandKind::Set {
+                ops::request(profile, cmd, &inputs, 1).map_err(op_error)?;
+            }
+            Checked::Set(cmd, inputs)
+        }
+        MspCmd::Watch {
+            commands,
+            rate,
+            count,
+        } => {
+            let mut cmds = Vec::new();
+            for name in commands {
+                let cmd = command(profile, name)?;
+                ops::check_kind(profile, cmd, Use::Poll).map_err(op_error)?;
+                ops::request(profile, cmd, &[], 1).map_err(op_error)?;
+                if cmds.iter().any(|c: &&Command| c.id == cmd.id) {
+                    return Err(CliError::input(format!("{} is given twice", cmd.ident)));
+                }
+                cmds.push(cmd);
+            }
+            let interval = match rate {
+                Rate::Max => None,
+                Rate::PerSecond(r) => Some(Duration::from_secs_f64(1.0 / r)),
+            };
+            Checked::Watch {
+                commands: cmds,
+                interval,
+                count: *count,
+            }
+        }
+        MspCmd::Selftest { plan, log, yes } => {
+            let plan = Plan::load(plan, profile).map_err(CliError::input)?;
+            if let Some(log) = log {
+                crate::document::check_append(log).map_err(CliError::input)?;
+            }
+            Checked::Selftest {
+                plan: Box::new(plan),
+                log: log.clone(),
+                yes: *yes,
+            }
+        }
+    })
 }
 
 /// Prints an answer's fields. A payload that does not fit the layout is shown as such: the
@@ -110,59 +203,22 @@ fn print_fields(profile: &Profile, cmd: &Command, payload: &[u8], json: bool) ->
 
 pub(crate) fn run(args: MspArgs) -> CliResult {
     let json = args.port.json;
-    // A self-test plan (and its log) is checked before the port is opened.
-    let selftest = match &args.cmd {
-        MspCmd::Selftest { plan, log, yes } => {
-            let profile = args.port.profile("window-cleaner", Protocol::Msp)?;
-            let plan = Plan::load(plan, &profile).map_err(CliError::input)?;
-            if let Some(log) = log {
-                std::fs::OpenOptions::new()
-                    .create(true)
-                    .append(true)
-                    .open(log)
-                    .map_err(|e| CliError::input(format!("{}: {e}", log.display())))?;
-            }
-            Some((profile, plan, log.clone(), *yes))
-        }
-        _ => None,
-    };
-    let (link, profile) = match &selftest {
-        Some((profile, ..)) => (args.port.open_with(profile.clone(), true)?, profile.clone()),
-        None => args.port.open("window-cleaner", Protocol::Msp, true)?,
-    };
+    // Everything given is checked before the port is opened.
+    let profile = args.port.profile("window-cleaner", Protocol::Msp)?;
+    let checked = check(&args.cmd, &profile)?;
+    let link = args.port.open_with(profile.clone(), true)?;
     // The session asks CMD_VERSION first, to learn the device code; later requests wait for it.
     let client = link.client();
     let identified = client.device_info();
-    match args.cmd {
-        MspCmd::Version => match identified {
+    match checked {
+        Checked::Version => match identified {
             Ok(info) => {
-                if json {
-                    println!("{}", serde_json::to_string(&info).unwrap_or_default());
-                } else {
-                    println!("hardware   {:#04x}", info.hw);
-                    println!("firmware   {}", info.firmware);
-                    println!("api        {}", info.api);
-                    println!("build      {}", info.build);
-                    println!("build date {}", info.build_date.as_deref().unwrap_or("-"));
-                    if let Some(extra) = &info.extra {
-                        println!("!! bytes past the profile's CMD_VERSION layout: {extra}");
-                    }
-                    match info.flags {
-                        Some(f) => println!(
-                            "flags      {f:#04x}: config page {}, PID page {}, charging module {}, collision switches {}",
-                            yes(info.supports(0)),
-                            yes(info.supports(1)),
-                            yes(info.supports(2)),
-                            yes(info.supports(3))
-                        ),
-                        None => println!("flags      none (older firmware)"),
-                    }
-                }
+                print_version(&info, json);
                 Ok(0)
             }
             Err(e) => Err(exchange_error(e)),
         },
-        MspCmd::Ping => {
+        Checked::Ping => {
             let r = crate::ops::device::ping(&client, &profile).map_err(op_error)?;
             if json {
                 println!(
@@ -174,8 +230,7 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
             }
             Ok(0)
         }
-        MspCmd::Get { command: name } => {
-            let cmd = command(&profile, &name)?;
+        Checked::Get(cmd) => {
             let reply = ops::send(&client, &profile, cmd, &[]).map_err(op_error)?;
             Ok(print_fields(
                 &profile,
@@ -184,88 +239,103 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
                 json,
             ))
         }
-        MspCmd::Set {
-            command: name,
-            fields,
-        } => {
-            let cmd = command(&profile, &name)?;
-            let inputs = parse_assignments(&fields)?;
-            let checks = ops::write_verified(&client, &profile, cmd, &inputs).map_err(op_error)?;
+        Checked::Set(cmd, inputs) => {
+            let written = ops::write_keeping(&client, &profile, cmd, &inputs).map_err(op_error)?;
             let field_of = |ident: &str| cmd.request.iter().find(|f| f.ident == ident).cloned();
-            Ok(print_checks(&checks, field_of, json))
+            let kept: Vec<&str> = written.kept.iter().map(|(k, _)| k).collect();
+            Ok(print_checks_kept(&written.checks, &kept, field_of, json))
         }
-        MspCmd::Watch {
+        Checked::Watch {
             commands,
-            rate,
+            interval,
             count,
-        } => {
-            let cmds: Vec<&Command> = commands
-                .iter()
-                .map(|c| command(&profile, c))
-                .collect::<Result<_, _>>()?;
-            let interval = match rate {
-                Some(r) if r > 0.0 && r.is_finite() => Some(Duration::from_secs_f64(1.0 / r)),
-                Some(r) => {
-                    return Err(CliError::input(format!(
-                        "--rate {r}: give polls per second above 0"
-                    )));
-                }
-                None => None,
-            };
-            let polls = cmds
-                .iter()
-                .map(|c| crate::ops::telemetry::poll(&profile, c, interval))
-                .collect();
-            link.send(LinkCommand::SetPolls(polls));
-            let started = Instant::now();
-            let mut seen = 0u64;
-            let mut failures = 0u64;
-            while count.is_none_or(|n| seen < n) {
-                let Ok(ev) = link.events().recv() else { break };
-                match ev {
-                    LinkEvent::Telemetry {
-                        command: id,
-                        at,
-                        result,
-                    } => {
-                        seen += 1;
-                        let t = at.duration_since(started).as_secs_f64();
-                        let Some(cmd) = profile.command_by_id(id) else {
-                            continue;
-                        };
-                        match result {
-                            Ok(p) => {
-                                let line = p.summary(&profile);
-                                if json {
-                                    println!(
-                                        "{}",
-                                        serde_json::json!({"t": t, "command": cmd.ident, "summary": line})
-                                    );
-                                } else {
-                                    println!("{t:9.3} {line}");
-                                }
-                            }
-                            Err(e) => {
-                                failures += 1;
-                                println!("{t:9.3} {} !{e}", cmd.ident);
-                            }
-                        }
-                    }
-                    LinkEvent::State(crate::link::LinkState::Lost { reason }) => {
-                        return Err(CliError::device(format!("link lost: {reason}")));
-                    }
-                    _ => {}
-                }
-            }
-            Ok(u8::from(failures > 0 && failures == seen))
-        }
-        MspCmd::Selftest { .. } => {
-            let Some((_, plan, log, yes)) = selftest else {
-                return Err(CliError::input("no plan"));
-            };
+        } => watch(&link, &profile, &commands, interval, count, json),
+        Checked::Selftest { plan, log, yes } => {
             selftest_run(&client, &profile, &plan, log.as_deref(), yes, json)
         }
     }
+}
+
+fn print_version(info: &crate::link::DeviceInfo, json: bool) {
+    if json {
+        println!("{}", serde_json::to_string(info).unwrap_or_default());
+        return;
+    }
+    println!("hardware   {:#04x}", info.hw);
+    println!("firmware   {}", info.firmware);
+    println!("api        {}", info.api);
+    println!("build      {}", info.build);
+    println!("build date {}", info.build_date.as_deref().unwrap_or("-"));
+    if let Some(extra) = &info.extra {
+        println!("!! bytes past the profile's CMD_VERSION layout: {extra}");
+    }
+    match info.flags {
+        Some(f) => println!(
+            "flags      {f:#04x}: config page {}, PID page {}, charging module {}, collision switches {}",
+            yes(info.supports(0)),
+            yes(info.supports(1)),
+            yes(info.supports(2)),
+            yes(info.supports(3))
+        ),
+        None => println!("flags      none (older firmware)"),
+    }
+}
+
+/// Polls `cmds` and prints each answer as a line, until `count` answers (or the link is lost).
+fn watch(
+    link: &crate::link::Link,
+    profile: &Profile,
+    cmds: &[&Command],
+    interval: Option<Duration>,
+    count: Option<u64>,
+    json: bool,
+) -> CliResult {
+    let polls = cmds
+        .iter()
+        .map(|c| crate::ops::telemetry::poll(profile, c, interval))
+        .collect();
+    link.send(LinkCommand::SetPolls(polls));
+    let started = Instant::now();
+    let mut seen = 0u64;
+    let mut failures = 0u64;
+    while count.is_none_or(|n| seen < n) {
+        let Ok(ev) = link.events().recv() else { break };
+        match ev {
+            LinkEvent::Telemetry {
+                command: id,
+                at,
+                result,
+            } => {
+                seen += 1;
+                let t = at.duration_since(started).as_secs_f64();
+                let Some(cmd) = profile.command_by_id(id) else {
+                    continue;
+                };
+                match result {
+                    Ok(p) => {
+                        let line = p.summary(profile);
+                        if json {
+                            println!(
+                                "{}",
+                                serde_json::json!({"t": t, "command": cmd.ident, "summary": line})
+                            );
+                        } else {
+                            println!("{t:9.3} {line}");
+                        }
+                    }
+                    Err(e) => {
+                        failures += 1;
+                        println!("{t:9.3} {} !{e}", cmd.ident);
+                    }
+                }
+            }
+            LinkEvent::State(crate::link::LinkState::Lost { reason }) => {
+                return Err(CliError::device(format!("link lost: {reason}")));
+            }
+            _ => {}
+        }
+    }
+    Ok(u8::from(failures > 0 && failures == seen))
 }
 
 /// The operator at a terminal: prompts on stderr, Enter on stdin.
@@ -355,7 +425,12 @@ fn selftest_run(
         }
     }
     if let Some(Err(e)) = logged {
-        return Err(CliError::device(e));
+        // The exit code names who failed: a failed device first, else the log.
+        return Err(if report.pass {
+            CliError::input(e)
+        } else {
+            CliError::device(e)
+        });
     }
     Ok(u8::from(!report.pass))
 }

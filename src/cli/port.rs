@@ -1,6 +1,6 @@
 //! What the device subcommands share: the port options, opening a link, printing checks.
 
-use super::{CliError, registry};
+use super::{CliError, checks, registry};
 use crate::link::{ExchangeError, Link, LinkOptions, serial};
 use crate::ops::{Check, OpError};
 use crate::profile::{Field, Profile, Protocol};
@@ -11,20 +11,20 @@ use std::sync::Arc;
 #[derive(Debug, Args)]
 pub(crate) struct PortArgs {
     /// The serial port (e.g. /dev/ttyUSB0, or a /dev/pts path from `botbench sim`).
-    #[arg(long, short)]
+    #[arg(long, short, value_parser = checks::port_path)]
     pub port: String,
-    /// Baud rate (default: the profile's).
-    #[arg(long, short)]
+    /// Baud rate, 300 to 4000000 (default: the profile's).
+    #[arg(long, short, value_parser = checks::baud)]
     pub baud: Option<u32>,
     /// Device profile name or .ron file.
     #[arg(long)]
     pub profile: Option<String>,
-    /// How long the device may take to answer beyond the wire time, in ms (default: the
+    /// How long the device may take to answer beyond the wire time, 1 to 5000 ms (default: the
     /// protocol's: MSP 20, servo 1.5, Tuya 300).
-    #[arg(long, value_name = "MS")]
+    #[arg(long, value_name = "MS", value_parser = checks::margin_ms)]
     pub margin_ms: Option<u64>,
-    /// MSP polling at the wire's maximum (`watch --rate max`): requests in flight at once. 2
-    /// sends the next request while the device still answers; 1 waits for each answer, for
+    /// MSP polling at the wire's maximum (`watch --rate max`): requests in flight at once, 1 to
+    /// 4. 2 sends the next request while the device still answers; 1 waits for each answer, for
     /// firmware that cannot take a request while it answers.
     #[arg(long, value_name = "N", default_value_t = 2, value_parser = clap::value_parser!(u8).range(1..=4))]
     pub poll_pipeline: u8,
@@ -34,18 +34,6 @@ pub(crate) struct PortArgs {
 }
 
 impl PortArgs {
-    /// Loads the profile, checks its protocol, and opens the port.
-    pub fn open(
-        &self,
-        default_profile: &str,
-        protocol: Protocol,
-        start_session: bool,
-    ) -> Result<(Link, Arc<Profile>), CliError> {
-        let profile = self.profile(default_profile, protocol)?;
-        let link = self.open_with(profile.clone(), start_session)?;
-        Ok((link, profile))
-    }
-
     /// Loads the profile (`--profile`, else `default_profile`) and checks its protocol.
     pub fn profile(
         &self,
@@ -107,12 +95,25 @@ pub(crate) fn print_checks(
     field_of: impl Fn(&str) -> Option<Field>,
     json: bool,
 ) -> u8 {
+    print_checks_kept(checks, &[], field_of, json)
+}
+
+/// Prints read-back checks, marking the fields in `kept` (not given: the device's own values
+/// written back) as such; returns exit code 1 if any mismatched.
+pub(crate) fn print_checks_kept(
+    checks: &[Check],
+    kept: &[&str],
+    field_of: impl Fn(&str) -> Option<Field>,
+    json: bool,
+) -> u8 {
     let bad = checks.iter().filter(|c| !c.ok()).count();
+    let is_kept = |field: &str| kept.iter().any(|k| k.eq_ignore_ascii_case(field));
     if json {
         let doc = serde_json::json!({
             "verified": bad == 0,
             "fields": checks.iter().map(|c| serde_json::json!({
                 "field": c.field, "written": c.written, "read": c.read, "ok": c.ok(),
+                "kept": is_kept(&c.field),
             })).collect::<Vec<_>>(),
         });
         println!("{doc}");
@@ -122,10 +123,15 @@ pub(crate) fn print_checks(
                 Some(f) => (f.format(&c.written), f.format(&c.read)),
                 None => (format!("{:?}", c.written), format!("{:?}", c.read)),
             };
-            if c.ok() {
-                println!("{:<24} {w:>12}  verified", c.field);
+            let how = if is_kept(&c.field) {
+                "kept (not given: the device's value), "
             } else {
-                println!("{:<24} {w:>12}  MISMATCH: device holds {r}", c.field);
+                ""
+            };
+            if c.ok() {
+                println!("{:<24} {w:>12}  {how}verified", c.field);
+            } else {
+                println!("{:<24} {w:>12}  {how}MISMATCH: device holds {r}", c.field);
             }
         }
         if checks.is_empty() {
@@ -135,20 +141,27 @@ pub(crate) fn print_checks(
     u8::from(bad > 0)
 }
 
-/// `FIELD=VALUE` arguments as named text inputs.
+/// `FIELD=VALUE` arguments as named text inputs (`what` names the left side in errors: `FIELD`,
+/// `NAME`). A name is needed before the `=`; the value may be empty (a text field).
 pub(crate) fn parse_assignments(
     args: &[String],
+    what: &str,
 ) -> Result<Vec<(String, crate::profile::Input)>, CliError> {
     args.iter()
         .map(|kv| {
-            kv.split_once('=')
-                .map(|(k, v)| {
-                    (
-                        k.trim().to_string(),
-                        crate::profile::Input::Text(v.to_string()),
-                    )
-                })
-                .ok_or_else(|| CliError::input(format!("'{kv}' is not FIELD=VALUE")))
+            let quoted = crate::document::quote(kv);
+            let (k, v) = kv
+                .split_once('=')
+                .ok_or_else(|| CliError::input(format!("'{quoted}' is not {what}=VALUE")))?;
+            if k.trim().is_empty() {
+                return Err(CliError::input(format!(
+                    "'{quoted}' has no {what} before the '='; write {what}=VALUE"
+                )));
+            }
+            Ok((
+                k.trim().to_string(),
+                crate::profile::Input::Text(v.to_string()),
+            ))
         })
         .collect()
 }

@@ -1,13 +1,14 @@
 //! `botbench preset`: save a device's tunable parameters to a file, compare, and write them back.
 
 use super::port::{PortArgs, op_error, print_checks};
-use super::{CliError, CliResult, registry};
+use super::{CliError, CliResult};
 use crate::link::{DeviceInfo, Link};
 use crate::ops::{self, Cancel, Progress};
 use crate::preset::{self, Preset};
 use crate::profile::{Profile, Protocol};
 use clap::Subcommand;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// The profile used when `--profile` is not given.
 const DEFAULT_PROFILE: &str = "window-cleaner";
@@ -49,42 +50,45 @@ pub(crate) fn run(cmd: PresetCmd) -> CliResult {
 }
 
 /// Loads and checks the preset before the port is opened: a bad file is exit 2.
-fn load(file: &std::path::Path, port: &PortArgs) -> Result<(Preset, Profile), CliError> {
-    let profile = registry()?
-        .get(port.profile.as_deref().unwrap_or(DEFAULT_PROFILE))
-        .map_err(CliError::input)?;
+fn load(file: &std::path::Path, port: &PortArgs) -> Result<(Preset, Arc<Profile>), CliError> {
+    let profile = port.profile(DEFAULT_PROFILE, Protocol::Msp)?;
     let loaded = Preset::load(file, &profile).map_err(CliError::input)?;
-    Ok((loaded.preset, (*profile).clone()))
+    Ok((loaded.preset, profile))
 }
 
 /// Opens the port and waits for the session to learn the device (its code) from CMD_VERSION.
-fn connect(port: &PortArgs) -> Result<(Link, std::sync::Arc<Profile>, DeviceInfo), CliError> {
-    let (link, profile) = port.open(DEFAULT_PROFILE, Protocol::Msp, true)?;
+fn connect(port: &PortArgs, profile: Arc<Profile>) -> Result<(Link, DeviceInfo), CliError> {
+    let link = port.open_with(profile, true)?;
     let info = link
         .client()
         .device_info()
         .map_err(|e| CliError::device(format!("no answer to CMD_VERSION: {e}")))?;
-    Ok((link, profile, info))
+    Ok((link, info))
 }
 
 fn no_progress(_: Progress) {}
 
 fn save(file: &std::path::Path, note: &str, port: &PortArgs) -> CliResult {
-    let (link, profile, info) = connect(port)?;
+    // The profile and the destination are checked before the device is read: a file that
+    // cannot be written is bad input (exit 2), found before the whole device is read for it.
+    let profile = port.profile(DEFAULT_PROFILE, Protocol::Msp)?;
     if preset::preset_commands(&profile).is_empty() {
         return Err(CliError::input(format!(
             "profile '{}' has no Set commands with a Get to read them back: nothing to save",
             profile.id
         )));
     }
+    crate::document::check_destination(file).map_err(CliError::input)?;
+    let (link, info) = connect(port, profile.clone())?;
     let mut captured =
         ops::preset::capture(&link.client(), &profile, &Cancel::new(), &mut no_progress)
             .map_err(op_error)?;
     captured.note = note.to_string();
     captured.device = Some(ops::device::short_description(&info));
+    // Still the destination's fault if it fails now (a full disk): exit 2, the device is fine.
     captured
         .save_annotated(file, &profile)
-        .map_err(CliError::device)?;
+        .map_err(CliError::input)?;
     let fields: usize = captured.values.iter().map(|c| c.fields.len()).sum();
     if port.json {
         println!(
@@ -106,8 +110,8 @@ fn save(file: &std::path::Path, note: &str, port: &PortArgs) -> CliResult {
 }
 
 fn diff(file: &std::path::Path, port: &PortArgs) -> CliResult {
-    let (preset, _) = load(file, port)?;
-    let (link, profile, _) = connect(port)?;
+    let (preset, profile) = load(file, port)?;
+    let (link, _) = connect(port, profile.clone())?;
     let device =
         ops::preset::read_device(&link.client(), &profile, &Cancel::new(), &mut no_progress)
             .map_err(op_error)?;
@@ -143,8 +147,8 @@ fn diff(file: &std::path::Path, port: &PortArgs) -> CliResult {
 }
 
 fn apply(file: &std::path::Path, port: &PortArgs) -> CliResult {
-    let (preset, _) = load(file, port)?;
-    let (link, profile, _) = connect(port)?;
+    let (preset, profile) = load(file, port)?;
+    let (link, _) = connect(port, profile.clone())?;
     let mut results = Vec::new();
     let json = port.json;
     let outcome = ops::preset::apply_each(

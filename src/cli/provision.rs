@@ -2,7 +2,7 @@
 //! a PASS or FAIL line for each and a CSV log.
 
 use super::port::PortArgs;
-use super::{CliError, CliResult, registry};
+use super::{CliError, CliResult};
 use crate::link::Client;
 use crate::ops::servo::provision::{self as ops, Outcome, Plan, ProvisionState, Record};
 use crate::ops::servo::{self as servo_ops, BAUDS, Presence};
@@ -18,29 +18,14 @@ pub(crate) fn run(
     count: u32,
     wait_ms: Option<u64>,
 ) -> CliResult {
-    // Everything that can be checked is checked before the port is opened.
-    if count == 0 {
-        return Err(CliError::input("--count 0: give at least 1"));
-    }
-    if wait_ms == Some(0) {
-        return Err(CliError::input("--wait-ms 0: give at least 1 ms"));
-    }
-    let profile = registry()?
-        .get(port.profile.as_deref().unwrap_or("servo"))
-        .map_err(CliError::input)?;
-    if profile.protocol != Protocol::Servo {
-        return Err(CliError::input(format!(
-            "profile '{}' speaks {}, not servo",
-            profile.id,
-            profile.protocol.name()
-        )));
-    }
+    // Everything that can be checked is checked before the port is opened (--count and
+    // --wait-ms by their parsers).
+    let profile = port.profile("servo", Protocol::Servo)?;
     let plan = Plan::load(plan_path, &profile).map_err(CliError::input)?;
     if let Some(log) = log {
-        ops::check_log(log)
-            .map_err(|e| CliError::input(format!("cannot open the log {}: {e}", log.display())))?;
+        ops::check_log(log, &plan.record).map_err(CliError::input)?;
     }
-    let (link, profile) = port.open("servo", Protocol::Servo, false)?;
+    let link = port.open_with(profile.clone(), false)?;
     let client = link.client();
     let cancel = super::port::cancel_on_ctrl_c();
     let mut state = ProvisionState::new();
@@ -74,13 +59,19 @@ pub(crate) fn run(
             failed += 1;
         }
         print_record(&record, n, count, plan.params.len(), port.json);
-        if let Some(log) = log {
-            ops::append_csv(log, &record).map_err(|e| {
-                CliError::device(format!(
-                    "the servo was not logged: cannot append to {}: {e}",
-                    log.display()
-                ))
-            })?;
+        if let Some(log) = log
+            && let Err(e) = ops::append_csv(log, &record)
+        {
+            let e = format!(
+                "the servo was not logged: cannot append to {}: {e}",
+                log.display()
+            );
+            // The exit code names who failed: a failed servo first, else the log.
+            return Err(if failed > 0 {
+                CliError::device(e)
+            } else {
+                CliError::input(e)
+            });
         }
         last = Some(record);
     }

@@ -1,5 +1,6 @@
 //! `botbench servo`: scan, parameters, id and baud provisioning, motion.
 
+use super::checks;
 use super::port::{PortArgs, op_error, print_checks};
 use super::{CliError, CliResult};
 use crate::ops::servo::{self as ops, BAUDS, Presence};
@@ -35,50 +36,61 @@ enum ServoCmd {
     },
     /// Is servo ID there?
     Ping {
-        /// Servo id.
+        /// Servo id, 0 to 254.
+        #[arg(value_parser = checks::servo_id)]
         id: u8,
     },
     /// Read one parameter, or all of them.
     Read {
-        /// Servo id.
+        /// Servo id, 0 to 254.
+        #[arg(value_parser = checks::servo_id)]
         id: u8,
         /// Parameter name or data_id (default: all).
         param: Option<String>,
     },
     /// Write one user parameter and read it back.
     Write {
-        /// Servo id.
+        /// Servo id, 0 to 254.
+        #[arg(value_parser = checks::servo_id)]
         id: u8,
         /// Parameter name or data_id.
         param: String,
-        /// Value in display units, or a label.
+        /// Value in display units, or a label (the parameter's range, as `read` shows it).
+        #[arg(allow_hyphen_values = true)]
         value: String,
     },
     /// Give servo OLD the id NEW (refuses 255 and ids in use; a fresh servo must be alone).
     SetId {
-        /// Its id now.
+        /// Its id now, 0 to 254.
+        #[arg(value_parser = checks::servo_id)]
         old: u8,
-        /// The id to give it.
+        /// The id to give it, 0 to 254.
+        #[arg(value_parser = checks::servo_id)]
         new: u8,
     },
     /// Set servo ID's baud rate (a rate such as 57600, or option 1-8), follow it and verify.
     SetBaud {
-        /// Servo id.
+        /// Servo id, 0 to 254.
+        #[arg(value_parser = checks::servo_id)]
         id: u8,
-        /// The new rate or option.
-        baud: u32,
+        /// The new rate (9600, 19200, 38400, 57600, 115200, 250000, 500000 or 1000000), or its
+        /// option 1 to 8.
+        #[arg(value_parser = servo_baud)]
+        baud: u8,
     },
     /// Turn servo ID to DEG degrees over --ms milliseconds.
     Angle {
-        /// Servo id.
+        /// Servo id, 0 to 254.
+        #[arg(value_parser = checks::servo_id)]
         id: u8,
-        /// Target angle in degrees (0.1° steps).
+        /// Target angle in degrees, in 0.1° steps, within the profile's range (the built-in
+        /// servo's: -180.0 to 180.0).
         #[arg(allow_hyphen_values = true)]
         deg: String,
-        /// Time to get there.
+        /// Time to get there, 0 to 65535 ms.
         #[arg(long, default_value_t = 500)]
         ms: u16,
-        /// Power in mW (0: the servo's limit).
+        /// Power, 0 to 65535 mW (0: the servo's limit).
         #[arg(long, default_value_t = 0)]
         power: u16,
     },
@@ -90,13 +102,30 @@ enum ServoCmd {
         /// Append one CSV line per servo to this file.
         #[arg(long)]
         log: Option<PathBuf>,
-        /// How many servos; between them the operator swaps the servo and presses Enter.
-        #[arg(long, default_value_t = 1)]
+        /// How many servos, 1 to 10000; between them the operator swaps the servo and presses
+        /// Enter.
+        #[arg(long, default_value_t = 1, value_parser = checks::provision_count)]
         count: u32,
-        /// Between servos, instead of waiting for Enter, look for a new fresh servo every MS ms.
-        #[arg(long, value_name = "MS")]
+        /// Between servos, instead of waiting for Enter, look for a new fresh servo every MS ms,
+        /// 1 to 600000.
+        #[arg(long, value_name = "MS", value_parser = checks::wait_ms)]
         wait_ms: Option<u64>,
     },
+}
+
+/// A servo baud rate or its option (1-8), as the option.
+fn servo_baud(text: &str) -> Result<u8, String> {
+    let allowed = || format!("give a servo baud rate ({BAUDS:?}) or its option 1 to 8");
+    let quoted = crate::document::quote(text);
+    let v: u32 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{quoted}' is not a number; {}", allowed()))?;
+    match v {
+        1..=8 => Ok(v as u8),
+        _ => ops::option_of_baud(v)
+            .ok_or_else(|| format!("{v} is not a servo baud rate or option; {}", allowed())),
+    }
 }
 
 fn parse_ids(s: &str) -> Result<std::ops::RangeInclusive<u8>, CliError> {
@@ -173,26 +202,77 @@ fn param<'p>(profile: &'p Profile, name: &str) -> Result<&'p crate::profile::Par
     })
 }
 
+/// A `servo` subcommand with everything it was given checked, before the port is opened.
+enum Checked<'p> {
+    Scan(ops::ScanPlan),
+    Monitor(Vec<u8>),
+    Ping(u8),
+    Read(u8, Vec<&'p crate::profile::Param>),
+    Write(u8, &'p crate::profile::Param, Value),
+    SetId(u8, u8),
+    SetBaud(u8, u8),
+    Angle(u8, Vec<(String, Input)>, u16),
+}
+
+/// Checks every id, name and value of `cmd` against `profile`; `home` is the port's baud rate.
+fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<'p>, CliError> {
+    Ok(match cmd {
+        ServoCmd::Scan { ids, bauds } => Checked::Scan(ops::ScanPlan {
+            ids: parse_ids(ids)?,
+            bauds: parse_bauds(bauds.as_deref(), home)?,
+            home_baud: home,
+        }),
+        ServoCmd::Monitor { ids } => Checked::Monitor(parse_id_list(ids)?),
+        ServoCmd::Ping { id } => Checked::Ping(*id),
+        ServoCmd::Read { id, param: name } => Checked::Read(
+            *id,
+            match name {
+                Some(n) => vec![param(profile, n)?],
+                None => profile.params.iter().collect(),
+            },
+        ),
+        ServoCmd::Write {
+            id,
+            param: name,
+            value,
+        } => {
+            let p = param(profile, name)?;
+            if p.access == crate::profile::Access::ReadOnly {
+                return Err(op_error(crate::ops::OpError::ReadOnly {
+                    param: p.field.ident.clone(),
+                }));
+            }
+            let value = p.field.parse(value).map_err(CliError::input)?;
+            Checked::Write(*id, p, value)
+        }
+        ServoCmd::SetId { old, new } => {
+            if old == new {
+                return Err(op_error(crate::ops::OpError::SameId { id: *new }));
+            }
+            Checked::SetId(*old, *new)
+        }
+        ServoCmd::SetBaud { id, baud } => Checked::SetBaud(*id, *baud),
+        ServoCmd::Angle { id, deg, ms, power } => {
+            let rotate = profile.command("ROTATE").ok_or_else(|| {
+                CliError::input(format!("profile '{}' has no ROTATE", profile.id))
+            })?;
+            let inputs = vec![
+                ("servo_id".to_string(), Input::Raw(Value::Int((*id).into()))),
+                ("angle".to_string(), Input::Text(deg.clone())),
+                ("interval".to_string(), Input::Raw(Value::Int((*ms).into()))),
+                ("power".to_string(), Input::Raw(Value::Int((*power).into()))),
+            ];
+            crate::ops::exchange::request(profile, rotate, &inputs, 1).map_err(op_error)?;
+            Checked::Angle(*id, inputs, *ms)
+        }
+        ServoCmd::Provision { .. } => {
+            return Err(CliError::input("provision is checked by its own plan"));
+        }
+    })
+}
+
 pub(crate) fn run(args: ServoArgs) -> CliResult {
     let json = args.port.json;
-    // Check what can be checked before touching the port.
-    if let ServoCmd::SetId { new: 255, .. } = args.cmd {
-        return Err(CliError::input(
-            "id 255 is the broadcast address and cannot be assigned",
-        ));
-    }
-    if let ServoCmd::SetBaud { baud, .. } = args.cmd {
-        if baud > 8 && ops::option_of_baud(baud).is_none() {
-            return Err(CliError::input(format!(
-                "{baud} is not a servo baud rate; allowed: {BAUDS:?} or options 1-8"
-            )));
-        }
-        if baud == 0 {
-            return Err(CliError::input(
-                "baud option 0 is out of range; allowed 1 to 8",
-            ));
-        }
-    }
     if let ServoCmd::Provision {
         plan,
         log,
@@ -202,98 +282,23 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
     {
         return super::provision::run(&args.port, plan, log.as_deref(), *count, *wait_ms);
     }
-    let (link, profile) = args.port.open("servo", Protocol::Servo, false)?;
-    let client = link.client();
+    // Everything given is checked before the port is opened.
+    let profile = args.port.profile("servo", Protocol::Servo)?;
     let home = args.port.baud.unwrap_or(profile.baud);
+    let checked = check(&args.cmd, &profile, home)?;
+    let link = args.port.open_with(profile.clone(), false)?;
+    let client = link.client();
     let cancel = super::port::cancel_on_ctrl_c();
-    match args.cmd {
-        ServoCmd::Scan { ids, bauds } => {
-            let ids = parse_ids(&ids)?;
-            let bauds = parse_bauds(bauds.as_deref(), home)?;
+    match checked {
+        Checked::Scan(plan) => {
             let started = std::time::Instant::now();
-            let plan = ops::ScanPlan {
-                ids,
-                bauds,
-                home_baud: home,
-            };
             let rows = ops::scan(&client, &profile, &plan, &cancel, &mut |_| {}, &mut |_| {})
                 .map_err(op_error)?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::json!({"servos": rows, "seconds": started.elapsed().as_secs_f64()})
-                );
-            } else {
-                println!(
-                    "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>18} {:>6}  presence",
-                    "id", "baud", "type", "firmware", "serial", "mV", "temp", "status"
-                );
-                for r in &rows {
-                    let o = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
-                    let presence = match &r.presence {
-                        Presence::Present => "ok".to_string(),
-                        Presence::PossibleDuplicate(e) => format!("possible duplicate id ({e})"),
-                        Presence::Absent => "absent".to_string(),
-                    };
-                    println!(
-                        "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>18} {:>6}  {presence}",
-                        r.id,
-                        r.baud,
-                        o(r.servo_type),
-                        o(r.firmware),
-                        o(r.serial),
-                        o(r.voltage_mv),
-                        r.temperature_text(&profile),
-                        r.status_hex()
-                    );
-                }
-                println!(
-                    "{} found in {:.2} s",
-                    rows.len(),
-                    started.elapsed().as_secs_f64()
-                );
-            }
+            print_scan(&profile, &rows, started.elapsed().as_secs_f64(), json);
             Ok(0)
         }
-        ServoCmd::Monitor { ids } => {
-            let ids = parse_id_list(&ids)?;
-            use crate::ops::servo::monitor::{Reading, monitor_all};
-            let rows = monitor_all(&client, &profile, &ids).map_err(op_error)?;
-            let missing = rows
-                .iter()
-                .any(|r| !matches!(r.reading, Reading::Values(_)));
-            if json {
-                println!("{}", serde_json::json!({ "servos": rows }));
-            } else {
-                println!(
-                    "{:>3} {:>6} {:>6} {:>6} {:>18} {:>6} {:>10} {:>6}",
-                    "id", "mV", "mA", "mW", "temp °C (raw)", "status", "angle °", "turns"
-                );
-                for r in &rows {
-                    match &r.reading {
-                        Reading::Values(m) => println!(
-                            "{:>3} {:>6} {:>6} {:>6} {:>18} {:>6} {:>10.1} {:>6}",
-                            r.id,
-                            m.voltage_mv,
-                            m.current_ma,
-                            m.power_mw,
-                            format!(
-                                "{} ({})",
-                                m.temperature_c.map_or("n/a".into(), |t| format!("{t:.1}")),
-                                m.temperature_raw
-                            ),
-                            format!("{:#04x}", m.status),
-                            m.angle_deg,
-                            m.turns
-                        ),
-                        Reading::Misfit { error } => println!("{:>3} !! {error}", r.id),
-                        Reading::NoAnswer => println!("{:>3} no answer", r.id),
-                    }
-                }
-            }
-            Ok(u8::from(missing))
-        }
-        ServoCmd::Ping { id } => {
+        Checked::Monitor(ids) => monitor(&client, &profile, &ids, json),
+        Checked::Ping(id) => {
             let p = ops::ping(&client, id, 3).map_err(op_error)?;
             if json {
                 println!("{}", serde_json::json!({"id": id, "presence": p}));
@@ -302,11 +307,7 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
             }
             Ok(u8::from(p != Presence::Present))
         }
-        ServoCmd::Read { id, param: name } => {
-            let params: Vec<&crate::profile::Param> = match &name {
-                Some(n) => vec![param(&profile, n)?],
-                None => profile.params.iter().collect(),
-            };
+        Checked::Read(id, params) => {
             let mut out = Vec::new();
             for p in params {
                 let v = ops::read_param(&client, &profile, id, p).map_err(op_error)?;
@@ -330,19 +331,13 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
             }
             Ok(0)
         }
-        ServoCmd::Write {
-            id,
-            param: name,
-            value,
-        } => {
-            let p = param(&profile, &name)?;
-            p.field.parse(&value).map_err(CliError::input)?;
+        Checked::Write(id, p, value) => {
             let check =
-                ops::write_param(&client, &profile, id, p, Input::Text(value)).map_err(op_error)?;
+                ops::write_param(&client, &profile, id, p, Input::Raw(value)).map_err(op_error)?;
             let field = p.field.clone();
             Ok(print_checks(&[check], |_| Some(field.clone()), json))
         }
-        ServoCmd::SetId { old, new } => {
+        Checked::SetId(old, new) => {
             ops::set_id(&client, &profile, old, new, &cancel).map_err(op_error)?;
             if json {
                 println!(
@@ -354,12 +349,7 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
             }
             Ok(0)
         }
-        ServoCmd::SetBaud { id, baud } => {
-            let option = if baud <= 8 {
-                baud as u8
-            } else {
-                ops::option_of_baud(baud).unwrap_or(0)
-            };
+        Checked::SetBaud(id, option) => {
             let rate = ops::set_baud(&client, &profile, id, option).map_err(op_error)?;
             if json {
                 println!(
@@ -371,22 +361,87 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
             }
             Ok(0)
         }
-        ServoCmd::Angle { id, deg, ms, power } => {
+        Checked::Angle(id, inputs, ms) => {
             let rotate = profile
                 .command("ROTATE")
                 .ok_or_else(|| CliError::input("the profile has no ROTATE"))?;
-            let inputs = vec![
-                ("servo_id".to_string(), Input::Raw(Value::Int(id.into()))),
-                ("angle".to_string(), Input::Text(deg)),
-                ("interval".to_string(), Input::Raw(Value::Int(ms.into()))),
-                ("power".to_string(), Input::Raw(Value::Int(power.into()))),
-            ];
             crate::ops::exchange::send(&client, &profile, rotate, &inputs).map_err(op_error)?;
             if !json {
                 println!("servo {id}: turning over {ms} ms");
             }
             Ok(0)
         }
-        ServoCmd::Provision { .. } => Err(CliError::input("provision is handled above")),
     }
+}
+
+fn print_scan(profile: &Profile, rows: &[ops::ScanRow], seconds: f64, json: bool) {
+    if json {
+        println!(
+            "{}",
+            serde_json::json!({"servos": rows, "seconds": seconds})
+        );
+        return;
+    }
+    println!(
+        "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>18} {:>6}  presence",
+        "id", "baud", "type", "firmware", "serial", "mV", "temp", "status"
+    );
+    for r in rows {
+        let o = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
+        let presence = match &r.presence {
+            Presence::Present => "ok".to_string(),
+            Presence::PossibleDuplicate(e) => format!("possible duplicate id ({e})"),
+            Presence::Absent => "absent".to_string(),
+        };
+        println!(
+            "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>18} {:>6}  {presence}",
+            r.id,
+            r.baud,
+            o(r.servo_type),
+            o(r.firmware),
+            o(r.serial),
+            o(r.voltage_mv),
+            r.temperature_text(profile),
+            r.status_hex()
+        );
+    }
+    println!("{} found in {seconds:.2} s", rows.len());
+}
+
+fn monitor(client: &crate::link::Client, profile: &Profile, ids: &[u8], json: bool) -> CliResult {
+    use crate::ops::servo::monitor::{Reading, monitor_all};
+    let rows = monitor_all(client, profile, ids).map_err(op_error)?;
+    let missing = rows
+        .iter()
+        .any(|r| !matches!(r.reading, Reading::Values(_)));
+    if json {
+        println!("{}", serde_json::json!({ "servos": rows }));
+        return Ok(u8::from(missing));
+    }
+    println!(
+        "{:>3} {:>6} {:>6} {:>6} {:>18} {:>6} {:>10} {:>6}",
+        "id", "mV", "mA", "mW", "temp °C (raw)", "status", "angle °", "turns"
+    );
+    for r in &rows {
+        match &r.reading {
+            Reading::Values(m) => println!(
+                "{:>3} {:>6} {:>6} {:>6} {:>18} {:>6} {:>10.1} {:>6}",
+                r.id,
+                m.voltage_mv,
+                m.current_ma,
+                m.power_mw,
+                format!(
+                    "{} ({})",
+                    m.temperature_c.map_or("n/a".into(), |t| format!("{t:.1}")),
+                    m.temperature_raw
+                ),
+                format!("{:#04x}", m.status),
+                m.angle_deg,
+                m.turns
+            ),
+            Reading::Misfit { error } => println!("{:>3} !! {error}", r.id),
+            Reading::NoAnswer => println!("{:>3} no answer", r.id),
+        }
+    }
+    Ok(u8::from(missing))
 }

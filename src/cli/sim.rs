@@ -18,24 +18,24 @@ use std::time::Duration;
 pub(crate) struct SimArgs {
     /// window-cleaner, solar-cleanbot, servo-bus or tuya-vacuum.
     kind: String,
-    /// The device's UART baud rate (default: its profile's). A client at another rate gets no
-    /// answer.
-    #[arg(long)]
+    /// The device's UART baud rate, 300 to 4000000 (default: its profile's). A client at
+    /// another rate gets no answer.
+    #[arg(long, value_parser = super::checks::baud)]
     baud: Option<u32>,
-    /// Probability (0-1) that a reply is lost.
-    #[arg(long, default_value_t = 0.0)]
+    /// Probability, 0 to 1, that a reply is lost.
+    #[arg(long, default_value_t = 0.0, value_parser = super::checks::probability)]
     drop: f64,
-    /// Probability (0-1) that a reply has a bit flipped (it then fails its checksum).
-    #[arg(long, default_value_t = 0.0)]
+    /// Probability, 0 to 1, that a reply has a bit flipped (it then fails its checksum).
+    #[arg(long, default_value_t = 0.0, value_parser = super::checks::probability)]
     corrupt: f64,
-    /// Extra delay before each reply, in milliseconds.
-    #[arg(long, default_value_t = 0)]
+    /// Extra delay before each reply, 0 to 10000 ms.
+    #[arg(long, default_value_t = 0, value_parser = super::checks::latency_ms)]
     latency_ms: u64,
-    /// Seed of the fault dice and of the sensor noise.
+    /// Seed of the fault dice and of the sensor noise, any number 0 to 18446744073709551615.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Servo bus only: the servo IDs on the bus, e.g. `0,1,5`.
-    #[arg(long, value_delimiter = ',')]
+    /// Servo bus only: the servo IDs on the bus, each 0 to 254, e.g. `0,1,5`.
+    #[arg(long, value_delimiter = ',', value_parser = super::checks::servo_id)]
     servos: Vec<u8>,
     /// Window cleaner and servo bus: answer as firmware described by this profile (a name or
     /// a .ron file) instead of the built-in one, e.g. `window-cleaner-configurator`, or a
@@ -54,9 +54,6 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         seed: args.seed,
     };
     faults.check().map_err(CliError::input)?;
-    if args.baud == Some(0) {
-        return Err(CliError::input("baud rate 0"));
-    }
     let opts = SimOptions {
         baud: args.baud,
         latency: None,

@@ -14,8 +14,8 @@ use std::time::{Duration, Instant};
 pub(crate) struct TuyaArgs {
     #[command(flatten)]
     port: PortArgs,
-    /// How long to wait for the start-up handshake, in seconds.
-    #[arg(long, default_value_t = 10)]
+    /// How long to wait for the start-up handshake, 1 to 600 seconds.
+    #[arg(long, default_value_t = 10, value_parser = super::checks::handshake_s)]
     wait: u64,
     #[command(subcommand)]
     cmd: TuyaCmd,
@@ -107,17 +107,28 @@ fn print_reports(profile: &Profile, reports: &[crate::packet::Packet], json: boo
 
 pub(crate) fn run(args: TuyaArgs) -> CliResult {
     let json = args.port.json;
-    if let TuyaCmd::Ota { file } = &args.cmd {
-        let meta = std::fs::metadata(file)
-            .map_err(|e| CliError::input(format!("{}: {e}", file.display())))?;
-        if meta.len() == 0 {
-            return Err(CliError::input(format!(
-                "{}: the firmware file is empty",
-                file.display()
-            )));
+    // Everything given is checked before the port is opened (and the handshake run).
+    let profile = args.port.profile("tuya-vacuum", Protocol::Tuya)?;
+    let mut image = Vec::new();
+    let mut inputs = Vec::new();
+    match &args.cmd {
+        TuyaCmd::Ota { file } => {
+            image = crate::document::read_bytes(file, crate::document::Limit::FIRMWARE)
+                .map_err(CliError::input)?;
+            if image.is_empty() {
+                return Err(CliError::input(format!(
+                    "{}: the firmware file is empty",
+                    file.display()
+                )));
+            }
         }
+        TuyaCmd::Dp { values } => {
+            inputs = parse_assignments(values, "NAME")?;
+            ops::set_dps_request(&profile, &inputs).map_err(op_error)?;
+        }
+        TuyaCmd::Init | TuyaCmd::Status => {}
     }
-    let (link, profile) = args.port.open("tuya-vacuum", Protocol::Tuya, true)?;
+    let link = args.port.open_with(profile.clone(), true)?;
     let wait = Duration::from_secs(args.wait);
     handshake(&link, wait, matches!(args.cmd, TuyaCmd::Init), json)?;
     let client = link.client();
@@ -133,15 +144,12 @@ pub(crate) fn run(args: TuyaArgs) -> CliResult {
             print_reports(&profile, &reports, json);
             Ok(0)
         }
-        TuyaCmd::Dp { values } => {
-            let inputs = parse_assignments(&values)?;
+        TuyaCmd::Dp { .. } => {
             let checks = ops::set_dps(&client, &profile, &inputs).map_err(op_error)?;
             let field_of = |ident: &str| profile.find_data_point(ident).map(|d| d.field.clone());
             Ok(print_checks(&checks, field_of, json))
         }
-        TuyaCmd::Ota { file } => {
-            let image = std::fs::read(&file)
-                .map_err(|e| CliError::input(format!("{}: {e}", file.display())))?;
+        TuyaCmd::Ota { .. } => {
             let mut last_pct = 0;
             let report = ops::ota(
                 &client,

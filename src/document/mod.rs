@@ -5,11 +5,18 @@
 //!
 //! Each document type keeps its own schema and checks; what they share is here: [`Source`] (a
 //! document's name and text), [`DocumentError`] (the one error type, with every problem and its
-//! place) and [`write_atomic`].
+//! place), reading within a size limit ([`file::read_text`], [`Limit`]) and [`write_atomic`].
+//! Messages quote at most a line or so of the input ([`quote`]).
 
+pub mod file;
 pub mod locate;
+pub mod quote;
 
+pub use file::{
+    Limit, check_append, check_destination, read_bytes, read_text, write_atomic, write_atomic_with,
+};
 pub use locate::{Step, line_col, locate};
+pub use quote::{clip_message, quote};
 
 use serde::de::DeserializeOwned;
 use std::fmt;
@@ -43,12 +50,13 @@ pub struct Problem {
 }
 
 impl Problem {
-    /// A problem at `(line, col)`.
+    /// A problem at `(line, col)`. Input the message holds is kept to a line or so
+    /// ([`clip_message`]).
     pub fn at((line, col): (usize, usize), message: impl Into<String>) -> Self {
         Self {
             line,
             col,
-            message: message.into(),
+            message: clip_message(&message.into()),
         }
     }
 }
@@ -79,7 +87,7 @@ impl DocumentError {
         Self {
             file: file.to_string(),
             kind,
-            problems: vec![Problem::at(at, message)],
+            problems: vec![Problem::at(at, message.into())],
         }
     }
 
@@ -199,41 +207,29 @@ impl<'t> Source<'t> {
     }
 }
 
-/// Reads the text of the document at `path`.
-pub fn read(path: &Path) -> Result<String, DocumentError> {
-    std::fs::read_to_string(path).map_err(|e| DocumentError::io(path, "read", &e))
-}
-
-/// Reads the document at `path` and parses it with `parse`, which is given the name errors use
-/// (the path) and the text. A relative path that is not in the working folder but is among the
-/// shipped examples (`presets/window-cleaner-selftest.ron` on an installed machine) is read from
-/// there ([`crate::system::shipped_or_given`]), and errors name the file read.
+/// Reads the document at `path` (a `limit.what`, at most `limit.max` bytes, a regular file:
+/// [`read_text`]) and parses it with `parse`, which is given the name errors use (the path) and
+/// the text. An empty file is refused as such. A relative path that is not in the working folder
+/// but is among the shipped examples (`presets/window-cleaner-selftest.ron` on an installed
+/// machine) is read from there ([`crate::system::shipped_or_given`]), and errors name the file
+/// read.
 pub fn load<T>(
     path: &Path,
+    limit: Limit,
     parse: impl FnOnce(&str, &str) -> Result<T, DocumentError>,
 ) -> Result<T, DocumentError> {
     let path = &crate::system::shipped_or_given(path);
-    let text = read(path)?;
-    parse(&path.display().to_string(), &text)
-}
-
-/// Writes `bytes` to `path` atomically: into a temporary file in the same folder, synced to
-/// disk, then renamed over `path`. On any failure `path` is untouched and the temporary file is
-/// removed.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), DocumentError> {
-    use std::io::Write;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir)
-        .map_err(|e| DocumentError::io(path, "create a temporary file", &e))?;
-    tmp.write_all(bytes)
-        .and_then(|()| tmp.as_file().sync_all())
-        .map_err(|e| DocumentError::io(path, "write", &e))?;
-    tmp.persist(path)
-        .map_err(|e| DocumentError::io(path, "replace the file", &e.error))?;
-    Ok(())
+    let text = read_text(path, limit)?;
+    let name = path.display().to_string();
+    if text.trim().is_empty() {
+        return Err(DocumentError::one(
+            &name,
+            ErrorKind::Syntax,
+            (0, 0),
+            format!("the file is empty: it holds no {}", limit.what),
+        ));
+    }
+    parse(&name, &text)
 }
 
 #[cfg(test)]

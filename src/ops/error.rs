@@ -29,13 +29,31 @@ pub enum OpError {
         /// The parameter asked for, by name or `data_id`.
         param: String,
     },
-    /// A command of another kind than the operation needs. Nothing was sent.
-    #[error("{command} is not {expected}")]
+    /// A command of another kind than the operation needs (a Set to read, an Action to
+    /// poll...). Nothing was sent.
+    #[error("{command} is {kind}: {operation} takes {expected}{hint}")]
     WrongCommand {
         /// The command's ident.
         command: String,
+        /// What it is, e.g. `a Set command`.
+        kind: &'static str,
+        /// The operation, e.g. `reading`.
+        operation: &'static str,
         /// What the operation needs, e.g. `a Get or Telemetry command`.
         expected: &'static str,
+        /// Where to look instead (`; its Get is MSP_GET_PWMVALUE`), or empty.
+        hint: String,
+    },
+    /// A field of a Set left out whose current value cannot be kept: the device's answer does
+    /// not hold it, or holds a value the profile refuses. Nothing was written.
+    #[error("{command}: cannot keep the device's {field}: {why}; give {field}=VALUE")]
+    CannotKeep {
+        /// The Set command's ident.
+        command: String,
+        /// The field left out.
+        field: String,
+        /// Why its value cannot be kept.
+        why: String,
     },
     /// Nothing to send was given. Nothing was sent.
     #[error("no {what} given: {hint}")]

@@ -4,8 +4,115 @@
 
 use super::OpError;
 use crate::link::{Client, Reply, Request};
-use crate::profile::{Command, CommandKind, Decoded, Input, Profile, Value};
+use crate::profile::{Command, CommandKind, Decoded, Field, FieldError, Input, Profile, Value};
 use crate::protocol::Direction;
+
+/// What an operation does with a profile command, and so which kinds of command it takes
+/// ([`check_kind`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Use {
+    /// Reads its answer once (`msp get`, a batch read): a Get or Telemetry command.
+    Read,
+    /// Polls it (`msp watch`, the plots): a Get or Telemetry command.
+    Poll,
+    /// Writes with it (`msp set`, presets, actions): a Set or Action command.
+    Write,
+}
+
+impl Use {
+    fn takes(self, kind: CommandKind) -> bool {
+        match self {
+            Use::Read | Use::Poll => matches!(kind, CommandKind::Get | CommandKind::Telemetry),
+            Use::Write => matches!(kind, CommandKind::Set | CommandKind::Action),
+        }
+    }
+
+    fn words(self) -> (&'static str, &'static str) {
+        match self {
+            Use::Read => ("reading", "a Get or Telemetry command"),
+            Use::Poll => ("polling", "a Get or Telemetry command"),
+            Use::Write => ("writing", "a Set or Action command"),
+        }
+    }
+}
+
+/// Refuses, before anything is sent, a command of a kind `usage` does not take: a Set or an
+/// Action to read or poll (it would be sent with an empty payload), a Get or Telemetry command
+/// to write, a Raw command (no published layout) to any. The error names the command's Get or
+/// Set partner where it has one.
+pub fn check_kind(profile: &Profile, cmd: &Command, usage: Use) -> Result<(), OpError> {
+    if usage.takes(cmd.kind) {
+        return Ok(());
+    }
+    let kind = match cmd.kind {
+        CommandKind::Get => "a Get command",
+        CommandKind::Set => "a Set command",
+        CommandKind::Telemetry => "a Telemetry command",
+        CommandKind::Action => "an Action",
+        CommandKind::Raw => "a Raw command (its payload layout is not published)",
+    };
+    let pair = cmd.pair.and_then(|id| profile.command_by_id(id));
+    let hint = match (cmd.kind, pair) {
+        (CommandKind::Set, Some(get)) => format!("; its Get is {}", get.ident),
+        (CommandKind::Get, Some(set)) => format!("; its Set is {}", set.ident),
+        _ => String::new(),
+    };
+    let (operation, expected) = usage.words();
+    Err(OpError::WrongCommand {
+        command: cmd.ident.clone(),
+        kind,
+        operation,
+        expected,
+        hint,
+    })
+}
+
+/// Checks a write's named inputs against `cmd` before anything is sent, without needing every
+/// field: the command is one to write ([`check_kind`]), each name is one of its fields and is
+/// given once, each value is one the field takes. Returns the fields left out. A Set with
+/// fields given none is refused ([`OpError::NothingGiven`]).
+pub fn check_write<'c>(
+    profile: &Profile,
+    cmd: &'c Command,
+    inputs: &[(String, Input)],
+) -> Result<Vec<&'c Field>, OpError> {
+    check_kind(profile, cmd, Use::Write)?;
+    let fields = profile.fields(cmd, Direction::HostToDevice);
+    if inputs.is_empty() && cmd.kind == CommandKind::Set && !fields.is_empty() {
+        return Err(OpError::NothingGiven {
+            what: "field",
+            hint: "give FIELD=VALUE for each field to change",
+        });
+    }
+    let mut given: Vec<&Field> = Vec::new();
+    for (name, input) in inputs {
+        let Some(field) = fields.iter().find(|f| f.ident.eq_ignore_ascii_case(name)) else {
+            let known: Vec<&str> = fields.iter().map(|f| f.ident.as_str()).collect();
+            return Err(FieldError::UnknownField {
+                command: cmd.ident.clone(),
+                field: crate::document::quote(name),
+                known: known.join(", "),
+            }
+            .into());
+        };
+        if given.iter().any(|g| std::ptr::eq(*g, field)) {
+            return Err(FieldError::Duplicate {
+                command: cmd.ident.clone(),
+                field: field.ident.clone(),
+            }
+            .into());
+        }
+        match input {
+            Input::Text(t) => field.parse(t).map(drop)?,
+            Input::Raw(v) => field.check(v)?,
+        }
+        given.push(field);
+    }
+    Ok(fields
+        .iter()
+        .filter(|f| !given.iter().any(|g| std::ptr::eq(*g, *f)))
+        .collect())
+}
 
 /// The values of one answer (or one command), named by field ident, in wire order. Fields are
 /// looked up by ident, ignoring ASCII case, as profiles and documents name them.
@@ -139,6 +246,7 @@ pub fn read(
     cmd: &Command,
     inputs: &[(String, Input)],
 ) -> Result<FieldValues, OpError> {
+    check_kind(profile, cmd, Use::Read)?;
     let reply = send(client, profile, cmd, inputs)?;
     decode_answer(profile, cmd, reply.payload().unwrap_or_default())
 }
@@ -156,14 +264,16 @@ pub fn decode_answer(
 }
 
 /// Writes with a Set command, then reads its Get back and compares every field. Values are
-/// checked against the profile before anything is sent. Returns the checks (all `ok()` when the
-/// device holds what was written); a command without a Get partner is sent and acknowledged only.
+/// checked against the profile before anything is sent, and so is the command's kind (a Set or
+/// an Action). Returns the checks (all `ok()` when the device holds what was written); a command
+/// without a Get partner is sent and acknowledged only.
 pub fn write_verified(
     client: &Client,
     profile: &Profile,
     set: &Command,
     inputs: &[(String, Input)],
 ) -> Result<Vec<Check>, OpError> {
+    check_kind(profile, set, Use::Write)?;
     let payload = profile.encode(set, Direction::HostToDevice, inputs)?;
     let written = profile
         .decode(set, Direction::HostToDevice, &payload)
@@ -190,4 +300,62 @@ pub fn checks(written: &FieldValues, read: &FieldValues) -> Vec<Check> {
             read: read.get(field).cloned().unwrap_or(Value::Bytes(Vec::new())),
         })
         .collect()
+}
+
+/// A write of some fields of a Set: the checks of every field, and the fields left out whose
+/// values the device already held and kept (raw).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Kept {
+    /// Every field written, read back.
+    pub checks: Vec<Check>,
+    /// The fields not given, written with the value the device held.
+    pub kept: FieldValues,
+}
+
+/// Writes the fields given with a Set command and keeps the device's current values for the
+/// rest: when fields are left out, the Set's Get is read first and its values fill them; then
+/// [`write_verified`]. An Action is written as given (its omitted fields take their defaults).
+/// Everything given is checked before anything is sent ([`check_write`]); a kept value the
+/// profile refuses, or one the answer lacks, is [`OpError::CannotKeep`] and nothing is written.
+pub fn write_keeping(
+    client: &Client,
+    profile: &Profile,
+    set: &Command,
+    inputs: &[(String, Input)],
+) -> Result<Kept, OpError> {
+    let omitted = check_write(profile, set, inputs)?;
+    let get = match (set.kind, set.pair) {
+        (CommandKind::Set, Some(pair)) if !omitted.is_empty() => profile.command_by_id(pair),
+        _ => None,
+    };
+    let Some(get) = get else {
+        let checks = write_verified(client, profile, set, inputs)?;
+        return Ok(Kept {
+            checks,
+            kept: FieldValues::new(),
+        });
+    };
+    let now = read(client, profile, get, &[])?;
+    let mut all = inputs.to_vec();
+    let mut kept = FieldValues::new();
+    for field in omitted {
+        let cannot = |why: String| OpError::CannotKeep {
+            command: set.ident.clone(),
+            field: field.ident.clone(),
+            why,
+        };
+        let value = now
+            .get(&field.ident)
+            .ok_or_else(|| cannot(format!("{} does not answer with it", get.ident)))?;
+        field.check(value).map_err(|e| {
+            cannot(format!(
+                "it holds {}, which the profile refuses ({e})",
+                field.format(value)
+            ))
+        })?;
+        all.push((field.ident.clone(), Input::Raw(value.clone())));
+        kept.push(field.ident.clone(), value.clone());
+    }
+    let checks = write_verified(client, profile, set, &all)?;
+    Ok(Kept { checks, kept })
 }

@@ -71,13 +71,9 @@ pub fn report_values(profile: &Profile, reports: &[Packet]) -> FieldValues {
         .collect()
 }
 
-/// Sends data points (0x06), checked against the profile before sending (type, range,
-/// writable), and compares what the MCU reports back for each.
-pub fn set_dps(
-    client: &Client,
-    profile: &Profile,
-    inputs: &[(String, Input)],
-) -> Result<Vec<Check>, OpError> {
+/// The payload of the 0x06 command that sends `inputs` (data points by name or dpid), checked
+/// against the profile (each named once, writable, type, range) without sending anything.
+pub fn set_dps_request(profile: &Profile, inputs: &[(String, Input)]) -> Result<Vec<u8>, OpError> {
     let command = dp_command(profile)?;
     if inputs.is_empty() {
         return Err(OpError::NothingGiven {
@@ -85,7 +81,18 @@ pub fn set_dps(
             hint: "use NAME=VALUE",
         });
     }
-    let payload = profile.encode(command, Direction::HostToDevice, inputs)?;
+    Ok(profile.encode(command, Direction::HostToDevice, inputs)?)
+}
+
+/// Sends data points (0x06), checked against the profile before sending (type, range,
+/// writable: [`set_dps_request`]), and compares what the MCU reports back for each.
+pub fn set_dps(
+    client: &Client,
+    profile: &Profile,
+    inputs: &[(String, Input)],
+) -> Result<Vec<Check>, OpError> {
+    let command = dp_command(profile)?;
+    let payload = set_dps_request(profile, inputs)?;
     let written = profile
         .decode(command, Direction::HostToDevice, &payload)
         .map_err(|e| OpError::answer(&command.ident, e))?;

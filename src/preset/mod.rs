@@ -176,7 +176,9 @@ impl Preset {
 
     /// Reads a preset file and checks it against `profile`.
     pub fn load(path: &Path, profile: &Profile) -> Result<Loaded, DocumentError> {
-        document::load(path, |name, text| Self::parse(name, text, profile))
+        document::load(path, document::Limit::PRESET, |name, text| {
+            Self::parse(name, text, profile)
+        })
     }
 
     /// Parses preset text (`name` names it in errors) and checks it against `profile`.

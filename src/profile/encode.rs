@@ -97,6 +97,11 @@ impl<'a> Inputs<'a> {
         let i = self.used.iter().position(|u| !u)?;
         Some(self.list[i].0.as_str())
     }
+
+    /// Whether an input named `name` was taken (the name is then given twice).
+    fn was_taken(&self, name: &str) -> bool {
+        (0..self.list.len()).any(|i| self.used[i] && self.list[i].0.eq_ignore_ascii_case(name))
+    }
 }
 
 impl Profile {
@@ -118,9 +123,15 @@ impl Profile {
         let mut missing: Option<FieldError> = None;
         let out = self.encode_fields(cmd, fields, dir, &mut ins, &mut missing)?;
         if let Some(name) = ins.first_unused() {
+            if ins.was_taken(name) {
+                return Err(FieldError::Duplicate {
+                    command: cmd.ident.clone(),
+                    field: crate::document::quote(name),
+                });
+            }
             return Err(FieldError::UnknownField {
                 command: cmd.ident.clone(),
-                field: name.to_string(),
+                field: crate::document::quote(name),
                 known: fields
                     .iter()
                     .map(|f| f.ident.as_str())
@@ -276,7 +287,7 @@ impl Profile {
             }
         }
         if has_dps {
-            out.extend(self.encode_dps(cmd, to_device, ins)?);
+            out.extend(self.encode_dps(to_device, ins)?);
         }
         Ok(out)
     }
@@ -325,13 +336,8 @@ impl Profile {
         })
     }
 
-    fn encode_dps(
-        &self,
-        cmd: &Command,
-        to_device: bool,
-        ins: &mut Inputs<'_>,
-    ) -> Result<Vec<u8>, FieldError> {
-        let mut points = Vec::new();
+    fn encode_dps(&self, to_device: bool, ins: &mut Inputs<'_>) -> Result<Vec<u8>, FieldError> {
+        let mut points: Vec<DataPoint> = Vec::new();
         for i in 0..ins.list.len() {
             if ins.used[i] {
                 continue;
@@ -339,11 +345,17 @@ impl Profile {
             let (name, input) = &ins.list[i];
             let def = self
                 .find_data_point(name)
-                .ok_or_else(|| FieldError::UnknownField {
-                    command: cmd.ident.clone(),
-                    field: name.clone(),
+                .ok_or_else(|| FieldError::UnknownDataPoint {
+                    name: crate::document::quote(name),
                     known: self.known_dps(),
                 })?;
+            // By name or number, one data point once: which value was meant is not known.
+            if points.iter().any(|p| p.id == def.id) {
+                return Err(FieldError::Duplicate {
+                    command: "data points".into(),
+                    field: def.field.ident.clone(),
+                });
+            }
             if to_device && def.access == Access::ReadOnly {
                 return Err(FieldError::ReadOnly {
                     field: def.field.ident.clone(),

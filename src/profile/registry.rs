@@ -31,19 +31,32 @@ pub const BUILTIN: &[(&str, &str)] = &[
 /// The environment variable naming a folder of profile overrides.
 pub const DIR_ENV: &str = "BOTBENCH_PROFILE_DIR";
 
-/// A profile that cannot be used, with where and why.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("{file}:{line}:{col}: {message}")]
+/// A profile that cannot be used, with where and why: `file:line:col: message`, `file: message`
+/// where the place is unknown (line 0), or the message alone where there is no file (a name
+/// that is no profile).
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ProfileError {
-    /// The file (or `builtin:<name>`).
+    /// The file (or `builtin:<name>`), empty when there is none.
     pub file: String,
-    /// 1-based line.
+    /// 1-based line, 0 when unknown.
     pub line: usize,
-    /// 1-based column.
+    /// 1-based column, 0 when unknown.
     pub col: usize,
     /// What is wrong.
     pub message: String,
 }
+
+impl std::fmt::Display for ProfileError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match (self.file.is_empty(), self.line) {
+            (true, _) => write!(f, "{}", self.message),
+            (false, 0) => write!(f, "{}: {}", self.file, self.message),
+            (false, line) => write!(f, "{}:{line}:{}: {}", self.file, self.col, self.message),
+        }
+    }
+}
+
+impl std::error::Error for ProfileError {}
 
 /// Where a loaded profile came from.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -62,7 +75,7 @@ pub fn parse(file: &str, src: &str, expected_id: Option<&str>) -> Result<Profile
         file: file.to_string(),
         line: e.span.start.line,
         col: e.span.start.col,
-        message: e.code.to_string(),
+        message: crate::document::clip_message(&e.code.to_string()),
     };
     // `base: "window-cleaner"` as written, without `Some(...)`. A file that cannot be read so
     // far is read as a whole profile below, which reports where it fails.
@@ -229,14 +242,19 @@ impl Variant {
     }
 }
 
-/// Reads and checks a profile file; its stem must be its id.
+/// Reads and checks a profile file; its stem must be its id. A file that is not a regular file,
+/// is larger than [`Limit::PROFILE`](crate::document::Limit::PROFILE) or is not UTF-8 is
+/// refused before it is parsed.
 pub fn load_file(path: &Path) -> Result<Profile, ProfileError> {
     let file = path.display().to_string();
-    let src = std::fs::read_to_string(path).map_err(|e| ProfileError {
-        file: file.clone(),
-        line: 0,
-        col: 0,
-        message: format!("cannot read: {e}"),
+    let src = crate::document::read_text(path, crate::document::Limit::PROFILE).map_err(|e| {
+        let (line, col) = e.at();
+        ProfileError {
+            file: file.clone(),
+            line,
+            col,
+            message: e.message().to_string(),
+        }
     })?;
     let stem = path.file_stem().and_then(|s| s.to_str());
     parse(&file, &src, stem)
@@ -310,10 +328,14 @@ impl Registry {
             .find(|(p, _)| p.id == name)
             .map(|(p, _)| p.clone())
             .ok_or_else(|| ProfileError {
-                file: name.to_string(),
+                file: String::new(),
                 line: 0,
                 col: 0,
-                message: format!("no profile '{name}'; known: {}", self.names().join(", ")),
+                message: format!(
+                    "no profile '{}'; known: {} (or a path to a .ron file)",
+                    crate::document::quote(name),
+                    self.names().join(", ")
+                ),
             })
     }
 

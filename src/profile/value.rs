@@ -4,7 +4,7 @@ use super::model::{Field, FieldType, Len};
 use crate::protocol::hex;
 use serde::Serialize;
 
-pub use super::fault::{Broken, Misfit};
+pub use super::fault::{Broken, FieldError, Misfit};
 
 /// A field's value, raw: integers in wire units (before scaling).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -18,155 +18,38 @@ pub enum Value {
     Bytes(Vec<u8>),
 }
 
-/// Why a value cannot be read, written or shown.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum FieldError {
-    /// A number outside the field's range.
-    #[error("{field}: {value} is out of range; allowed {min} to {max}{unit}")]
-    OutOfRange {
-        /// The field's ident.
-        field: String,
-        /// The value, as displayed.
-        value: String,
-        /// The smallest allowed, as displayed.
-        min: String,
-        /// The largest allowed, as displayed.
-        max: String,
-        /// The unit, with a leading space, or empty.
-        unit: String,
-    },
-    /// A value the field's labels do not name.
-    #[error("{field}: '{value}' is not one of {allowed}")]
-    NotALabel {
-        /// The field's ident.
-        field: String,
-        /// What was given.
-        value: String,
-        /// The allowed labels and numbers.
-        allowed: String,
-    },
-    /// Text that is not a number.
-    #[error("{field}: '{input}' is not a number")]
-    NotANumber {
-        /// The field's ident.
-        field: String,
-        /// What was typed.
-        input: String,
-    },
-    /// A number finer than the field's step (`2.755` where the step is 0.01).
-    #[error("{field}: {input} is not a multiple of the field's step {step}")]
-    NotOnStep {
-        /// The field's ident.
-        field: String,
-        /// What was typed.
-        input: String,
-        /// The step (the scale).
-        step: String,
-    },
-    /// A value of the wrong kind (text for a number...).
-    #[error("{field}: expected {expected}")]
-    WrongType {
-        /// The field's ident.
-        field: String,
-        /// What the field takes.
-        expected: String,
-    },
-    /// Text or bytes of the wrong length.
-    #[error("{field}: expected exactly {expected} bytes, got {actual}")]
-    WrongLength {
-        /// The field's ident.
-        field: String,
-        /// The field's length.
-        expected: usize,
-        /// The value's length.
-        actual: usize,
-    },
-    /// A payload that ends inside a field.
-    #[error("{field}: payload ends early: {need} more byte(s) needed, {have} left")]
-    ShortPayload {
-        /// The field's ident.
-        field: String,
-        /// Bytes the field needs.
-        need: usize,
-        /// Bytes left.
-        have: usize,
-    },
-    /// Text bytes that are not UTF-8.
-    #[error("{field}: text is not valid UTF-8")]
-    NotUtf8 {
-        /// The field's ident.
-        field: String,
-    },
-    /// A name that is not a field of the command.
-    #[error("{command} has no field '{field}'; its fields: {known}")]
-    UnknownField {
-        /// The command's ident.
-        command: String,
-        /// The unknown name.
-        field: String,
-        /// The fields it has.
-        known: String,
-    },
-    /// A field left out.
-    #[error("{command}: field '{field}' is missing")]
-    MissingField {
-        /// The command's ident.
-        command: String,
-        /// The field's ident.
-        field: String,
-    },
-    /// A parameter or data point that cannot be written.
-    #[error("{field} is read-only")]
-    ReadOnly {
-        /// Its ident.
-        field: String,
-    },
-    /// A parameter or data point the profile does not have.
-    #[error("{what} {id} is not in the profile")]
-    Unknown {
-        /// "parameter" or "data point".
-        what: &'static str,
-        /// Its id or name.
-        id: String,
-    },
-    /// A data point whose type differs from the profile's.
-    #[error("data point {field}: type {actual} on the wire, the profile says {expected}")]
-    DpType {
-        /// The DP's ident.
-        field: String,
-        /// The profile's type.
-        expected: &'static str,
-        /// The wire type.
-        actual: &'static str,
-    },
-    /// A malformed data-point list.
-    #[error("{0}")]
-    Dp(#[from] crate::protocol::tuya::dp::DpError),
-    /// Bytes left over after the layout's last field (firmware that sends more than the
-    /// profile knows).
-    #[error("{} byte(s) past the layout's last field: {}", extra.len(), hex::format(extra))]
-    LongPayload {
-        /// The bytes left over.
-        extra: Vec<u8>,
-    },
-    /// A payload that does not fit its layout: the fault, what was read before it, the raw
-    /// bytes. Never shown as clean values.
-    #[error("{0}")]
-    Misfit(Box<Misfit>),
-    /// Records of a synchronous command (servo 25) that do not fit their sub-command.
-    #[error("{field}: {message}")]
-    Records {
-        /// The field's ident.
-        field: String,
-        /// What does not fit.
-        message: String,
-    },
-    /// Two values that break a relation of the profile (a minimum above its maximum).
-    #[error("{0}")]
-    Relation(Box<Broken>),
-}
+/// The words a bool field takes besides its labels, for messages.
+const BOOL_WORDS: &str = "on, off (or true, false, yes, no, 1, 0)";
 
 impl Field {
+    /// What may be written, as a message says it: `0 to 100 %`, `strong (0), normal (1)`,
+    /// `on, off (…)`, bit names, `text of 16 bytes`, `hex bytes`.
+    pub fn allowed_text(&self) -> String {
+        match self.ty {
+            FieldType::Str(Len::Fixed(n)) => return format!("text of {n} bytes"),
+            FieldType::Str(_) => return "text".into(),
+            FieldType::Bytes(Len::Fixed(n)) => return format!("{n} hex bytes"),
+            FieldType::Bytes(_) => return "hex bytes".into(),
+            _ => {}
+        }
+        if self.ty == FieldType::Bool && self.labels.is_empty() {
+            return BOOL_WORDS.into();
+        }
+        if !self.bits.is_empty() {
+            let names: Vec<&str> = self.bits.iter().map(|b| b.ident.as_str()).collect();
+            return format!("bit names joined by | ({}), or a number", names.join(", "));
+        }
+        match self.allowed() {
+            Allowed::Range(lo, hi) => format!(
+                "{} to {}{}",
+                self.format_number(lo),
+                self.format_number(hi),
+                self.unit_suffix()
+            ),
+            Allowed::Labels(_) => self.label_list(),
+        }
+    }
+
     /// The raw values that may be written: the explicit range, else the labels, else the type's.
     pub fn allowed(&self) -> Allowed<'_> {
         if let Some((lo, hi)) = self.range {
@@ -275,24 +158,33 @@ impl Field {
             (FieldType::Bytes(len), Value::Bytes(b)) => check_len(self, len, b.len()),
             (ty, Value::Int(raw)) if ty.int_bounds().is_some() => match self.allowed() {
                 Allowed::Range(lo, hi) if (lo..=hi).contains(raw) => Ok(()),
-                Allowed::Range(lo, hi) => Err(FieldError::OutOfRange {
-                    field: self.ident.clone(),
-                    value: self.format_number(*raw),
-                    min: self.format_number(lo),
-                    max: self.format_number(hi),
-                    unit: self.unit_suffix(),
-                }),
+                Allowed::Range(..) => Err(self.out_of_range(self.format_number(*raw))),
                 Allowed::Labels(_) if self.label(*raw).is_some() => Ok(()),
-                Allowed::Labels(_) => Err(FieldError::NotALabel {
-                    field: self.ident.clone(),
-                    value: raw.to_string(),
-                    allowed: self.label_list(),
-                }),
+                Allowed::Labels(_) => Err(self.out_of_range(raw.to_string())),
             },
             _ => Err(FieldError::WrongType {
                 field: self.ident.clone(),
                 expected: self.expected(),
             }),
+        }
+    }
+
+    /// `shown` (a value as displayed, or as typed) is not what the field allows: out of its
+    /// range, or not one of its labels.
+    fn out_of_range(&self, shown: String) -> FieldError {
+        match self.allowed() {
+            Allowed::Range(lo, hi) => FieldError::OutOfRange {
+                field: self.ident.clone(),
+                value: crate::document::quote(&shown),
+                min: self.format_number(lo),
+                max: self.format_number(hi),
+                unit: self.unit_suffix(),
+            },
+            Allowed::Labels(_) => FieldError::NotALabel {
+                field: self.ident.clone(),
+                value: crate::document::quote(&shown),
+                allowed: self.label_list(),
+            },
         }
     }
 
@@ -318,6 +210,13 @@ impl Field {
     /// bools, bit idents joined by `|` for bit fields, or `0x..` raw hex where the scale is 1.
     pub fn parse(&self, input: &str) -> Result<Value, FieldError> {
         let text = input.trim();
+        let takes_text = matches!(self.ty, FieldType::Str(_));
+        if text.is_empty() && !takes_text {
+            return Err(FieldError::NoValue {
+                field: self.ident.clone(),
+                allowed: self.allowed_text(),
+            });
+        }
         let value = match self.ty {
             FieldType::Str(_) => Value::Text(input.to_string()),
             FieldType::Bytes(_) => {
@@ -347,6 +246,13 @@ impl Field {
             match text.to_ascii_lowercase().as_str() {
                 "true" | "on" | "yes" => return Ok(1),
                 "false" | "off" | "no" => return Ok(0),
+                _ if self.labels.is_empty() && text.parse::<f64>().is_err() => {
+                    return Err(FieldError::NotALabel {
+                        field: self.ident.clone(),
+                        value: crate::document::quote(text),
+                        allowed: BOOL_WORDS.into(),
+                    });
+                }
                 _ => {}
             }
         }
@@ -366,7 +272,7 @@ impl Field {
                     .find(|b| b.ident.eq_ignore_ascii_case(part))
                     .ok_or_else(|| FieldError::NotALabel {
                         field: self.ident.clone(),
-                        value: part.to_string(),
+                        value: crate::document::quote(part),
                         allowed: self
                             .bits
                             .iter()
@@ -385,7 +291,7 @@ impl Field {
         if !self.labels.is_empty() && text.parse::<f64>().is_err() {
             return Err(FieldError::NotALabel {
                 field: self.ident.clone(),
-                value: text.to_string(),
+                value: crate::document::quote(text),
                 allowed: self.label_list(),
             });
         }
@@ -393,16 +299,11 @@ impl Field {
             ScaledError::NotANumber => self.not_a_number(text),
             ScaledError::NotOnStep => FieldError::NotOnStep {
                 field: self.ident.clone(),
-                input: text.to_string(),
+                input: crate::document::quote(text),
                 step: format!("{:.*}", self.decimals(), self.scale),
             },
-            ScaledError::Huge => FieldError::OutOfRange {
-                field: self.ident.clone(),
-                value: text.to_string(),
-                min: self.format_number(self.ty.int_bounds().map_or(0, |b| b.0)),
-                max: self.format_number(self.ty.int_bounds().map_or(0, |b| b.1)),
-                unit: self.unit_suffix(),
-            },
+            // Beyond any integer: out of the field's own range (not its type's).
+            ScaledError::Huge => self.out_of_range(text.to_string()),
         })
     }
 
@@ -429,7 +330,8 @@ impl Field {
     fn not_a_number(&self, text: &str) -> FieldError {
         FieldError::NotANumber {
             field: self.ident.clone(),
-            input: text.to_string(),
+            input: crate::document::quote(text),
+            allowed: self.allowed_text(),
         }
     }
 }
@@ -484,8 +386,11 @@ fn parse_scaled(text: &str, scale: f64) -> Result<i64, ScaledError> {
         return Ok(v);
     }
     let x: f64 = text.parse().map_err(|_| ScaledError::NotANumber)?;
-    if !x.is_finite() {
+    if x.is_nan() {
         return Err(ScaledError::NotANumber);
+    }
+    if x.is_infinite() {
+        return Err(ScaledError::Huge);
     }
     let raw = x / scale;
     let rounded = raw.round();

@@ -8,7 +8,9 @@
 
 mod support;
 
+mod cli_edges;
 mod cli_frame;
+mod cli_ranges;
 mod codec_props;
 mod firmware_variants;
 mod gui;

@@ -362,7 +362,7 @@ fn writing_read_only_parameters_and_report_only_data_points_is_refused() {
             &[("nonsense".into(), Input::from("1"))],
         )
         .unwrap_err();
-    assert!(matches!(err, FieldError::UnknownField { .. }), "{err}");
+    assert!(matches!(err, FieldError::UnknownDataPoint { .. }), "{err}");
 }
 
 #[test]
@@ -392,4 +392,64 @@ fn a_set_sends_the_layout_of_its_get() {
         assert_eq!(a, b, "{} / {}", g.ident, s.ident);
         assert!(!a.is_empty());
     }
+}
+
+/// Each refusal names the real problem and what is allowed (issue 17, item 7).
+#[test]
+fn a_refused_value_is_told_what_is_wrong_and_what_is_allowed() {
+    let reg = registry();
+    let wc = reg.get("window-cleaner").unwrap();
+    let set = wc.command("MSP_SET_PWMVALUE").unwrap();
+    let encode = |inputs: &[(&str, &str)]| {
+        let inputs = crate::support::inputs(inputs);
+        wc.encode(set, Direction::HostToDevice, &inputs)
+            .unwrap_err()
+            .to_string()
+    };
+    // Given twice: not "has no field 'pwmValue'; its fields: pwmValue".
+    let e = encode(&[("pwmValue", "70"), ("pwmValue", "80")]);
+    assert!(e.contains("'pwmValue' is given twice"), "{e}");
+    // Beyond any integer: the field's range (0 to 100 %), not the type's (0 to 255).
+    for huge in ["99999999999999999999999", "1e400", "-1e400"] {
+        let e = encode(&[("pwmValue", huge)]);
+        assert!(e.contains("allowed 0 to 100 %"), "{huge}: {e}");
+    }
+    let e = encode(&[("pwmValue", "")]);
+    assert!(e.contains("no value given; allowed 0 to 100 %"), "{e}");
+    let e = encode(&[("pwmValue", "lots")]);
+    assert!(
+        e.contains("'lots' is not a number; allowed 0 to 100 %"),
+        "{e}"
+    );
+    // A command that takes no fields says so, rather than "its fields:" and nothing.
+    let get = wc.command("MSP_GET_PWMVALUE").unwrap();
+    let e = wc
+        .encode(
+            get,
+            Direction::HostToDevice,
+            &[("pwmValue".into(), Input::from("1"))],
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(e.ends_with("it takes no fields"), "{e}");
+    // A bool is not a number.
+    let tuya = reg.get("tuya-vacuum").unwrap();
+    let dp = tuya.command("6").unwrap();
+    let dps = |inputs: &[(&str, &str)]| {
+        let inputs = crate::support::inputs(inputs);
+        tuya.encode(dp, Direction::HostToDevice, &inputs)
+    };
+    let e = dps(&[("power", "maybe")]).unwrap_err().to_string();
+    assert!(!e.contains("not a number"), "{e}");
+    assert!(e.contains("'maybe'") && e.contains("on, off"), "{e}");
+    // One data point by name and by number is given twice.
+    let e = dps(&[("power", "on"), ("1", "off")])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("'power' is given twice"), "{e}");
+    assert!(dps(&[("power", "on")]).is_ok());
+    // A long input is quoted to a line at most.
+    let long = "9".repeat(100_000);
+    let e = encode(&[("pwmValue", &long)]);
+    assert!(e.len() < 200, "{} bytes", e.len());
 }

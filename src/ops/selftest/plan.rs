@@ -135,7 +135,9 @@ pub struct Action {
 impl Plan {
     /// Reads a plan file and checks it against `profile`.
     pub fn load(path: &Path, profile: &Profile) -> Result<Plan, DocumentError> {
-        document::load(path, |name, text| Self::parse(name, text, profile))
+        document::load(path, document::Limit::SELFTEST_PLAN, |name, text| {
+            Self::parse(name, text, profile)
+        })
     }
 
     /// Parses plan text (`name` names it in errors) and checks it against `profile`. Every

@@ -48,7 +48,9 @@ pub fn in_preset(p: &crate::profile::Param) -> bool {
 impl ParamPreset {
     /// Reads a preset file and checks it against the servo `profile`.
     pub fn load(path: &Path, profile: &Profile) -> Result<Self, DocumentError> {
-        document::load(path, |name, text| Self::parse(name, text, profile))
+        document::load(path, document::Limit::SERVO_PRESET, |name, text| {
+            Self::parse(name, text, profile)
+        })
     }
 
     /// Parses preset text (`name` names it in errors) and checks every value against `profile`.

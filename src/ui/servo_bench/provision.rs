@@ -147,9 +147,15 @@ impl ProvisionPanel {
         {
             let log =
                 Some(PathBuf::from(self.log_path.trim())).filter(|p| !p.as_os_str().is_empty());
-            match log.as_deref().map(|path| (path, prov::check_log(path))) {
+            match log
+                .as_deref()
+                .map(|path| (path, prov::check_log(path, &plan.record)))
+            {
                 Some((path, Err(e))) => {
-                    self.log_error = Some(LogError::new(path, &e));
+                    self.log_error = Some(LogError {
+                        path: path.to_path_buf(),
+                        reason: e.message().to_string(),
+                    });
                 }
                 _ => {
                     self.log_error = None;

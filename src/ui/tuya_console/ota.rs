@@ -127,12 +127,12 @@ fn work(path: PathBuf) -> Job {
                 )
             })
         };
-        let image = match std::fs::read(&path) {
+        let image = match crate::document::read_bytes(&path, crate::document::Limit::FIRMWARE) {
             Ok(i) => i,
             Err(e) => {
                 return done(Err(JobError::File {
                     path: path.clone(),
-                    reason: e.to_string(),
+                    reason: e.message().to_string(),
                 }));
             }
         };

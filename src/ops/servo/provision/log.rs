@@ -62,23 +62,7 @@ pub fn append_csv(path: &Path, record: &Record) -> std::io::Result<()> {
         .open(path)?;
     let new = file.metadata()?.len() == 0;
     if !new {
-        let mut first = csv::StringRecord::new();
-        csv::ReaderBuilder::new()
-            .has_headers(false)
-            .flexible(true)
-            .from_path(path)?
-            .read_record(&mut first)?;
-        if !first.iter().eq(header.iter()) {
-            return Err(std::io::Error::new(
-                std::io::ErrorKind::InvalidData,
-                format!(
-                    "{} has another header ({}); this plan logs {}: use another log file",
-                    path.display(),
-                    first.iter().collect::<Vec<_>>().join(","),
-                    header.join(",")
-                ),
-            ));
-        }
+        check_header(path, &header)?;
     }
     let mut out = csv::Writer::from_writer(Vec::new());
     if new {
@@ -91,12 +75,45 @@ pub fn append_csv(path: &Path, record: &Record) -> std::io::Result<()> {
     file.sync_all()
 }
 
-/// Checks that the log at `path` can be appended to (created if missing), before any servo is
-/// touched.
-pub fn check_log(path: &Path) -> std::io::Result<()> {
-    std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(path)
-        .map(drop)
+/// The most bytes of a log's first line read to compare its header.
+const HEADER_MAX: u64 = 64 << 10;
+
+/// Refuses a log whose first line is not `header` (another plan's log, or not a log at all).
+fn check_header(path: &Path, header: &[String]) -> std::io::Result<()> {
+    use std::io::{BufRead, Read};
+    let mut line = String::new();
+    let file = std::fs::File::open(path)?;
+    // A line longer than any header is not one: read no more of it.
+    std::io::BufReader::new(file.take(HEADER_MAX)).read_line(&mut line)?;
+    let mut first = csv::StringRecord::new();
+    csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(line.as_bytes())
+        .read_record(&mut first)?;
+    if first.iter().eq(header.iter()) {
+        return Ok(());
+    }
+    Err(std::io::Error::new(
+        std::io::ErrorKind::InvalidData,
+        format!(
+            "{} has another header ({}); this plan logs {}: use another log file",
+            path.display(),
+            crate::document::quote(&first.iter().collect::<Vec<_>>().join(",")),
+            header.join(",")
+        ),
+    ))
+}
+
+/// Checks, before any servo is touched, that the log at `path` can be appended to (created if
+/// missing; a folder, a device or a pipe is refused) and that an existing one is a log of a plan
+/// that records `recorded` (its header).
+pub fn check_log(path: &Path, recorded: &[String]) -> Result<(), crate::document::DocumentError> {
+    crate::document::check_append(path)?;
+    let empty = std::fs::metadata(path).is_ok_and(|m| m.len() == 0);
+    if empty {
+        return Ok(());
+    }
+    check_header(path, &log_columns(recorded))
+        .map_err(|e| crate::document::DocumentError::io(path, "use it as the log", &e))
 }

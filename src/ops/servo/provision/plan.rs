@@ -75,7 +75,9 @@ impl Plan {
     /// Reads a plan file and checks it against the servo `profile`. Nothing has been written
     /// when it is refused.
     pub fn load(path: &Path, profile: &Profile) -> Result<Plan, DocumentError> {
-        document::load(path, |name, text| Self::parse(name, text, profile))
+        document::load(path, document::Limit::PROVISION_PLAN, |name, text| {
+            Self::parse(name, text, profile)
+        })
     }
 
     /// Parses plan text (`name` names it in errors) and checks it against `profile`.
