@@ -7,7 +7,7 @@ use super::jobs::{self, JobOutput};
 use super::settings::Settings;
 use super::state::{AppState, Notice, Target};
 use super::{
-    Action, actions, connection, device, monitor, presets, selftest, servo_bench, solar,
+    Action, actions, connection, device, monitor, presets, repaint, selftest, servo_bench, solar,
     status_bar, telemetry, tuning, tuya_console,
 };
 use crate::i18n::Lang;
@@ -179,13 +179,23 @@ impl App {
             ctx.send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
             self.title = title;
         }
-        // Repaint while a plot follows live data or a job runs; otherwise only on events.
-        let live = matches!(self.settings.panel, PanelId::Telemetry | PanelId::Solar)
-            && !self.state.link.polling_paused
-            && self.state.connected();
-        if live || self.state.job_progress().is_some() {
-            ctx.request_repaint_after(std::time::Duration::from_millis(33));
+        if let Some(after) = self.repaint_after() {
+            ctx.request_repaint_after(after);
         }
+    }
+
+    /// How soon the window redraws on its own: at [`repaint::LIVE`] while a live view is shown
+    /// (a plot of polled telemetry, the packet monitor while frames are logged) or a job runs;
+    /// `None` otherwise (idle, paused or disconnected: the window sleeps until input or a
+    /// worker event).
+    pub fn repaint_after(&self) -> Option<std::time::Duration> {
+        let connected = self.state.connected();
+        let live = match self.settings.panel {
+            PanelId::Telemetry | PanelId::Solar => connected && !self.state.link.polling_paused,
+            PanelId::Monitor => connected && !self.state.packets.paused,
+            _ => false,
+        };
+        (live || self.state.job_progress().is_some()).then_some(repaint::LIVE)
     }
 
     /// Routes one piece of job output: to the device model, the status line or its panel.

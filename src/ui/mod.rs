@@ -12,6 +12,7 @@ mod inputs;
 pub mod jobs;
 mod monitor;
 mod presets;
+pub mod repaint;
 mod selftest;
 mod servo_bench;
 pub mod settings;
@@ -95,6 +96,9 @@ pub fn run(
             .with_inner_size([1200.0, 780.0])
             .with_min_inner_size([800.0, 500.0])
             .with_title("botbench"),
+        // Dithering is a per-pixel cost that software rendering pays on every frame, for
+        // gradients the window does not draw.
+        dithering: false,
         ..Default::default()
     };
     eframe::run_native(
