@@ -8,7 +8,7 @@ use super::settings::Settings;
 use super::state::{AppState, Notice, Target};
 use super::{
     Action, actions, connection, device, monitor, presets, repaint, selftest, servo_bench, solar,
-    status_bar, telemetry, tuning, tuya_console,
+    status_bar, telemetry, tour, tuning, tuya_console,
 };
 use crate::i18n::Lang;
 use crate::link::LinkCommand;
@@ -100,6 +100,8 @@ pub struct App {
     pub servo: servo_bench::ServoBenchPanel,
     /// The Tuya console.
     pub tuya: tuya_console::TuyaConsolePanel,
+    /// The screenshot tour, when the window was opened for one.
+    pub tour: Option<tour::Tour>,
     /// The window title last set.
     title: String,
 }
@@ -123,6 +125,7 @@ impl App {
             selftest: selftest::SelfTestPanel::default(),
             servo: servo_bench::ServoBenchPanel::default(),
             tuya: tuya_console::TuyaConsolePanel::default(),
+            tour: None,
             title: String::new(),
         };
         app.apply(Action::Connect {
@@ -181,6 +184,18 @@ impl App {
         }
         if let Some(after) = self.repaint_after() {
             ctx.request_repaint_after(after);
+        }
+        if let Some(mut tour) = self.tour.take() {
+            let panels = self.panels();
+            for a in tour.step(ctx, &self.state, &panels) {
+                let connect = matches!(a, Action::Connect { .. });
+                self.apply(a);
+                if connect {
+                    // The connection bar shows the device the tour moved to.
+                    self.connection = connection::ConnectionBar::new(&self.settings);
+                }
+            }
+            self.tour = Some(tour);
         }
     }
 
@@ -391,6 +406,9 @@ impl eframe::App for App {
     }
 
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
-        eframe::set_value(storage, eframe::APP_KEY, &self.settings);
+        // A screenshot tour's panels, sizes and languages are not the user's choice.
+        if self.tour.is_none() {
+            eframe::set_value(storage, eframe::APP_KEY, &self.settings);
+        }
     }
 }
