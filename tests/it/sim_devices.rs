@@ -17,11 +17,9 @@ use botbench::sim::tuya_mcu::{
 };
 use botbench::sim::{Device, Outgoing};
 
-const B: u32 = 115_200;
+use crate::support::{image, ms};
 
-fn ms(n: u64) -> Duration {
-    Duration::from_millis(n)
-}
+const B: u32 = 115_200;
 
 // ---------------------------------------------------------------- servo helpers
 
@@ -955,11 +953,6 @@ fn mcu_requests_are_sent_and_answers_recorded() {
 }
 
 // ---------------------------------------------------------------- OTA
-
-fn image(len: usize) -> Vec<u8> {
-    let mut rng = fastrand::Rng::with_seed(len as u64);
-    (0..len).map(|_| rng.u8(..)).collect()
-}
 
 fn ota_packet(offset: u32, data: &[u8]) -> Vec<u8> {
     let mut d = offset.to_be_bytes().to_vec();

@@ -13,6 +13,8 @@ use botbench::protocol::tuya::dp::{self, DataPoint, DpValue};
 use botbench::protocol::tuya::{self, TuyaDecoder, cmd as tcmd};
 use botbench::protocol::{Decoder, Direction, Framing, hex};
 
+use crate::support::sum_mod_256;
+
 /// Decodes `bytes` pushed in one go and in single bytes; both must give exactly one frame that
 /// spans the whole input, with nothing left over.
 fn decode_one<P>(make: impl Fn() -> Decoder<P>, bytes: &[u8]) -> P::Frame
@@ -235,11 +237,6 @@ fn tuya_vector(frame: &tuya::Frame, bytes: &[u8]) {
     assert_eq!(frame.wire_len(), bytes.len());
     let got = decode_one(TuyaDecoder::new, bytes);
     assert_eq!(&got, frame);
-}
-
-/// The checksum, worked out independently of the crate: the byte sum mod 256.
-fn sum_mod_256(bytes: &[u8]) -> u8 {
-    (bytes.iter().map(|&b| u32::from(b)).sum::<u32>() % 256) as u8
 }
 
 #[test]

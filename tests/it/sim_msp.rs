@@ -2,22 +2,21 @@
 //! in-process transport, and through `botbench sim`.
 
 use botbench::link::{LinkError, Transport, wire_time};
-use botbench::profile::Registry;
 use botbench::protocol::msp::{Reply, ReplyDecoder, Request};
 use botbench::protocol::{Direction, FrameError};
 use botbench::sim::solar_cleanbot::SolarCleanbot;
 use botbench::sim::window_cleaner::{Fault, WindowCleaner};
 use botbench::sim::{Faults, PtyServer, SimKind, SimOptions, SimTransport, build};
 use serialport::SerialPort;
-use std::io::{BufRead, BufReader, ErrorKind};
-use std::process::{Command, Stdio};
+use std::io::ErrorKind;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use crate::support::cli::{self, SimProcess};
+use crate::support::{PATIENCE, profile, wait_until};
+
 const WINDOW: u8 = 0x03;
 const SOLAR: u8 = 0x04;
-/// Generous: the machine is loaded. Only "nothing arrived" tests wait this long on purpose.
-const PATIENCE: Duration = Duration::from_secs(3);
 
 type Answer = Option<Result<Reply, FrameError>>;
 
@@ -91,13 +90,6 @@ fn open(path: &str, baud: u32) -> Box<dyn SerialPort> {
         .timeout(Duration::from_millis(20))
         .open()
         .expect("opens the pty")
-}
-
-fn profile(id: &str) -> Arc<botbench::profile::Profile> {
-    Registry::builtin()
-        .expect("profiles")
-        .get(id)
-        .expect("profile")
 }
 
 fn field(id: &str, cmd: &str, r: &Reply, ident: &str) -> i64 {
@@ -183,9 +175,9 @@ fn telemetry_moves_with_time() {
     let (dev, mut t) = window(Faults::default());
     let att = Request::new(WINDOW, 108, vec![]);
     let a = reply(exchange(&mut t, &att, PATIENCE));
-    std::thread::sleep(Duration::from_millis(400));
-    let b = reply(exchange(&mut t, &att, PATIENCE));
-    assert_ne!(a.data, b.data, "attitude did not move");
+    wait_until("the attitude to move", || {
+        reply(exchange(&mut t, &att, PATIENCE)).data != a.data
+    });
 
     // The fan ADC rises with the fan speed set by MSP_SET_FAN.
     let analog = Request::new(WINDOW, 110, vec![]);
@@ -200,15 +192,16 @@ fn telemetry_moves_with_time() {
         &Request::new(WINDOW, 211, vec![90]),
         PATIENCE,
     ));
-    std::thread::sleep(Duration::from_millis(600));
-    let running = field(
-        "window-cleaner",
-        "110",
-        &reply(exchange(&mut t, &analog, PATIENCE)),
-        "adcFan",
-    );
-    assert!(running > idle + 500, "fan ADC {idle} -> {running}");
     assert_eq!(dev.lock().expect("lock").fan_pwm(), 90);
+    wait_until("the fan ADC to rise by 500", || {
+        let running = field(
+            "window-cleaner",
+            "110",
+            &reply(exchange(&mut t, &analog, PATIENCE)),
+            "adcFan",
+        );
+        running > idle + 500
+    });
 
     // Corners set from the test, as an operator covering switches.
     dev.lock().expect("lock").set_corners(0b0101);
@@ -260,19 +253,16 @@ fn solar_speed_and_rotate_change_the_robot() {
         &Request::new(SOLAR, 99, 60i16.to_le_bytes().to_vec()),
         PATIENCE,
     ));
-    std::thread::sleep(Duration::from_millis(800));
-
-    let moving = reply(exchange(&mut t, &speed, PATIENCE));
-    assert!(field("solar-cleanbot", "104", &moving, "averageSpeed") > 150);
-    assert!(field("solar-cleanbot", "104", &moving, "moveDistance") > 50);
-    let yaw1 = field(
-        "solar-cleanbot",
-        "108",
-        &reply(exchange(&mut t, &attitude, PATIENCE)),
-        "yaw",
-    );
-    assert!(yaw1 > yaw0 + 10, "yaw {yaw0} -> {yaw1}");
     assert_eq!(dev.lock().expect("lock").commanded_speed(), 250);
+    wait_until("the robot to run and move away", || {
+        let moving = reply(exchange(&mut t, &speed, PATIENCE));
+        field("solar-cleanbot", "104", &moving, "averageSpeed") > 150
+            && field("solar-cleanbot", "104", &moving, "moveDistance") > 50
+    });
+    wait_until("the robot to turn", || {
+        let attitude = reply(exchange(&mut t, &attitude, PATIENCE));
+        field("solar-cleanbot", "108", &attitude, "yaw") > yaw0 + 10
+    });
 
     // Settings are stored; the battery answers in 0.01 V with a state.
     reply(exchange(
@@ -398,34 +388,11 @@ fn vanishing_ports_disconnect_the_host() {
     assert_eq!(err.kind(), ErrorKind::BrokenPipe, "{err}");
 }
 
-struct Child(std::process::Child);
-
-impl Drop for Child {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
 #[test]
 fn cli_sim_prints_the_pty_path_first_and_answers_there() {
-    let mut child = Child(
-        Command::new(env!("CARGO_BIN_EXE_botbench"))
-            .args(["sim", "window-cleaner", "--seed", "3"])
-            .env("BOTBENCH_PROFILE_DIR", "/nonexistent")
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("spawns"),
-    );
-    let stdout = child.0.stdout.take().expect("piped stdout");
-    let mut line = String::new();
-    BufReader::new(stdout)
-        .read_line(&mut line)
-        .expect("reads the first line");
-    let path = line.trim_end();
-    assert!(path.starts_with("/dev/pts/"), "first line: {line:?}");
-    let mut port = open(path, 115_200);
+    let sim = SimProcess::start(&["window-cleaner", "--seed", "3"]);
+    assert!(sim.path.starts_with("/dev/pts/"), "{}", sim.path);
+    let mut port = open(&sim.path, 115_200);
     let v = reply(exchange_port(
         &mut *port,
         &Request::new(0, 2, vec![]),
@@ -441,13 +408,10 @@ fn cli_sim_rejects_bad_options_with_exit_code_2() {
         &["sim", "window-cleaner", "--drop", "1.5"][..],
         &["sim", "window-cleaner", "--corrupt", "-0.1"][..],
     ] {
-        let o = Command::new(env!("CARGO_BIN_EXE_botbench"))
-            .args(args)
-            .output()
-            .expect("runs");
-        assert_eq!(o.status.code(), Some(2), "{args:?}");
-        assert!(!o.stderr.is_empty(), "{args:?}: no message");
-        assert!(o.stdout.is_empty(), "{args:?}");
+        let o = cli::run(args);
+        assert_eq!(o.code, 2, "{args:?}");
+        assert!(!o.err.is_empty(), "{args:?}: no message");
+        assert!(o.out.is_empty(), "{args:?}");
     }
 }
 

@@ -15,6 +15,8 @@ use proptest::collection::vec;
 use proptest::prelude::*;
 use proptest::sample::{Index, select};
 
+use crate::support::sum_mod_256;
+
 // ---------------------------------------------------------------------------------------------
 // The protocols, restated for the tests
 // ---------------------------------------------------------------------------------------------
@@ -31,10 +33,6 @@ struct Proto<P: Framing> {
     len_known_at: usize,
     /// The checksum of a frame's bytes, worked out by hand (the last byte excluded).
     checksum: fn(&[u8]) -> u8,
-}
-
-fn sum_mod_256(bytes: &[u8]) -> u8 {
-    (bytes.iter().map(|&b| u32::from(b)).sum::<u32>() % 256) as u8
 }
 
 fn msp_request_proto() -> Proto<msp::RequestFraming> {

@@ -1,51 +1,19 @@
-//! What the GUI tests share: the real app in an egui_kittest harness, connected to a simulator
-//! served on a pseudo-terminal, stepped in real time until a condition holds.
-#![allow(dead_code)] // each test binary uses its own part
+//! The real app in an egui_kittest harness, connected to a simulator served in lockstep on a
+//! pseudo-terminal ([`super::serve`]), stepped until a condition holds.
 
+use super::PATIENCE;
 use botbench::i18n::Lang;
-use botbench::sim::{Device, Faults, PtyServer, SharedDevice};
 use botbench::ui::{App, PanelId, Settings, Target};
 use eframe::egui;
 use egui_kittest::Harness;
-use std::sync::{Arc, Mutex};
+use egui_kittest::kittest::{AccessKitNode, Queryable};
 use std::time::{Duration, Instant};
 
 /// The app in a harness.
 pub type H = Harness<'static, Option<App>>;
 
-/// How long a step_until may wait: generous, since a loaded CI machine is slow, and a condition
-/// that holds returns at once.
-const PATIENCE: Duration = Duration::from_secs(40);
-
-/// A simulated device on a pseudo-terminal, and a handle to look inside it.
-pub struct Served<D> {
-    pub server: PtyServer,
-    pub sim: Arc<Mutex<D>>,
-}
-
-impl<D> Served<D> {
-    /// The path the app opens.
-    pub fn path(&self) -> &str {
-        self.server.path()
-    }
-}
-
-/// Serves `device` with `faults`.
-pub fn serve_with<D: Device + 'static>(device: D, faults: Faults) -> Served<D> {
-    let sim = Arc::new(Mutex::new(device));
-    let shared: SharedDevice = sim.clone();
-    Served {
-        server: PtyServer::start(shared, faults).expect("a pseudo-terminal"),
-        sim,
-    }
-}
-
-/// Serves `device` with no faults.
-pub fn serve<D: Device + 'static>(device: D) -> Served<D> {
-    serve_with(device, Faults::default())
-}
-
-/// Settings that open `path` at 115200 baud with `profile` on `panel`.
+/// Settings that open `path` at 115200 baud with `profile` on `panel`, with the protocol's own
+/// answer margin.
 pub fn settings(path: &str, profile: &str, panel: PanelId, lang: Lang) -> Settings {
     Settings {
         target: Target::Port(path.to_string()),
@@ -90,13 +58,13 @@ pub fn app_mut(h: &mut H) -> &mut App {
     h.state_mut().as_mut().expect("app")
 }
 
-/// Steps the UI in real time until `done` holds; on timeout, panics naming `what`, with the
-/// link state and the status line.
+/// Steps the UI until `done` holds; after [`PATIENCE`], fails naming `what`, with the link
+/// state and the status line.
 pub fn step_until(h: &mut H, what: &str, done: impl Fn(&App) -> bool) {
     step_until_or(h, what, done, |_| String::new());
 }
 
-/// As [`step_until`], and on timeout also says what `diagnose` says of the app.
+/// As [`step_until`], and on failure also says what `diagnose` says of the app.
 pub fn step_until_or(
     h: &mut H,
     what: &str,
@@ -118,6 +86,36 @@ pub fn step_until_or(
                 diagnose(a)
             );
         }
-        std::thread::sleep(Duration::from_millis(10));
+        // The link and job threads do the work: give them the processor.
+        std::thread::sleep(Duration::from_millis(2));
     }
+}
+
+fn is_text_input(n: &AccessKitNode<'_>) -> bool {
+    n.role() == egui::accesskit::Role::TextInput
+}
+
+/// Replaces the text of the text field labelled `label` with `text`, as a user does: focus,
+/// select all, type.
+pub fn type_into(h: &mut H, label: &str, text: &str) {
+    replace_text(h, |n| n.label().as_deref() == Some(label), text);
+}
+
+/// Replaces the text of the text field that now holds `current` with `text`.
+pub fn edit_value(h: &mut H, current: &str, new: &str) {
+    replace_text(h, |n| n.value().as_deref() == Some(current), new);
+}
+
+fn replace_text(h: &mut H, which: impl Fn(&AccessKitNode<'_>) -> bool, text: &str) {
+    h.get_by(|n| is_text_input(n) && which(n)).focus();
+    h.step();
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.step();
+    h.get_by(|n| is_text_input(n) && which(n)).type_text(text);
+    h.run_steps(2);
+}
+
+/// Whether some widget's label contains `text`.
+pub fn has_label(h: &H, text: &str) -> bool {
+    h.query_all_by_label_contains(text).next().is_some()
 }

@@ -1,29 +1,7 @@
 //! The frame tool as a user runs it: output, JSON keys and exit codes.
 
-use std::process::{Command, Output};
-
-fn botbench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_botbench"))
-        .args(args)
-        .env("BOTBENCH_PROFILE_DIR", "/nonexistent")
-        .output()
-        .expect("runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn json_lines(o: &Output) -> Vec<serde_json::Value> {
-    stdout(o)
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("one JSON document a line"))
-        .collect()
-}
+use crate::support::cli::run as botbench;
+use crate::support::temp_dir;
 
 #[test]
 fn decodes_the_seed_rotate_example_with_named_fields() {
@@ -33,8 +11,8 @@ fn decodes_the_seed_rotate_example_with_named_fields() {
         "servo",
         "0x12 0x4c 0x08 0x07 0x02 0x84 0x03 0xf4 0x01 0x00 0x00 0xeb",
     ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let out = stdout(&o);
+    assert_eq!(o.code, 0, "{}", o.err);
+    let out = o.out;
     assert!(out.contains("ROTATE"), "{out}");
     assert!(out.contains("angle = 90.0 °"), "{out}");
     assert!(out.contains("interval = 500 ms"), "{out}");
@@ -52,8 +30,8 @@ fn json_output_has_stable_keys_and_reports_checksum_errors() {
         "00 11",
         "--json",
     ]);
-    assert_eq!(o.status.code(), Some(1), "frame errors exit 1");
-    let docs = json_lines(&o);
+    assert_eq!(o.code, 1, "frame errors exit 1");
+    let docs = o.json_lines();
     assert_eq!(docs.len(), 3, "{docs:?}");
     assert_eq!(docs[0]["ok"], true);
     assert_eq!(docs[0]["name"], "PING");
@@ -77,8 +55,8 @@ fn hex_may_be_spaced_prefixed_or_packed() {
         "55aa00000000ff",
     ] {
         let o = botbench(&["frame", "decode", "tuya", form, "--json"]);
-        assert_eq!(o.status.code(), Some(0), "{form}: {}", stderr(&o));
-        assert_eq!(json_lines(&o)[0]["command"], 0, "{form}");
+        assert_eq!(o.code, 0, "{form}: {}", o.err);
+        assert_eq!(o.json_lines()[0]["command"], 0, "{form}");
     }
 }
 
@@ -88,8 +66,8 @@ fn an_unknown_command_id_is_decoded_raw_with_its_id() {
     let crc = 250u8 ^ 2 ^ 0xAB ^ 0xCD;
     let hex = format!("ff ff fa 02 ab cd {crc:02x}");
     let o = botbench(&["frame", "decode", "msp", &hex, "--json"]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let doc = &json_lines(&o)[0];
+    assert_eq!(o.code, 0, "{}", o.err);
+    let doc = &o.json_lines()[0];
     assert_eq!(doc["command"], 250);
     assert_eq!(doc["name"], serde_json::Value::Null);
     assert_eq!(doc["payload"], "ab cd");
@@ -107,16 +85,16 @@ fn encode_builds_the_seed_frames_from_names_and_display_values() {
         "interval=500",
         "power=0",
     ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert_eq!(stdout(&o).trim(), "12 4c 08 07 02 84 03 f4 01 00 00 eb");
+    assert_eq!(o.code, 0, "{}", o.err);
+    assert_eq!(o.out.trim(), "12 4c 08 07 02 84 03 f4 01 00 00 eb");
 
     let o = botbench(&["frame", "encode", "tuya", "0", "--json"]);
-    assert_eq!(json_lines(&o)[0]["hex"], "55 aa 00 00 00 00 ff");
+    assert_eq!(o.json_lines()[0]["hex"], "55 aa 00 00 00 00 ff");
 
     // MSP SET with the profile's device code and the crc over device..data.
     let o = botbench(&["frame", "encode", "msp", "MSP_SET_PWMVALUE", "pwmValue=85"]);
     let crc = 3u8 ^ 220 ^ 1 ^ 85;
-    assert_eq!(stdout(&o).trim(), format!("ff ff 03 dc 01 55 {crc:02x}"));
+    assert_eq!(o.out.trim(), format!("ff ff 03 dc 01 55 {crc:02x}"));
 }
 
 #[test]
@@ -134,10 +112,10 @@ fn encoded_frames_decode_back_to_the_same_values() {
         "maxTarget=3",
         "minTarget=2.5",
     ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let hex = stdout(&o);
+    assert_eq!(o.code, 0, "{}", o.err);
+    let hex = o.out;
     let o = botbench(&["frame", "decode", "msp", hex.trim(), "--json"]);
-    let doc = &json_lines(&o)[0];
+    let doc = &o.json_lines()[0];
     let fields = doc["fields"].as_array().unwrap();
     let get = |name: &str| {
         fields
@@ -201,14 +179,15 @@ fn bad_input_gets_a_clear_message_and_exit_code_2() {
     ];
     for (args, want) in cases {
         let o = botbench(args);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
-        assert!(stderr(&o).contains(want), "{args:?}: {}", stderr(&o));
+        assert_eq!(o.code, 2, "{args:?}: {}", o.err);
+        assert!(o.err.contains(want), "{args:?}: {}", o.err);
     }
 }
 
 #[test]
 fn a_malformed_profile_file_is_refused_with_line_and_column() {
-    let path = std::env::temp_dir().join(format!("window-cleaner-{}.ron", std::process::id()));
+    let dir = temp_dir();
+    let path = dir.path().join("window-cleaner.ron");
     std::fs::write(
         &path,
         "Profile(\n  id: \"window-cleaner\",\n  name: oops,\n)",
@@ -222,9 +201,8 @@ fn a_malformed_profile_file_is_refused_with_line_and_column() {
         "--profile",
         path.to_str().unwrap(),
     ]);
-    std::fs::remove_file(&path).unwrap();
-    assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains(":3:"), "{}", stderr(&o));
+    assert_eq!(o.code, 2);
+    assert!(o.err.contains(":3:"), "{}", o.err);
 }
 
 #[test]
@@ -237,8 +215,9 @@ fn truncated_and_over_long_frames_are_reported() {
         "55 aa 00 00 00",
         "--json",
     ]);
-    assert_eq!(o.status.code(), Some(1));
-    let kinds: Vec<String> = json_lines(&o)
+    assert_eq!(o.code, 1);
+    let kinds: Vec<String> = o
+        .json_lines()
         .iter()
         .map(|d| d["error"].as_str().unwrap_or("ok").to_string())
         .collect();

@@ -3,31 +3,21 @@
 //! the CSV export of the whole set. Each `decimate` iteration is one frame's worth (all 4
 //! series); the frame budget is 4 ms p95.
 //!
-//! Run: `cargo bench --bench series -- --warm-up-time 1 --measurement-time 3`
+//! Run: `cargo bench -- series --warm-up-time 1 --measurement-time 3`
 
 use std::hint::black_box;
 
 use botbench::series::{DEFAULT_CAPACITY, SeriesSet};
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use criterion::{Criterion, Throughput};
+
+use fastrand::Rng;
 
 const NAMES: [&str; 4] = ["eulerX", "eulerY", "eulerZ", "battery"];
 const HZ: f64 = 100.0;
 const BUCKETS: usize = 1200;
 
-/// A small deterministic generator (xorshift64*).
-struct Rng(u64);
-
-impl Rng {
-    fn unit(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 fn value(rng: &mut Rng, k: usize, t: f64) -> f64 {
-    let noise = rng.unit() - 0.5;
+    let noise = rng.f64() - 0.5;
     match k {
         3 => 12.6 - t * 1e-4 + noise * 0.05,
         _ => 30.0 * (t * 0.3 + k as f64).sin() + noise * 2.0,
@@ -37,7 +27,7 @@ fn value(rng: &mut Rng, k: usize, t: f64) -> f64 {
 /// A set of 4 full series; 1.5× capacity was pushed so the rings have wrapped.
 fn full_set() -> (SeriesSet, Rng, u64) {
     let mut set = SeriesSet::new(DEFAULT_CAPACITY);
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut rng = Rng::with_seed(0x9E37_79B9_7F4A_7C15);
     let n = DEFAULT_CAPACITY as u64 * 3 / 2;
     for i in 0..n {
         let t = i as f64 / HZ;
@@ -54,7 +44,7 @@ fn decimate(c: &mut Criterion) {
     let mut outs: Vec<Vec<[f64; 2]>> = (0..4)
         .map(|_| Vec::with_capacity(2 * BUCKETS + 2))
         .collect();
-    let mut g = c.benchmark_group("decimate_4_series_frame");
+    let mut g = c.benchmark_group("series/decimate_4_series_frame");
     // Samples scanned per frame, for the throughput figure.
     for (label, secs) in [
         ("full_10min", 600.0),
@@ -81,7 +71,7 @@ fn decimate(c: &mut Criterion) {
 
 fn push(c: &mut Criterion) {
     let (mut set, mut rng, mut i) = full_set();
-    let mut g = c.benchmark_group("push_full_ring");
+    let mut g = c.benchmark_group("series/push_full_ring");
     // One 100 Hz tick: a sample for each of the 4 series, looked up by name. Values are plain
     // random numbers so the figure is the push, not the generator's `sin`.
     g.throughput(Throughput::Elements(4));
@@ -90,7 +80,7 @@ fn push(c: &mut Criterion) {
             let t = i as f64 / HZ;
             i += 1;
             for name in NAMES {
-                black_box(set.push(black_box(name), t, rng.unit())).unwrap();
+                black_box(set.push(black_box(name), t, rng.f64())).unwrap();
             }
         })
     });
@@ -100,7 +90,7 @@ fn push(c: &mut Criterion) {
         b.iter(|| {
             let t = i as f64 / HZ;
             i += 1;
-            black_box(series.push(t, rng.unit())).unwrap();
+            black_box(series.push(t, rng.f64())).unwrap();
         })
     });
     g.finish();
@@ -113,7 +103,7 @@ fn csv_export(c: &mut Criterion) {
     let mut out = Vec::with_capacity(8 << 20);
     set.write_csv(&mut out).unwrap();
     let rows = out.iter().filter(|&&b| b == b'\n').count() as u64;
-    let mut g = c.benchmark_group("csv_export");
+    let mut g = c.benchmark_group("series/csv_export");
     g.throughput(Throughput::Elements(rows));
     g.bench_function("full_set_rows", |b| {
         b.iter(|| {
@@ -125,5 +115,10 @@ fn csv_export(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, decimate, push, csv_export);
-criterion_main!(benches);
+/// Decimating a frame's worth, pushing samples and exporting CSV: groups
+/// `series/decimate_4_series_frame`, `series/push_full_ring` and `series/csv_export`.
+pub fn benches(c: &mut Criterion) {
+    decimate(c);
+    push(c);
+    csv_export(c);
+}

@@ -4,63 +4,24 @@
 //! relation before anything is sent. Through the codec, the command line and the window-cleaner
 //! simulator answering as other firmware, on a pty.
 
-use botbench::link::{Link, LinkEvent, LinkOptions, serial};
 use botbench::ops::{OpError, exchange as msp_ops};
 use botbench::preset::Preset;
-use botbench::profile::registry::{BUILTIN, parse};
-use botbench::profile::{FieldError, Input, Profile, Registry};
+use botbench::profile::registry::parse;
+use botbench::profile::{FieldError, Profile};
 use botbench::protocol::Direction;
 use botbench::sim::msp_device::MspCore;
 use botbench::sim::window_cleaner::{DEVICE_CODE, WindowCleaner};
-use botbench::sim::{Faults, PtyServer, SharedDevice};
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Output, Stdio};
-use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::sync::Arc;
 
-fn botbench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_botbench"))
-        .args(args)
-        .env("BOTBENCH_PROFILE_DIR", "/nonexistent")
-        .output()
-        .expect("runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn json(o: &Output) -> serde_json::Value {
-    serde_json::from_str(stdout(o).lines().next().expect("a line")).expect("JSON")
-}
-
-fn profile(name: &str) -> Arc<Profile> {
-    Registry::builtin().unwrap().get(name).unwrap()
-}
-
-/// The 1-based line of the `nth` occurrence of `needle`.
-fn line_of(src: &str, needle: &str, nth: usize) -> usize {
-    let pos = src.match_indices(needle).nth(nth).expect("needle").0;
-    botbench::document::line_col(src, pos).0
-}
-
-fn inputs(pairs: &[(&str, &str)]) -> Vec<(String, Input)> {
-    pairs
-        .iter()
-        .map(|(k, v)| (k.to_string(), Input::from(*v)))
-        .collect()
-}
+use crate::support::cli::{self, SimProcess, run as botbench};
+use crate::support::{Served, builtin_src, connect, inputs, line_of, profile, serve, temp_dir};
 
 #[test]
 fn a_short_set_is_shown_with_the_fields_read_before_the_fault_and_exits_1() {
     let frame = "ff ff 03 e1 04 96 00 0a 02 78";
     let o = botbench(&["frame", "decode", "msp", frame]);
-    assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
-    let out = stdout(&o);
+    assert_eq!(o.code, 1, "{}", o.out);
+    let out = o.out;
     for want in [
         "waterPump = 150",
         "waterPumpStartAngle = 2 °",
@@ -69,7 +30,7 @@ fn a_short_set_is_shown_with_the_fields_read_before_the_fault_and_exits_1() {
     ] {
         assert!(out.contains(want), "{want}:\n{out}");
     }
-    let doc = json(&botbench(&["frame", "decode", "msp", frame, "--json"]));
+    let doc = botbench(&["frame", "decode", "msp", frame, "--json"]).json();
     assert_eq!(doc["ok"], false);
     assert_eq!(doc["error"], "layout");
     assert_eq!(doc["fields"].as_array().unwrap().len(), 3);
@@ -89,17 +50,9 @@ fn a_short_set_is_shown_with_the_fields_read_before_the_fault_and_exits_1() {
         "--profile",
         "window-cleaner-configurator",
     ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
-    assert!(
-        stdout(&o).contains("waterPumpDuration = 150 ms"),
-        "{}",
-        stdout(&o)
-    );
-    assert!(
-        stdout(&o).contains("waterPumpMoveCnt = 2"),
-        "{}",
-        stdout(&o)
-    );
+    assert_eq!(o.code, 0, "{}", o.out);
+    assert!(o.out.contains("waterPumpDuration = 150 ms"), "{}", o.out);
+    assert!(o.out.contains("waterPumpMoveCnt = 2"), "{}", o.out);
 }
 
 #[test]
@@ -113,12 +66,12 @@ fn a_long_reply_is_shown_with_its_extra_bytes_and_exits_1() {
         "reply",
         "ff ff 82 02 55 07 d2",
     ]);
-    assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
-    assert!(stdout(&o).contains("pwmValue = 85 %"), "{}", stdout(&o));
+    assert_eq!(o.code, 1, "{}", o.out);
+    assert!(o.out.contains("pwmValue = 85 %"), "{}", o.out);
     assert!(
-        stdout(&o).contains("1 byte(s) past the layout's last field: 07"),
+        o.out.contains("1 byte(s) past the layout's last field: 07"),
         "{}",
-        stdout(&o)
+        o.out
     );
 }
 
@@ -167,11 +120,7 @@ fn the_configurator_variant_leaves_out_set_224s_second_byte_when_it_is_0() {
 
 #[test]
 fn a_variant_set_of_its_own_layout_must_be_readable_back_through_its_get() {
-    let src = BUILTIN
-        .iter()
-        .find(|(n, _)| *n == "window-cleaner-configurator")
-        .unwrap()
-        .1;
+    let src = builtin_src("window-cleaner-configurator");
     let edited = src.replacen(
         "ident: \"waterPumpMoveCnt\"",
         "ident: \"waterPumpMoveCount\"",
@@ -184,40 +133,9 @@ fn a_variant_set_of_its_own_layout_must_be_readable_back_through_its_get() {
 }
 
 /// A window cleaner answering as firmware described by `firmware`, on a pty.
-fn window_cleaner(firmware: Arc<Profile>) -> (PtyServer, Arc<Mutex<WindowCleaner>>) {
+fn window_cleaner(firmware: Arc<Profile>) -> Served<WindowCleaner> {
     let core = MspCore::new(firmware, DEVICE_CODE, 115_200);
-    let wc = Arc::new(Mutex::new(WindowCleaner::with_core(core, 0)));
-    let shared: SharedDevice = wc.clone();
-    (PtyServer::start(shared, Faults::default()).unwrap(), wc)
-}
-
-/// Opens the pty and waits until the session has learned the device code.
-fn connect(path: &str, p: &Arc<Profile>) -> Link {
-    let link = Link::open(
-        serial::opener(path, 115_200),
-        p.clone(),
-        // Generous for a loaded test machine.
-        LinkOptions {
-            margin: Some(Duration::from_millis(300)),
-            ..LinkOptions::default()
-        },
-        None,
-    )
-    .expect("opens the pty");
-    let deadline = Instant::now() + Duration::from_secs(10);
-    loop {
-        match link
-            .events()
-            .recv_timeout(deadline.saturating_duration_since(Instant::now()))
-        {
-            Ok(LinkEvent::Identified(r)) => {
-                r.expect("CMD_VERSION answered");
-                return link;
-            }
-            Ok(_) => {}
-            Err(_) => panic!("not identified"),
-        }
-    }
+    serve(WindowCleaner::with_core(core, 0))
 }
 
 /// Firmware whose GET 135 answers without waterPump and whose GET 130 answers one byte more.
@@ -249,9 +167,9 @@ const DRIFT: &str = r#"(
 #[test]
 fn replies_that_drift_from_the_layout_reach_the_tuning_path_as_misfits_with_their_bytes() {
     let firmware = Arc::new(parse("drift.ron", DRIFT, None).unwrap());
-    let (server, _wc) = window_cleaner(firmware);
+    let wc = window_cleaner(firmware);
     let p = profile("window-cleaner");
-    let link = connect(server.path(), &p);
+    let link = connect(wc.path(), &p);
     let client = link.client();
     for (get, raw, fault) in [
         ("MSP_GET_SPRAY_VALUE", "96 00 1e 03", "payload ends early"),
@@ -274,53 +192,23 @@ fn replies_that_drift_from_the_layout_reach_the_tuning_path_as_misfits_with_thei
     }
 }
 
-/// A simulator started as a technician would, stopped when dropped.
-struct Sim(Child, String);
-
-impl Sim {
-    fn start(args: &[&str]) -> Self {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_botbench"))
-            .arg("sim")
-            .args(args)
-            .env("BOTBENCH_PROFILE_DIR", "/nonexistent")
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("botbench sim starts");
-        let mut line = String::new();
-        BufReader::new(child.stdout.take().unwrap())
-            .read_line(&mut line)
-            .unwrap();
-        assert!(line.starts_with("/dev/"), "'{line}'");
-        Self(child, line.trim().to_string())
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
 #[test]
 fn msp_get_shows_a_short_answer_as_such_with_its_raw_bytes() {
-    let dir = std::env::temp_dir().join(format!("botbench-drift-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("window-cleaner-drift.ron");
+    let dir = temp_dir();
+    let file = dir.path().join("window-cleaner-drift.ron");
     std::fs::write(&file, DRIFT).unwrap();
-    let sim = Sim::start(&["window-cleaner", "--profile", file.to_str().unwrap()]);
+    let sim = SimProcess::start(&["window-cleaner", "--profile", file.to_str().unwrap()]);
     let o = botbench(&[
         "msp",
         "--margin-ms",
-        "300",
+        cli::MARGIN_MS,
         "--port",
-        &sim.1,
+        &sim.path,
         "get",
         "MSP_GET_SPRAY_VALUE",
     ]);
-    assert_eq!(o.status.code(), Some(1), "{}{}", stdout(&o), stderr(&o));
-    let out = stdout(&o);
+    assert_eq!(o.code, 1, "{}{}", o.out, o.err);
+    let out = o.out;
     assert!(
         out.contains("4-byte answer where the layout takes 5 byte(s)"),
         "{out}"
@@ -329,36 +217,35 @@ fn msp_get_shows_a_short_answer_as_such_with_its_raw_bytes() {
     let o = botbench(&[
         "msp",
         "--margin-ms",
-        "300",
+        cli::MARGIN_MS,
         "--port",
-        &sim.1,
+        &sim.path,
         "get",
         "MSP_GET_SPRAY_VALUE",
         "--json",
     ]);
-    let doc = json(&o);
+    let doc = o.json();
     assert_eq!(doc["ok"], false);
     assert_eq!(doc["payload"], "96 00 1e 03");
     // A clean answer still exits 0.
     let o = botbench(&[
         "msp",
         "--margin-ms",
-        "300",
+        cli::MARGIN_MS,
         "--port",
-        &sim.1,
+        &sim.path,
         "get",
         "MSP_GET_MOTOR_VALUE",
     ]);
-    assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
+    assert_eq!(o.code, 0, "{}{}", o.out, o.err);
     drop(sim);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn the_configurator_variant_writes_and_reads_back_against_its_firmware() {
     let p = profile("window-cleaner-configurator");
-    let (server, wc) = window_cleaner(p.clone());
-    let link = connect(server.path(), &p);
+    let wc = window_cleaner(p.clone());
+    let link = connect(wc.path(), &p);
     let client = link.client();
     let spray = p.command("MSP_SET_SPRAY_VALUE").unwrap();
     let checks = msp_ops::write_verified(
@@ -387,7 +274,7 @@ fn the_configurator_variant_writes_and_reads_back_against_its_firmware() {
     )
     .unwrap();
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
-    let wc = wc.lock().unwrap();
+    let wc = wc.sim();
     assert_eq!(wc.param("waterPumpDuration"), Some(200));
     assert_eq!(wc.param("fanUpThrdAdd"), Some(0));
     assert_eq!(wc.param("hangCnt"), Some(5));
@@ -398,8 +285,8 @@ fn the_configurator_variant_writes_and_reads_back_against_its_firmware() {
 #[test]
 fn tuning_and_presets_refuse_a_broken_relation_before_anything_is_sent() {
     let p = profile("window-cleaner");
-    let (server, wc) = window_cleaner(p.clone());
-    let link = connect(server.path(), &p);
+    let wc = window_cleaner(p.clone());
+    let link = connect(wc.path(), &p);
     let client = link.client();
     let set = p.command("MSP_SET_USE_FAN_OUTPUT_PID").unwrap();
     let bad = inputs(&[
@@ -413,11 +300,7 @@ fn tuning_and_presets_refuse_a_broken_relation_before_anything_is_sent() {
     let err = msp_ops::write_verified(&client, &p, set, &bad).unwrap_err();
     assert!(err.is_input(), "{err}");
     assert!(err.to_string().contains("minTarget"), "{err}");
-    assert_eq!(
-        wc.lock().unwrap().param("minTarget"),
-        Some(250),
-        "nothing written"
-    );
+    assert_eq!(wc.sim().param("minTarget"), Some(250), "nothing written");
     // A preset holding it is refused when it is loaded, at its command's line.
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),

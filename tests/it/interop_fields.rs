@@ -4,56 +4,14 @@
 //! firmware_variants.rs.
 
 use botbench::ops::servo as servo_ops;
-use botbench::profile::registry::{BUILTIN, parse};
-use botbench::profile::{Input, Profile, Registry, Value};
+use botbench::profile::registry::parse;
+use botbench::profile::{Input, Value};
 use botbench::protocol::Direction;
 use botbench::sim::servo_bus::SimServo;
-use std::process::{Command, Output};
-use std::sync::Arc;
-use std::time::Duration;
 
-mod common;
-
-fn botbench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_botbench"))
-        .args(args)
-        .env("BOTBENCH_PROFILE_DIR", "/nonexistent")
-        .output()
-        .expect("runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn json(o: &Output) -> serde_json::Value {
-    serde_json::from_str(stdout(o).lines().next().expect("a line")).expect("JSON")
-}
-
-fn profile(name: &str) -> Arc<Profile> {
-    Registry::builtin().unwrap().get(name).unwrap()
-}
-
-fn builtin_src(name: &str) -> &'static str {
-    BUILTIN.iter().find(|(n, _)| *n == name).unwrap().1
-}
-
-/// The 1-based line of the `nth` occurrence of `needle`.
-fn line_of(src: &str, needle: &str, nth: usize) -> usize {
-    let pos = src.match_indices(needle).nth(nth).expect("needle").0;
-    botbench::document::line_col(src, pos).0
-}
-
-fn inputs(pairs: &[(&str, &str)]) -> Vec<(String, Input)> {
-    pairs
-        .iter()
-        .map(|(k, v)| (k.to_string(), Input::from(*v)))
-        .collect()
-}
+use crate::support::cli::run as botbench;
+use crate::support::servo::Bench;
+use crate::support::{builtin_src, inputs, line_of, profile};
 
 // ------------------------------------------------------------ 2. one name per decoded field
 
@@ -66,8 +24,8 @@ fn a_write_of_the_id_parameter_names_the_new_id_apart_from_the_servo_id() {
         "12 4c 04 03 00 22 05 8c",
         "--json",
     ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let doc = json(&o);
+    assert_eq!(o.code, 0, "{}", o.err);
+    let doc = o.json();
     let names: Vec<&str> = doc["fields"]
         .as_array()
         .unwrap()
@@ -98,7 +56,7 @@ fn a_profile_whose_decoded_frame_would_carry_two_values_of_one_name_is_refused()
     );
     // A Tuya data point named as a field of the frame that carries it.
     let tuya = builtin_src("tuya-vacuum");
-    let dp_cmd = Registry::builtin().unwrap().get("tuya-vacuum").unwrap();
+    let dp_cmd = profile("tuya-vacuum");
     let list = dp_cmd
         .commands
         .iter()
@@ -121,8 +79,8 @@ fn a_profile_whose_decoded_frame_would_carry_two_values_of_one_name_is_refused()
 #[test]
 fn an_omitted_field_with_a_default_takes_it() {
     let o = botbench(&["frame", "encode", "servo", "SET_ORIGIN", "servo_id=0"]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert_eq!(stdout(&o).trim(), "12 4c 17 02 00 00 77");
+    assert_eq!(o.code, 0, "{}", o.err);
+    assert_eq!(o.out.trim(), "12 4c 17 02 00 00 77");
     // The SDK's t_acc = t_dec = 20 ms and power 0: its bytes for `set_servo_angle(1, 90.5,
     // interval=500)` (tests/sdk/vectors.jsonl, set_servo_angle/by_interval).
     let o = botbench(&[
@@ -134,9 +92,9 @@ fn an_omitted_field_with_a_default_takes_it() {
         "angle=90.5",
         "interval=500",
     ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(o.code, 0, "{}", o.err);
     assert_eq!(
-        stdout(&o).trim(),
+        o.out.trim(),
         "12 4c 0b 0b 01 89 03 f4 01 14 00 14 00 00 00 1e"
     );
     // A field without a default is still required.
@@ -147,8 +105,8 @@ fn an_omitted_field_with_a_default_takes_it() {
         "ROTATE_BY_INTERVAL",
         "servo_id=1",
     ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("'angle' is missing"), "{}", stderr(&o));
+    assert_eq!(o.code, 2);
+    assert!(o.err.contains("'angle' is missing"), "{}", o.err);
 }
 
 // ------------------------------------------------------------ 4. temperature
@@ -158,13 +116,13 @@ fn a_thermistor_reading_shows_in_celsius_with_its_raw_value_beside() {
     // READ_DATA parameter 4 answered with 32: 241.3 °C by the SDK's conversion.
     let reply = "05 1c 03 04 01 04 20 00 4d";
     let o = botbench(&["frame", "decode", "servo", reply]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(o.code, 0, "{}", o.err);
     assert!(
-        stdout(&o).contains("temprature = 241.3 °C (raw 32)"),
+        o.out.contains("temprature = 241.3 °C (raw 32)"),
         "{}",
-        stdout(&o)
+        o.out
     );
-    let doc = json(&botbench(&["frame", "decode", "servo", reply, "--json"]));
+    let doc = botbench(&["frame", "decode", "servo", reply, "--json"]).json();
     let t = &doc["fields"][2];
     assert_eq!(t["field"], "temprature");
     assert_eq!(t["value"], 32);
@@ -175,7 +133,7 @@ fn a_thermistor_reading_shows_in_celsius_with_its_raw_value_beside() {
     assert_eq!(t["unit"], "°C");
     // No temperature stands for raw 0: shown as such, never as a number.
     let monitor = "05 1c 16 10 01 e8 1c 78 00 78 03 00 00 01 39 30 00 00 03 00 ac";
-    let doc = json(&botbench(&["frame", "decode", "servo", monitor, "--json"]));
+    let doc = botbench(&["frame", "decode", "servo", monitor, "--json"]).json();
     let t = &doc["fields"][4];
     assert_eq!(
         (t["value"].as_i64(), t["converted"].is_null()),
@@ -210,12 +168,8 @@ fn a_minimum_above_its_maximum_is_refused_naming_both_fields() {
     let kv: Vec<String> = values.iter().map(|(k, v)| format!("{k}={v}")).collect();
     args.extend(kv.iter().map(String::as_str));
     let o = botbench(&args);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(
-        stderr(&o).contains("(minTarget) 3.50 must be ≤"),
-        "{}",
-        stderr(&o)
-    );
+    assert_eq!(o.code, 2);
+    assert!(o.err.contains("(minTarget) 3.50 must be ≤"), "{}", o.err);
     // Fan PWM minimum ≤ maximum.
     let comp = p.command("MSP_SET_USE_FAN_LEVEL_DYNAMIC_COMP").unwrap();
     let err = p
@@ -234,15 +188,12 @@ fn a_minimum_above_its_maximum_is_refused_naming_both_fields() {
 
 #[test]
 fn a_servo_angle_limit_is_checked_against_the_other_one_the_servo_holds() {
-    let bench = common::Bench::with_margin(
-        vec![
-            SimServo::fresh(1)
-                .with_id(1)
-                .with_param(51, 300)
-                .with_param(52, -300),
-        ],
-        Duration::from_millis(200),
-    );
+    let bench = Bench::new(vec![
+        SimServo::fresh(1)
+            .with_id(1)
+            .with_param(51, 300)
+            .with_param(52, -300),
+    ]);
     let client = bench.client();
     let p = &bench.profile;
     let low = p.find_param("angle_limit_low").unwrap();
@@ -251,7 +202,7 @@ fn a_servo_angle_limit_is_checked_against_the_other_one_the_servo_holds() {
         err.to_string(),
         "Angle lower limit (angle_limit_low) 45.0 ° must be ≤ Angle upper limit (angle_limit_high) 30.0 °"
     );
-    assert_eq!(bench.bus.lock().unwrap().servos()[0].param(52), Some(-300));
+    assert_eq!(bench.bus().servos()[0].param(52), Some(-300));
     let check = servo_ops::write_param(&client, p, 1, low, Input::from("-45")).unwrap();
     assert!(check.ok());
     assert_eq!(check.read, Value::Int(-450));

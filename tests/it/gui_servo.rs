@@ -6,69 +6,29 @@ use botbench::ops::OpError;
 use botbench::ops::servo::Presence;
 use botbench::sim::servo_bus::{Motion, ServoBus, SimServo};
 use botbench::ui::{Action, App, PanelId};
-use eframe::egui;
 use egui_kittest::kittest::{NodeT, Queryable};
-use std::sync::Mutex;
 use std::time::Instant;
 
-mod gui_harness;
-use gui_harness::{H, Served, app, serve, settings, step_until};
+use crate::support::gui::{H, app, app_mut, settings, step_until, type_into};
+use crate::support::{Served, serve, temp_dir};
 
-struct Bench {
-    served: Served<ServoBus>,
-    _one_at_a_time: std::sync::MutexGuard<'static, ()>,
+/// The simulated bus on its pty, in lockstep with the app's link.
+type Bench = Served<ServoBus>;
+
+fn bench(servos: Vec<SimServo>) -> Bench {
+    serve(ServoBus::new(servos))
 }
 
-/// Several simulated buses with their apps and link threads at once load the machine enough for
-/// answers to miss their deadlines: the tests of this file run one at a time.
-static SERIAL: Mutex<()> = Mutex::new(());
-
-impl Bench {
-    fn new(servos: Vec<SimServo>) -> Self {
-        let one_at_a_time = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-        Self {
-            served: serve(ServoBus::new(servos)),
-            _one_at_a_time: one_at_a_time,
-        }
-    }
-
-    fn bus(&self) -> std::sync::MutexGuard<'_, ServoBus> {
-        self.served.sim.lock().unwrap()
-    }
-
-    fn servo(&self, serial: u32) -> SimServo {
-        self.bus().servo_by_serial(serial).unwrap().clone()
-    }
-}
-
+/// The app on the servo bench panel, connected with the servo protocol's own answer margin.
 fn harness(b: &Bench, lang: Lang) -> H {
-    let saved = settings(b.served.path(), "servo", PanelId::ServoBench, lang);
-    let mut h = gui_harness::harness_with(saved.clone(), move |app| {
-        // Generous for a loaded test machine (the tests share 2 cores with builds).
-        app.apply(Action::Connect {
-            target: saved.target.clone(),
-            baud: saved.baud,
-            profile: saved.profile.clone(),
-            margin_ms: Some(20),
-        });
-    });
+    let mut h =
+        crate::support::gui::harness(settings(b.path(), "servo", PanelId::ServoBench, lang));
     step_until(&mut h, "the link", |a| a.state.connected());
     h
 }
 
 fn idle(a: &App) -> bool {
     a.state.job_progress().is_none()
-}
-
-/// Replaces the text of the entry labelled `label`.
-fn set_text(h: &mut H, label: &str, text: &str) {
-    h.get_by_label(label).focus();
-    h.step();
-    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
-    h.step();
-    h.get_by_label(label).type_text(text);
-    h.step();
-    h.step();
 }
 
 /// Selects `servo` in the scan table and asks for the baud option labelled `option`.
@@ -87,8 +47,8 @@ fn set_baud(h: &mut H, servo: &str, option: &str) {
 
 /// Scans ids `first`-`last` at the checked rates and waits for the end.
 fn scan(h: &mut H, first: &str, last: &str) {
-    set_text(h, "First id", first);
-    set_text(h, "Last id", last);
+    type_into(h, "First id", first);
+    type_into(h, "Last id", last);
     h.get_by_label("Scan").click();
     h.step();
     step_until(h, "the scan", |a| idle(a) && a.servo.scan.outcome.is_some());
@@ -97,7 +57,7 @@ fn scan(h: &mut H, first: &str, last: &str) {
 
 #[test]
 fn a_scan_finds_the_configured_servos_and_shows_a_duplicate_as_such() {
-    let b = Bench::new(vec![
+    let b = bench(vec![
         SimServo::fresh(11).with_id(3).with_type(77),
         SimServo::fresh(12).with_id(9),
         SimServo::fresh(13).with_id(9),
@@ -162,7 +122,7 @@ fn a_scan_finds_the_configured_servos_and_shows_a_duplicate_as_such() {
 
 #[test]
 fn a_parameter_out_of_range_is_refused_and_one_in_range_is_written_and_verified() {
-    let b = Bench::new(vec![SimServo::fresh(21).with_id(5).with_param(41, 77)]);
+    let b = bench(vec![SimServo::fresh(21).with_id(5).with_param(41, 77)]);
     let mut h = harness(&b, Lang::En);
     scan(&mut h, "0", "10");
     let sel = app(&h).servo.selected.expect("the only servo is selected");
@@ -176,7 +136,7 @@ fn a_parameter_out_of_range_is_refused_and_one_in_range_is_written_and_verified(
     });
     h.step();
     assert_eq!(app(&h).servo.params.values.get(&41), Some(&Ok(77)));
-    set_text(&mut h, "Temperature limit", "70000");
+    type_into(&mut h, "Temperature limit", "70000");
     assert!(
         app(&h)
             .servo
@@ -193,7 +153,7 @@ fn a_parameter_out_of_range_is_refused_and_one_in_range_is_written_and_verified(
     h.run_steps(5);
     assert!(idle(app(&h)), "nothing is written");
     assert_eq!(b.servo(21).param(41), Some(77));
-    set_text(&mut h, "Temperature limit", "65");
+    type_into(&mut h, "Temperature limit", "65");
     h.get_by_label("Write changes (1)").click();
     h.step();
     step_until(&mut h, "the write", |a| {
@@ -207,7 +167,7 @@ fn a_parameter_out_of_range_is_refused_and_one_in_range_is_written_and_verified(
 
 #[test]
 fn an_id_change_from_the_panel_is_verified_and_bad_ids_are_refused() {
-    let b = Bench::new(vec![
+    let b = bench(vec![
         SimServo::fresh(31).with_id(5),
         SimServo::fresh(32).with_id(7),
     ]);
@@ -218,7 +178,7 @@ fn an_id_change_from_the_panel_is_verified_and_bad_ids_are_refused() {
     h.get_by_label("ID & baud rate").click();
     h.step();
     for (bad, why) in [("7", "already answers"), ("255", "broadcast")] {
-        set_text(&mut h, "New id", bad);
+        type_into(&mut h, "New id", bad);
         assert!(
             h.query_by_label_contains(why).is_some(),
             "{bad} is refused because of {why}"
@@ -227,7 +187,7 @@ fn an_id_change_from_the_panel_is_verified_and_bad_ids_are_refused() {
         h.run_steps(3);
         assert!(idle(app(&h)));
     }
-    set_text(&mut h, "New id", "12");
+    type_into(&mut h, "New id", "12");
     h.get_by_label("Set ID").click();
     h.step();
     step_until(&mut h, "the id change", |a| {
@@ -247,9 +207,9 @@ fn an_id_change_from_the_panel_is_verified_and_bad_ids_are_refused() {
 
 #[test]
 fn provision_next_on_a_fresh_servo_shows_pass_and_the_servo_has_the_plans_id_and_baud() {
-    let b = Bench::new(vec![SimServo::fresh(4001)]);
-    let log = std::env::temp_dir().join(format!("botbench-gui-servo-{}.csv", std::process::id()));
-    let _ = std::fs::remove_file(&log);
+    let b = bench(vec![SimServo::fresh(4001)]);
+    let dir = temp_dir();
+    let log = dir.path().join("provision.csv");
     let mut h = harness(&b, Lang::En);
     h.get_by_label("Production").click();
     h.step();
@@ -257,8 +217,8 @@ fn provision_next_on_a_fresh_servo_shows_pass_and_the_servo_has_the_plans_id_and
         env!("CARGO_MANIFEST_DIR"),
         "/presets/servo-provision-plan.ron"
     );
-    set_text(&mut h, "Plan", plan);
-    set_text(&mut h, "CSV log", &log.display().to_string());
+    type_into(&mut h, "Plan", plan);
+    type_into(&mut h, "CSV log", &log.display().to_string());
     h.get_by_label("Load plan").click();
     h.step();
     assert!(
@@ -291,12 +251,11 @@ fn provision_next_on_a_fresh_servo_shows_pass_and_the_servo_has_the_plans_id_and
     });
     h.step();
     assert!(h.query_by_label_contains("FAIL · step detect").is_some());
-    let _ = std::fs::remove_file(&log);
 }
 
 #[test]
 fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
-    let b = Bench::new(vec![
+    let b = bench(vec![
         SimServo::fresh(51).with_id(1),
         SimServo::fresh(52).with_id(2).with_extended(false),
         SimServo::fresh(53).with_id(3).with_baud(57_600),
@@ -311,8 +270,8 @@ fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
         h.step();
         h.get_by_label("Motion").click();
         h.step();
-        set_text(&mut h, "Angle (°)", "90");
-        set_text(&mut h, "Interval (ms)", "60000");
+        type_into(&mut h, "Angle (°)", "90");
+        type_into(&mut h, "Interval (ms)", "60000");
         h.get_by_label("Go to angle").click();
         h.step();
         step_until(&mut h, "the servo to move", |_| {
@@ -343,7 +302,7 @@ fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
     h.get_by_label("Bus scan").click();
     h.step();
     h.get_by_label("All 8").click();
-    set_text(&mut h, "Last id", "254");
+    type_into(&mut h, "Last id", "254");
     h.get_by_label("Scan").click();
     h.step();
     h.step();
@@ -367,15 +326,15 @@ fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
 
 #[test]
 fn the_live_angle_follows_a_move() {
-    let b = Bench::new(vec![SimServo::fresh(61).with_id(4)]);
+    let b = bench(vec![SimServo::fresh(61).with_id(4)]);
     let mut h = harness(&b, Lang::En);
     scan(&mut h, "4", "4");
     h.get_by_label("Motion").click();
     h.step();
     h.get_by_label("Live angle").click();
     h.step();
-    set_text(&mut h, "Angle (°)", "-45.5");
-    set_text(&mut h, "Interval (ms)", "100");
+    type_into(&mut h, "Angle (°)", "-45.5");
+    type_into(&mut h, "Interval (ms)", "100");
     h.get_by_label("Go to angle").click();
     step_until(&mut h, "the plotted angle", |a| {
         a.servo
@@ -390,7 +349,11 @@ fn the_live_angle_follows_a_move() {
 
 #[test]
 fn the_panel_renders_every_tab_in_english_and_chinese() {
-    let b = Bench::new(vec![SimServo::fresh(71).with_id(2)]);
+    let b = bench(vec![SimServo::fresh(71).with_id(2)]);
+    let mut h = harness(&b, Lang::En);
+    // Scans of id 2 alone: every tab has something to show, and scanning is drawn too.
+    type_into(&mut h, "First id", "2");
+    type_into(&mut h, "Last id", "2");
     for (lang, tabs) in [
         (
             Lang::En,
@@ -407,9 +370,11 @@ fn the_panel_renders_every_tab_in_english_and_chinese() {
             ["总线扫描", "参数", "ID与波特率", "运动测试", "产线烧录"],
         ),
     ] {
-        let mut h = harness(&b, lang);
-        let scan_label = if lang == Lang::En { "Scan" } else { "扫描" };
-        h.get_by_label(scan_label).click();
+        app_mut(&mut h).settings.lang = lang;
+        h.run_steps(2);
+        h.get_by_label(tabs[0]).click();
+        h.run_steps(2);
+        h.get_by_label(lang.tr("Scan", "扫描")).click();
         h.step();
         step_until(&mut h, "the scan", |a| {
             idle(a) && a.servo.scan.outcome.is_some()
@@ -423,7 +388,7 @@ fn the_panel_renders_every_tab_in_english_and_chinese() {
 
 #[test]
 fn a_baud_change_is_followed_and_verified_and_a_lost_servo_is_found() {
-    let b = Bench::new(vec![
+    let b = bench(vec![
         SimServo::fresh(81).with_id(4),
         // An old servo does not take option 8 (1 Mbaud): it stays at 115200.
         SimServo::fresh(82).with_id(6).with_extended(false),
@@ -462,10 +427,9 @@ fn a_baud_change_is_followed_and_verified_and_a_lost_servo_is_found() {
 
 #[test]
 fn a_parameter_preset_saves_loads_and_writes_and_a_bad_one_is_refused_with_its_place() {
-    let b = Bench::new(vec![SimServo::fresh(91).with_id(3).with_param(41, 66)]);
-    let path =
-        std::env::temp_dir().join(format!("botbench-servo-preset-{}.ron", std::process::id()));
-    let _ = std::fs::remove_file(&path);
+    let b = bench(vec![SimServo::fresh(91).with_id(3).with_param(41, 66)]);
+    let dir = temp_dir();
+    let path = dir.path().join("servo-preset.ron");
     let mut h = harness(&b, Lang::En);
     scan(&mut h, "3", "3");
     h.get_by_label("Parameters").click();
@@ -475,12 +439,12 @@ fn a_parameter_preset_saves_loads_and_writes_and_a_bad_one_is_refused_with_its_p
     step_until(&mut h, "the parameters", |a| {
         idle(a) && a.servo.params.values.len() == 30
     });
-    set_text(&mut h, "Parameter preset", &path.display().to_string());
+    type_into(&mut h, "Parameter preset", &path.display().to_string());
     h.get_by_label("Save preset").click();
     h.step();
     assert!(path.exists(), "{:?}", app(&h).servo.params.message);
     // The servo drifts from the preset; loading it brings the preset's value back as an edit.
-    b.bus()
+    b.sim()
         .servo_by_serial_mut(91)
         .unwrap()
         .clone_from(&SimServo::fresh(91).with_id(3).with_param(41, 80));
@@ -515,12 +479,11 @@ fn a_parameter_preset_saves_loads_and_writes_and_a_bad_one_is_refused_with_its_p
         app(&h).servo.params.edits.is_empty(),
         "nothing of a bad preset is taken"
     );
-    let _ = std::fs::remove_file(&path);
 }
 
 #[test]
 fn reset_user_data_asks_first_then_follows_the_servo_to_id_0() {
-    let b = Bench::new(vec![
+    let b = bench(vec![
         SimServo::fresh(95)
             .with_id(9)
             .with_baud(57_600)
@@ -559,7 +522,7 @@ fn reset_user_data_asks_first_then_follows_the_servo_to_id_0() {
 
 #[test]
 fn wheel_mode_and_damping_reach_the_servo() {
-    let b = Bench::new(vec![SimServo::fresh(97).with_id(8)]);
+    let b = bench(vec![SimServo::fresh(97).with_id(8)]);
     let mut h = harness(&b, Lang::En);
     scan(&mut h, "8", "8");
     h.get_by_label("Motion").click();
@@ -568,7 +531,7 @@ fn wheel_mode_and_damping_reach_the_servo() {
     h.run_steps(2);
     h.get_by_label("Continuous").click();
     h.step();
-    set_text(&mut h, "Speed (°/s)", "120");
+    type_into(&mut h, "Speed (°/s)", "120");
     h.get_by_label("Run wheel").click();
     h.step();
     step_until(
@@ -577,13 +540,13 @@ fn wheel_mode_and_damping_reach_the_servo() {
         |_| matches!(b.servo(97).motion_at(Instant::now()), Motion::Spin { rate, .. } if rate > 0.0),
     );
     // Out of range speeds are refused before sending.
-    set_text(&mut h, "Speed (°/s)", "70000");
+    type_into(&mut h, "Speed (°/s)", "70000");
     assert!(
         h.query_all_by_label_contains("out of range")
             .next()
             .is_some()
     );
-    set_text(&mut h, "Holding power (mW, 0 = limit)", "1500");
+    type_into(&mut h, "Holding power (mW, 0 = limit)", "1500");
     h.get_by_label("Damping mode").click();
     h.step();
     step_until(&mut h, "damping", |_| {
@@ -593,18 +556,17 @@ fn wheel_mode_and_damping_reach_the_servo() {
 
 #[test]
 fn a_new_connection_forgets_the_servos_found_on_the_last_one() {
-    let b = Bench::new(vec![SimServo::fresh(51).with_id(4)]);
+    let b = bench(vec![SimServo::fresh(51).with_id(4)]);
     let other = serve(ServoBus::new(Vec::new()));
     let mut h = harness(&b, Lang::En);
     scan(&mut h, "0", "10");
     assert_eq!(app(&h).servo.scan.rows.len(), 1);
     assert!(app(&h).servo.selected.is_some(), "a lone servo is selected");
-    let margin_ms = app(&h).settings.margin_ms;
-    gui_harness::app_mut(&mut h).apply(Action::Connect {
+    app_mut(&mut h).apply(Action::Connect {
         target: botbench::ui::Target::Port(other.path().to_string()),
         baud: 115_200,
         profile: "servo".into(),
-        margin_ms,
+        margin_ms: None,
     });
     step_until(&mut h, "the new link", |a| a.state.connected());
     let a = app(&h);

@@ -1,16 +1,10 @@
 //! Loading profiles: malformed and inconsistent files fail with file, line, column and reason;
 //! a user's file overrides the built-in of the same name.
 
-use botbench::profile::registry::{BUILTIN, parse};
+use botbench::profile::registry::parse;
 use botbench::profile::{Registry, Source};
 
-fn builtin(name: &str) -> &'static str {
-    BUILTIN
-        .iter()
-        .find(|(n, _)| *n == name)
-        .expect("built-in")
-        .1
-}
+use crate::support::{builtin_src as builtin, line_col_of};
 
 /// The built-in window-cleaner profile with `from` replaced by `to` (once, checked).
 fn edited(from: &str, to: &str) -> String {
@@ -20,11 +14,6 @@ fn edited(from: &str, to: &str) -> String {
         "test setup: '{from}' not in the profile"
     );
     src.replacen(from, to, 1)
-}
-
-fn line_col_of(src: &str, needle: &str, nth: usize) -> (usize, usize) {
-    let pos = src.match_indices(needle).nth(nth).expect("needle").0;
-    botbench::document::line_col(src, pos)
 }
 
 #[test]
@@ -109,8 +98,8 @@ fn a_file_whose_id_differs_from_its_name_is_refused() {
 
 #[test]
 fn a_users_file_overrides_the_builtin_and_a_broken_one_is_an_error() {
-    let dir = std::env::temp_dir().join(format!("botbench-profiles-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::support::temp_dir();
+    let dir = tmp.path().to_path_buf();
     let mut reg = Registry::builtin().unwrap();
     // A firmware variant: the fan PWM limited to 90 %.
     let variant = edited("range: Some((0, 100))", "range: Some((0, 90))");
@@ -126,7 +115,6 @@ fn a_users_file_overrides_the_builtin_and_a_broken_one_is_an_error() {
     std::fs::write(dir.join("servo.ron"), "Profile(id: \"servo\",").unwrap();
     let err = reg.add_dir(&dir).unwrap_err();
     assert!(err.file.ends_with("servo.ron"), "{err}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

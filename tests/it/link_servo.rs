@@ -6,8 +6,9 @@ use botbench::ops::servo::{self as ops, Presence, ScanPlan};
 use botbench::profile::Input;
 use botbench::sim::servo_bus::SimServo;
 
-mod common;
-use common::Bench;
+use crate::support::servo::Bench;
+use crate::support::wait_until;
+use std::time::Instant;
 
 impl Bench {
     fn scan(&self, bauds: &[u32]) -> Vec<(u8, u32, Presence)> {
@@ -98,12 +99,9 @@ fn an_id_change_is_followed_and_verified_and_bad_ids_are_refused() {
         Err(OpError::BroadcastId)
     ));
     ops::set_id(&c, &bench.profile, 0, 12, &cancel).unwrap();
-    assert_eq!(
-        bench.bus.lock().unwrap().servo_by_serial(77).unwrap().id(),
-        12
-    );
+    assert_eq!(bench.servo(77).id(), 12);
     // Another servo arrives fresh: id 12 is taken now.
-    bench.bus.lock().unwrap().add(SimServo::fresh(78));
+    bench.bus().add(SimServo::fresh(78));
     let err = ops::set_id(&c, &bench.profile, 0, 12, &cancel).unwrap_err();
     assert!(err.to_string().contains("already answers"), "{err}");
     // A fresh servo is only given an id when it is alone on the bus... it is alone at id 0,
@@ -118,10 +116,7 @@ fn a_baud_change_is_followed_and_verified() {
     let c = bench.client();
     let baud = ops::set_baud(&c, &bench.profile, 4, 4).unwrap();
     assert_eq!(baud, 57_600);
-    assert_eq!(
-        bench.bus.lock().unwrap().servo_by_serial(5).unwrap().baud(),
-        57_600
-    );
+    assert_eq!(bench.servo(5).baud(), 57_600);
     // The link follows: the servo answers at the new rate.
     assert_eq!(ops::ping(&c, 4, 2).unwrap(), Presence::Present);
     let err = ops::set_baud(&c, &bench.profile, 4, 9).unwrap_err();
@@ -160,16 +155,7 @@ fn a_parameter_write_is_range_checked_and_read_back() {
     let p = bench.profile.find_param("angle_limit_high").unwrap();
     let check = ops::write_param(&c, &bench.profile, 1, p, Input::from("90.5")).unwrap();
     assert!(check.ok(), "{check:?}");
-    assert_eq!(
-        bench
-            .bus
-            .lock()
-            .unwrap()
-            .servo_by_serial(3)
-            .unwrap()
-            .param(p.id),
-        Some(905)
-    );
+    assert_eq!(bench.servo(3).param(p.id), Some(905));
     let ro = bench.profile.find_param("voltage").unwrap();
     assert!(matches!(
         ops::write_param(&c, &bench.profile, 1, ro, Input::from("5000")),
@@ -180,16 +166,6 @@ fn a_parameter_write_is_range_checked_and_read_back() {
         ops::write_param(&c, &bench.profile, 1, baud, Input::from("9")),
         Err(OpError::Value(_))
     ));
-}
-
-fn sim(bench: &Bench, serial: u32) -> SimServo {
-    bench
-        .bus
-        .lock()
-        .unwrap()
-        .servo_by_serial(serial)
-        .unwrap()
-        .clone()
 }
 
 #[test]
@@ -207,7 +183,7 @@ fn the_user_block_is_read_and_written_as_a_batch_and_read_back() {
     }
     let checks = ops::write_block(&client, &profile, 4, &block).unwrap();
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
-    assert_eq!(sim(&bench, 21).param(41), Some(72));
+    assert_eq!(bench.servo(21).param(41), Some(72));
     // The id is not changed through the block: the servo would be lost.
     let mut moved = block.clone();
     for (id, v) in moved.iter_mut() {
@@ -217,7 +193,7 @@ fn the_user_block_is_read_and_written_as_a_batch_and_read_back() {
     }
     let e = ops::write_block(&client, &profile, 4, &moved).unwrap_err();
     assert!(matches!(e, OpError::FollowedChange { .. }), "{e}");
-    assert_eq!(sim(&bench, 21).id(), 4);
+    assert_eq!(bench.servo(21).id(), 4);
     // Out of range values are refused before anything is sent.
     let mut bad = block.clone();
     bad.retain(|(id, _)| *id != 44);
@@ -246,7 +222,7 @@ fn reset_user_data_follows_the_servo_to_its_factory_id_and_rate() {
             baud: 115_200
         }
     );
-    let s = sim(&bench, 31);
+    let s = bench.servo(31);
     assert_eq!((s.id(), s.baud()), (0, 115_200));
     assert_ne!(s.param(41), Some(60));
 }
@@ -257,7 +233,7 @@ fn reset_user_data_is_refused_when_another_servo_holds_the_factory_id() {
     let (client, profile) = (bench.client(), bench.profile.clone());
     let e = ops::reset_user_data(&client, &profile, 6, 115_200).unwrap_err();
     assert!(matches!(e, OpError::FactoryIdTaken { .. }), "{e}");
-    assert_eq!(sim(&bench, 41).id(), 6);
+    assert_eq!(bench.servo(41).id(), 6);
 }
 
 #[test]
@@ -270,7 +246,9 @@ fn motion_requests_move_the_servo_and_stop_all_stops_every_servo() {
     let (client, profile) = (bench.client(), bench.profile.clone());
     let r = ops::rotate_request(&profile, 1, 450, 10, 0).unwrap();
     let _ = client.request(r);
-    std::thread::sleep(std::time::Duration::from_millis(60));
+    wait_until("the move to end", || {
+        bench.servo(51).motion_at(Instant::now()) == Motion::Hold
+    });
     let angle = ops::read_angle(&client, &profile, 1).unwrap();
     assert_eq!(angle, 450);
     assert!(ops::rotate_request(&profile, 1, 40_000, 10, 0).is_err());
@@ -278,23 +256,22 @@ fn motion_requests_move_the_servo_and_stop_all_stops_every_servo() {
         let r = ops::spin_request(&profile, id, ops::Wheel::Continuous, true, 60).unwrap();
         let _ = client.request(r);
     }
-    let now = std::time::Instant::now();
-    assert!(matches!(
-        sim(&bench, 51).motion_at(now),
-        Motion::Spin { .. }
-    ));
-    assert!(matches!(
-        sim(&bench, 52).motion_at(now),
-        Motion::Spin { .. }
-    ));
+    wait_until("both servos to spin", || {
+        [51, 52].iter().all(|s| {
+            matches!(
+                bench.servo(*s).motion_at(Instant::now()),
+                Motion::Spin { .. }
+            )
+        })
+    });
     for r in ops::stop_all_requests(&profile) {
         client.request(r).unwrap();
     }
     // A broadcast is not answered: the ping makes sure it has crossed the wire.
     assert_eq!(ops::ping(&client, 1, 2).unwrap(), Presence::Present);
-    let now = std::time::Instant::now();
-    assert_eq!(sim(&bench, 51).motion_at(now), Motion::Hold);
-    assert_eq!(sim(&bench, 52).motion_at(now), Motion::Damping { power: 0 });
+    let now = Instant::now();
+    assert_eq!(bench.servo(51).motion_at(now), Motion::Hold);
+    assert_eq!(bench.servo(52).motion_at(now), Motion::Damping { power: 0 });
 }
 
 #[test]
@@ -304,21 +281,36 @@ fn a_baud_change_right_after_a_broadcast_lets_the_broadcast_cross_the_wire_whole
     let (client, profile) = (bench.client(), bench.profile.clone());
     let r = ops::spin_request(&profile, 1, ops::Wheel::Continuous, true, 60).unwrap();
     let _ = client.request(r);
-    assert!(matches!(
-        sim(&bench, 61).motion_at(std::time::Instant::now()),
-        Motion::Spin { .. }
-    ));
+    wait_until("the servo to spin", || {
+        matches!(
+            bench.servo(61).motion_at(Instant::now()),
+            Motion::Spin { .. }
+        )
+    });
     // Nobody answers a broadcast: each returns as soon as it is written, and the baud change
-    // comes at once after them.
+    // comes at once after them. The simulator hears the host's writes and baud changes at the
+    // instants the host made them (lockstep), so a change that cut a broadcast off garbles it
+    // here however the threads are scheduled.
     for r in ops::stop_all_requests(&profile) {
         client.request(r).unwrap();
     }
     client.set_baud(9600).unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(20));
     client.set_baud(115_200).unwrap();
     assert_eq!(ops::ping(&client, 1, 2).unwrap(), Presence::Present);
-    assert_eq!(
-        sim(&bench, 61).motion_at(std::time::Instant::now()),
-        Motion::Hold
-    );
+    assert_eq!(bench.servo(61).motion_at(Instant::now()), Motion::Hold);
+}
+
+#[test]
+fn a_simulator_held_up_past_the_answer_deadline_still_answers_in_time() {
+    // As a loaded machine holds up the simulator's thread: here the device is busy (locked by
+    // the test) well past the ping's deadline, the wire time plus the servo's 1.5 ms. The
+    // simulator serves in lockstep: the answer is due when the device would have sent it, and
+    // the host's read waits for the simulator to catch up before it calls the deadline passed.
+    let bench = Bench::new(vec![SimServo::fresh(71).with_id(3)]);
+    let held = bench.bus();
+    let client = bench.client();
+    let ping = std::thread::spawn(move || ops::ping(&client, 3, 1));
+    std::thread::sleep(std::time::Duration::from_millis(50));
+    drop(held);
+    assert_eq!(ping.join().unwrap().unwrap(), Presence::Present);
 }

@@ -5,56 +5,32 @@ use botbench::link::{
 };
 use botbench::ops::OpError;
 use botbench::ops::exchange as ops;
-use botbench::profile::{Input, Profile, Registry, Value};
+use botbench::profile::{Input, Profile, Value};
+use botbench::sim::Faults;
 use botbench::sim::window_cleaner::WindowCleaner;
-use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
+use std::cell::Cell;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-fn profile(name: &str) -> Arc<Profile> {
-    Registry::builtin().unwrap().get(name).unwrap()
-}
+use crate::support::{Served, next_event, profile, serve_with};
 
-fn window_cleaner(faults: Faults) -> (PtyServer, Arc<Mutex<WindowCleaner>>) {
-    let wc = Arc::new(Mutex::new(
-        WindowCleaner::new(&SimOptions::default()).unwrap(),
-    ));
-    let shared: SharedDevice = wc.clone();
-    (PtyServer::start(shared, faults).unwrap(), wc)
+fn window_cleaner(faults: Faults) -> Served<WindowCleaner> {
+    serve_with(crate::support::window_cleaner(), faults)
 }
 
 fn open(path: &str, profile: Arc<Profile>, options: LinkOptions) -> Link {
-    Link::open(serial::opener(path, 115_200), profile, options, None).expect("opens the pty")
-}
-
-/// Waits for an event that `pick` accepts, draining the rest.
-fn wait_for<T>(
-    link: &Link,
-    within: Duration,
-    mut pick: impl FnMut(LinkEvent) -> Option<T>,
-) -> Option<T> {
-    let deadline = Instant::now() + within;
-    while let Ok(ev) = link
-        .events()
-        .recv_timeout(deadline.saturating_duration_since(Instant::now()))
-    {
-        if let Some(t) = pick(ev) {
-            return Some(t);
-        }
-    }
-    None
+    crate::support::open_link(path, 115_200, profile, options)
 }
 
 #[test]
 fn the_session_learns_the_device_and_reads_and_writes_parameters() {
     let p = profile("window-cleaner");
-    let (server, wc) = window_cleaner(Faults::default());
-    let link = open(server.path(), p.clone(), LinkOptions::default());
-    let info = wait_for(&link, Duration::from_secs(5), |ev| match ev {
+    let b = window_cleaner(Faults::default());
+    let link = open(b.path(), p.clone(), LinkOptions::default());
+    let info = next_event(&link, "identification", |ev| match ev {
         LinkEvent::Identified(r) => Some(r),
         _ => None,
     })
-    .expect("identified")
     .expect("CMD_VERSION answered");
     assert_eq!(info.hw, 0x03);
     assert_eq!(info.flags, Some(0x0f));
@@ -75,7 +51,7 @@ fn the_session_learns_the_device_and_reads_and_writes_parameters() {
     let checks = ops::write_verified(&client, &p, set, &inputs).unwrap();
     assert_eq!(checks.len(), 6);
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
-    let sim = wc.lock().unwrap();
+    let sim = b.sim();
     assert_eq!(sim.param("defaultTarget"), Some(280));
     assert_eq!(sim.param("minTarget"), Some(240));
 }
@@ -83,9 +59,9 @@ fn the_session_learns_the_device_and_reads_and_writes_parameters() {
 #[test]
 fn an_out_of_range_value_is_refused_before_anything_is_sent() {
     let p = profile("window-cleaner");
-    let (server, wc) = window_cleaner(Faults::default());
-    let link = open(server.path(), p.clone(), LinkOptions::default());
-    let before = wc.lock().unwrap().param("pwmValue");
+    let b = window_cleaner(Faults::default());
+    let link = open(b.path(), p.clone(), LinkOptions::default());
+    let before = b.sim().param("pwmValue");
     let set = p.command("MSP_SET_PWMVALUE").unwrap();
     let err = ops::write_verified(
         &link.client(),
@@ -101,7 +77,7 @@ fn an_out_of_range_value_is_refused_before_anything_is_sent() {
         ),
         "{err}"
     );
-    assert_eq!(wc.lock().unwrap().param("pwmValue"), before);
+    assert_eq!(b.sim().param("pwmValue"), before);
 }
 
 #[test]
@@ -113,8 +89,8 @@ fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_type
         seed: 7,
         ..Faults::default()
     };
-    let (server, wc) = window_cleaner(faults);
-    let link = open(server.path(), p.clone(), LinkOptions::default());
+    let b = window_cleaner(faults);
+    let link = open(b.path(), p.clone(), LinkOptions::default());
     let client = link.client();
     let get = p.command("MSP_GET_PWMVALUE").unwrap();
     let set = p.command("MSP_SET_PWMVALUE").unwrap();
@@ -131,7 +107,7 @@ fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_type
             ) {
                 Ok(checks) => {
                     assert!(checks.iter().all(|c| c.ok()), "op {i}: {checks:?}");
-                    assert_eq!(wc.lock().unwrap().param("pwmValue"), Some(v), "op {i}");
+                    assert_eq!(b.sim().param("pwmValue"), Some(v), "op {i}");
                     ok += 1;
                 }
                 Err(OpError::Exchange(
@@ -144,7 +120,7 @@ fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_type
         } else {
             match ops::read(&client, &p, get, &[]) {
                 Ok(values) => {
-                    let held = wc.lock().unwrap().param("pwmValue").unwrap();
+                    let held = b.sim().param("pwmValue").unwrap();
                     assert_eq!(
                         values,
                         [("pwmValue".to_string(), Value::Int(held))]
@@ -173,15 +149,15 @@ fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_type
 #[test]
 fn polled_telemetry_arrives_as_events() {
     let p = profile("window-cleaner");
-    let (server, _wc) = window_cleaner(Faults::default());
-    let link = open(server.path(), p.clone(), LinkOptions::default());
+    let b = window_cleaner(Faults::default());
+    let link = open(b.path(), p.clone(), LinkOptions::default());
     let attitude = p.command("MSP_ATTITUDE").unwrap();
     link.send(LinkCommand::SetPolls(vec![Poll {
         request: Request::for_command(&p, attitude, Vec::new()).attempts(1),
         interval: None,
     }]));
     let mut answers = 0;
-    let _ = wait_for(&link, Duration::from_secs(5), |ev| {
+    next_event(&link, "50 attitude answers", |ev| {
         if let LinkEvent::Telemetry {
             command,
             result: Ok(packet),
@@ -194,7 +170,6 @@ fn polled_telemetry_arrives_as_events() {
         }
         (answers >= 50).then_some(())
     });
-    assert!(answers >= 50, "{answers} attitude answers");
 }
 
 #[test]
@@ -206,12 +181,12 @@ fn pipelined_polls_under_faults_never_mix_answers_with_each_other_or_with_writes
         seed: 3,
         ..Faults::default()
     };
-    let (server, wc) = window_cleaner(faults);
+    let b = window_cleaner(faults);
     let options = LinkOptions {
         poll_pipeline: 2,
         ..LinkOptions::default()
     };
-    let link = open(server.path(), p.clone(), options);
+    let link = open(b.path(), p.clone(), options);
     let attitude = p.command("MSP_ATTITUDE").unwrap();
     let get = p.command("MSP_GET_PWMVALUE").unwrap();
     let set = p.command("MSP_SET_PWMVALUE").unwrap();
@@ -221,9 +196,9 @@ fn pipelined_polls_under_faults_never_mix_answers_with_each_other_or_with_writes
     };
     link.send(LinkCommand::SetPolls(vec![poll(attitude), poll(get)]));
     let client = link.client();
-    let mut written = vec![wc.lock().unwrap().param("pwmValue").unwrap()];
-    let (mut attitudes, mut pwms) = (0, 0);
-    let mut check = |ev: LinkEvent, written: &[i64]| {
+    let mut written = vec![b.sim().param("pwmValue").unwrap()];
+    let (attitudes, pwms) = (Cell::new(0), Cell::new(0));
+    let check = |ev: LinkEvent, written: &[i64]| {
         if let LinkEvent::Telemetry {
             command,
             result: Ok(packet),
@@ -233,12 +208,12 @@ fn pipelined_polls_under_faults_never_mix_answers_with_each_other_or_with_writes
             assert_eq!(packet.command, command, "an answer reported as another's");
             if command == attitude.id {
                 assert_eq!(packet.payload.len(), 6);
-                attitudes += 1;
+                attitudes.set(attitudes.get() + 1);
             } else {
                 assert_eq!(command, get.id);
                 let v = i64::from(packet.payload[0]);
                 assert!(written.contains(&v), "polled {v}, never written");
-                pwms += 1;
+                pwms.set(pwms.get() + 1);
             }
         }
     };
@@ -251,26 +226,26 @@ fn pipelined_polls_under_faults_never_mix_answers_with_each_other_or_with_writes
             &[("pwmValue".into(), Input::Raw(Value::Int(v)))],
         ) {
             assert!(checks.iter().all(|c| c.ok()), "write {i}: {checks:?}");
-            assert_eq!(wc.lock().unwrap().param("pwmValue"), Some(v));
+            assert_eq!(b.sim().param("pwmValue"), Some(v));
         }
         written.push(v);
         while let Ok(ev) = link.events().try_recv() {
             check(ev, &written);
         }
     }
-    let _ = wait_for(&link, Duration::from_millis(500), |ev| {
+    // Polling goes on: every answer from here on is checked too, until each command has been
+    // answered more than 100 times.
+    next_event(&link, "more than 100 answers to each poll", |ev| {
         check(ev, &written);
-        None::<()>
+        (attitudes.get() > 100 && pwms.get() > 100).then_some(())
     });
-    assert!(attitudes > 100, "{attitudes} attitude answers");
-    assert!(pwms > 100, "{pwms} parameter answers");
 }
 
 #[test]
 fn a_vanished_port_gives_disconnected_and_the_link_reconnects_when_it_returns() {
     let p = profile("window-cleaner");
-    let (mut server, _wc) = window_cleaner(Faults::default());
-    let path = Arc::new(Mutex::new(server.path().to_string()));
+    let mut b = window_cleaner(Faults::default());
+    let path = Arc::new(Mutex::new(b.path().to_string()));
     let opener_path = path.clone();
     let opener: botbench::link::Opener = Box::new(move || {
         let p = opener_path.lock().unwrap().clone();
@@ -281,42 +256,35 @@ fn a_vanished_port_gives_disconnected_and_the_link_reconnects_when_it_returns() 
     let ping = || client.request(Request::new(1, Vec::new()));
     assert!(ping().is_ok());
 
-    let t0 = Instant::now();
-    server.vanish();
+    b.server.vanish();
     // The next exchange (or the idle check) notices.
     let _ = ping();
-    let reason = wait_for(&link, Duration::from_secs(2), |ev| match ev {
+    next_event(&link, "Lost", |ev| match ev {
         LinkEvent::State(LinkState::Lost { reason }) => Some(reason),
         _ => None,
-    })
-    .expect("Lost reported");
-    assert!(
-        t0.elapsed() < Duration::from_secs(1),
-        "lost after {:?}: {reason}",
-        t0.elapsed()
-    );
+    });
     assert!(matches!(ping(), Err(ExchangeError::Disconnected(_))));
 
     // The device comes back (a new pty stands in for the re-plugged adapter).
-    let (server2, _wc2) = window_cleaner(Faults::default());
-    *path.lock().unwrap() = server2.path().to_string();
-    let back = wait_for(&link, Duration::from_secs(10), |ev| match ev {
+    let b2 = window_cleaner(Faults::default());
+    *path.lock().unwrap() = b2.path().to_string();
+    let back = next_event(&link, "the reconnection", |ev| match ev {
         LinkEvent::State(LinkState::Connected { port, .. }) => Some(port),
         _ => None,
     });
-    assert_eq!(back.as_deref(), Some(server2.path()));
+    assert_eq!(back, b2.path());
     assert!(ping().is_ok());
 }
 
 #[test]
 fn a_silent_device_gives_a_typed_timeout_after_bounded_attempts() {
     let p = profile("window-cleaner");
-    let (server, _wc) = window_cleaner(Faults {
+    let b = window_cleaner(Faults {
         silent: true,
         ..Faults::default()
     });
     let link = open(
-        server.path(),
+        b.path(),
         p,
         LinkOptions {
             start_session: false,

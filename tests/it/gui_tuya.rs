@@ -11,15 +11,14 @@ use botbench::ui::{App, FirmwareFileError, PanelId};
 use eframe::egui;
 use egui::accesskit::Role;
 use egui_kittest::kittest::Queryable;
-use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 const BAUD: u32 = 115_200;
-const VACUUM: &str = include_str!("../assets/profiles/tuya-vacuum.ron");
+const VACUUM: &str = include_str!("../../assets/profiles/tuya-vacuum.ron");
 
-mod gui_harness;
-use gui_harness::{H, Served, app, app_mut, serve_with, settings, step_until};
+use crate::support::gui::{H, app, app_mut, has_label, settings, step_until, type_into};
+use crate::support::{Served, image, serve_with, temp_dir, wait_until};
 
 type Bench = Served<TuyaMcu>;
 
@@ -36,13 +35,6 @@ fn bench_with(mcu: TuyaMcu, faults: Faults) -> Bench {
 
 fn bench() -> Bench {
     bench_with(TuyaMcu::new(config()), Faults::default())
-}
-
-/// A temporary folder of its own for each test.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("botbench-gui-tuya-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// The vacuum profile with its value, string, bitmap and raw data points made writable, saved as
@@ -68,7 +60,7 @@ fn writable_profile(dir: &std::path::Path) -> (String, Bench) {
 fn harness(path: &str, profile: &str) -> H {
     let mut saved = settings(path, profile, PanelId::TuyaConsole, Lang::En);
     saved.baud = BAUD;
-    gui_harness::harness(saved)
+    crate::support::gui::harness(saved)
 }
 
 fn handshake(h: &mut H) {
@@ -88,14 +80,10 @@ fn reported(a: &App, id: u8) -> Option<Value> {
     a.state.device.tuya.dps.get(&id).map(|s| s.value.clone())
 }
 
-fn has_label(h: &H, text: &str) -> bool {
-    h.query_all_by_label_contains(text).next().is_some()
-}
-
 #[test]
 fn the_handshake_completes_and_the_panel_shows_the_product_info() {
     let b = bench();
-    let mut h = harness(b.server.path(), "tuya-vacuum");
+    let mut h = harness(b.path(), "tuya-vacuum");
     handshake(&mut h);
     assert!(h.query_by_label("lgldgnmt4ifc.jzex").is_some(), "the PID");
     assert!(h.query_by_label("1.0.0").is_some(), "the MCU version");
@@ -120,7 +108,7 @@ fn the_handshake_completes_and_the_panel_shows_the_product_info() {
     h.get_by_label("2: Configured, not connected to router")
         .click();
     step_until(&mut h, "the MCU to hold Wi-Fi state 2", |_| {
-        b.sim.lock().unwrap().wifi_state() == Some(2)
+        b.sim().wifi_state() == Some(2)
     });
     step_until(&mut h, "the ack", |a| {
         a.state.device.tuya.wifi_acked.is_some_and(|t| {
@@ -146,7 +134,7 @@ fn a_malformed_product_info_is_shown_raw_and_the_handshake_goes_on() {
         }),
         Faults::default(),
     );
-    let mut h = harness(b.server.path(), "tuya-vacuum");
+    let mut h = harness(b.path(), "tuya-vacuum");
     handshake(&mut h);
     assert!(
         h.query_by_label("{\"p\":\"abc\",\"v\":").is_some(),
@@ -163,7 +151,7 @@ fn a_silent_mcu_shows_where_the_handshake_stopped_and_no_value() {
         ..Faults::default()
     };
     let b = bench_with(TuyaMcu::new(config()), silent);
-    let mut h = harness(b.server.path(), "tuya-vacuum");
+    let mut h = harness(b.path(), "tuya-vacuum");
     step_until(&mut h, "two failed attempts", |a| {
         a.state.device.tuya.stopped.is_some() && a.state.device.tuya.attempts >= 2
     });
@@ -181,14 +169,14 @@ fn a_silent_mcu_shows_where_the_handshake_stopped_and_no_value() {
 #[test]
 fn an_mcu_restart_is_shown_and_the_handshake_runs_again() {
     let b = bench();
-    let mut h = harness(b.server.path(), "tuya-vacuum");
+    let mut h = harness(b.path(), "tuya-vacuum");
     h.step();
     // A short heartbeat, sent to the worker on the next frame.
     let a = app_mut(&mut h);
     a.tuya.opts.heartbeat = Duration::from_millis(300);
     a.tuya.synced = None;
     handshake(&mut h);
-    b.sim.lock().unwrap().restart();
+    b.sim().restart();
     step_until(&mut h, "the restart and a new handshake", |a| {
         a.state.device.tuya.restarts.0 == 1
             && a.state.device.tuya.done_at.is_some()
@@ -204,7 +192,7 @@ fn an_mcu_restart_is_shown_and_the_handshake_runs_again() {
 #[test]
 fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_it() {
     let b = bench();
-    let mut h = harness(b.server.path(), "tuya-vacuum");
+    let mut h = harness(b.path(), "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "Data points");
     assert_eq!(reported(app(&h), 13), Some(Value::Int(0)));
@@ -214,7 +202,7 @@ fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_
         reported(a, 13) == Some(Value::Int(1))
             && format!("{:?}", a.tuya.dps.marks.get(&13)) == "Some(Confirmed)"
     });
-    assert_eq!(b.sim.lock().unwrap().dp(13), Some(&DpValue::Bool(true)));
+    assert_eq!(b.sim().dp(13), Some(&DpValue::Bool(true)));
     h.get_by(|n| n.role() == Role::ComboBox && n.label().as_deref() == Some("3 Work mode"))
         .click();
     h.run_steps(2);
@@ -222,7 +210,7 @@ fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_
     step_until(&mut h, "the mode reported", |a| {
         reported(a, 3) == Some(Value::Int(5)) && a.tuya.dps.pending.is_empty()
     });
-    assert_eq!(b.sim.lock().unwrap().dp(3), Some(&DpValue::Enum(5)));
+    assert_eq!(b.sim().dp(3), Some(&DpValue::Enum(5)));
     h.run_steps(2);
     // The side effect the MCU reported (status: spot cleaning) is shown too, and logged.
     assert!(h.query_by_label("Spot cleaning").is_some());
@@ -235,17 +223,6 @@ fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_
         a.state.device.tuya.log_seq >= before + 19
     });
     assert!(app(&h).state.device.tuya.last_query.is_some());
-}
-
-/// Types `text` into the empty text field labelled `label`.
-fn type_into(h: &mut H, label: &str, text: &str) {
-    let is = |n: &egui_kittest::kittest::AccessKitNode<'_>| {
-        n.role() == Role::TextInput && n.label().as_deref() == Some(label)
-    };
-    h.get_by(is).focus();
-    h.step();
-    h.get_by(is).type_text(text);
-    h.run_steps(2);
 }
 
 fn sent_dp_commands(a: &App) -> usize {
@@ -262,9 +239,10 @@ fn sent_dp_commands(a: &App) -> usize {
 
 #[test]
 fn a_value_out_of_range_is_refused_before_sending_and_typed_data_points_are_set() {
-    let dir = temp_dir("typed");
-    let (profile, b) = writable_profile(&dir);
-    let mut h = harness(b.server.path(), &profile);
+    let tmp = temp_dir();
+    let dir = tmp.path();
+    let (profile, b) = writable_profile(dir);
+    let mut h = harness(b.path(), &profile);
     handshake(&mut h);
     tab(&mut h, "Data points");
     assert_eq!(reported(app(&h), 16), Some(Value::Int(35)));
@@ -273,12 +251,9 @@ fn a_value_out_of_range_is_refused_before_sending_and_typed_data_points_are_set(
     assert!(h.query_by_label("Send").is_none(), "nothing to send");
     h.key_press(egui::Key::Enter);
     h.run_steps(5);
-    std::thread::sleep(Duration::from_millis(100));
-    h.run_steps(2);
     assert_eq!(sent_dp_commands(app(&h)), 0, "no 0x06 went out");
-    assert_eq!(b.sim.lock().unwrap().dp(16), Some(&DpValue::Value(35)));
-    assert_eq!(reported(app(&h), 16), Some(Value::Int(35)));
-    // A valid value of each typed kind goes out and comes back.
+    // A valid value of each typed kind goes out and comes back. The link keeps order: had the
+    // refused value been sent, the MCU would have taken it before the first of these.
     app_mut(&mut h).tuya.dps.edits.clear();
     h.run_steps(2);
     let cases: [(&str, &str, u8, Value, DpValue); 4] = [
@@ -320,7 +295,10 @@ fn a_value_out_of_range_is_refused_before_sending_and_typed_data_points_are_set(
         step_until(&mut h, label, |a| {
             reported(a, id) == Some(value.clone()) && a.tuya.dps.pending.is_empty()
         });
-        assert_eq!(b.sim.lock().unwrap().dp(id), Some(&dp), "{label}");
+        assert_eq!(b.sim().dp(id), Some(&dp), "{label}");
+        if id == 16 {
+            assert_eq!(sent_dp_commands(app(&h)), 1, "only the valid area went out");
+        }
         assert_eq!(
             format!("{:?}", app(&h).tuya.dps.marks.get(&id)),
             "Some(Confirmed)",
@@ -331,13 +309,12 @@ fn a_value_out_of_range_is_refused_before_sending_and_typed_data_points_are_set(
     // The fault bits the MCU reported are lit by name.
     assert!(h.query_by_label("Left wheel fault").is_some());
     assert!(h.query_by_label("Bumper fault").is_some());
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn the_mcus_requests_are_answered_and_shown_with_a_chosen_time() {
     let b = bench();
-    let mut h = harness(b.server.path(), "tuya-vacuum");
+    let mut h = harness(b.path(), "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "MCU requests");
     app_mut(&mut h).tuya.requests.time_text = "2026-11-22 08:30:15".into();
@@ -347,7 +324,7 @@ fn the_mcus_requests_are_answered_and_shown_with_a_chosen_time() {
     assert!(app(&h).tuya.opts.fixed_time.is_some());
     h.run_steps(2);
     {
-        let mut m = b.sim.lock().unwrap();
+        let mut m = b.sim();
         m.request_local_time();
         m.reset_wifi();
         m.request_wifi_test();
@@ -361,36 +338,38 @@ fn the_mcus_requests_are_answered_and_shown_with_a_chosen_time() {
     assert!(has_label(&h, "The MCU asked to reset the Wi-Fi, times: 1"));
     assert!(has_label(&h, "passed, signal 80 %"));
     assert!(h.query_by_label("02:b0:7b:00:00:01").is_some());
-    let deadline = Instant::now() + Duration::from_secs(2);
-    while b.sim.lock().unwrap().answers().len() < 4 && Instant::now() < deadline {
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    let answers = b.sim.lock().unwrap().answers().to_vec();
+    // The last answers may still be on the wire.
+    wait_until("the MCU to hold four answers", || {
+        b.sim().answers().len() >= 4
+    });
+    let answers = b.sim().answers().to_vec();
     assert!(
         answers.contains(&(0x1c, vec![1, 26, 11, 22, 8, 30, 15, 7])),
         "{answers:?}"
     );
 }
 
-fn image(len: usize) -> Vec<u8> {
-    let mut rng = fastrand::Rng::with_seed(len as u64);
-    (0..len).map(|_| rng.u8(..)).collect()
-}
-
-#[test]
-fn an_update_from_the_panel_completes_and_the_mcu_holds_the_image() {
-    let dir = temp_dir("ota");
-    let file = dir.join("firmware.bin");
-    let img = image(3000);
-    std::fs::write(&file, &img).unwrap();
+/// An MCU after the handshake, and `img` in a file (in the folder returned) chosen on the
+/// firmware tab; Start update clicked, so the confirmation shows.
+fn update_asked(img: &[u8]) -> (tempfile::TempDir, Bench, H) {
+    let tmp = temp_dir();
+    let file = tmp.path().join("firmware.bin");
+    std::fs::write(&file, img).unwrap();
     let b = bench();
-    let mut h = harness(b.server.path(), "tuya-vacuum");
+    let mut h = harness(b.path(), "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "Firmware update");
     app_mut(&mut h).tuya.ota.path = file.display().to_string();
     h.step();
     h.get_by_label("Start update").click();
     h.run_steps(2);
+    (tmp, b, h)
+}
+
+#[test]
+fn an_update_from_the_panel_completes_and_the_mcu_holds_the_image() {
+    let img = image(3000);
+    let (_dir, b, mut h) = update_asked(&img);
     assert!(h.query_by_label("Update the MCU firmware?").is_some());
     h.get_by_label("Update").click();
     step_until(&mut h, "the update to end", |a| a.tuya.ota.result.is_some());
@@ -401,7 +380,7 @@ fn an_update_from_the_panel_completes_and_the_mcu_holds_the_image() {
         (3000, 256, 12)
     );
     assert_eq!(
-        *b.sim.lock().unwrap().ota_state(),
+        *b.sim().ota_state(),
         OtaState::Complete {
             size: 3000,
             crc32: crc32(&img)
@@ -409,16 +388,16 @@ fn an_update_from_the_panel_completes_and_the_mcu_holds_the_image() {
     );
     h.run_steps(2);
     assert!(has_label(&h, "Update complete"));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn an_empty_or_missing_firmware_file_is_refused_with_a_clear_message() {
-    let dir = temp_dir("empty");
+    let tmp = temp_dir();
+    let dir = tmp.path();
     let empty = dir.join("empty.bin");
     std::fs::write(&empty, b"").unwrap();
     let b = bench();
-    let mut h = harness(b.server.path(), "tuya-vacuum");
+    let mut h = harness(b.path(), "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "Firmware update");
     for (path, why) in [
@@ -439,23 +418,12 @@ fn an_empty_or_missing_firmware_file_is_refused_with_a_clear_message() {
         assert!(h.query_by_label("Update the MCU firmware?").is_none());
         assert!(app(&h).state.job.is_none(), "no update started");
     }
-    assert_eq!(*b.sim.lock().unwrap().ota_state(), OtaState::Idle);
-    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(*b.sim().ota_state(), OtaState::Idle);
 }
 
 #[test]
 fn an_update_can_be_cancelled_and_says_where_it_stopped() {
-    let dir = temp_dir("cancel");
-    let file = dir.join("firmware.bin");
-    std::fs::write(&file, image(65_536)).unwrap();
-    let b = bench();
-    let mut h = harness(b.server.path(), "tuya-vacuum");
-    handshake(&mut h);
-    tab(&mut h, "Firmware update");
-    app_mut(&mut h).tuya.ota.path = file.display().to_string();
-    h.step();
-    h.get_by_label("Start update").click();
-    h.run_steps(2);
+    let (_dir, b, mut h) = update_asked(&image(65_536));
     h.get_by_label("Update").click();
     step_until(&mut h, "some progress", |a| {
         a.tuya.ota.progress.as_ref().is_some_and(|p| p.done >= 1024)
@@ -468,23 +436,20 @@ fn an_update_can_be_cancelled_and_says_where_it_stopped() {
     step_until(&mut h, "the update to end", |a| a.tuya.ota.result.is_some());
     let err = app(&h).tuya.ota.result.clone().unwrap().unwrap_err();
     assert!(err.to_string().contains("cancelled after offset"), "{err}");
-    assert!(!matches!(
-        b.sim.lock().unwrap().ota_state(),
-        OtaState::Complete { .. }
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
+    assert!(!matches!(b.sim().ota_state(), OtaState::Complete { .. }));
 }
 
 #[test]
 fn every_section_renders_in_english_and_chinese() {
     // A glyph missing from the bundled fonts panics while drawing: draw every section with
     // something in it, in both languages.
-    let dir = temp_dir("render");
-    let (profile, b) = writable_profile(&dir);
-    let mut h = harness(b.server.path(), &profile);
+    let tmp = temp_dir();
+    let dir = tmp.path();
+    let (profile, b) = writable_profile(dir);
+    let mut h = harness(b.path(), &profile);
     handshake(&mut h);
     {
-        let mut m = b.sim.lock().unwrap();
+        let mut m = b.sim();
         m.set_dp(
             18,
             DpValue::Bitmap {
@@ -525,5 +490,4 @@ fn every_section_renders_in_english_and_chinese() {
         }
     }
     assert!(has_label(&h, "firmware file is empty"));
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -6,9 +6,10 @@
 //! on stderr and passes without running: CI installs the SDK (two `pip` wheels) to run it. It
 //! takes about 20 s (the SDK waits up to 100 ms for every reply).
 
-use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
+
+use crate::support::cli::SimProcess;
 
 /// The SDK's interpreter, if it is installed.
 fn sdk_python() -> Result<PathBuf, String> {
@@ -31,16 +32,6 @@ fn sdk_python() -> Result<PathBuf, String> {
     }
 }
 
-/// The simulator, stopped when dropped.
-struct Sim(Child);
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
 #[test]
 fn the_vendor_sdk_gets_correct_answers_from_the_servo_bus_simulator() {
     let python = match sdk_python() {
@@ -52,19 +43,8 @@ fn the_vendor_sdk_gets_correct_answers_from_the_servo_bus_simulator() {
             return;
         }
     };
-    let mut sim = Sim(Command::new(env!("CARGO_BIN_EXE_botbench"))
-        .args(["sim", "servo-bus", "--servos", "1,2,3"])
-        .env("BOTBENCH_PROFILE_DIR", "/nonexistent")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("botbench sim starts"));
-    let mut pty = String::new();
-    BufReader::new(sim.0.stdout.take().expect("stdout"))
-        .read_line(&mut pty)
-        .expect("the simulator prints its pty");
-    let pty = pty.trim();
-    assert!(pty.starts_with("/dev/"), "first line: '{pty}'");
+    let sim = SimProcess::start(&["servo-bus", "--servos", "1,2,3"]);
+    let pty = sim.path.as_str();
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/sdk/sdk_drive_sim.py");
     let out = Command::new(&python)
         .args([script, pty, "--ids", "1,2,3"])

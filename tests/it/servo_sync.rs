@@ -3,11 +3,9 @@
 //! the synchronous-MONITOR operation. Also: parameter 4 and MONITOR agree on the temperature,
 //! whichever form (°C or a thermistor reading) the profile says the firmware sends.
 
-mod common;
-
 use botbench::ops::servo as ops;
 use botbench::ops::servo::monitor::{Reading, monitor_all, read_monitor};
-use botbench::profile::registry::{BUILTIN, parse};
+use botbench::profile::registry::parse;
 use botbench::profile::{Input, Value};
 use botbench::protocol::Direction;
 use botbench::protocol::servo::{self, ServoDecoder, cmd};
@@ -16,11 +14,13 @@ use botbench::sim::{Device, Outgoing};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-const B: u32 = 115_200;
+use crate::support::ms;
 
-fn ms(n: u64) -> Duration {
-    Duration::from_millis(n)
-}
+use crate::support::cli::{self, SimProcess};
+use crate::support::servo::Bench;
+use crate::support::wait_until;
+
+const B: u32 = 115_200;
 
 fn send(bus: &mut ServoBus, command: &str, fields: &[(&str, i64)], now: Instant) -> Vec<Outgoing> {
     let p = builtin_servo_profile();
@@ -155,7 +155,7 @@ fn a_synchronous_monitor_is_answered_by_each_servo_in_the_order_asked() {
 
 /// The servo profile with parameter 4 and MONITOR's temperature in °C (the seed's reading).
 fn celsius_profile() -> Arc<botbench::profile::Profile> {
-    let src = BUILTIN.iter().find(|(n, _)| *n == "servo").unwrap().1;
+    let src = crate::support::builtin_src("servo");
     let edited = src.replace(", convert: Some(Ntc(beta: 3435.0, full_scale: 4096))", "");
     assert_eq!(src.matches("convert: Some(Ntc").count(), 2, "test setup");
     Arc::new(parse("servo-celsius.ron", &edited, None).unwrap())
@@ -196,14 +196,11 @@ fn parameter_4_and_monitor_agree_on_the_temperature_in_either_form() {
 
 #[test]
 fn through_a_pty_one_exchange_reads_every_servo_and_the_temperatures_agree() {
-    let bench = common::Bench::with_margin(
-        vec![
-            SimServo::fresh(11).with_id(1).with_temperature(40),
-            SimServo::fresh(12).with_id(2).with_temperature(55),
-            SimServo::fresh(13).with_id(5).with_temperature(61),
-        ],
-        Duration::from_millis(200),
-    );
+    let bench = Bench::new(vec![
+        SimServo::fresh(11).with_id(1).with_temperature(40),
+        SimServo::fresh(12).with_id(2).with_temperature(55),
+        SimServo::fresh(13).with_id(5).with_temperature(61),
+    ]);
     let client = bench.client();
     let p = &bench.profile;
     let rows = monitor_all(&client, p, &[1, 2, 3, 5]).unwrap();
@@ -247,14 +244,12 @@ fn through_a_pty_one_exchange_reads_every_servo_and_the_temperatures_agree() {
     let reply = botbench::ops::exchange::send(&client, p, sync, &inputs).unwrap();
     assert!(reply.packets.is_empty());
     for (id, want) in [(1u8, 450), (2, -450)] {
-        let deadline = Instant::now() + Duration::from_secs(10);
-        while ops::read_angle(&client, p, id).unwrap() != want {
-            assert!(Instant::now() < deadline, "servo {id} never reached {want}");
-            std::thread::sleep(ms(20));
-        }
+        wait_until(&format!("servo {id} at {want}"), || {
+            ops::read_angle(&client, p, id).unwrap() == want
+        });
     }
     // The servo it did not name stays where it was.
-    let bus = bench.bus.lock().unwrap();
+    let bus = bench.bus();
     assert_eq!(
         bus.servo_by_serial(13).unwrap().angle_at(Instant::now()),
         0.0
@@ -263,47 +258,30 @@ fn through_a_pty_one_exchange_reads_every_servo_and_the_temperatures_agree() {
 
 #[test]
 fn servo_monitor_on_the_command_line_reads_every_servo_in_one_exchange() {
-    use std::io::{BufRead, BufReader};
-    use std::process::{Command, Stdio};
-    let bin = env!("CARGO_BIN_EXE_botbench");
-    let mut sim = Command::new(bin)
-        .args(["sim", "servo-bus", "--servos", "1,2,3"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("botbench sim starts");
-    let mut pty = String::new();
-    BufReader::new(sim.stdout.take().unwrap())
-        .read_line(&mut pty)
-        .unwrap();
+    let sim = SimProcess::start(&["servo-bus", "--servos", "1,2,3"]);
     let monitor = |ids: &str, json: bool| {
         let mut args = vec![
             "servo",
             "--margin-ms",
-            "200",
+            cli::MARGIN_MS,
             "--port",
-            pty.trim(),
+            &sim.path,
             "monitor",
             ids,
         ];
         if json {
             args.push("--json");
         }
-        Command::new(bin)
-            .args(&args)
-            .env("BOTBENCH_PROFILE_DIR", "/nonexistent")
-            .output()
-            .unwrap()
+        cli::run(&args)
     };
     let text = monitor("1-3", false);
     let json = monitor("2,7", true);
-    let _ = sim.kill();
-    let _ = sim.wait();
-    let out = String::from_utf8_lossy(&text.stdout);
-    assert_eq!(text.status.code(), Some(0), "{out}");
+    drop(sim);
+    let out = &text.out;
+    assert_eq!(text.code, 0, "{out}");
     assert_eq!(out.matches("32.0 (1779)").count(), 3, "{out}");
-    assert_eq!(json.status.code(), Some(1), "servo 7 does not answer");
-    let doc: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(json.code, 1, "servo 7 does not answer");
+    let doc: serde_json::Value = serde_json::from_str(&json.out).unwrap();
     assert_eq!(doc["servos"][0]["id"], 2);
     assert_eq!(doc["servos"][0]["answer"], "values");
     assert_eq!(doc["servos"][0]["temperature_raw"], 1779);

@@ -1,84 +1,28 @@
 //! Presets against the built-in profiles and the simulated window cleaner on a pty.
 
 use botbench::document::{DocumentError, ErrorKind};
-use botbench::link::{Link, LinkEvent, LinkOptions, serial};
 use botbench::ops::OpError;
 use botbench::ops::{self, Cancel, Progress};
 use botbench::preset::{self, Preset};
 use botbench::profile::{Field, FieldType, Input, Len, Profile, Registry, Value};
+use botbench::sim::Faults;
 use botbench::sim::window_cleaner::WindowCleaner;
-use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
-use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::path::Path;
+
+use crate::support::cli::{self, SimProcess};
+use crate::support::{Served, connect, profile, serve, serve_plain, temp_dir};
 
 const FACTORY: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/presets/window-cleaner-factory.ron"
 );
 
-fn profile(name: &str) -> Arc<Profile> {
-    Registry::builtin().unwrap().get(name).unwrap()
-}
-
 fn factory_text() -> String {
     std::fs::read_to_string(FACTORY).unwrap()
 }
 
-fn window_cleaner() -> (PtyServer, Arc<Mutex<WindowCleaner>>) {
-    let wc = Arc::new(Mutex::new(
-        WindowCleaner::new(&SimOptions::default()).unwrap(),
-    ));
-    let shared: SharedDevice = wc.clone();
-    (PtyServer::start(shared, Faults::default()).unwrap(), wc)
-}
-
-/// Opens the pty and waits until the session has learned the device code.
-fn connect(path: &str, p: &Arc<Profile>) -> Link {
-    let link = Link::open(
-        serial::opener(path, 115_200),
-        p.clone(),
-        LinkOptions::default(),
-        None,
-    )
-    .expect("opens the pty");
-    let deadline = Instant::now() + Duration::from_secs(5);
-    loop {
-        let left = deadline.saturating_duration_since(Instant::now());
-        match link.events().recv_timeout(left) {
-            Ok(LinkEvent::Identified(r)) => {
-                r.expect("CMD_VERSION answered");
-                return link;
-            }
-            Ok(_) => {}
-            Err(_) => panic!("not identified"),
-        }
-    }
-}
-
-/// A fresh directory under the target dir's temp space, removed on drop.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> Self {
-        let dir =
-            std::env::temp_dir().join(format!("botbench-preset-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Self(dir)
-    }
-
-    fn path(&self, file: &str) -> PathBuf {
-        self.0.join(file)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
+fn window_cleaner() -> Served<WindowCleaner> {
+    serve(crate::support::window_cleaner())
 }
 
 fn parse_err(text: &str, p: &Profile) -> DocumentError {
@@ -225,12 +169,12 @@ fn every_field_of_every_paired_command_round_trips_through_its_display_text() {
 #[test]
 fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
     let p = profile("window-cleaner");
-    let (server, wc) = window_cleaner();
-    let link = connect(server.path(), &p);
+    let wc = window_cleaner();
+    let link = connect(wc.path(), &p);
     let client = link.client();
     let cancel = Cancel::new();
-    let dir = TempDir::new("cycle");
-    let file = dir.path("line3.ron");
+    let dir = temp_dir();
+    let file = dir.path().join("line3.ron");
 
     // Save what the device holds.
     let mut seen: Vec<Progress> = Vec::new();
@@ -239,7 +183,7 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
     assert_eq!(captured.values.len(), preset::preset_commands(&p).len());
     assert_eq!(seen.last().map(|s| (s.done, s.total)), Some((9, 9)));
     captured.save_annotated(&file, &p).unwrap();
-    let leftovers: Vec<_> = std::fs::read_dir(&dir.0).unwrap().flatten().collect();
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().flatten().collect();
     assert_eq!(leftovers.len(), 1, "no temporary file is left behind");
     let text = std::fs::read_to_string(&file).unwrap();
     assert!(text.starts_with("// botbench preset"), "{text}");
@@ -250,7 +194,7 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
 
     // Someone changes two values on the device.
     {
-        let mut sim = wc.lock().unwrap();
+        let mut sim = wc.sim();
         sim.set_param("pwmValue", 60).unwrap();
         sim.set_param("defaultTarget", 290).unwrap();
     }
@@ -292,7 +236,7 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
     assert_eq!(checks.len(), 26);
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
     {
-        let sim = wc.lock().unwrap();
+        let sim = wc.sim();
         assert_eq!(sim.param("pwmValue"), Some(85));
         assert_eq!(sim.param("defaultTarget"), Some(275));
     }
@@ -303,20 +247,20 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
 #[test]
 fn the_factory_preset_applies_to_a_tuned_device() {
     let p = profile("window-cleaner");
-    let (server, wc) = window_cleaner();
+    let wc = window_cleaner();
     {
-        let mut sim = wc.lock().unwrap();
+        let mut sim = wc.sim();
         sim.set_param("gyroUpThreshold", 60).unwrap();
         sim.set_param("waterPump", 0).unwrap();
         sim.set_param("maxTarget", 320).unwrap();
     }
-    let link = connect(server.path(), &p);
+    let link = connect(wc.path(), &p);
     let factory = Preset::load(Path::new(FACTORY), &p).unwrap().preset;
     let checks =
         ops::preset::apply(&link.client(), &p, &factory, &Cancel::new(), &mut |_| {}).unwrap();
     assert_eq!(checks.len(), 22);
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
-    let sim = wc.lock().unwrap();
+    let sim = wc.sim();
     assert_eq!(sim.param("gyroUpThreshold"), Some(45));
     assert_eq!(sim.param("waterPump"), Some(1));
     assert_eq!(sim.param("maxTarget"), Some(300));
@@ -325,9 +269,9 @@ fn the_factory_preset_applies_to_a_tuned_device() {
 #[test]
 fn a_cancel_stops_between_commands_and_returns_what_was_done() {
     let p = profile("window-cleaner");
-    let (server, wc) = window_cleaner();
-    wc.lock().unwrap().set_param("gyroThreshold", 99).unwrap();
-    let link = connect(server.path(), &p);
+    let wc = window_cleaner();
+    wc.sim().set_param("gyroThreshold", 99).unwrap();
+    let link = connect(wc.path(), &p);
     let factory = Preset::load(Path::new(FACTORY), &p).unwrap().preset;
     let cancel = Cancel::new();
     let c2 = cancel.clone();
@@ -340,7 +284,7 @@ fn a_cancel_stops_between_commands_and_returns_what_was_done() {
     // Only MSP_SET_PWMVALUE was written.
     assert_eq!(checks.len(), 1);
     assert_eq!(checks[0].field, "pwmValue");
-    assert_eq!(wc.lock().unwrap().param("gyroThreshold"), Some(99));
+    assert_eq!(wc.sim().param("gyroThreshold"), Some(99));
 }
 
 #[test]
@@ -424,9 +368,9 @@ fn a_missing_or_newer_version_is_refused() {
 #[test]
 fn an_out_of_range_value_is_refused_before_anything_is_written() {
     let p = profile("window-cleaner");
-    let (server, wc) = window_cleaner();
+    let wc = window_cleaner();
     {
-        let mut sim = wc.lock().unwrap();
+        let mut sim = wc.sim();
         sim.set_param("pwmValue", 50).unwrap();
         sim.set_param("gyroThreshold", 99).unwrap();
     }
@@ -443,14 +387,14 @@ fn an_out_of_range_value_is_refused_before_anything_is_written() {
 
     // Applying it anyway (unchecked) writes nothing, not even the valid commands.
     let unchecked = Preset::parse_unchecked("test.ron", &text).unwrap();
-    let link = connect(server.path(), &p);
+    let link = connect(wc.path(), &p);
     let err = ops::preset::apply(&link.client(), &p, &unchecked, &Cancel::new(), &mut |_| {})
         .unwrap_err();
     assert!(
         matches!(err, OpError::Document(ref e) if e.to_string().contains("out of range")),
         "{err}"
     );
-    let sim = wc.lock().unwrap();
+    let sim = wc.sim();
     assert_eq!(sim.param("pwmValue"), Some(50));
     assert_eq!(sim.param("gyroThreshold"), Some(99));
 }
@@ -524,67 +468,32 @@ fn to_ron_reads_back_as_the_same_preset() {
         let back = Preset::parse("t.ron", &text, &p).unwrap_or_else(|e| panic!("{e}\n{text}"));
         assert_eq!(back.preset, pr);
     }
-    let dir = TempDir::new("save");
-    let file = dir.path("plain.ron");
+    let dir = temp_dir();
+    let file = dir.path().join("plain.ron");
     pr.save(&file).unwrap();
     pr.save(&file).unwrap(); // replaces
     assert_eq!(Preset::load(&file, &p).unwrap().preset, pr);
-    let e = pr.save(&dir.path("no/such/dir/x.ron")).unwrap_err();
+    let e = pr.save(&dir.path().join("no/such/dir/x.ron")).unwrap_err();
     assert_eq!(e.kind, ErrorKind::Io);
 }
 
 // ---- The command line ----
 
-/// A `botbench sim window-cleaner` process, killed on drop.
-struct Sim {
-    child: Child,
-    path: String,
-}
-
-impl Sim {
-    fn start() -> Self {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_botbench"))
-            .args(["sim", "window-cleaner"])
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("starts the simulator");
-        let mut line = String::new();
-        let stdout = child.stdout.take().expect("stdout");
-        BufReader::new(stdout)
-            .read_line(&mut line)
-            .expect("pty path");
-        Self {
-            child,
-            path: line.trim().to_string(),
-        }
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
+/// `botbench` with `args`: exit code, stdout, stderr. A device command is given the tests'
+/// answer margin across processes.
 fn botbench(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_botbench"))
-        .args(args)
-        .output()
-        .expect("runs botbench");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    let mut args = args.to_vec();
+    if args.contains(&"--port") {
+        args.extend(["--margin-ms", cli::MARGIN_MS]);
+    }
+    let ran = cli::run(&args);
+    (ran.code, ran.out, ran.err)
 }
 
 #[test]
 fn cli_preset_apply_refuses_a_bad_file_before_opening_the_port() {
-    let dir = TempDir::new("cli-bad");
-    let bad = dir.path("bad.ron");
+    let dir = temp_dir();
+    let bad = dir.path().join("bad.ron");
     let text = factory_text().replacen(r#""pwmValue": "85""#, r#""pwmValue": "101""#, 1);
     let line = text.lines().position(|l| l.contains(r#""101""#)).unwrap() + 1;
     std::fs::write(&bad, &text).unwrap();
@@ -606,14 +515,14 @@ fn cli_preset_apply_refuses_a_bad_file_before_opening_the_port() {
     assert!(!err.contains("botbench-no-such-port"), "{err}");
 
     // A real device is left as it was.
-    let (server, wc) = window_cleaner();
-    let (code, _, err) = botbench(&["preset", "apply", bad, "--port", server.path()]);
+    let wc = serve_plain(crate::support::window_cleaner(), Faults::default());
+    let (code, _, err) = botbench(&["preset", "apply", bad, "--port", wc.path()]);
     assert_eq!(code, 2, "{err}");
-    assert_eq!(wc.lock().unwrap().param("pwmValue"), Some(85));
-    assert_eq!(wc.lock().unwrap().param("gyroThreshold"), Some(100));
+    assert_eq!(wc.sim().param("pwmValue"), Some(85));
+    assert_eq!(wc.sim().param("gyroThreshold"), Some(100));
 
     // Malformed RON and a missing file are exit 2 as well.
-    let broken = dir.path("broken.ron");
+    let broken = dir.path().join("broken.ron");
     std::fs::write(&broken, "(version: 1, profile: \"window-cleaner\"").unwrap();
     let (code, _, err) = botbench(&[
         "preset",
@@ -627,7 +536,7 @@ fn cli_preset_apply_refuses_a_bad_file_before_opening_the_port() {
     let (code, _, err) = botbench(&[
         "preset",
         "diff",
-        dir.path("none.ron").to_str().unwrap(),
+        dir.path().join("none.ron").to_str().unwrap(),
         "--port",
         "/dev/null",
     ]);
@@ -637,11 +546,10 @@ fn cli_preset_apply_refuses_a_bad_file_before_opening_the_port() {
 
 #[test]
 fn cli_preset_save_diff_and_apply_against_the_simulator() {
-    let sim = Sim::start();
+    let sim = SimProcess::start(&["window-cleaner"]);
     let port = sim.path.as_str();
-    assert!(port.starts_with("/dev/"), "{port}");
-    let dir = TempDir::new("cli");
-    let tuned = dir.path("tuned.ron");
+    let dir = temp_dir();
+    let tuned = dir.path().join("tuned.ron");
     let tuned_s = tuned.to_str().unwrap();
 
     let (code, out, err) = botbench(&[
@@ -704,7 +612,7 @@ fn cli_preset_save_diff_and_apply_against_the_simulator() {
     assert_eq!(code, 0);
 
     // A preset for another profile is refused with the reason.
-    let solar = dir.path("solar.ron");
+    let solar = dir.path().join("solar.ron");
     std::fs::write(
         &solar,
         factory_text().replacen(r#""window-cleaner""#, r#""solar-cleanbot""#, 1),

@@ -6,17 +6,15 @@ use botbench::sim::SimOptions;
 use botbench::sim::solar_cleanbot::SolarCleanbot;
 use botbench::sim::window_cleaner::{Fault, WindowCleaner};
 use botbench::ui::{App, PanelId, SolarOutcome, SolarTrip};
-use eframe::egui;
 use egui_kittest::kittest::Queryable;
-use std::time::Duration;
 
-mod gui_harness;
-use gui_harness::{H, Served, app, serve, settings};
+use crate::support::gui::{H, app, app_mut, settings, type_into};
+use crate::support::{SELFTEST_PLAN, Served, selftest_plan, serve, temp_dir};
 
 type Bench<D> = Served<D>;
 
 fn window_cleaner(flags: Option<u8>, faults: &[Fault]) -> Bench<WindowCleaner> {
-    let mut wc = WindowCleaner::new(&SimOptions::default()).unwrap();
+    let mut wc = crate::support::window_cleaner();
     wc.set_flags(flags);
     for f in faults {
         wc.inject(*f);
@@ -28,17 +26,14 @@ fn solar() -> Bench<SolarCleanbot> {
     serve(SolarCleanbot::new(&SimOptions::default()).unwrap())
 }
 
-/// The app on `profile` at `path`, with 100 ms for the device to start answering: generous for a
-/// loaded test machine.
+/// The app on `profile` at `path`, with the protocol's own answer margin.
 fn harness(path: &str, profile: &str, panel: PanelId, lang: Lang) -> H {
-    let mut saved = settings(path, profile, panel, lang);
-    saved.margin_ms = Some(100);
-    gui_harness::harness(saved)
+    crate::support::gui::harness(settings(path, profile, panel, lang))
 }
 
 /// Steps the UI in real time until `done` holds; on timeout says what the panels hold.
 fn step_until(h: &mut H, what: &str, done: impl Fn(&App) -> bool) {
-    gui_harness::step_until_or(h, what, done, |a| {
+    crate::support::gui::step_until_or(h, what, done, |a| {
         format!(
             "info {:?}, solar inputs {:?}, outcomes {:?}, self-test running {} results {:?} \
              error {:?}",
@@ -79,7 +74,7 @@ fn a_clear_capability_bit_hides_its_panels_and_the_app_leaves_them() {
     assert!(!nav_has(&h, "Tuning") && !nav_has(&h, "Presets"));
     assert!(nav_has(&h, "Self-test"));
     // The device panel says why.
-    h.state_mut().as_mut().unwrap().settings.panel = PanelId::Device;
+    app_mut(&mut h).settings.panel = PanelId::Device;
     h.run_steps(2);
     assert!(h.query_by_label_contains("Hidden (not supported").is_some());
     assert!(h.query_all_by_label("not supported").next().is_some());
@@ -109,7 +104,7 @@ fn the_device_panel_pings_and_shows_version_build_and_flags() {
     step_until(&mut h, "the ping job to end", |a| {
         a.state.job_progress().is_none()
     });
-    b.sim.lock().unwrap().set_flags(Some(0b0101));
+    b.sim().set_flags(Some(0b0101));
     h.get_by_label("Read version and power state").click();
     step_until(&mut h, "the new flags", |a| {
         matches!(&a.device.version, Some(Ok(v)) if v.flags == Some(0b0101))
@@ -134,21 +129,6 @@ fn the_device_panel_pings_and_shows_version_build_and_flags() {
     assert_eq!(h.query_all_by_label("not supported").count(), 2);
 }
 
-fn text_input<'h>(h: &'h H, label: &'h str) -> egui_kittest::Node<'h> {
-    h.get_by(|n| {
-        n.role() == egui::accesskit::Role::TextInput && n.label().as_deref() == Some(label)
-    })
-}
-
-fn type_into(h: &mut H, label: &str, text: &str) {
-    text_input(h, label).focus();
-    h.step();
-    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
-    h.step();
-    text_input(h, label).type_text(text);
-    h.run_steps(2);
-}
-
 fn solar_ready(b: &Bench<SolarCleanbot>) -> H {
     let mut h = harness(b.path(), "solar-cleanbot", PanelId::Solar, Lang::En);
     step_until(&mut h, "the device identified", identified);
@@ -163,7 +143,7 @@ fn drive(h: &mut H, b: &Bench<SolarCleanbot>, speed: i16) {
     // Moving asks first.
     h.get_by_label("Confirm").click();
     step_until(h, "the robot to take the speed", |_| {
-        b.sim.lock().unwrap().commanded_speed() == speed
+        b.sim().commanded_speed() == speed
     });
 }
 
@@ -174,9 +154,7 @@ fn speed_rotate_and_stop_from_the_solar_panel_drive_the_simulated_robot() {
     assert!(app(&h).panels().contains(&PanelId::Solar));
     assert!(!app(&h).panels().contains(&PanelId::SelfTest));
     drive(&mut h, &b, 300);
-    step_until(&mut h, "the robot to move", |_| {
-        b.sim.lock().unwrap().speed() > 100.0
-    });
+    step_until(&mut h, "the robot to move", |_| b.sim().speed() > 100.0);
     step_until(&mut h, "the readouts", |a| {
         a.state
             .device
@@ -189,19 +167,15 @@ fn speed_rotate_and_stop_from_the_solar_panel_drive_the_simulated_robot() {
     h.get_by_label("Rotate").click();
     h.run_steps(2);
     h.get_by_label("Confirm").click();
-    step_until(&mut h, "the robot to turn", |_| {
-        b.sim.lock().unwrap().yaw() > 20.0
-    });
+    step_until(&mut h, "the robot to turn", |_| b.sim().yaw() > 20.0);
     // STOP, while a job runs.
-    h.state_mut().as_mut().unwrap().settings.panel = PanelId::Device;
+    app_mut(&mut h).settings.panel = PanelId::Device;
     h.run_steps(2);
     h.get_by_label("Read version and power state").click();
     h.run_steps(1);
     h.get_by_label("STOP").click();
-    step_until(&mut h, "STOP", |_| {
-        b.sim.lock().unwrap().commanded_speed() == 0
-    });
-    h.state_mut().as_mut().unwrap().settings.panel = PanelId::Solar;
+    step_until(&mut h, "STOP", |_| b.sim().commanded_speed() == 0);
+    app_mut(&mut h).settings.panel = PanelId::Solar;
     step_until(&mut h, "the STOP acknowledged", |a| {
         matches!(
             a.solar.control.outcomes.get(&100),
@@ -214,7 +188,7 @@ fn speed_rotate_and_stop_from_the_solar_panel_drive_the_simulated_robot() {
 fn out_of_range_control_values_are_refused_and_nothing_is_sent() {
     let b = solar();
     let mut h = solar_ready(&b);
-    let before = b.sim.lock().unwrap().heartbeat();
+    let before = b.sim().heartbeat();
     type_into(&mut h, "Speed value", "5000");
     assert!(
         h.query_all_by_label_contains("out of range")
@@ -230,23 +204,27 @@ fn out_of_range_control_values_are_refused_and_nothing_is_sent() {
     type_into(&mut h, "Frame rate", "abc");
     h.get_by_label("Set vision frame rate").click();
     h.run_steps(5);
-    std::thread::sleep(Duration::from_millis(100));
-    h.run_steps(2);
-    let sim = b.sim.lock().unwrap();
-    assert_eq!(sim.commanded_speed(), 0);
-    assert_eq!(sim.heartbeat(), before);
-    assert_eq!(sim.frame_rate(), 30);
-    drop(sim);
     assert!(
         app(&h).solar.control.outcomes.is_empty(),
         "nothing was sent"
     );
-    // A value in range goes through and is acknowledged.
+    // A value in range goes through and is acknowledged; the link keeps order, so anything the
+    // refused ones had sent would have reached the robot before it.
     type_into(&mut h, "Frame rate", "15");
     h.get_by_label("Set vision frame rate").click();
-    step_until(&mut h, "the frame rate", |_| {
-        b.sim.lock().unwrap().frame_rate() == 15
+    step_until(&mut h, "the frame rate", |a| {
+        b.sim().frame_rate() == 15 && !a.solar.control.outcomes.is_empty()
     });
+    let sim = b.sim();
+    assert_eq!(sim.commanded_speed(), 0);
+    assert_eq!(sim.heartbeat(), before);
+    drop(sim);
+    assert_eq!(
+        app(&h).solar.control.outcomes.len(),
+        1,
+        "only the frame rate was sent: {:?}",
+        app(&h).solar.control.outcomes
+    );
 }
 
 #[test]
@@ -254,16 +232,14 @@ fn the_dead_man_stops_the_robot_when_the_operator_stops_confirming() {
     let b = solar();
     let mut h = solar_ready(&b);
     drive(&mut h, &b, 200);
-    h.state_mut().as_mut().unwrap().solar.control.deadman_secs = 1;
+    app_mut(&mut h).solar.control.deadman_secs = 1;
     h.get_by_label("Dead-man").click();
     // Arming sets the robot's heartbeat to the same period.
-    step_until(&mut h, "the heartbeat set", |_| {
-        b.sim.lock().unwrap().heartbeat() == 1
-    });
+    step_until(&mut h, "the heartbeat set", |_| b.sim().heartbeat() == 1);
     h.get_by_label("Hold to confirm (or press Space)").click();
     // Nobody confirms any more.
     step_until(&mut h, "the dead-man STOP", |_| {
-        b.sim.lock().unwrap().commanded_speed() == 0
+        b.sim().commanded_speed() == 0
     });
     assert!(matches!(
         app(&h).solar.control.trip,
@@ -274,20 +250,11 @@ fn the_dead_man_stops_the_robot_when_the_operator_stops_confirming() {
     assert!(h.query_by_label_contains("stopped confirming").is_some());
 }
 
-const EXAMPLE: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/presets/window-cleaner-selftest.ron"
-);
-
-/// The example plan with the corner step's timeout cut to 3 s, written to a temp file.
-fn plan_file(tag: &str) -> std::path::PathBuf {
-    let text = std::fs::read_to_string(EXAMPLE).unwrap();
-    let text = text.replace("timeout_ms: 20000", "timeout_ms: 3000");
-    let path = std::env::temp_dir().join(format!(
-        "botbench-gui-plan-{tag}-{}.ron",
-        std::process::id()
-    ));
-    std::fs::write(&path, text).unwrap();
+/// The example plan with test timings, written into `dir`. Its corner step waits as long as
+/// the operator needs: only a lost link ends it early here.
+fn plan_file(dir: &tempfile::TempDir) -> std::path::PathBuf {
+    let path = dir.path().join("plan.ron");
+    std::fs::write(&path, selftest_plan(60_000)).unwrap();
     path
 }
 
@@ -301,19 +268,19 @@ fn start_selftest(h: &mut H) {
 }
 
 /// Opens the plan, runs it, and covers the corners when the prompt asks (answering through the
-/// modal). Returns the log's path.
-fn run_selftest(h: &mut H, b: &Bench<WindowCleaner>, tag: &str) -> std::path::PathBuf {
-    let plan = plan_file(tag);
-    let log = std::env::temp_dir().join(format!(
-        "botbench-gui-log-{tag}-{}.jsonl",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_file(&log);
+/// modal). Returns the log's path, in `dir`.
+fn run_selftest(
+    h: &mut H,
+    b: &Bench<WindowCleaner>,
+    dir: &tempfile::TempDir,
+) -> std::path::PathBuf {
+    let plan = plan_file(dir);
+    let log = dir.path().join("selftest.jsonl");
     step_until(h, "the device identified", |a| {
         identified(a) && a.state.job_progress().is_none()
     });
     {
-        let a = h.state_mut().as_mut().unwrap();
+        let a = app_mut(h);
         a.selftest.path = plan.display().to_string();
         a.selftest.log_path = log.display().to_string();
     }
@@ -329,17 +296,11 @@ fn run_selftest(h: &mut H, b: &Bench<WindowCleaner>, tag: &str) -> std::path::Pa
     step_until(h, "the operator prompt", |a| a.selftest.prompt.is_some());
     h.run_steps(2);
     assert!(h.query_by_label_contains("corner switches").is_some());
-    let sim = b.sim.clone();
-    std::thread::spawn(move || {
-        for bits in [0b0001, 0b0011, 0b0111, 0b1111] {
-            sim.lock().unwrap().set_corners(bits);
-            std::thread::sleep(Duration::from_millis(40));
-        }
-    });
+    // The step has read the corners all released before it asked: the operator covers them.
+    b.sim().set_corners(0b1111);
     h.get_by_label("Done").click();
     step_until(h, "the report", |a| a.selftest.report.is_some());
     h.run_steps(2);
-    let _ = std::fs::remove_file(&plan);
     log
 }
 
@@ -347,7 +308,8 @@ fn run_selftest(h: &mut H, b: &Bench<WindowCleaner>, tag: &str) -> std::path::Pa
 fn the_self_test_passes_on_a_healthy_robot_and_logs_the_device() {
     let b = window_cleaner(Some(0x0F), &[]);
     let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
-    let log = run_selftest(&mut h, &b, "pass");
+    let dir = temp_dir();
+    let log = run_selftest(&mut h, &b, &dir);
     let report = app(&h).selftest.report.clone().unwrap();
     assert!(report.pass, "{report:#?}");
     assert_eq!(
@@ -366,14 +328,14 @@ fn the_self_test_passes_on_a_healthy_robot_and_logs_the_device() {
         text.contains("\"pass\":true") && text.contains("2024-05-17 14:03:52"),
         "{text}"
     );
-    let _ = std::fs::remove_file(&log);
 }
 
 #[test]
 fn the_self_test_fails_naming_the_faulty_check() {
     let b = window_cleaner(Some(0x0F), &[Fault::FanCurrentStuck]);
     let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
-    let log = run_selftest(&mut h, &b, "fail");
+    let dir = temp_dir();
+    run_selftest(&mut h, &b, &dir);
     let report = app(&h).selftest.report.clone().unwrap();
     assert!(!report.pass);
     let failed: Vec<&str> = report.failed().map(|r| r.name.as_str()).collect();
@@ -384,8 +346,7 @@ fn the_self_test_fails_naming_the_faulty_check() {
         "the row and the banner"
     );
     assert!(h.query_by_label("Failed: Fan current").is_some());
-    assert_eq!(b.sim.lock().unwrap().fan_pwm(), 0, "the fan is off after");
-    let _ = std::fs::remove_file(&log);
+    assert_eq!(b.sim().fan_pwm(), 0, "the fan is off after");
 }
 
 #[test]
@@ -393,14 +354,14 @@ fn a_malformed_plan_is_refused_with_its_line() {
     let b = window_cleaner(Some(0x0F), &[]);
     let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
     step_until(&mut h, "the link", |a| a.state.connected());
-    let path =
-        std::env::temp_dir().join(format!("botbench-gui-bad-plan-{}.ron", std::process::id()));
+    let dir = temp_dir();
+    let path = dir.path().join("bad-plan.ron");
     std::fs::write(
         &path,
         "(\n  version: 1,\n  profile: \"window-cleaner\",\n  name: \"bad\",\n  steps: [\n    Reads(name: \"Water\", command: \"MSP_NO_SUCH_COMMAND\"),\n  ],\n)\n",
     )
     .unwrap();
-    h.state_mut().as_mut().unwrap().selftest.path = path.display().to_string();
+    app_mut(&mut h).selftest.path = path.display().to_string();
     h.step();
     h.get_by_label("Open plan").click();
     h.run_steps(2);
@@ -415,7 +376,6 @@ fn a_malformed_plan_is_refused_with_its_line() {
         "nothing to run"
     );
     assert!(h.query_by_label_contains("The plan was refused").is_some());
-    let _ = std::fs::remove_file(&path);
 }
 
 #[test]
@@ -425,7 +385,7 @@ fn the_msp_panels_render_in_english_and_chinese() {
         let mut h = harness(b.path(), "solar-cleanbot", PanelId::Solar, lang);
         step_until(&mut h, "readings", |a| a.state.device.readings.len() > 5);
         for panel in app(&h).panels() {
-            h.state_mut().as_mut().unwrap().settings.panel = panel;
+            app_mut(&mut h).settings.panel = panel;
             h.run_steps(2);
         }
         drop(h);
@@ -434,7 +394,7 @@ fn the_msp_panels_render_in_english_and_chinese() {
     for lang in [Lang::En, Lang::Zh] {
         let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, lang);
         step_until(&mut h, "the link", |a| a.state.connected());
-        h.state_mut().as_mut().unwrap().selftest.path = EXAMPLE.into();
+        app_mut(&mut h).selftest.path = SELFTEST_PLAN.into();
         h.step();
         let open = lang.tr("Open plan", "打开方案");
         h.get_by_label(open).click();
@@ -445,7 +405,7 @@ fn the_msp_panels_render_in_english_and_chinese() {
             app(&h).selftest.error,
             app(&h).settings.panel
         );
-        h.state_mut().as_mut().unwrap().settings.panel = PanelId::Device;
+        app_mut(&mut h).settings.panel = PanelId::Device;
         h.run_steps(2);
     }
 }
@@ -454,12 +414,13 @@ fn the_msp_panels_render_in_english_and_chinese() {
 fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step() {
     let b = window_cleaner(Some(0x0F), &[]);
     let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
-    let plan = plan_file("lost");
+    let dir = temp_dir();
+    let plan = plan_file(&dir);
     step_until(&mut h, "the device identified", |a| {
         identified(a) && a.state.job_progress().is_none()
     });
     {
-        let a = h.state_mut().as_mut().unwrap();
+        let a = app_mut(&mut h);
         a.selftest.path = plan.display().to_string();
         a.selftest.log_path = String::new();
     }
@@ -484,5 +445,4 @@ fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step
             .is_some()
     );
     assert!(h.query_all_by_label("PASS").count() < report.results.len() + 1);
-    let _ = std::fs::remove_file(&plan);
 }

@@ -1,6 +1,6 @@
 //! One UI frame (logic + layout, headless through egui_kittest) on the telemetry panel with
 //! 4 series × 10 min at 100 Hz, and the memory of an hour of 100 Hz telemetry.
-//! Prints one JSON document a line. Run: `cargo bench --bench ui_frame`.
+//! Prints one JSON document a line. Run: `cargo bench -- ui_frame`.
 
 use botbench::series::{DEFAULT_CAPACITY, SeriesSet};
 use botbench::ui::{App, PanelId, Settings, Target};
@@ -13,9 +13,8 @@ fn percentile(sorted: &[Duration], p: f64) -> f64 {
     sorted[i].as_secs_f64() * 1e3
 }
 
-fn main() {
-    // `cargo test --all-targets` runs benches once with `--bench` absent: keep that quick.
-    let quick = !std::env::args().any(|a| a == "--bench");
+/// Measures and prints; `quick` (under `cargo test`) draws 5 frames and simulates 72 s.
+pub fn run(quick: bool) {
     let frames = if quick { 5 } else { 300 };
 
     let saved = Settings {

@@ -2,13 +2,13 @@
 
 use botbench::ops::servo::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
 use botbench::ops::{Cancel, Progress};
-use botbench::profile::{Profile, Registry};
+use botbench::profile::Profile;
 use botbench::sim::servo_bus::SimServo;
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
-mod common;
-use common::Bench;
+use crate::support::cli::{self, SimProcess};
+use crate::support::servo::Bench;
+use crate::support::{profile, temp_dir};
 
 impl Bench {
     fn provision_with(
@@ -30,18 +30,13 @@ impl Bench {
     fn provision(&self, plan: &Plan, state: &mut ProvisionState) -> Record {
         self.provision_with(plan, state, &mut |_| {})
     }
-
-    fn servo(&self, serial: u32) -> SimServo {
-        self.bus
-            .lock()
-            .unwrap()
-            .servo_by_serial(serial)
-            .unwrap()
-            .clone()
-    }
 }
 
-const PLAN: &str = include_str!("../presets/servo-provision-plan.ron");
+const PLAN_FILE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/presets/servo-provision-plan.ron"
+);
+const PLAN: &str = include_str!("../../presets/servo-provision-plan.ron");
 
 fn plan(profile: &Profile) -> Plan {
     Plan::parse("plan.ron", PLAN, profile).unwrap()
@@ -55,13 +50,6 @@ fn plan_raw(plan: &Plan, profile: &Profile) -> Vec<(u8, i64)> {
         .iter()
         .map(|(p, raw)| (p.id, *raw))
         .collect()
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let p = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("provision-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_file(&p);
-    p
 }
 
 /// An RFC 4180 reader, written apart from the writer under test.
@@ -110,13 +98,14 @@ fn three_fresh_servos_plugged_one_after_another_get_ids_baud_params_and_pass_lin
     let bench = Bench::new(vec![SimServo::fresh(1001)]);
     let plan = plan(&bench.profile);
     assert_eq!(plan.params.len(), 10);
-    let log = tmp("three.csv");
+    let dir = temp_dir();
+    let log = dir.path().join("three.csv");
     let mut state = ProvisionState::new();
     let mut records = Vec::new();
     for serial in [1001, 1002, 1003] {
         if serial != 1001 {
             // The operator plugs the next one; the ones done stay on the bus.
-            bench.bus.lock().unwrap().add(SimServo::fresh(serial));
+            bench.bus().add(SimServo::fresh(serial));
         }
         let r = bench.provision(&plan, &mut state);
         assert_eq!(r.result, Outcome::Pass, "{r:?}");
@@ -188,7 +177,7 @@ fn ids_that_already_answer_at_any_rate_are_skipped() {
     assert_eq!(bench.servo(3001).id(), 9);
     assert_eq!((bench.servo(1).id(), bench.servo(3).id()), (1, 3));
     // The list is used up.
-    bench.bus.lock().unwrap().add(SimServo::fresh(3002));
+    bench.bus().add(SimServo::fresh(3002));
     let r = bench.provision(&plan, &mut state);
     assert!(
         matches!(&r.result, Outcome::Fail { step, reason } if step == "assign id" && reason.contains("no free id")),
@@ -214,7 +203,7 @@ fn a_fresh_servo_is_given_an_id_only_when_alone_at_its_rate() {
     assert_eq!(r.serial, Some(3002));
     assert_eq!(bench.servo(3002).id(), 0, "nothing written");
     // The operator unplugs servo 6; the same session goes on, and id 1 is still free.
-    bench.bus.lock().unwrap().remove(6);
+    bench.bus().remove(6);
     let r = bench.provision(&plan, &mut state);
     assert_eq!(r.result, Outcome::Pass, "{r:?}");
     assert_eq!(r.id, Some(1));
@@ -264,7 +253,7 @@ fn no_fresh_servo_fails_at_detect() {
 fn vanish_at(when: &str) -> (Bench, Record) {
     let bench = Bench::new(vec![SimServo::fresh(5001)]);
     let plan = plan(&bench.profile);
-    let bus = bench.bus.clone();
+    let bus = bench.served.sim.clone();
     let mut gone = false;
     let r = bench.provision_with(&plan, &mut ProvisionState::new(), &mut |p| {
         if !gone && p.message.starts_with(when) {
@@ -290,7 +279,8 @@ fn a_servo_unplugged_after_its_id_is_set_fails_at_set_baud() {
         Outcome::Pass => panic!("{r:?}"),
     }
     assert_eq!((r.serial, r.id), (Some(5001), Some(1)));
-    let log = tmp("vanish.csv");
+    let dir = temp_dir();
+    let log = dir.path().join("vanish.csv");
     prov::append_csv(&log, &r).unwrap();
     let rows = parse_csv(&std::fs::read_to_string(&log).unwrap());
     assert_eq!(rows[1][col(&rows[0], "result")], "FAIL");
@@ -320,7 +310,7 @@ fn a_servo_swapped_before_verify_is_caught_by_its_serial_number() {
     // Another servo with the same id and rate takes its place: verify reads the serial again.
     let bench = Bench::new(vec![SimServo::fresh(6001)]);
     let plan = plan(&bench.profile);
-    let bus = bench.bus.clone();
+    let bus = bench.served.sim.clone();
     let r = bench.provision_with(&plan, &mut ProvisionState::new(), &mut |p| {
         if p.message == "verify" {
             let mut bus = bus.lock().unwrap();
@@ -358,7 +348,7 @@ fn edited(from: &str, to: &str, skip: usize) -> (String, usize, usize) {
 
 #[test]
 fn bad_plans_are_refused_at_load_with_line_and_column() {
-    let profile = Registry::builtin().unwrap().get("servo").unwrap();
+    let profile = profile("servo");
     let cases = [
         (
             r#"("over_temprature", "70")"#,
@@ -426,7 +416,8 @@ fn bad_plans_are_refused_at_load_with_line_and_column() {
 
 #[test]
 fn a_log_for_other_recorded_params_is_not_mixed() {
-    let log = tmp("mixed.csv");
+    let dir = temp_dir();
+    let log = dir.path().join("mixed.csv");
     let mut r = Record {
         time: "2025-01-01T00:00:00+00:00".into(),
         serial: Some(1),
@@ -457,61 +448,31 @@ fn a_log_for_other_recorded_params_is_not_mixed() {
 
 #[test]
 fn the_cli_provisions_one_servo_with_a_pass_line_and_a_log() {
-    use std::io::BufRead;
-    let exe = env!("CARGO_BIN_EXE_botbench");
-    let mut sim = std::process::Command::new(exe)
-        .args(["sim", "servo-bus", "--servos", "0"])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut path = String::new();
-    std::io::BufReader::new(sim.stdout.take().unwrap())
-        .read_line(&mut path)
-        .unwrap();
-    let log = tmp("cli.csv");
+    let sim = SimProcess::start(&["servo-bus", "--servos", "0"]);
+    let dir = temp_dir();
+    let log = dir.path().join("cli.csv");
     let provision = || {
-        std::process::Command::new(exe)
-            .args([
-                "servo",
-                "--port",
-                path.trim(),
-                "--margin-ms",
-                "5",
-                "provision",
-            ])
-            .arg(concat!(
-                env!("CARGO_MANIFEST_DIR"),
-                "/presets/servo-provision-plan.ron"
-            ))
-            .arg("--log")
-            .arg(&log)
-            .output()
-            .unwrap()
+        let mut c = cli::botbench(["servo", "--port", &sim.path, "--margin-ms", cli::MARGIN_MS]);
+        c.args(["provision", PLAN_FILE]).arg("--log").arg(&log);
+        cli::output(&mut c)
     };
     let out = provision();
     // A second run finds no fresh servo: a FAIL, exit 1, and a second line in the log.
     let again = provision();
-    let _ = sim.kill();
-    let _ = sim.wait();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{stdout}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let lines: Vec<&str> = stdout.lines().collect();
-    assert_eq!(lines.len(), 1, "{stdout}");
+    drop(sim);
+    assert_eq!(out.code, 0, "{}{}", out.out, out.err);
+    let lines: Vec<&str> = out.out.lines().collect();
+    assert_eq!(lines.len(), 1, "{}", out.out);
     assert!(
         lines[0].contains("PASS") && lines[0].contains("id 1"),
-        "{stdout}"
+        "{}",
+        out.out
     );
-    let again_out = String::from_utf8_lossy(&again.stdout);
-    assert_eq!(again.status.code(), Some(1), "{again_out}");
+    assert_eq!(again.code, 1, "{}", again.out);
     assert!(
-        again_out.contains("FAIL") && !again_out.contains("PASS"),
-        "{again_out}"
+        again.out.contains("FAIL") && !again.out.contains("PASS"),
+        "{}",
+        again.out
     );
     let rows = parse_csv(&std::fs::read_to_string(&log).unwrap());
     assert_eq!(rows.len(), 3, "{rows:?}");
@@ -522,69 +483,51 @@ fn the_cli_provisions_one_servo_with_a_pass_line_and_a_log() {
 
 #[test]
 fn the_cli_refuses_a_bad_plan_before_opening_the_port() {
-    let plan = tmp("bad-plan.ron");
+    let dir = temp_dir();
+    let plan = dir.path().join("bad-plan.ron");
     std::fs::write(
         &plan,
         PLAN.replace("target_baud: 500000", "target_baud: 400000"),
     )
     .unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_botbench"))
-        .args(["servo", "--port", "/nonexistent/port", "provision"])
-        .arg(&plan)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    let mut c = cli::botbench(["servo", "--port", "/nonexistent/port", "provision"]);
+    let ran = cli::output(c.arg(&plan));
+    assert_eq!(ran.code, 2, "{}", ran.err);
     assert!(
-        stderr.contains("400000 is not a servo baud rate"),
-        "{stderr}"
+        ran.err.contains("400000 is not a servo baud rate"),
+        "{}",
+        ran.err
     );
-    assert!(!stderr.contains("nonexistent"), "{stderr}");
+    assert!(!ran.err.contains("nonexistent"), "{}", ran.err);
 }
 
 #[test]
 fn the_cli_asks_for_the_next_servo_and_stops_when_told() {
-    use std::io::{BufRead, Write};
-    let exe = env!("CARGO_BIN_EXE_botbench");
-    let mut sim = std::process::Command::new(exe)
-        .args(["sim", "servo-bus", "--servos", "0"])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut path = String::new();
-    std::io::BufReader::new(sim.stdout.take().unwrap())
-        .read_line(&mut path)
-        .unwrap();
-    let mut run = std::process::Command::new(exe)
-        .args([
-            "servo",
-            "--port",
-            path.trim(),
-            "--margin-ms",
-            "5",
-            "provision",
-        ])
-        .arg(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/presets/servo-provision-plan.ron"
-        ))
-        .args(["--count", "3"])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
+    use std::io::Write;
+    use std::process::Stdio;
+    // Only a provisioned servo (id 7) on the bus: the first attempt fails at once, at detect
+    // (one that passes is above); then the operator is asked for the next.
+    let sim = SimProcess::start(&["servo-bus", "--servos", "7"]);
+    let mut run = cli::botbench(["servo", "--port", &sim.path, "--margin-ms", cli::MARGIN_MS])
+        .args(["provision", PLAN_FILE, "--count", "3"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
         .spawn()
         .unwrap();
     // The operator has no second servo and types q at the prompt.
     run.stdin.take().unwrap().write_all(b"q\n").unwrap();
     let out = run.wait_with_output().unwrap();
-    let _ = sim.kill();
-    let _ = sim.wait();
+    drop(sim);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(0), "{stdout}{stderr}");
+    assert_eq!(out.status.code(), Some(1), "{stdout}{stderr}");
     assert!(stderr.contains("plug in servo 2 of 3"), "{stderr}");
-    assert!(stderr.contains("stopped by the operator"), "{stderr}");
-    assert_eq!(stdout.matches("PASS ====").count(), 1, "{stdout}");
-    assert!(stdout.contains("1 PASS, 0 FAIL"), "{stdout}");
+    assert!(
+        stderr.contains("stopped by the operator before servo 2 of 3"),
+        "{stderr}"
+    );
+    assert_eq!(stdout.matches("FAIL ####").count(), 1, "{stdout}");
+    assert!(stdout.contains("at step \"detect\""), "{stdout}");
+    assert!(stdout.contains("0 PASS, 1 FAIL"), "{stdout}");
 }

@@ -2,28 +2,23 @@
 
 use botbench::i18n::Lang;
 use botbench::profile::Value;
+use botbench::sim::Faults;
 use botbench::sim::window_cleaner::WindowCleaner;
-use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
 use botbench::ui::state::Reading;
 use botbench::ui::{App, PanelId};
-use eframe::egui;
 use egui_kittest::kittest::Queryable;
-use std::sync::{Arc, Mutex};
-
-mod gui_harness;
-use gui_harness::{H, Served, app, serve, settings, step_until};
 use std::time::Duration;
 
+use crate::support::gui::{H, app, app_mut, edit_value, settings, step_until};
+use crate::support::{Served, serve, serve_with, temp_dir, window_cleaner};
+
 fn bench() -> Served<WindowCleaner> {
-    serve(WindowCleaner::new(&SimOptions::default()).unwrap())
+    serve(window_cleaner())
 }
 
-/// The app on the window cleaner at `path`, with 100 ms for the device to start answering:
-/// generous for a loaded test machine (the protocol's own 20 ms is tested below).
+/// The app on the window cleaner at `path`, with the protocol's own answer margin.
 fn harness(path: &str, panel: PanelId) -> H {
-    let mut saved = settings(path, "window-cleaner", panel, Lang::En);
-    saved.margin_ms = Some(100);
-    gui_harness::harness(saved)
+    crate::support::gui::harness(settings(path, "window-cleaner", panel, Lang::En))
 }
 
 fn all_read(app: &App) -> bool {
@@ -54,7 +49,7 @@ fn read_all_brings_every_parameter_from_the_device() {
         .unwrap();
     let mut h = harness(b.path(), PanelId::Tuning);
     read_all(&mut h);
-    let want = b.sim.lock().unwrap().param("waterPumpDuration").unwrap();
+    let want = b.sim().param("waterPumpDuration").unwrap();
     let got = match app(&h).state.device.readings.get(&135) {
         Some(Reading::Values(v, _)) => v.get("waterPumpDuration").cloned(),
         _ => None,
@@ -67,30 +62,14 @@ fn read_all_brings_every_parameter_from_the_device() {
     );
 }
 
-fn is_text_input(n: &egui_kittest::kittest::AccessKitNode<'_>) -> bool {
-    n.role() == egui::accesskit::Role::TextInput
-}
-
-fn edit(h: &mut H, current: &str, new: &str) {
-    h.get_by(|n| is_text_input(n) && n.value().as_deref() == Some(current))
-        .focus();
-    h.step();
-    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
-    h.step();
-    h.get_by(|n| is_text_input(n) && n.value().as_deref() == Some(current))
-        .type_text(new);
-    h.step();
-    h.step();
-}
-
 #[test]
 fn an_out_of_range_edit_is_refused_for_writing() {
     let b = bench();
-    b.sim.lock().unwrap().set_param("pwmValue", 33).unwrap();
+    b.sim().set_param("pwmValue", 33).unwrap();
     let mut h = harness(b.path(), PanelId::Tuning);
     read_all(&mut h);
     h.step();
-    edit(&mut h, "33", "101");
+    edit_value(&mut h, "33", "101");
     let a = app(&h);
     assert_eq!(
         a.tuning.edits.values().cloned().collect::<Vec<_>>(),
@@ -108,17 +87,17 @@ fn an_out_of_range_edit_is_refused_for_writing() {
     // The button is there but disabled: clicking it writes nothing.
     h.get_by_label_contains("Write changes").click();
     h.run_steps(5);
-    assert_eq!(b.sim.lock().unwrap().param("pwmValue"), Some(33));
+    assert_eq!(b.sim().param("pwmValue"), Some(33));
 }
 
 #[test]
 fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
     let b = bench();
-    b.sim.lock().unwrap().set_param("pwmValue", 33).unwrap();
+    b.sim().set_param("pwmValue", 33).unwrap();
     let mut h = harness(b.path(), PanelId::Tuning);
     read_all(&mut h);
     h.step();
-    edit(&mut h, "33", "64");
+    edit_value(&mut h, "33", "64");
     h.get_by_label_contains("Write changes (1)").click();
     h.run_steps(3);
     // The diff is shown first.
@@ -128,7 +107,7 @@ fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
         a.state.device.marks.get(&(130, "pwmValue".to_string()))
             == Some(&botbench::ui::state::Mark::Verified)
     });
-    assert_eq!(b.sim.lock().unwrap().param("pwmValue"), Some(64));
+    assert_eq!(b.sim().param("pwmValue"), Some(64));
     h.step();
     assert!(h.query_all_by_label_contains("verified").next().is_some());
 }
@@ -153,20 +132,21 @@ fn the_plots_receive_points() {
 #[test]
 fn a_preset_saves_and_applies_in_a_round_trip() {
     let b = bench();
-    let path = std::env::temp_dir().join(format!("botbench-gui-preset-{}.ron", std::process::id()));
+    let dir = temp_dir();
+    let path = dir.path().join("preset.ron");
     let mut h = harness(b.path(), PanelId::Presets);
     step_until(&mut h, "the first read", |a| {
         all_read(a) && a.state.job_progress().is_none()
     });
-    h.state_mut().as_mut().unwrap().presets.path = path.display().to_string();
+    app_mut(&mut h).presets.path = path.display().to_string();
     h.step();
     h.get_by_label("Save device to file").click();
     step_until(&mut h, "the preset saved", |_| path.exists());
     step_until(&mut h, "the job to end", |a| {
         a.state.job_progress().is_none()
     });
-    let saved_pwm = b.sim.lock().unwrap().param("pwmValue").unwrap();
-    let saved_target = b.sim.lock().unwrap().param("defaultTarget").unwrap();
+    let saved_pwm = b.sim().param("pwmValue").unwrap();
+    let saved_target = b.sim().param("defaultTarget").unwrap();
     // The device drifts from the preset.
     b.sim
         .lock()
@@ -198,29 +178,25 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
                 .marks
                 .contains_key(&(130, "pwmValue".to_string()))
     });
-    assert_eq!(b.sim.lock().unwrap().param("pwmValue"), Some(saved_pwm));
-    assert_eq!(
-        b.sim.lock().unwrap().param("defaultTarget"),
-        Some(saved_target)
-    );
-    let _ = std::fs::remove_file(&path);
+    assert_eq!(b.sim().param("pwmValue"), Some(saved_pwm));
+    assert_eq!(b.sim().param("defaultTarget"), Some(saved_target));
 }
 
 #[test]
 fn a_malformed_preset_is_shown_with_its_line_and_column() {
     let b = bench();
-    let path = std::env::temp_dir().join(format!("botbench-gui-bad-{}.ron", std::process::id()));
+    let dir = temp_dir();
+    let path = dir.path().join("bad.ron");
     std::fs::write(&path, "(\n  version: 1,\n  profile: \"window-cleaner\",\n  values: {\n    \"MSP_SET_PWMVALUE\": { \"pwmValue\": \"101\" },\n  },\n)\n").unwrap();
     let mut h = harness(b.path(), PanelId::Presets);
     step_until(&mut h, "the link", |a| a.state.connected());
-    h.state_mut().as_mut().unwrap().presets.path = path.display().to_string();
+    app_mut(&mut h).presets.path = path.display().to_string();
     h.step();
     h.get_by_label("Open").click();
     h.run_steps(2);
     let err = app(&h).presets.error.clone().expect("refused").to_string();
     assert!(err.contains(":5:") && err.contains("out of range"), "{err}");
     assert!(app(&h).presets.loaded.is_none());
-    let _ = std::fs::remove_file(&path);
 }
 
 #[test]
@@ -234,11 +210,9 @@ fn every_panel_renders_in_english_and_chinese() {
     assert!(panels.len() >= 5, "{panels:?}");
     for lang in [Lang::En, Lang::Zh] {
         for panel in &panels {
-            {
-                let a = h.state_mut().as_mut().unwrap();
-                a.settings.lang = lang;
-                a.settings.panel = *panel;
-            }
+            let a = app_mut(&mut h);
+            a.settings.lang = lang;
+            a.settings.panel = *panel;
             h.run_steps(3);
         }
     }
@@ -249,16 +223,12 @@ fn every_panel_renders_in_english_and_chinese() {
 
 #[test]
 fn nothing_is_shown_before_a_reply_and_a_failed_read_says_so_in_place() {
-    let sim = Arc::new(Mutex::new(
-        WindowCleaner::new(&SimOptions::default()).unwrap(),
-    ));
-    let shared: SharedDevice = sim.clone();
     let silent = Faults {
         silent: true,
         ..Faults::default()
     };
-    let server = PtyServer::start(shared, silent).unwrap();
-    let mut h = harness(server.path(), PanelId::Tuning);
+    let b = serve_with(window_cleaner(), silent);
+    let mut h = harness(b.path(), PanelId::Tuning);
     step_until(&mut h, "the reads to fail", |a| {
         matches!(a.state.device.readings.get(&130), Some(Reading::Failed(_)))
     });
@@ -288,12 +258,12 @@ fn a_slow_device_is_read_once_the_answer_margin_allows_for_it() {
         extra_latency: Duration::from_millis(150),
         ..Faults::default()
     };
-    let served = gui_harness::serve_with(WindowCleaner::new(&SimOptions::default()).unwrap(), slow);
+    let served = serve_with(window_cleaner(), slow);
     // The protocol's own 20 ms is too short for it, even over three attempts: reads fail, and
     // say so.
     let saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
     assert_eq!(saved.margin_ms, None, "the protocol's own margin");
-    let mut h = gui_harness::harness(saved);
+    let mut h = crate::support::gui::harness(saved);
     step_until(&mut h, "the first read to fail", |a| {
         matches!(a.state.device.readings.get(&130), Some(Reading::Failed(_)))
     });
@@ -301,6 +271,6 @@ fn a_slow_device_is_read_once_the_answer_margin_allows_for_it() {
     // 300 ms chosen in the connection bar: every parameter is read.
     let mut saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
     saved.margin_ms = Some(300);
-    let mut h = gui_harness::harness(saved);
+    let mut h = crate::support::gui::harness(saved);
     step_until(&mut h, "every parameter read", all_read);
 }

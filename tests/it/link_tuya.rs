@@ -2,22 +2,23 @@
 //! on a pseudo-terminal.
 
 use botbench::link::session::tuya::{HandshakeStep, TuyaEvent, TuyaModuleOptions};
-use botbench::link::{Link, LinkEvent, LinkOptions, serial};
+use botbench::link::{Link, LinkEvent, LinkOptions};
 use botbench::ops::Cancel;
 use botbench::ops::OpError;
 use botbench::ops::tuya::{self as ops, OtaTiming};
-use botbench::profile::{Input, Profile, Registry, Value};
+use botbench::profile::{Input, Profile, Value};
 use botbench::sim::tuya_mcu::{OtaPacketAnswer, OtaState, TuyaConfig, TuyaMcu};
-use botbench::sim::{Faults, PtyServer, SharedDevice};
-use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::sync::Arc;
+use std::time::Duration;
+
+use crate::support::{Served, image, next_event, open_link, profile, serve, wait_until};
 
 const BAUD: u32 = 115_200;
 
+/// The MCU on its pty and a link to it (which closes first).
 struct Bench {
-    _server: PtyServer,
-    mcu: Arc<Mutex<TuyaMcu>>,
     link: Link,
+    mcu: Served<TuyaMcu>,
     profile: Arc<Profile>,
 }
 
@@ -27,62 +28,37 @@ impl Bench {
     }
 
     fn at(baud: u32, cfg: TuyaConfig, module: TuyaModuleOptions) -> Self {
-        let profile = Registry::builtin().unwrap().get("tuya-vacuum").unwrap();
-        let mcu = Arc::new(Mutex::new(TuyaMcu::new(TuyaConfig {
+        let profile = profile("tuya-vacuum");
+        let mcu = serve(TuyaMcu::new(TuyaConfig {
             baud: Some(baud),
             ..cfg
-        })));
-        let shared: SharedDevice = mcu.clone();
-        let server = PtyServer::start(shared, Faults::default()).unwrap();
+        }));
         let options = LinkOptions {
             tuya: module,
             ..LinkOptions::default()
         };
-        let link = Link::open(
-            serial::opener(server.path(), baud),
-            profile.clone(),
-            options,
-            None,
-        )
-        .unwrap();
-        Self {
-            _server: server,
-            mcu,
-            link,
-            profile,
-        }
+        let link = open_link(mcu.path(), baud, profile.clone(), options);
+        Self { link, mcu, profile }
     }
 
     fn default() -> Self {
         Self::new(TuyaConfig::default(), TuyaModuleOptions::default())
     }
 
-    /// Tuya events until `done` says stop (or the time is up).
-    fn events_until(
-        &self,
-        within: Duration,
-        mut done: impl FnMut(&TuyaEvent) -> bool,
-    ) -> Vec<TuyaEvent> {
-        let deadline = Instant::now() + within;
+    /// The Tuya events up to the first that `done` accepts.
+    fn events_until(&self, what: &str, mut done: impl FnMut(&TuyaEvent) -> bool) -> Vec<TuyaEvent> {
         let mut out = Vec::new();
-        while let Ok(ev) = self
-            .link
-            .events()
-            .recv_timeout(deadline.saturating_duration_since(Instant::now()))
-        {
-            if let LinkEvent::Tuya(t) = ev {
-                let stop = done(&t);
-                out.push(t);
-                if stop {
-                    break;
-                }
-            }
-        }
+        next_event(&self.link, what, |ev| {
+            let LinkEvent::Tuya(t) = ev else { return None };
+            let stop = done(&t);
+            out.push(t);
+            stop.then_some(())
+        });
         out
     }
 
     fn handshake(&self) -> Vec<TuyaEvent> {
-        self.events_until(Duration::from_secs(10), |e| *e == TuyaEvent::HandshakeDone)
+        self.events_until("the handshake", |e| *e == TuyaEvent::HandshakeDone)
     }
 }
 
@@ -111,7 +87,7 @@ fn the_handshake_completes_step_by_step() {
     });
     assert_eq!(info.unwrap().pid.as_deref(), Some("lgldgnmt4ifc.jzex"));
     // The MCU was told the Wi-Fi state, since it drives the LED.
-    assert_eq!(bench.mcu.lock().unwrap().wifi_state(), Some(4));
+    assert_eq!(bench.mcu.sim().wifi_state(), Some(4));
 }
 
 #[test]
@@ -122,7 +98,7 @@ fn an_mcu_restart_is_noticed_by_the_heartbeat_and_the_handshake_runs_again() {
     };
     let bench = Bench::new(TuyaConfig::default(), module);
     bench.handshake();
-    bench.mcu.lock().unwrap().restart();
+    bench.mcu.sim().restart();
     let events = bench.handshake();
     assert!(events.contains(&TuyaEvent::McuRestarted), "{events:?}");
     assert_eq!(events.last(), Some(&TuyaEvent::HandshakeDone));
@@ -160,7 +136,7 @@ fn the_mcus_own_requests_are_answered() {
     let bench = Bench::new(TuyaConfig::default(), module);
     bench.handshake();
     {
-        let mut m = bench.mcu.lock().unwrap();
+        let mut m = bench.mcu.sim();
         m.request_local_time();
         m.request_wifi_test();
         m.reset_wifi();
@@ -169,19 +145,17 @@ fn the_mcus_own_requests_are_answered() {
         m.request_mac();
     }
     let mut answered = 0;
-    bench.events_until(Duration::from_secs(5), |e| {
+    bench.events_until("six requests answered", |e| {
         if matches!(e, TuyaEvent::McuRequest { .. }) {
             answered += 1;
         }
         answered == 6
     });
-    assert_eq!(answered, 6);
     // The last answers may still be on the wire.
-    let deadline = Instant::now() + Duration::from_secs(2);
-    while bench.mcu.lock().unwrap().answers().len() < 6 && Instant::now() < deadline {
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    let answers = bench.mcu.lock().unwrap().answers().to_vec();
+    wait_until("the MCU to hold six answers", || {
+        bench.mcu.sim().answers().len() >= 6
+    });
+    let answers = bench.mcu.sim().answers().to_vec();
     let get = |c: u8| {
         answers
             .iter()
@@ -213,7 +187,7 @@ fn every_writable_data_point_type_is_set_and_reported_back() {
     assert_eq!(checks.len(), 4);
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
     assert_eq!(
-        bench.mcu.lock().unwrap().dp(3).map(|v| format!("{v:?}")),
+        bench.mcu.sim().dp(3).map(|v| format!("{v:?}")),
         Some("Enum(5)".into())
     );
     // The status query reports all 19.
@@ -243,11 +217,6 @@ fn a_wrong_typed_or_report_only_data_point_is_refused_before_sending() {
     )
     .unwrap_err();
     assert!(matches!(err, OpError::Value(_)), "{err}");
-}
-
-fn image(len: usize) -> Vec<u8> {
-    let mut rng = fastrand::Rng::with_seed(len as u64);
-    (0..len).map(|_| rng.u8(..)).collect()
 }
 
 #[test]
@@ -288,7 +257,7 @@ fn a_64_kib_image_arrives_intact_at_each_packet_size() {
             _ => 256,
         };
         assert_eq!(report.packet_size, want);
-        let mcu = bench.mcu.lock().unwrap();
+        let mcu = bench.mcu.sim();
         assert!(
             matches!(mcu.ota_state(), OtaState::Complete { size: 65_536, .. }),
             "{:?}",

@@ -1,93 +1,70 @@
 //! The production self-test against the simulated window cleaner on a pseudo-terminal.
 
-use botbench::link::{Link, LinkEvent, LinkOptions, serial};
+use botbench::link::{Link, LinkOptions};
 use botbench::ops::Cancel;
 use botbench::ops::selftest::{self, Plan, Report};
-use botbench::profile::{Profile, Registry};
+use botbench::profile::Profile;
 use botbench::sim::window_cleaner::{Fault, Motor, WindowCleaner};
-use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
-use std::io::{BufRead, BufReader, Write};
-use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use std::io::{BufRead, BufReader};
+use std::process::Stdio;
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
 
-const EXAMPLE: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/presets/window-cleaner-selftest.ron"
-);
+use crate::support::cli::{self, SimProcess};
+use crate::support::{
+    SELFTEST_PLAN, Served, identified, open_link, selftest_plan, serve, temp_dir, wait_until,
+};
 
 fn profile() -> Arc<Profile> {
-    Registry::builtin().unwrap().get("window-cleaner").unwrap()
+    crate::support::profile("window-cleaner")
 }
 
-/// The example plan, with the corner step's 20 s timeout cut to 2 s (a stuck corner is only
-/// found when it runs out).
+/// The example plan with test timings; its corner step waits as long as the operator needs.
 fn example_plan(p: &Profile) -> Plan {
-    let text = std::fs::read_to_string(EXAMPLE).unwrap();
-    assert!(text.contains("timeout_ms: 20000"));
-    let text = text.replace("timeout_ms: 20000", "timeout_ms: 2000");
-    Plan::parse("example", &text, p).unwrap()
+    Plan::parse("example", &selftest_plan(60_000), p).unwrap()
 }
 
+/// The example plan with test timings and the corner step cut to 300 ms: for a run whose corner
+/// step must fail, which is only found when the step runs out.
+fn plan_to_fail_corners(p: &Profile) -> Plan {
+    Plan::parse("example", &selftest_plan(300), p).unwrap()
+}
+
+/// The robot on its pty and a link to it (which closes first).
 struct Bench {
-    server: PtyServer,
-    sim: Arc<Mutex<WindowCleaner>>,
     link: Link,
+    robot: Served<WindowCleaner>,
+    sim: Arc<Mutex<WindowCleaner>>,
     profile: Arc<Profile>,
 }
 
 fn bench(faults: &[Fault]) -> Bench {
     let profile = profile();
-    let mut wc = WindowCleaner::new(&SimOptions::default()).unwrap();
+    let mut wc = crate::support::window_cleaner();
     for f in faults {
         wc.inject(*f);
     }
-    let sim = Arc::new(Mutex::new(wc));
-    let shared: SharedDevice = sim.clone();
-    let server = PtyServer::start(shared, Faults::default()).unwrap();
-    let link = Link::open(
-        serial::opener(server.path(), 115_200),
-        profile.clone(),
-        LinkOptions {
-            reconnect: false,
-            // The checks, not the timing, are under test: a loaded machine must not fail them.
-            margin: Some(Duration::from_millis(250)),
-            ..LinkOptions::default()
-        },
-        None,
-    )
-    .unwrap();
+    let robot = serve(wc);
+    let options = LinkOptions {
+        reconnect: false,
+        ..LinkOptions::default()
+    };
+    let link = open_link(robot.path(), 115_200, profile.clone(), options);
     // The session learns the device code from CMD_VERSION first.
-    let deadline = Instant::now() + Duration::from_secs(5);
-    while let Ok(ev) = link
-        .events()
-        .recv_timeout(deadline.saturating_duration_since(Instant::now()))
-    {
-        if let LinkEvent::Identified(r) = ev {
-            r.expect("identified");
-            break;
-        }
-    }
+    identified(&link);
     Bench {
-        server,
-        sim,
         link,
+        sim: robot.sim.clone(),
+        robot,
         profile,
     }
 }
 
-/// An operator who covers the corners one after another when asked (and keeps them covered).
+/// An operator who covers the corners when asked (and keeps them covered): the step has read
+/// them all released before it asks.
 fn covering_operator(sim: Arc<Mutex<WindowCleaner>>) -> impl FnMut(&str) -> bool {
     move |prompt: &str| {
         assert!(prompt.contains("corner"), "{prompt}");
-        let sim = sim.clone();
-        std::thread::spawn(move || {
-            for bits in [0b0001, 0b0011, 0b0111, 0b1111] {
-                sim.lock().unwrap().set_corners(bits);
-                std::thread::sleep(Duration::from_millis(30));
-            }
-        });
+        sim.lock().unwrap().set_corners(0b1111);
         true
     }
 }
@@ -161,7 +138,11 @@ fn each_fault_fails_exactly_its_own_step() {
         .map(|(fault, expected)| {
             std::thread::spawn(move || {
                 let b = bench(&[fault]);
-                let plan = example_plan(&b.profile);
+                let plan = if fault == Fault::CornerStuck {
+                    plan_to_fail_corners(&b.profile)
+                } else {
+                    example_plan(&b.profile)
+                };
                 let mut op = covering_operator(b.sim.clone());
                 let report = run(&b, &plan, &mut op, &Cancel::new());
                 let motor = b.sim.lock().unwrap().motor();
@@ -185,7 +166,7 @@ fn each_fault_fails_exactly_its_own_step() {
 #[test]
 fn failed_steps_say_what_was_measured() {
     let b = bench(&[Fault::BatteryLow, Fault::CornerStuck]);
-    let plan = example_plan(&b.profile);
+    let plan = plan_to_fail_corners(&b.profile);
     let mut op = covering_operator(b.sim.clone());
     let report = run(&b, &plan, &mut op, &Cancel::new());
     let battery = report
@@ -214,7 +195,7 @@ fn failed_steps_say_what_was_measured() {
 #[test]
 fn an_operator_who_does_nothing_fails_the_corner_step_and_one_who_aborts_ends_the_run() {
     let b = bench(&[]);
-    let plan = example_plan(&b.profile);
+    let plan = plan_to_fail_corners(&b.profile);
     let mut idle = |_: &str| true;
     let report = run(&b, &plan, &mut idle, &Cancel::new());
     assert!(!report.pass);
@@ -236,7 +217,7 @@ fn an_operator_who_does_nothing_fails_the_corner_step_and_one_who_aborts_ends_th
 fn a_link_lost_at_the_operator_prompt_ends_the_run_as_fail_naming_the_step() {
     let b = bench(&[]);
     let plan = example_plan(&b.profile);
-    let vanish = b.server.vanish_handle();
+    let vanish = b.robot.server.vanish_handle();
     let mut op = move |_: &str| {
         vanish.vanish();
         true
@@ -273,11 +254,11 @@ fn long_rise(p: &Profile) -> Plan {
     Plan::parse("long", text, p).unwrap()
 }
 
-/// Waits (as long as it takes) until the simulated motor runs.
+/// Waits until the simulated motor runs.
 fn when_motor_runs(sim: &Arc<Mutex<WindowCleaner>>) {
-    while sim.lock().unwrap().motor() == Motor::Stop {
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    wait_until("the motor to run", || {
+        sim.lock().unwrap().motor() != Motor::Stop
+    });
 }
 
 #[test]
@@ -307,7 +288,7 @@ fn a_cancelled_rises_step_still_stops_the_motor() {
 fn a_link_lost_while_the_motor_runs_is_fail_naming_the_step() {
     let b = bench(&[]);
     let plan = long_rise(&b.profile);
-    let (sim, vanish) = (b.sim.clone(), b.server.vanish_handle());
+    let (sim, vanish) = (b.sim.clone(), b.robot.server.vanish_handle());
     let t = std::thread::spawn(move || {
         when_motor_runs(&sim);
         vanish.vanish();
@@ -333,8 +314,8 @@ fn the_report_is_logged_as_one_json_line_per_run() {
     let plan = Plan::parse("short", text, &b.profile).unwrap();
     let report = run(&b, &plan, &mut |_: &str| true, &Cancel::new());
     assert_eq!(failed(&report), ["Water box"]);
-    let dir = temp_dir("log");
-    let log = dir.join("selftest.jsonl");
+    let dir = temp_dir();
+    let log = dir.path().join("selftest.jsonl");
     selftest::append_log(&log, &report).unwrap();
     selftest::append_log(&log, &report).unwrap();
     let text = std::fs::read_to_string(&log).unwrap();
@@ -351,7 +332,6 @@ fn the_report_is_logged_as_one_json_line_per_run() {
         assert_eq!(v["results"][1]["pass"], false);
         assert!(v["started"].is_string());
     }
-    let _ = std::fs::remove_dir_all(dir);
 }
 
 // ---- Plans that are refused ----
@@ -420,70 +400,13 @@ fn malformed_plans_are_refused_with_file_line_and_column() {
 
 // ---- The command line ----
 
-fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("botbench-selftest-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// `botbench sim window-cleaner`, with its stdin to type commands into; killed on drop.
-struct Sim {
-    child: Child,
-    path: String,
-    stderr: std::io::Lines<BufReader<std::process::ChildStderr>>,
-}
-
-impl Sim {
-    fn start() -> Self {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_botbench"))
-            .args(["sim", "window-cleaner"])
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("starts the simulator");
-        let mut line = String::new();
-        BufReader::new(child.stdout.take().unwrap())
-            .read_line(&mut line)
-            .expect("pty path");
-        let stderr = BufReader::new(child.stderr.take().unwrap()).lines();
-        Self {
-            child,
-            path: line.trim().to_string(),
-            stderr,
-        }
-    }
-
-    /// Types a command and waits for the simulator to confirm it.
-    fn type_line(&mut self, command: &str) {
-        let stdin = self.child.stdin.as_mut().unwrap();
-        writeln!(stdin, "{command}").unwrap();
-        stdin.flush().unwrap();
-        let want = format!("ok: {command}");
-        for line in self.stderr.by_ref() {
-            if line.unwrap().contains(&want) {
-                return;
-            }
-        }
-        panic!("the simulator did not confirm {command}");
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// Runs the self-test CLI on the example plan; when it prompts the operator, the simulator's
-/// corners are pressed through its stdin (as a fixture would).
-fn cli_selftest(sim: &mut Sim, extra: &[&str]) -> (i32, String, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_botbench"))
-        .args(["msp", "--port", &sim.path, "selftest", EXAMPLE, "--yes"])
+/// Runs the self-test CLI on `plan` against `sim`; when it prompts the operator, the simulator's
+/// corners are pressed through its stdin (as a fixture would), all released before.
+fn cli_selftest(sim: &mut SimProcess, plan: &str, extra: &[&str]) -> cli::Ran {
+    sim.type_line("corners 0");
+    let mut child = cli::botbench(["msp", "--port", &sim.path, "--margin-ms", cli::MARGIN_MS])
+        .args(["selftest", plan, "--yes"])
         .args(extra)
-        .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -504,21 +427,24 @@ fn cli_selftest(sim: &mut Sim, extra: &[&str]) -> (i32, String, String) {
         err.push('\n');
     }
     let out = child.wait_with_output().unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
+    cli::Ran {
+        code: out.status.code().unwrap_or(-1),
+        out: String::from_utf8_lossy(&out.stdout).into_owned(),
         err,
-    )
+    }
 }
 
 #[test]
 fn cli_selftest_passes_a_healthy_robot_and_fails_a_faulty_one() {
-    let dir = temp_dir("cli");
-    let log = dir.join("line3.jsonl");
+    let dir = temp_dir();
+    let log = dir.path().join("line3.jsonl");
     let log_s = log.to_str().unwrap();
+    let plan = dir.path().join("plan.ron");
+    std::fs::write(&plan, selftest_plan(60_000)).unwrap();
+    let plan = plan.to_str().unwrap();
 
-    let mut sim = Sim::start();
-    let (code, out, err) = cli_selftest(&mut sim, &["--log", log_s]);
+    let mut sim = SimProcess::start(&["window-cleaner"]);
+    let cli::Ran { code, out, err } = cli_selftest(&mut sim, plan, &["--log", log_s]);
     assert_eq!(code, 0, "{out}\n{err}");
     assert!(
         err.contains("OPERATOR: Cover each of the four corner switches"),
@@ -537,9 +463,9 @@ fn cli_selftest_passes_a_healthy_robot_and_fails_a_faulty_one() {
     );
     drop(sim);
 
-    let mut sim = Sim::start();
+    let mut sim = SimProcess::start(&["window-cleaner"]);
     sim.type_line("fault battery-low");
-    let (code, out, err) = cli_selftest(&mut sim, &["--log", log_s]);
+    let cli::Ran { code, out, err } = cli_selftest(&mut sim, plan, &["--log", log_s]);
     assert_eq!(code, 1, "{out}\n{err}");
     assert!(out.contains("FAIL  Battery voltage"), "{out}");
     assert!(out.contains("10.8 V"), "{out}");
@@ -549,7 +475,7 @@ fn cli_selftest_passes_a_healthy_robot_and_fails_a_faulty_one() {
         "{out}"
     );
 
-    let (code, out, err) = cli_selftest(&mut sim, &["--json"]);
+    let cli::Ran { code, out, err } = cli_selftest(&mut sim, plan, &["--json"]);
     assert_eq!(code, 1, "{err}");
     let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
     assert_eq!(v["pass"], false);
@@ -563,14 +489,13 @@ fn cli_selftest_passes_a_healthy_robot_and_fails_a_faulty_one() {
     assert_eq!(runs.len(), 2);
     assert_eq!(runs[0]["pass"], true);
     assert_eq!(runs[1]["pass"], false);
-    let _ = std::fs::remove_dir_all(dir);
 }
 
 #[test]
 fn cli_selftest_refuses_a_bad_plan_before_opening_the_port() {
-    let dir = temp_dir("cli-bad");
-    let bad = dir.join("bad.ron");
-    let text = std::fs::read_to_string(EXAMPLE).unwrap().replacen(
+    let dir = temp_dir();
+    let bad = dir.path().join("bad.ron");
+    let text = std::fs::read_to_string(SELFTEST_PLAN).unwrap().replacen(
         "\"batteryVoltage\"",
         "\"batteryVolts\"",
         1,
@@ -581,15 +506,10 @@ fn cli_selftest_refuses_a_bad_plan_before_opening_the_port() {
         .unwrap()
         + 1;
     std::fs::write(&bad, &text).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_botbench"))
-        .args(["msp", "--port", "/dev/botbench-no-such-port", "selftest"])
-        .arg(&bad)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{err}");
+    let mut c = cli::botbench(["msp", "--port", "/dev/botbench-no-such-port", "selftest"]);
+    let cli::Ran { code, err, .. } = cli::output(c.arg(&bad));
+    assert_eq!(code, 2, "{err}");
     assert!(err.contains(&format!("bad.ron:{line}:")), "{err}");
     assert!(err.contains("no field 'batteryVolts'"), "{err}");
     assert!(!err.contains("botbench-no-such-port"), "{err}");
-    let _ = std::fs::remove_dir_all(dir);
 }
