@@ -3,15 +3,13 @@
 //! live asks for no frame at all. (What that costs is measured by `.ci/window_cpu.sh`, not here.)
 
 use botbench::i18n::Lang;
-use botbench::sim::SimOptions;
-use botbench::sim::window_cleaner::WindowCleaner;
 use botbench::ui::repaint::LIVE;
 use botbench::ui::{Action, App, PanelId};
 use eframe::egui;
 use std::time::Duration;
 
-mod gui_harness;
-use gui_harness::{H, app, app_mut, serve, settings, step_until};
+use crate::support::gui::{H, app, app_mut, harness, settings, step_until};
+use crate::support::{serve, window_cleaner};
 
 /// How soon the last frame asked for the next one (`Duration::MAX`: never).
 fn requested_delay(h: &H) -> Duration {
@@ -49,10 +47,10 @@ fn streaming(a: &App) -> bool {
 fn a_streaming_plot_redraws_at_the_live_rate_not_on_every_sample() {
     // No faster than the eye needs: at most 15 frames a second.
     assert!(LIVE >= Duration::from_millis(66), "live rate {LIVE:?}");
-    let b = serve(WindowCleaner::new(&SimOptions::default()).unwrap());
+    let b = serve(window_cleaner());
     let mut saved = settings(b.path(), "window-cleaner", PanelId::Telemetry, Lang::En);
     saved.poll_hz = Some(50.0);
-    let mut h = gui_harness::harness(saved);
+    let mut h = harness(saved);
     step_until(&mut h, "telemetry points", streaming);
     assert_eq!(app(&h).repaint_after(), Some(LIVE));
     // The frame itself asks for exactly that (a frame that also drains a backlog of worker
@@ -85,9 +83,9 @@ fn a_streaming_plot_redraws_at_the_live_rate_not_on_every_sample() {
 
 #[test]
 fn a_disconnected_window_asks_for_no_frame() {
-    let b = serve(WindowCleaner::new(&SimOptions::default()).unwrap());
+    let b = serve(window_cleaner());
     let saved = settings(b.path(), "window-cleaner", PanelId::Telemetry, Lang::En);
-    let mut h = gui_harness::harness(saved);
+    let mut h = harness(saved);
     step_until(&mut h, "telemetry points", streaming);
     app_mut(&mut h).apply(Action::Disconnect);
     assert_eq!(app(&h).repaint_after(), None);
