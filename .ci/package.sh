@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The Debian package (issue 18): builds it from the release binary already built (cargo deb
+# The Debian package (issue 18): builds it from the binary already built (release, or the
+# tests' debug binary with BOTBENCH_DEB_PROFILE=dev; cargo deb
 # --no-build; installs cargo-deb first if it is missing, about 2 minutes on 2 cores), installs it
 # with dpkg (CI runs as root), and checks the installed /usr/bin/botbench the way a line PC runs
 # it: no Rust toolchain on PATH, no source checkout in reach (an empty folder, a fresh HOME):
@@ -15,10 +16,14 @@ if ! command -v cargo-deb >/dev/null 2>&1; then
     step "installing cargo-deb"
     cargo install cargo-deb --locked --version 3.8.0
 fi
-[ -x target/release/botbench ] || cargo build --release
-step "cargo deb --no-build"
+# BOTBENCH_DEB_PROFILE=dev packages the debug binary the tests already built (CI: one build);
+# the default is the release package a line PC installs.
+profile=${BOTBENCH_DEB_PROFILE:-release}
+dir=$([ "$profile" = dev ] && echo debug || echo "$profile")
+[ -x "target/$dir/botbench" ] || cargo build --profile "$profile"
+step "cargo deb --no-build --profile $profile"
 rm -f target/debian/botbench_*.deb
-cargo deb --no-build
+cargo deb --no-build --profile "$profile"
 deb=$(ls target/debian/botbench_*.deb)
 echo "$deb: $(du -k "$deb" | cut -f1) KiB"
 dpkg-deb --contents "$deb" | awk '{ print $6 }'

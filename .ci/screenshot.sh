@@ -1,22 +1,18 @@
 #!/usr/bin/env bash
-# Starts the release binary under Xvfb on each built-in demo device, takes a screenshot of one
-# panel of each, and fails if a window did not come up or a shot is blank.
-# Usage: .ci/screenshot.sh [DIR]   (default: target/screenshots)
+# Opens the window once under Xvfb (software rendering) for its screenshot tour (`botbench gui
+# --screenshots DIR`): each built-in demo device in turn, every panel it has, at 1280×800 and
+# 1024×600, in English and 中文. Fails if the window did not come up, the tour reported a
+# failure, a panel lacks one of its four shots, or a shot is blank.
+# Usage: .ci/screenshot.sh [DIR] [BINARY]
+#   DIR     default target/screenshots (emptied of old shots first)
+#   BINARY  default target/debug/botbench: the one `cargo test` builds, so CI builds once
 set -euo pipefail
 cd "$(dirname "$0")/.."
 dir=${1:-target/screenshots}
-bin=target/release/botbench
-# name  demo device  panel  seconds to let it connect, read and plot
-shots=(
-    "tuning window-cleaner Tuning 6"
-    "telemetry window-cleaner Telemetry 6"
-    "solar solar-cleanbot Solar 6"
-    "servo servo-bus ServoBench 4"
-    "tuya tuya-vacuum TuyaConsole 6"
-)
+bin=${2:-target/debug/botbench}
 
 need=()
-for cmd in xvfb-run xauth import xdotool; do
+for cmd in xvfb-run xauth xdotool identify; do
     command -v "$cmd" >/dev/null 2>&1 || need+=("$cmd")
 done
 if [ ${#need[@]} -gt 0 ] || [ ! -e /usr/lib/x86_64-linux-gnu/dri/swrast_dri.so ]; then
@@ -25,13 +21,15 @@ if [ ${#need[@]} -gt 0 ] || [ ! -e /usr/lib/x86_64-linux-gnu/dri/swrast_dri.so ]
     apt-get update -qq
     apt-get install -y -qq xvfb xauth imagemagick xdotool libegl1 libegl-mesa0 libgl1-mesa-dri libglx-mesa0 >/dev/null
 fi
-[ -x "$bin" ] || cargo build --release
+[ -x "$bin" ] || cargo build
+bin=$(realpath "$bin")
 
 # A fresh settings folder, so that nothing saved before changes what the window shows.
 home=$(mktemp -d)
 trap 'rm -rf "$home"' EXIT
 mkdir -p "$dir"
 dir=$(cd "$dir" && pwd)
+rm -f "$dir"/*.png
 cat > "$home/run.sh" <<SCRIPT
 #!/usr/bin/env bash
 set -u
@@ -43,28 +41,16 @@ for _ in \$(seq 1 60); do
 done
 echo "X display \$DISPLAY: \$(xdotool getdisplaygeometry 2>&1)"
 # Now and then the app cannot open its X connection at start, though the server answers (about
-# one launch in ten under Xvfb here): each shot gets three launches.
-launch() {
-    "$PWD/$bin" gui --demo "\$1" --panel "\$2" > "$home/app.log" 2>&1 &
-    app=\$!
-    for _ in \$(seq 1 120); do
-        if xdotool search --name "botbench" >/dev/null 2>&1; then return 0; fi
-        if ! kill -0 \$app 2>/dev/null; then
-            echo "the app exited early (\$1 \$2):"; cat "$home/app.log"; return 1
-        fi
-        sleep 0.5
-    done
-    echo "no window titled botbench after 60 s (\$1 \$2)"; cat "$home/app.log"; kill \$app; return 1
-}
-shot() {
-    launch "\$2" "\$3" || { sleep 1; launch "\$2" "\$3"; } || { sleep 1; launch "\$2" "\$3"; } || exit 1
-    sleep "\$4"
-    import -window root "$dir/\$1.png"
-    kill \$app
-    wait \$app 2>/dev/null || true
-}
+# one launch in ten under Xvfb here): three launches.
+for attempt in 1 2 3; do
+    "$bin" gui --screenshots "$dir" > "$home/app.log" 2>&1 && exit 0
+    grep -q "Failed to open connection to X server" "$home/app.log" || break
+    echo "launch \$attempt could not open its X connection; again"
+    sleep 1
+done
+cat "$home/app.log"
+exit 1
 SCRIPT
-for s in "${shots[@]}"; do echo "shot $s" >> "$home/run.sh"; done
 chmod +x "$home/run.sh"
 # Two xvfb-run -a started at once can race for a display number: one retry.
 xvfb-run -a -s "-screen 0 1280x800x24" "$home/run.sh" || {
@@ -72,11 +58,22 @@ xvfb-run -a -s "-screen 0 1280x800x24" "$home/run.sh" || {
     sleep 2
     xvfb-run -a -s "-screen 0 1280x800x24" "$home/run.sh"
 }
+grep "^tour: done" "$home/app.log"
+if ! grep -q "^tour: done, 0 failure" "$home/app.log"; then
+    grep "^tour:" "$home/app.log" | grep -v "\.png$"
+    exit 1
+fi
 
-# Blank means a single colour: its standard deviation is (about) zero.
-for s in "${shots[@]}"; do
-    shot="$dir/${s%% *}.png"
-    sd=$(/usr/bin/convert "$shot" -format "%[fx:standard_deviation]" info:)
-    echo "screenshot $shot: standard deviation $sd"
-    awk -v sd="$sd" 'BEGIN { exit !(sd > 0.02) }' || { echo "$shot is blank"; exit 1; }
+# Every device's shots, and each panel shown at both sizes in both languages.
+for device in window-cleaner solar-cleanbot servo-bus tuya-vacuum; do
+    ls "$dir/$device"-*.png >/dev/null 2>&1 || { echo "no shot of $device"; exit 1; }
 done
+for panel in $(ls "$dir" | sed -n 's/-[0-9]*x[0-9]*-[a-z]*\.png$//p' | sort -u); do
+    for shot in 1280x800-en 1280x800-zh 1024x600-en 1024x600-zh; do
+        [ -s "$dir/$panel-$shot.png" ] || { echo "missing $panel-$shot.png"; exit 1; }
+    done
+done
+# Blank means a single colour: its standard deviation is (about) zero.
+/usr/bin/identify -format "%f %[fx:standard_deviation]\n" "$dir"/*.png | awk '
+    $2 <= 0.02 { print "blank: " $1; bad = 1 }
+    END { print NR " screenshots in '"$dir"'"; exit bad }'

@@ -75,6 +75,11 @@ enum Cmd {
         /// SelfTest, ServoBench, TuyaConsole or Monitor (if the device has it).
         #[arg(long, value_name = "PANEL", value_parser = parse_panel)]
         panel: Option<crate::ui::PanelId>,
+        /// Tour the built-in demo devices and save a screenshot of each panel at 1280×800 and
+        /// 1024×600, in English and Chinese, into DIR as <device>-<panel>-<size>-<lang>.png; then
+        /// close. Saved settings are neither read nor changed.
+        #[arg(long, value_name = "DIR", conflicts_with_all = ["port", "demo"])]
+        screenshots: Option<std::path::PathBuf>,
     },
     /// Decode or build frames of the three protocols.
     #[command(subcommand)]
@@ -170,8 +175,9 @@ fn run(cli: Cli) -> CliResult {
             profile,
             demo,
             panel,
-        }) => gui(port, baud, profile, demo, panel),
-        None => gui(None, None, None, None, None),
+            screenshots,
+        }) => gui(port, baud, profile, demo, panel, screenshots),
+        None => gui(None, None, None, None, None, None),
     }
 }
 
@@ -258,6 +264,7 @@ fn gui(
     mut profile: Option<String>,
     demo: Option<String>,
     panel: Option<crate::ui::PanelId>,
+    screenshots: Option<std::path::PathBuf>,
 ) -> CliResult {
     let mut target = port.map(crate::ui::Target::Port);
     if let Some(kind) = demo {
@@ -268,7 +275,7 @@ fn gui(
     if let Some(p) = &profile {
         registry()?.get(p).map_err(CliError::input)?;
     }
-    crate::ui::run(target, baud, profile, panel)
+    crate::ui::run(target, baud, profile, panel, screenshots)
         .map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
     Ok(0)
 }

@@ -7,8 +7,8 @@ use super::jobs::{self, JobOutput};
 use super::settings::Settings;
 use super::state::{AppState, Notice, Target};
 use super::{
-    Action, actions, connection, demo_hint, device, monitor, presets, selftest, servo_bench, solar,
-    status_bar, telemetry, tuning, tuya_console,
+    Action, actions, connection, demo_hint, device, monitor, presets, repaint, selftest,
+    servo_bench, solar, status_bar, telemetry, tour, tuning, tuya_console,
 };
 use crate::i18n::Lang;
 use crate::link::LinkCommand;
@@ -105,6 +105,8 @@ pub struct App {
     pub servo: servo_bench::ServoBenchPanel,
     /// The Tuya console.
     pub tuya: tuya_console::TuyaConsolePanel,
+    /// The screenshot tour, when the window was opened for one.
+    pub tour: Option<tour::Tour>,
     /// The window title last set.
     title: String,
 }
@@ -128,6 +130,7 @@ impl App {
             selftest: selftest::SelfTestPanel::default(),
             servo: servo_bench::ServoBenchPanel::default(),
             tuya: tuya_console::TuyaConsolePanel::default(),
+            tour: None,
             title: String::new(),
         };
         app.apply(Action::Connect {
@@ -184,13 +187,35 @@ impl App {
             ctx.send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
             self.title = title;
         }
-        // Repaint while a plot follows live data or a job runs; otherwise only on events.
-        let live = matches!(self.settings.panel, PanelId::Telemetry | PanelId::Solar)
-            && !self.state.link.polling_paused
-            && self.state.connected();
-        if live || self.state.job_progress().is_some() {
-            ctx.request_repaint_after(std::time::Duration::from_millis(33));
+        if let Some(after) = self.repaint_after() {
+            ctx.request_repaint_after(after);
         }
+        if let Some(mut tour) = self.tour.take() {
+            let panels = self.panels();
+            for a in tour.step(ctx, &self.state, &panels) {
+                let connect = matches!(a, Action::Connect { .. });
+                self.apply(a);
+                if connect {
+                    // The connection bar shows the device the tour moved to.
+                    self.connection = connection::ConnectionBar::new(&self.settings);
+                }
+            }
+            self.tour = Some(tour);
+        }
+    }
+
+    /// How soon the window redraws on its own: at [`repaint::LIVE`] while a live view is shown
+    /// (a plot of polled telemetry, the packet monitor while frames are logged) or a job runs;
+    /// `None` otherwise (idle, paused or disconnected: the window sleeps until input or a
+    /// worker event).
+    pub fn repaint_after(&self) -> Option<std::time::Duration> {
+        let connected = self.state.connected();
+        let live = match self.settings.panel {
+            PanelId::Telemetry | PanelId::Solar => connected && !self.state.link.polling_paused,
+            PanelId::Monitor => connected && !self.state.packets.paused,
+            _ => false,
+        };
+        (live || self.state.job_progress().is_some()).then_some(repaint::LIVE)
     }
 
     /// Routes one piece of job output: to the device model, the status line or its panel.
@@ -365,6 +390,9 @@ impl eframe::App for App {
     }
 
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
-        eframe::set_value(storage, eframe::APP_KEY, &self.settings);
+        // A screenshot tour's panels, sizes and languages are not the user's choice.
+        if self.tour.is_none() {
+            eframe::set_value(storage, eframe::APP_KEY, &self.settings);
+        }
     }
 }

@@ -13,6 +13,7 @@ mod inputs;
 pub mod jobs;
 mod monitor;
 mod presets;
+pub mod repaint;
 mod selftest;
 mod servo_bench;
 pub mod settings;
@@ -20,6 +21,7 @@ mod solar;
 pub mod state;
 mod status_bar;
 mod telemetry;
+pub mod tour;
 mod tuning;
 mod tuya_console;
 
@@ -94,18 +96,25 @@ pub(crate) fn ron_dialog() -> rfd::FileDialog {
     }
 }
 
-/// Opens the window. `target`, `baud` and `profile` override the saved settings.
+/// Opens the window. `target`, `baud` and `profile` override the saved settings. With
+/// `screenshots`, the window tours the demo devices and saves screenshots there, then closes
+/// (see [`tour`]); it then neither reads nor keeps saved settings.
 pub fn run(
     target: Option<Target>,
     baud: Option<u32>,
     profile: Option<String>,
     panel: Option<PanelId>,
+    screenshots: Option<std::path::PathBuf>,
 ) -> Result<(), UiError> {
+    let touring = screenshots.is_some();
     let options = eframe::NativeOptions {
         viewport: eframe::egui::ViewportBuilder::default()
             .with_inner_size([1200.0, 780.0])
             .with_min_inner_size([800.0, 500.0])
             .with_title(app::TITLE),
+        // Dithering is a per-pixel cost that software rendering pays on every frame, for
+        // gradients the window does not draw.
+        dithering: false,
         ..Default::default()
     };
     eframe::run_native(
@@ -114,6 +123,7 @@ pub fn run(
         Box::new(move |cc| {
             let mut saved: Settings = cc
                 .storage
+                .filter(|_| !touring)
                 .and_then(|s| eframe::get_value(s, eframe::APP_KEY))
                 .unwrap_or_default();
             if let Some(t) = target {
@@ -128,8 +138,9 @@ pub fn run(
             if let Some(p) = panel {
                 saved.panel = p;
             }
-            let app = App::new(&cc.egui_ctx, saved)
+            let mut app = App::new(&cc.egui_ctx, saved)
                 .map_err(|e| -> Box<dyn std::error::Error + Send + Sync> { e.into() })?;
+            app.tour = screenshots.map(tour::Tour::new);
             Ok(Box::new(app))
         }),
     )

@@ -28,6 +28,7 @@ mod preset;
 mod profile_codec;
 mod profile_load;
 mod provision;
+mod repaint;
 mod sdk_driver;
 mod sdk_vectors;
 mod seed_vectors;

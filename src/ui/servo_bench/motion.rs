@@ -300,7 +300,7 @@ impl MotionState {
         });
         if self.live {
             self.collect(rt, servo.id);
-            ui.ctx().request_repaint_after(Duration::from_millis(50));
+            ui.ctx().request_repaint_after(crate::ui::repaint::LIVE);
         }
         self.readout(ui, lang, rt, servo);
         Plot::new("servo-angle")

@@ -146,10 +146,10 @@ impl AppState {
             Target::Port(path) => crate::link::serial::opener(path, baud),
         };
         let ctx = self.ctx.clone();
-        // Background events (polled telemetry, the packet log) repaint at most 5 times a second;
-        // a live plot asks for its own frame rate, and jobs wake the UI at once.
+        // Background events (polled telemetry, the packet log) repaint at most twice a second;
+        // a live view asks for its own frame rate, and jobs wake the UI at once.
         let waker: crate::link::Waker =
-            Arc::new(move || ctx.request_repaint_after(Duration::from_millis(200)));
+            Arc::new(move || ctx.request_repaint_after(crate::ui::repaint::BACKGROUND));
         let link = Link::open(
             opener,
             profile.clone(),
