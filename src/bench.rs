@@ -274,6 +274,7 @@ pub fn tuya_ota(baud: u32, packet: u8) -> Result<Figure, String> {
     let report = tuya_ops::ota(
         &link.client(),
         &image,
+        u32::MAX,
         OtaTiming::default(),
         &Cancel::new(),
         &mut |_| {},

@@ -1,0 +1,456 @@
+//! botbench as the Tuya Wi-Fi module against MCUs that behave as MCUs in the field do
+//! (PROTOCOL_NOTES §4): through pseudo-terminals, on the command line as a user runs it, and
+//! through the link.
+
+use botbench::link::{
+    Link, LinkError, LinkEvent, LinkOptions, Match, ReplySpec, Request, Transport, TuyaEvent,
+    serial,
+};
+use botbench::profile::Registry;
+use botbench::protocol::tuya::{Frame, TuyaDecoder, cmd};
+use botbench::sim::tuya_mcu::{TuyaConfig, TuyaMcu};
+use botbench::sim::{Faults, PtyServer, SharedDevice};
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// The longest a command may run before it is taken for hung (an upload of hours).
+const HUNG: Duration = Duration::from_secs(90);
+
+/// Runs botbench to its end, or kills it after [`HUNG`] (then its status is not success).
+fn botbench(args: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_botbench"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("botbench runs");
+    let deadline = Instant::now() + HUNG;
+    while child.try_wait().expect("wait").is_none() && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    child.wait_with_output().expect("output")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "status {:?}\nstdout:\n{}\nstderr:\n{}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    let out = stdout(o);
+    let last = out.lines().last().unwrap_or_default();
+    serde_json::from_str(last).unwrap_or_else(|e| panic!("{e}: {}", text(o)))
+}
+
+/// `botbench sim tuya-vacuum ARGS` on its pseudo-terminal, stopped when dropped.
+struct Sim {
+    child: Child,
+    path: String,
+}
+
+impl Sim {
+    fn start(args: &[&str]) -> Self {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_botbench"))
+            .args(["sim", "tuya-vacuum"])
+            .args(args)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("the simulator runs");
+        let mut line = String::new();
+        let out = child.stdout.take().expect("stdout");
+        BufReader::new(out).read_line(&mut line).expect("its path");
+        Self {
+            child,
+            path: line.trim().to_string(),
+        }
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// An in-process MCU on a pseudo-terminal at 115200 baud.
+fn serve(cfg: TuyaConfig, faults: Faults) -> (PtyServer, Arc<Mutex<TuyaMcu>>) {
+    let mcu = Arc::new(Mutex::new(TuyaMcu::new(TuyaConfig {
+        baud: Some(115_200),
+        ..cfg
+    })));
+    let shared: SharedDevice = mcu.clone();
+    (PtyServer::start(shared, faults).expect("a pty"), mcu)
+}
+
+/// `botbench tuya --port PATH --baud 115200 ARGS`.
+fn tuya(path: &str, args: &[&str]) -> Output {
+    let mut all = vec!["tuya", "--port", path, "--baud", "115200"];
+    all.extend_from_slice(args);
+    botbench(&all)
+}
+
+// ---------------------------------------------------------------- 1. version byte 0x00
+
+#[test]
+fn an_mcu_whose_frames_carry_version_0x00_is_answered_and_its_version_shown() {
+    let sim = Sim::start(&["--frame-version", "0", "--baud", "115200"]);
+    let o = tuya(&sim.path, &["init"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let out = stdout(&o);
+    assert!(out.contains("Heartbeat      ok"), "{out}");
+    assert!(
+        out.contains("MCU frames carry version 0x00 (the protocol document says 0x03)"),
+        "{out}"
+    );
+    let o = tuya(&sim.path, &["status", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let doc = json(&o);
+    assert_eq!(doc["frame_version"], 0);
+    assert_eq!(doc["data_points"].as_array().map(Vec::len), Some(19));
+}
+
+#[test]
+fn on_a_line_that_echoes_the_modules_frames_a_version_0x00_mcu_is_told_apart_by_what_was_sent() {
+    let cfg = TuyaConfig {
+        frame_version: 0,
+        echo: true,
+        ..TuyaConfig::default()
+    };
+    let (server, mcu) = serve(cfg, Faults::default());
+    let o = tuya(server.path(), &["dp", "find_robot=on"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(stdout(&o).contains("verified"), "{}", text(&o));
+    // The MCU's requests: a reset-Wi-Fi ack is the very bytes of the request (version 0x00);
+    // its echo must not be taken for another request, or the module acks its own ack forever.
+    let profile = Registry::builtin().unwrap().get("tuya-vacuum").unwrap();
+    let link = Link::open(
+        serial::opener(server.path(), 115_200),
+        profile.clone(),
+        LinkOptions::default(),
+        None,
+    )
+    .unwrap();
+    wait_for(&link, |e| {
+        matches!(e, LinkEvent::Tuya(TuyaEvent::HandshakeDone))
+    });
+    mcu.lock().unwrap().take_answers();
+    mcu.lock().unwrap().reset_wifi();
+    mcu.lock().unwrap().request_local_time();
+    let mut asked = 0;
+    wait_for(&link, |e| {
+        asked += usize::from(matches!(e, LinkEvent::Tuya(TuyaEvent::McuRequest { .. })));
+        asked == 2
+    });
+    // A status query after them: anything the module wrote in between has reached the MCU.
+    botbench::ops::tuya::query_status(&link.client(), &profile).unwrap();
+    let answers = mcu.lock().unwrap().take_answers();
+    let commands: Vec<u8> = answers.iter().map(|(c, _)| *c).collect();
+    assert_eq!(
+        commands,
+        [cmd::RESET_WIFI, cmd::LOCAL_TIME],
+        "{answers:02x?}"
+    );
+}
+
+fn wait_for(link: &Link, mut done: impl FnMut(&LinkEvent) -> bool) {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        let ev = link.events().recv_timeout(left).expect("the event in time");
+        if done(&ev) {
+            return;
+        }
+    }
+}
+
+// ---------------------------------------------------------------- 2. a chatty MCU
+
+#[test]
+fn an_mcu_that_reports_every_30_ms_is_initialised_queried_and_commanded() {
+    // At the profile's 9600 baud, as the issue found it.
+    let sim = Sim::start(&["--report-every", "30"]);
+    let o = botbench(&["tuya", "--port", &sim.path, "init"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert_eq!(stdout(&o).matches("  ok  ").count(), 5, "{}", text(&o));
+    let o = botbench(&["tuya", "--port", &sim.path, "status", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert_eq!(json(&o)["data_points"].as_array().map(Vec::len), Some(19));
+    let o = botbench(&[
+        "tuya",
+        "--port",
+        &sim.path,
+        "dp",
+        "power=off",
+        "find_robot=on",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert_eq!(stdout(&o).matches("verified").count(), 2, "{}", text(&o));
+}
+
+// ---------------------------------------------------------------- 3. another type or length
+
+#[test]
+fn data_points_of_another_type_or_length_are_shown_raw_and_status_fails() {
+    let sim = Sim::start(&[
+        "--misreport",
+        "3:value:4",
+        "--misreport",
+        "1:bool:4",
+        "--baud",
+        "115200",
+    ]);
+    let o = tuya(&sim.path, &["status"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains("power (1)            MISFIT raw 00 00 00 01 (bool of 4 byte(s) on the wire; a bool is 1 byte(s))"),
+        "{out}"
+    );
+    assert!(
+        out.contains("mode (3)             MISFIT raw 00 00 00 00 (type value on the wire, the profile says enum)"),
+        "{out}"
+    );
+    assert!(out.contains("battery"), "the others are listed: {out}");
+    let o = tuya(&sim.path, &["status", "--json"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let doc = json(&o);
+    assert_eq!(doc["complete"], false);
+    let points = doc["data_points"].as_array().expect("data points");
+    assert_eq!(points.len(), 19);
+    let power = points.iter().find(|p| p["id"] == 1).expect("power");
+    assert_eq!(power["raw"], "00 00 00 01");
+    assert_eq!(power["value"], serde_json::Value::Null);
+    assert_eq!(power["misfit"], "length");
+    let mode = points.iter().find(|p| p["id"] == 3).expect("mode");
+    assert_eq!(mode["misfit"], "type");
+    assert!(
+        mode["mismatch"]
+            .as_str()
+            .unwrap_or("")
+            .contains("the profile says enum")
+    );
+}
+
+// ---------------------------------------------------------------- 4. drops and corruption
+
+#[test]
+fn under_drops_and_corruption_status_asks_again_or_names_what_is_missing() {
+    for seed in 1..=8u64 {
+        let faults = Faults {
+            drop: 0.01,
+            corrupt: 0.01,
+            seed,
+            ..Faults::default()
+        };
+        let (server, _mcu) = serve(TuyaConfig::default(), faults);
+        let o = tuya(server.path(), &["status", "--json"]);
+        let doc = json(&o);
+        let points = doc["data_points"].as_array().expect("data points").len();
+        let missing = doc["missing"].as_array().expect("missing").clone();
+        match o.status.code() {
+            Some(0) => assert_eq!((points, missing.len()), (19, 0), "seed {seed}: {doc}"),
+            Some(1) => {
+                assert!(!missing.is_empty(), "seed {seed}: {doc}");
+                assert!(missing.iter().all(|m| m["dp"].is_string()), "{doc}");
+            }
+            _ => panic!("seed {seed}: {}", text(&o)),
+        }
+    }
+}
+
+// ---------------------------------------------------------------- 5. verified
+
+#[test]
+fn a_value_the_mcu_changed_back_is_not_verified_though_the_report_of_the_change_was_lost() {
+    // The firmware resets the mode when the power goes off, even when the same frame set one,
+    // and the report of that change is lost.
+    let cfg = TuyaConfig {
+        rules_override_command: true,
+        lose_rule_reports: true,
+        ..TuyaConfig::default()
+    };
+    let (server, mcu) = serve(cfg, Faults::default());
+    let o = tuya(server.path(), &["dp", "mode=8", "power=off"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let out = stdout(&o);
+    let mode = out
+        .lines()
+        .find(|l| l.starts_with("mode"))
+        .unwrap_or_default();
+    assert!(mode.contains("MISMATCH: the MCU reports standby"), "{out}");
+    let power = out
+        .lines()
+        .find(|l| l.starts_with("power"))
+        .unwrap_or_default();
+    assert!(power.ends_with("verified"), "{out}");
+    assert_eq!(
+        format!("{:?}", mcu.lock().unwrap().dp(3)),
+        "Some(Enum(0))",
+        "the MCU holds mode 0"
+    );
+    // A firmware that keeps what it was told: both verified, by the read-back.
+    let (server, mcu) = serve(TuyaConfig::default(), Faults::default());
+    let o = tuya(server.path(), &["dp", "mode=8", "power=off", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let doc = json(&o);
+    assert_eq!(doc["verified"], true);
+    assert_eq!(doc["data_points"][0]["last"]["value"], 8);
+    assert_eq!(format!("{:?}", mcu.lock().unwrap().dp(3)), "Some(Enum(8))");
+}
+
+// ---------------------------------------------------------------- 6. firmware images
+
+#[test]
+fn an_image_over_the_profiles_maximum_is_refused_before_anything_is_sent() {
+    let dir = std::env::temp_dir().join(format!("botbench-tuya-field-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let big = dir.join("20mb.bin");
+    // 20 MB by its size (sparse: nothing to read).
+    std::fs::File::create(&big)
+        .and_then(|f| f.set_len(20_000_000))
+        .unwrap();
+    let (server, mcu) = serve(TuyaConfig::default(), Faults::default());
+    let big_path = big.display().to_string();
+    for (file, said) in [
+        (
+            big_path.as_str(),
+            "20000000 bytes is over the largest image the profile allows (524288 bytes)",
+        ),
+        (
+            "/dev/zero",
+            "at least 524289 bytes is over the largest image the profile allows (524288 bytes)",
+        ),
+    ] {
+        let o = tuya(server.path(), &["ota", file]);
+        assert_eq!(o.status.code(), Some(2), "{file}: {}", text(&o));
+        assert!(text(&o).contains(said), "{file}: {}", text(&o));
+    }
+    assert_eq!(
+        format!("{:?}", mcu.lock().unwrap().ota_state()),
+        "Idle",
+        "nothing reached the MCU"
+    );
+    // An image that fits: the expected time at the port's rate, before it starts.
+    let fw = dir.join("fw.bin");
+    std::fs::write(&fw, vec![0x5a; 3000]).unwrap();
+    let o = tuya(server.path(), &["ota", &fw.display().to_string()]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("firmware: 3000 bytes: about 0 s at 115200 baud"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+// ---------------------------------------------------------------- 8. the round trip
+
+/// A scripted MCU: answers a status query (0x08) with three reports, the first at once and
+/// the other two only after the host has read the first and a while has passed.
+struct SlowBurst {
+    pending: Vec<Vec<u8>>,
+    held: Vec<Vec<u8>>,
+    decoder: TuyaDecoder,
+}
+
+/// How long the last reports of the scripted burst are held back after the first is read.
+const HELD: Duration = Duration::from_millis(120);
+
+impl Transport for SlowBurst {
+    fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        self.decoder.push(bytes);
+        while let Some(Ok(f)) = self.decoder.next() {
+            if f.command == cmd::QUERY_STATUS {
+                let report = |id: u8| Frame::from_mcu(cmd::DP_REPORT, vec![id, 1, 0, 1, 1]);
+                self.pending.push(report(1).encode().unwrap());
+                self.held = vec![report(2).encode().unwrap(), report(13).encode().unwrap()];
+            }
+        }
+        Ok(())
+    }
+
+    fn read(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
+        let next = if !self.pending.is_empty() {
+            self.pending.remove(0)
+        } else if !self.held.is_empty() {
+            std::thread::sleep(HELD);
+            std::mem::take(&mut self.held).concat()
+        } else {
+            std::thread::sleep(deadline.saturating_duration_since(Instant::now()));
+            return Ok(0);
+        };
+        buf[..next.len()].copy_from_slice(&next);
+        Ok(next.len())
+    }
+
+    fn set_baud(&mut self, _baud: u32) -> Result<(), LinkError> {
+        Ok(())
+    }
+
+    fn baud(&self) -> u32 {
+        115_200
+    }
+
+    fn clear_input(&mut self) -> Result<(), LinkError> {
+        Ok(())
+    }
+
+    fn describe(&self) -> String {
+        "scripted MCU".into()
+    }
+}
+
+#[test]
+fn the_links_round_trip_is_the_first_answers_not_the_end_of_a_burst() {
+    let profile = Registry::builtin().unwrap().get("tuya-vacuum").unwrap();
+    let options = LinkOptions {
+        start_session: false,
+        ..LinkOptions::default()
+    };
+    let opener = Box::new(|| {
+        Ok(Box::new(SlowBurst {
+            pending: Vec::new(),
+            held: Vec::new(),
+            decoder: TuyaDecoder::new(),
+        }) as Box<dyn Transport>)
+    });
+    let link = Link::open(opener, profile, options, None).unwrap();
+    let request = Request::new(cmd::QUERY_STATUS, Vec::new()).reply(ReplySpec::Burst {
+        each: Match::command(cmd::DP_REPORT),
+        quiet: Duration::from_millis(300),
+    });
+    let reply = link.client().request(request).unwrap();
+    assert_eq!(reply.packets.len(), 3);
+    assert!(
+        reply.rtt >= HELD,
+        "the reply lasts to its last frame: {reply:?}"
+    );
+    let mut rtt = None;
+    wait_for(&link, |e| {
+        if let LinkEvent::Stats(s) = e {
+            rtt = s.rtt;
+        }
+        rtt.is_some()
+    });
+    let rtt = rtt.unwrap_or_default();
+    // The link's round trip ends at the first report, read before the others were let go.
+    assert!(
+        rtt + HELD <= reply.rtt,
+        "round trip {rtt:?}, reply {:?}",
+        reply.rtt
+    );
+}
