@@ -454,3 +454,17 @@ fn the_links_round_trip_is_the_first_answers_not_the_end_of_a_burst() {
         reply.rtt
     );
 }
+
+#[test]
+fn the_bench_times_the_handshake_against_a_chatty_mcu_beside_a_quiet_one() {
+    let every = Duration::from_millis(30);
+    let quiet = botbench::bench::tuya_handshake(9600, None).expect("quiet MCU");
+    let chatty = botbench::bench::tuya_handshake(9600, Some(every)).expect("chatty MCU");
+    assert!(chatty.name.contains("every 30 ms"), "{}", chatty.name);
+    // The handshake's own frames are on the line in both; the chatty MCU adds its reports.
+    assert!(quiet.wire_seconds > 0.0, "{quiet:?}");
+    assert!(
+        chatty.wire_seconds > quiet.wire_seconds,
+        "{quiet:?} {chatty:?}"
+    );
+}
