@@ -126,10 +126,7 @@ fn after_a_command_the_console_shows_what_the_mcu_holds_though_the_report_of_a_c
 fn an_image_over_the_profiles_maximum_is_refused_and_one_that_fits_shows_its_expected_time() {
     let tmp = temp_dir();
     let dir = tmp.path();
-    let big = dir.join("20mb.bin");
-    std::fs::File::create(&big)
-        .and_then(|f| f.set_len(20_000_000))
-        .unwrap();
+    let big = crate::tuya_field::twenty_mb_image(dir);
     let fw = dir.join("fw.bin");
     std::fs::write(&fw, vec![0xa5; 65_536]).unwrap();
     let b = mcu(TuyaConfig::default());

@@ -260,15 +260,20 @@ fn a_value_the_mcu_changed_back_is_not_verified_though_the_report_of_the_change_
 
 // ---------------------------------------------------------------- 6. firmware images
 
+/// A 20 MB firmware file in `dir`, by its size (sparse: nothing to read), as the issue gave it.
+pub(crate) fn twenty_mb_image(dir: &std::path::Path) -> std::path::PathBuf {
+    let big = dir.join("20mb.bin");
+    std::fs::File::create(&big)
+        .and_then(|f| f.set_len(20_000_000))
+        .unwrap();
+    big
+}
+
 #[test]
 fn an_image_over_the_profiles_maximum_is_refused_before_anything_is_sent() {
     let tmp = temp_dir();
     let dir = tmp.path();
-    let big = dir.join("20mb.bin");
-    // 20 MB by its size (sparse: nothing to read).
-    std::fs::File::create(&big)
-        .and_then(|f| f.set_len(20_000_000))
-        .unwrap();
+    let big = twenty_mb_image(dir);
     let served = serve(TuyaConfig::default(), Faults::default());
     let big_path = big.display().to_string();
     for (file, said) in [
