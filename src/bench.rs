@@ -274,6 +274,7 @@ pub fn tuya_ota(baud: u32, packet: u8) -> Result<Figure, String> {
     let report = tuya_ops::ota(
         &link.client(),
         &image,
+        u32::MAX,
         OtaTiming::default(),
         &Cancel::new(),
         &mut |_| {},
@@ -369,6 +370,52 @@ pub fn tuya_dp_report(baud: u32, rounds: usize) -> Result<Figure, String> {
     ))
 }
 
+/// The module's start-up handshake (heartbeat to status query, PROTOCOL_NOTES §4) at `baud`,
+/// from the port's opening to its last step, against a quiet MCU or one that reports a data
+/// point on its own every `chatty` (a field MCU's habit, issue 12). The wire time is that of
+/// every frame on the line until then, the chatty MCU's own reports included. Errors when the
+/// handshake does not finish within 30 s.
+pub fn tuya_handshake(baud: u32, chatty: Option<Duration>) -> Result<Figure, String> {
+    use crate::link::session::tuya::TuyaEvent;
+    let p = profile("tuya-vacuum")?;
+    let mcu: SharedDevice = Arc::new(Mutex::new(TuyaMcu::new(TuyaConfig {
+        baud: Some(baud),
+        // The battery, as `botbench sim tuya-vacuum --report-every` reports by default.
+        report_every: chatty.map(|every| (6, every)),
+        ..TuyaConfig::default()
+    })));
+    let server = PtyServer::start(mcu, Faults::default()).map_err(|e| e.to_string())?;
+    let started = Instant::now();
+    let link = open(&server, p, baud, LinkOptions::default())?;
+    let deadline = started + Duration::from_secs(30);
+    let mut bytes = 0;
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        match link.events().recv_timeout(left) {
+            Ok(LinkEvent::Tuya(TuyaEvent::HandshakeDone)) => break,
+            Ok(LinkEvent::Frame(entry)) => {
+                bytes += entry.frame.as_ref().map_or(0, |f| f.wire.len());
+            }
+            Ok(_) => {}
+            Err(_) => return Err("the handshake did not finish within 30 s".to_string()),
+        }
+    }
+    let secs = started.elapsed().as_secs_f64();
+    let wire = wire_time(bytes, baud).as_secs_f64();
+    let who = match chatty {
+        Some(every) => format!("an MCU reporting every {} ms", every.as_millis()),
+        None => "a quiet MCU".to_string(),
+    };
+    Ok(Figure::new(
+        &format!("tuya handshake, {baud} baud, {who}"),
+        secs,
+        wire,
+        format!(
+            "{bytes} bytes on the line, from the port's opening to the status query's last report"
+        ),
+    ))
+}
+
 /// Everything; `long` adds the 8-baud scan and the 9600-baud OTA (about 80 s).
 pub fn run_all(long: bool, report: &mut dyn FnMut(&Figure)) -> Result<Vec<Figure>, String> {
     let mut out = Vec::new();
@@ -385,6 +432,11 @@ pub fn run_all(long: bool, report: &mut dyn FnMut(&Figure)) -> Result<Vec<Figure
     add(tuya_ota(115_200, 2)?, &mut out);
     add(tuya_dp_report(115_200, 50)?, &mut out);
     add(tuya_dp_report(9600, 20)?, &mut out);
+    add(tuya_handshake(9600, None)?, &mut out);
+    add(
+        tuya_handshake(9600, Some(Duration::from_millis(30)))?,
+        &mut out,
+    );
     if long {
         add(tuya_ota(9600, 2)?, &mut out);
     }

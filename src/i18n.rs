@@ -346,6 +346,7 @@ impl Key {
             TuyaEvent::McuRestarted => Some(Key::McuRestarted),
             TuyaEvent::HeartbeatLost => Some(Key::HeartbeatLost),
             TuyaEvent::Step { .. }
+            | TuyaEvent::FrameVersion { .. }
             | TuyaEvent::ProductInfo(_)
             | TuyaEvent::WorkMode { .. }
             | TuyaEvent::McuRequest { .. } => None,

@@ -25,7 +25,7 @@ pub enum Header {
     Servo,
     /// A Tuya frame.
     Tuya {
-        /// 0x00 module, 0x03 MCU.
+        /// 0x00 module; 0x03 MCU by the document, 0x01 or 0x00 from some MCUs.
         version: u8,
     },
 }
@@ -100,6 +100,15 @@ impl Packet {
             header: Header::Tuya { version: f.version },
             payload: f.data,
             wire,
+        }
+    }
+
+    /// From a Tuya frame the host read from the port: from the MCU whatever its version byte
+    /// (the link tells the module's own echoed frames by what it sent).
+    pub fn tuya_received(f: tuya::Frame) -> Self {
+        Self {
+            direction: Direction::DeviceToHost,
+            ..Self::tuya(f)
         }
     }
 

@@ -5,7 +5,7 @@
 
 use super::{CliError, CliResult};
 use crate::sim::msp_device::MspCore;
-use crate::sim::tuya_mcu::TuyaMcu;
+use crate::sim::tuya_mcu::{McuRequest, TuyaMcu};
 use crate::sim::window_cleaner::WindowCleaner;
 use crate::sim::{Faults, PtyServer, SharedDevice, SimKind, SimOptions, build};
 use clap::Args;
@@ -42,10 +42,74 @@ pub(crate) struct SimArgs {
     /// firmware whose payloads differ from botbench's profile.
     #[arg(long)]
     profile: Option<String>,
+    #[command(flatten)]
+    tuya: TuyaSimArgs,
+}
+
+/// How the simulated Tuya MCU misbehaves, as MCUs in the field do (PROTOCOL_NOTES §4).
+#[derive(Debug, Args)]
+struct TuyaSimArgs {
+    /// Tuya vacuum: the version byte of the MCU's frames (0x03 by the protocol document; 0x01
+    /// and 0x00 are seen in the field). Decimal or 0x-hex.
+    #[arg(long, value_name = "BYTE", value_parser = parse_byte)]
+    frame_version: Option<u8>,
+    /// Tuya vacuum: report a data point on its own every MS milliseconds (a chatty MCU).
+    #[arg(long, value_name = "MS")]
+    report_every: Option<u64>,
+    /// Tuya vacuum: the data point `--report-every` reports (default 6, the battery).
+    #[arg(long, value_name = "ID", default_value_t = 6)]
+    report_dp: u8,
+    /// Tuya vacuum: report data point ID with another type and length than the profile's,
+    /// `ID:TYPE:LEN` (e.g. `3:value:4`); repeat for more.
+    #[arg(long, value_name = "ID:TYPE:LEN", value_parser = crate::sim::tuya_mcu::parse_misreport)]
+    misreport: Vec<(u8, crate::sim::tuya_mcu::WireForm)>,
+    /// Tuya vacuum: the line echoes every frame the module sends (a one-wire adapter).
+    #[arg(long)]
+    echo: bool,
+}
+
+impl TuyaSimArgs {
+    /// Whether any was given.
+    fn any(&self) -> bool {
+        self.frame_version.is_some()
+            || self.report_every.is_some()
+            || !self.misreport.is_empty()
+            || self.echo
+    }
+
+    /// Applies them to the MCU's settings.
+    fn apply(&self, config: &mut crate::sim::tuya_mcu::TuyaConfig) -> Result<(), CliError> {
+        if let Some(v) = self.frame_version {
+            config.frame_version = v;
+        }
+        if let Some(ms) = self.report_every {
+            if ms == 0 {
+                return Err(CliError::input("--report-every takes at least 1 ms"));
+            }
+            config.report_every = Some((self.report_dp, Duration::from_millis(ms)));
+        }
+        config.misreport.extend(self.misreport.iter().copied());
+        config.echo = self.echo;
+        Ok(())
+    }
+}
+
+fn parse_byte(text: &str) -> Result<u8, String> {
+    let t = text.trim();
+    match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+        Some(h) => u8::from_str_radix(h, 16),
+        None => t.parse(),
+    }
+    .map_err(|_| format!("'{text}' is not a byte (0-255 or 0x00-0xff)"))
 }
 
 pub(crate) fn run(args: SimArgs) -> CliResult {
     let kind: SimKind = args.kind.parse().map_err(CliError::input)?;
+    if args.tuya.any() && kind != SimKind::TuyaVacuum {
+        return Err(CliError::input(format!(
+            "--frame-version, --report-every, --misreport and --echo are for the tuya-vacuum simulator, not {kind}"
+        )));
+    }
     let faults = Faults {
         drop: args.drop,
         corrupt: args.corrupt,
@@ -109,7 +173,17 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         }
         (kind, None) => match kind {
             SimKind::TuyaVacuum => {
-                let mcu = Arc::new(Mutex::new(crate::sim::tuya_mcu(&opts)));
+                let mut mcu = crate::sim::tuya_mcu(&opts);
+                let profile = crate::sim::tuya_mcu::builtin_vacuum_profile();
+                if let Some(id) = args.tuya.report_every.and(Some(args.tuya.report_dp))
+                    && profile.data_point(id).is_none()
+                {
+                    return Err(CliError::input(format!(
+                        "--report-dp {id}: the vacuum has no data point {id}"
+                    )));
+                }
+                args.tuya.apply(mcu.config_mut())?;
+                let mcu = Arc::new(Mutex::new(mcu));
                 (mcu.clone(), Some(Control::Tuya(mcu)))
             }
             SimKind::WindowCleaner => {
@@ -188,16 +262,8 @@ impl Control {
             Control::Tuya(m) => {
                 let mut m = m.lock().map_err(|_| "simulator poisoned")?;
                 match words[0] {
-                    "time" => m.request_local_time(),
-                    "wifi-test" => m.request_wifi_test(),
-                    "reset-wifi" => m.reset_wifi(),
-                    "reset-wifi-mode" => {
-                        m.reset_wifi_mode(arg(1)?.parse().map_err(|_| "mode is 0 or 1")?)
-                    }
-                    "net-status" => m.request_net_status(),
-                    "mac" => m.request_mac(),
                     "restart" => m.restart(),
-                    other => return Err(format!("unknown command '{other}'")),
+                    word => m.request(McuRequest::parse(word, words.get(1).copied())?),
                 }
             }
             Control::WindowCleaner(w) => {

@@ -12,7 +12,8 @@ pub enum AnyDecoder {
     Msp(msp::ReplyDecoder),
     /// Servo frames (replies, and echoes of our own requests on a one-wire adapter).
     Servo(servo::ServoDecoder),
-    /// Tuya frames.
+    /// Tuya frames, all taken as the MCU's whatever their version byte (the session tells the
+    /// module's own echoed frames by what was sent).
     Tuya(tuya::TuyaDecoder),
 }
 
@@ -40,7 +41,7 @@ impl AnyDecoder {
         match self {
             AnyDecoder::Msp(d) => d.next().map(|r| r.map(Packet::msp_reply)),
             AnyDecoder::Servo(d) => d.next().map(|r| r.map(Packet::servo)),
-            AnyDecoder::Tuya(d) => d.next().map(|r| r.map(Packet::tuya)),
+            AnyDecoder::Tuya(d) => d.next().map(|r| r.map(Packet::tuya_received)),
         }
     }
 

@@ -131,13 +131,25 @@ pub enum ReplySpec {
     /// One matching frame if the device sends one (a servo with its response switch off does
     /// not); none is not an error.
     Optional(Match),
-    /// Every matching frame until the line is quiet for `quiet` (Tuya's query burst), at least
-    /// one.
+    /// Every matching frame until the line is quiet for `quiet` (the answers of a servo
+    /// synchronous MONITOR, each servo in turn), at least one.
     Burst {
         /// What each frame of the burst matches.
         each: Match,
         /// How long a pause ends the burst.
         quiet: Duration,
+    },
+    /// Tuya data-point reports (0x07) answering a status query or a data-point command: every
+    /// matching frame until each of `ids` has been reported, or until a bounded time has
+    /// passed (the request's and the reports' wire time twice over, plus the device's margin),
+    /// at least one. Never on a pause alone: an MCU that reports on its own is never quiet.
+    Reports {
+        /// What each report matches.
+        each: Match,
+        /// The data points the answer is complete with.
+        ids: Vec<u8>,
+        /// The reports' expected size on the wire, in bytes: it bounds the wait.
+        bytes: usize,
     },
 }
 
@@ -146,7 +158,8 @@ pub enum ReplySpec {
 pub struct Reply {
     /// The answering frames (one, or a burst; none for a send-only or unanswered optional).
     pub packets: Vec<Packet>,
-    /// From the request's first byte written to the answer's last byte read.
+    /// From the request's first byte written to the answer's last frame read (a burst's last
+    /// frame, not the end of the wait).
     pub rtt: Duration,
     /// Attempts used.
     pub attempts: u8,
@@ -226,7 +239,7 @@ impl Request {
     /// follows the command's definition (MSP: the same command, sent to the command's device
     /// code if it has one; servo: the same command from the addressed servo, optional where the
     /// servo answers only with its response switch on, none for broadcast; Tuya: the reply
-    /// command, a burst of reports for a query or a data-point command).
+    /// command, the reports of its data points for a query or a data-point command).
     pub fn for_command(
         profile: &crate::profile::Profile,
         cmd: &crate::profile::Command,
@@ -261,12 +274,18 @@ impl Request {
                 };
             }
             Protocol::Tuya => {
+                use crate::link::session::tuya::{command_ids, reports_reply};
+                use crate::protocol::tuya::cmd::{DP_COMMAND, DP_REPORT};
                 let answer = cmd.reply_command.unwrap_or(cmd.id);
-                r.reply = if answer == crate::protocol::tuya::cmd::DP_REPORT {
-                    ReplySpec::Burst {
-                        each: Match::command(answer),
-                        quiet: Duration::from_millis(300),
-                    }
+                r.reply = if answer == DP_REPORT {
+                    // A data-point command is answered by a report of each data point it
+                    // sets; a query by a report of every data point.
+                    let ids = if cmd.id == DP_COMMAND {
+                        command_ids(&r.payload)
+                    } else {
+                        profile.data_points.iter().map(|d| d.id).collect()
+                    };
+                    reports_reply(profile, &ids)
                 } else {
                     ReplySpec::Required(Match::command(answer))
                 };

@@ -143,11 +143,14 @@ pub enum OpError {
     /// An empty firmware image. Nothing was sent.
     #[error("the firmware image is empty")]
     EmptyImage,
-    /// A firmware image too large for the protocol's 32-bit size. Nothing was sent.
-    #[error("the image is {size} bytes, over 4 GiB")]
+    /// A firmware image larger than the profile's largest image
+    /// ([`crate::profile::Profile::ota_max_bytes`]). Nothing was sent.
+    #[error("the image is {size} bytes, over the largest the profile allows ({max} bytes)")]
     ImageTooLarge {
         /// Its size in bytes.
         size: usize,
+        /// The profile's largest image, in bytes.
+        max: u32,
     },
     /// A document (a preset) that does not fit the profile. Nothing was written.
     #[error(transparent)]

@@ -99,6 +99,10 @@ pub struct Profile {
     /// Tuya only: the product's data points.
     #[serde(default)]
     pub data_points: Vec<DataPointDef>,
+    /// Tuya only: the largest MCU firmware image an update may send, in bytes
+    /// ([`Profile::ota_max_bytes`] gives [`DEFAULT_OTA_MAX_BYTES`] when the profile is silent).
+    #[serde(default)]
+    pub ota_max_bytes: Option<u32>,
     /// Live plots: which telemetry fields to draw together.
     #[serde(default)]
     pub plots: Vec<Plot>,
@@ -113,7 +117,17 @@ pub struct Profile {
     pub relations: Vec<Relation>,
 }
 
+/// The largest MCU firmware image a Tuya update sends unless the profile says otherwise: 512 KiB,
+/// the flash of the larger MCUs Tuya's MCU SDK is built for (and over 9 minutes at 9600 baud).
+/// A file past it is the wrong file (the 20 MB image of another product would take 6 hours).
+pub const DEFAULT_OTA_MAX_BYTES: u32 = 512 * 1024;
+
 impl Profile {
+    /// Tuya: the largest firmware image an update may send, in bytes.
+    pub fn ota_max_bytes(&self) -> u32 {
+        self.ota_max_bytes.unwrap_or(DEFAULT_OTA_MAX_BYTES)
+    }
+
     /// A profile with no commands, parameters or data points: what a simulator falls back to
     /// should its built-in profile ever fail to parse.
     pub fn empty(id: &str, protocol: Protocol, baud: u32) -> Self {
@@ -130,6 +144,7 @@ impl Profile {
             commands: Vec::new(),
             params: Vec::new(),
             data_points: Vec::new(),
+            ota_max_bytes: None,
             plots: Vec::new(),
             panels: Vec::new(),
             relations: Vec::new(),

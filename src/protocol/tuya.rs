@@ -1,7 +1,9 @@
 //! The Tuya MCU serial protocol (seed 003), as the Wi-Fi module sees it.
 //!
 //! Frame: `55 AA, version, command, length u16 BE, data[length], checksum`; the checksum is the
-//! sum of every byte before it, mod 256. The module sends version 0x00 and the MCU 0x03.
+//! sum of every byte before it, mod 256. The module sends version 0x00; the MCU 0x03 by the
+//! protocol document, but MCU SDKs before v2.5 send 0x01 and some firmware 0x00, so a frame of
+//! any version byte is read (PROTOCOL_NOTES §4), and the version is kept in [`Frame::version`].
 //! Data points (commands 0x06 and 0x07) are in [`dp`].
 
 pub mod dp;
@@ -13,7 +15,8 @@ use serde::Serialize;
 pub const HEADER: [u8; 2] = [0x55, 0xAA];
 /// The version byte of frames from the module (botbench).
 pub const VERSION_MODULE: u8 = 0x00;
-/// The version byte of frames from the MCU.
+/// The version byte of frames from the MCU, as the protocol document (and MCU SDK v2.5) gives
+/// it. MCUs in the field also send 0x01 (MCU SDK v2.3) and 0x00.
 pub const VERSION_MCU: u8 = 0x03;
 /// The largest data length a decoder accepts by default: an OTA packet of 1024 bytes plus its
 /// offset, with room to spare. The MCU SDK's own buffers are far smaller.
@@ -58,7 +61,7 @@ pub mod cmd {
 /// A Tuya frame.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Frame {
-    /// 0x00 from the module, 0x03 from the MCU.
+    /// 0x00 from the module; 0x03 from the MCU by the document (0x01 or 0x00 from some).
     pub version: u8,
     /// The command word.
     pub command: u8,
@@ -85,7 +88,9 @@ impl Frame {
         }
     }
 
-    /// Which way the frame goes, by its version byte.
+    /// Which way the frame goes, guessed from its version byte alone (a frame tool's guess:
+    /// an MCU that sends version 0x00 is taken for the module). The link knows better: it
+    /// tells the module's own frames by what it sent.
     pub fn direction(&self) -> Direction {
         if self.version == VERSION_MCU {
             Direction::DeviceToHost
@@ -148,14 +153,8 @@ impl Framing for TuyaFraming {
         if buf.len() < 3 {
             return Scan::NeedMore { need: None };
         }
+        // Any version byte: MCUs send 0x03, 0x01 or 0x00 (the checksum still guards the frame).
         let version = buf[2];
-        if version != VERSION_MODULE && version != VERSION_MCU {
-            return Scan::Bad(FrameError::UnknownHeader {
-                what: "version",
-                value: version,
-                bytes: buf[..3].to_vec(),
-            });
-        }
         if buf.len() < 6 {
             return Scan::NeedMore { need: None };
         }

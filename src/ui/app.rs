@@ -344,6 +344,11 @@ impl App {
             Action::PausePacketLog(paused) => self.state.packets.paused = paused,
             Action::ClearPacketLog => self.state.packets.clear(),
             Action::Notify(n) => self.state.notify(n),
+            Action::DemoMcuRequest(r) => {
+                if let Some(mcu) = self.state.link.demo_tuya() {
+                    mcu.lock().unwrap_or_else(|e| e.into_inner()).request(r);
+                }
+            }
             Action::Link(cmd) => self.state.send(cmd),
         }
     }

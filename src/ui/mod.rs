@@ -73,6 +73,9 @@ pub enum Action {
     /// A command for the worker that needs no answer on this thread (stop all, polls, Tuya
     /// options, a request an operation built…).
     Link(crate::link::LinkCommand),
+    /// Ask the built-in simulated Tuya MCU (the demo device) to send one of its own requests;
+    /// nothing happens on a real port.
+    DemoMcuRequest(crate::sim::tuya_mcu::McuRequest),
 }
 
 /// Why the window could not open.
@@ -94,6 +97,36 @@ pub(crate) fn ron_dialog() -> rfd::FileDialog {
         Some(dir) => d.set_directory(dir),
         None => d,
     }
+}
+
+/// The settings the window opens with: the saved ones, overridden by what the command line
+/// gave. A built-in demo device named without a baud rate runs at its profile's rate (the Tuya
+/// vacuum at 9600, as its profile and the protocol document say), not the last port's.
+pub fn launch_settings(
+    mut saved: Settings,
+    target: Option<Target>,
+    baud: Option<u32>,
+    profile: Option<String>,
+    panel: Option<PanelId>,
+) -> Settings {
+    if let Some(t) = target {
+        if let Target::Demo(kind) = &t
+            && let Ok(kind) = kind.parse::<crate::sim::SimKind>()
+        {
+            saved.baud = kind.default_baud();
+        }
+        saved.target = t;
+    }
+    if let Some(b) = baud {
+        saved.baud = b;
+    }
+    if let Some(p) = profile {
+        saved.profile = p;
+    }
+    if let Some(p) = panel {
+        saved.panel = p;
+    }
+    saved
 }
 
 /// Opens the window. `target`, `baud` and `profile` override the saved settings. With
@@ -121,23 +154,12 @@ pub fn run(
         "botbench",
         options,
         Box::new(move |cc| {
-            let mut saved: Settings = cc
+            let saved: Settings = cc
                 .storage
                 .filter(|_| !touring)
                 .and_then(|s| eframe::get_value(s, eframe::APP_KEY))
                 .unwrap_or_default();
-            if let Some(t) = target {
-                saved.target = t;
-            }
-            if let Some(b) = baud {
-                saved.baud = b;
-            }
-            if let Some(p) = profile {
-                saved.profile = p;
-            }
-            if let Some(p) = panel {
-                saved.panel = p;
-            }
+            let saved = launch_settings(saved, target, baud, profile, panel);
             let mut app = App::new(&cc.egui_ctx, saved)
                 .map_err(|e| -> Box<dyn std::error::Error + Send + Sync> { e.into() })?;
             app.tour = screenshots.map(tour::Tour::new);

@@ -57,26 +57,26 @@ fn writable_profile(dir: &std::path::Path) -> (String, Bench) {
     )
 }
 
-fn harness(path: &str, profile: &str) -> H {
+pub(crate) fn harness(path: &str, profile: &str) -> H {
     let mut saved = settings(path, profile, PanelId::TuyaConsole, Lang::En);
     saved.baud = BAUD;
     crate::support::gui::harness(saved)
 }
 
-fn handshake(h: &mut H) {
+pub(crate) fn handshake(h: &mut H) {
     step_until(h, "the handshake", |a| {
         a.state.device.tuya.done_at.is_some()
     });
     h.run_steps(2);
 }
 
-fn tab(h: &mut H, name: &str) {
+pub(crate) fn tab(h: &mut H, name: &str) {
     h.get_by(|n| n.role() == Role::Button && n.label().as_deref() == Some(name))
         .click();
     h.run_steps(2);
 }
 
-fn reported(a: &App, id: u8) -> Option<Value> {
+pub(crate) fn reported(a: &App, id: u8) -> Option<Value> {
     a.state.device.tuya.dps.get(&id).map(|s| s.value.clone())
 }
 

@@ -185,14 +185,15 @@ fn every_writable_data_point_type_is_set_and_reported_back() {
     .collect();
     let checks = ops::set_dps(&c, &bench.profile, &inputs).unwrap();
     assert_eq!(checks.len(), 4);
-    assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
+    assert!(checks.iter().all(|c| c.verified()), "{checks:?}");
     assert_eq!(
         bench.mcu.sim().dp(3).map(|v| format!("{v:?}")),
         Some("Enum(5)".into())
     );
     // The status query reports all 19.
-    let reports = ops::query(&c).unwrap();
-    assert_eq!(ops::report_values(&bench.profile, &reports).len(), 19);
+    let status = ops::query_status(&c, &bench.profile).unwrap();
+    assert_eq!(status.data_points.len(), 19);
+    assert!(status.complete(), "{status:?}");
 }
 
 #[test]
@@ -246,6 +247,7 @@ fn a_64_kib_image_arrives_intact_at_each_packet_size() {
         let report = ops::ota(
             &bench.link.client(),
             &img,
+            bench.profile.ota_max_bytes(),
             OtaTiming::default(),
             &Cancel::new(),
             &mut |_| {},
@@ -285,6 +287,7 @@ fn an_mcu_that_stops_acking_ends_the_upload_with_the_offset_named() {
     let err = ops::ota(
         &bench.link.client(),
         &image(65_536),
+        bench.profile.ota_max_bytes(),
         timing,
         &Cancel::new(),
         &mut |_| {},
@@ -303,6 +306,7 @@ fn an_empty_image_is_refused() {
     let err = ops::ota(
         &bench.link.client(),
         &[],
+        bench.profile.ota_max_bytes(),
         OtaTiming::default(),
         &Cancel::new(),
         &mut |_| {},

@@ -759,30 +759,46 @@ fn query_gives_19_reports() {
 }
 
 #[test]
-fn dp_commands_are_applied_and_reported() {
+fn dp_commands_are_answered_as_the_sdk_and_what_follows_is_reported_after() {
+    // The MCU SDK answers each data point of a 0x06 with one report of the value received; what
+    // the vacuum's own rules change follows from the next tick, in the order it changed.
     let now = Instant::now();
     let mut mcu = TuyaMcu::default();
-    // Bool: power off; standby follows.
-    mcu.receive(&dp_frame(&[point(2, DpValue::Bool(true))]), 9600, now);
+    // Clean switch on: the mode (0 → 2) and the status (smart clean) follow.
+    let got = reports(&mcu.receive(&dp_frame(&[point(2, DpValue::Bool(true))]), 9600, now));
+    assert_eq!(got, [point(2, DpValue::Bool(true))]);
     assert_eq!(mcu.dp(dpid::STATUS), Some(&DpValue::Enum(1)));
-    let got = reports(&mcu.receive(&dp_frame(&[point(1, DpValue::Bool(false))]), 9600, now));
-    assert_eq!(got[0], point(1, DpValue::Bool(false)));
-    assert!(got.contains(&point(5, DpValue::Enum(0))));
-    assert!(got.contains(&point(2, DpValue::Bool(false))));
-    // Enum: wall-follow mode → edge cleaning.
-    let got = reports(&mcu.receive(&dp_frame(&[point(3, DpValue::Enum(3))]), 9600, now));
-    assert_eq!(got[0], point(3, DpValue::Enum(3)));
-    assert!(got.contains(&point(5, DpValue::Enum(2))));
-    // A consumable reset: life back to 100.
-    let got = reports(&mcu.receive(&dp_frame(&[point(12, DpValue::Bool(true))]), 9600, now));
     assert_eq!(
-        got,
+        reports(&mcu.tick(now)),
+        [point(3, DpValue::Enum(2)), point(5, DpValue::Enum(1))]
+    );
+    // Power off: the clean switch, the status and the mode follow.
+    let got = reports(&mcu.receive(&dp_frame(&[point(1, DpValue::Bool(false))]), 9600, now));
+    assert_eq!(got, [point(1, DpValue::Bool(false))]);
+    assert_eq!(
+        reports(&mcu.tick(now)),
         [
-            point(12, DpValue::Bool(true)),
-            point(9, DpValue::Value(100))
+            point(2, DpValue::Bool(false)),
+            point(5, DpValue::Enum(0)),
+            point(3, DpValue::Enum(0))
         ]
     );
-    // Several DPs in one frame: each its own report.
+    // Enum: wall-follow mode → edge cleaning, and the robot powers on.
+    let got = reports(&mcu.receive(&dp_frame(&[point(3, DpValue::Enum(3))]), 9600, now));
+    assert_eq!(got, [point(3, DpValue::Enum(3))]);
+    assert_eq!(
+        reports(&mcu.tick(now)),
+        [
+            point(5, DpValue::Enum(2)),
+            point(2, DpValue::Bool(true)),
+            point(1, DpValue::Bool(true))
+        ]
+    );
+    // A consumable reset: life back to 100.
+    let got = reports(&mcu.receive(&dp_frame(&[point(12, DpValue::Bool(true))]), 9600, now));
+    assert_eq!(got, [point(12, DpValue::Bool(true))]);
+    assert_eq!(reports(&mcu.tick(now)), [point(9, DpValue::Value(100))]);
+    // Several DPs in one frame: each its own report, in order; nothing follows.
     let got = reports(&mcu.receive(
         &dp_frame(&[point(14, DpValue::Enum(0)), point(13, DpValue::Bool(true))]),
         9600,
@@ -792,6 +808,7 @@ fn dp_commands_are_applied_and_reported() {
         got,
         [point(14, DpValue::Enum(0)), point(13, DpValue::Bool(true))]
     );
+    assert!(mcu.tick(now).is_empty());
 }
 
 #[test]
@@ -878,6 +895,8 @@ fn battery_drains_while_cleaning_and_is_reported() {
         "not cleaning: no drain"
     );
     mcu.receive(&dp_frame(&[point(2, DpValue::Bool(true))]), 9600, t0);
+    // What starting to clean changed (the mode, the status) is reported first.
+    assert!(!mcu.tick(t0).is_empty());
     let mut seen = Vec::new();
     for s in 1..=60 {
         for p in reports(&mcu.tick(t0 + ms(s * 1000))) {
@@ -893,6 +912,11 @@ fn battery_drains_while_cleaning_and_is_reported() {
         &dp_frame(&[point(2, DpValue::Bool(false))]),
         9600,
         t0 + ms(60_000),
+    );
+    // The status (standby) follows; then nothing more.
+    assert_eq!(
+        reports(&mcu.tick(t0 + ms(60_000))),
+        [point(5, DpValue::Enum(0))]
     );
     assert!(mcu.tick(t0 + ms(120_000)).is_empty());
     // A change the robot makes itself is reported from the next tick.

@@ -79,6 +79,7 @@ impl ProtocolSession {
             Protocol::Msp => Self::Msp(msp::MspSession::new(profile, options.start_session)),
             Protocol::Servo => Self::Servo,
             Protocol::Tuya => Self::Tuya(tuya::TuyaSession::new(
+                &profile,
                 options.tuya.clone(),
                 options.start_session,
                 now,
@@ -121,6 +122,22 @@ impl ProtocolSession {
                 (f.encode().map_err(enc)?, Packet::tuya(f))
             }
         })
+    }
+
+    /// The frame `sent` was written (a Tuya line that echoes gives it back).
+    pub(crate) fn wrote(&mut self, sent: &Packet) {
+        if let Self::Tuya(s) = self {
+            s.wrote(sent);
+        }
+    }
+
+    /// A frame read from the line, sorted: on a Tuya line, the module's own frames echoed
+    /// back are marked as sent by the host.
+    pub(crate) fn received(&mut self, p: Packet) -> Packet {
+        match self {
+            Self::Tuya(s) => s.received(p),
+            _ => p,
+        }
     }
 
     /// Whether polls at the wire's maximum may be sent ahead of the answers still to come:
@@ -199,12 +216,12 @@ impl ProtocolSession {
         }
     }
 
-    /// The request due at `now` (at `baud`), if any; its result goes to [`Self::on_answer`].
-    pub(crate) fn next_request(&mut self, now: Instant, baud: u32) -> Option<Request> {
+    /// The request due at `now`, if any; its result goes to [`Self::on_answer`].
+    pub(crate) fn next_request(&mut self, now: Instant) -> Option<Request> {
         match self {
             Self::Msp(s) => s.next_request(),
             Self::Servo => None,
-            Self::Tuya(s) => s.next_request(now, baud),
+            Self::Tuya(s) => s.next_request(now),
         }
     }
 

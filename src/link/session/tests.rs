@@ -33,10 +33,7 @@ impl Driver {
     /// Takes the session's next request, checks its command, and answers it with `result`.
     /// Returns the request and whether the session's next request follows at once.
     fn answer(&mut self, command: u8, result: Result<Reply, ExchangeError>) -> (Request, bool) {
-        let request = self
-            .s
-            .next_request(self.now, 115_200)
-            .expect("a request due");
+        let request = self.s.next_request(self.now).expect("a request due");
         assert_eq!(request.command, command, "{request:?}");
         let more = self.s.on_answer(result, self.now, &mut self.events);
         (request, more)
@@ -146,7 +143,7 @@ fn an_msp_identify_without_build_info_still_identifies_and_a_failed_one_says_why
         }))]
     );
     assert!(unreadable, "{:?}", d.events);
-    assert_eq!(d.s.next_request(d.now, 115_200), None);
+    assert_eq!(d.s.next_request(d.now), None);
 }
 
 #[test]

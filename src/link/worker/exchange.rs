@@ -35,10 +35,36 @@ pub(super) struct Waited {
 
 /// Whether an answer came.
 pub(super) enum Outcome {
-    /// The answer (one frame, or the frames of a burst).
-    Answered(Vec<Packet>),
+    /// The answer (one frame, or the frames of a burst), and when its first and last frames
+    /// were read.
+    Answered {
+        packets: Vec<Packet>,
+        first: Instant,
+        last: Instant,
+    },
     /// Nothing that answers the request.
     Nothing,
+}
+
+/// How a burst of answering frames ends.
+pub(super) enum BurstEnd {
+    /// When the line has been quiet this long.
+    Quiet(Duration),
+    /// When each of these Tuya data points has been reported, or at `until` at the latest.
+    Reported { ids: Vec<u8>, until: Instant },
+}
+
+impl BurstEnd {
+    /// Whether `got` completes the burst.
+    fn complete(&self, got: &[Packet]) -> bool {
+        match self {
+            BurstEnd::Quiet(_) => false,
+            BurstEnd::Reported { ids, .. } => {
+                let reported = crate::link::session::tuya::reported_ids(got);
+                ids.iter().all(|id| reported.contains(id))
+            }
+        }
+    }
 }
 
 impl Worker {
@@ -63,8 +89,16 @@ impl Worker {
         let now = Instant::now();
         self.sent_until = self.sent_until.max(now) + wire_time(bytes.len(), self.baud);
         self.stats.sent += 1;
+        self.session.wrote(&sent);
         self.log(Direction::HostToDevice, Ok(sent));
         Ok(())
+    }
+
+    /// The next frame (or frame error) the decoder holds, as the session sorts it: a Tuya
+    /// frame that repeats what the module sent is its own echo.
+    pub(super) fn next_frame(&mut self) -> Option<Result<Packet, FrameError>> {
+        let item = self.decoder.next_packet()?;
+        Some(item.map(|p| self.session.received(p)))
     }
 
     /// Reads what arrives before `deadline` into the decoder.
@@ -88,11 +122,11 @@ impl Worker {
 
     /// Takes every frame already decoded as one that answers no request.
     pub(super) fn drain_unsolicited(&mut self) {
-        while let Some(item) = self.decoder.next_packet() {
+        while let Some(item) = self.next_frame() {
             match item {
                 Ok(p) => {
                     self.stats.received += 1;
-                    self.log(Direction::DeviceToHost, Ok(p.clone()));
+                    self.log(p.direction, Ok(p.clone()));
                     let unasked = self.session.unasked(&p);
                     let _ = self.take_unasked(p, unasked);
                 }
@@ -146,6 +180,7 @@ impl Worker {
             }
             let t0 = Instant::now();
             self.write(&bytes, sent.clone())?;
+            let baud = self.baud;
             let (each, burst) = match &req.reply {
                 ReplySpec::None => {
                     return Ok(Reply {
@@ -155,9 +190,21 @@ impl Worker {
                     });
                 }
                 ReplySpec::Required(m) | ReplySpec::Optional(m) => (m.clone(), None),
-                ReplySpec::Burst { each, quiet } => (each.clone(), Some(*quiet)),
+                ReplySpec::Burst { each, quiet } => (each.clone(), Some(BurstEnd::Quiet(*quiet))),
+                ReplySpec::Reports {
+                    each,
+                    ids,
+                    bytes: expected,
+                } => {
+                    // The reports' wire time twice over, after the request and the margin.
+                    let wire = wire_time(bytes.len(), baud) + wire_time(*expected, baud) * 2;
+                    let end = BurstEnd::Reported {
+                        ids: ids.clone(),
+                        until: t0 + wire + margin,
+                    };
+                    (each.clone(), Some(end))
+                }
             };
-            let baud = self.baud;
             let first = t0 + wire_time(bytes.len() + 1, baud) + margin;
             let Waited {
                 outcome,
@@ -165,12 +212,17 @@ impl Worker {
                 mismatch,
             } = self.wait_for(&each, burst, first, baud)?;
             match outcome {
-                Outcome::Answered(packets) => {
-                    let rtt = t0.elapsed();
-                    self.stats.rtt = Some(rtt);
+                Outcome::Answered {
+                    packets,
+                    first,
+                    last,
+                } => {
+                    // The link's round trip is the first answering frame's; a burst's reply
+                    // lasts until its last frame (never until the end of the wait).
+                    self.stats.rtt = Some(first.saturating_duration_since(t0));
                     return Ok(Reply {
                         packets,
-                        rtt,
+                        rtt: last.saturating_duration_since(t0),
                         attempts: attempt,
                     });
                 }
@@ -222,40 +274,53 @@ impl Worker {
     pub(super) fn wait_for(
         &mut self,
         each: &Match,
-        burst: Option<Duration>,
+        burst: Option<BurstEnd>,
         first_deadline: Instant,
         baud: u32,
     ) -> Result<Waited, ExchangeError> {
         let mut deadline = first_deadline;
+        // A burst of reports ends by this time whatever comes (a chatty MCU is never quiet).
+        let cap = match &burst {
+            Some(BurstEnd::Reported { until, .. }) => *until,
+            _ => first_deadline + Duration::from_secs(86_400),
+        };
         let mut got: Vec<Packet> = Vec::new();
+        let mut first_at: Option<Instant> = None;
+        let mut last_at = first_deadline;
         let mut frame_err = None;
         let mut mismatch = None;
         let mut flushed = false;
         // How far the last read that found nothing looked.
         let mut looked_to: Option<Instant> = None;
         loop {
-            while let Some(item) = self.decoder.next_packet() {
+            while let Some(item) = self.next_frame() {
                 match item {
                     Ok(p) => {
                         self.stats.received += 1;
-                        self.log(Direction::DeviceToHost, Ok(p.clone()));
+                        self.log(p.direction, Ok(p.clone()));
                         if each.accepts(&p) {
                             if self.session.answer_is_report(&p) {
                                 self.emit(LinkEvent::Report(p.clone()));
                             }
-                            match burst {
-                                Some(quiet) => {
-                                    got.push(p);
-                                    deadline = Instant::now() + quiet;
-                                }
-                                None => {
+                            let now = Instant::now();
+                            first_at.get_or_insert(now);
+                            last_at = now;
+                            got.push(p);
+                            deadline = match &burst {
+                                Some(BurstEnd::Quiet(quiet)) => now + *quiet,
+                                Some(end @ BurstEnd::Reported { .. }) if !end.complete(&got) => cap,
+                                _ => {
                                     return Ok(Waited {
-                                        outcome: Outcome::Answered(vec![p]),
+                                        outcome: Outcome::Answered {
+                                            packets: got,
+                                            first: first_at.unwrap_or(now),
+                                            last: now,
+                                        },
                                         frame_err: None,
                                         mismatch: None,
                                     });
                                 }
-                            }
+                            };
                         } else {
                             let unasked = self.session.unasked(&p);
                             if unasked.answers_other() {
@@ -283,7 +348,7 @@ impl Worker {
                     if self.read_some(deadline)? > 0 {
                         flushed = false;
                         let more = Instant::now() + wire_time(8, baud) + INTER_BYTE_SLACK;
-                        deadline = deadline.max(more);
+                        deadline = deadline.max(more).min(cap.max(first_deadline));
                     }
                     continue;
                 }
@@ -292,10 +357,13 @@ impl Worker {
                     flushed = true;
                     continue;
                 }
-                let outcome = if got.is_empty() {
-                    Outcome::Nothing
-                } else {
-                    Outcome::Answered(got)
+                let outcome = match first_at {
+                    None => Outcome::Nothing,
+                    Some(first) => Outcome::Answered {
+                        packets: got,
+                        first,
+                        last: last_at,
+                    },
                 };
                 return Ok(Waited {
                     outcome,
@@ -308,7 +376,7 @@ impl Worker {
             if self.read_some(slice)? > 0 {
                 flushed = false;
                 let more = Instant::now() + wire_time(8, baud) + INTER_BYTE_SLACK;
-                deadline = deadline.max(more);
+                deadline = deadline.max(more).min(cap.max(first_deadline));
             } else {
                 looked_to = Some(slice);
             }

@@ -162,7 +162,7 @@ impl Worker {
     fn run_session(&mut self) {
         self.settle_polls();
         let mut events = Vec::new();
-        while let Some(request) = self.session.next_request(Instant::now(), self.baud) {
+        while let Some(request) = self.session.next_request(Instant::now()) {
             let result = self.exchange(&request);
             let more = self.session.on_answer(result, Instant::now(), &mut events);
             for ev in events.drain(..) {

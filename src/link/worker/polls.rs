@@ -97,7 +97,7 @@ impl Worker {
         let result = match self.wait_for(&each, None, deadline, baud) {
             Err(e) => Err(e),
             Ok(Waited {
-                outcome: Outcome::Answered(packets),
+                outcome: Outcome::Answered { packets, .. },
                 ..
             }) => {
                 self.stats.rtt = Some(f.sent.elapsed());

@@ -199,38 +199,32 @@ pub fn encode(dps: &[DataPoint]) -> Result<Vec<u8>, DpError> {
     Ok(out)
 }
 
-/// Reads a list of data points.
-pub fn decode(data: &[u8]) -> Result<Vec<DataPoint>, DpError> {
-    let mut out = Vec::new();
-    let mut at = 0;
-    while at < data.len() {
-        let rest = &data[at..];
-        if rest.len() < 4 {
-            return Err(DpError::Truncated {
-                offset: at,
-                need: 4,
-                have: rest.len(),
-            });
-        }
-        let id = rest[0];
-        let ty_byte = rest[1];
-        let len = u16::from_be_bytes([rest[2], rest[3]]) as usize;
-        if rest.len() < 4 + len {
-            return Err(DpError::Truncated {
-                offset: at,
-                need: 4 + len,
-                have: rest.len(),
-            });
-        }
-        let v = &rest[4..4 + len];
-        let ty = DpType::from_byte(ty_byte).ok_or(DpError::UnknownType { id, ty: ty_byte })?;
+/// One data point as it is on the wire, before its value is read: id, type byte, value bytes.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct RawPoint {
+    /// The data-point id.
+    pub id: u8,
+    /// The type byte (0-5 are the six types; anything else is kept as it came).
+    pub ty: u8,
+    /// The value's bytes, as many as the length field said.
+    pub bytes: Vec<u8>,
+    /// Where the data point starts in the data.
+    pub offset: usize,
+}
+
+impl RawPoint {
+    /// Its value read by its own type byte and length: an unknown type, a length the type does
+    /// not allow and a string that is not UTF-8 are errors.
+    pub fn value(&self) -> Result<DpValue, DpError> {
+        let (id, v) = (self.id, self.bytes.as_slice());
+        let ty = DpType::from_byte(self.ty).ok_or(DpError::UnknownType { id, ty: self.ty })?;
         let bad = |expected| DpError::BadLength {
             id,
             ty: ty.name(),
-            len,
+            len: v.len(),
             expected,
         };
-        let value = match ty {
+        Ok(match ty {
             DpType::Raw => DpValue::Raw(v.to_vec()),
             DpType::Bool => match v {
                 [b] => DpValue::Bool(*b != 0),
@@ -256,12 +250,67 @@ pub fn decode(data: &[u8]) -> Result<Vec<DataPoint>, DpError> {
                 };
                 DpValue::Bitmap {
                     bits,
-                    width: len as u8,
+                    width: v.len() as u8,
                 }
             }
-        };
-        out.push(DataPoint { id, value });
-        at += 4 + len;
+        })
     }
-    Ok(out)
+}
+
+/// A data-point list read leniently: every whole data point, whatever its type byte and length,
+/// and why the bytes after the last one are not a data point (cut short).
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Walk {
+    /// The data points, in order.
+    pub points: Vec<RawPoint>,
+    /// The list ends inside a data point: [`DpError::Truncated`], and the bytes left.
+    pub rest: Option<(DpError, Vec<u8>)>,
+}
+
+/// Splits a data-point list (the data of a 0x06 or 0x07 frame) into its data points without
+/// reading their values, so that one data point of an unexpected type or length does not hide
+/// the others.
+pub fn walk(data: &[u8]) -> Walk {
+    let mut out = Walk::default();
+    let mut at = 0;
+    while at < data.len() {
+        let rest = &data[at..];
+        let need = match rest {
+            [_, _, hi, lo, ..] => 4 + u16::from_be_bytes([*hi, *lo]) as usize,
+            _ => 4,
+        };
+        if rest.len() < need {
+            let error = DpError::Truncated {
+                offset: at,
+                need,
+                have: rest.len(),
+            };
+            out.rest = Some((error, rest.to_vec()));
+            break;
+        }
+        out.points.push(RawPoint {
+            id: rest[0],
+            ty: rest[1],
+            bytes: rest[4..need].to_vec(),
+            offset: at,
+        });
+        at += need;
+    }
+    out
+}
+
+/// Reads a list of data points; the first data point that does not read is the error.
+pub fn decode(data: &[u8]) -> Result<Vec<DataPoint>, DpError> {
+    let walk = walk(data);
+    let mut out = Vec::with_capacity(walk.points.len());
+    for p in &walk.points {
+        out.push(DataPoint {
+            id: p.id,
+            value: p.value()?,
+        });
+    }
+    match walk.rest {
+        Some((e, _)) => Err(e),
+        None => Ok(out),
+    }
 }

@@ -3,6 +3,8 @@
 
 use crate::link::serial::{self, PortInfo};
 use crate::link::{Link, LinkOptions, LinkState, LinkStats};
+use crate::sim::tuya_mcu::TuyaMcu;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// What to connect to.
@@ -30,6 +32,9 @@ pub struct Connection {
     pub link: Link,
     /// What it talks to.
     pub target: Target,
+    /// The built-in simulated Tuya MCU, when that is the target: the window can ask it to
+    /// send its own requests.
+    pub demo_tuya: Option<Arc<Mutex<TuyaMcu>>>,
 }
 
 /// The link's status.
@@ -64,6 +69,11 @@ impl LinkStatus {
             Some(LinkState::Connected { baud, .. }) => Some(*baud),
             _ => None,
         }
+    }
+
+    /// The built-in simulated Tuya MCU the link talks to, if it does.
+    pub fn demo_tuya(&self) -> Option<&Arc<Mutex<TuyaMcu>>> {
+        self.connection.as_ref().and_then(|c| c.demo_tuya.as_ref())
     }
 
     /// What the link talks to, while one is open.

@@ -12,15 +12,14 @@ pub use link::{Connection, LinkStatus, Target};
 pub use model::{DeviceModel, Mark, Reading, ReadingError};
 pub use packets::{LOG_CAPACITY, PacketLog};
 pub use tuya::{
-    DpState, LOG_CAPACITY as REPORT_LOG_CAPACITY, LogLine, ReportError, RequestLine, StepResult,
-    TuyaModel,
+    DpState, LOG_CAPACITY as REPORT_LOG_CAPACITY, LogLine, RequestLine, StepResult, TuyaModel,
 };
 
 use super::jobs::{Job, JobError, JobOutput, RunningJob};
 use crate::link::{Link, LinkCommand, LinkEvent, LinkState, LinkStats, Opener};
 use crate::profile::{ProfileError, Registry};
-use crate::sim::{Faults, SimKind, SimOptions, SimTransport};
-use std::sync::Arc;
+use crate::sim::{Faults, SharedDevice, SimKind, SimOptions, SimTransport};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// The longest the UI thread spends draining link events in one frame.
@@ -127,6 +126,7 @@ impl AppState {
     ) -> Result<(), ConnectError> {
         self.disconnect();
         let profile = self.registry.get(profile_id)?;
+        let mut demo_tuya = None;
         let opener: Opener = match &target {
             Target::Demo(kind) => {
                 let kind: SimKind = kind.parse().map_err(ConnectError::Simulator)?;
@@ -134,13 +134,19 @@ impl AppState {
                     baud: Some(baud),
                     ..SimOptions::default()
                 };
+                // One device for the connection, kept across reconnects; the Tuya MCU's handle
+                // lets the window ask it to send its own requests.
+                let device: SharedDevice = if kind == SimKind::TuyaVacuum {
+                    let mcu = Arc::new(Mutex::new(crate::sim::tuya_mcu(&opts)));
+                    demo_tuya = Some(mcu.clone());
+                    mcu
+                } else {
+                    crate::sim::build(kind, &opts).map_err(ConnectError::Simulator)?
+                };
                 Box::new(move || {
-                    SimTransport::of_kind(kind, &opts, Faults::default())
-                        .map(|t| Box::new(t) as Box<dyn crate::link::Transport>)
-                        .map_err(|e| crate::link::LinkError::Open {
-                            path: kind.to_string(),
-                            reason: e,
-                        })
+                    let t =
+                        SimTransport::new(device.clone(), baud, Faults::default(), kind.describe());
+                    Ok(Box::new(t) as Box<dyn crate::link::Transport>)
                 })
             }
             Target::Port(path) => crate::link::serial::opener(path, baud),
@@ -157,7 +163,11 @@ impl AppState {
             Some(waker),
         )?;
         self.device.reset(profile);
-        self.link.connection = Some(Connection { link, target });
+        self.link.connection = Some(Connection {
+            link,
+            target,
+            demo_tuya,
+        });
         self.link.state = None;
         Ok(())
     }

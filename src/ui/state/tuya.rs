@@ -5,11 +5,11 @@
 
 use crate::link::LogEntry;
 use crate::link::session::tuya::{HandshakeStep, ProductInfo, TuyaEvent};
+use crate::ops::tuya::{ReportedDp, read_reports};
 use crate::packet::{Header, Packet};
 use crate::profile::{Profile, Value};
 use crate::protocol::Direction;
 use crate::protocol::tuya::cmd;
-use crate::protocol::tuya::dp::{self, DpError, DpType, DpValue};
 use chrono::{DateTime, Local};
 use std::collections::{BTreeMap, VecDeque};
 use std::time::Instant;
@@ -30,7 +30,7 @@ pub struct StepResult {
     pub at: DateTime<Local>,
 }
 
-/// A data point's last report.
+/// A data point's last report that fits the profile.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DpState {
     /// The raw value reported.
@@ -39,6 +39,9 @@ pub struct DpState {
     pub at: Instant,
     /// When (for people).
     pub clock: DateTime<Local>,
+    /// Status queries sent before it came ([`TuyaModel::queries`]): a report that came after
+    /// a query sent after a command is that command's read-back.
+    pub query: u64,
 }
 
 /// One line of the report log.
@@ -48,36 +51,9 @@ pub struct LogLine {
     pub seq: u64,
     /// When.
     pub clock: DateTime<Local>,
-    /// The data point's id, ident and value, or what was wrong with it.
-    pub item: Result<(u8, String, Value), ReportError>,
-}
-
-/// What is wrong with a report (0x07): it is logged, and its values are not shown.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum ReportError {
-    /// The report's bytes are not data points.
-    #[error("malformed report: {0}")]
-    Malformed(DpError),
-    /// A data point the profile does not have.
-    #[error("data point {id} is not in the profile ({} {value:?})", value.dp_type().name())]
-    NotInProfile {
-        /// Its id.
-        id: u8,
-        /// Its value as reported.
-        value: DpValue,
-    },
-    /// A data point reported with another type than the profile's.
-    #[error("data point {id} ({ident}): type {} on the wire, the profile says {}", wire.name(), profile.name())]
-    WrongType {
-        /// Its id.
-        id: u8,
-        /// Its ident in the profile.
-        ident: String,
-        /// The type reported.
-        wire: DpType,
-        /// The profile's type.
-        profile: DpType,
-    },
+    /// The data point as reported and read against the profile (with its raw bytes and the
+    /// mismatch when it does not fit).
+    pub item: ReportedDp,
 }
 
 /// An MCU request the module answered.
@@ -106,6 +82,8 @@ pub struct TuyaModel {
     pub stopped: Option<(HandshakeStep, StepResult)>,
     /// When the handshake last completed.
     pub done_at: Option<DateTime<Local>>,
+    /// The version byte of the MCU's frames, from its last heartbeat answer in a handshake.
+    pub frame_version: Option<u8>,
     /// The product info of the last handshake.
     pub product: Option<ProductInfo>,
     /// The current attempt received product info (a failed product-info step then means JSON
@@ -125,8 +103,14 @@ pub struct TuyaModel {
     pub wifi_acked: Option<DateTime<Local>>,
     /// When a status query (0x08) was last sent.
     pub last_query: Option<DateTime<Local>>,
-    /// Each data point's last report, by id.
+    /// Each data point's last report that fits the profile, by id.
     pub dps: BTreeMap<u8, DpState>,
+    /// Data points whose last report did not fit the profile (another type or length), by
+    /// id, with when and the queries sent before it (as [`DpState::query`]): shown raw with
+    /// the mismatch.
+    pub misfits: BTreeMap<u8, (ReportedDp, DateTime<Local>, u64)>,
+    /// Status queries (0x08) sent on this connection.
+    pub queries: u64,
     /// The report log, oldest first.
     pub log: VecDeque<LogLine>,
     /// Report lines so far (the next line's number).
@@ -142,18 +126,6 @@ fn step_index(step: HandshakeStep) -> usize {
         .iter()
         .position(|s| *s == step)
         .unwrap_or(0)
-}
-
-/// A data point's value as the profile's fields hold it, if its type is the profile's.
-pub fn dp_raw_value(v: &DpValue) -> Value {
-    match v {
-        DpValue::Bool(b) => Value::Int(i64::from(*b)),
-        DpValue::Value(x) => Value::Int(i64::from(*x)),
-        DpValue::Enum(e) => Value::Int(i64::from(*e)),
-        DpValue::Bitmap { bits, .. } => Value::Int(i64::from(*bits)),
-        DpValue::String(s) => Value::Text(s.clone()),
-        DpValue::Raw(b) => Value::Bytes(b.clone()),
-    }
 }
 
 impl TuyaModel {
@@ -194,6 +166,7 @@ impl TuyaModel {
                 }
                 self.steps[step_index(step)] = Some(result);
             }
+            TuyaEvent::FrameVersion { version } => self.frame_version = Some(version),
             TuyaEvent::ProductInfo(p) => {
                 self.product = Some(p);
                 self.product_in_attempt = true;
@@ -248,57 +221,46 @@ impl TuyaModel {
                 }
             }
             (Direction::DeviceToHost, cmd::WIFI_STATE) => self.wifi_acked = Some(at),
-            (Direction::HostToDevice, cmd::QUERY_STATUS) => self.last_query = Some(at),
+            (Direction::HostToDevice, cmd::QUERY_STATUS) => {
+                self.last_query = Some(at);
+                self.queries += 1;
+            }
             _ => {}
         }
     }
 
-    /// Takes a report (0x07): each data point in it, checked against the profile.
+    /// Takes a report (0x07): each data point in it, checked against the profile. One that
+    /// fits is shown as its value; one of another type or length is shown raw with the
+    /// mismatch, and the value shown before stays marked as older.
     pub fn on_report(&mut self, profile: &Profile, p: &Packet) {
-        if !matches!(p.header, Header::Tuya { .. })
-            || p.command != cmd::DP_REPORT
-            || p.direction != Direction::DeviceToHost
-        {
+        if !matches!(p.header, Header::Tuya { .. }) || p.direction != Direction::DeviceToHost {
             return;
         }
         let (at, clock) = (Instant::now(), Local::now());
-        let points = match dp::decode(&p.payload) {
-            Ok(points) => points,
-            Err(e) => {
-                self.log(clock, Err(ReportError::Malformed(e)));
-                return;
-            }
-        };
-        for point in points {
-            let item = match profile.data_point(point.id) {
-                None => Err(ReportError::NotInProfile {
-                    id: point.id,
-                    value: point.value.clone(),
-                }),
-                Some(def) if def.dp_type != point.value.dp_type() => Err(ReportError::WrongType {
-                    id: point.id,
-                    ident: def.field.ident.clone(),
-                    wire: point.value.dp_type(),
-                    profile: def.dp_type,
-                }),
-                Some(def) => {
-                    let value = dp_raw_value(&point.value);
+        for item in read_reports(profile, std::slice::from_ref(p)) {
+            match (&item.value, &item.misfit) {
+                (Some(value), None) => {
+                    self.misfits.remove(&item.id);
                     self.dps.insert(
-                        point.id,
+                        item.id,
                         DpState {
                             value: value.clone(),
                             at,
                             clock,
+                            query: self.queries,
                         },
                     );
-                    Ok((point.id, def.field.ident.clone(), value))
                 }
-            };
+                _ => {
+                    self.misfits
+                        .insert(item.id, (item.clone(), clock, self.queries));
+                }
+            }
             self.log(clock, item);
         }
     }
 
-    fn log(&mut self, clock: DateTime<Local>, item: Result<(u8, String, Value), ReportError>) {
+    fn log(&mut self, clock: DateTime<Local>, item: ReportedDp) {
         if self.log.len() >= LOG_CAPACITY {
             self.log.pop_front();
         }
@@ -350,12 +312,13 @@ mod tests {
         let profile = crate::sim::tuya_mcu::builtin_vacuum_profile();
         let mut s = TuyaModel::default();
         let frame = |data: Vec<u8>| {
-            Packet::tuya(crate::protocol::tuya::Frame::from_mcu(cmd::DP_REPORT, data))
+            Packet::tuya_received(crate::protocol::tuya::Frame::from_mcu(cmd::DP_REPORT, data))
         };
-        // DP 6 (battery) is a value; reported as a bool it is refused.
+        // DP 6 (battery) is a value; reported as a bool it is kept raw with the mismatch.
         s.on_report(&profile, &frame(vec![6, 1, 0, 1, 1]));
         assert!(s.dps.is_empty());
-        assert!(s.log[0].item.is_err());
+        assert!(s.log[0].item.misfit.is_some());
+        assert_eq!(s.misfits.get(&6).map(|m| m.0.raw.clone()), Some(vec![1]));
         s.on_report(&profile, &frame(vec![6, 2, 0, 4, 0, 0, 0, 42]));
         for _ in 0..LOG_CAPACITY {
             s.on_report(&profile, &frame(vec![1, 1, 0, 1, 1]));
@@ -363,6 +326,10 @@ mod tests {
         assert_eq!(s.log.len(), LOG_CAPACITY);
         assert_eq!(s.dps.get(&1).map(|d| d.value.clone()), Some(Value::Int(1)));
         assert_eq!(s.dps.get(&6).map(|d| d.value.clone()), Some(Value::Int(42)));
+        assert!(
+            s.misfits.is_empty(),
+            "a report that fits replaces the misfit"
+        );
         for _ in 0..REQUESTS_CAPACITY + 5 {
             s.on_event(TuyaEvent::McuRequest {
                 command: cmd::RESET_WIFI,

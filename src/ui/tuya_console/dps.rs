@@ -1,39 +1,50 @@
 //! Data points, generated from the profile: a control by type (bool toggle, enum selector, value
 //! with range and unit, string, bitmap with its named bits lit, raw as hex). Commands go out as
-//! 0x06; only the MCU's 0x07 reports change what is shown, with the time of the last report.
+//! 0x06; only the MCU's 0x07 reports change what is shown, with the time of the last report. A
+//! data point reported with another type or length than the profile's is shown raw with the
+//! mismatch. A command is marked by the data point's last report up to a read-back query.
 
 use super::{Action, AppState, clock, fire};
 use crate::i18n::Lang;
+use crate::link::{LinkCommand, ReplyTo};
 use crate::ops::OpError;
-use crate::ops::tuya as ops;
+use crate::ops::tuya::{self as ops, ReportedDp};
 use crate::profile::{Access, DataPointDef, Value};
 use crate::protocol::tuya::dp::DpType;
 use eframe::egui;
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
-/// How long a command waits for its report before it is marked unanswered.
-pub const REPORT_WAIT: Duration = Duration::from_secs(3);
+/// How long a command waits for its read-back when the link never says the read-back ended
+/// (its events lost): it is then marked unanswered.
+pub const REPORT_WAIT: Duration = Duration::from_secs(30);
 
 const GREEN: egui::Color32 = egui::Color32::from_rgb(40, 160, 60);
 const ORANGE: egui::Color32 = egui::Color32::from_rgb(220, 150, 0);
 
-/// A command sent and not yet reported back.
+/// A command sent and not yet read back.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Pending {
     /// What was sent.
     pub value: Value,
     /// When.
     pub sent: Instant,
+    /// Status queries sent before the command ([`crate::ui::state::TuyaModel::queries`]):
+    /// reports after a later query are the read-back's.
+    pub queries: u64,
+    /// The read-back query's reply id: once it is answered, the last report says.
+    pub read_back: u64,
 }
 
 /// What the last command of a data point came to.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Mark {
-    /// The MCU reported the value sent.
+    /// The MCU's last report after the command, up to the read-back, carries the value sent.
     Confirmed,
-    /// The MCU reported another value.
+    /// The MCU's last report carries another value.
     Mismatch(Value),
+    /// The MCU's last report does not fit the profile (another type or length).
+    Misfit(ReportedDp),
     /// No report came.
     NoReport(Value),
     /// Refused before sending.
@@ -93,45 +104,59 @@ fn allowed(lang: Lang, def: &DataPointDef) -> String {
 }
 
 impl DpView {
-    /// Sends `value` to data point `def` as a 0x06 command, checked against the profile first.
-    fn send(&mut self, rt: &AppState, def: &DataPointDef, value: Value) -> Option<Action> {
-        match ops::dp_request(&rt.device.profile, def, value.clone()) {
+    /// Sends `value` to data point `def` as a 0x06 command, checked against the profile first,
+    /// then a status query that reads back every data point.
+    fn send(&mut self, rt: &AppState, def: &DataPointDef, value: Value) -> Vec<Action> {
+        let profile = &rt.device.profile;
+        match ops::dp_request(profile, def, value.clone()) {
             Ok(request) => {
+                let read_back = rt.link.reply_id();
                 self.marks.remove(&def.id);
                 self.pending.insert(
                     def.id,
                     Pending {
                         value,
                         sent: Instant::now(),
+                        queries: rt.device.tuya.queries,
+                        read_back,
                     },
                 );
-                Some(fire(request))
+                vec![
+                    fire(request),
+                    // Every data point: what the command changed besides is brought too.
+                    Action::Link(LinkCommand::Request {
+                        request: ops::query_request(profile),
+                        reply_to: ReplyTo::Event(read_back),
+                    }),
+                ]
             }
             Err(e) => {
                 self.marks.insert(def.id, Mark::Refused(e));
-                None
+                Vec::new()
             }
         }
     }
 
-    /// Settles commands whose report came, or whose wait is over.
+    /// Settles the commands whose read-back has ended: by the data point's last report after
+    /// the command (one that came after the read-back query was sent).
     fn settle(&mut self, rt: &AppState) {
+        let tuya = &rt.device.tuya;
         let mut settled = Vec::new();
         for (id, p) in &self.pending {
-            match rt.device.tuya.dps.get(id) {
-                Some(st) if st.at >= p.sent => {
-                    let mark = if st.value == p.value {
-                        Mark::Confirmed
-                    } else {
-                        Mark::Mismatch(st.value.clone())
-                    };
-                    settled.push((*id, mark));
-                }
-                _ if p.sent.elapsed() >= REPORT_WAIT => {
-                    settled.push((*id, Mark::NoReport(p.value.clone())));
-                }
-                _ => {}
+            let ended = rt.device.replies.contains_key(&p.read_back);
+            if !ended && p.sent.elapsed() < REPORT_WAIT {
+                continue;
             }
+            let misfit = tuya.misfits.get(id).filter(|m| m.2 > p.queries);
+            let fits = tuya.dps.get(id).filter(|st| st.query > p.queries);
+            let mark = match (misfit, fits) {
+                // A report that fits removes the misfit: a misfit still there is the latest.
+                (Some(m), _) => Mark::Misfit(m.0.clone()),
+                (None, Some(st)) if st.value == p.value => Mark::Confirmed,
+                (None, Some(st)) => Mark::Mismatch(st.value.clone()),
+                (None, None) => Mark::NoReport(p.value.clone()),
+            };
+            settled.push((*id, mark));
         }
         for (id, mark) in settled {
             self.pending.remove(&id);
@@ -166,7 +191,7 @@ impl DpView {
                 ))
                 .clicked()
             {
-                actions.push(fire(ops::query_request()));
+                actions.push(fire(ops::query_request(&rt.device.profile)));
             }
             if let Some(t) = &rt.device.tuya.last_query {
                 ui.weak(format!(
@@ -204,9 +229,7 @@ impl DpView {
                 ui.strong("");
                 ui.end_row();
                 for def in &defs {
-                    if let Some(a) = self.row(ui, lang, rt, def, can_send) {
-                        actions.push(a);
-                    }
+                    actions.extend(self.row(ui, lang, rt, def, can_send));
                     ui.end_row();
                 }
             });
@@ -222,26 +245,29 @@ impl DpView {
         rt: &AppState,
         def: &DataPointDef,
         can_send: bool,
-    ) -> Option<Action> {
+    ) -> Vec<Action> {
         let f = &def.field;
         let name = ui
             .label(format!("{} {}", def.id, lang.tr(&f.name.en, &f.name.zh)))
             .on_hover_text(format!("{} ({})", f.ident, def.dp_type.name()));
         let reported = rt.device.tuya.dps.get(&def.id);
-        match reported {
-            Some(st) if def.dp_type == DpType::Bitmap => bits(ui, lang, def, &st.value),
-            Some(st) => {
+        let misfit = rt.device.tuya.misfits.get(&def.id);
+        match (misfit, reported) {
+            (Some((m, _, _)), _) => misfit_label(ui, lang, m),
+            (None, Some(st)) if def.dp_type == DpType::Bitmap => bits(ui, lang, def, &st.value),
+            (None, Some(st)) => {
                 ui.monospace(shown(lang, def, &st.value));
             }
-            None => {
+            (None, None) => {
                 ui.weak(lang.tr("not reported yet", "尚未上报"));
             }
         }
-        match reported {
-            Some(st) => ui.monospace(clock(&st.clock)),
-            None => ui.label(""),
+        match (misfit, reported) {
+            (Some((_, t, _)), _) => ui.monospace(clock(t)),
+            (None, Some(st)) => ui.monospace(clock(&st.clock)),
+            (None, None) => ui.label(""),
         };
-        let mut action = None;
+        let mut action = Vec::new();
         let writable = def.access == Access::ReadWrite;
         if !writable {
             ui.weak(lang.tr("report only", "仅上报"));
@@ -312,8 +338,8 @@ impl DpView {
         def: &DataPointDef,
         label: egui::Id,
         can_send: bool,
-    ) -> Option<Action> {
-        let mut action = None;
+    ) -> Vec<Action> {
+        let mut action = Vec::new();
         ui.horizontal(|ui| {
             let mut text = self.edits.get(&def.id).cloned().unwrap_or_default();
             let parsed = (!text.is_empty()).then(|| def.field.parse(&text));
@@ -385,6 +411,16 @@ impl DpView {
                     ),
                 );
             }
+            Some(Mark::Misfit(m)) => {
+                ui.colored_label(
+                    egui::Color32::RED,
+                    format!(
+                        "× {} {}",
+                        lang.tr("the MCU reports", "MCU上报为"),
+                        misfit_text(lang, m)
+                    ),
+                );
+            }
             Some(Mark::NoReport(v)) => {
                 ui.colored_label(
                     egui::Color32::RED,
@@ -438,18 +474,31 @@ impl DpView {
             .stick_to_bottom(true)
             .show(ui, |ui| {
                 for l in lines {
-                    match &l.item {
-                        Ok((id, ident, v)) => {
-                            let text = match rt.device.profile.data_point(*id) {
-                                Some(def) => shown(lang, def, v),
-                                None => format!("{v:?}"),
-                            };
-                            ui.monospace(format!("{}  {id:>3} {ident} = {text}", clock(&l.clock)));
+                    let item = &l.item;
+                    let ident = item.ident.as_deref().unwrap_or("?");
+                    let fits = rt
+                        .device
+                        .profile
+                        .data_point(item.id)
+                        .zip(item.value.as_ref());
+                    match (fits, &item.misfit) {
+                        (Some((def, v)), None) => {
+                            ui.monospace(format!(
+                                "{}  {:>3} {ident} = {}",
+                                clock(&l.clock),
+                                item.id,
+                                shown(lang, def, v)
+                            ));
                         }
-                        Err(e) => {
+                        _ => {
                             ui.colored_label(
                                 egui::Color32::RED,
-                                format!("{}  {e}", clock(&l.clock)),
+                                format!(
+                                    "{}  {:>3} {ident}: {}",
+                                    clock(&l.clock),
+                                    item.id,
+                                    misfit_text(lang, item)
+                                ),
                             );
                         }
                     }
@@ -479,4 +528,26 @@ fn bits(ui: &mut egui::Ui, lang: Lang, def: &DataPointDef, v: &Value) {
             }
         }
     });
+}
+
+/// A report that does not fit the profile: its raw bytes and the mismatch.
+fn misfit_text(lang: Lang, m: &ReportedDp) -> String {
+    let why = m
+        .misfit
+        .as_ref()
+        .map_or_else(String::new, |e| format!(": {e}"));
+    format!(
+        "{} {}{why}",
+        lang.tr("raw", "原始字节"),
+        crate::protocol::hex::format(&m.raw)
+    )
+}
+
+/// A reported value that does not fit the profile, in the value's column.
+fn misfit_label(ui: &mut egui::Ui, lang: Lang, m: &ReportedDp) {
+    ui.colored_label(egui::Color32::RED, misfit_text(lang, m))
+        .on_hover_text(lang.tr(
+            "Reported with another type or length than the profile's data point",
+            "上报的类型或长度与配置中的数据点不符",
+        ));
 }

@@ -192,6 +192,23 @@ pub fn show(
                 None => ui.weak(lang.tr("not received yet", "尚未收到")),
             };
             ui.end_row();
+            ui.label(lang.tr("MCU frame version", "MCU帧版本"));
+            match s.frame_version {
+                Some(v) if v == crate::protocol::tuya::VERSION_MCU => {
+                    ui.monospace(format!("{v:#04x}"))
+                }
+                Some(v) => ui.colored_label(
+                    ORANGE,
+                    format!(
+                        "{v:#04x} ({} {:#04x}; {})",
+                        lang.tr("the protocol document says", "协议文档规定为"),
+                        crate::protocol::tuya::VERSION_MCU,
+                        lang.tr("accepted", "已接受")
+                    ),
+                ),
+                None => ui.weak(lang.tr("not received yet", "尚未收到")),
+            };
+            ui.end_row();
             ui.label(lang.tr("Configuration mode", "配网模式"));
             match s.product.as_ref().map(|p| p.mode) {
                 Some(Some(m)) => ui.monospace(config_mode(m, lang)),

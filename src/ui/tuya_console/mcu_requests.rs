@@ -2,10 +2,11 @@
 //! time, the Wi-Fi production test's result and signal, the network status, the MAC), and each
 //! request answered, reset-Wi-Fi acks shown clearly.
 
-use super::{AppState, clock, wifi_state_name};
+use super::{Action, AppState, clock, wifi_state_name};
 use crate::i18n::Lang;
 use crate::link::TuyaModuleOptions;
 use crate::protocol::tuya::cmd;
+use crate::sim::tuya_mcu::McuRequest;
 use chrono::{Datelike, NaiveDateTime};
 use eframe::egui;
 
@@ -69,6 +70,40 @@ pub fn parse_mac(text: &str) -> Result<[u8; 6], EntryError> {
         .ok()
         .filter(|_| parts.len() == 6)
         .ok_or_else(|| EntryError::Mac(text.trim().to_string()))
+}
+
+/// The name of one of the MCU's own requests, for its button.
+fn request_name(r: McuRequest, lang: Lang) -> &'static str {
+    match r {
+        McuRequest::LocalTime => lang.tr("Ask the local time (0x1c)", "请求本地时间 (0x1c)"),
+        McuRequest::WifiTest => lang.tr("Start the Wi-Fi test (0x0e)", "发起WiFi功能产测 (0x0e)"),
+        McuRequest::ResetWifi => lang.tr("Ask to reset the Wi-Fi (0x04)", "请求重置WiFi (0x04)"),
+        McuRequest::ResetWifiMode(_) => lang.tr(
+            "Ask to reset the Wi-Fi into AP mode (0x05)",
+            "请求重置WiFi进入AP模式 (0x05)",
+        ),
+        McuRequest::NetStatus => lang.tr("Ask the network status (0x2b)", "查询联网状态 (0x2b)"),
+        McuRequest::Mac => lang.tr("Ask the module's MAC (0x2d)", "获取模块MAC (0x2d)"),
+    }
+}
+
+/// Buttons that make the built-in simulated MCU send its own requests, as a real MCU does when
+/// it wants the time or a factory test.
+fn demo_buttons(ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
+    ui.strong(lang.tr(
+        "Make the built-in MCU ask the module",
+        "让内置模拟MCU向模块发出请求",
+    ));
+    ui.horizontal_wrapped(|ui| {
+        for r in McuRequest::ALL {
+            if ui
+                .add_enabled(rt.connected(), egui::Button::new(request_name(r, lang)))
+                .clicked()
+            {
+                actions.push(Action::DemoMcuRequest(r));
+            }
+        }
+    });
 }
 
 fn mac_text(mac: &[u8]) -> String {
@@ -137,14 +172,20 @@ fn answer_text(rt: &AppState, lang: Lang, command: u8, answer: &[u8]) -> String 
 }
 
 impl RequestsView {
-    /// Draws the section; changes to what the module answers go into `opts`.
+    /// Draws the section; changes to what the module answers go into `opts`. With the
+    /// built-in simulated MCU, buttons ask it to send its requests.
     pub fn show(
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
         rt: &AppState,
         opts: &mut TuyaModuleOptions,
-    ) {
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
+        if rt.link.demo_tuya().is_some() {
+            demo_buttons(ui, lang, rt, &mut actions);
+            ui.separator();
+        }
         ui.strong(lang.tr("What the module answers", "模块的应答"));
         egui::Grid::new("tuya-answers")
             .num_columns(2)
@@ -251,7 +292,7 @@ impl RequestsView {
         ));
         if s.requests.is_empty() {
             ui.weak(lang.tr("The MCU has asked nothing yet.", "MCU尚未发出请求。"));
-            return;
+            return actions;
         }
         egui::Grid::new("tuya-requests")
             .num_columns(3)
@@ -278,6 +319,7 @@ impl RequestsView {
                     ui.end_row();
                 }
             });
+        actions
     }
 
     fn time_row(&mut self, ui: &mut egui::Ui, lang: Lang, opts: &mut TuyaModuleOptions) {

@@ -127,7 +127,7 @@ impl TuyaConsolePanel {
             .show(ui, |ui| match self.tab {
                 Tab::Handshake => actions.extend(handshake::show(ui, lang, rt, &mut self.opts)),
                 Tab::DataPoints => actions.extend(self.dps.show(ui, lang, rt, self.ota.active(rt))),
-                Tab::Requests => self.requests.show(ui, lang, rt, &mut self.opts),
+                Tab::Requests => actions.extend(self.requests.show(ui, lang, rt, &mut self.opts)),
                 Tab::Ota => actions.extend(self.ota.show(ui, lang, rt)),
             });
         if self.opts != before {

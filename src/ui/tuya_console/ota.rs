@@ -1,13 +1,15 @@
-//! The MCU firmware update: choose a file, check it, confirm, send it in packets of the size the
-//! MCU asks for, with a progress bar, rate and time left, cancel, and the result.
+//! The MCU firmware update: choose a file, check it (not empty, not over the profile's largest
+//! image), confirm with the expected transfer time at the port's rate, send it in packets of the
+//! size the MCU asks for, with a progress bar, rate and time left, cancel, and the result.
 
 use super::{Action, AppState, Output};
 use crate::i18n::Lang;
 use crate::ops::OpError;
+pub use crate::ops::tuya::FirmwareFileError;
 use crate::ops::tuya::{self as ops, OtaTiming};
 use crate::ui::jobs::{Job, JobError, JobOutput};
 use eframe::egui;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 const GREEN: egui::Color32 = egui::Color32::from_rgb(40, 160, 60);
@@ -34,8 +36,8 @@ pub struct OtaView {
     pub path: String,
     /// Why the file cannot be sent.
     pub error: Option<FirmwareFileError>,
-    /// The file checked and awaiting confirmation, with its size.
-    confirm: Option<(PathBuf, u64)>,
+    /// The file checked and awaiting confirmation, with its size when the system gives it.
+    confirm: Option<(PathBuf, Option<u64>)>,
     /// The running update's progress.
     pub progress: Option<OtaProgress>,
     /// The last update's result.
@@ -44,79 +46,12 @@ pub struct OtaView {
     pub running: bool,
 }
 
-/// Why a firmware file cannot be sent.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum FirmwareFileError {
-    /// No file chosen.
-    #[error("choose a firmware file first")]
-    NoneChosen,
-    /// The file cannot be read.
-    #[error("{}: {reason}", path.display())]
-    Unreadable {
-        /// The file.
-        path: PathBuf,
-        /// What the system said.
-        reason: String,
-    },
-    /// Not a file (a folder, a device).
-    #[error("{}: not a file", path.display())]
-    NotAFile {
-        /// The path.
-        path: PathBuf,
-    },
-    /// An empty file.
-    #[error("{}: the firmware file is empty; nothing to send", path.display())]
-    Empty {
-        /// The file.
-        path: PathBuf,
-    },
-    /// A file larger than the update can announce (a 32-bit size).
-    #[error("{}: {size} bytes is over the 4 GiB the update can announce", path.display())]
-    TooLarge {
-        /// The file.
-        path: PathBuf,
-        /// Its size.
-        size: u64,
-    },
-}
-
-/// The size of a firmware file that can be sent, or why it cannot.
-pub fn check_file(path: &Path) -> Result<u64, FirmwareFileError> {
-    if path.as_os_str().is_empty() {
-        return Err(FirmwareFileError::NoneChosen);
-    }
-    let meta = std::fs::metadata(path).map_err(|e| FirmwareFileError::Unreadable {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
-    if !meta.is_file() {
-        return Err(FirmwareFileError::NotAFile {
-            path: path.to_path_buf(),
-        });
-    }
-    match meta.len() {
-        0 => Err(FirmwareFileError::Empty {
-            path: path.to_path_buf(),
-        }),
-        n if n > u64::from(u32::MAX) => Err(FirmwareFileError::TooLarge {
-            path: path.to_path_buf(),
-            size: n,
-        }),
-        n => Ok(n),
-    }
-}
-
 /// Seconds as `1 min 05 s` or `12 s`.
 fn duration(secs: f64) -> String {
-    let s = secs.max(0.0).round() as u64;
-    if s >= 60 {
-        format!("{} min {:02} s", s / 60, s % 60)
-    } else {
-        format!("{s} s")
-    }
+    ops::duration_text(std::time::Duration::from_secs_f64(secs.max(0.0)))
 }
 
-fn work(path: PathBuf) -> Job {
+fn work(path: PathBuf, max: u32) -> Job {
     Job::new("OTA", move |client, cancel, sink| {
         let done = |r: Result<ops::OtaReport, JobError>| {
             sink.send(JobOutput::Tuya(Output::OtaDone(r.clone())));
@@ -127,33 +62,41 @@ fn work(path: PathBuf) -> Job {
                 )
             })
         };
-        let image = match crate::document::read_bytes(&path, crate::document::Limit::FIRMWARE) {
+        // Read with the profile's bound: a file that grew past it, or a device, stops there.
+        let image = match ops::read_image(&path, max) {
             Ok(i) => i,
             Err(e) => {
                 return done(Err(JobError::File {
                     path: path.clone(),
-                    reason: e.message().to_string(),
+                    reason: e.to_string(),
                 }));
             }
         };
         let started = Instant::now();
         let mut packet = None;
         let mut acked = 0u64;
-        let result = ops::ota(client, &image, OtaTiming::default(), cancel, &mut |p| {
-            if packet.is_none() && p.done < p.total {
-                packet = Some(p.done as usize);
-            }
-            acked = p.done;
-            let rate = p.done as f64 / started.elapsed().as_secs_f64().max(1e-3);
-            sink.send(JobOutput::Tuya(Output::OtaProgress(OtaProgress {
-                done: p.done,
-                total: p.total,
-                rate,
-                left: p.total.saturating_sub(p.done) as f64 / rate.max(1.0),
-                packet,
-            })));
-            sink.progress(p);
-        });
+        let result = ops::ota(
+            client,
+            &image,
+            max,
+            OtaTiming::default(),
+            cancel,
+            &mut |p| {
+                if packet.is_none() && p.done < p.total {
+                    packet = Some(p.done as usize);
+                }
+                acked = p.done;
+                let rate = p.done as f64 / started.elapsed().as_secs_f64().max(1e-3);
+                sink.send(JobOutput::Tuya(Output::OtaProgress(OtaProgress {
+                    done: p.done,
+                    total: p.total,
+                    rate,
+                    left: p.total.saturating_sub(p.done) as f64 / rate.max(1.0),
+                    packet,
+                })));
+                sink.progress(p);
+            },
+        );
         done(result.map_err(|e| match e {
             OpError::Cancelled => JobError::UpdateCancelled {
                 offset: acked,
@@ -184,11 +127,20 @@ impl OtaView {
     /// Draws the section.
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
+        let max = rt.device.profile.ota_max_bytes();
         let busy = rt.job_progress().is_some();
         let active = self.active(rt);
         ui.weak(lang.tr(
             "The image goes in packets of the size the MCU asks for (256, 512 or 1024 bytes); each packet waits up to 5 s for its ack and is sent up to 3 more times.",
             "固件按MCU要求的包大小(256、512或1024字节)分包发送;每包最多等待5秒应答,最多重发3次。",
+        ));
+        ui.weak(format!(
+            "{} {max} {}",
+            lang.tr(
+                "The profile allows images of at most",
+                "配置允许的最大固件:"
+            ),
+            lang.tr("bytes.", "字节。")
         ));
         ui.horizontal_wrapped(|ui| {
             let label = ui.label(lang.tr("Firmware file", "固件文件"));
@@ -211,7 +163,7 @@ impl OtaView {
                     .pick_file()
             {
                 self.path = p.display().to_string();
-                self.error = check_file(&p).err();
+                self.error = ops::check_file(&p, max).err();
             }
             if ui
                 .add_enabled(
@@ -221,7 +173,7 @@ impl OtaView {
                 .clicked()
             {
                 let path = PathBuf::from(self.path.trim());
-                match check_file(&path) {
+                match ops::check_file(&path, max) {
                     Ok(size) => {
                         self.error = None;
                         self.confirm = Some((path, size));
@@ -290,18 +242,45 @@ impl OtaView {
             }
             _ => {}
         }
-        if let Some(a) = self.confirm_dialog(ui, lang) {
+        if let Some(a) = self.confirm_dialog(ui, lang, rt) {
             actions.push(a);
         }
         actions
     }
 
-    fn confirm_dialog(&mut self, ui: &mut egui::Ui, lang: Lang) -> Option<Action> {
+    fn confirm_dialog(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Option<Action> {
         let (path, size) = self.confirm.clone()?;
+        let max = rt.device.profile.ota_max_bytes();
+        let baud = rt.link.baud().unwrap_or(rt.device.profile.baud);
         let mut decision = None;
         let modal = egui::Modal::new(egui::Id::unique("tuya-ota-confirm")).show(ui.ctx(), |ui| {
             ui.heading(lang.tr("Update the MCU firmware?", "升级MCU固件?"));
-            ui.label(format!("{} ({size} B)", path.display()));
+            match size {
+                Some(size) => {
+                    ui.label(format!("{} ({size} B)", path.display()));
+                    let t = ops::transfer_time(size, ops::DEFAULT_PACKET, baud);
+                    ui.label(format!(
+                        "{} {} {} {baud} {} ({} {} {})",
+                        lang.tr("Expected transfer time:", "预计传输时间:"),
+                        ops::duration_text(t),
+                        lang.tr("at", "波特率"),
+                        lang.tr("baud", ""),
+                        ops::DEFAULT_PACKET,
+                        lang.tr("byte packets;", "字节每包;"),
+                        lang.tr(
+                            "less if the MCU asks for larger ones",
+                            "若MCU要求更大的包则更短"
+                        ),
+                    ));
+                }
+                None => {
+                    ui.label(format!(
+                        "{} ({} {max} B)",
+                        path.display(),
+                        lang.tr("size unknown until read; at most", "读取前大小未知;最多")
+                    ));
+                }
+            }
             ui.label(lang.tr(
                 "Keep the MCU powered until the update ends.",
                 "升级结束前请勿断开MCU电源。",
@@ -324,7 +303,7 @@ impl OtaView {
                 self.running = true;
                 self.progress = None;
                 self.result = None;
-                Some(Action::StartJob(work(path)))
+                Some(Action::StartJob(work(path, max)))
             }
             false => {
                 self.confirm = None;

@@ -1,19 +1,26 @@
 //! The Tuya session: botbench plays the Wi-Fi module (PROTOCOL_NOTES §3). A state machine runs
 //! the start-up handshake (heartbeat, product info, working mode, Wi-Fi state, query status),
 //! then a heartbeat that notices an MCU restart and starts the handshake again; frames the MCU
-//! sends on its own are answered ([`mcu_requests`]) or passed on as reports.
+//! sends on its own are answered ([`mcu_requests`]) or passed on as reports. The MCU's frames
+//! are taken whatever their version byte, and told from the module's own echoed frames by what
+//! was sent ([`echo`]).
 
+mod echo;
 mod mcu_requests;
 mod product_info;
+mod reports;
 
 pub use mcu_requests::{TuyaModuleOptions, answer_mcu_request, local_time};
 pub use product_info::{ProductInfo, parse_product_info};
+pub use reports::{command_ids, reported_ids, reports_reply};
 
 use super::Unasked;
-use crate::link::request::{ExchangeError, Match, Reply, ReplySpec, Request};
-use crate::link::{LinkEvent, wire_time};
-use crate::packet::Packet;
-use crate::protocol::tuya::{self, cmd};
+use crate::link::LinkEvent;
+use crate::link::request::{ExchangeError, Reply, ReplySpec, Request};
+use crate::packet::{Header, Packet};
+use crate::profile::Profile;
+use crate::protocol::Direction;
+use crate::protocol::tuya::{self, VERSION_MCU, cmd};
 use serde::Serialize;
 use std::time::{Duration, Instant};
 
@@ -21,9 +28,6 @@ use std::time::{Duration, Instant};
 const HANDSHAKE_RETRY: Duration = Duration::from_secs(1);
 /// How soon the heartbeat is sent again after the MCU missed one.
 const HEARTBEAT_RETRY: Duration = Duration::from_secs(3);
-/// The pause that ends the burst of data-point reports answering the query (at least; longer
-/// when 64 bytes take longer on the wire).
-const QUERY_QUIET: Duration = Duration::from_millis(300);
 
 /// A step of the module's start-up handshake.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -76,6 +80,12 @@ pub enum TuyaEvent {
         /// What came back, or why it failed.
         detail: String,
     },
+    /// The version byte of the MCU's frames (its heartbeat answer's): 0x03 by the protocol
+    /// document, 0x01 from MCU SDKs before v2.5, 0x00 from some firmware.
+    FrameVersion {
+        /// The version byte.
+        version: u8,
+    },
     /// Product info as read.
     ProductInfo(ProductInfo),
     /// The working mode: the MCU drives the LED, or the module's GPIO numbers.
@@ -110,6 +120,12 @@ pub(crate) struct TuyaSession {
     phase: Phase,
     /// What was sent and is awaited.
     asked: Option<Ask>,
+    /// The profile's data points: the status query's answer is complete when each reported.
+    data_points: Vec<u8>,
+    /// The status query's answer: the reports of every data point.
+    status_reply: ReplySpec,
+    /// The module's own frames read back on a line that echoes.
+    echo: echo::EchoFilter,
 }
 
 /// Where the module stands with the MCU.
@@ -138,15 +154,20 @@ impl TuyaSession {
     /// A session answering the MCU with `options`; the handshake starts at `now` when
     /// `handshake_on_connect`.
     pub(crate) fn new(
+        profile: &Profile,
         options: TuyaModuleOptions,
         handshake_on_connect: bool,
         now: Instant,
     ) -> Self {
+        let data_points: Vec<u8> = profile.data_points.iter().map(|d| d.id).collect();
         let mut session = Self {
             options,
             handshake_on_connect,
             phase: Phase::Idle,
             asked: None,
+            status_reply: reports_reply(profile, &data_points),
+            data_points,
+            echo: echo::EchoFilter::default(),
         };
         session.connected(now);
         session
@@ -159,6 +180,7 @@ impl TuyaSession {
 
     /// A new connection (the first, or after a reconnect).
     pub(crate) fn connected(&mut self, now: Instant) {
+        self.echo.connected();
         if self.handshake_on_connect {
             self.phase = Phase::HandshakeAt(now);
         }
@@ -186,9 +208,22 @@ impl TuyaSession {
         }
     }
 
-    /// The request due at `now`, if any; its answer is then awaited. `baud` sets how long a
-    /// pause ends the query's burst of reports.
-    pub(crate) fn next_request(&mut self, now: Instant, baud: u32) -> Option<Request> {
+    /// The module wrote the frame `sent`.
+    pub(crate) fn wrote(&mut self, sent: &Packet) {
+        self.echo.wrote(&sent.wire);
+    }
+
+    /// A frame read from the line, as the MCU's or, when it repeats what the module sent, as
+    /// the module's own echo (direction host to device).
+    pub(crate) fn received(&mut self, mut p: Packet) -> Packet {
+        if self.echo.is_echo(&p) {
+            p.direction = Direction::HostToDevice;
+        }
+        p
+    }
+
+    /// The request due at `now`, if any; its answer is then awaited.
+    pub(crate) fn next_request(&mut self, now: Instant) -> Option<Request> {
         if !self.due(now) {
             return None;
         }
@@ -208,10 +243,7 @@ impl TuyaSession {
             HandshakeStep::Heartbeat => Request::new(cmd::HEARTBEAT, Vec::new()).attempts(2),
             HandshakeStep::WifiState => Request::new(cmd::WIFI_STATE, vec![wifi_state]),
             HandshakeStep::QueryStatus => {
-                Request::new(cmd::QUERY_STATUS, Vec::new()).reply(ReplySpec::Burst {
-                    each: Match::command(cmd::DP_REPORT),
-                    quiet: QUERY_QUIET.max(wire_time(64, baud)),
-                })
+                Request::new(cmd::QUERY_STATUS, Vec::new()).reply(self.status_reply.clone())
             }
             HandshakeStep::ProductInfo | HandshakeStep::WorkMode => {
                 Request::new(step.command(), Vec::new())
@@ -269,12 +301,21 @@ impl TuyaSession {
         let payload = reply.payload().unwrap_or_default();
         let next = match step {
             HandshakeStep::Heartbeat => {
-                let detail = if payload == [0] {
+                let answer = if payload == [0] {
                     "answered 0: first since the MCU started"
                 } else {
                     "answered 1"
                 };
-                events.push(step_event(step, true, detail.into()));
+                let detail = match reply.packets.first().map(|p| &p.header) {
+                    Some(Header::Tuya { version }) => {
+                        events.push(LinkEvent::Tuya(TuyaEvent::FrameVersion {
+                            version: *version,
+                        }));
+                        format!("{answer}; {}", version_text(*version))
+                    }
+                    _ => answer.to_string(),
+                };
+                events.push(step_event(step, true, detail));
                 HandshakeStep::ProductInfo
             }
             HandshakeStep::ProductInfo => {
@@ -319,7 +360,23 @@ impl TuyaSession {
                 HandshakeStep::QueryStatus
             }
             HandshakeStep::QueryStatus => {
-                let detail = format!("{} report(s)", reply.packets.len());
+                let reported = reported_ids(&reply.packets);
+                let missing: Vec<String> = self
+                    .data_points
+                    .iter()
+                    .filter(|id| !reported.contains(id))
+                    .map(u8::to_string)
+                    .collect();
+                let total = self.data_points.len();
+                let detail = if missing.is_empty() {
+                    format!("all {total} data points reported")
+                } else {
+                    format!(
+                        "{} of {total} data points reported; not reported: {}",
+                        total - missing.len(),
+                        missing.join(", ")
+                    )
+                };
                 events.push(step_event(step, true, detail));
                 events.push(LinkEvent::Tuya(TuyaEvent::HandshakeDone));
                 self.phase = Phase::Heartbeat(now + self.options.heartbeat);
@@ -347,6 +404,18 @@ impl TuyaSession {
         } else {
             Unasked::Stale
         }
+    }
+}
+
+/// The MCU's frame version as a person reads it: `MCU frames carry version 0x00 (the protocol
+/// document says 0x03)`.
+pub fn version_text(version: u8) -> String {
+    if version == VERSION_MCU {
+        format!("MCU frames carry version {version:#04x}")
+    } else {
+        format!(
+            "MCU frames carry version {version:#04x} (the protocol document says {VERSION_MCU:#04x})"
+        )
     }
 }
 

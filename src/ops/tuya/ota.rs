@@ -1,0 +1,341 @@
+//! The MCU firmware update (OTA, PROTOCOL_NOTES §3): the image read from its file with a size
+//! bound, the expected transfer time at the port's rate, and the upload itself.
+
+use super::super::{Cancel, OpError, Progress};
+use crate::link::{Client, ExchangeError, Match, ReplySpec, Request, wire_time};
+use crate::protocol::tuya::cmd;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// How long the MCU may take to ack one OTA packet.
+pub const OTA_ACK_WAIT: Duration = Duration::from_secs(5);
+/// Retries of an OTA packet whose ack did not come.
+pub const OTA_RETRIES: u8 = 3;
+/// The packet size an MCU asks for unless it says otherwise (0x0a answered 0 or nothing).
+pub const DEFAULT_PACKET: usize = 256;
+
+/// Why a firmware file cannot be sent. Nothing was sent.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FirmwareFileError {
+    /// No file chosen.
+    #[error("choose a firmware file first")]
+    NoneChosen,
+    /// The file cannot be read.
+    #[error("{}: {reason}", path.display())]
+    Unreadable {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        reason: String,
+    },
+    /// A folder.
+    #[error("{}: not a file", path.display())]
+    NotAFile {
+        /// The path.
+        path: PathBuf,
+    },
+    /// An empty file.
+    #[error("{}: the firmware file is empty; nothing to send", path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A file larger than the profile's largest image.
+    #[error(
+        "{}: {} bytes is over the largest image the profile allows ({max} bytes): is it the right file?",
+        path.display(),
+        size.map_or_else(|| format!("at least {}", u64::from(*max) + 1), |s| s.to_string())
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size, when the system knows it (a pipe or a device has none: reading stopped
+        /// past the maximum).
+        size: Option<u64>,
+        /// The profile's largest image ([`crate::profile::Profile::ota_max_bytes`]).
+        max: u32,
+    },
+}
+
+/// The size of the firmware file at `path`, if it can be sent (at most `max` bytes, not
+/// empty); a file whose size the system does not give (a pipe) is `None` here and is bounded
+/// when read. Reads nothing.
+pub fn check_file(path: &Path, max: u32) -> Result<Option<u64>, FirmwareFileError> {
+    if path.as_os_str().is_empty() {
+        return Err(FirmwareFileError::NoneChosen);
+    }
+    let meta = std::fs::metadata(path).map_err(|e| FirmwareFileError::Unreadable {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    if meta.is_dir() {
+        return Err(FirmwareFileError::NotAFile {
+            path: path.to_path_buf(),
+        });
+    }
+    if !meta.is_file() {
+        return Ok(None);
+    }
+    match meta.len() {
+        0 => Err(FirmwareFileError::Empty {
+            path: path.to_path_buf(),
+        }),
+        n if n > u64::from(max) => Err(FirmwareFileError::TooLarge {
+            path: path.to_path_buf(),
+            size: Some(n),
+            max,
+        }),
+        n => Ok(Some(n)),
+    }
+}
+
+/// The firmware image at `path`, read with a bound: a file over `max` bytes is refused by its
+/// size before anything is read, and one whose size the system does not give (a pipe, a device
+/// such as /dev/zero) is read no further than one byte past `max`.
+pub fn read_image(path: &Path, max: u32) -> Result<Vec<u8>, FirmwareFileError> {
+    check_file(path, max)?;
+    let unreadable = |e: std::io::Error| FirmwareFileError::Unreadable {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    };
+    let file = std::fs::File::open(path).map_err(unreadable)?;
+    let mut image = Vec::new();
+    file.take(u64::from(max) + 1)
+        .read_to_end(&mut image)
+        .map_err(unreadable)?;
+    if image.len() > max as usize {
+        return Err(FirmwareFileError::TooLarge {
+            path: path.to_path_buf(),
+            size: None,
+            max,
+        });
+    }
+    if image.is_empty() {
+        return Err(FirmwareFileError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(image)
+}
+
+/// The bytes an update of `size` bytes puts on the wire with `packet`-byte packets: the start
+/// (11 out, 8 back), each packet (7 + 4 + data out, 7 back), the last, empty packet (11 out, 7
+/// back).
+pub fn transfer_bytes(size: u64, packet: usize) -> u64 {
+    let packets = size.div_ceil(packet.max(1) as u64);
+    11 + 8 + packets * (7 + 4 + 7) + size + 11 + 7
+}
+
+/// How long an update of `size` bytes takes at `baud` with `packet`-byte packets: the bytes'
+/// own time on the wire, which the update comes close to (see the README's figures).
+pub fn transfer_time(size: u64, packet: usize, baud: u32) -> Duration {
+    let bytes = usize::try_from(transfer_bytes(size, packet)).unwrap_or(usize::MAX);
+    wire_time(bytes, baud)
+}
+
+/// A duration as `1 h 02 min`, `4 min 05 s` or `12 s`.
+pub fn duration_text(d: Duration) -> String {
+    let s = d.as_secs_f64().round() as u64;
+    match s {
+        s if s >= 3600 => format!("{} h {:02} min", s / 3600, s % 3600 / 60),
+        s if s >= 60 => format!("{} min {:02} s", s / 60, s % 60),
+        s => format!("{s} s"),
+    }
+}
+
+/// What an update of `size` bytes will take at `baud`, for a person about to start it:
+/// `65536 bytes: about 1 min 14 s at 9600 baud (256-byte packets; less if the MCU asks for
+/// larger ones)`.
+pub fn expected_text(size: u64, baud: u32) -> String {
+    format!(
+        "{size} bytes: about {} at {baud} baud ({DEFAULT_PACKET}-byte packets; less if the MCU asks for larger ones)",
+        duration_text(transfer_time(size, DEFAULT_PACKET, baud))
+    )
+}
+
+/// The result of a firmware upload.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct OtaReport {
+    /// Image size in bytes.
+    pub size: usize,
+    /// The packet size the MCU asked for.
+    pub packet_size: usize,
+    /// Data packets sent.
+    pub packets: usize,
+    /// Packets sent again after a missing ack.
+    pub retries: u32,
+    /// Seconds taken.
+    pub seconds: f64,
+}
+
+/// The packet size of the MCU's answer to 0x0a: 0 → 256, 1 → 512, 2 → 1024, nothing → 256.
+pub fn packet_size(answer: &[u8]) -> Result<usize, OpError> {
+    match answer.first() {
+        None | Some(0) => Ok(256),
+        Some(1) => Ok(512),
+        Some(2) => Ok(1024),
+        Some(x) => Err(OpError::Verify(format!(
+            "the MCU asked for unknown packet size option {x}"
+        ))),
+    }
+}
+
+/// How an upload waits for acks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OtaTiming {
+    /// How long the MCU may take to ack a packet.
+    pub ack_wait: Duration,
+    /// How many times a packet is sent again when its ack does not come.
+    pub retries: u8,
+}
+
+impl Default for OtaTiming {
+    /// 5 s and 3 retries, as the Tuya MCU SDK expects.
+    fn default() -> Self {
+        Self {
+            ack_wait: OTA_ACK_WAIT,
+            retries: OTA_RETRIES,
+        }
+    }
+}
+
+/// Uploads `image` to the MCU: 0x0a with the size, then 0x0b packets of the size the MCU asked
+/// for (never larger), each acked within `timing.ack_wait` and sent up to `timing.retries` more
+/// times, then the final empty packet at offset == size. An image over `max` bytes (the
+/// profile's [`crate::profile::Profile::ota_max_bytes`]) is refused before anything is sent.
+pub fn ota(
+    client: &Client,
+    image: &[u8],
+    max: u32,
+    timing: OtaTiming,
+    cancel: &Cancel,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<OtaReport, OpError> {
+    let attempts = timing.retries.saturating_add(1);
+    if image.is_empty() {
+        return Err(OpError::EmptyImage);
+    }
+    let size = u32::try_from(image.len())
+        .ok()
+        .filter(|s| *s <= max)
+        .ok_or(OpError::ImageTooLarge {
+            size: image.len(),
+            max,
+        })?;
+    let started = Instant::now();
+    let start = Request::new(cmd::OTA_START, size.to_be_bytes().to_vec())
+        .margin(timing.ack_wait)
+        .attempts(attempts);
+    let answer = client
+        .request(start)
+        .map_err(|e| OpError::Verify(format!("the MCU did not accept the update: {e}")))?;
+    let chunk = packet_size(answer.payload().unwrap_or_default())?;
+    let mut retries = 0u32;
+    let mut packets = 0usize;
+    let total = image.len() as u64;
+    for (i, data) in image.chunks(chunk).enumerate() {
+        if cancel.is_cancelled() {
+            return Err(OpError::Cancelled);
+        }
+        let offset = (i * chunk) as u32;
+        let mut payload = offset.to_be_bytes().to_vec();
+        payload.extend_from_slice(data);
+        let req = Request::new(cmd::OTA_PACKET, payload)
+            .margin(timing.ack_wait)
+            .attempts(attempts);
+        let reply = client.request(req).map_err(|e| match e {
+            ExchangeError::Disconnected(r) => OpError::Verify(format!("link lost at offset {offset}: {r}")),
+            e => OpError::Verify(format!(
+                "the MCU stopped acking at offset {offset} (of {size} bytes) after {attempts} attempts: {e}"
+            )),
+        })?;
+        retries += u32::from(reply.attempts - 1);
+        packets += 1;
+        let done = (offset as u64) + data.len() as u64;
+        let secs = started.elapsed().as_secs_f64().max(1e-6);
+        let rate = done as f64 / secs;
+        let left = (total - done) as f64 / rate.max(1.0);
+        progress(Progress {
+            done,
+            total,
+            message: format!(
+                "offset {done} of {size}, {:.0} B/s, {:.0} s left",
+                rate, left
+            ),
+        });
+    }
+    let last = Request::new(cmd::OTA_PACKET, size.to_be_bytes().to_vec())
+        .reply(ReplySpec::Optional(Match::command(cmd::OTA_PACKET)))
+        .margin(Duration::from_secs(1))
+        .attempts(1);
+    client.request(last)?;
+    Ok(OtaReport {
+        size: image.len(),
+        packet_size: chunk,
+        packets,
+        retries,
+        seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_expected_time_is_the_wire_time_of_every_frame() {
+        // 64 KiB in 256 packets of 256 bytes: 65536 + 256 × 18, and 37 for the start and the end.
+        assert_eq!(transfer_bytes(65_536, 256), 65_536 + 256 * 18 + 37);
+        let t = transfer_time(65_536, 256, 9600);
+        assert_eq!(duration_text(t), "1 min 13 s");
+        // 20 MB at 9600 baud: about 6 hours.
+        assert_eq!(
+            duration_text(transfer_time(20_000_000, 256, 9600)),
+            "6 h 11 min"
+        );
+        assert!(expected_text(65_536, 9600).starts_with("65536 bytes: about 1 min 13 s at 9600"));
+    }
+
+    #[test]
+    fn a_file_is_refused_by_its_size_and_a_device_is_read_no_further_than_the_maximum() {
+        let dir = std::env::temp_dir().join(format!("botbench-ota-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let big = dir.join("big.bin");
+        // Sparse: 20 MB by its size, nothing written.
+        std::fs::File::create(&big)
+            .and_then(|f| f.set_len(20_000_000))
+            .unwrap();
+        let err = read_image(&big, 1024).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                FirmwareFileError::TooLarge {
+                    size: Some(20_000_000),
+                    max: 1024,
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        assert!(err.to_string().contains("20000000 bytes is over"), "{err}");
+        let err = read_image(Path::new("/dev/zero"), 1024).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "/dev/zero: at least 1025 bytes is over the largest image the profile allows (1024 bytes): is it the right file?"
+        );
+        let small = dir.join("small.bin");
+        std::fs::write(&small, [1, 2, 3]).unwrap();
+        assert_eq!(read_image(&small, 3).unwrap(), [1, 2, 3]);
+        std::fs::write(&small, []).unwrap();
+        assert!(matches!(
+            read_image(&small, 3),
+            Err(FirmwareFileError::Empty { .. })
+        ));
+        assert!(matches!(
+            read_image(&dir, 3),
+            Err(FirmwareFileError::NotAFile { .. })
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
