@@ -10,6 +10,7 @@ pub mod encode;
 pub mod fault;
 pub mod registry;
 pub mod relation;
+pub mod stop;
 pub mod validate;
 pub mod value;
 

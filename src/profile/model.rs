@@ -111,6 +111,24 @@ pub struct Profile {
     /// Relations between fields that every write must keep (minimum ≤ default ≤ maximum...).
     #[serde(default)]
     pub relations: Vec<Relation>,
+    /// What STOP sends, in order: the commands that bring the robot to rest (motors, fan,
+    /// spray off) with every field's value. The window's STOP, the self-test's safe state and
+    /// the "running" indicator all read it here ([`crate::profile::stop`]).
+    #[serde(default)]
+    pub stop: Vec<StopCommand>,
+}
+
+/// One command of the profile's STOP: the command and the value of each of its request fields,
+/// as display text (`{"motor": "stop"}`, `{"pwm": "0"}`). Checked at load: the command exists
+/// and is sent by the host, every field has a value the field takes, no other names.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StopCommand {
+    /// The command's canonical ident (or number).
+    pub command: String,
+    /// Field ident → value, as a person writes it.
+    #[serde(default)]
+    pub values: std::collections::BTreeMap<String, String>,
 }
 
 impl Profile {
@@ -133,6 +151,7 @@ impl Profile {
             plots: Vec::new(),
             panels: Vec::new(),
             relations: Vec::new(),
+            stop: Vec::new(),
         }
     }
 }
@@ -272,6 +291,11 @@ pub struct Command {
     /// The robot moves: ask the operator first.
     #[serde(default)]
     pub confirm: bool,
+    /// On a Get: its values are the robot's tuning, meant to be the same on every unit, so
+    /// presets capture, compare and apply it (with its Set). A unit's own state (its auto-test
+    /// result, a calibration) is left unmarked and never copied from one unit to the next.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub tunable: bool,
     /// The initiator's payload. A Set with none sends its Get's reply layout; a Set with its own
     /// (firmware that takes fewer fields than its Get answers with) sends that, and every field
     /// of it must be a field of the Get's reply, so that the write can be read back.
@@ -479,6 +503,9 @@ pub struct Param {
     pub id: u8,
     /// Read-only (1-8) or user (32-53).
     pub access: Access,
+    /// Reserved by the maker: shown, and written back as read in the user block, never edited.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub reserved: bool,
     /// Its layout, name, unit, range and labels.
     pub field: Field,
 }
