@@ -22,7 +22,7 @@ fn bench() -> Served<WindowCleaner> {
 /// generous for a loaded test machine (the protocol's own 20 ms is tested below).
 fn harness(path: &str, panel: PanelId) -> H {
     let mut saved = settings(path, "window-cleaner", panel, Lang::En);
-    saved.margin_ms = Some(100);
+    saved.port_mut().margin_ms = Some(100);
     gui_harness::harness(saved)
 }
 
@@ -292,7 +292,11 @@ fn a_slow_device_is_read_once_the_answer_margin_allows_for_it() {
     // The protocol's own 20 ms is too short for it, even over three attempts: reads fail, and
     // say so.
     let saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
-    assert_eq!(saved.margin_ms, None, "the protocol's own margin");
+    assert_eq!(
+        saved.port_of("window-cleaner").margin_ms,
+        None,
+        "the protocol's own margin"
+    );
     let mut h = gui_harness::harness(saved);
     step_until(&mut h, "the first read to fail", |a| {
         matches!(a.state.device.readings.get(&130), Some(Reading::Failed(_)))
@@ -300,7 +304,7 @@ fn a_slow_device_is_read_once_the_answer_margin_allows_for_it() {
     drop(h);
     // 300 ms chosen in the connection bar: every parameter is read.
     let mut saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
-    saved.margin_ms = Some(300);
+    saved.port_mut().margin_ms = Some(300);
     let mut h = gui_harness::harness(saved);
     step_until(&mut h, "every parameter read", all_read);
 }

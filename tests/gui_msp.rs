@@ -5,7 +5,7 @@ use botbench::i18n::Lang;
 use botbench::sim::SimOptions;
 use botbench::sim::solar_cleanbot::SolarCleanbot;
 use botbench::sim::window_cleaner::{Fault, WindowCleaner};
-use botbench::ui::{App, PanelId, SolarOutcome, SolarTrip};
+use botbench::ui::{App, PanelId, SolarTrip};
 use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use std::time::Duration;
@@ -32,7 +32,7 @@ fn solar() -> Bench<SolarCleanbot> {
 /// loaded test machine.
 fn harness(path: &str, profile: &str, panel: PanelId, lang: Lang) -> H {
     let mut saved = settings(path, profile, panel, lang);
-    saved.margin_ms = Some(100);
+    saved.port_mut().margin_ms = Some(100);
     gui_harness::harness(saved)
 }
 
@@ -203,10 +203,7 @@ fn speed_rotate_and_stop_from_the_solar_panel_drive_the_simulated_robot() {
     });
     h.state_mut().as_mut().unwrap().settings.panel = PanelId::Solar;
     step_until(&mut h, "the STOP acknowledged", |a| {
-        matches!(
-            a.solar.control.outcomes.get(&100),
-            Some((SolarOutcome::Acked(_), _))
-        )
+        matches!(a.stop.state(), botbench::ui::stop::StopState::Acked(_))
     });
 }
 

@@ -47,7 +47,7 @@ fn harness(b: &Bench, lang: Lang) -> H {
         // Generous for a loaded test machine (the tests share 2 cores with builds).
         app.apply(Action::Connect {
             target: saved.target.clone(),
-            baud: saved.baud,
+            baud: 115_200,
             profile: saved.profile.clone(),
             margin_ms: Some(20),
         });
@@ -599,7 +599,7 @@ fn a_new_connection_forgets_the_servos_found_on_the_last_one() {
     scan(&mut h, "0", "10");
     assert_eq!(app(&h).servo.scan.rows.len(), 1);
     assert!(app(&h).servo.selected.is_some(), "a lone servo is selected");
-    let margin_ms = app(&h).settings.margin_ms;
+    let margin_ms = app(&h).settings.port_of("servo").margin_ms;
     gui_harness::app_mut(&mut h).apply(Action::Connect {
         target: botbench::ui::Target::Port(other.path().to_string()),
         baud: 115_200,

@@ -67,7 +67,7 @@ fn writable_profile(dir: &std::path::Path) -> (String, Bench) {
 
 fn harness(path: &str, profile: &str) -> H {
     let mut saved = settings(path, profile, PanelId::TuyaConsole, Lang::En);
-    saved.baud = BAUD;
+    saved.port_mut().baud = Some(BAUD);
     gui_harness::harness(saved)
 }
 

@@ -47,6 +47,29 @@ impl Profile {
             })
             .collect()
     }
+
+    /// Whether sending command `id` with `inputs` is what the STOP sends for it (it brings the
+    /// robot to rest, so it needs no "the robot will move" confirmation).
+    pub fn is_stop(&self, id: u8, inputs: &[(String, Input)]) -> bool {
+        let Some(stop) = self.stop_values(id) else {
+            return false;
+        };
+        let Some(cmd) = self.command_by_id(id) else {
+            return false;
+        };
+        stop.iter().all(|(k, want)| {
+            let Some(f) = cmd.request.iter().find(|f| &f.ident == k) else {
+                return false;
+            };
+            inputs.iter().any(|(name, v)| {
+                name.eq_ignore_ascii_case(k)
+                    && match v {
+                        Input::Text(t) => f.parse(t).ok().as_ref() == Some(want),
+                        Input::Raw(r) => r == want,
+                    }
+            })
+        })
+    }
 }
 
 /// Checks the profile's STOP: each command exists, is sent by the host (an Action or a Set),

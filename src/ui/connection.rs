@@ -3,7 +3,7 @@
 
 use super::Action;
 use super::settings::Settings;
-use super::state::{AppState, Target};
+use super::state::{Answering, AppState, Target};
 use crate::i18n::Lang;
 use crate::link::LinkState;
 use crate::sim::SimKind;
@@ -36,19 +36,45 @@ pub struct ConnectionBar {
     typed: String,
 }
 
+/// A margin this many times the protocol's own is worth a warning: every request that goes
+/// unanswered (each id a scan asks) waits that long.
+const MARGIN_WARN_FACTOR: f64 = 4.0;
+
 impl ConnectionBar {
-    /// Fields from the saved settings.
-    pub fn new(saved: &Settings) -> Self {
+    /// Fields from the saved settings, at `baud` (the profile's saved or usual rate).
+    pub fn new(saved: &Settings, baud: u32) -> Self {
         Self {
             target: saved.target.clone(),
-            baud: saved.baud,
+            baud,
             profile: saved.profile.clone(),
-            margin_ms: saved.margin_ms,
+            margin_ms: saved.port_of(&saved.profile).margin_ms,
             typed: match &saved.target {
                 Target::Port(p) => p.clone(),
                 Target::Demo(_) => String::new(),
             },
         }
+    }
+
+    /// The profile the bar would connect with.
+    pub fn profile(&self) -> &str {
+        &self.profile
+    }
+
+    /// The baud rate and margin the bar would connect with.
+    pub fn port(&self) -> (u32, Option<u64>) {
+        (self.baud, self.margin_ms)
+    }
+
+    /// Another profile chosen: its own saved port settings (or its usual rate, auto margin).
+    fn take_profile(&mut self, profile: &str, saved: &Settings, rt: &AppState) {
+        if self.profile == profile {
+            return;
+        }
+        let port = saved.port_of(profile);
+        let usual = rt.registry.get(profile).map_or(self.baud, |p| p.baud);
+        self.profile = profile.to_string();
+        self.baud = port.baud.unwrap_or(usual);
+        self.margin_ms = port.margin_ms;
     }
 
     /// Draws the bar.
@@ -65,8 +91,10 @@ impl ConnectionBar {
                         let t = Target::Demo(kind.name().to_string());
                         let label = format!("{} ({})", lang.tr("Demo", "演示"), kind.describe());
                         if ui.selectable_label(self.target == t, label).clicked() {
-                            self.profile = kind.profile_id().to_string();
-                            self.baud = kind.default_baud();
+                            self.take_profile(kind.profile_id(), saved, rt);
+                            if saved.port_of(kind.profile_id()).baud.is_none() {
+                                self.baud = kind.default_baud();
+                            }
                             self.target = t;
                         }
                     }
@@ -107,16 +135,22 @@ impl ConnectionBar {
                 .response
                 .labelled_by(baud_label.id);
             let profile_label = ui.label(lang.tr("Profile", "设备配置"));
+            let mut chosen = None;
             egui::ComboBox::from_id_salt("profile")
                 .selected_text(&self.profile)
                 .show_ui(ui, |ui| {
                     for (p, _) in rt.registry.iter() {
                         let label = format!("{} — {}", p.id, lang.tr(&p.name.en, &p.name.zh));
-                        ui.selectable_value(&mut self.profile, p.id.clone(), label);
+                        if ui.selectable_label(self.profile == p.id, label).clicked() {
+                            chosen = Some(p.id.clone());
+                        }
                     }
                 })
                 .response
                 .labelled_by(profile_label.id);
+            if let Some(p) = chosen {
+                self.take_profile(&p, saved, rt);
+            }
             let margin_label = ui
                 .label(lang.tr("Margin", "应答余量"))
                 .on_hover_text(lang.tr(
@@ -140,6 +174,7 @@ impl ConnectionBar {
                 })
                 .response
                 .labelled_by(margin_label.id);
+            self.margin_warning(ui, lang, rt);
             let connect = || Action::Connect {
                 target: self.target.clone(),
                 baud: self.baud,
@@ -154,11 +189,12 @@ impl ConnectionBar {
             } else if ui.button(lang.tr("Connect", "连接")).clicked() {
                 actions.push(connect());
             }
+            let port = saved.port_of(&saved.profile);
             if open
                 && (self.target != saved.target
-                    || self.baud != saved.baud
+                    || Some(self.baud) != port.baud
                     || self.profile != saved.profile
-                    || self.margin_ms != saved.margin_ms)
+                    || self.margin_ms != port.margin_ms)
                 && ui.button(lang.tr("Reconnect", "重新连接")).clicked()
             {
                 actions.push(connect());
@@ -183,16 +219,69 @@ impl ConnectionBar {
     }
 }
 
+impl ConnectionBar {
+    /// A warning beside a margin far above the protocol's own.
+    fn margin_warning(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+        let Some(ms) = self.margin_ms else { return };
+        let Ok(profile) = rt.registry.get(&self.profile) else {
+            return;
+        };
+        let auto = crate::link::default_margin(profile.protocol).as_secs_f64() * 1e3;
+        let factor = ms as f64 / auto;
+        if factor < MARGIN_WARN_FACTOR {
+            return;
+        }
+        ui.colored_label(
+            egui::Color32::from_rgb(220, 150, 0),
+            format!("⚠ {factor:.0}× {}", lang.tr("auto", "自动值")),
+        )
+        .on_hover_text(format!(
+            "{ms} ms {} {factor:.0}× {} {auto} ms: {}",
+            lang.tr("is", "是"),
+            lang.tr("the automatic", "自动值"),
+            lang.tr(
+                "every request nobody answers (each id a scan asks) waits this long",
+                "每个无人应答的请求(扫描的每个ID)都要等待这么久",
+            )
+        ));
+    }
+}
+
 fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
     let (text, color) = match (&rt.link.connection, &rt.link.state) {
         (None, _) => (
             lang.tr("not connected", "未连接").to_string(),
             egui::Color32::GRAY,
         ),
-        (Some(_), Some(LinkState::Connected { .. })) => (
-            lang.tr("● connected", "● 已连接").to_string(),
-            egui::Color32::from_rgb(40, 160, 60),
-        ),
+        // An open port says nothing of the device behind it: green only once it answers. On a
+        // servo bus silence is normal (a scan asks ids nobody has), so the port is all it says.
+        (Some(_), Some(LinkState::Connected { .. }))
+            if rt.device.profile.protocol == crate::profile::Protocol::Servo =>
+        {
+            (
+                lang.tr("● port open", "● 端口已打开").to_string(),
+                egui::Color32::from_rgb(60, 130, 200),
+            )
+        }
+        (Some(_), Some(LinkState::Connected { .. })) => match rt.link.answering() {
+            Answering::Yes => (
+                lang.tr("● device answering", "● 设备应答中").to_string(),
+                egui::Color32::from_rgb(40, 160, 60),
+            ),
+            Answering::NotYet => (
+                lang.tr("● port open, no answer yet", "● 端口已打开,尚无应答")
+                    .to_string(),
+                egui::Color32::from_rgb(220, 150, 0),
+            ),
+            Answering::No(n) => (
+                format!(
+                    "{} ({n} {})",
+                    lang.tr("● port open, device silent", "● 端口已打开,设备无应答"),
+                    lang.tr("unanswered", "次未应答")
+                ),
+                egui::Color32::RED,
+            ),
+        },
         (Some(_), Some(LinkState::Reconnecting { attempt })) => (
             format!("{} ({attempt})", lang.tr("● reconnecting", "● 重连中")),
             egui::Color32::from_rgb(220, 150, 0),

@@ -8,9 +8,11 @@ mod actions;
 pub mod app;
 mod connection;
 mod device;
+pub mod files;
 mod inputs;
 pub mod jobs;
 mod monitor;
+mod plot;
 mod presets;
 mod selftest;
 mod servo_bench;
@@ -18,6 +20,7 @@ pub mod settings;
 mod solar;
 pub mod state;
 mod status_bar;
+pub mod stop;
 mod telemetry;
 mod tuning;
 mod tuya_console;
@@ -67,6 +70,11 @@ pub enum Action {
     ClearPacketLog,
     /// A status-line message.
     Notify(Notice),
+    /// Remember the file last used for this purpose.
+    RememberFile(settings::FileKind, String),
+    /// STOP: the profile's stop commands, straight to the worker (sent when the link is back if
+    /// it is down).
+    Stop,
     /// A command for the worker that needs no answer on this thread (stop all, polls, Tuya
     /// options, a request an operation built…).
     Link(crate::link::LinkCommand),
@@ -108,11 +116,11 @@ pub fn run(
             if let Some(t) = target {
                 saved.target = t;
             }
-            if let Some(b) = baud {
-                saved.baud = b;
-            }
             if let Some(p) = profile {
                 saved.profile = p;
+            }
+            if let Some(b) = baud {
+                saved.port_mut().baud = Some(b);
             }
             if let Some(p) = panel {
                 saved.panel = p;

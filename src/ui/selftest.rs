@@ -49,6 +49,9 @@ pub struct SelfTestPanel {
     pub running: bool,
     /// The prompt the job waits on.
     pub prompt: Option<Prompt>,
+    /// The unit the last report is about (the device model's `unit` when it came): the
+    /// PASS/FAIL banner belongs to it and goes when another connection or unit comes.
+    pub report_unit: Option<u64>,
 }
 
 impl Default for SelfTestPanel {
@@ -63,6 +66,7 @@ impl Default for SelfTestPanel {
             logged: None,
             running: false,
             prompt: None,
+            report_unit: None,
         }
     }
 }
@@ -235,6 +239,17 @@ impl SelfTestPanel {
         )))
     }
 
+    /// Forgets the last run's verdict when it is about another unit than the one answering
+    /// now (a new connection, a lost link, a device answering again after silence).
+    pub fn forget_other_unit(&mut self, unit: u64) {
+        if !self.running && self.report_unit.is_some_and(|u| u != unit) {
+            self.results.clear();
+            self.report = None;
+            self.logged = None;
+            self.report_unit = None;
+        }
+    }
+
     /// Draws the panel.
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
@@ -373,6 +388,13 @@ impl SelfTestPanel {
         if let Some(d) = &report.device {
             ui.monospace(format!("{} {d}", lang.tr("Device:", "设备:")));
         }
+        if !report.safe_state.is_empty() {
+            ui.weak(format!(
+                "{} {}",
+                lang.tr("Started from the safe state:", "从安全状态开始:"),
+                report.safe_state.join("; ")
+            ));
+        }
         match &self.logged {
             Some(Ok(p)) => {
                 ui.label(format!(
@@ -472,14 +494,15 @@ impl SelfTestPanel {
         }
     }
 
-    /// Takes what one of its jobs reported.
-    pub fn on_output(&mut self, out: Output) {
+    /// Takes what one of its jobs reported; a report is about `unit` (the device model's).
+    pub fn on_output(&mut self, out: Output, unit: u64) {
         match out {
             Output::Step(r) => self.results.push(r),
             Output::Prompt(p) => self.prompt = Some(p),
             Output::Done(report, logged) => {
                 self.results = report.results.clone();
                 self.report = Some(*report);
+                self.report_unit = Some(unit);
                 self.logged = logged;
                 self.running = false;
                 self.prompt = None;

@@ -341,7 +341,7 @@ impl TuningPanel {
         }
         ui.label(&f.unit);
         ui.weak(range_text(f));
-        match (&parsed, rt.device.marks.get(&key)) {
+        match (&parsed, rt.device.mark(get, &f.ident)) {
             (Some(Err(e)), _) => {
                 ui.colored_label(
                     egui::Color32::RED,

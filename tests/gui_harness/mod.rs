@@ -47,14 +47,15 @@ pub fn serve<D: Device + 'static>(device: D) -> Served<D> {
 
 /// Settings that open `path` at 115200 baud with `profile` on `panel`.
 pub fn settings(path: &str, profile: &str, panel: PanelId, lang: Lang) -> Settings {
-    Settings {
+    let mut saved = Settings {
         target: Target::Port(path.to_string()),
-        baud: 115_200,
         profile: profile.into(),
         panel,
         lang,
         ..Settings::default()
-    }
+    };
+    saved.port_mut().baud = Some(115_200);
+    saved
 }
 
 /// The app with `saved` settings, in a 1400×1000 window: each step runs its logic and draws it.

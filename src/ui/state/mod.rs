@@ -6,11 +6,13 @@
 mod link;
 mod model;
 mod packets;
+mod running;
 mod tuya;
 
-pub use link::{Connection, LinkStatus, Target};
+pub use link::{Answering, Connection, LinkStatus, SILENT_AFTER, Target};
 pub use model::{DeviceModel, Mark, Reading, ReadingError};
 pub use packets::{LOG_CAPACITY, PacketLog};
+pub use running::{Running, RunningSet};
 pub use tuya::{
     DpState, LOG_CAPACITY as REPORT_LOG_CAPACITY, LogLine, ReportError, RequestLine, StepResult,
     TuyaModel,
@@ -86,6 +88,8 @@ pub struct AppState {
     pub notice: Option<Notice>,
     /// Wakes the UI from the worker and from jobs.
     pub ctx: eframe::egui::Context,
+    /// Whether the system can show a file dialog (looked up once).
+    pub dialogs: super::files::Dialogs,
 }
 
 impl AppState {
@@ -104,12 +108,20 @@ impl AppState {
             job: None,
             notice: None,
             ctx: ctx.clone(),
+            dialogs: super::files::Dialogs::detect(),
         })
     }
 
     /// Whether the link is up.
     pub fn connected(&self) -> bool {
         self.link.connected()
+    }
+
+    /// Where a plot that follows the newest data ends, in plot time (seconds since the
+    /// connection): now, or the moment polling was paused, so that paused data stays in view.
+    pub fn plot_end(&self) -> f64 {
+        let end = self.link.paused_at.unwrap_or_else(Instant::now);
+        end.saturating_duration_since(self.device.t0).as_secs_f64()
     }
 
     /// Shows a message in the status line.
@@ -162,14 +174,18 @@ impl AppState {
         Ok(())
     }
 
-    /// Closes the link (a running job is cancelled).
+    /// Closes the link (a running job is cancelled); what the device showed is forgotten.
     pub fn disconnect(&mut self) {
         if let Some(job) = &self.job {
             job.cancel.cancel();
         }
-        self.link.connection = None;
+        if self.link.connection.take().is_some() {
+            self.device.forget_unit();
+            self.device.running.clear();
+        }
         self.link.state = None;
         self.link.stats = LinkStats::default();
+        self.link.forget_answers();
     }
 
     /// Sends a command to the worker, if connected.
@@ -201,6 +217,17 @@ impl AppState {
         match ev {
             LinkEvent::State(s) => {
                 match &s {
+                    LinkState::Lost { .. } | LinkState::Reconnecting { .. } | LinkState::Closed
+                        if self.link.connected() =>
+                    {
+                        // The connection ended: what it showed is no longer known.
+                        self.device.forget_unit();
+                        self.device.running.on_link_lost();
+                        self.link.forget_answers();
+                    }
+                    _ => {}
+                }
+                match &s {
                     LinkState::Lost { reason } => {
                         self.notify(Notice::error(format!("link lost: {reason}")))
                     }
@@ -214,10 +241,12 @@ impl AppState {
                 }
                 self.link.state = Some(s);
             }
-            LinkEvent::Stats(s) => self.link.stats = s,
+            LinkEvent::Stats(s) => self.link.on_stats(s),
             LinkEvent::Identified(r) => self.device.info = Some(r.map_err(Into::into)),
             LinkEvent::Frame(entry) => {
                 self.device.tuya.on_frame(&entry);
+                let profile = self.device.profile.clone();
+                self.device.running.on_frame(&profile, &entry);
                 self.packets.push(entry)
             }
             LinkEvent::Report(p) => self.device.on_report(p),
