@@ -56,7 +56,8 @@ impl SeriesSet {
         let Some(series) = self.get(name) else {
             return;
         };
-        if !(t0 <= t1) || buckets == 0 {
+        // A NaN bound, or bounds the wrong way round, select nothing.
+        if t0.partial_cmp(&t1).is_none_or(|o| o.is_gt()) || buckets == 0 {
             return;
         }
         // The stretches: [t0, b1], [b1, b2], ..., [bk, t1] for the gaps strictly inside.
