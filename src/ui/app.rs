@@ -168,9 +168,12 @@ impl App {
         if back {
             self.state.device.forget_unit();
             self.state.send(LinkCommand::Identify);
-            self.state.notify(Notice::info(
-                "the device answers again: identified and read again (it may be another unit)",
-            ));
+            self.state.notify(
+                Notice::info(
+                    "the device answers again: identified and read again (it may be another unit)",
+                )
+                .zh("设备重新应答:已重新识别并读取(可能是另一台设备)"),
+            );
         } else if fresh {
             self.state.device.unit += 1;
         }
@@ -339,7 +342,7 @@ impl App {
             } => self.connect(target, baud, profile, margin_ms),
             Action::Disconnect => {
                 self.state.disconnect();
-                self.state.notify(Notice::info("disconnected"));
+                self.state.notify(Notice::info("disconnected").zh("已断开"));
             }
             Action::StartJob(job) => self.state.start_job(job),
             Action::CancelJob => self.state.cancel_job(),
@@ -378,7 +381,7 @@ impl App {
         self.state.link.options.margin = margin_ms.map(std::time::Duration::from_millis);
         if let Err(e) = self.state.connect(target.clone(), baud, &profile) {
             self.state
-                .notify(Notice::error(format!("cannot connect: {e}")));
+                .notify(Notice::error(format!("cannot connect: {e}")).zh(format!("无法连接:{e}")));
             return;
         }
         self.settings.target = target;

@@ -81,7 +81,36 @@ impl ConnectionBar {
     pub fn show(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
         let lang = saved.lang;
         let mut actions = Vec::new();
-        ui.horizontal_wrapped(|ui| {
+        // The language switch and the link's badge hold the right end at a fixed width, never
+        // wrapped; the settings wrap in the room left, so that a Reconnect appearing, the
+        // badge's text changing or the language switching moves nothing else.
+        // Top-aligned, one row high to start with (as `horizontal_wrapped` does): the bar is
+        // as high as its rows, and the switch and badge stay on the first.
+        let row = egui::vec2(ui.available_width(), ui.spacing().interact_size.y);
+        let rtl = egui::Layout::right_to_left(egui::Align::Min);
+        ui.allocate_ui_with_layout(row, rtl, |ui| {
+            let next = lang.toggled();
+            let switch = egui::Button::new(next.native_name()).min_size(egui::vec2(72.0, 0.0));
+            if ui.add(switch).on_hover_text("Language / 语言").clicked() {
+                actions.push(Action::SetLanguage(next));
+            }
+            ui.separator();
+            state_badge(ui, lang, rt);
+            ui.separator();
+            let ltr = egui::Layout::left_to_right(egui::Align::Center).with_main_wrap(true);
+            let rest = egui::vec2(ui.available_width(), row.y);
+            ui.allocate_ui_with_layout(rest, ltr, |ui| {
+                actions.extend(self.settings_row(ui, saved, rt))
+            });
+        });
+        actions
+    }
+
+    /// The port, baud, profile and margin, and Connect / Disconnect / Reconnect.
+    fn settings_row(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
+        let lang = saved.lang;
+        let mut actions = Vec::new();
+        {
             let port_label = ui.label(lang.tr("Port", "端口"));
             egui::ComboBox::from_id_salt("port")
                 .width(220.0)
@@ -190,31 +219,23 @@ impl ConnectionBar {
                 actions.push(connect());
             }
             let port = saved.port_of(&saved.profile);
+            let changed = self.target != saved.target
+                || Some(self.baud) != port.baud
+                || self.profile != saved.profile
+                || self.margin_ms != port.margin_ms;
+            // There while connected (enabled once a setting differs), so that nothing moves.
             if open
-                && (self.target != saved.target
-                    || Some(self.baud) != port.baud
-                    || self.profile != saved.profile
-                    || self.margin_ms != port.margin_ms)
-                && ui.button(lang.tr("Reconnect", "重新连接")).clicked()
+                && ui
+                    .add_enabled(changed, egui::Button::new(lang.tr("Reconnect", "重新连接")))
+                    .on_disabled_hover_text(lang.tr(
+                        "change the port, baud, profile or margin first",
+                        "请先修改端口、波特率、设备配置或应答余量",
+                    ))
+                    .clicked()
             {
                 actions.push(connect());
             }
-            ui.separator();
-            state_badge(ui, lang, rt);
-            ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
-                let next = match lang {
-                    Lang::En => Lang::Zh,
-                    Lang::Zh => Lang::En,
-                };
-                let label = match lang {
-                    Lang::En => "中文",
-                    Lang::Zh => "English",
-                };
-                if ui.button(label).on_hover_text("Language / 语言").clicked() {
-                    actions.push(Action::SetLanguage(next));
-                }
-            });
-        });
+        }
         actions
     }
 }
@@ -298,5 +319,15 @@ fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
             egui::Color32::GRAY,
         ),
     };
-    ui.colored_label(color, text);
+    // A fixed width, on one line: a longer text is cut (whole on hover), never wrapped.
+    let size = egui::vec2(BADGE_WIDTH, ui.spacing().interact_size.y);
+    let ltr = egui::Layout::left_to_right(egui::Align::Center);
+    ui.allocate_ui_with_layout(size, ltr, |ui| {
+        ui.set_min_size(size);
+        let label = egui::Label::new(egui::RichText::new(&text).color(color)).truncate();
+        ui.add(label).on_hover_text(&text);
+    });
 }
+
+/// The link badge's width, points: its longest English text at the default size.
+pub const BADGE_WIDTH: f32 = 290.0;

@@ -119,7 +119,7 @@ impl MonitorPanel {
             } else {
                 lang.tr("Pause", "暂停")
             };
-            if ui.button(pause).clicked() {
+            if ui.add(super::inputs::steady_button(pause)).clicked() {
                 actions.push(Action::PausePacketLog(!log.paused));
             }
             if ui.button(lang.tr("Clear", "清空")).clicked() {

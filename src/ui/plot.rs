@@ -1,10 +1,17 @@
 //! What every live plot shares: its series drawn as lines broken at the recording's gaps (a
 //! link outage, a failed poll, polling paused), one colour per field whatever the number of
-//! stretches, and the sample nearest a time within reach, for a cursor readout.
+//! stretches, and the sample nearest a time within reach, for a cursor readout; the axes a
+//! technician reads (wall-clock time as the packet monitor shows it, the fields' unit, integers
+//! without decimals) and a key of the fields' names in the window's language above the plot,
+//! where it covers no data.
 
+use crate::i18n::Lang;
+use crate::profile::{Command, Field};
 use crate::series::SeriesSet;
 use eframe::egui;
-use egui_plot::{Line, PlotPoints, PlotUi};
+use egui_plot::{GridMark, Line, Plot, PlotPoints, PlotUi};
+use std::ops::RangeInclusive;
+use std::time::{Duration, SystemTime};
 
 /// How far (in pixels) from the pointer a sample may be and still be read out.
 pub const REACH_PX: f64 = 12.0;
@@ -23,12 +30,115 @@ pub struct Scratch {
     starts: Vec<usize>,
 }
 
+/// How a plot's fields are read: each field's name (in the window's language, with its unit),
+/// the y axis' label, and whether every field is a whole number.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Legend {
+    /// Per field, in order: `Battery voltage (V)` / `电池电压 (V)`; a field the command does not
+    /// have keeps its ident.
+    pub names: Vec<String>,
+    /// The y axis label: the fields' units (`V`, `g`), or "value (unit not published)".
+    pub y_label: String,
+    /// Every field is a whole number (no scale): ticks and readouts show no decimals.
+    pub integer: bool,
+}
+
+impl Legend {
+    /// The legend of `fields` of `cmd` (a Get or Telemetry command's reply) in `lang`.
+    pub fn new(cmd: Option<&Command>, fields: &[String], lang: Lang) -> Self {
+        let field = |ident: &String| -> Option<&Field> {
+            cmd.and_then(|c| c.reply.iter().find(|f| &f.ident == ident))
+        };
+        let names = fields
+            .iter()
+            .map(|ident| match field(ident) {
+                Some(f) if f.unit.is_empty() => lang.tr(&f.name.en, &f.name.zh).to_string(),
+                Some(f) => format!("{} ({})", lang.tr(&f.name.en, &f.name.zh), f.unit),
+                None => ident.clone(),
+            })
+            .collect();
+        let mut units: Vec<&str> = fields
+            .iter()
+            .filter_map(field)
+            .map(|f| f.unit.as_str())
+            .collect();
+        units.dedup();
+        let y_label = match units.as_slice() {
+            [one] if !one.is_empty() => one.to_string(),
+            [] | [_] => lang
+                .tr("value (unit not published)", "数值(单位未公布)")
+                .to_string(),
+            many => many.join(", "),
+        };
+        let integer = fields
+            .iter()
+            .all(|i| field(i).is_some_and(|f| f.scale == 1.0 && f.convert.is_none()));
+        Self {
+            names,
+            y_label,
+            integer,
+        }
+    }
+}
+
+/// The wall-clock time (local, as the packet monitor shows it) of plot time `t` seconds after
+/// `t0`: `12:00:01` (with milliseconds when `millis`).
+pub fn clock(t0: SystemTime, t: f64, millis: bool) -> String {
+    let at = if t >= 0.0 {
+        t0 + Duration::from_secs_f64(t)
+    } else {
+        t0 - Duration::from_secs_f64(-t)
+    };
+    let at = chrono::DateTime::<chrono::Local>::from(at);
+    if millis {
+        at.format("%H:%M:%S%.3f").to_string()
+    } else {
+        at.format("%H:%M:%S").to_string()
+    }
+}
+
+/// A y tick: no decimals for whole-number fields (and no tick between two whole numbers),
+/// otherwise as many decimals as the tick spacing needs.
+pub fn y_tick(mark: GridMark, integer: bool) -> String {
+    if integer {
+        if mark.value.fract().abs() > 1e-9 {
+            return String::new();
+        }
+        return format!("{:.0}", mark.value);
+    }
+    let decimals = (-mark.step_size.log10().floor()).clamp(0.0, 6.0) as usize;
+    format!("{:.*}", decimals, mark.value)
+}
+
+/// `plot` with the axes every live plot shares: x in wall-clock time since `t0`, y labelled
+/// with the fields' unit and ticked as [`y_tick`]; no legend inside the plot (see [`key`]).
+pub fn axes<'a>(plot: Plot<'a>, lang: Lang, t0: SystemTime, legend: &Legend) -> Plot<'a> {
+    let integer = legend.integer;
+    plot.x_axis_label(lang.tr("time", "时间"))
+        .y_axis_label(legend.y_label.clone())
+        .x_axis_formatter(move |mark: GridMark, _: &RangeInclusive<f64>| {
+            clock(t0, mark.value, mark.step_size < 1.0)
+        })
+        .y_axis_formatter(move |mark: GridMark, _: &RangeInclusive<f64>| y_tick(mark, integer))
+}
+
+/// The fields' names in their colours, on a line above the plot (a legend inside it would
+/// cover the newest data).
+pub fn key(ui: &mut egui::Ui, legend: &Legend) {
+    ui.horizontal_wrapped(|ui| {
+        for (i, name) in legend.names.iter().enumerate() {
+            ui.colored_label(color(i), format!("— {name}"));
+        }
+    });
+}
+
 /// Draws `fields` of `set` over `[t0, t1]`, decimated to `width_px` columns: one line per
-/// unbroken stretch, all of a field's stretches under its name (one legend entry) and colour.
+/// unbroken stretch, all of a field's stretches under its name from `legend` and colour.
 pub fn lines(
     pui: &mut PlotUi<'_>,
     set: &SeriesSet,
     fields: &[String],
+    legend: &Legend,
     (t0, t1): (f64, f64),
     width_px: usize,
     scratch: &mut Scratch,
@@ -51,7 +161,8 @@ pub fn lines(
                 .copied()
                 .unwrap_or(scratch.points.len());
             let pts = PlotPoints::from(scratch.points[from..to].to_vec());
-            pui.line(Line::new(name.clone(), pts).color(color(i)));
+            let label = legend.names.get(i).unwrap_or(name);
+            pui.line(Line::new(label.clone(), pts).color(color(i)));
         }
     }
 }
@@ -87,6 +198,53 @@ pub fn nearest(set: &SeriesSet, fields: &[String], t: f64, reach: f64) -> Option
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn mark(value: f64, step_size: f64) -> GridMark {
+        GridMark { value, step_size }
+    }
+
+    #[test]
+    fn whole_numbers_tick_without_decimals_and_scaled_values_with_what_the_step_needs() {
+        assert_eq!(y_tick(mark(3.0, 0.5), true), "3");
+        assert_eq!(
+            y_tick(mark(3.5, 0.5), true),
+            "",
+            "no tick between whole numbers"
+        );
+        assert_eq!(y_tick(mark(2.75, 0.05), false), "2.75");
+        assert_eq!(y_tick(mark(20.0, 10.0), false), "20");
+    }
+
+    #[test]
+    fn the_legend_names_fields_in_the_windows_language_with_their_unit() {
+        let p = crate::sim::msp_device::builtin_profile("window-cleaner").unwrap();
+        let plot = p
+            .plots
+            .iter()
+            .find(|pl| pl.command.contains("BATTERY") || pl.id.contains("batt"));
+        let plot = plot.unwrap_or(&p.plots[0]);
+        let cmd = p.command(&plot.command);
+        let en = Legend::new(cmd, &plot.fields, Lang::En);
+        let zh = Legend::new(cmd, &plot.fields, Lang::Zh);
+        for ((ident, en), zh) in plot.fields.iter().zip(&en.names).zip(&zh.names) {
+            let f = cmd
+                .unwrap()
+                .reply
+                .iter()
+                .find(|f| &f.ident == ident)
+                .unwrap();
+            assert!(en.starts_with(&f.name.en), "{en}");
+            assert!(zh.starts_with(&f.name.zh), "{zh}");
+            if !f.unit.is_empty() {
+                assert!(en.ends_with(&format!("({})", f.unit)), "{en}");
+            }
+        }
+        assert!(!en.y_label.is_empty() && !zh.y_label.is_empty());
+        assert_eq!(
+            Legend::new(None, &["eulerX".to_string()], Lang::Zh).y_label,
+            "数值(单位未公布)"
+        );
+    }
 
     #[test]
     fn the_readout_is_a_sample_within_reach_or_nothing() {

@@ -10,7 +10,7 @@ use super::{Action, files, plot};
 use crate::i18n::Lang;
 use crate::profile::CommandKind;
 use eframe::egui;
-use egui_plot::{Legend, Plot, VLine};
+use egui_plot::{Plot, VLine};
 
 /// Poll rates offered, polls a second (`None`: as fast as the wire allows).
 pub const RATES: [Option<f64>; 8] = [
@@ -49,6 +49,8 @@ pub struct Shown {
     pub x: (f64, f64),
     /// The cursor readout under it, if any.
     pub readout: Option<plot::Readout>,
+    /// Its fields' names, y axis label and number format, in the window's language.
+    pub legend: plot::Legend,
     /// Where the plot was drawn.
     pub rect: egui::Rect,
 }
@@ -109,7 +111,7 @@ impl TelemetryPanel {
             } else {
                 lang.tr("Pause", "暂停")
             };
-            if ui.button(pause).clicked() {
+            if ui.add(super::inputs::steady_button(pause)).clicked() {
                 actions.push(Action::PausePolling(!paused));
             }
             let label = ui.label(lang.tr("Window", "时间窗"));
@@ -174,7 +176,8 @@ impl TelemetryPanel {
         let plots = &rt.device.profile.plots;
         let text_h = ui.text_style_height(&egui::TextStyle::Body);
         let gap = ui.spacing().item_spacing.y;
-        let chrome = 2.0 * (text_h + gap) + gap;
+        // Title, key, readout and the x axis' label.
+        let chrome = 4.0 * (text_h + gap) + gap;
         let n = plots.len().max(1) as f32;
         let height = ((ui.available_height() - n * chrome) / n).max(90.0);
         let window = saved.window_secs;
@@ -189,6 +192,9 @@ impl TelemetryPanel {
             .show(ui, |ui| {
                 for p in plots {
                     ui.label(egui::RichText::new(lang.tr(&p.name.en, &p.name.zh)).strong());
+                    let legend =
+                        plot::Legend::new(rt.device.profile.command(&p.command), &p.fields, lang);
+                    plot::key(ui, &legend);
                     let set = rt.device.plots.get(&p.id);
                     let end = if follow {
                         rt.plot_end()
@@ -197,9 +203,8 @@ impl TelemetryPanel {
                     };
                     let width_px = ui.available_width().max(100.0) as usize;
                     let scratch = &mut self.scratch;
-                    let resp = Plot::new(("plot", &p.id))
-                        .height(height)
-                        .legend(Legend::default())
+                    let plot = Plot::new(("plot", &p.id)).height(height);
+                    let resp = plot::axes(plot, lang, rt.device.t0_wall, &legend)
                         .link_axis(link, [true, false])
                         .allow_drag(!follow)
                         .allow_zoom(!follow)
@@ -224,7 +229,7 @@ impl TelemetryPanel {
                                 _ => None,
                             };
                             if let Some(set) = set {
-                                plot::lines(pui, set, &p.fields, x, width_px, scratch);
+                                plot::lines(pui, set, &p.fields, &legend, x, width_px, scratch);
                             }
                             if let Some(r) = &readout {
                                 let gray = egui::Color32::from_gray(140);
@@ -243,6 +248,7 @@ impl TelemetryPanel {
                         id: p.id.clone(),
                         x,
                         readout,
+                        legend,
                         rect: resp.response.rect,
                     });
                 }
@@ -341,7 +347,7 @@ fn readout_line(
             .layout(egui::Layout::left_to_right(egui::Align::Center)),
     );
     line.set_clip_rect(rect.intersect(ui.clip_rect()));
-    line.weak(format!("t = {:.2} s", r.t));
+    line.weak(plot::clock(rt.device.t0_wall, r.t, true));
     let cmd = rt.device.profile.command(&p.command);
     for (ident, v) in &r.values {
         let f = cmd.and_then(|c| c.reply.iter().find(|f| &f.ident == ident));

@@ -15,7 +15,7 @@ use super::{Action, plot};
 use crate::i18n::Lang;
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Value};
 use eframe::egui;
-use egui_plot::{Corner, Legend, Plot};
+use egui_plot::Plot;
 use std::collections::HashMap;
 use std::time::Duration;
 
@@ -34,6 +34,8 @@ pub struct SolarPanel {
     /// A command that moves the robot, waiting for the operator's yes.
     confirm: Option<(u8, Vec<(String, Input)>)>,
     scratch: plot::Scratch,
+    /// The plots' width when last drawn, points: the whole panel's.
+    pub plot_width: f32,
 }
 
 const RED: egui::Color32 = egui::Color32::from_rgb(200, 30, 30);
@@ -74,11 +76,13 @@ impl SolarPanel {
         egui::ScrollArea::vertical()
             .auto_shrink(false)
             .show(ui, |ui| {
-                ui.columns(3, |cols| {
+                ui.columns(2, |cols| {
                     self.controls(&mut cols[0], lang, rt, &mut actions);
                     self.readouts(&mut cols[1], lang, rt);
-                    self.plots(&mut cols[2], lang, rt);
                 });
+                ui.separator();
+                // The plots across the whole width, their key above them.
+                self.plots(ui, lang, rt);
             });
         self.confirm_modal(ui, lang, rt, stop, &mut actions);
         actions
@@ -218,12 +222,12 @@ impl SolarPanel {
         let width_px = ui.available_width().max(100.0) as usize;
         for p in &rt.device.profile.plots {
             ui.label(egui::RichText::new(lang.tr(&p.name.en, &p.name.zh)).strong());
+            let legend = plot::Legend::new(rt.device.profile.command(&p.command), &p.fields, lang);
+            plot::key(ui, &legend);
             let set = rt.device.plots.get(&p.id);
             let scratch = &mut self.scratch;
-            Plot::new(("solar-plot", &p.id))
-                .height(110.0)
-                // New points come in at the right: the legend stays out of their way.
-                .legend(Legend::default().position(Corner::LeftTop))
+            let shown = Plot::new(("solar-plot", &p.id)).height(130.0);
+            let resp = plot::axes(shown, lang, rt.device.t0_wall, &legend)
                 .allow_drag(false)
                 .allow_zoom(false)
                 .allow_scroll(false)
@@ -232,9 +236,10 @@ impl SolarPanel {
                     pui.set_auto_bounds([false, true]);
                     if let Some(set) = set {
                         let x = (now - WINDOW_SECS, now);
-                        plot::lines(pui, set, &p.fields, x, width_px, scratch);
+                        plot::lines(pui, set, &p.fields, &legend, x, width_px, scratch);
                     }
                 });
+            self.plot_width = resp.response.rect.width();
         }
     }
 

@@ -31,8 +31,10 @@ pub const EVENT_BUDGET: Duration = Duration::from_millis(4);
 /// A status-line message.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Notice {
-    /// The text.
+    /// The text, in English.
     pub text: String,
+    /// The text in Chinese, where it is translated (an error a library reports stays English).
+    pub zh: Option<String>,
     /// An error (shown red).
     pub error: bool,
     /// When.
@@ -44,6 +46,7 @@ impl Notice {
     pub fn info(text: impl Into<String>) -> Self {
         Self {
             text: text.into(),
+            zh: None,
             error: false,
             at: Instant::now(),
         }
@@ -54,6 +57,20 @@ impl Notice {
         Self {
             error: true,
             ..Self::info(text)
+        }
+    }
+
+    /// The message with its Chinese text.
+    pub fn zh(mut self, zh: impl Into<String>) -> Self {
+        self.zh = Some(zh.into());
+        self
+    }
+
+    /// The text in `lang` (English where there is no Chinese).
+    pub fn text_in(&self, lang: crate::i18n::Lang) -> &str {
+        match (lang, &self.zh) {
+            (crate::i18n::Lang::Zh, Some(zh)) => zh,
+            _ => &self.text,
         }
     }
 }
@@ -228,14 +245,18 @@ impl AppState {
                     _ => {}
                 }
                 match &s {
-                    LinkState::Lost { reason } => {
-                        self.notify(Notice::error(format!("link lost: {reason}")))
-                    }
+                    LinkState::Lost { reason } => self.notify(
+                        Notice::error(format!("link lost: {reason}"))
+                            .zh(format!("连接丢失:{reason}")),
+                    ),
                     LinkState::Connected { port, baud } => {
                         if !self.link.connected() {
                             self.link.just_connected = true;
                         }
-                        self.notify(Notice::info(format!("connected to {port} at {baud} baud")))
+                        self.notify(
+                            Notice::info(format!("connected to {port} at {baud} baud"))
+                                .zh(format!("已连接 {port},波特率 {baud}")),
+                        )
                     }
                     _ => {}
                 }
@@ -269,7 +290,7 @@ impl AppState {
             return;
         }
         let Some(conn) = &self.link.connection else {
-            self.notify(Notice::error("not connected"));
+            self.notify(Notice::error("not connected").zh("未连接"));
             return;
         };
         match RunningJob::spawn(job, conn.link.client(), &self.ctx) {
@@ -304,9 +325,11 @@ impl AppState {
     /// The status line's message for a job that ended.
     pub fn job_done(&mut self, result: Result<String, JobError>) {
         let title = self.job.as_ref().map_or("job", |j| j.title.as_str());
+        let title_zh = crate::i18n::job_title_zh(title);
         let notice = match result {
-            Ok(summary) => Notice::info(format!("{title}: {summary}")),
-            Err(e) => Notice::error(format!("{title}: {e}")),
+            Ok(summary) => Notice::info(format!("{title}: {summary}"))
+                .zh(format!("{title_zh}:{}", crate::i18n::summary_zh(&summary))),
+            Err(e) => Notice::error(format!("{title}: {e}")).zh(format!("{title_zh}:{e}")),
         };
         self.notify(notice);
     }

@@ -61,6 +61,8 @@ pub struct DeviceModel {
     pub plots: HashMap<String, SeriesSet>,
     /// When plotting started (t = 0 of the series); also marks the connection.
     pub t0: Instant,
+    /// The wall-clock time of `t0`: the plots' time axis reads as the packet monitor's clock.
+    pub t0_wall: std::time::SystemTime,
     /// Reports the device sent on its own (Tuya data points, MSP async), oldest first.
     pub reports: VecDeque<(Instant, Packet)>,
     /// Results of requests sent with `ReplyTo::Event(id)` (see
@@ -87,6 +89,7 @@ impl DeviceModel {
             marks: HashMap::new(),
             plots: HashMap::new(),
             t0: Instant::now(),
+            t0_wall: std::time::SystemTime::now(),
             reports: VecDeque::new(),
             replies: HashMap::new(),
             tuya: TuyaModel::default(),
@@ -103,6 +106,7 @@ impl DeviceModel {
         self.running.clear();
         self.tuya = self.tuya.next();
         self.t0 = Instant::now();
+        self.t0_wall = std::time::SystemTime::now();
     }
 
     /// Forgets what the last unit showed (its values, the marks of writes to it, its version)
