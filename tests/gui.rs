@@ -191,6 +191,11 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
         "two fields differ"
     );
     h.get_by_label_contains("Apply (").click();
+    h.run_steps(3);
+    // Asked first, as Tuning asks: nothing is written before the yes.
+    assert!(h.query_by_label("Apply this preset?").is_some());
+    assert_ne!(b.sim.lock().unwrap().param("pwmValue"), Some(saved_pwm));
+    h.get_by_label("Write").click();
     step_until(&mut h, "the preset applied", |a| {
         a.state.job_progress().is_none()
             && a.state

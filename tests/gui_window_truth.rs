@@ -514,3 +514,37 @@ fn the_solar_plots_take_the_whole_width() {
         app(&h).solar.plot_width
     );
 }
+
+#[test]
+fn factory_defaults_leave_no_file_named_and_a_typed_preset_path_is_remembered() {
+    let b = bench();
+    let dir = std::env::temp_dir().join(format!("botbench-wt-preset-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("golden.ron");
+    let mut h = harness(b.path(), PanelId::Presets);
+    step_until(&mut h, "the device read", |a| {
+        a.state.device.value(130, "pwmValue").is_some() && a.state.job_progress().is_none()
+    });
+    app_mut(&mut h).presets.path = path.display().to_string();
+    h.step();
+    h.get_by_label("Save device to file").click();
+    step_until(&mut h, "the preset saved", |a| {
+        path.exists() && a.state.job_progress().is_none()
+    });
+    assert_eq!(
+        app(&h)
+            .settings
+            .file(botbench::ui::settings::FileKind::Preset),
+        Some(path.display().to_string().as_str()),
+        "the path is remembered"
+    );
+    h.get_by_label("Factory defaults").click();
+    h.run_steps(2);
+    assert!(app(&h).presets.loaded.is_some());
+    assert_eq!(
+        app(&h).presets.path,
+        "",
+        "the defaults are not the file named before"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -4,10 +4,10 @@
 //! panels draw, and applies the actions they returned.
 
 use super::jobs::{self, JobOutput};
-use super::settings::{self, Settings};
+use super::settings::{self, FileKind, Settings};
 use super::state::{AppState, Notice, Target};
 use super::{
-    Action, actions, connection, device, monitor, presets, selftest, servo_bench, solar,
+    Action, actions, connection, device, files, monitor, presets, selftest, servo_bench, solar,
     status_bar, stop, telemetry, tuning, tuya_console,
 };
 use crate::i18n::Lang;
@@ -129,6 +129,7 @@ impl App {
             stop: stop::StopControl::default(),
             title: String::new(),
         };
+        app.restore_files();
         app.apply(Action::Connect {
             target: app.settings.target.clone(),
             baud,
@@ -372,6 +373,31 @@ impl App {
             Action::Stop => {
                 for a in self.stop.stop(&self.state) {
                     self.apply(a);
+                }
+            }
+        }
+    }
+
+    /// The files last used, back in their boxes; the self-test plan, when none was used yet,
+    /// is the shipped one (found wherever the binary runs, see [`files::shipped_in`]).
+    fn restore_files(&mut self) {
+        let file = |k| self.settings.file(k).map(str::to_string);
+        if let Some(p) = file(FileKind::Packets) {
+            self.monitor.save_path = p;
+        }
+        if let Some(p) = file(FileKind::TelemetryCsv) {
+            self.telemetry.csv_path = p;
+        }
+        if let Some(p) = file(FileKind::Preset) {
+            self.presets.path = p;
+        }
+        match file(FileKind::SelfTestPlan) {
+            Some(p) => self.selftest.path = p,
+            None => {
+                let shipped =
+                    files::shipped_in(&files::shipped_dir(), "window-cleaner-selftest.ron");
+                if let Ok(p) = shipped {
+                    self.selftest.path = p.display().to_string();
                 }
             }
         }

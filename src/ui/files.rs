@@ -136,10 +136,71 @@ pub fn row(
     }
 }
 
+/// The plans and presets botbench ships (`presets/` in the source), built into the binary so
+/// that they are there wherever it runs: (file name, contents).
+pub const SHIPPED: [(&str, &str); 3] = [
+    (
+        "window-cleaner-selftest.ron",
+        include_str!("../../presets/window-cleaner-selftest.ron"),
+    ),
+    (
+        "window-cleaner-factory.ron",
+        include_str!("../../presets/window-cleaner-factory.ron"),
+    ),
+    (
+        "servo-provision-plan.ron",
+        include_str!("../../presets/servo-provision-plan.ron"),
+    ),
+];
+
+/// The folder the shipped files are put in for the technician to open and edit:
+/// `$XDG_DATA_HOME/botbench/presets`, else `~/.local/share/botbench/presets`, else the system's
+/// temporary folder's `botbench-presets`.
+pub fn shipped_dir() -> PathBuf {
+    let data = std::env::var_os("XDG_DATA_HOME")
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/share")));
+    match data {
+        Some(d) => d.join("botbench").join("presets"),
+        None => std::env::temp_dir().join("botbench-presets"),
+    }
+}
+
+/// The path of shipped file `name` in `dir`, written there from the built-in copy when it is not
+/// there yet (a technician's edits to it are kept). Errors: `name` is not shipped, or the folder
+/// cannot be made or the file written.
+pub fn shipped_in(dir: &Path, name: &str) -> std::io::Result<PathBuf> {
+    let Some((_, text)) = SHIPPED.iter().find(|(n, _)| *n == name) else {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            format!("{name} is not a shipped file"),
+        ));
+    };
+    let path = dir.join(name);
+    if !path.exists() {
+        std::fs::create_dir_all(dir)?;
+        crate::document::write_atomic(&path, text.as_bytes())
+            .map_err(|e| std::io::Error::other(e.to_string()))?;
+    }
+    Ok(path)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use std::ffi::OsStr;
+
+    #[test]
+    fn a_shipped_file_is_found_outside_the_source_and_a_technicians_edit_is_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        let plan = shipped_in(dir.path(), "window-cleaner-selftest.ron").unwrap();
+        assert_eq!(std::fs::read_to_string(&plan).unwrap(), SHIPPED[0].1);
+        std::fs::write(&plan, "edited").unwrap();
+        let again = shipped_in(dir.path(), "window-cleaner-selftest.ron").unwrap();
+        assert_eq!(std::fs::read_to_string(again).unwrap(), "edited");
+        assert!(shipped_in(dir.path(), "nothing.ron").is_err());
+    }
 
     #[test]
     fn a_dialog_needs_a_portal_on_a_session_bus_or_zenity() {

@@ -3,9 +3,10 @@
 //! operator prompts as a modal that the job waits on, a results table, a PASS/FAIL banner, and
 //! one JSON line per run appended to a log with the device's version and build info.
 
-use super::Action;
 use super::jobs::{Job, JobError, JobOutput, LogError};
-use super::state::AppState;
+use super::settings::FileKind;
+use super::state::{AppState, Notice};
+use super::{Action, files};
 use crate::document::DocumentError;
 use crate::i18n::Lang;
 use crate::ops::selftest::{self, Plan, Report, StepKind, StepResult};
@@ -15,7 +16,8 @@ use eframe::egui;
 use std::path::PathBuf;
 use std::time::Duration;
 
-/// The plan offered first.
+/// The plan offered first, relative to the working folder, until the app puts the shipped
+/// plan's own path there ([`files::shipped_in`]).
 pub const DEFAULT_PLAN: &str = "presets/window-cleaner-selftest.ron";
 /// The log appended to unless the operator names another.
 pub const DEFAULT_LOG: &str = "selftest-log.jsonl";
@@ -239,6 +241,18 @@ impl SelfTestPanel {
         )))
     }
 
+    /// Opens the plan at the path typed or chosen, and remembers the path if it opens.
+    fn open_and_remember(&mut self, rt: &AppState) -> Vec<Action> {
+        self.open(rt);
+        if self.plan.is_none() {
+            return Vec::new();
+        }
+        vec![Action::RememberFile(
+            FileKind::SelfTestPlan,
+            self.path.trim().to_string(),
+        )]
+    }
+
     /// Forgets the last run's verdict when it is about another unit than the one answering
     /// now (a new connection, a lost link, a device answering again after silence).
     pub fn forget_other_unit(&mut self, unit: u64) {
@@ -263,30 +277,27 @@ impl SelfTestPanel {
             self.running = false;
         }
         ui.horizontal_wrapped(|ui| {
-            let label = ui.label(lang.tr("Test plan", "测试方案"));
-            ui.add(egui::TextEdit::singleline(&mut self.path).desired_width(320.0))
-                .labelled_by(label.id);
-            if ui
-                .add_enabled(
-                    !self.running,
-                    egui::Button::new(lang.tr("Browse…", "浏览…")),
-                )
-                .clicked()
-                && let Some(p) = rfd::FileDialog::new()
-                    .add_filter("RON", &["ron"])
-                    .pick_file()
-            {
-                self.path = p.display().to_string();
-                self.open(rt);
-            }
-            if ui
+            let event = files::row(
+                ui,
+                lang,
+                lang.tr("Test plan", "测试方案"),
+                &mut self.path,
+                "window-cleaner-selftest.ron",
+                files::Pick::Open(&["ron"]),
+                &rt.dialogs,
+                !self.running,
+            );
+            let open = ui
                 .add_enabled(
                     !self.running,
                     egui::Button::new(lang.tr("Open plan", "打开方案")),
                 )
-                .clicked()
-            {
-                self.open(rt);
+                .clicked();
+            match event {
+                files::FileEvent::NoDialog(why) => actions.push(Action::Notify(Notice::error(why))),
+                files::FileEvent::Chosen(_) => actions.extend(self.open_and_remember(rt)),
+                files::FileEvent::None if open => actions.extend(self.open_and_remember(rt)),
+                files::FileEvent::None => {}
             }
         });
         ui.horizontal_wrapped(|ui| {
