@@ -10,10 +10,12 @@ pub mod encode;
 pub mod fault;
 pub mod registry;
 pub mod relation;
+pub mod roles;
 pub mod stop;
 pub mod validate;
 pub mod value;
 
 pub use codec::{Decoded, FieldValue, Input};
 pub use registry::{ProfileError, Registry, Source};
+pub use roles::{CommandRole, ParamRole};
 pub use value::{FieldError, Misfit, Value};
