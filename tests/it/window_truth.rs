@@ -82,9 +82,11 @@ fn the_packet_monitor_opened_late_shows_the_newest_and_holds_where_the_technicia
     step_until(&mut h, "more traffic", |a| newest(a) >= until);
     h.run_steps(2);
     let a = app(&h);
+    // On a loaded machine more frames may come than the log keeps: a held frame that was
+    // dropped leaves the view on the oldest one kept.
     assert_eq!(
         a.monitor.top,
-        Some(held),
+        Some(held.max(a.state.packets.first_seq())),
         "the view stays on the frames it was on"
     );
     let (below, secs) = a.monitor.behind.expect("says how far behind");
