@@ -402,6 +402,40 @@ pub fn install_cjk_font(ctx: &egui::Context) {
     ctx.set_fonts(cjk_font_definitions());
 }
 
+/// A job's title (as the status line shows it, `read: 12 read`) in Chinese; an unknown title
+/// stays as it is.
+pub fn job_title_zh(title: &str) -> &str {
+    match title {
+        "read" => "读取",
+        "write" => "写入",
+        "send" => "发送",
+        "save preset" => "保存预设",
+        "apply preset" => "应用预设",
+        "OTA" => "固件升级",
+        "provision" => "配置",
+        "read parameters" => "读取参数",
+        "read user block" => "读取用户参数区",
+        "self-test" => "自检",
+        "scan" => "扫描",
+        "rescan" => "重新扫描",
+        other => other,
+    }
+}
+
+/// A job's summary in Chinese where it is one of the panels' own phrasings (`12 read`,
+/// `3 command(s) written and verified`); anything else stays as it is.
+pub fn summary_zh(summary: &str) -> String {
+    let (n, rest) = summary.split_once(' ').unwrap_or(("", summary));
+    if n.parse::<u64>().is_err() {
+        return summary.to_string();
+    }
+    match rest {
+        "read" => format!("已读取 {n} 项"),
+        "command(s) written and verified" => format!("{n} 条命令已写入并校验"),
+        _ => summary.to_string(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -410,6 +410,12 @@ fn selftest_run(
         println!("{}", serde_json::to_string(&report).unwrap_or_default());
     } else {
         let device = report.device.as_deref().unwrap_or("unknown device");
+        if !report.safe_state.is_empty() {
+            println!(
+                "safe state before the first step: {}",
+                report.safe_state.join("; ")
+            );
+        }
         let failed: Vec<&str> = report.failed().map(|r| r.name.as_str()).collect();
         if report.pass {
             println!("PASS: all {} steps passed ({device})", report.results.len());

@@ -9,6 +9,7 @@ pub mod serial;
 pub mod session;
 pub mod transport;
 mod worker;
+pub use worker::default_margin;
 
 pub use request::{ExchangeError, Match, Reply, ReplySpec, Request};
 pub use session::DeviceInfo;

@@ -8,6 +8,8 @@
 //!   a checked request); [`error`]: [`OpError`].
 //! - [`device`] (MSP ping, identity, power state), [`tuning`] (batches of reads and verified
 //!   writes), [`telemetry`] (what is polled), [`preset`] (capture, read, apply).
+//! - [`stop`]: the profile's STOP (motors, fan, spray off), for the window's STOP button and
+//!   the self-test's safe state.
 //! - [`servo`] (scan, parameters, id / baud / reset, motion, production provisioning, parameter
 //!   presets), [`selftest`] (the window cleaner's production test), [`tuya`] (data points,
 //!   status query, OTA).
@@ -18,6 +20,7 @@ pub mod exchange;
 pub mod preset;
 pub mod selftest;
 pub mod servo;
+pub mod stop;
 pub mod telemetry;
 pub mod tuning;
 pub mod tuya;

@@ -103,8 +103,11 @@ pub struct DiffRow {
     pub differs: bool,
 }
 
-/// The Set commands a preset can hold: a Set whose Get takes no arguments and whose fields are
-/// plain values (not servo parameter blocks or Tuya data points), with its Get.
+/// The Set commands a preset can hold, with their Gets: a Set whose Get the profile marks
+/// `tunable` (the robot's tuning, the same on every unit; a unit's own state such as its
+/// auto-test result is never copied between units), takes no arguments, and whose fields are
+/// plain values (not servo parameter blocks or Tuya data points). Capture, diff, apply and the
+/// command line all take this list.
 pub fn preset_commands(profile: &Profile) -> Vec<(&Command, &Command)> {
     profile
         .commands
@@ -113,6 +116,7 @@ pub fn preset_commands(profile: &Profile) -> Vec<(&Command, &Command)> {
         .filter_map(|set| {
             let get = profile.command_by_id(set.pair?)?;
             let plain = get.kind == CommandKind::Get
+                && get.tunable
                 && get.request.is_empty()
                 && !set.request.is_empty()
                 && set.request.iter().all(|f| is_plain(f.ty));
@@ -283,6 +287,21 @@ impl Preset {
                 continue;
             };
             let Some(&(set, _)) = allowed.iter().find(|(s, _)| s.id == cmd.id) else {
+                let get = match cmd.kind {
+                    CommandKind::Set => cmd.pair.and_then(|p| profile.command_by_id(p)),
+                    _ => Some(cmd),
+                };
+                if get.is_some_and(|g| g.kind == CommandKind::Get && !g.tunable) {
+                    problem(
+                        at_cmd,
+                        format!(
+                            "{} is not tunable: it holds the unit's own state, which a preset \
+                             never copies from one unit to the next; delete this entry",
+                            cmd.ident
+                        ),
+                    );
+                    continue;
+                }
                 let partner = cmd
                     .pair
                     .and_then(|p| profile.command_by_id(p))

@@ -11,6 +11,7 @@ pub mod fault;
 pub mod registry;
 pub mod relation;
 pub mod roles;
+pub mod stop;
 pub mod validate;
 pub mod value;
 

@@ -115,6 +115,24 @@ pub struct Profile {
     /// Relations between fields that every write must keep (minimum ≤ default ≤ maximum...).
     #[serde(default)]
     pub relations: Vec<Relation>,
+    /// What STOP sends, in order: the commands that bring the robot to rest (motors, fan,
+    /// spray off) with every field's value. The window's STOP, the self-test's safe state and
+    /// the "running" indicator all read it here ([`crate::profile::stop`]).
+    #[serde(default)]
+    pub stop: Vec<StopCommand>,
+}
+
+/// One command of the profile's STOP: the command and the value of each of its request fields,
+/// as display text (`{"motor": "stop"}`, `{"pwm": "0"}`). Checked at load: the command exists
+/// and is sent by the host, every field has a value the field takes, no other names.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StopCommand {
+    /// The command's canonical ident (or number).
+    pub command: String,
+    /// Field ident → value, as a person writes it.
+    #[serde(default)]
+    pub values: std::collections::BTreeMap<String, String>,
 }
 
 /// The largest MCU firmware image a Tuya update sends unless the profile says otherwise: 512 KiB,
@@ -148,6 +166,7 @@ impl Profile {
             plots: Vec::new(),
             panels: Vec::new(),
             relations: Vec::new(),
+            stop: Vec::new(),
         }
     }
 }
@@ -291,6 +310,11 @@ pub struct Command {
     /// The robot moves: ask the operator first.
     #[serde(default)]
     pub confirm: bool,
+    /// On a Get: its values are the robot's tuning, meant to be the same on every unit, so
+    /// presets capture, compare and apply it (with its Set). A unit's own state (its auto-test
+    /// result, a calibration) is left unmarked and never copied from one unit to the next.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub tunable: bool,
     /// What code finds this command by (MSP core, the solar drive or heartbeat).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub role: Option<super::roles::CommandRole>,
@@ -501,6 +525,9 @@ pub struct Param {
     pub id: u8,
     /// Read-only (1-8) or user (32-53).
     pub access: Access,
+    /// Reserved by the maker: shown, and written back as read in the user block, never edited.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub reserved: bool,
     /// What code finds this parameter by (the servo id, the baud option and its rates, the
     /// serial number).
     #[serde(default, skip_serializing_if = "Option::is_none")]

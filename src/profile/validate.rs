@@ -68,6 +68,7 @@ pub fn validate(profile: &mut Profile) -> Result<(), Issue> {
     super::roles::check_panel_needs(profile)?;
     super::roles::check_roles(profile)?;
     super::relation::validate_relations(profile)?;
+    super::stop::check_stop(profile)?;
     Ok(())
 }
 
@@ -119,6 +120,12 @@ fn check_commands(p: &Profile) -> Result<(), Issue> {
             return Err(issue(
                 at("group"),
                 format!("{}: no group '{g}' in `groups`", c.ident),
+            ));
+        }
+        if c.tunable && c.kind != CommandKind::Get {
+            return Err(issue(
+                at("tunable"),
+                format!("{}: `tunable` marks a Get (its Set follows)", c.ident),
             ));
         }
         if c.device.is_some() && p.protocol != Protocol::Msp {

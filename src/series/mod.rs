@@ -7,7 +7,10 @@
 //! it through [`Series::decimate`], a min/max decimation to one or two points per pixel column.
 //!
 //! A [`SeriesSet`] groups the named series of one plot (say `eulerX`, `eulerY`, `eulerZ`) and
-//! exports them as CSV.
+//! exports them as CSV. It also keeps the times of gaps in the recording (a link outage, a
+//! failed poll, polling paused): a plot draws each unbroken stretch as its own line
+//! ([`SeriesSet::decimate_segments`]), so no straight line stands in for what was not
+//! measured.
 //!
 //! Choices, documented once here:
 //! - **Out-of-order times are clamped.** A sample whose time is earlier than the last one is
@@ -21,6 +24,7 @@
 //!   values are ordinary values.
 
 mod decimate;
+mod gaps;
 mod set;
 
 pub use set::SeriesSet;

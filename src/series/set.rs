@@ -8,6 +8,8 @@ use std::io::{self, Write};
 pub struct SeriesSet {
     series: Vec<(String, Series)>,
     capacity: usize,
+    /// Times of gaps in the recording, oldest first (see [`SeriesSet::mark_break`]).
+    pub(super) breaks: std::collections::VecDeque<f64>,
 }
 
 impl Default for SeriesSet {
@@ -22,6 +24,7 @@ impl SeriesSet {
         Self {
             series: Vec::new(),
             capacity,
+            breaks: std::collections::VecDeque::new(),
         }
     }
 
@@ -39,11 +42,13 @@ impl SeriesSet {
         self.series[i].1.push(t, v)
     }
 
-    /// Drops every sample of every series, keeping the names and the allocations.
+    /// Drops every sample of every series (and every break), keeping the names and the
+    /// allocations.
     pub fn clear(&mut self) {
         for (_, s) in &mut self.series {
             s.clear();
         }
+        self.breaks.clear();
     }
 
     /// The series `name`.

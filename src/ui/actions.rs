@@ -84,7 +84,9 @@ impl ActionsPanel {
                                 }
                             });
                             let inputs = command_inputs(cmd, &self.inputs);
-                            let label = if cmd.confirm {
+                            let stopping =
+                                inputs.as_ref().is_ok_and(|i| profile.is_stop(cmd.id, i));
+                            let label = if cmd.confirm && !stopping {
                                 format!("⚠ {}", lang.tr("Send…", "发送…"))
                             } else {
                                 lang.tr("Send", "发送").to_string()
@@ -98,7 +100,8 @@ impl ActionsPanel {
                             if resp.clicked()
                                 && let Ok(inputs) = inputs
                             {
-                                if cmd.confirm {
+                                // Stopping (motor stop, fan 0) moves nothing: no warning.
+                                if cmd.confirm && !stopping {
                                     self.confirm = Some((cmd.id, inputs));
                                 } else {
                                     actions.push(Action::StartJob(jobs::send(

@@ -4,11 +4,11 @@
 //! panels draw, and applies the actions they returned.
 
 use super::jobs::{self, JobOutput};
-use super::settings::Settings;
+use super::settings::{self, FileKind, Settings};
 use super::state::{AppState, Notice, Target};
 use super::{
-    Action, actions, connection, demo_hint, device, monitor, presets, repaint, selftest,
-    servo_bench, solar, status_bar, telemetry, tour, tuning, tuya_console,
+    Action, actions, connection, demo_hint, device, files, monitor, presets, repaint, selftest,
+    servo_bench, solar, status_bar, stop, telemetry, tour, tuning, tuya_console,
 };
 use crate::i18n::Lang;
 use crate::link::LinkCommand;
@@ -107,6 +107,8 @@ pub struct App {
     pub tuya: tuya_console::TuyaConsolePanel,
     /// The screenshot tour, when the window was opened for one.
     pub tour: Option<tour::Tour>,
+    /// STOP: on screen for every profile that names one.
+    pub stop: stop::StopControl,
     /// The window title last set.
     title: String,
 }
@@ -116,8 +118,9 @@ impl App {
     pub fn new(ctx: &egui::Context, settings: Settings) -> Result<Self, ProfileError> {
         crate::i18n::install_cjk_font(ctx);
         let state = AppState::new(ctx, &settings.profile)?;
+        let (baud, margin_ms) = port_for(&settings, &state, &settings.profile);
         let mut app = Self {
-            connection: connection::ConnectionBar::new(&settings),
+            connection: connection::ConnectionBar::new(&settings, baud),
             settings,
             state,
             tuning: tuning::TuningPanel::default(),
@@ -131,13 +134,15 @@ impl App {
             servo: servo_bench::ServoBenchPanel::default(),
             tuya: tuya_console::TuyaConsolePanel::default(),
             tour: None,
+            stop: stop::StopControl::default(),
             title: String::new(),
         };
+        app.restore_files();
         app.apply(Action::Connect {
             target: app.settings.target.clone(),
-            baud: app.settings.baud,
+            baud,
             profile: app.settings.profile.clone(),
-            margin_ms: app.settings.margin_ms,
+            margin_ms,
         });
         Ok(app)
     }
@@ -157,13 +162,32 @@ impl App {
         if !panels.contains(&self.settings.panel) {
             self.settings.panel = panels[0];
         }
-        // The solar panel's STOP-on-reconnect and dead-man run whichever panel is shown.
+        // STOP-on-reconnect and the solar dead-man run whichever panel is shown.
+        for a in self.stop.tick(&self.state) {
+            self.apply(a);
+        }
         for a in self.solar.tick(&self.state) {
             self.apply(a);
         }
-        if std::mem::take(&mut self.state.link.just_connected)
-            && self.panels().contains(&PanelId::Tuning)
-        {
+        // A device that answers again after silence may be another unit on the same port (a
+        // robot swapped on the fixture): what the last one showed is forgotten, and it is
+        // identified and read again. A link that came back starts a new unit too.
+        let fresh = std::mem::take(&mut self.state.link.just_connected);
+        let back = std::mem::take(&mut self.state.link.device_back);
+        if back {
+            self.state.device.forget_unit();
+            self.state.send(LinkCommand::Identify);
+            self.state.notify(
+                Notice::info(
+                    "the device answers again: identified and read again (it may be another unit)",
+                )
+                .zh("设备重新应答:已重新识别并读取(可能是另一台设备)"),
+            );
+        } else if fresh {
+            self.state.device.unit += 1;
+        }
+        self.selftest.forget_other_unit(self.state.device.unit);
+        if (fresh || back) && self.panels().contains(&PanelId::Tuning) {
             // What the device holds is shown as soon as it is known; nothing is shown before.
             let profile = &self.state.device.profile;
             let gets: Vec<u8> = profile
@@ -197,7 +221,8 @@ impl App {
                 self.apply(a);
                 if connect {
                     // The connection bar shows the device the tour moved to.
-                    self.connection = connection::ConnectionBar::new(&self.settings);
+                    let (baud, _) = port_for(&self.settings, &self.state, &self.settings.profile);
+                    self.connection = connection::ConnectionBar::new(&self.settings, baud);
                 }
             }
             self.tour = Some(tour);
@@ -233,7 +258,7 @@ impl App {
                 if o.is_prompt() {
                     self.settings.panel = PanelId::SelfTest;
                 }
-                self.selftest.on_output(o)
+                self.selftest.on_output(o, self.state.device.unit)
             }
         }
     }
@@ -261,10 +286,15 @@ impl App {
                     actions.push(Action::ShowPanel(panel));
                 }
             }
-            // The solar cleanbot's STOP is on every panel.
-            if settings.panel != PanelId::Solar && panels.contains(&PanelId::Solar) {
+            // STOP is on every panel of a robot whose profile names one (the solar panel
+            // shows its own at the top), with what the robot may be doing.
+            if !state.device.profile.stop.is_empty() {
                 ui.separator();
-                actions.extend(self.solar.stop_button(ui, lang, state));
+                if settings.panel != PanelId::Solar {
+                    actions.extend(self.stop.button(ui, lang, state));
+                    self.stop.status(ui, lang);
+                }
+                stop::running(ui, lang, state);
             }
         });
         egui::CentralPanel::default().show(ui, |ui| match settings.panel {
@@ -274,7 +304,7 @@ impl App {
             PanelId::Presets => actions.extend(self.presets.show(ui, lang, state)),
             PanelId::Actions => actions.extend(self.actions.show(ui, lang, state)),
             PanelId::Device => actions.extend(self.device.show(ui, lang, state)),
-            PanelId::Solar => actions.extend(self.solar.show(ui, lang, state)),
+            PanelId::Solar => actions.extend(self.solar.show(ui, lang, state, &mut self.stop)),
             PanelId::SelfTest => actions.extend(self.selftest.show(ui, lang, state)),
             PanelId::ServoBench => actions.extend(self.servo.show(ui, lang, state)),
             PanelId::TuyaConsole => actions.extend(self.tuya.show(ui, lang, state)),
@@ -320,13 +350,10 @@ impl App {
                 baud,
                 profile,
                 margin_ms,
-            } => {
-                self.settings.margin_ms = margin_ms;
-                self.connect(target, baud, profile)
-            }
+            } => self.connect(target, baud, profile, margin_ms),
             Action::Disconnect => {
                 self.state.disconnect();
-                self.state.notify(Notice::info("disconnected"));
+                self.state.notify(Notice::info("disconnected").zh("已断开"));
             }
             Action::StartJob(job) => self.state.start_job(job),
             Action::CancelJob => self.state.cancel_job(),
@@ -335,7 +362,12 @@ impl App {
                 self.restart_polls();
             }
             Action::PausePolling(paused) => {
+                if paused != self.state.link.polling_paused {
+                    // Nothing is measured while paused: the plots break there.
+                    self.state.device.mark_gap();
+                }
                 self.state.link.polling_paused = paused;
+                self.state.link.paused_at = paused.then(std::time::Instant::now);
                 self.restart_polls();
             }
             Action::SetPlotWindow(secs) => self.settings.window_secs = secs,
@@ -349,24 +381,59 @@ impl App {
                     mcu.lock().unwrap_or_else(|e| e.into_inner()).request(r);
                 }
             }
+            Action::RememberFile(kind, path) => {
+                self.settings.files.insert(kind, path);
+            }
             Action::Link(cmd) => self.state.send(cmd),
+            Action::Stop => {
+                for a in self.stop.stop(&self.state) {
+                    self.apply(a);
+                }
+            }
         }
     }
 
-    fn connect(&mut self, target: Target, baud: u32, profile: String) {
-        self.state.link.options.margin = self
-            .settings
-            .margin_ms
-            .map(std::time::Duration::from_millis);
+    /// The files last used, back in their boxes; the self-test plan, when none was used yet,
+    /// is the shipped one (found wherever the binary runs, see [`files::shipped_in`]).
+    fn restore_files(&mut self) {
+        let file = |k| self.settings.file(k).map(str::to_string);
+        if let Some(p) = file(FileKind::Packets) {
+            self.monitor.save_path = p;
+        }
+        if let Some(p) = file(FileKind::TelemetryCsv) {
+            self.telemetry.csv_path = p;
+        }
+        if let Some(p) = file(FileKind::Preset) {
+            self.presets.path = p;
+        }
+        match file(FileKind::SelfTestPlan) {
+            Some(p) => self.selftest.path = p,
+            None => {
+                let shipped =
+                    files::shipped_in(&files::shipped_dir(), "window-cleaner-selftest.ron");
+                if let Ok(p) = shipped {
+                    self.selftest.path = p.display().to_string();
+                }
+            }
+        }
+    }
+
+    fn connect(&mut self, target: Target, baud: u32, profile: String, margin_ms: Option<u64>) {
+        self.state.link.options.margin = margin_ms.map(std::time::Duration::from_millis);
         if let Err(e) = self.state.connect(target.clone(), baud, &profile) {
             self.state
-                .notify(Notice::error(format!("cannot connect: {e}")));
+                .notify(Notice::error(format!("cannot connect: {e}")).zh(format!("无法连接:{e}")));
             return;
         }
         self.settings.target = target;
-        self.settings.baud = baud;
         self.settings.profile = profile;
+        // Kept for this profile only: another device keeps its own.
+        *self.settings.port_mut() = settings::PortSettings {
+            baud: Some(baud),
+            margin_ms,
+        };
         self.tuning = tuning::TuningPanel::default();
+        self.stop = stop::StopControl::default();
         // What was found on another connection is not on this one.
         self.servo.forget_bus();
         if !self.panels().contains(&self.settings.panel) {
@@ -383,6 +450,14 @@ impl App {
         };
         self.state.send(LinkCommand::SetPolls(polls));
     }
+}
+
+/// The baud rate and margin to open `profile` with: its saved ones, or its usual rate and the
+/// protocol's own margin.
+fn port_for(saved: &Settings, state: &AppState, profile: &str) -> (u32, Option<u64>) {
+    let port = saved.port_of(profile);
+    let usual = state.registry.get(profile).map_or(115_200, |p| p.baud);
+    (port.baud.unwrap_or(usual), port.margin_ms)
 }
 
 impl eframe::App for App {

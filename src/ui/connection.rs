@@ -3,7 +3,7 @@
 
 use super::Action;
 use super::settings::Settings;
-use super::state::{AppState, Target};
+use super::state::{Answering, AppState, Target};
 use crate::i18n::Lang;
 use crate::link::LinkState;
 use crate::sim::SimKind;
@@ -36,14 +36,18 @@ pub struct ConnectionBar {
     typed: String,
 }
 
+/// A margin this many times the protocol's own is worth a warning: every request that goes
+/// unanswered (each id a scan asks) waits that long.
+const MARGIN_WARN_FACTOR: f64 = 4.0;
+
 impl ConnectionBar {
-    /// Fields from the saved settings.
-    pub fn new(saved: &Settings) -> Self {
+    /// Fields from the saved settings, at `baud` (the profile's saved or usual rate).
+    pub fn new(saved: &Settings, baud: u32) -> Self {
         Self {
             target: saved.target.clone(),
-            baud: saved.baud,
+            baud,
             profile: saved.profile.clone(),
-            margin_ms: saved.margin_ms,
+            margin_ms: saved.port_of(&saved.profile).margin_ms,
             typed: match &saved.target {
                 Target::Port(p) => p.clone(),
                 Target::Demo(_) => String::new(),
@@ -51,11 +55,62 @@ impl ConnectionBar {
         }
     }
 
+    /// The profile the bar would connect with.
+    pub fn profile(&self) -> &str {
+        &self.profile
+    }
+
+    /// The baud rate and margin the bar would connect with.
+    pub fn port(&self) -> (u32, Option<u64>) {
+        (self.baud, self.margin_ms)
+    }
+
+    /// Another profile chosen: its own saved port settings (or its usual rate, auto margin).
+    fn take_profile(&mut self, profile: &str, saved: &Settings, rt: &AppState) {
+        if self.profile == profile {
+            return;
+        }
+        let port = saved.port_of(profile);
+        let usual = rt.registry.get(profile).map_or(self.baud, |p| p.baud);
+        self.profile = profile.to_string();
+        self.baud = port.baud.unwrap_or(usual);
+        self.margin_ms = port.margin_ms;
+    }
+
     /// Draws the bar.
     pub fn show(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
         let lang = saved.lang;
         let mut actions = Vec::new();
-        ui.horizontal_wrapped(|ui| {
+        // The language switch and the link's badge hold the right end at a fixed width, never
+        // wrapped; the settings wrap in the room left, so that a Reconnect appearing, the
+        // badge's text changing or the language switching moves nothing else.
+        // Top-aligned, one row high to start with (as `horizontal_wrapped` does): the bar is
+        // as high as its rows, and the switch and badge stay on the first.
+        let row = egui::vec2(ui.available_width(), ui.spacing().interact_size.y);
+        let rtl = egui::Layout::right_to_left(egui::Align::Min);
+        ui.allocate_ui_with_layout(row, rtl, |ui| {
+            let next = lang.toggled();
+            let switch = egui::Button::new(next.native_name()).min_size(egui::vec2(72.0, 0.0));
+            if ui.add(switch).on_hover_text("Language / 语言").clicked() {
+                actions.push(Action::SetLanguage(next));
+            }
+            ui.separator();
+            state_badge(ui, lang, rt);
+            ui.separator();
+            let ltr = egui::Layout::left_to_right(egui::Align::Center).with_main_wrap(true);
+            let rest = egui::vec2(ui.available_width(), row.y);
+            ui.allocate_ui_with_layout(rest, ltr, |ui| {
+                actions.extend(self.settings_row(ui, saved, rt))
+            });
+        });
+        actions
+    }
+
+    /// The port, baud, profile and margin, and Connect / Disconnect / Reconnect.
+    fn settings_row(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
+        let lang = saved.lang;
+        let mut actions = Vec::new();
+        {
             let port_label = ui.label(lang.tr("Port", "端口"));
             egui::ComboBox::from_id_salt("port")
                 .width(220.0)
@@ -65,8 +120,10 @@ impl ConnectionBar {
                         let t = Target::Demo(kind.name().to_string());
                         let label = format!("{} ({})", lang.tr("Demo", "演示"), kind.describe());
                         if ui.selectable_label(self.target == t, label).clicked() {
-                            self.profile = kind.profile_id().to_string();
-                            self.baud = kind.default_baud();
+                            self.take_profile(kind.profile_id(), saved, rt);
+                            if saved.port_of(kind.profile_id()).baud.is_none() {
+                                self.baud = kind.default_baud();
+                            }
                             self.target = t;
                         }
                     }
@@ -107,16 +164,22 @@ impl ConnectionBar {
                 .response
                 .labelled_by(baud_label.id);
             let profile_label = ui.label(lang.tr("Profile", "设备配置"));
+            let mut chosen = None;
             egui::ComboBox::from_id_salt("profile")
                 .selected_text(&self.profile)
                 .show_ui(ui, |ui| {
                     for (p, _) in rt.registry.iter() {
                         let label = format!("{} — {}", p.id, lang.tr(&p.name.en, &p.name.zh));
-                        ui.selectable_value(&mut self.profile, p.id.clone(), label);
+                        if ui.selectable_label(self.profile == p.id, label).clicked() {
+                            chosen = Some(p.id.clone());
+                        }
                     }
                 })
                 .response
                 .labelled_by(profile_label.id);
+            if let Some(p) = chosen {
+                self.take_profile(&p, saved, rt);
+            }
             let margin_label = ui
                 .label(lang.tr("Margin", "应答余量"))
                 .on_hover_text(lang.tr(
@@ -140,6 +203,7 @@ impl ConnectionBar {
                 })
                 .response
                 .labelled_by(margin_label.id);
+            self.margin_warning(ui, lang, rt);
             let connect = || Action::Connect {
                 target: self.target.clone(),
                 baud: self.baud,
@@ -154,32 +218,53 @@ impl ConnectionBar {
             } else if ui.button(lang.tr("Connect", "连接")).clicked() {
                 actions.push(connect());
             }
+            let port = saved.port_of(&saved.profile);
+            let changed = self.target != saved.target
+                || Some(self.baud) != port.baud
+                || self.profile != saved.profile
+                || self.margin_ms != port.margin_ms;
+            // There while connected (enabled once a setting differs), so that nothing moves.
             if open
-                && (self.target != saved.target
-                    || self.baud != saved.baud
-                    || self.profile != saved.profile
-                    || self.margin_ms != saved.margin_ms)
-                && ui.button(lang.tr("Reconnect", "重新连接")).clicked()
+                && ui
+                    .add_enabled(changed, egui::Button::new(lang.tr("Reconnect", "重新连接")))
+                    .on_disabled_hover_text(lang.tr(
+                        "change the port, baud, profile or margin first",
+                        "请先修改端口、波特率、设备配置或应答余量",
+                    ))
+                    .clicked()
             {
                 actions.push(connect());
             }
-            ui.separator();
-            state_badge(ui, lang, rt);
-            ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
-                let next = match lang {
-                    Lang::En => Lang::Zh,
-                    Lang::Zh => Lang::En,
-                };
-                let label = match lang {
-                    Lang::En => "中文",
-                    Lang::Zh => "English",
-                };
-                if ui.button(label).on_hover_text("Language / 语言").clicked() {
-                    actions.push(Action::SetLanguage(next));
-                }
-            });
-        });
+        }
         actions
+    }
+}
+
+impl ConnectionBar {
+    /// A warning beside a margin far above the protocol's own.
+    fn margin_warning(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+        let Some(ms) = self.margin_ms else { return };
+        let Ok(profile) = rt.registry.get(&self.profile) else {
+            return;
+        };
+        let auto = crate::link::default_margin(profile.protocol).as_secs_f64() * 1e3;
+        let factor = ms as f64 / auto;
+        if factor < MARGIN_WARN_FACTOR {
+            return;
+        }
+        ui.colored_label(
+            egui::Color32::from_rgb(220, 150, 0),
+            format!("⚠ {factor:.0}× {}", lang.tr("auto", "自动值")),
+        )
+        .on_hover_text(format!(
+            "{ms} ms {} {factor:.0}× {} {auto} ms: {}",
+            lang.tr("is", "是"),
+            lang.tr("the automatic", "自动值"),
+            lang.tr(
+                "every request nobody answers (each id a scan asks) waits this long",
+                "每个无人应答的请求(扫描的每个ID)都要等待这么久",
+            )
+        ));
     }
 }
 
@@ -189,10 +274,35 @@ fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
             lang.tr("not connected", "未连接").to_string(),
             egui::Color32::GRAY,
         ),
-        (Some(_), Some(LinkState::Connected { .. })) => (
-            lang.tr("● connected", "● 已连接").to_string(),
-            egui::Color32::from_rgb(40, 160, 60),
-        ),
+        // An open port says nothing of the device behind it: green only once it answers. On a
+        // servo bus silence is normal (a scan asks ids nobody has), so the port is all it says.
+        (Some(_), Some(LinkState::Connected { .. }))
+            if rt.device.profile.protocol == crate::profile::Protocol::Servo =>
+        {
+            (
+                lang.tr("● port open", "● 端口已打开").to_string(),
+                egui::Color32::from_rgb(60, 130, 200),
+            )
+        }
+        (Some(_), Some(LinkState::Connected { .. })) => match rt.link.answering() {
+            Answering::Yes => (
+                lang.tr("● device answering", "● 设备应答中").to_string(),
+                egui::Color32::from_rgb(40, 160, 60),
+            ),
+            Answering::NotYet => (
+                lang.tr("● port open, no answer yet", "● 端口已打开,尚无应答")
+                    .to_string(),
+                egui::Color32::from_rgb(220, 150, 0),
+            ),
+            Answering::No(n) => (
+                format!(
+                    "{} ({n} {})",
+                    lang.tr("● port open, device silent", "● 端口已打开,设备无应答"),
+                    lang.tr("unanswered", "次未应答")
+                ),
+                egui::Color32::RED,
+            ),
+        },
         (Some(_), Some(LinkState::Reconnecting { attempt })) => (
             format!("{} ({attempt})", lang.tr("● reconnecting", "● 重连中")),
             egui::Color32::from_rgb(220, 150, 0),
@@ -209,5 +319,15 @@ fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
             egui::Color32::GRAY,
         ),
     };
-    ui.colored_label(color, text);
+    // A fixed width, on one line: a longer text is cut (whole on hover), never wrapped.
+    let size = egui::vec2(BADGE_WIDTH, ui.spacing().interact_size.y);
+    let ltr = egui::Layout::left_to_right(egui::Align::Center);
+    ui.allocate_ui_with_layout(size, ltr, |ui| {
+        ui.set_min_size(size);
+        let label = egui::Label::new(egui::RichText::new(&text).color(color)).truncate();
+        ui.add(label).on_hover_text(&text);
+    });
 }
+
+/// The link badge's width, points: its longest English text at the default size.
+pub const BADGE_WIDTH: f32 = 290.0;

@@ -24,9 +24,9 @@ pub struct DevicePanel {
     pub version: Option<Result<DeviceInfo, OpError>>,
     /// When the last answer came.
     at: Option<Instant>,
-    /// The connection the values came from (the device model's `t0`): another connection
-    /// clears them.
-    conn: Option<Instant>,
+    /// The unit the values came from (the device model's `unit`): another connection, or a
+    /// device that answers again after silence, clears them.
+    unit: Option<u64>,
     /// Version and power state have been asked on this connection.
     asked: bool,
 }
@@ -93,10 +93,10 @@ impl DevicePanel {
     /// Draws the panel.
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
-        if self.conn != Some(rt.device.t0) {
+        if self.unit != Some(rt.device.unit) {
             // Values of another connection (maybe another device) are never shown.
             *self = Self {
-                conn: Some(rt.device.t0),
+                unit: Some(rt.device.unit),
                 ..Self::default()
             };
         }

@@ -64,3 +64,9 @@ pub fn range_text(field: &Field) -> String {
             .join(" / "),
     }
 }
+
+/// A button whose text changes (Pause / Resume, 暂停 / 继续) at a width that does not: the
+/// widgets after it stay where they are.
+pub fn steady_button(text: &str) -> eframe::egui::Button<'_> {
+    eframe::egui::Button::new(text).min_size(eframe::egui::vec2(80.0, 0.0))
+}

@@ -9,9 +9,11 @@ pub mod app;
 mod connection;
 pub mod demo_hint;
 mod device;
+pub mod files;
 mod inputs;
 pub mod jobs;
 mod monitor;
+mod plot;
 mod presets;
 pub mod repaint;
 mod selftest;
@@ -20,6 +22,7 @@ pub mod settings;
 mod solar;
 pub mod state;
 mod status_bar;
+pub mod stop;
 mod telemetry;
 pub mod tour;
 mod tuning;
@@ -70,6 +73,11 @@ pub enum Action {
     ClearPacketLog,
     /// A status-line message.
     Notify(Notice),
+    /// Remember the file last used for this purpose.
+    RememberFile(settings::FileKind, String),
+    /// STOP: the profile's stop commands, straight to the worker (sent when the link is back if
+    /// it is down).
+    Stop,
     /// A command for the worker that needs no answer on this thread (stop all, polls, Tuya
     /// options, a request an operation built…).
     Link(crate::link::LinkCommand),
@@ -109,19 +117,21 @@ pub fn launch_settings(
     profile: Option<String>,
     panel: Option<PanelId>,
 ) -> Settings {
+    let mut demo_baud = None;
     if let Some(t) = target {
         if let Target::Demo(kind) = &t
             && let Ok(kind) = kind.parse::<crate::sim::SimKind>()
         {
-            saved.baud = kind.default_baud();
+            demo_baud = Some(kind.default_baud());
         }
         saved.target = t;
     }
-    if let Some(b) = baud {
-        saved.baud = b;
-    }
     if let Some(p) = profile {
         saved.profile = p;
+    }
+    // The port settings are the profile's: set once the profile is known.
+    if let Some(b) = baud.or(demo_baud) {
+        saved.port_mut().baud = Some(b);
     }
     if let Some(p) = panel {
         saved.panel = p;

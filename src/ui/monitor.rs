@@ -1,7 +1,15 @@
 //! The packet monitor: every frame sent and received, with time, direction, hex and decoded
-//! meaning (command name, fields, errors). Filter by command, pause, copy, save as text.
+//! meaning (command name, fields, errors). Filter by command, pause, copy, save as text to a
+//! typed or chosen file.
+//!
+//! The view follows the newest frame unless the technician scrolls away; then it stays on the
+//! frames they scrolled to (held by sequence number, so that frames dropped from the front of a
+//! full log or arriving at the end do not move it), says how far behind the newest it is, and
+//! follows again from the bottom or with "Newest".
 
 use super::Action;
+use super::files;
+use super::settings::FileKind;
 use super::state::{AppState, Notice};
 use crate::i18n::Lang;
 use crate::link::LogEntry;
@@ -10,12 +18,43 @@ use crate::protocol::{Direction, hex};
 use eframe::egui;
 
 /// The monitor's view state.
-#[derive(Default)]
 pub struct MonitorPanel {
     /// Show only frames whose command name or number contains this.
     pub filter: String,
     /// Show errors only.
     pub errors_only: bool,
+    /// Keep the newest frame in view.
+    pub follow: bool,
+    /// While not following: the frame at the top of the view (its sequence number), and how
+    /// far into its row the view starts.
+    anchor: Option<(u64, f32)>,
+    /// The offset the view was put at last frame, to tell the technician's scrolling from it.
+    placed: Option<f32>,
+    /// The height of the rows' view last frame.
+    view_h: Option<f32>,
+    /// The frame at the top of the view when last drawn.
+    pub top: Option<u64>,
+    /// While not following: frames shown below the view, and how many seconds the last one in
+    /// view is older than the newest.
+    pub behind: Option<(usize, f64)>,
+    /// The file the log is saved to.
+    pub save_path: String,
+}
+
+impl Default for MonitorPanel {
+    fn default() -> Self {
+        Self {
+            filter: String::new(),
+            errors_only: false,
+            follow: true,
+            anchor: None,
+            placed: None,
+            view_h: None,
+            top: None,
+            behind: None,
+            save_path: String::new(),
+        }
+    }
 }
 
 /// One log line: `12:00:01.234 >> ff ff 03 82 00 81  MSP_GET_PWMVALUE`.
@@ -62,6 +101,10 @@ impl MonitorPanel {
         let mut actions = Vec::new();
         let profile = rt.device.profile.clone();
         let log = &rt.packets;
+        let rows: Vec<(u64, &LogEntry)> = log
+            .numbered()
+            .filter(|(_, e)| self.matches(&profile, e))
+            .collect();
         ui.horizontal_wrapped(|ui| {
             let label = ui.label(lang.tr("Filter", "筛选"));
             ui.add(
@@ -76,39 +119,23 @@ impl MonitorPanel {
             } else {
                 lang.tr("Pause", "暂停")
             };
-            if ui.button(pause).clicked() {
+            if ui.add(super::inputs::steady_button(pause)).clicked() {
                 actions.push(Action::PausePacketLog(!log.paused));
             }
             if ui.button(lang.tr("Clear", "清空")).clicked() {
                 actions.push(Action::ClearPacketLog);
             }
-            let copy = ui.button(lang.tr("Copy", "复制")).clicked();
-            let save_clicked = ui.button(lang.tr("Save…", "保存…")).clicked();
-            if copy || save_clicked {
-                let shown: Vec<String> = log
-                    .entries
-                    .iter()
-                    .filter(|e| self.matches(&profile, e))
-                    .map(|e| line(&profile, e))
-                    .collect();
-                if copy {
-                    ui.ctx().copy_text(shown.join("\n"));
-                    actions.push(Action::Notify(Notice::info(format!(
-                        "{} line(s) copied",
-                        shown.len()
-                    ))));
-                } else {
-                    actions.push(save(&shown));
-                }
+            if ui.button(lang.tr("Copy", "复制")).clicked() {
+                let shown: Vec<String> = rows.iter().map(|(_, e)| line(&profile, e)).collect();
+                ui.ctx().copy_text(shown.join("\n"));
+                actions.push(Action::Notify(Notice::info(format!(
+                    "{} line(s) copied",
+                    shown.len()
+                ))));
             }
-            let shown = log
-                .entries
-                .iter()
-                .filter(|e| self.matches(&profile, e))
-                .count();
             ui.weak(format!(
                 "{} {} / {}{}",
-                shown,
+                rows.len(),
                 lang.tr("shown", "条显示"),
                 log.entries.len(),
                 if log.dropped > 0 {
@@ -122,19 +149,79 @@ impl MonitorPanel {
                 }
             ));
         });
+        ui.horizontal_wrapped(|ui| {
+            let event = files::row(
+                ui,
+                lang,
+                lang.tr("File", "文件"),
+                &mut self.save_path,
+                "packets.txt",
+                files::Pick::Save("packets.txt"),
+                &rt.dialogs,
+                true,
+            );
+            let save = ui.button(lang.tr("Save", "保存")).clicked();
+            match event {
+                files::FileEvent::NoDialog(why) => actions.push(Action::Notify(Notice::error(why))),
+                files::FileEvent::Chosen(_) => actions.extend(self.save(&profile, &rows)),
+                files::FileEvent::None if save => actions.extend(self.save(&profile, &rows)),
+                files::FileEvent::None => {}
+            }
+        });
+        self.where_the_view_is(ui, lang);
         ui.separator();
-        let rows: Vec<&LogEntry> = log
-            .entries
-            .iter()
-            .filter(|e| self.matches(&profile, e))
-            .collect();
-        let row_h = ui.text_style_height(&egui::TextStyle::Monospace) + 2.0;
-        egui::ScrollArea::both()
+        self.rows(ui, &profile, &rows);
+        actions
+    }
+
+    /// Following, or how far behind the newest the view is, with a way back.
+    fn where_the_view_is(&mut self, ui: &mut egui::Ui, lang: Lang) {
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut self.follow, lang.tr("Follow the newest", "跟随最新"));
+            if let (false, Some((below, secs))) = (self.follow, self.behind) {
+                ui.colored_label(
+                    egui::Color32::from_rgb(220, 150, 0),
+                    format!(
+                        "{below} {} ({secs:.1} s {})",
+                        lang.tr("newer frame(s) below the view", "条更新的帧在下方"),
+                        lang.tr("behind the newest", "落后于最新")
+                    ),
+                );
+                if ui.button(lang.tr("Newest", "最新")).clicked() {
+                    self.follow = true;
+                }
+            }
+        });
+    }
+
+    /// The rows, in a scroll area with a solid scroll bar, placed where the view is held.
+    fn rows(&mut self, ui: &mut egui::Ui, profile: &Profile, rows: &[(u64, &LogEntry)]) {
+        // show_rows adds the spacing between rows itself.
+        let text_h = ui.text_style_height(&egui::TextStyle::Monospace);
+        let row_h = text_h + ui.spacing().item_spacing.y;
+        ui.spacing_mut().scroll = egui::style::ScrollStyle::solid();
+        // No rubber band: it would spring an offset placed past last frame's end (the log grew,
+        // or the panel was just opened) back, as if the technician had scrolled.
+        ui.spacing_mut().scroll.kinetic.rubber_band = false;
+        let content = rows.len() as f32 * row_h;
+        let view_h = self
+            .view_h
+            .unwrap_or_else(|| ui.available_height() - ui.spacing().scroll.allocated_width());
+        let offset = if self.follow {
+            (content - view_h).max(0.0)
+        } else {
+            match self.anchor {
+                Some((seq, into)) => rows.partition_point(|(s, _)| *s < seq) as f32 * row_h + into,
+                None => self.placed.unwrap_or(0.0),
+            }
+        };
+        let out = egui::ScrollArea::both()
             .auto_shrink(false)
-            .stick_to_bottom(!log.paused)
-            .show_rows(ui, row_h, rows.len(), |ui, range| {
-                for e in &rows[range] {
-                    let text = line(&profile, e);
+            .scroll_bar_visibility(egui::scroll_area::ScrollBarVisibility::AlwaysVisible)
+            .vertical_scroll_offset(offset)
+            .show_rows(ui, text_h, rows.len(), |ui, range| {
+                for (_, e) in &rows[range] {
+                    let text = line(profile, e);
                     let color = match (&e.frame, e.direction) {
                         (Err(_), _) => egui::Color32::RED,
                         (Ok(_), Direction::HostToDevice) => ui.visuals().text_color(),
@@ -146,25 +233,55 @@ impl MonitorPanel {
                     );
                 }
             });
-        actions
+        let view_h = out.inner_rect.height();
+        self.view_h = Some(view_h);
+        let max = (out.content_size.y - view_h).max(0.0);
+        let now = out.state.clamped_offset().y.clamp(0.0, max);
+        let placed = offset.clamp(0.0, max);
+        // The technician scrolled: up leaves the newest, to the bottom follows it again.
+        if (now - placed).abs() > 0.5 {
+            self.follow = now >= max - 1.0;
+        }
+        let top = ((now / row_h).floor() as usize).min(rows.len().saturating_sub(1));
+        self.top = rows.get(top).map(|(s, _)| *s);
+        self.anchor = (!self.follow)
+            .then(|| self.top.map(|s| (s, now - top as f32 * row_h)))
+            .flatten();
+        self.placed = Some(now);
+        let last_in_view = (((now + view_h) / row_h).ceil() as usize).min(rows.len());
+        self.behind = match (rows.get(last_in_view.saturating_sub(1)), rows.last()) {
+            (Some((_, seen)), Some((_, newest))) if !self.follow => {
+                let secs = newest
+                    .at
+                    .duration_since(seen.at)
+                    .map_or(0.0, |d| d.as_secs_f64());
+                Some((rows.len() - last_in_view, secs))
+            }
+            _ => None,
+        };
     }
-}
 
-fn save(lines: &[String]) -> Action {
-    let Some(path) = rfd::FileDialog::new()
-        .set_file_name("packets.txt")
-        .save_file()
-    else {
-        return Action::Notify(Notice::info(
-            "save cancelled (no file chosen, or no file dialog on this system)",
-        ));
-    };
-    match crate::document::write_atomic(&path, (lines.join("\n") + "\n").as_bytes()) {
-        Ok(()) => Action::Notify(Notice::info(format!(
-            "{} line(s) saved to {}",
-            lines.len(),
-            path.display()
-        ))),
-        Err(e) => Action::Notify(Notice::error(e.to_string())),
+    /// Writes the rows shown to the typed (or chosen) file.
+    fn save(&self, profile: &Profile, rows: &[(u64, &LogEntry)]) -> Vec<Action> {
+        let path = self.save_path.trim();
+        if path.is_empty() {
+            return vec![Action::Notify(Notice::error(
+                "save: give the file's path (type it, or Browse)",
+            ))];
+        }
+        let lines: Vec<String> = rows.iter().map(|(_, e)| line(profile, e)).collect();
+        match crate::document::write_atomic(
+            std::path::Path::new(path),
+            (lines.join("\n") + "\n").as_bytes(),
+        ) {
+            Ok(()) => vec![
+                Action::RememberFile(FileKind::Packets, path.to_string()),
+                Action::Notify(Notice::info(format!(
+                    "{} line(s) saved to {path}",
+                    lines.len()
+                ))),
+            ],
+            Err(e) => vec![Action::Notify(Notice::error(e.to_string()))],
+        }
     }
 }

@@ -1,9 +1,10 @@
 //! Presets: save the device's parameters to a RON file, open one and compare it with the device
 //! in a diff table, apply it with read-back verification and a progress bar.
 
-use super::Action;
 use super::jobs::{self, Job, JobError, JobOutput};
-use super::state::{AppState, Reading};
+use super::settings::FileKind;
+use super::state::{AppState, Notice, Reading};
+use super::{Action, files};
 use crate::document::DocumentError;
 use crate::i18n::Lang;
 use crate::ops;
@@ -24,6 +25,8 @@ pub struct PresetsPanel {
     pub loaded: Option<Loaded>,
     /// Why the last open failed, with line and column.
     pub error: Option<DocumentError>,
+    /// Apply was clicked: the preset waits for the technician's yes.
+    pub confirm_apply: bool,
 }
 
 /// Reads the device's parameters and saves them as a preset at `path`, with `note`
@@ -106,21 +109,22 @@ impl PresetsPanel {
         let busy = rt.job_progress().is_some();
         let ready = rt.connected() && !busy;
         ui.horizontal_wrapped(|ui| {
-            let label = ui.label(lang.tr("File", "文件"));
-            ui.add(
-                egui::TextEdit::singleline(&mut self.path)
-                    .hint_text("window-cleaner.ron")
-                    .desired_width(320.0),
-            )
-            .labelled_by(label.id);
-            if ui.button(lang.tr("Browse…", "浏览…")).clicked()
-                && let Some(p) = super::ron_dialog().pick_file()
-            {
-                self.path = p.display().to_string();
-                self.open(rt);
-            }
-            if ui.button(lang.tr("Open", "打开")).clicked() {
-                self.open(rt);
+            let event = files::row(
+                ui,
+                lang,
+                lang.tr("File", "文件"),
+                &mut self.path,
+                "window-cleaner.ron",
+                files::Pick::Open(&["ron"]),
+                &rt.dialogs,
+                true,
+            );
+            let open = ui.button(lang.tr("Open", "打开")).clicked();
+            match event {
+                files::FileEvent::NoDialog(why) => actions.push(Action::Notify(Notice::error(why))),
+                files::FileEvent::Chosen(_) => actions.extend(self.open_and_remember(rt)),
+                files::FileEvent::None if open => actions.extend(self.open_and_remember(rt)),
+                files::FileEvent::None => {}
             }
         });
         ui.horizontal_wrapped(|ui| {
@@ -130,25 +134,15 @@ impl PresetsPanel {
             let can_save = ready && !self.path.trim().is_empty();
             if ui
                 .add_enabled(
-                    ready,
-                    egui::Button::new(lang.tr("Save device as…", "另存设备参数…")),
-                )
-                .clicked()
-                && let Some(p) = rfd::FileDialog::new()
-                    .add_filter("RON", &["ron"])
-                    .set_file_name(format!("{}.ron", profile.id))
-                    .save_file()
-            {
-                self.path = p.display().to_string();
-                actions.push(Action::StartJob(save_job(profile, p, self.note.clone())));
-            }
-            if ui
-                .add_enabled(
                     can_save,
                     egui::Button::new(lang.tr("Save device to file", "保存设备参数到文件")),
                 )
                 .clicked()
             {
+                actions.push(Action::RememberFile(
+                    FileKind::Preset,
+                    self.path.trim().to_string(),
+                ));
                 actions.push(Action::StartJob(save_job(
                     profile,
                     PathBuf::from(self.path.trim()),
@@ -164,6 +158,8 @@ impl PresetsPanel {
                     Ok(writes) => {
                         self.loaded = Some(Loaded { preset, writes });
                         self.error = None;
+                        // The defaults come from the profile, not from the file named.
+                        self.path.clear();
                     }
                     Err(e) => self.error = Some(e),
                 }
@@ -212,7 +208,7 @@ impl PresetsPanel {
                 egui::Button::new(format!("{} ({differing})", lang.tr("Apply", "写入预设"))),
             );
             if apply.clicked() {
-                actions.push(Action::StartJob(apply_job(profile, p.clone())));
+                self.confirm_apply = true;
             }
         });
         egui::ScrollArea::vertical()
@@ -243,6 +239,56 @@ impl PresetsPanel {
                         }
                     });
             });
+        if self.confirm_apply {
+            let preset = p.clone();
+            match confirm(ui, lang, differing) {
+                Some(true) => {
+                    self.confirm_apply = false;
+                    actions.push(Action::StartJob(apply_job(profile, preset)));
+                }
+                Some(false) => self.confirm_apply = false,
+                None => {}
+            }
+        }
         actions
     }
+
+    /// Opens the preset at the path typed or chosen, and remembers the path.
+    fn open_and_remember(&mut self, rt: &AppState) -> Vec<Action> {
+        self.open(rt);
+        if self.error.is_some() {
+            return Vec::new();
+        }
+        vec![Action::RememberFile(
+            FileKind::Preset,
+            self.path.trim().to_string(),
+        )]
+    }
+}
+
+/// Asks before applying, as Tuning's "Write changes" does: `Some(true)` to write.
+fn confirm(ui: &mut egui::Ui, lang: Lang, differing: usize) -> Option<bool> {
+    let mut decision = None;
+    let modal = egui::Modal::new(egui::Id::unique("confirm-apply-preset")).show(ui.ctx(), |ui| {
+        ui.heading(lang.tr("Apply this preset?", "写入此预设?"));
+        ui.label(format!(
+            "{differing} {}",
+            lang.tr(
+                "field(s) differ from the device; the preset's commands will be written, then read back.",
+                "项与设备不同;预设的命令将被写入并回读校验。",
+            )
+        ));
+        ui.horizontal(|ui| {
+            if ui.button(lang.tr("Write", "写入")).clicked() {
+                decision = Some(true);
+            }
+            if ui.button(lang.tr("Cancel", "取消")).clicked() {
+                decision = Some(false);
+            }
+        });
+    });
+    if modal.should_close() && decision.is_none() {
+        decision = Some(false);
+    }
+    decision
 }

@@ -3,9 +3,10 @@
 //! operator prompts as a modal that the job waits on, a results table, a PASS/FAIL banner, and
 //! one JSON line per run appended to a log with the device's version and build info.
 
-use super::Action;
 use super::jobs::{Job, JobError, JobOutput, LogError};
-use super::state::AppState;
+use super::settings::FileKind;
+use super::state::{AppState, Notice};
+use super::{Action, files};
 use crate::document::DocumentError;
 use crate::i18n::Lang;
 use crate::ops::selftest::{self, Plan, Report, StepKind, StepResult};
@@ -15,7 +16,8 @@ use eframe::egui;
 use std::path::PathBuf;
 use std::time::Duration;
 
-/// The plan offered first.
+/// The plan offered first, relative to the working folder, until the app puts the shipped
+/// plan's own path there ([`files::shipped_in`]).
 pub const DEFAULT_PLAN: &str = "presets/window-cleaner-selftest.ron";
 /// The log appended to unless the operator names another.
 pub const DEFAULT_LOG: &str = "selftest-log.jsonl";
@@ -49,6 +51,9 @@ pub struct SelfTestPanel {
     pub running: bool,
     /// The prompt the job waits on.
     pub prompt: Option<Prompt>,
+    /// The unit the last report is about (the device model's `unit` when it came): the
+    /// PASS/FAIL banner belongs to it and goes when another connection or unit comes.
+    pub report_unit: Option<u64>,
 }
 
 impl Default for SelfTestPanel {
@@ -63,6 +68,7 @@ impl Default for SelfTestPanel {
             logged: None,
             running: false,
             prompt: None,
+            report_unit: None,
         }
     }
 }
@@ -235,6 +241,29 @@ impl SelfTestPanel {
         )))
     }
 
+    /// Opens the plan at the path typed or chosen, and remembers the path if it opens.
+    fn open_and_remember(&mut self, rt: &AppState) -> Vec<Action> {
+        self.open(rt);
+        if self.plan.is_none() {
+            return Vec::new();
+        }
+        vec![Action::RememberFile(
+            FileKind::SelfTestPlan,
+            self.path.trim().to_string(),
+        )]
+    }
+
+    /// Forgets the last run's verdict when it is about another unit than the one answering
+    /// now (a new connection, a lost link, a device answering again after silence).
+    pub fn forget_other_unit(&mut self, unit: u64) {
+        if !self.running && self.report_unit.is_some_and(|u| u != unit) {
+            self.results.clear();
+            self.report = None;
+            self.logged = None;
+            self.report_unit = None;
+        }
+    }
+
     /// Draws the panel.
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
@@ -248,28 +277,27 @@ impl SelfTestPanel {
             self.running = false;
         }
         ui.horizontal_wrapped(|ui| {
-            let label = ui.label(lang.tr("Test plan", "测试方案"));
-            ui.add(egui::TextEdit::singleline(&mut self.path).desired_width(320.0))
-                .labelled_by(label.id);
-            if ui
-                .add_enabled(
-                    !self.running,
-                    egui::Button::new(lang.tr("Browse…", "浏览…")),
-                )
-                .clicked()
-                && let Some(p) = super::ron_dialog().pick_file()
-            {
-                self.path = p.display().to_string();
-                self.open(rt);
-            }
-            if ui
+            let event = files::row(
+                ui,
+                lang,
+                lang.tr("Test plan", "测试方案"),
+                &mut self.path,
+                "window-cleaner-selftest.ron",
+                files::Pick::Open(&["ron"]),
+                &rt.dialogs,
+                !self.running,
+            );
+            let open = ui
                 .add_enabled(
                     !self.running,
                     egui::Button::new(lang.tr("Open plan", "打开方案")),
                 )
-                .clicked()
-            {
-                self.open(rt);
+                .clicked();
+            match event {
+                files::FileEvent::NoDialog(why) => actions.push(Action::Notify(Notice::error(why))),
+                files::FileEvent::Chosen(_) => actions.extend(self.open_and_remember(rt)),
+                files::FileEvent::None if open => actions.extend(self.open_and_remember(rt)),
+                files::FileEvent::None => {}
             }
         });
         ui.horizontal_wrapped(|ui| {
@@ -371,6 +399,13 @@ impl SelfTestPanel {
         if let Some(d) = &report.device {
             ui.monospace(format!("{} {d}", lang.tr("Device:", "设备:")));
         }
+        if !report.safe_state.is_empty() {
+            ui.weak(format!(
+                "{} {}",
+                lang.tr("Started from the safe state:", "从安全状态开始:"),
+                report.safe_state.join("; ")
+            ));
+        }
         match &self.logged {
             Some(Ok(p)) => {
                 ui.label(format!(
@@ -470,14 +505,15 @@ impl SelfTestPanel {
         }
     }
 
-    /// Takes what one of its jobs reported.
-    pub fn on_output(&mut self, out: Output) {
+    /// Takes what one of its jobs reported; a report is about `unit` (the device model's).
+    pub fn on_output(&mut self, out: Output, unit: u64) {
         match out {
             Output::Step(r) => self.results.push(r),
             Output::Prompt(p) => self.prompt = Some(p),
             Output::Done(report, logged) => {
                 self.results = report.results.clone();
                 self.report = Some(*report);
+                self.report_unit = Some(unit);
                 self.logged = logged;
                 self.running = false;
                 self.prompt = None;

@@ -1,10 +1,23 @@
-//! What is kept between runs (eframe storage): the last connection, the panel shown, the
-//! language and the telemetry view. Changed only by the app, as panels ask ([`super::Action`]).
+//! What is kept between runs (eframe storage): the last connection, each profile's port
+//! settings, the panel shown, the language, the telemetry view and the files last used.
+//! Changed only by the app, as panels ask ([`super::Action`]).
 
 use super::app::PanelId;
 use super::state::Target;
 use crate::i18n::Lang;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// What a port needs for one kind of device, kept per profile: a 300 ms margin chosen for a
+/// slow window cleaner must not slow a servo scan, nor Tuya's 9600 baud the next servo bench.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PortSettings {
+    /// The baud rate (`None`: the profile's usual rate).
+    pub baud: Option<u32>,
+    /// How long the device may take to start answering, ms (`None`: the protocol's own).
+    pub margin_ms: Option<u64>,
+}
 
 /// The saved settings.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -12,10 +25,10 @@ use serde::{Deserialize, Serialize};
 pub struct Settings {
     /// The last target.
     pub target: Target,
-    /// The last baud rate.
-    pub baud: u32,
     /// The last profile.
     pub profile: String,
+    /// Port settings by profile id.
+    pub ports: BTreeMap<String, PortSettings>,
     /// The panel shown.
     pub panel: PanelId,
     /// The UI language.
@@ -26,22 +39,60 @@ pub struct Settings {
     pub window_secs: f64,
     /// The navigation is shown.
     pub nav_open: bool,
-    /// How long the device may take to start answering, ms (`None`: the protocol's own).
-    pub margin_ms: Option<u64>,
+    /// The files last used, by purpose ([`FileKind`]).
+    pub files: BTreeMap<FileKind, String>,
+}
+
+/// What a remembered file is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum FileKind {
+    /// A parameter preset (presets panel).
+    Preset,
+    /// A self-test plan.
+    SelfTestPlan,
+    /// The self-test's JSON-lines log.
+    SelfTestLog,
+    /// The telemetry CSV export.
+    TelemetryCsv,
+    /// The packet monitor's saved text.
+    Packets,
+    /// A servo parameter preset.
+    ServoPreset,
+    /// A servo provisioning plan.
+    ProvisionPlan,
+    /// The provisioning CSV log.
+    ProvisionLog,
 }
 
 impl Default for Settings {
     fn default() -> Self {
         Self {
             target: Target::Demo("window-cleaner".into()),
-            baud: 115_200,
             profile: "window-cleaner".into(),
+            ports: BTreeMap::new(),
             panel: PanelId::Tuning,
             lang: Lang::En,
             poll_hz: Some(50.0),
             window_secs: 60.0,
             nav_open: true,
-            margin_ms: None,
+            files: BTreeMap::new(),
         }
+    }
+}
+
+impl Settings {
+    /// The port settings saved for `profile` (none saved: the profile's rate, auto margin).
+    pub fn port_of(&self, profile: &str) -> PortSettings {
+        self.ports.get(profile).cloned().unwrap_or_default()
+    }
+
+    /// The current profile's port settings, to change.
+    pub fn port_mut(&mut self) -> &mut PortSettings {
+        self.ports.entry(self.profile.clone()).or_default()
+    }
+
+    /// The file last used for `kind`, if any.
+    pub fn file(&self, kind: FileKind) -> Option<&str> {
+        self.files.get(&kind).map(String::as_str)
     }
 }

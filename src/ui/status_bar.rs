@@ -29,7 +29,7 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         }
         if let Some((title, fraction, msg)) = rt.job_progress() {
             ui.separator();
-            ui.label(title);
+            ui.label(lang.tr(title, crate::i18n::job_title_zh(title)));
             ui.add(
                 egui::ProgressBar::new(fraction)
                     .desired_width(160.0)
@@ -47,7 +47,7 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
             } else {
                 ui.visuals().text_color()
             };
-            ui.colored_label(color, &s.text);
+            ui.colored_label(color, s.text_in(lang));
         }
     });
     actions

@@ -1,15 +1,16 @@
 //! Live telemetry: the profile's plots (attitude, battery, …) drawn from bounded series with a
-//! min/max decimation to the plot's pixel width, poll-rate and time-window controls, a cursor
-//! readout, the other telemetry listed with live values, and CSV export.
+//! min/max decimation to the plot's pixel width and broken at gaps, poll-rate and time-window
+//! controls, a cursor readout of the sample under the pointer, the other telemetry listed with
+//! live values in a part of its own, and CSV export to a typed or chosen file.
 
-use super::Action;
 use super::jobs;
-use super::settings::Settings;
+use super::settings::{FileKind, Settings};
 use super::state::{AppState, Notice, Reading};
+use super::{Action, files, plot};
 use crate::i18n::Lang;
 use crate::profile::CommandKind;
 use eframe::egui;
-use egui_plot::{Legend, Line, Plot, PlotPoints, VLine};
+use egui_plot::{Plot, VLine};
 
 /// Poll rates offered, polls a second (`None`: as fast as the wire allows).
 pub const RATES: [Option<f64>; 8] = [
@@ -27,12 +28,31 @@ pub const WINDOWS: [f64; 6] = [10.0, 30.0, 60.0, 120.0, 300.0, 600.0];
 
 /// The panel's view state.
 pub struct TelemetryPanel {
-    /// Keep the newest data in view.
+    /// Keep the newest data in view (where polling was paused, while it is).
     pub follow: bool,
-    /// The time under the pointer, for the readout.
+    /// The time under the pointer while it is over a plot (as of the last frame).
     cursor: Option<f64>,
     /// Scratch for decimated points (no allocation per frame once grown).
-    points: Vec<[f64; 2]>,
+    scratch: plot::Scratch,
+    /// What each plot showed when last drawn, in profile order.
+    pub shown: Vec<Shown>,
+    /// The CSV export's file (typed, or chosen with Browse).
+    pub csv_path: String,
+}
+
+/// What one plot showed when last drawn.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Shown {
+    /// The plot's id.
+    pub id: String,
+    /// Its time range, seconds.
+    pub x: (f64, f64),
+    /// The cursor readout under it, if any.
+    pub readout: Option<plot::Readout>,
+    /// Its fields' names, y axis label and number format, in the window's language.
+    pub legend: plot::Legend,
+    /// Where the plot was drawn.
+    pub rect: egui::Rect,
 }
 
 impl Default for TelemetryPanel {
@@ -40,7 +60,9 @@ impl Default for TelemetryPanel {
         Self {
             follow: true,
             cursor: None,
-            points: Vec::new(),
+            scratch: plot::Scratch::default(),
+            shown: Vec::new(),
+            csv_path: String::new(),
         }
     }
 }
@@ -50,6 +72,16 @@ fn rate_label(rate: Option<f64>, lang: Lang) -> String {
         Some(r) => format!("{r} Hz"),
         None => lang.tr("max (wire limit)", "最大(线速)").to_string(),
     }
+}
+
+/// The telemetry commands listed under the plots: every one with a reply.
+fn other_commands(rt: &AppState) -> Vec<&crate::profile::Command> {
+    rt.device
+        .profile
+        .commands
+        .iter()
+        .filter(|c| c.kind == CommandKind::Telemetry && !c.reply.is_empty())
+        .collect()
 }
 
 impl TelemetryPanel {
@@ -79,7 +111,7 @@ impl TelemetryPanel {
             } else {
                 lang.tr("Pause", "暂停")
             };
-            if ui.button(pause).clicked() {
+            if ui.add(super::inputs::steady_button(pause)).clicked() {
                 actions.push(Action::PausePolling(!paused));
             }
             let label = ui.label(lang.tr("Window", "时间窗"));
@@ -98,87 +130,142 @@ impl TelemetryPanel {
                 .response
                 .labelled_by(label.id);
             ui.checkbox(&mut self.follow, lang.tr("Follow", "跟随"));
-            if ui.button(lang.tr("Export CSV", "导出 CSV")).clicked() {
-                actions.push(export_csv(rt));
+        });
+        ui.horizontal_wrapped(|ui| {
+            let event = files::row(
+                ui,
+                lang,
+                lang.tr("CSV file", "CSV 文件"),
+                &mut self.csv_path,
+                "telemetry.csv",
+                files::Pick::Save("telemetry.csv"),
+                &rt.dialogs,
+                true,
+            );
+            let export = ui.button(lang.tr("Export CSV", "导出 CSV")).clicked();
+            match event {
+                files::FileEvent::NoDialog(why) => actions.push(Action::Notify(Notice::error(why))),
+                files::FileEvent::Chosen(_) => actions.extend(export_csv(rt, &self.csv_path)),
+                files::FileEvent::None if export => actions.extend(export_csv(rt, &self.csv_path)),
+                files::FileEvent::None => {}
             }
         });
         ui.separator();
-        let plots = &rt.device.profile.plots;
-        let height = ((ui.available_height() - 160.0) / plots.len().max(1) as f32).max(120.0);
-        let now = rt.device.t0.elapsed().as_secs_f64();
-        let window = saved.window_secs;
-        let link = egui::Id::unique("telemetry-x");
-        let mut hovered = None;
-        for plot in plots {
-            ui.label(egui::RichText::new(lang.tr(&plot.name.en, &plot.name.zh)).strong());
-            let set = rt.device.plots.get(&plot.id);
-            let end = if self.follow {
-                now
-            } else {
-                set.and_then(|s| s.span()).map_or(now, |s| s.1)
-            };
-            let width_px = ui.available_width().max(100.0) as usize;
-            let cursor = self.cursor;
-            let points = &mut self.points;
-            let follow = self.follow;
-            let resp = Plot::new(("plot", &plot.id))
-                .height(height)
-                .legend(Legend::default())
-                .link_axis(link, [true, false])
-                .allow_drag(!follow)
-                .allow_zoom(!follow)
-                .show(ui, |pui| {
-                    if follow {
-                        pui.set_plot_bounds_x(end - window..=end);
-                        pui.set_auto_bounds([false, true]);
-                    }
-                    let bounds = pui.plot_bounds();
-                    let (t0, t1) = (bounds.min()[0], bounds.max()[0]);
-                    if let Some(set) = set {
-                        for name in &plot.fields {
-                            let Some(series) = set.get(name) else {
-                                continue;
-                            };
-                            points.clear();
-                            series.decimate(t0, t1, width_px, points);
-                            pui.line(Line::new(name.clone(), PlotPoints::from(points.clone())));
-                        }
-                    }
-                    if let Some(t) = cursor {
-                        pui.vline(VLine::new("cursor", t));
-                    }
-                    pui.pointer_coordinate().map(|p| p.x)
-                });
-            if let Some(t) = resp.inner {
-                hovered = Some(t);
-            }
-            if let (Some(t), Some(set)) = (self.cursor.or(hovered), set) {
-                ui.horizontal_wrapped(|ui| {
-                    ui.weak(format!("t = {t:.2} s"));
-                    for name in &plot.fields {
-                        if let Some(s) = set.value_at(name, t) {
-                            ui.monospace(format!("{name} = {:.3}", s.v));
-                        }
-                    }
-                });
-            }
-        }
-        self.cursor = hovered;
-        ui.separator();
-        actions.extend(self.other_telemetry(ui, lang, rt));
+        // The other telemetry below, in a part the technician can resize: by default room for
+        // every command, up to 45 % of the panel.
+        let cmds = other_commands(rt);
+        let avail = ui.available_height();
+        let row_h = ui.spacing().interact_size.y + ui.spacing().item_spacing.y;
+        let wanted = (cmds.len() as f32 + 2.0) * row_h;
+        let default = wanted.clamp(avail * 0.25, avail * 0.45);
+        egui::Panel::bottom("other-telemetry")
+            .resizable(true)
+            .default_size(default)
+            .size_range(row_h * 3.0..=(avail * 0.8).max(row_h * 3.0))
+            .show(ui, |ui| {
+                actions.extend(self.other_telemetry(ui, lang, rt, &cmds))
+            });
+        self.plots(ui, saved, rt);
         actions
     }
 
-    /// The profile's other telemetry, with the values the last reads brought.
-    fn other_telemetry(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    /// The profile's plots, sharing the height left; each with its cursor readout below it, on
+    /// a line kept whether or not there is one, so that nothing below moves.
+    fn plots(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) {
+        let lang = saved.lang;
+        let plots = &rt.device.profile.plots;
+        let text_h = ui.text_style_height(&egui::TextStyle::Body);
+        let gap = ui.spacing().item_spacing.y;
+        // Title, key, readout and the x axis' label.
+        let chrome = 4.0 * (text_h + gap) + gap;
+        let n = plots.len().max(1) as f32;
+        let height = ((ui.available_height() - n * chrome) / n).max(90.0);
+        let window = saved.window_secs;
+        let follow = self.follow;
+        let link = egui::Id::unique("telemetry-x");
+        let cursor = self.cursor;
+        let mut hovered = None;
+        self.shown.clear();
+        egui::ScrollArea::vertical()
+            .id_salt("plots")
+            .auto_shrink(false)
+            .show(ui, |ui| {
+                for p in plots {
+                    ui.label(egui::RichText::new(lang.tr(&p.name.en, &p.name.zh)).strong());
+                    let legend =
+                        plot::Legend::new(rt.device.profile.command(&p.command), &p.fields, lang);
+                    plot::key(ui, &legend);
+                    let set = rt.device.plots.get(&p.id);
+                    let end = if follow {
+                        rt.plot_end()
+                    } else {
+                        set.and_then(|s| s.span()).map_or(rt.plot_end(), |s| s.1)
+                    };
+                    let width_px = ui.available_width().max(100.0) as usize;
+                    let scratch = &mut self.scratch;
+                    let plot = Plot::new(("plot", &p.id)).height(height);
+                    let resp = plot::axes(plot, lang, rt.device.t0_wall, &legend)
+                        .link_axis(link, [true, false])
+                        .allow_drag(!follow)
+                        .allow_zoom(!follow)
+                        .allow_scroll(!follow)
+                        // The readout below says what is under the cursor, from samples only.
+                        .show_x(false)
+                        .show_y(false)
+                        .show(ui, |pui| {
+                            let x = if follow {
+                                pui.set_plot_bounds_x(end - window..=end);
+                                pui.set_auto_bounds([false, true]);
+                                (end - window, end)
+                            } else {
+                                let b = pui.plot_bounds();
+                                (b.min()[0], b.max()[0])
+                            };
+                            let dx = pui.transform().dpos_dvalue_x().abs().max(1e-12);
+                            let readout = match (cursor, set) {
+                                (Some(t), Some(set)) => {
+                                    plot::nearest(set, &p.fields, t, plot::REACH_PX / dx)
+                                }
+                                _ => None,
+                            };
+                            if let Some(set) = set {
+                                plot::lines(pui, set, &p.fields, &legend, x, width_px, scratch);
+                            }
+                            if let Some(r) = &readout {
+                                let gray = egui::Color32::from_gray(140);
+                                pui.vline(VLine::new("", r.t).stroke(egui::Stroke::new(1.0, gray)));
+                            }
+                            let over = pui.response().hovered();
+                            let t = pui.pointer_coordinate().map(|c| c.x).filter(|_| over);
+                            (t, readout, x)
+                        });
+                    let (t, readout, x) = resp.inner;
+                    if t.is_some() {
+                        hovered = t;
+                    }
+                    readout_line(ui, lang, rt, p, readout.as_ref(), text_h);
+                    self.shown.push(Shown {
+                        id: p.id.clone(),
+                        x,
+                        readout,
+                        legend,
+                        rect: resp.response.rect,
+                    });
+                }
+            });
+        self.cursor = hovered;
+    }
+
+    /// The profile's other telemetry, with the values the last reads brought, in all the room
+    /// its part of the panel has.
+    fn other_telemetry(
+        &self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        cmds: &[&crate::profile::Command],
+    ) -> Vec<Action> {
         let mut actions = Vec::new();
-        let cmds: Vec<_> = rt
-            .device
-            .profile
-            .commands
-            .iter()
-            .filter(|c| c.kind == CommandKind::Telemetry && !c.reply.is_empty())
-            .collect();
         ui.horizontal(|ui| {
             ui.strong(lang.tr("Other telemetry", "其他数据"));
             let busy = rt.job_progress().is_some();
@@ -197,7 +284,7 @@ impl TelemetryPanel {
         });
         egui::ScrollArea::vertical()
             .id_salt("other")
-            .max_height(150.0)
+            .auto_shrink(false)
             .show(ui, |ui| {
                 egui::Grid::new("other-grid")
                     .striped(true)
@@ -239,23 +326,63 @@ impl TelemetryPanel {
     }
 }
 
-/// Asks where to save and writes every plot's series as CSV.
-fn export_csv(rt: &AppState) -> Action {
-    let Some(path) = rfd::FileDialog::new()
-        .set_file_name("telemetry.csv")
-        .add_filter("CSV", &["csv"])
-        .save_file()
-    else {
-        return Action::Notify(Notice::info(
-            "export cancelled (no file chosen, or no file dialog on this system)",
-        ));
-    };
+/// The readout under a plot: the sample's time and each field's value, on a line of its own
+/// that is there (empty) when there is nothing to read out.
+fn readout_line(
+    ui: &mut egui::Ui,
+    lang: Lang,
+    rt: &AppState,
+    p: &crate::profile::Plot,
+    readout: Option<&plot::Readout>,
+    text_h: f32,
+) {
+    let (rect, _) = ui.allocate_exact_size(
+        egui::vec2(ui.available_width(), text_h + 2.0),
+        egui::Sense::hover(),
+    );
+    let Some(r) = readout else { return };
+    let mut line = ui.new_child(
+        egui::UiBuilder::new()
+            .max_rect(rect)
+            .layout(egui::Layout::left_to_right(egui::Align::Center)),
+    );
+    line.set_clip_rect(rect.intersect(ui.clip_rect()));
+    line.weak(plot::clock(rt.device.t0_wall, r.t, true));
+    let cmd = rt.device.profile.command(&p.command);
+    for (ident, v) in &r.values {
+        let f = cmd.and_then(|c| c.reply.iter().find(|f| &f.ident == ident));
+        let text = match f {
+            Some(f) => format!(
+                "{} = {:.*}{}",
+                lang.tr(&f.name.en, &f.name.zh),
+                f.decimals(),
+                v,
+                f.unit_suffix()
+            ),
+            None => format!("{ident} = {v}"),
+        };
+        line.monospace(text);
+    }
+}
+
+/// Writes every plot's series as CSV to the typed (or chosen) `path`; says what happened.
+fn export_csv(rt: &AppState, path: &str) -> Vec<Action> {
+    let path = path.trim();
+    if path.is_empty() {
+        return vec![Action::Notify(Notice::error(
+            "export: give the CSV file's path (type it, or Browse)",
+        ))];
+    }
+    let path = std::path::PathBuf::from(path);
     match write_csv(rt, &path) {
-        Ok(n) => Action::Notify(Notice::info(format!(
-            "{n} plot(s) written to {}",
-            path.display()
-        ))),
-        Err(e) => Action::Notify(Notice::error(e.to_string())),
+        Ok(n) => vec![
+            Action::RememberFile(FileKind::TelemetryCsv, path.display().to_string()),
+            Action::Notify(Notice::info(format!(
+                "{n} plot(s) written to {}",
+                path.display()
+            ))),
+        ],
+        Err(e) => vec![Action::Notify(Notice::error(e.to_string()))],
     }
 }
 

@@ -20,6 +20,10 @@ pub struct Change {
     pub command: String,
     /// The field's ident.
     pub field: String,
+    /// The Set command's name, as the window shows it.
+    pub command_name: crate::profile::Text,
+    /// The field's name, as the window shows it.
+    pub field_name: crate::profile::Text,
     /// The device's value, as shown.
     pub device: String,
     /// The new value, as shown.
@@ -159,8 +163,14 @@ impl TuningPanel {
             if !touched {
                 continue;
             }
+            // The Set's own fields, each from the Get's field of the same ident: a Set may
+            // leave out fields its Get reads (a variant's SET 225 has no waterPump).
             let mut inputs = Vec::new();
-            for f in &get.reply {
+            for f in set
+                .request
+                .iter()
+                .filter_map(|sf| get.reply.iter().find(|f| f.ident == sf.ident))
+            {
                 let device = rt.device.value(get.id, &f.ident);
                 let value = match self.edited(get.id, f) {
                     Some(Ok(v)) => {
@@ -168,6 +178,8 @@ impl TuningPanel {
                             changes.push(Change {
                                 command: set.ident.clone(),
                                 field: f.ident.clone(),
+                                command_name: set.name.clone(),
+                                field_name: f.name.clone(),
                                 device: device.map_or("—".into(), |d| f.format(d)),
                                 new: f.format(&v),
                             });
@@ -241,7 +253,7 @@ impl TuningPanel {
                 self.edits.clear();
             }
             if let Err(e) = &pending {
-                ui.colored_label(egui::Color32::RED, e.to_string());
+                ui.colored_label(egui::Color32::RED, pending_text(e, rt, lang));
             }
         });
         ui.separator();
@@ -264,10 +276,15 @@ impl TuningPanel {
     /// One grid per group, so that its columns line up: a header row per command, then its
     /// fields.
     fn group_grid(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, group: &Group<'_>) {
+        // Every group's table has the same six columns across the whole width, whatever its
+        // contents: a long text wraps or is cut in its cell instead of moving the columns.
+        let gap = ui.spacing().item_spacing.x;
+        let col = ((ui.available_width() - 5.0 * gap) / 6.0).max(60.0);
         egui::Grid::new(("fields", &group.id))
             .num_columns(6)
             .striped(true)
-            .min_col_width(60.0)
+            .min_col_width(col)
+            .max_col_width(col)
             .show(ui, |ui| {
                 ui.weak(lang.tr("Field", "字段"));
                 ui.weak(lang.tr("Device", "设备值"));
@@ -284,10 +301,10 @@ impl TuningPanel {
                         ));
                     match rt.device.readings.get(&get.id) {
                         Some(Reading::Failed(e)) => {
-                            ui.colored_label(
-                                egui::Color32::RED,
-                                format!("{}: {e}", lang.tr("read failed", "读取失败")),
-                            );
+                            let text = format!("{}: {e}", lang.tr("read failed", "读取失败"));
+                            let label = egui::RichText::new(&text).color(egui::Color32::RED);
+                            ui.add(egui::Label::new(label).truncate())
+                                .on_hover_text(text);
                         }
                         _ => {
                             ui.weak(format!("{} / {}", get.id, set.id));
@@ -312,6 +329,8 @@ impl TuningPanel {
             Some(v) => ui.monospace(f.format(v)),
             None => ui.weak(lang.tr("not read yet", "尚未读取")),
         };
+        let writable =
+            profile_set(rt, get).is_none_or(|set| set.request.iter().any(|sf| sf.ident == f.ident));
         let mut text = self
             .edits
             .get(&key)
@@ -324,7 +343,15 @@ impl TuningPanel {
         if invalid {
             edit = edit.text_color(egui::Color32::RED);
         }
-        let resp = ui.add(edit).labelled_by(name.id);
+        let resp = ui.add_enabled(writable, edit).labelled_by(name.id);
+        let resp = if writable {
+            resp
+        } else {
+            resp.on_disabled_hover_text(lang.tr(
+                "read only: the Set command does not carry this field",
+                "只读:设置命令不含此字段",
+            ))
+        };
         let resp = if invalid {
             ui.painter().rect_stroke(
                 resp.rect,
@@ -339,16 +366,17 @@ impl TuningPanel {
         if resp.changed() {
             self.edits.insert(key.clone(), text);
         }
-        ui.label(&f.unit);
-        ui.weak(range_text(f));
-        match (&parsed, rt.device.marks.get(&key)) {
+        unit_cell(ui, lang, f);
+        ui.weak(profile_range(f, lang));
+        match (&parsed, rt.device.mark(get, &f.ident)) {
             (Some(Err(e)), _) => {
                 ui.colored_label(
                     egui::Color32::RED,
                     format!("× {}", lang.tr("invalid", "无效")),
                 )
                 .on_hover_text(format!(
-                    "{e}\n{}: {}",
+                    "{}\n{}: {}",
+                    named(&e.to_string(), f, lang),
                     lang.tr("allowed", "允许"),
                     range_text(f)
                 ));
@@ -396,8 +424,10 @@ impl TuningPanel {
                     ui.strong(lang.tr("New", "新值"));
                     ui.end_row();
                     for c in changes {
-                        ui.monospace(&c.command);
-                        ui.label(&c.field);
+                        ui.label(lang.tr(&c.command_name.en, &c.command_name.zh))
+                            .on_hover_text(&c.command);
+                        ui.label(lang.tr(&c.field_name.en, &c.field_name.zh))
+                            .on_hover_text(&c.field);
                         ui.label(&c.device);
                         ui.strong(&c.new);
                         ui.end_row();
@@ -434,6 +464,72 @@ impl TuningPanel {
                 None
             }
             None => None,
+        }
+    }
+}
+
+/// The Set command paired with Get `get`.
+fn profile_set(rt: &AppState, get: u8) -> Option<&Command> {
+    let p = &rt.device.profile;
+    p.command_by_id(p.command_by_id(get)?.pair?)
+}
+
+/// The allowed values the profile gives (a range or labels); "—" where it gives none (the
+/// type's own limits say nothing a technician can use).
+fn profile_range(f: &Field, lang: Lang) -> String {
+    if f.range.is_none() && f.labels.is_empty() {
+        return lang.tr("— (not given)", "—(未规定)").to_string();
+    }
+    range_text(f)
+}
+
+/// The field's unit; where the protocol publishes none, says so.
+fn unit_cell(ui: &mut egui::Ui, lang: Lang, f: &Field) {
+    if f.unit.is_empty() {
+        ui.weak("—").on_hover_text(lang.tr(
+            "the protocol does not publish this field's unit",
+            "协议未公布此字段的单位",
+        ));
+    } else {
+        ui.label(&f.unit);
+    }
+}
+
+/// An error about field `f` (`pwmvalueMax: 120 is out of range…`) with the field's name in
+/// `lang` in place of its wire name.
+fn named(text: &str, f: &Field, lang: Lang) -> String {
+    match text.strip_prefix(&format!("{}:", f.ident)) {
+        Some(rest) => format!("{}:{rest}", lang.tr(&f.name.en, &f.name.zh)),
+        None => text.to_string(),
+    }
+}
+
+/// A pending error as the window says it: fields and commands by their names, not wire names.
+fn pending_text(e: &PendingError, rt: &AppState, lang: Lang) -> String {
+    let p = &rt.device.profile;
+    let fields = || {
+        p.commands
+            .iter()
+            .flat_map(|c| c.reply.iter().chain(&c.request))
+    };
+    match e {
+        PendingError::NotRead { command, field } => {
+            let cmd = p.commands.iter().find(|c| &c.ident == command);
+            let f = fields().find(|f| &f.ident == field);
+            let cmd = cmd.map_or(command.as_str(), |c| lang.tr(&c.name.en, &c.name.zh));
+            let f = f.map_or(field.as_str(), |f| lang.tr(&f.name.en, &f.name.zh));
+            match lang {
+                Lang::En => format!(
+                    "{cmd}: {f} has not been read; read it first so that the whole command can be written"
+                ),
+                Lang::Zh => format!("{cmd}:{f} 尚未读取;请先读取,以便写入完整的命令"),
+            }
+        }
+        other => {
+            let text = other.to_string();
+            fields()
+                .find(|f| text.starts_with(&format!("{}:", f.ident)))
+                .map_or(text.clone(), |f| named(&text, f, lang))
         }
     }
 }

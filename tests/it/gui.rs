@@ -171,6 +171,11 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
         "two fields differ"
     );
     h.get_by_label_contains("Apply (").click();
+    h.run_steps(3);
+    // Asked first, as Tuning asks: nothing is written before the yes.
+    assert!(h.query_by_label("Apply this preset?").is_some());
+    assert_ne!(b.sim.lock().unwrap().param("pwmValue"), Some(saved_pwm));
+    h.get_by_label("Write").click();
     step_until(&mut h, "the preset applied", |a| {
         a.state.job_progress().is_none()
             && a.state
@@ -262,7 +267,11 @@ fn a_slow_device_is_read_once_the_answer_margin_allows_for_it() {
     // The protocol's own 20 ms is too short for it, even over three attempts: reads fail, and
     // say so.
     let saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
-    assert_eq!(saved.margin_ms, None, "the protocol's own margin");
+    assert_eq!(
+        saved.port_of("window-cleaner").margin_ms,
+        None,
+        "the protocol's own margin"
+    );
     let mut h = crate::support::gui::harness(saved);
     step_until(&mut h, "the first read to fail", |a| {
         matches!(a.state.device.readings.get(&130), Some(Reading::Failed(_)))
@@ -270,7 +279,7 @@ fn a_slow_device_is_read_once_the_answer_margin_allows_for_it() {
     drop(h);
     // 300 ms chosen in the connection bar: every parameter is read.
     let mut saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
-    saved.margin_ms = Some(300);
+    saved.port_mut().margin_ms = Some(300);
     let mut h = crate::support::gui::harness(saved);
     step_until(&mut h, "every parameter read", all_read);
 }

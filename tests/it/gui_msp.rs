@@ -5,7 +5,7 @@ use botbench::i18n::Lang;
 use botbench::sim::SimOptions;
 use botbench::sim::solar_cleanbot::SolarCleanbot;
 use botbench::sim::window_cleaner::{Fault, WindowCleaner};
-use botbench::ui::{App, PanelId, SolarOutcome, SolarTrip};
+use botbench::ui::{App, PanelId, SolarTrip};
 use egui_kittest::kittest::Queryable;
 
 use crate::support::gui::{H, app, app_mut, settings, type_into};
@@ -177,10 +177,7 @@ fn speed_rotate_and_stop_from_the_solar_panel_drive_the_simulated_robot() {
     step_until(&mut h, "STOP", |_| b.sim().commanded_speed() == 0);
     app_mut(&mut h).settings.panel = PanelId::Solar;
     step_until(&mut h, "the STOP acknowledged", |a| {
-        matches!(
-            a.solar.control.outcomes.get(&100),
-            Some((SolarOutcome::Acked(_), _))
-        )
+        matches!(a.stop.state(), botbench::ui::stop::StopState::Acked(_))
     });
 }
 

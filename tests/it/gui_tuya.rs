@@ -59,7 +59,7 @@ fn writable_profile(dir: &std::path::Path) -> (String, Bench) {
 
 pub(crate) fn harness(path: &str, profile: &str) -> H {
     let mut saved = settings(path, profile, PanelId::TuyaConsole, Lang::En);
-    saved.baud = BAUD;
+    saved.port_mut().baud = Some(BAUD);
     crate::support::gui::harness(saved)
 }
 

@@ -33,7 +33,11 @@ fn the_demo_mcu_runs_at_the_profiles_rate_and_sends_its_requests_when_asked() {
         Some("tuya-vacuum".into()),
         Some(PanelId::TuyaConsole),
     );
-    assert_eq!(saved.baud, 9600, "the profile's rate");
+    assert_eq!(
+        saved.port_of("tuya-vacuum").baud,
+        Some(9600),
+        "the profile's rate"
+    );
     let mut h = crate::support::gui::harness(saved);
     handshake(&mut h);
     assert!(

@@ -40,3 +40,4 @@ mod sim_devices;
 mod sim_msp;
 mod tuya_field;
 mod tuya_sdk_vectors;
+mod window_truth;

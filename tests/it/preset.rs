@@ -181,7 +181,15 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
     let captured = ops::preset::capture(&client, &p, &cancel, &mut |pr| seen.push(pr)).unwrap();
     assert_eq!(captured.device.as_deref(), Some("hw 0x03 fw 1.4.2"));
     assert_eq!(captured.values.len(), preset::preset_commands(&p).len());
-    assert_eq!(seen.last().map(|s| (s.done, s.total)), Some((9, 9)));
+    // The tunable commands only: the auto-test result (147/148) is the unit's own.
+    assert_eq!(seen.last().map(|s| (s.done, s.total)), Some((8, 8)));
+    assert!(
+        captured
+            .values
+            .iter()
+            .all(|v| v.command != "MSP_SET_AUTO_TEST_RESULT"),
+        "{captured:?}"
+    );
     captured.save_annotated(&file, &p).unwrap();
     let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().flatten().collect();
     assert_eq!(leftovers.len(), 1, "no temporary file is left behind");
@@ -190,7 +198,7 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
     assert!(text.contains(r#""defaultTarget": "2.75","#), "{text}");
     let saved = Preset::load(&file, &p).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(saved.preset, captured);
-    assert_eq!(saved.writes.len(), 9);
+    assert_eq!(saved.writes.len(), 8);
 
     // Someone changes two values on the device.
     {
@@ -200,7 +208,7 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
     }
     let device = ops::preset::read_device(&client, &p, &cancel, &mut |_| {}).unwrap();
     let rows = saved.preset.diff(&p, &device);
-    assert_eq!(rows.len(), 26);
+    assert_eq!(rows.len(), 25);
     let differing: Vec<(&str, &str, &str, Option<&str>)> = rows
         .iter()
         .filter(|r| r.differs)
@@ -232,8 +240,8 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
         steps.push(pr.done)
     })
     .unwrap();
-    assert_eq!(steps, (0..=9).collect::<Vec<u64>>());
-    assert_eq!(checks.len(), 26);
+    assert_eq!(steps, (0..=8).collect::<Vec<u64>>());
+    assert_eq!(checks.len(), 25);
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
     {
         let sim = wc.sim();
@@ -557,7 +565,7 @@ fn cli_preset_save_diff_and_apply_against_the_simulator() {
     ]);
     assert_eq!(code, 0, "{out}{err}");
     assert!(
-        out.contains("saved 9 commands (26 fields) from hw 0x03 fw 1.4.2"),
+        out.contains("saved 8 commands (25 fields) from hw 0x03 fw 1.4.2"),
         "{out}"
     );
     let p = profile("window-cleaner");
@@ -586,7 +594,8 @@ fn cli_preset_save_diff_and_apply_against_the_simulator() {
         "{out}"
     );
     assert!(!out.contains("MISMATCH"), "{out}");
-    assert_eq!(out.matches("verified").count(), 27, "{out}"); // 26 fields + the summary
+    assert_eq!(out.matches("verified").count(), 26, "{out}"); // 25 fields + the summary
+    assert!(!out.contains("AUTO_TEST"), "{out}");
 
     // Now the factory preset differs in one field: exit 1, and JSON says which.
     let (code, out, err) = botbench(&["preset", "diff", FACTORY, "--port", port, "--json"]);
@@ -623,5 +632,36 @@ fn cli_preset_save_diff_and_apply_against_the_simulator() {
     assert!(
         err.contains("this preset is for solar-cleanbot; the connected device uses window-cleaner"),
         "{err}"
+    );
+}
+
+#[test]
+fn a_preset_holding_a_units_own_state_is_refused_where_it_names_it() {
+    // A golden unit's preset saved before the profile marked what is tunable: it carries the
+    // unit's auto-test result, which must not be copied onto the next unit.
+    let p = profile("window-cleaner");
+    let text = factory_text().replacen(
+        "    values: {\n",
+        "    values: {\n        \"MSP_SET_AUTO_TEST_RESULT\": {\"result\": \"1\"},\n",
+        1,
+    );
+    let line = text
+        .lines()
+        .position(|l| l.contains("\"MSP_SET_AUTO_TEST_RESULT\": {"))
+        .unwrap()
+        + 1;
+    let err = parse_err(&text, &p).to_string();
+    assert!(err.contains(&format!(":{line}:")), "{err}");
+    assert!(
+        err.contains("MSP_SET_AUTO_TEST_RESULT is not tunable"),
+        "{err}"
+    );
+    // The factory defaults and a capture never name it.
+    let defaults = Preset::defaults(&p, "");
+    assert!(
+        defaults
+            .values
+            .iter()
+            .all(|v| !v.command.contains("AUTO_TEST"))
     );
 }

@@ -3,7 +3,7 @@
 use botbench::link::{Link, LinkOptions};
 use botbench::ops::Cancel;
 use botbench::ops::selftest::{self, Plan, Report};
-use botbench::profile::Profile;
+use botbench::profile::{Input, Profile};
 use botbench::sim::window_cleaner::{Fault, Motor, WindowCleaner};
 use std::io::{BufRead, BufReader};
 use std::process::Stdio;
@@ -116,6 +116,45 @@ fn a_healthy_robot_passes_every_step() {
     let sim = b.sim.lock().unwrap();
     assert_eq!(sim.motor(), Motor::Stop);
     assert_eq!(sim.fan_pwm(), 0);
+}
+
+#[test]
+fn a_run_starts_from_the_safe_state_whatever_was_left_running() {
+    // Fan, motor and spray left on from the actions panel: the fan and wheel steps measure a
+    // rise from rest, so the run must first bring the robot to rest.
+    let b = bench(&[]);
+    let client = b.link.client();
+    for (cmd, field, value) in [
+        ("MSP_SET_FAN", "pwm", "60"),
+        ("MSP_SET_MOTOR", "motor", "forward"),
+        ("MSP_SET_SPRAY", "spray", "on"),
+    ] {
+        let c = b.profile.command(cmd).unwrap();
+        let inputs = [(field.to_string(), Input::Text(value.into()))];
+        botbench::ops::exchange::send(&client, &b.profile, c, &inputs).unwrap();
+    }
+    {
+        let sim = b.sim.lock().unwrap();
+        assert_eq!(sim.fan_pwm(), 60);
+        assert!(sim.spraying());
+    }
+    let plan = example_plan(&b.profile);
+    let mut op = covering_operator(b.sim.clone());
+    let report = run(&b, &plan, &mut op, &Cancel::new());
+    assert!(report.pass, "{:?} {:#?}", failed(&report), report.results);
+    assert_eq!(
+        report.safe_state,
+        [
+            "MSP_SET_MOTOR motor=stop: acknowledged",
+            "MSP_SET_FAN pwm=0: acknowledged",
+            "MSP_SET_SPRAY spray=off: acknowledged"
+        ]
+    );
+    let sim = b.sim.lock().unwrap();
+    assert_eq!(
+        (sim.fan_pwm(), sim.motor(), sim.spraying()),
+        (0, Motor::Stop, false)
+    );
 }
 
 #[test]

@@ -16,7 +16,7 @@ const INTER_BYTE_SLACK: Duration = Duration::from_millis(5);
 
 /// The default answer margin of a protocol: how long the device may think before its first byte
 /// (the seeds' and the field's figures: MSP 20 ms, servo 1.5 ms, Tuya 300 ms).
-pub(super) fn default_margin(protocol: Protocol) -> Duration {
+pub fn default_margin(protocol: Protocol) -> Duration {
     match protocol {
         Protocol::Msp => Duration::from_millis(20),
         Protocol::Servo => Duration::from_micros(1500),

@@ -6,6 +6,7 @@ mod exchange;
 mod polls;
 mod port;
 
+pub use exchange::default_margin;
 use polls::InFlight;
 
 use super::decoder::AnyDecoder;

@@ -35,6 +35,10 @@ pub struct Report {
     pub started: String,
     /// How long it took, in ms.
     pub duration_ms: u64,
+    /// The safe state set before the first step (the profile's STOP: motor, fan, spray off),
+    /// one line per command: `MSP_SET_FAN pwm=0: acknowledged`. Empty when the run ended before
+    /// it, or the profile names no STOP.
+    pub safe_state: Vec<String>,
     /// The steps run, in order.
     pub results: Vec<StepResult>,
     /// Why the run ended before its last step (link lost, no answer, cancelled, operator abort).

@@ -92,6 +92,7 @@ pub fn run_each(
         device_info: None,
         started: chrono::Local::now().to_rfc3339_opts(chrono::SecondsFormat::Millis, false),
         duration_ms: 0,
+        safe_state: Vec::new(),
         results: Vec::new(),
         aborted: None,
         pass: false,
@@ -118,6 +119,14 @@ pub fn run_each(
             report.aborted = Some(format!("step 'Device identity': {}", r.detail));
             report.results.push(r);
         }
+    }
+    if report.aborted.is_none() {
+        progress(Progress {
+            done: 0,
+            total,
+            message: "setting the safe state".into(),
+        });
+        report.aborted = safe_state(client, profile, plan, cancel, &mut report.safe_state);
     }
     if report.aborted.is_none() {
         for (i, step) in plan.steps.iter().enumerate() {
@@ -176,6 +185,48 @@ pub fn run_each(
         && report.results.iter().all(|r| r.pass);
     report.duration_ms = t0.elapsed().as_millis() as u64;
     report
+}
+
+/// Brings the robot to rest before the first step, whatever an earlier session left running
+/// (a fan left on from the actions panel would make "Fan current" fail): sends the profile's
+/// STOP, each command acknowledged, then waits as long as the plan's longest settle so that
+/// what ran has spun down before anything is measured. Each command's outcome goes to `lines`;
+/// returns why the run cannot start, if it cannot.
+fn safe_state(
+    client: &Client,
+    profile: &Profile,
+    plan: &Plan,
+    cancel: &Cancel,
+    lines: &mut Vec<String>,
+) -> Option<String> {
+    let stopped = crate::ops::stop::stop(client, profile);
+    for s in &stopped {
+        lines.push(match &s.result {
+            Ok(()) => format!("{}: acknowledged", s.what),
+            Err(e) => format!("{}: {e}", s.what),
+        });
+    }
+    if let Some(s) = stopped.iter().find(|s| s.result.is_err()) {
+        let e = s.result.clone().err().map(Halt::from);
+        return Some(format!(
+            "safe state not reached: {}: {}; no step run",
+            s.what,
+            e.map_or_else(String::new, |h| h.message())
+        ));
+    }
+    let settle = plan
+        .steps
+        .iter()
+        .filter_map(|s| match &s.kind {
+            StepKind::Rises { settle, .. } => Some(*settle),
+            _ => None,
+        })
+        .max()
+        .unwrap_or_default();
+    if !stopped.is_empty() && !sleep(settle, cancel) {
+        return Some("cancelled while setting the safe state; no step run".into());
+    }
+    None
 }
 
 type StepOutcome = Result<(bool, String), (Halt, String)>;

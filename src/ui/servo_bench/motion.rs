@@ -305,6 +305,8 @@ impl MotionState {
         self.readout(ui, lang, rt, servo);
         Plot::new("servo-angle")
             .height(180.0)
+            .x_axis_label(lang.tr("time (s)", "时间 (s)"))
+            .y_axis_label(lang.tr("angle (°)", "角度 (°)"))
             .allow_scroll(false)
             .show(ui, |p| {
                 p.line(Line::new(

@@ -1,58 +1,31 @@
-//! What the solar panel sends: controls (each range-checked before anything leaves), STOP, and
-//! the dead-man. Each request is built by [`crate::ops::exchange::request`] and goes straight to
+//! What the solar panel sends: controls (each range-checked before anything leaves) and the
+//! dead-man. Each request is built by [`crate::ops::exchange::request`] and goes straight to
 //! the worker queue (`Action::Link`) with a reply id, so that it works while a job runs, and its
-//! answer is shown when it comes.
+//! answer is shown when it comes. STOP is the window's ([`crate::ui::stop`]): the dead-man asks
+//! for it with [`Action::Stop`].
 
 use super::super::Action;
 use super::super::state::AppState;
-use crate::link::{ExchangeError, LinkCommand, ReplyTo};
-use crate::ops::{OpError, exchange};
+use crate::link::{LinkCommand, ReplyTo};
+use crate::ops::exchange;
 use crate::profile::{Input, Value};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
-/// CMD_SET_SPEED: STOP is speed 0.
-pub const CMD_SET_SPEED: u8 = 100;
+pub use super::super::stop::{Outcome, SendError};
+
 /// CMD_SET_HEARTBEAT: set when the dead-man is armed.
 pub const CMD_SET_HEARTBEAT: u8 = 98;
 /// The dead-man intervals offered, seconds.
 pub const DEADMAN_SECS: std::ops::RangeInclusive<u32> = 1..=10;
-
-/// The last outcome of a command sent from the panel.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Outcome {
-    /// Sent; no answer yet.
-    Waiting(String),
-    /// The device acknowledged it.
-    Acked(String),
-    /// It was refused before sending, or the exchange failed.
-    Failed(SendError),
-}
-
-/// Why a command sent from the panel did not get through.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum SendError {
-    /// Refused before sending: a value the profile refuses, an unknown command.
-    #[error(transparent)]
-    Refused(#[from] OpError),
-    /// Not sent: the link is down.
-    #[error("not sent: the link is down")]
-    LinkDown,
-    /// Sent, and the exchange failed.
-    #[error(transparent)]
-    Exchange(#[from] ExchangeError),
-}
 
 /// Why the robot was last stopped by the app on its own.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Trip {
     /// The operator stopped confirming.
     NotConfirmed,
-    /// The link went down while the dead-man was armed (or a STOP could not be delivered): STOP
-    /// waits for the link.
+    /// The link went down while the dead-man was armed: STOP waits for the link.
     LinkLost,
-    /// STOP was sent after the link came back.
-    SentAfterReconnect,
 }
 
 /// The sending side of the panel.
@@ -62,10 +35,6 @@ pub struct Control {
     sent: HashMap<u64, u8>,
     /// The last outcome per command id.
     pub outcomes: HashMap<u8, (Outcome, Instant)>,
-    /// The id of the last STOP sent.
-    stop_id: Option<u64>,
-    /// STOP must be sent as soon as the link is back.
-    pub stop_pending: bool,
     /// The dead-man is armed.
     pub deadman: bool,
     /// Its interval, seconds.
@@ -75,7 +44,6 @@ pub struct Control {
     /// What the app did on its own last, and when.
     pub trip: Option<(Trip, Instant)>,
     was_connected: bool,
-    last_sent: Option<u64>,
 }
 
 impl Default for Control {
@@ -83,14 +51,11 @@ impl Default for Control {
         Self {
             sent: HashMap::new(),
             outcomes: HashMap::new(),
-            stop_id: None,
-            stop_pending: false,
             deadman: false,
             deadman_secs: 2,
             confirmed_at: None,
             trip: None,
             was_connected: false,
-            last_sent: None,
         }
     }
 }
@@ -101,16 +66,6 @@ impl Control {
     /// One attempt only: a retry after a late answer would apply a relative command (rotate)
     /// twice. A failure is shown, and the operator decides.
     pub fn send(&mut self, rt: &AppState, id: u8, inputs: &[(String, Input)]) -> Option<Action> {
-        self.send_with(rt, id, inputs, 1)
-    }
-
-    fn send_with(
-        &mut self,
-        rt: &AppState,
-        id: u8,
-        inputs: &[(String, Input)],
-        attempts: u8,
-    ) -> Option<Action> {
         let profile = &rt.device.profile;
         let cmd = profile.command_by_id(id)?;
         let text = inputs
@@ -122,7 +77,7 @@ impl Control {
             })
             .collect::<Vec<_>>()
             .join(", ");
-        let request = match exchange::request(profile, cmd, inputs, attempts) {
+        let request = match exchange::request(profile, cmd, inputs, 1) {
             Ok(r) => r,
             Err(e) => {
                 self.outcomes
@@ -137,33 +92,12 @@ impl Control {
         }
         let reply_id = rt.link.reply_id();
         self.sent.insert(reply_id, id);
-        self.last_sent = Some(reply_id);
         self.outcomes
             .insert(id, (Outcome::Waiting(text), Instant::now()));
         Some(Action::Link(LinkCommand::Request {
             request,
             reply_to: ReplyTo::Event(reply_id),
         }))
-    }
-
-    /// STOP: speed 0, now. When the link is down it is sent as soon as the link is back.
-    pub fn stop(&mut self, rt: &AppState) -> Option<Action> {
-        if !rt.connected() {
-            self.stop_pending = true;
-            self.trip = Some((Trip::LinkLost, Instant::now()));
-            return None;
-        }
-        // Speed 0 is the same however often it arrives: retried.
-        let a = self.send_with(
-            rt,
-            CMD_SET_SPEED,
-            &[("speed".into(), Input::Raw(Value::Int(0)))],
-            3,
-        );
-        if a.is_some() {
-            self.stop_id = self.last_sent;
-        }
-        a
     }
 
     /// The operator confirms they are watching (dead-man).
@@ -200,8 +134,9 @@ impl Control {
         )
     }
 
-    /// Called every frame, whichever panel is shown: takes answers, sends STOP when the
-    /// dead-man runs out, and sends a pending STOP once the link is back.
+    /// Called every frame, whichever panel is shown: takes answers, and asks for STOP when the
+    /// dead-man runs out or the link goes down while it is armed (STOP then waits for the
+    /// link).
     pub fn tick(&mut self, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
         let answered: Vec<u64> = self
@@ -222,35 +157,23 @@ impl Control {
                     };
                     Outcome::Acked(what)
                 }
-                Some(Err(e)) => {
-                    if Some(reply_id) == self.stop_id && !rt.connected() {
-                        // A STOP lost with the link is sent again when the link is back (one
-                        // the robot did not answer is shown, and the operator presses again).
-                        self.stop_pending = true;
-                    }
-                    Outcome::Failed(e.clone().into())
-                }
+                Some(Err(e)) => Outcome::Failed(e.clone().into()),
                 None => continue,
             };
             self.outcomes.insert(cmd, (outcome, Instant::now()));
         }
         let connected = rt.connected();
         if self.deadman && self.was_connected && !connected {
-            self.stop_pending = true;
+            actions.push(Action::Stop);
             self.trip = Some((Trip::LinkLost, Instant::now()));
         }
         self.was_connected = connected;
-        if self.stop_pending && connected {
-            self.stop_pending = false;
-            actions.extend(self.stop(rt));
-            self.trip = Some((Trip::SentAfterReconnect, Instant::now()));
-        }
         if connected && self.deadman_left() == Some(Duration::ZERO) {
-            actions.extend(self.stop(rt));
+            actions.push(Action::Stop);
             self.deadman = false;
             self.trip = Some((Trip::NotConfirmed, Instant::now()));
         }
-        if self.deadman || self.stop_pending || !self.sent.is_empty() {
+        if self.deadman || !self.sent.is_empty() {
             rt.ctx.request_repaint_after(Duration::from_millis(100));
         }
         actions
@@ -296,7 +219,7 @@ mod tests {
     }
 
     #[test]
-    fn a_stop_while_the_link_is_down_is_sent_when_it_is_back() {
+    fn the_dead_man_asks_for_stop_when_the_link_goes_down() {
         let mut rt = runtime();
         let mut c = Control::default();
         let arm = c.arm(&rt, true).expect("the heartbeat is set");
@@ -305,74 +228,8 @@ mod tests {
         rt.link.state = Some(LinkState::Lost {
             reason: "unplugged".into(),
         });
-        assert!(c.tick(&rt).is_empty(), "nothing can be sent");
-        assert!(c.stop_pending);
+        let actions = c.tick(&rt);
+        assert!(matches!(actions[..], [Action::Stop]), "{actions:?}");
         assert!(matches!(c.trip, Some((Trip::LinkLost, _))));
-        rt.link.state = Some(LinkState::Connected {
-            port: "test".into(),
-            baud: 115_200,
-        });
-        let actions = c.tick(&rt);
-        assert_eq!(actions.len(), 1, "{actions:?}");
-        assert_eq!(sent(&actions[0]), (100, vec![0, 0]));
-        assert!(!c.stop_pending);
-        assert!(matches!(c.trip, Some((Trip::SentAfterReconnect, _))));
-
-        // STOP pressed while the link is down, without the dead-man, waits for the link too.
-        let mut c = Control::default();
-        rt.link.state = Some(LinkState::Reconnecting { attempt: 1 });
-        assert!(c.stop(&rt).is_none());
-        assert!(c.stop_pending);
-        rt.link.state = Some(LinkState::Connected {
-            port: "test".into(),
-            baud: 115_200,
-        });
-        let actions = c.tick(&rt);
-        assert_eq!(sent(&actions[0]), (100, vec![0, 0]));
-    }
-
-    fn reply_id(a: Action) -> u64 {
-        match a {
-            Action::Link(LinkCommand::Request {
-                reply_to: ReplyTo::Event(id),
-                ..
-            }) => id,
-            other => panic!("not a request answered as an event: {other:?}"),
-        }
-    }
-
-    #[test]
-    fn a_failed_stop_is_sent_again_when_the_link_is_back() {
-        let mut rt = runtime();
-        let mut c = Control::default();
-        // Unanswered on a working link: shown, not repeated on its own.
-        let id = reply_id(c.stop(&rt).unwrap());
-        rt.device.replies.insert(
-            id,
-            Err(ExchangeError::Timeout {
-                command: 100,
-                attempts: 3,
-                waited_ms: 50,
-            }),
-        );
-        assert!(c.tick(&rt).is_empty());
-        assert!(!c.stop_pending);
-        assert!(matches!(
-            c.outcomes.get(&100),
-            Some((Outcome::Failed(_), _))
-        ));
-        // Lost with the link: sent again when it is back.
-        let id = reply_id(c.stop(&rt).unwrap());
-        rt.device
-            .replies
-            .insert(id, Err(ExchangeError::Disconnected("unplugged".into())));
-        rt.link.state = None;
-        assert!(c.tick(&rt).is_empty());
-        assert!(c.stop_pending);
-        rt.link.state = Some(LinkState::Connected {
-            port: "test".into(),
-            baud: 115_200,
-        });
-        assert_eq!(sent(&c.tick(&rt)[0]), (100, vec![0, 0]));
     }
 }

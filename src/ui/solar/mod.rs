@@ -8,13 +8,14 @@ mod control;
 
 pub use control::{Control, Outcome, Trip};
 
-use super::Action;
 use super::inputs::{command_inputs, range_text};
 use super::state::{AppState, Reading};
+use super::stop::StopControl;
+use super::{Action, plot};
 use crate::i18n::Lang;
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Value};
 use eframe::egui;
-use egui_plot::{Corner, Legend, Line, Plot, PlotPoints};
+use egui_plot::Plot;
 use std::collections::HashMap;
 use std::time::Duration;
 
@@ -32,7 +33,9 @@ pub struct SolarPanel {
     pub inputs: HashMap<(u8, String), String>,
     /// A command that moves the robot, waiting for the operator's yes.
     confirm: Option<(u8, Vec<(String, Input)>)>,
-    points: Vec<[f64; 2]>,
+    scratch: plot::Scratch,
+    /// The plots' width when last drawn, points: the whole panel's.
+    pub plot_width: f32,
 }
 
 const RED: egui::Color32 = egui::Color32::from_rgb(200, 30, 30);
@@ -49,106 +52,55 @@ fn shown(f: &Field, v: &Value, lang: Lang) -> String {
 }
 
 impl SolarPanel {
-    /// Called every frame whichever panel is shown (STOP after a reconnect, the dead-man).
+    /// Called every frame whichever panel is shown (the dead-man).
     pub fn tick(&mut self, rt: &AppState) -> Vec<Action> {
         self.control.tick(rt)
     }
 
-    /// The STOP button alone, for places outside the panel (the navigation).
-    pub fn stop_button(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
-        let b = egui::Button::new(
-            egui::RichText::new(lang.tr("STOP", "停止"))
-                .strong()
-                .color(egui::Color32::WHITE),
-        )
-        .fill(RED)
-        .min_size(egui::vec2(90.0, 32.0));
-        if ui
-            .add(b)
-            .on_hover_text(lang.tr("Speed 0, now", "立即将速度设为 0"))
-            .clicked()
-        {
-            return self.control.stop(rt).into_iter().collect();
-        }
-        Vec::new()
-    }
-
-    /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    /// Draws the panel; `stop` is the window's STOP.
+    pub fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        stop: &mut StopControl,
+    ) -> Vec<Action> {
         let mut actions = Vec::new();
         ui.horizontal_wrapped(|ui| {
-            actions.extend(self.stop_button(ui, lang, rt));
-            self.stop_status(ui, lang, rt);
+            actions.extend(stop.button(ui, lang, rt));
+            stop.status(ui, lang);
+            self.trip_status(ui, lang, rt);
         });
         self.deadman(ui, lang, rt, &mut actions);
         ui.separator();
         egui::ScrollArea::vertical()
             .auto_shrink(false)
             .show(ui, |ui| {
-                ui.columns(3, |cols| {
+                ui.columns(2, |cols| {
                     self.controls(&mut cols[0], lang, rt, &mut actions);
                     self.readouts(&mut cols[1], lang, rt);
-                    self.plots(&mut cols[2], lang, rt);
                 });
+                ui.separator();
+                // The plots across the whole width, their key above them.
+                self.plots(ui, lang, rt);
             });
-        self.confirm_modal(ui, lang, rt, &mut actions);
+        self.confirm_modal(ui, lang, rt, stop, &mut actions);
         actions
     }
 
-    fn stop_status(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
-        match self.control.outcomes.get(&control::CMD_SET_SPEED) {
-            Some((Outcome::Acked(t), at)) if t.ends_with("speed=0") => {
-                ui.colored_label(
-                    GREEN,
-                    format!(
-                        "{} ({:.0} s)",
-                        lang.tr("speed 0 acknowledged", "速度 0 已确认"),
-                        at.elapsed().as_secs_f64()
-                    ),
-                );
-            }
-            Some((Outcome::Waiting(t), _)) if t.ends_with("speed=0") => {
-                ui.label(lang.tr("STOP sent, waiting for the answer…", "已发送停止,等待应答…"));
-            }
-            Some((Outcome::Failed(e), _)) => {
-                ui.colored_label(RED, format!("{}: {e}", lang.tr("speed", "速度")));
-            }
-            _ => {}
-        }
-        if self.control.stop_pending {
+    fn trip_status(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+        if let Some((Trip::NotConfirmed, at)) = &self.control.trip {
             ui.colored_label(
                 RED,
-                lang.tr(
-                    "Link down: STOP will be sent as soon as the link is back.",
-                    "链路中断:链路恢复后将立即发送停止。",
+                format!(
+                    "{} ({:.0} s)",
+                    lang.tr(
+                        "Dead-man: the operator stopped confirming; STOP sent",
+                        "失能保护:操作员未持续确认,已发送停止",
+                    ),
+                    at.elapsed().as_secs_f64()
                 ),
             );
-        }
-        match &self.control.trip {
-            Some((Trip::NotConfirmed, at)) => {
-                ui.colored_label(
-                    RED,
-                    format!(
-                        "{} ({:.0} s)",
-                        lang.tr(
-                            "Dead-man: the operator stopped confirming; STOP sent",
-                            "失能保护:操作员未持续确认,已发送停止",
-                        ),
-                        at.elapsed().as_secs_f64()
-                    ),
-                );
-            }
-            Some((Trip::SentAfterReconnect, at)) => {
-                ui.colored_label(
-                    RED,
-                    format!(
-                        "{} ({:.0} s)",
-                        lang.tr("The link came back: STOP sent", "链路已恢复:已发送停止",),
-                        at.elapsed().as_secs_f64()
-                    ),
-                );
-            }
-            Some((Trip::LinkLost, _)) | None => {}
         }
         if !rt.connected() && rt.link.connection.is_some() {
             ui.colored_label(RED, lang.tr("link down", "链路中断"));
@@ -266,32 +218,28 @@ impl SolarPanel {
     }
 
     fn plots(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
-        let now = rt.device.t0.elapsed().as_secs_f64();
+        let now = rt.plot_end();
         let width_px = ui.available_width().max(100.0) as usize;
-        for plot in &rt.device.profile.plots {
-            ui.label(egui::RichText::new(lang.tr(&plot.name.en, &plot.name.zh)).strong());
-            let set = rt.device.plots.get(&plot.id);
-            let points = &mut self.points;
-            Plot::new(("solar-plot", &plot.id))
-                .height(110.0)
-                // New points come in at the right: the legend stays out of their way.
-                .legend(Legend::default().position(Corner::LeftTop))
+        for p in &rt.device.profile.plots {
+            ui.label(egui::RichText::new(lang.tr(&p.name.en, &p.name.zh)).strong());
+            let legend = plot::Legend::new(rt.device.profile.command(&p.command), &p.fields, lang);
+            plot::key(ui, &legend);
+            let set = rt.device.plots.get(&p.id);
+            let scratch = &mut self.scratch;
+            let shown = Plot::new(("solar-plot", &p.id)).height(130.0);
+            let resp = plot::axes(shown, lang, rt.device.t0_wall, &legend)
                 .allow_drag(false)
                 .allow_zoom(false)
                 .allow_scroll(false)
                 .show(ui, |pui| {
                     pui.set_plot_bounds_x(now - WINDOW_SECS..=now);
                     pui.set_auto_bounds([false, true]);
-                    let Some(set) = set else { return };
-                    for name in &plot.fields {
-                        let Some(series) = set.get(name) else {
-                            continue;
-                        };
-                        points.clear();
-                        series.decimate(now - WINDOW_SECS, now, width_px, points);
-                        pui.line(Line::new(name.clone(), PlotPoints::from(points.clone())));
+                    if let Some(set) = set {
+                        let x = (now - WINDOW_SECS, now);
+                        plot::lines(pui, set, &p.fields, &legend, x, width_px, scratch);
                     }
                 });
+            self.plot_width = resp.response.rect.width();
         }
     }
 
@@ -415,6 +363,7 @@ impl SolarPanel {
         ui: &mut egui::Ui,
         lang: Lang,
         rt: &AppState,
+        stop_control: &mut StopControl,
         actions: &mut Vec<Action>,
     ) {
         let Some((id, inputs)) = &self.confirm else {
@@ -452,7 +401,7 @@ impl SolarPanel {
                     decision = Some(false);
                 }
                 ui.separator();
-                stop = self.stop_button(ui, lang, rt);
+                stop = stop_control.button(ui, lang, rt);
             });
         });
         if !stop.is_empty() {

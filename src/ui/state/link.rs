@@ -26,6 +26,24 @@ impl Target {
     }
 }
 
+/// Whether the device answers, as the link's counters tell it: an open port says nothing of
+/// the device behind it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Answering {
+    /// Nothing answered yet on this connection, and fewer than [`SILENT_AFTER`] requests went
+    /// unanswered.
+    #[default]
+    NotYet,
+    /// The device answered, and fewer than [`SILENT_AFTER`] requests went unanswered since.
+    Yes,
+    /// This many requests in a row went unanswered (at least [`SILENT_AFTER`]).
+    No(u64),
+}
+
+/// Requests in a row without an answer after which the device counts as silent (and, when it
+/// answers again, as possibly another unit).
+pub const SILENT_AFTER: u64 = 3;
+
 /// An open link and what it talks to.
 pub struct Connection {
     /// The worker.
@@ -50,8 +68,19 @@ pub struct LinkStatus {
     pub options: LinkOptions,
     /// Telemetry polling is paused.
     pub polling_paused: bool,
+    /// When polling was paused: a following plot stops there instead of scrolling the paused
+    /// data out of view.
+    pub paused_at: Option<Instant>,
     /// The link has just come up (first connect or a reconnect): the app reads the device.
     pub just_connected: bool,
+    /// The device answered again after being silent (or answered for the first time after
+    /// silence): possibly another unit on the same port. The app forgets what the last unit
+    /// showed, identifies and reads the device again.
+    pub device_back: bool,
+    /// Whether an answer came since the port opened.
+    answered: bool,
+    /// Requests unanswered since the last answer.
+    unanswered: u64,
     /// Serial ports, refreshed every second.
     pub ports: Vec<PortInfo>,
     ports_at: Option<Instant>,
@@ -74,6 +103,42 @@ impl LinkStatus {
     /// The built-in simulated Tuya MCU the link talks to, if it does.
     pub fn demo_tuya(&self) -> Option<&Arc<Mutex<TuyaMcu>>> {
         self.connection.as_ref().and_then(|c| c.demo_tuya.as_ref())
+    }
+
+    /// Whether the device answers (see [`Answering`]).
+    pub fn answering(&self) -> Answering {
+        if self.unanswered >= SILENT_AFTER {
+            Answering::No(self.unanswered)
+        } else if self.answered {
+            Answering::Yes
+        } else {
+            Answering::NotYet
+        }
+    }
+
+    /// Takes the worker's counters: answers and unanswered requests since the last report
+    /// tell whether the device answers. An answer after [`SILENT_AFTER`] unanswered requests
+    /// raises [`Self::device_back`].
+    pub fn on_stats(&mut self, stats: crate::link::LinkStats) {
+        let received = stats.received.saturating_sub(self.stats.received);
+        let timeouts = stats.timeouts.saturating_sub(self.stats.timeouts);
+        if received > 0 {
+            if self.unanswered >= SILENT_AFTER {
+                self.device_back = true;
+            }
+            self.answered = true;
+            self.unanswered = 0;
+        } else {
+            self.unanswered += timeouts;
+        }
+        self.stats = stats;
+    }
+
+    /// The port closed or was lost: nothing is known of the device until it answers.
+    pub fn forget_answers(&mut self) {
+        self.answered = false;
+        self.unanswered = 0;
+        self.device_back = false;
     }
 
     /// What the link talks to, while one is open.

@@ -6,11 +6,13 @@
 mod link;
 mod model;
 mod packets;
+mod running;
 mod tuya;
 
-pub use link::{Connection, LinkStatus, Target};
+pub use link::{Answering, Connection, LinkStatus, SILENT_AFTER, Target};
 pub use model::{DeviceModel, Mark, Reading, ReadingError};
 pub use packets::{LOG_CAPACITY, PacketLog};
+pub use running::{Running, RunningSet};
 pub use tuya::{
     DpState, LOG_CAPACITY as REPORT_LOG_CAPACITY, LogLine, RequestLine, StepResult, TuyaModel,
 };
@@ -28,8 +30,10 @@ pub const EVENT_BUDGET: Duration = Duration::from_millis(4);
 /// A status-line message.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Notice {
-    /// The text.
+    /// The text, in English.
     pub text: String,
+    /// The text in Chinese, where it is translated (an error a library reports stays English).
+    pub zh: Option<String>,
     /// An error (shown red).
     pub error: bool,
     /// When.
@@ -41,6 +45,7 @@ impl Notice {
     pub fn info(text: impl Into<String>) -> Self {
         Self {
             text: text.into(),
+            zh: None,
             error: false,
             at: Instant::now(),
         }
@@ -51,6 +56,20 @@ impl Notice {
         Self {
             error: true,
             ..Self::info(text)
+        }
+    }
+
+    /// The message with its Chinese text.
+    pub fn zh(mut self, zh: impl Into<String>) -> Self {
+        self.zh = Some(zh.into());
+        self
+    }
+
+    /// The text in `lang` (English where there is no Chinese).
+    pub fn text_in(&self, lang: crate::i18n::Lang) -> &str {
+        match (lang, &self.zh) {
+            (crate::i18n::Lang::Zh, Some(zh)) => zh,
+            _ => &self.text,
         }
     }
 }
@@ -85,6 +104,8 @@ pub struct AppState {
     pub notice: Option<Notice>,
     /// Wakes the UI from the worker and from jobs.
     pub ctx: eframe::egui::Context,
+    /// Whether the system can show a file dialog (looked up once).
+    pub dialogs: super::files::Dialogs,
 }
 
 impl AppState {
@@ -103,12 +124,20 @@ impl AppState {
             job: None,
             notice: None,
             ctx: ctx.clone(),
+            dialogs: super::files::Dialogs::detect(),
         })
     }
 
     /// Whether the link is up.
     pub fn connected(&self) -> bool {
         self.link.connected()
+    }
+
+    /// Where a plot that follows the newest data ends, in plot time (seconds since the
+    /// connection): now, or the moment polling was paused, so that paused data stays in view.
+    pub fn plot_end(&self) -> f64 {
+        let end = self.link.paused_at.unwrap_or_else(Instant::now);
+        end.saturating_duration_since(self.device.t0).as_secs_f64()
     }
 
     /// Shows a message in the status line.
@@ -172,14 +201,18 @@ impl AppState {
         Ok(())
     }
 
-    /// Closes the link (a running job is cancelled).
+    /// Closes the link (a running job is cancelled); what the device showed is forgotten.
     pub fn disconnect(&mut self) {
         if let Some(job) = &self.job {
             job.cancel.cancel();
         }
-        self.link.connection = None;
+        if self.link.connection.take().is_some() {
+            self.device.forget_unit();
+            self.device.running.clear();
+        }
         self.link.state = None;
         self.link.stats = LinkStats::default();
+        self.link.forget_answers();
     }
 
     /// Sends a command to the worker, if connected.
@@ -211,23 +244,40 @@ impl AppState {
         match ev {
             LinkEvent::State(s) => {
                 match &s {
-                    LinkState::Lost { reason } => {
-                        self.notify(Notice::error(format!("link lost: {reason}")))
+                    LinkState::Lost { .. } | LinkState::Reconnecting { .. } | LinkState::Closed
+                        if self.link.connected() =>
+                    {
+                        // The connection ended: what it showed is no longer known.
+                        self.device.forget_unit();
+                        self.device.running.on_link_lost();
+                        self.link.forget_answers();
                     }
+                    _ => {}
+                }
+                match &s {
+                    LinkState::Lost { reason } => self.notify(
+                        Notice::error(format!("link lost: {reason}"))
+                            .zh(format!("连接丢失:{reason}")),
+                    ),
                     LinkState::Connected { port, baud } => {
                         if !self.link.connected() {
                             self.link.just_connected = true;
                         }
-                        self.notify(Notice::info(format!("connected to {port} at {baud} baud")))
+                        self.notify(
+                            Notice::info(format!("connected to {port} at {baud} baud"))
+                                .zh(format!("已连接 {port},波特率 {baud}")),
+                        )
                     }
                     _ => {}
                 }
                 self.link.state = Some(s);
             }
-            LinkEvent::Stats(s) => self.link.stats = s,
+            LinkEvent::Stats(s) => self.link.on_stats(s),
             LinkEvent::Identified(r) => self.device.info = Some(r.map_err(Into::into)),
             LinkEvent::Frame(entry) => {
                 self.device.tuya.on_frame(&entry);
+                let profile = self.device.profile.clone();
+                self.device.running.on_frame(&profile, &entry);
                 self.packets.push(entry)
             }
             LinkEvent::Report(p) => self.device.on_report(p),
@@ -250,7 +300,7 @@ impl AppState {
             return;
         }
         let Some(conn) = &self.link.connection else {
-            self.notify(Notice::error("not connected"));
+            self.notify(Notice::error("not connected").zh("未连接"));
             return;
         };
         match RunningJob::spawn(job, conn.link.client(), &self.ctx) {
@@ -285,9 +335,11 @@ impl AppState {
     /// The status line's message for a job that ended.
     pub fn job_done(&mut self, result: Result<String, JobError>) {
         let title = self.job.as_ref().map_or("job", |j| j.title.as_str());
+        let title_zh = crate::i18n::job_title_zh(title);
         let notice = match result {
-            Ok(summary) => Notice::info(format!("{title}: {summary}")),
-            Err(e) => Notice::error(format!("{title}: {e}")),
+            Ok(summary) => Notice::info(format!("{title}: {summary}"))
+                .zh(format!("{title_zh}:{}", crate::i18n::summary_zh(&summary))),
+            Err(e) => Notice::error(format!("{title}: {e}")).zh(format!("{title_zh}:{e}")),
         };
         self.notify(notice);
     }

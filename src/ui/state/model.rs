@@ -2,6 +2,7 @@
 //! left, the plotted telemetry, the reports it sent on its own, and (Tuya) what the module
 //! session reported. Nothing is here before a reply brings it.
 
+use super::running::RunningSet;
 use super::tuya::TuyaModel;
 use crate::link::{DeviceInfo, ExchangeError, Reply};
 use crate::ops::{Check, FieldValues, OpError};
@@ -60,6 +61,8 @@ pub struct DeviceModel {
     pub plots: HashMap<String, SeriesSet>,
     /// When plotting started (t = 0 of the series); also marks the connection.
     pub t0: Instant,
+    /// The wall-clock time of `t0`: the plots' time axis reads as the packet monitor's clock.
+    pub t0_wall: std::time::SystemTime,
     /// Reports the device sent on its own (Tuya data points, MSP async), oldest first.
     pub reports: VecDeque<(Instant, Packet)>,
     /// Results of requests sent with `ReplyTo::Event(id)` (see
@@ -68,6 +71,12 @@ pub struct DeviceModel {
     pub replies: HashMap<u64, Result<Reply, ExchangeError>>,
     /// Tuya: what the module session has reported.
     pub tuya: TuyaModel,
+    /// What the robot may be doing because this window told it to (fan on, motor running).
+    pub running: RunningSet,
+    /// Counts the units seen: changes whenever what is shown may belong to another unit (a new
+    /// connection, a lost link, a device that answers again after silence). Panels keep
+    /// results of a unit (a self-test's verdict, a ping) with the number they were made under.
+    pub unit: u64,
 }
 
 impl DeviceModel {
@@ -80,21 +89,59 @@ impl DeviceModel {
             marks: HashMap::new(),
             plots: HashMap::new(),
             t0: Instant::now(),
+            t0_wall: std::time::SystemTime::now(),
             reports: VecDeque::new(),
             replies: HashMap::new(),
             tuya: TuyaModel::default(),
+            running: RunningSet::default(),
+            unit: 0,
         }
     }
 
     /// Forgets everything for a new connection with `profile`.
     pub fn reset(&mut self, profile: Arc<Profile>) {
         self.profile = profile;
-        self.readings.clear();
-        self.marks.clear();
+        self.forget_unit();
         self.plots.clear();
-        self.info = None;
+        self.running.clear();
         self.tuya = self.tuya.next();
         self.t0 = Instant::now();
+        self.t0_wall = std::time::SystemTime::now();
+    }
+
+    /// Forgets what the last unit showed (its values, the marks of writes to it, its version)
+    /// when the connection ends or another unit may be answering; the plots keep their history
+    /// (with a break), and what was left running stays shown.
+    pub fn forget_unit(&mut self) {
+        self.readings.clear();
+        self.marks.clear();
+        self.info = None;
+        self.unit += 1;
+        self.mark_gap();
+    }
+
+    /// Marks a gap in every plot now (the link was lost, polling paused): no line joins the
+    /// samples on either side of it.
+    pub fn mark_gap(&mut self) {
+        let t = self.t0.elapsed().as_secs_f64();
+        for set in self.plots.values_mut() {
+            set.mark_break(t);
+        }
+    }
+
+    /// Marks a gap at `at` in the plots of telemetry command `command` (its poll failed).
+    fn mark_gap_of(&mut self, command: u8, at: Instant) {
+        let t = at.saturating_duration_since(self.t0).as_secs_f64();
+        let Some(cmd) = self.profile.command_by_id(command) else {
+            return;
+        };
+        for plot in &self.profile.plots {
+            if plot.command.eq_ignore_ascii_case(&cmd.ident)
+                && let Some(set) = self.plots.get_mut(&plot.id)
+            {
+                set.mark_break(t);
+            }
+        }
     }
 
     /// The device's value of field `field` of command `get`, if a reply has brought one.
@@ -103,6 +150,13 @@ impl DeviceModel {
             Some(Reading::Values(values, _)) => values.get(field),
             _ => None,
         }
+    }
+
+    /// The mark the last write left on field `field` of command `get`, while the field shows a
+    /// value: a mark never stands beside a field that reads nothing.
+    pub fn mark(&self, get: u8, field: &str) -> Option<&Mark> {
+        self.value(get, field)?;
+        self.marks.get(&(get, field.to_string()))
     }
 
     /// Takes a read's result (a job's).
@@ -124,6 +178,7 @@ impl DeviceModel {
         let p = match result {
             Ok(p) => p,
             Err(e) => {
+                self.mark_gap_of(command, at);
                 self.readings
                     .insert(command, Reading::Failed(ReadingError::Read(e.into())));
                 return;
@@ -137,6 +192,7 @@ impl DeviceModel {
             Ok(d) => d,
             Err(e) => {
                 let e = OpError::answer(&cmd.ident, e);
+                self.mark_gap_of(command, at);
                 self.readings
                     .insert(command, Reading::Failed(ReadingError::Read(e)));
                 return;

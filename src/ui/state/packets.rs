@@ -1,4 +1,6 @@
-//! The packet log: every frame sent and received, bounded, for the packet monitor.
+//! The packet log: every frame sent and received, bounded, for the packet monitor. Each frame
+//! kept has a sequence number that never changes (the first frame ever kept is 0), so that a
+//! view can hold on to a frame while older ones are dropped under it.
 
 use crate::link::LogEntry;
 use std::collections::VecDeque;
@@ -7,14 +9,29 @@ use std::collections::VecDeque;
 pub const LOG_CAPACITY: usize = 20_000;
 
 /// The frames, oldest first.
-#[derive(Default)]
 pub struct PacketLog {
-    /// The frames kept, oldest first (at most [`LOG_CAPACITY`]).
+    /// The frames kept, oldest first (at most [`Self::capacity`]).
     pub entries: VecDeque<LogEntry>,
+    /// The most frames kept ([`LOG_CAPACITY`] unless changed).
+    pub capacity: usize,
     /// The log is frozen: frames that come are counted, not kept.
     pub paused: bool,
     /// Frames not kept because the log was frozen.
     pub dropped: u64,
+    /// Frames ever kept: the next frame's sequence number.
+    kept: u64,
+}
+
+impl Default for PacketLog {
+    fn default() -> Self {
+        Self {
+            entries: VecDeque::new(),
+            capacity: LOG_CAPACITY,
+            paused: false,
+            dropped: 0,
+            kept: 0,
+        }
+    }
 }
 
 impl PacketLog {
@@ -24,13 +41,28 @@ impl PacketLog {
             self.dropped += 1;
             return;
         }
-        if self.entries.len() >= LOG_CAPACITY {
+        while self.entries.len() >= self.capacity.max(1) {
             self.entries.pop_front();
         }
         self.entries.push_back(entry);
+        self.kept += 1;
     }
 
-    /// Forgets every frame and the count of those not kept.
+    /// The sequence number of the oldest frame kept (of the next frame when none is kept).
+    pub fn first_seq(&self) -> u64 {
+        self.kept - self.entries.len() as u64
+    }
+
+    /// The frames kept with their sequence numbers, oldest first.
+    pub fn numbered(&self) -> impl DoubleEndedIterator<Item = (u64, &LogEntry)> + '_ {
+        let first = self.first_seq();
+        self.entries
+            .iter()
+            .enumerate()
+            .map(move |(i, e)| (first + i as u64, e))
+    }
+
+    /// Forgets every frame and the count of those not kept (sequence numbers go on).
     pub fn clear(&mut self) {
         self.entries.clear();
         self.dropped = 0;

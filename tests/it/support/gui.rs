@@ -15,14 +15,15 @@ pub type H = Harness<'static, Option<App>>;
 /// Settings that open `path` at 115200 baud with `profile` on `panel`, with the protocol's own
 /// answer margin.
 pub fn settings(path: &str, profile: &str, panel: PanelId, lang: Lang) -> Settings {
-    Settings {
+    let mut saved = Settings {
         target: Target::Port(path.to_string()),
-        baud: 115_200,
         profile: profile.into(),
         panel,
         lang,
         ..Settings::default()
-    }
+    };
+    saved.port_mut().baud = Some(115_200);
+    saved
 }
 
 /// The app with `saved` settings, in a 1400×1000 window: each step runs its logic and draws it.
@@ -32,20 +33,23 @@ pub fn harness(saved: Settings) -> H {
 
 /// As [`harness`], with `prepare` run on the app once it has started.
 pub fn harness_with(saved: Settings, prepare: impl Fn(&mut App) + 'static) -> H {
-    Harness::builder()
-        .with_size(egui::vec2(1400.0, 1000.0))
-        .build_ui_state(
-            move |ui, app: &mut Option<App>| {
-                let app = app.get_or_insert_with(|| {
-                    let mut app = App::new(ui.ctx(), saved.clone()).expect("app starts");
-                    prepare(&mut app);
-                    app
-                });
-                app.logic(ui.ctx());
-                app.ui(ui);
-            },
-            None,
-        )
+    harness_sized(saved, egui::vec2(1400.0, 1000.0), prepare)
+}
+
+/// As [`harness_with`], in a window of `size` points.
+pub fn harness_sized(saved: Settings, size: egui::Vec2, prepare: impl Fn(&mut App) + 'static) -> H {
+    Harness::builder().with_size(size).build_ui_state(
+        move |ui, app: &mut Option<App>| {
+            let app = app.get_or_insert_with(|| {
+                let mut app = App::new(ui.ctx(), saved.clone()).expect("app starts");
+                prepare(&mut app);
+                app
+            });
+            app.logic(ui.ctx());
+            app.ui(ui);
+        },
+        None,
+    )
 }
 
 /// The app.

@@ -1,0 +1,552 @@
+//! Issue 14, "show only what is true": the real app through egui_kittest against the simulated
+//! window cleaner on a pty. Cursor readout, broken lines, the packet monitor's view, port open
+//! vs device answering, a unit's values and verdicts forgotten, the safe state and what is
+//! running, tunable presets, per-profile port settings, pause.
+
+use botbench::i18n::Lang;
+use botbench::sim::SimOptions;
+use botbench::sim::window_cleaner::WindowCleaner;
+use botbench::ui::{App, PanelId};
+use eframe::egui;
+use egui_kittest::kittest::Queryable;
+
+use crate::support::gui::{H, app, app_mut, settings, step_until};
+use crate::support::{Served, serve, serve_with};
+
+fn bench() -> Served<WindowCleaner> {
+    serve(WindowCleaner::new(&SimOptions::default()).unwrap())
+}
+
+/// The app on the window cleaner at `path`, with 100 ms for the device to start answering:
+/// generous for a loaded test machine.
+fn harness(path: &str, panel: PanelId) -> H {
+    let mut saved = settings(path, "window-cleaner", panel, Lang::En);
+    saved.port_mut().margin_ms = Some(100);
+    crate::support::gui::harness(saved)
+}
+
+fn show(h: &mut H, panel: PanelId) {
+    app_mut(h).settings.panel = panel;
+    h.run_steps(3);
+}
+
+#[test]
+fn the_packet_monitor_opened_late_shows_the_newest_and_holds_where_the_technician_scrolled() {
+    let b = bench();
+    let mut h = harness(b.path(), PanelId::Tuning);
+    // A small log, so that it is full (and drops its oldest) within the test.
+    app_mut(&mut h).state.packets.capacity = 400;
+    step_until(&mut h, "traffic", |a| a.state.packets.entries.len() >= 400);
+    show(&mut h, PanelId::Monitor);
+    let newest = |a: &App| a.state.packets.first_seq() + a.state.packets.entries.len() as u64;
+    {
+        let a = app(&h);
+        assert!(a.monitor.follow, "it follows by default");
+        let top = a.monitor.top.expect("rows shown");
+        assert!(
+            top + 60 >= newest(a),
+            "the newest is in view: top {top}, newest {}",
+            newest(a)
+        );
+    }
+    // The technician scrolls up: the view leaves the newest and stays on the same frames while
+    // new ones come and old ones are dropped.
+    let rows: Vec<egui::Rect> = h
+        .get_all_by_label_contains("MSP_")
+        .map(|n| n.rect())
+        .collect();
+    let area = rows[rows.len() / 2].center();
+    h.hover_at(area);
+    for _ in 0..6 {
+        h.event(egui::Event::MouseWheel {
+            unit: egui::MouseWheelUnit::Line,
+            delta: egui::vec2(0.0, 5.0),
+            phase: egui::TouchPhase::Move,
+            source: egui::MouseWheelSource::Unknown,
+            modifiers: egui::Modifiers::NONE,
+        });
+        h.step();
+    }
+    // Until the wheel's smooth scrolling has come to rest.
+    let (mut last, mut still) = (app(&h).monitor.top, 0);
+    while still < 10 {
+        h.step();
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        let top = app(&h).monitor.top;
+        still = if top == last { still + 1 } else { 0 };
+        last = top;
+    }
+    let held = app(&h).monitor.top.unwrap();
+    assert!(!app(&h).monitor.follow);
+    let until = newest(app(&h)) + 200;
+    step_until(&mut h, "more traffic", |a| newest(a) >= until);
+    h.run_steps(2);
+    let a = app(&h);
+    // On a loaded machine more frames may come than the log keeps: a held frame that was
+    // dropped leaves the view on the oldest one kept.
+    assert_eq!(
+        a.monitor.top,
+        Some(held.max(a.state.packets.first_seq())),
+        "the view stays on the frames it was on"
+    );
+    let (below, secs) = a.monitor.behind.expect("says how far behind");
+    assert!(below >= 200 && secs > 0.0, "{below} {secs}");
+    assert!(
+        h.query_by_label_contains("newer frame(s) below the view")
+            .is_some()
+    );
+    // "Newest" follows again.
+    h.get_by_label("Newest").click();
+    h.run_steps(3);
+    let a = app(&h);
+    assert!(a.monitor.follow);
+    assert!(a.monitor.top.unwrap() + 60 >= newest(a));
+}
+
+fn telemetry(path: &str, lang: Lang) -> H {
+    let mut saved = settings(path, "window-cleaner", PanelId::Telemetry, lang);
+    saved.port_mut().margin_ms = Some(100);
+    // A window far longer than the test: its left part is before any data.
+    saved.window_secs = 600.0;
+    crate::support::gui::harness(saved)
+}
+
+/// Samples in the first plot's series.
+fn samples(a: &App) -> usize {
+    let id = &a.state.device.profile.plots[0].id;
+    a.state
+        .device
+        .plots
+        .get(id)
+        .and_then(|s| s.iter().next().map(|(_, series)| series.iter().count()))
+        .unwrap_or(0)
+}
+
+#[test]
+fn the_cursor_readout_is_a_sample_under_the_pointer_or_nothing_and_moves_nothing() {
+    let b = bench();
+    let mut h = telemetry(b.path(), Lang::En);
+    step_until(&mut h, "samples", |a| {
+        samples(a) >= 5 && a.telemetry.shown.len() >= 2
+    });
+    let before = app(&h).telemetry.shown[1].rect;
+    let plot = app(&h).telemetry.shown[0].rect;
+    // Over the newest data: the readout is a sample's own time, with values.
+    h.hover_at(egui::pos2(plot.right() - 4.0, plot.center().y));
+    h.run_steps(3);
+    {
+        let a = app(&h);
+        let r = a.telemetry.shown[0].readout.clone().expect("a readout");
+        let id = &a.state.device.profile.plots[0].id;
+        let set = a.state.device.plots.get(id).unwrap();
+        let (field, series) = set.iter().next().unwrap();
+        assert!(
+            series.iter().any(|s| s.t == r.t),
+            "the readout's time {} is a sample of {field}",
+            r.t
+        );
+        assert!(!r.values.is_empty());
+        assert_eq!(
+            a.telemetry.shown[1].rect, before,
+            "the readout moves nothing"
+        );
+        for s in &a.telemetry.shown {
+            assert!(!s.legend.names.iter().any(|n| n.contains("cursor")));
+        }
+    }
+    // Before any data: nothing.
+    h.hover_at(egui::pos2(plot.left() + 10.0, plot.center().y));
+    h.run_steps(3);
+    assert_eq!(app(&h).telemetry.shown[0].readout, None, "no sample there");
+    // Off the plots (over the top bar): nothing anywhere.
+    h.hover_at(egui::pos2(plot.right() - 4.0, 5.0));
+    h.run_steps(3);
+    assert!(app(&h).telemetry.shown.iter().all(|s| s.readout.is_none()));
+}
+
+#[test]
+fn a_pause_keeps_the_paused_data_in_view_and_breaks_the_line() {
+    let b = bench();
+    let mut h = telemetry(b.path(), Lang::En);
+    step_until(&mut h, "samples", |a| {
+        samples(a) >= 5 && !a.telemetry.shown.is_empty()
+    });
+    let window = h.get_all_by_label("Window").next().unwrap().rect();
+    h.get_by_label("Pause").click();
+    h.run_steps(3);
+    assert_eq!(
+        h.get_all_by_label("Window").next().unwrap().rect(),
+        window,
+        "Pause/Resume moves nothing"
+    );
+    let end = app(&h).telemetry.shown[0].x.1;
+    let t0 = app(&h).state.device.t0;
+    step_until(&mut h, "time to pass", |a| {
+        a.state.device.t0.elapsed().as_secs_f64() > end + 0.5 && t0 == a.state.device.t0
+    });
+    h.run_steps(2);
+    assert!(app(&h).telemetry.follow);
+    assert_eq!(
+        app(&h).telemetry.shown[0].x.1,
+        end,
+        "the view stays where polling paused"
+    );
+    let n = samples(app(&h));
+    h.get_by_label("Resume").click();
+    step_until(&mut h, "new samples", |a| samples(a) >= n + 3);
+    let a = app(&h);
+    let id = &a.state.device.profile.plots[0].id;
+    let set = a.state.device.plots.get(id).unwrap();
+    let (field, _) = set.iter().next().unwrap();
+    let (mut pts, mut starts) = (Vec::new(), Vec::new());
+    set.decimate_segments(field, 0.0, a.state.plot_end(), 1000, &mut pts, &mut starts);
+    assert!(
+        starts.len() >= 2,
+        "the line is broken where polling paused: {starts:?}"
+    );
+}
+
+#[test]
+fn a_silent_device_is_a_port_open_not_a_device_answering() {
+    let b = serve_with(
+        WindowCleaner::new(&SimOptions::default()).unwrap(),
+        botbench::sim::Faults {
+            silent: true,
+            ..Default::default()
+        },
+    );
+    let mut h = harness(b.path(), PanelId::Tuning);
+    step_until(&mut h, "the port", |a| a.state.connected());
+    step_until(&mut h, "unanswered requests", |a| {
+        matches!(
+            a.state.link.answering(),
+            botbench::ui::state::Answering::No(_)
+        )
+    });
+    h.run_steps(2);
+    assert!(h.query_by_label_contains("device silent").is_some());
+    assert!(h.query_by_label_contains("device answering").is_none());
+}
+
+#[test]
+fn a_disconnect_forgets_the_units_version_values_and_marks() {
+    let b = bench();
+    let mut h = harness(b.path(), PanelId::Tuning);
+    step_until(&mut h, "the device read", |a| {
+        a.state.device.info.is_some() && a.state.device.value(130, "pwmValue").is_some()
+    });
+    h.run_steps(2);
+    assert!(h.query_by_label_contains("device answering").is_some());
+    assert!(
+        h.query_by_label_contains(" fw ").is_some(),
+        "the version is shown"
+    );
+    h.get_by_label("Disconnect").click();
+    h.run_steps(3);
+    let a = app(&h);
+    assert!(a.state.device.info.is_none());
+    assert!(a.state.device.value(130, "pwmValue").is_none());
+    assert!(
+        h.query_by_label_contains(" fw ").is_none(),
+        "no version of a gone unit"
+    );
+    assert!(h.query_by_label_contains("verified").is_none());
+}
+
+#[test]
+fn stop_is_on_every_window_cleaner_panel_and_goes_straight_to_the_robot() {
+    let b = bench();
+    let mut h = harness(b.path(), PanelId::Tuning);
+    step_until(&mut h, "the link", |a| a.state.connected());
+    for panel in [
+        PanelId::Tuning,
+        PanelId::Telemetry,
+        PanelId::Monitor,
+        PanelId::Presets,
+        PanelId::Actions,
+        PanelId::Device,
+        PanelId::SelfTest,
+    ] {
+        show(&mut h, panel);
+        assert!(
+            h.query_all_by_label("STOP").next().is_some(),
+            "{panel:?} has STOP"
+        );
+    }
+    show(&mut h, PanelId::Tuning);
+    h.get_all_by_label("STOP").next().unwrap().click();
+    let ids: Vec<u8> = {
+        let p = &app(&h).state.device.profile;
+        p.stop
+            .iter()
+            .map(|s| p.command(&s.command).expect("a STOP command").id)
+            .collect()
+    };
+    assert!(!ids.is_empty());
+    step_until(&mut h, "every STOP command answered", |a| {
+        ids.iter().all(|id| {
+            a.state.packets.entries.iter().any(|e| {
+                e.direction == botbench::protocol::Direction::DeviceToHost
+                    && e.frame.as_ref().is_ok_and(|p| p.command == *id)
+            })
+        })
+    });
+    step_until(&mut h, "the acknowledgement", |a| {
+        matches!(a.stop.state(), botbench::ui::stop::StopState::Acked(_))
+    });
+    h.run_steps(2);
+    assert!(h.query_by_label_contains("STOP acknowledged").is_some());
+    assert!(h.query_by_label_contains("the robot will move").is_none());
+}
+
+/// Every text box's left edge.
+/// Every text box's left edge in the tuning tables (below "Read all").
+fn input_lefts(h: &H) -> Vec<f32> {
+    let top = h.get_by_label("Read all").rect().bottom();
+    h.query_all(egui_kittest::kittest::by().role(egui::accesskit::Role::TextInput))
+        .filter(|n| n.rect().top() > top)
+        .map(|n| n.rect().left())
+        .collect()
+}
+
+#[test]
+fn the_tuning_tables_line_up_across_the_width_and_say_only_what_the_profile_gives() {
+    let b = bench();
+    b.sim.lock().unwrap().set_param("pwmvalueMax", 97).unwrap();
+    let mut h = harness(b.path(), PanelId::Tuning);
+    step_until(&mut h, "the device read", |a| {
+        (130..=136).all(|id| a.state.device.readings.contains_key(&id))
+            && a.state.job_progress().is_none()
+    });
+    h.run_steps(2);
+    let lefts = input_lefts(&h);
+    assert!(lefts.len() > 10, "{lefts:?}");
+    let min = lefts.iter().copied().fold(f32::MAX, f32::min);
+    let max = lefts.iter().copied().fold(f32::MIN, f32::max);
+    assert!(
+        max - min < 1.0,
+        "the Edited column is the same in every group: {lefts:?}"
+    );
+    assert!(
+        min > 1400.0 * 0.3,
+        "the table spreads over the width (Edited column at {min})"
+    );
+    for limit in ["4294967", "65535", "2147483"] {
+        assert!(
+            h.query_by_label_contains(limit).is_none(),
+            "no type limit ({limit}) shown as a range"
+        );
+    }
+    // The write dialog names fields as the window does.
+    let input = h.get_by(|n| {
+        n.role() == egui::accesskit::Role::TextInput && n.value().as_deref() == Some("97")
+    });
+    input.focus();
+    h.step();
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.step();
+    h.get_by(|n| {
+        n.role() == egui::accesskit::Role::TextInput && n.value().as_deref() == Some("97")
+    })
+    .type_text("90");
+    h.run_steps(2);
+    h.get_by_label_contains("Write changes (1)").click();
+    h.run_steps(3);
+    assert!(h.query_by_label("Write these changes?").is_some());
+    // The table indents its field names: the exact name is the dialog's.
+    assert!(
+        h.query_by_label("Fan PWM maximum").is_some(),
+        "the dialog names the field"
+    );
+    assert!(h.query_by_label_contains("pwmvalueMax").is_none());
+}
+
+#[test]
+fn the_configurator_variants_own_set_layout_is_written_and_verified() {
+    let profile =
+        botbench::sim::msp_device::builtin_profile("window-cleaner-configurator").unwrap();
+    let core = botbench::sim::msp_device::MspCore::new(profile, 3, 115_200);
+    let b = serve(WindowCleaner::with_core(core, 1));
+    b.sim
+        .lock()
+        .unwrap()
+        .set_param("waterPumpDuration", 151)
+        .unwrap();
+    let mut saved = settings(
+        b.path(),
+        "window-cleaner-configurator",
+        PanelId::Tuning,
+        Lang::En,
+    );
+    saved.port_mut().margin_ms = Some(100);
+    let mut h = crate::support::gui::harness(saved);
+    step_until(&mut h, "the spray settings read", |a| {
+        a.state.device.value(135, "waterPumpDuration").is_some() && a.state.job_progress().is_none()
+    });
+    h.run_steps(2);
+    let is_151 = |n: &egui_kittest::kittest::AccessKitNode<'_>| {
+        n.role() == egui::accesskit::Role::TextInput && n.value().as_deref() == Some("151")
+    };
+    h.get_by(is_151).focus();
+    h.step();
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.step();
+    h.get_by(is_151).type_text("200");
+    h.run_steps(2);
+    let a = app(&h);
+    let (_, writes) = a.tuning.pending(&a.state).expect("the write is possible");
+    let set = writes.iter().find(|(id, _)| *id == 225).expect("SET 225");
+    let fields: Vec<&str> = set.1.iter().map(|(f, _)| f.as_str()).collect();
+    assert_eq!(
+        fields,
+        [
+            "waterPumpDuration",
+            "waterPumpStartAngle",
+            "waterPumpMoveCnt"
+        ],
+        "the Set's own fields"
+    );
+    step_until(&mut h, "no job running", |a| {
+        a.state.job_progress().is_none()
+    });
+    h.get_by_label_contains("Write changes (1)").click();
+    h.run_steps(3);
+    h.get_by_label("Write").click();
+    step_until(&mut h, "the write verified", |a| {
+        a.state
+            .device
+            .marks
+            .get(&(135, "waterPumpDuration".to_string()))
+            == Some(&botbench::ui::state::Mark::Verified)
+    });
+    assert_eq!(b.sim.lock().unwrap().param("waterPumpDuration"), Some(200));
+}
+
+/// The app at `size` on the window cleaner, in `lang`.
+fn sized(path: &str, size: egui::Vec2, lang: Lang) -> H {
+    let mut saved = settings(path, "window-cleaner", PanelId::Tuning, lang);
+    saved.port_mut().margin_ms = Some(100);
+    crate::support::gui::harness_sized(saved, size, |_| {})
+}
+
+#[test]
+fn the_top_bar_keeps_its_badge_whole_and_its_switch_in_place() {
+    let b = bench();
+    for (width, lang, answering, switch) in [
+        (1200.0, Lang::En, "● device answering", "中文"),
+        (1024.0, Lang::En, "● device answering", "中文"),
+        (1024.0, Lang::Zh, "● 设备应答中", "English"),
+    ] {
+        let mut h = sized(b.path(), egui::vec2(width, 600.0), lang);
+        h.run_steps(2);
+        let before = h.get_by_label(switch).rect();
+        step_until(&mut h, "answers", |a| {
+            a.state.link.answering() == botbench::ui::state::Answering::Yes
+        });
+        h.run_steps(2);
+        let badge = h.get_by_label(answering).rect();
+        let line = h.get_by_label(switch).rect().height();
+        assert!(
+            badge.height() <= line + 1.0,
+            "{width} {lang:?}: the badge is on one line ({badge:?})"
+        );
+        assert_eq!(
+            h.get_by_label(switch).rect(),
+            before,
+            "{width} {lang:?}: the language switch stays put"
+        );
+        assert!(before.right() <= width);
+        h.get_by_label(switch).click();
+        h.run_steps(3);
+        let other = if lang == Lang::En {
+            "English"
+        } else {
+            "中文"
+        };
+        assert_eq!(
+            h.get_by_label(other).rect().right(),
+            before.right(),
+            "{width}: switching language moves the switch not"
+        );
+    }
+}
+
+#[test]
+fn in_chinese_the_status_line_and_the_plot_legends_are_chinese() {
+    let b = bench();
+    let mut h = telemetry(b.path(), Lang::Zh);
+    step_until(&mut h, "samples", |a| {
+        samples(a) >= 2 && !a.telemetry.shown.is_empty()
+    });
+    h.run_steps(2);
+    let a = app(&h);
+    let profile = &a.state.device.profile;
+    for s in &a.telemetry.shown {
+        let p = profile.plots.iter().find(|p| p.id == s.id).unwrap();
+        for (ident, name) in p.fields.iter().zip(&s.legend.names) {
+            assert!(
+                !name.contains(ident.as_str()),
+                "{name} is not the wire name {ident}"
+            );
+            assert!(name.chars().any(|c| c as u32 > 0x2e80), "{name} is Chinese");
+        }
+        assert!(!s.legend.y_label.is_empty());
+    }
+    let first = a.telemetry.shown[0].legend.names[0].clone();
+    assert!(
+        h.query_by_label_contains(&first).is_some(),
+        "the key shows {first}"
+    );
+    h.get_by_label("断开").click();
+    h.run_steps(3);
+    assert!(h.query_by_label("已断开").is_some(), "the status line");
+}
+
+#[test]
+fn the_solar_plots_take_the_whole_width() {
+    let b =
+        serve(botbench::sim::solar_cleanbot::SolarCleanbot::new(&SimOptions::default()).unwrap());
+    let mut saved = settings(b.path(), "solar-cleanbot", PanelId::Solar, Lang::En);
+    saved.port_mut().margin_ms = Some(100);
+    let mut h = crate::support::gui::harness_sized(saved, egui::vec2(1280.0, 800.0), |_| {});
+    step_until(&mut h, "the plots drawn", |a| a.solar.plot_width > 0.0);
+    assert!(
+        app(&h).solar.plot_width > 1280.0 * 0.8,
+        "{}",
+        app(&h).solar.plot_width
+    );
+}
+
+#[test]
+fn factory_defaults_leave_no_file_named_and_a_typed_preset_path_is_remembered() {
+    let b = bench();
+    let dir = std::env::temp_dir().join(format!("botbench-wt-preset-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("golden.ron");
+    let mut h = harness(b.path(), PanelId::Presets);
+    step_until(&mut h, "the device read", |a| {
+        a.state.device.value(130, "pwmValue").is_some() && a.state.job_progress().is_none()
+    });
+    app_mut(&mut h).presets.path = path.display().to_string();
+    h.step();
+    h.get_by_label("Save device to file").click();
+    step_until(&mut h, "the preset saved", |a| {
+        path.exists() && a.state.job_progress().is_none()
+    });
+    assert_eq!(
+        app(&h)
+            .settings
+            .file(botbench::ui::settings::FileKind::Preset),
+        Some(path.display().to_string().as_str()),
+        "the path is remembered"
+    );
+    h.get_by_label("Factory defaults").click();
+    h.run_steps(2);
+    assert!(app(&h).presets.loaded.is_some());
+    assert_eq!(
+        app(&h).presets.path,
+        "",
+        "the defaults are not the file named before"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
