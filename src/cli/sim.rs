@@ -50,14 +50,15 @@ pub(crate) struct SimArgs {
 #[derive(Debug, Args)]
 struct TuyaSimArgs {
     /// Tuya vacuum: the version byte of the MCU's frames (0x03 by the protocol document; 0x01
-    /// and 0x00 are seen in the field). Decimal or 0x-hex.
+    /// and 0x00 are seen in the field): 0 to 255, decimal or 0x-hex.
     #[arg(long, value_name = "BYTE", value_parser = parse_byte)]
     frame_version: Option<u8>,
-    /// Tuya vacuum: report a data point on its own every MS milliseconds (a chatty MCU).
-    #[arg(long, value_name = "MS")]
+    /// Tuya vacuum: report a data point on its own every MS milliseconds (a chatty MCU): 1 to
+    /// 60000.
+    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=60_000))]
     report_every: Option<u64>,
-    /// Tuya vacuum: the data point `--report-every` reports (default 6, the battery).
-    #[arg(long, value_name = "ID", default_value_t = 6)]
+    /// Tuya vacuum: the data point `--report-every` reports (default 6, the battery): 1 to 255.
+    #[arg(long, value_name = "ID", default_value_t = 6, value_parser = clap::value_parser!(u8).range(1..))]
     report_dp: u8,
     /// Tuya vacuum: report data point ID with another type and length than the profile's,
     /// `ID:TYPE:LEN` (e.g. `3:value:4`); repeat for more.

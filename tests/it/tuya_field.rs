@@ -283,7 +283,7 @@ fn an_image_over_the_profiles_maximum_is_refused_before_anything_is_sent() {
         ),
         (
             "/dev/zero",
-            "at least 524289 bytes is over the largest image the profile allows (524288 bytes)",
+            "/dev/zero: not a firmware image file (a folder, a device or a pipe)",
         ),
     ] {
         let o = tuya(served.path(), &["ota", file]);

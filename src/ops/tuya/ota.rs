@@ -29,8 +29,8 @@ pub enum FirmwareFileError {
         /// What the system said.
         reason: String,
     },
-    /// A folder.
-    #[error("{}: not a file", path.display())]
+    /// A folder, a device (such as /dev/zero) or a pipe.
+    #[error("{}: not a firmware image file (a folder, a device or a pipe)", path.display())]
     NotAFile {
         /// The path.
         path: PathBuf,
@@ -58,9 +58,9 @@ pub enum FirmwareFileError {
     },
 }
 
-/// The size of the firmware file at `path`, if it can be sent (at most `max` bytes, not
-/// empty); a file whose size the system does not give (a pipe) is `None` here and is bounded
-/// when read. Reads nothing.
+/// The size of the firmware file at `path`, if it can be sent: a regular file (not a folder, a
+/// device or a pipe), at most `max` bytes, not empty. Always `Some` size when `Ok`. Reads
+/// nothing.
 pub fn check_file(path: &Path, max: u32) -> Result<Option<u64>, FirmwareFileError> {
     if path.as_os_str().is_empty() {
         return Err(FirmwareFileError::NoneChosen);
@@ -69,13 +69,10 @@ pub fn check_file(path: &Path, max: u32) -> Result<Option<u64>, FirmwareFileErro
         path: path.to_path_buf(),
         reason: e.to_string(),
     })?;
-    if meta.is_dir() {
+    if !meta.is_file() {
         return Err(FirmwareFileError::NotAFile {
             path: path.to_path_buf(),
         });
-    }
-    if !meta.is_file() {
-        return Ok(None);
     }
     match meta.len() {
         0 => Err(FirmwareFileError::Empty {
