@@ -1,4 +1,5 @@
 pub mod bench;
+pub mod capture;
 pub mod cli;
 pub mod document;
 pub mod i18n;
