@@ -9,7 +9,7 @@ pub mod replay;
 
 pub use decode::{CapturedFrame, frames};
 pub use format::{CaptureFile, CaptureInfo, Chunk, read, read_path, write_chunks};
-pub use record::{Capture, CaptureSummary, QUEUE_CHUNKS};
+pub use record::{Capture, CaptureSummary, QUEUE_CHUNKS, Tap};
 pub use replay::{ReplayDevice, ReplayStats};
 
 /// What went wrong with a capture file.

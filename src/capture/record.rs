@@ -254,41 +254,92 @@ impl Capture {
 
     /// An opener that opens what `opener` opens, with every transport recorded here (a port
     /// reopened after a loss goes on being recorded into the same file).
+    pub fn wrap(&self, opener: Opener) -> Opener {
+        let tap = Tap::default();
+        tap.start(self.clone());
+        tap.wrap(opener)
+    }
+}
+
+/// Where a link's bytes go when recording is switched on and off while connected (the window's
+/// Record button): every transport opened through [`Tap::wrap`] records into the capture
+/// [`Tap::start`] set, until [`Tap::stop`].
+#[derive(Clone, Default)]
+pub struct Tap(Arc<Mutex<Option<Capture>>>);
+
+impl std::fmt::Debug for Tap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_tuple("Tap").field(&self.current()).finish()
+    }
+}
+
+impl Tap {
+    fn slot(&self) -> std::sync::MutexGuard<'_, Option<Capture>> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Records into `capture` from now on (replacing any other, which is returned).
+    pub fn start(&self, capture: Capture) -> Option<Capture> {
+        self.slot().replace(capture)
+    }
+
+    /// Stops recording here; returns the capture to [`Capture::stop`].
+    pub fn stop(&self) -> Option<Capture> {
+        self.slot().take()
+    }
+
+    /// The capture being recorded, if any.
+    pub fn current(&self) -> Option<Capture> {
+        self.slot().clone()
+    }
+
+    /// An opener that opens what `opener` opens, its transports recorded while this tap has a
+    /// capture.
     pub fn wrap(&self, mut opener: Opener) -> Opener {
-        let capture = self.clone();
+        let tap = self.clone();
         Box::new(move || {
             let inner = opener()?;
             Ok(Box::new(RecordingTransport {
                 inner,
-                capture: capture.clone(),
+                tap: tap.clone(),
             }) as Box<dyn Transport>)
         })
+    }
+
+    fn record(&self, direction: Direction, bytes: &[u8]) {
+        if let Some(c) = self.slot().as_ref() {
+            c.record(direction, bytes);
+        }
     }
 }
 
 /// A transport whose writes and reads are recorded as they are made.
 struct RecordingTransport {
     inner: Box<dyn Transport>,
-    capture: Capture,
+    tap: Tap,
 }
 
 impl Transport for RecordingTransport {
     fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
-        self.capture.record(Direction::HostToDevice, bytes);
+        self.tap.record(Direction::HostToDevice, bytes);
         self.inner.write(bytes)
     }
 
     fn read(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
         let n = self.inner.read(buf, deadline)?;
-        if let Some(got) = buf.get(..n) {
-            self.capture.record(Direction::DeviceToHost, got);
+        if n > 0
+            && let Some(got) = buf.get(..n)
+        {
+            self.tap.record(Direction::DeviceToHost, got);
         }
         Ok(n)
     }
 
     fn set_baud(&mut self, baud: u32) -> Result<(), LinkError> {
         self.inner.set_baud(baud)?;
-        self.capture.baud_changed(baud);
+        if let Some(c) = self.tap.current() {
+            c.baud_changed(baud);
+        }
         Ok(())
     }
 

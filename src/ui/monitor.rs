@@ -60,8 +60,12 @@ impl MonitorPanel {
     /// Draws the panel.
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
-        let profile = rt.device.profile.clone();
         let log = &rt.packets;
+        let (profile, entries) = match &log.offline {
+            Some(o) => (o.profile.clone(), &o.entries),
+            None => (rt.device.profile.clone(), &log.entries),
+        };
+        ui.horizontal_wrapped(|ui| capture_bar(ui, lang, rt, &mut actions));
         ui.horizontal_wrapped(|ui| {
             let label = ui.label(lang.tr("Filter", "筛选"));
             ui.add(
@@ -85,8 +89,7 @@ impl MonitorPanel {
             let copy = ui.button(lang.tr("Copy", "复制")).clicked();
             let save_clicked = ui.button(lang.tr("Save…", "保存…")).clicked();
             if copy || save_clicked {
-                let shown: Vec<String> = log
-                    .entries
+                let shown: Vec<String> = entries
                     .iter()
                     .filter(|e| self.matches(&profile, e))
                     .map(|e| line(&profile, e))
@@ -101,16 +104,12 @@ impl MonitorPanel {
                     actions.push(save(&shown));
                 }
             }
-            let shown = log
-                .entries
-                .iter()
-                .filter(|e| self.matches(&profile, e))
-                .count();
+            let shown = entries.iter().filter(|e| self.matches(&profile, e)).count();
             ui.weak(format!(
                 "{} {} / {}{}",
                 shown,
                 lang.tr("shown", "条显示"),
-                log.entries.len(),
+                entries.len(),
                 if log.dropped > 0 {
                     format!(
                         ", {} {}",
@@ -123,8 +122,7 @@ impl MonitorPanel {
             ));
         });
         ui.separator();
-        let rows: Vec<&LogEntry> = log
-            .entries
+        let rows: Vec<&LogEntry> = entries
             .iter()
             .filter(|e| self.matches(&profile, e))
             .collect();
@@ -147,6 +145,85 @@ impl MonitorPanel {
                 }
             });
         actions
+    }
+}
+
+/// Record / Stop with the file's size growing; Open capture / Back to live.
+fn capture_bar(ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
+    match rt.recording() {
+        Some(c) => {
+            if ui.button(lang.tr("Stop recording", "停止录制")).clicked() {
+                actions.push(Action::StopCapture);
+            }
+            let lost = if c.dropped() > 0 {
+                format!(", {} {}", c.dropped(), lang.tr("chunks lost", "块丢失"))
+            } else {
+                String::new()
+            };
+            ui.colored_label(
+                egui::Color32::RED,
+                format!(
+                    "{} {}  {:.1} KiB{lost}",
+                    lang.tr("REC", "录制中"),
+                    c.path(),
+                    c.file_bytes() as f64 / 1024.0
+                ),
+            );
+            ui.ctx()
+                .request_repaint_after(std::time::Duration::from_millis(250));
+        }
+        None => {
+            let record = ui
+                .add_enabled(
+                    rt.connected(),
+                    egui::Button::new(lang.tr("Record…", "录制…")),
+                )
+                .on_hover_text(lang.tr(
+                    "record the port's bytes to a pcapng capture (Wireshark, botbench sim replay)",
+                    "将端口字节录制为 pcapng 抓包文件(Wireshark、botbench sim replay)",
+                ));
+            if record.clicked() {
+                actions.push(pick("capture.pcapng", true, Action::StartCapture));
+            }
+        }
+    }
+    match &rt.packets.offline {
+        Some(o) => {
+            ui.label(format!(
+                "{} {}{}",
+                lang.tr("viewing", "查看"),
+                o.name,
+                o.truncated
+                    .as_ref()
+                    .map_or(String::new(), |t| format!(" (cut off: {t})"))
+            ));
+            if ui.button(lang.tr("Back to live", "返回实时")).clicked() {
+                actions.push(Action::CloseCapture);
+            }
+        }
+        None => {
+            if ui.button(lang.tr("Open capture…", "打开抓包…")).clicked() {
+                actions.push(pick("capture.pcapng", false, Action::OpenCapture));
+            }
+        }
+    }
+}
+
+/// A file from the dialog made into an action, or a notice that none was chosen.
+fn pick(name: &str, save: bool, then: fn(std::path::PathBuf) -> Action) -> Action {
+    let dialog = rfd::FileDialog::new()
+        .add_filter("pcapng", &["pcapng"])
+        .set_file_name(name);
+    let path = if save {
+        dialog.save_file()
+    } else {
+        dialog.pick_file()
+    };
+    match path {
+        Some(p) => then(p),
+        None => Action::Notify(Notice::info(
+            "cancelled (no file chosen, or no file dialog on this system)",
+        )),
     }
 }
 

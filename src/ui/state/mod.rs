@@ -3,6 +3,7 @@
 //! Panels read it; it changes only through the app (link events, job output, actions), once per
 //! frame.
 
+mod capture;
 mod link;
 mod model;
 mod packets;
@@ -10,7 +11,7 @@ mod tuya;
 
 pub use link::{Connection, LinkStatus, Target};
 pub use model::{DeviceModel, Mark, Reading, ReadingError};
-pub use packets::{LOG_CAPACITY, PacketLog};
+pub use packets::{LOG_CAPACITY, OfflineCapture, PacketLog};
 pub use tuya::{
     DpState, LOG_CAPACITY as REPORT_LOG_CAPACITY, LogLine, ReportError, RequestLine, StepResult,
     TuyaModel,
@@ -145,6 +146,7 @@ impl AppState {
             }
             Target::Port(path) => crate::link::serial::opener(path, baud),
         };
+        let opener = self.packets.tap.wrap(opener);
         let ctx = self.ctx.clone();
         // Background events (polled telemetry, the packet log) repaint at most 5 times a second;
         // a live plot asks for its own frame rate, and jobs wake the UI at once.
@@ -164,6 +166,7 @@ impl AppState {
 
     /// Closes the link (a running job is cancelled).
     pub fn disconnect(&mut self) {
+        self.stop_capture();
         if let Some(job) = &self.job {
             job.cancel.cancel();
         }

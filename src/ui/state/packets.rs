@@ -1,7 +1,10 @@
 //! The packet log: every frame sent and received, bounded, for the packet monitor.
 
+use crate::capture::Tap;
 use crate::link::LogEntry;
+use crate::profile::Profile;
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 /// How many frames the packet monitor keeps.
 pub const LOG_CAPACITY: usize = 20_000;
@@ -15,6 +18,22 @@ pub struct PacketLog {
     pub paused: bool,
     /// Frames not kept because the log was frozen.
     pub dropped: u64,
+    /// Records the link's bytes while a capture is set (the monitor's Record button).
+    pub tap: Tap,
+    /// A capture file opened for viewing, shown instead of the live frames.
+    pub offline: Option<OfflineCapture>,
+}
+
+/// A capture file's frames, decoded with its profile, for the monitor.
+pub struct OfflineCapture {
+    /// The file's name.
+    pub name: String,
+    /// The profile it was decoded with.
+    pub profile: Arc<Profile>,
+    /// Its frames in order.
+    pub entries: VecDeque<LogEntry>,
+    /// Why the file ended early, if it did.
+    pub truncated: Option<String>,
 }
 
 impl PacketLog {
