@@ -5,6 +5,7 @@
 use std::time::{Duration, Instant};
 
 mod kind;
+pub mod lockstep;
 pub mod msp_device;
 pub mod pty;
 pub mod runner;

@@ -93,6 +93,7 @@ impl Worker {
         let margin = self.margin(&f.request);
         let deadline = f.deadline.max(Instant::now() + margin);
         let baud = self.baud;
+        let mut answered_other = false;
         let result = match self.wait_for(&each, None, deadline, baud) {
             Err(e) => Err(e),
             Ok(Waited {
@@ -106,14 +107,17 @@ impl Worker {
                     waited_ms: 0,
                 })
             }
-            Ok(w) => Err(self.unanswered(
-                f.request.command,
-                each.command,
-                w.frame_err,
-                w.mismatch,
-                1,
-                f.sent,
-            )),
+            Ok(w) => {
+                answered_other = w.mismatch.is_some();
+                Err(self.unanswered(
+                    f.request.command,
+                    each.command,
+                    w.frame_err,
+                    w.mismatch,
+                    1,
+                    f.sent,
+                ))
+            }
         };
         let at = Instant::now();
         if let Some(slot) = self.polls.get_mut(f.index)
@@ -126,6 +130,25 @@ impl Worker {
             at,
             result,
         });
+        if answered_other {
+            // The device answers in order: this poll's answer was lost, and what came instead
+            // answered a later poll, whose answer is now gone too. The polls still in flight
+            // are reported unanswered, so that the next answer awaited is the next one sent;
+            // otherwise every later poll would wait out its deadline for an answer already
+            // taken.
+            for f in std::mem::take(&mut self.in_flight) {
+                let waited_ms = f.sent.elapsed().as_millis() as u64;
+                self.emit(LinkEvent::Telemetry {
+                    command: f.request.command,
+                    at: Instant::now(),
+                    result: Err(ExchangeError::Timeout {
+                        command: f.request.command,
+                        attempts: 1,
+                        waited_ms,
+                    }),
+                });
+            }
+        }
     }
 
     pub(super) fn run_poll(&mut self, i: usize) {
