@@ -34,6 +34,7 @@ pub const VERSION: &str = concat!(
 );
 
 pub mod bench;
+pub mod capture;
 pub mod cli;
 pub mod document;
 pub mod i18n;

@@ -1,13 +1,16 @@
-//! The benchmarks, in one binary: decoder throughput (`decoders`), the plot path (`series`) and
-//! one UI frame with the memory of an hour of telemetry (`ui_frame`).
+//! The benchmarks, in one binary: decoder throughput (`decoders`), the plot path (`series`),
+//! one UI frame with the memory of an hour of telemetry (`ui_frame`), and an hour of capture at
+//! the wire's maximum (`capture_hour`).
 //!
-//! Run all with `cargo bench`, one with `cargo bench -- decoders` (`series`, `ui_frame`);
+//! Run all with `cargo bench`, one with `cargo bench -- decoders` (`series`, `ui_frame`,
+//! `capture_hour`);
 //! criterion's options follow, e.g. `--warm-up-time 1 --measurement-time 3`. `cargo test
 //! --all-targets` runs each once, quickly, without `--bench`.
 
 // Tests and benchmarks stop at the first thing that is not as set up: a panic is their report.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod capture_hour;
 mod decoders;
 mod series;
 mod ui_frame;
@@ -15,7 +18,7 @@ mod ui_frame;
 use criterion::Criterion;
 
 /// The benchmarks by name, as given on the command line.
-const SECTIONS: [&str; 3] = ["decoders", "series", "ui_frame"];
+const SECTIONS: [&str; 4] = ["decoders", "series", "ui_frame", "capture_hour"];
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -38,5 +41,8 @@ fn main() {
     }
     if runs("ui_frame") {
         ui_frame::run(!args.iter().any(|a| a == "--bench"));
+    }
+    if runs("capture_hour") {
+        capture_hour::run(!args.iter().any(|a| a == "--bench"));
     }
 }

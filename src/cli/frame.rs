@@ -47,12 +47,19 @@ pub(crate) enum FrameCmd {
     /// error (bad checksum, junk, truncation) was found, or a payload that does not fit its
     /// command's layout (too short, too long: the fields read before the fault are printed,
     /// with the raw bytes); 2 when the input is not hex.
+    ///
+    /// With `--capture FILE`, prints every frame of a capture (both directions, with the time
+    /// its last byte crossed), decoded with the capture's profile unless --profile is given.
     Decode {
-        /// The protocol.
-        protocol: Proto,
+        /// The protocol (with --capture: the capture profile's).
+        #[arg(required_unless_present = "capture")]
+        protocol: Option<Proto>,
         /// The bytes, in one or more arguments.
-        #[arg(required = true, num_args = 1..)]
+        #[arg(required_unless_present = "capture", num_args = 1..)]
         hex: Vec<String>,
+        /// A capture file recorded with --capture (pcapng).
+        #[arg(long, value_name = "FILE", conflicts_with = "hex")]
+        capture: Option<std::path::PathBuf>,
         /// The device profile that names commands and fields (default: the protocol's usual one).
         #[arg(long)]
         profile: Option<String>,
@@ -105,12 +112,21 @@ fn parse_u8(s: &str) -> Result<u8, String> {
 pub(crate) fn run(cmd: FrameCmd) -> CliResult {
     match cmd {
         FrameCmd::Decode {
+            capture: Some(path),
+            protocol,
+            profile,
+            json,
+            ..
+        } => decode_capture(&path, protocol, profile.as_deref(), json),
+        FrameCmd::Decode {
             protocol,
             hex: parts,
             profile,
             msp_dir,
             json,
+            ..
         } => {
+            let protocol = protocol.ok_or_else(|| CliError::input("which protocol?"))?;
             let profile = load_profile(protocol, profile.as_deref())?;
             let bytes = hex::parse(&parts.join(" ")).map_err(CliError::input)?;
             let dir = match msp_dir {
@@ -182,6 +198,67 @@ pub(crate) fn run(cmd: FrameCmd) -> CliResult {
             Ok(0)
         }
     }
+}
+
+/// `frame decode --capture FILE`: each frame of the capture, with its time since the first
+/// chunk and its direction. Exit code 1 when a frame error or a misfit payload was found.
+fn decode_capture(
+    path: &std::path::Path,
+    protocol: Option<Proto>,
+    profile: Option<&str>,
+    json: bool,
+) -> CliResult {
+    let file = crate::capture::read_path(path).map_err(CliError::input)?;
+    let profile = match (profile, protocol) {
+        (Some(_), Some(p)) | (None, Some(p)) => load_profile(p, profile)?,
+        (Some(name), None) => registry()?.get(name).map_err(CliError::input)?,
+        (None, None) if file.info.profile.is_empty() => {
+            return Err(CliError::input(format!(
+                "{} names no profile: give the protocol or --profile",
+                path.display()
+            )));
+        }
+        (None, None) => registry()?
+            .get(&file.info.profile)
+            .map_err(|e| CliError::input(format!("the capture's profile: {e} (give --profile)")))?,
+    };
+    if !json {
+        println!(
+            "# {}: {}, profile {}, {} baud, {} chunks{}",
+            path.display(),
+            file.info.application,
+            profile.id,
+            file.info.baud,
+            file.chunks.len(),
+            file.truncated
+                .as_ref()
+                .map_or(String::new(), |t| format!(" (cut off: {t})"))
+        );
+    }
+    let start = file.chunks.first().map_or(0, |c| c.at_us);
+    let mut errors = 0;
+    let frames = crate::capture::frames(&file, profile.protocol);
+    for f in &frames {
+        let misfit = match &f.item.result {
+            Ok(p) => p.decode_lenient(&profile).is_some_and(|d| !d.fits()),
+            Err(_) => true,
+        };
+        errors += usize::from(misfit);
+        let seconds = f.at_us.saturating_sub(start) as f64 / 1e6;
+        if json {
+            let mut doc = item_json(&profile, &f.item);
+            doc["at_us"] = json!(f.at_us);
+            doc["t"] = json!(seconds);
+            doc["wire_direction"] = json!(f.direction);
+            println!("{doc}");
+        } else {
+            print!("{seconds:>11.6} {}", item_text(&profile, &f.item));
+        }
+    }
+    if frames.is_empty() && !json {
+        println!("no bytes");
+    }
+    Ok(u8::from(errors > 0 || file.truncated.is_some()))
 }
 
 fn load_profile(p: Proto, name: Option<&str>) -> Result<std::sync::Arc<Profile>, CliError> {

@@ -9,6 +9,7 @@ mod msp;
 mod port;
 mod preset;
 mod provision;
+mod replay;
 mod servo;
 mod sim;
 mod tuya;
@@ -128,7 +129,13 @@ pub fn main() -> ExitCode {
             return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
         }
     };
-    match run(cli) {
+    let result = run(cli);
+    // The links are closed by now: the capture files are complete.
+    let result = match (result, port::finish_captures()) {
+        (Ok(_), Err(e)) => Err(e),
+        (r, _) => r,
+    };
+    match result {
         Ok(code) => ExitCode::from(code),
         Err(e) => {
             eprintln!("botbench: {}", bounded(&e.message));

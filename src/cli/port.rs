@@ -1,6 +1,7 @@
 //! What the device subcommands share: the port options, opening a link, printing checks.
 
 use super::{CliError, checks, registry};
+use crate::capture::{Capture, CaptureInfo};
 use crate::link::{ExchangeError, Link, LinkOptions, serial};
 use crate::ops::{Check, OpError};
 use crate::profile::{Field, Profile, Protocol};
@@ -28,9 +29,42 @@ pub(crate) struct PortArgs {
     /// firmware that cannot take a request while it answers.
     #[arg(long, value_name = "N", default_value_t = 2, value_parser = clap::value_parser!(u8).range(1..=4))]
     pub poll_pipeline: u8,
+    /// Record the session to this pcapng file (Wireshark opens it; `botbench sim replay`
+    /// serves it back; `botbench frame decode --capture` prints it).
+    #[arg(long, value_name = "FILE")]
+    pub capture: Option<std::path::PathBuf>,
     /// Print JSON.
     #[arg(long, global = true)]
     pub json: bool,
+}
+
+/// The captures this process records, finished by [`finish_captures`].
+static CAPTURES: std::sync::Mutex<Vec<Capture>> = std::sync::Mutex::new(Vec::new());
+
+/// Waits until every capture file is complete (their links are closed by now) and tells on
+/// stderr what each holds; an error when one could not be written.
+pub(crate) fn finish_captures() -> Result<(), CliError> {
+    let captures = std::mem::take(&mut *CAPTURES.lock().unwrap_or_else(|e| e.into_inner()));
+    let mut failed = None;
+    for c in captures {
+        match c.stop() {
+            Ok(s) => {
+                let lost = if s.dropped > 0 {
+                    format!(", {} chunks lost (the disk could not keep up)", s.dropped)
+                } else {
+                    String::new()
+                };
+                eprintln!(
+                    "botbench: capture {}: {} chunks, {} bytes{lost}",
+                    c.path(),
+                    s.chunks,
+                    s.file_bytes
+                );
+            }
+            Err(e) => failed = Some(CliError::device(format!("capture {}: {e}", c.path()))),
+        }
+    }
+    failed.map_or(Ok(()), Err)
 }
 
 impl PortArgs {
@@ -64,13 +98,18 @@ impl PortArgs {
             poll_pipeline: usize::from(self.poll_pipeline),
             ..LinkOptions::default()
         };
-        let link = Link::open(
-            serial::opener(&self.port, baud),
-            profile.clone(),
-            options,
-            None,
-        )
-        .map_err(|e| CliError::input(e.to_string()))?;
+        let mut opener = serial::opener(&self.port, baud);
+        if let Some(path) = &self.capture {
+            let info = CaptureInfo::new(&self.port, baud, &profile.id, options.margin);
+            let capture = Capture::create(path, info).map_err(CliError::input)?;
+            opener = capture.wrap(opener);
+            CAPTURES
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .push(capture);
+        }
+        let link = Link::open(opener, profile.clone(), options, None)
+            .map_err(|e| CliError::input(e.to_string()))?;
         Ok(link)
     }
 }

@@ -16,8 +16,11 @@ use std::time::Duration;
 
 #[derive(Debug, Args)]
 pub(crate) struct SimArgs {
-    /// window-cleaner, solar-cleanbot, servo-bus or tuya-vacuum.
+    /// window-cleaner, solar-cleanbot, servo-bus or tuya-vacuum; or `replay` with a capture file.
     kind: String,
+    /// `replay` only: the capture (pcapng, from --capture) whose device is served.
+    #[arg(value_name = "FILE")]
+    capture: Option<std::path::PathBuf>,
     /// The device's UART baud rate, 300 to 4000000 (default: its profile's). A client at
     /// another rate gets no answer.
     #[arg(long, value_parser = super::checks::baud)]
@@ -105,6 +108,15 @@ fn parse_byte(text: &str) -> Result<u8, String> {
 }
 
 pub(crate) fn run(args: SimArgs) -> CliResult {
+    if args.kind == "replay" {
+        return super::replay::serve(args.capture.as_deref());
+    }
+    if let Some(extra) = &args.capture {
+        return Err(CliError::input(format!(
+            "unexpected argument '{}': only `sim replay` takes a file",
+            extra.display()
+        )));
+    }
     let kind: SimKind = args.kind.parse().map_err(CliError::input)?;
     if args.tuya.any() && kind != SimKind::TuyaVacuum {
         return Err(CliError::input(format!(

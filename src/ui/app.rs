@@ -375,6 +375,10 @@ impl App {
             Action::SetLanguage(lang) => self.settings.lang = lang,
             Action::PausePacketLog(paused) => self.state.packets.paused = paused,
             Action::ClearPacketLog => self.state.packets.clear(),
+            Action::StartCapture(path) => self.state.start_capture(&path),
+            Action::StopCapture => self.state.stop_capture(),
+            Action::OpenCapture(path) => self.state.open_capture(&path),
+            Action::CloseCapture => self.state.close_capture(),
             Action::Notify(n) => self.state.notify(n),
             Action::DemoMcuRequest(r) => {
                 if let Some(mcu) = self.state.link.demo_tuya() {

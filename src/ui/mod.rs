@@ -71,6 +71,14 @@ pub enum Action {
     PausePacketLog(bool),
     /// Forget the packet log.
     ClearPacketLog,
+    /// Record the link's bytes to this capture file (pcapng).
+    StartCapture(std::path::PathBuf),
+    /// Stop recording.
+    StopCapture,
+    /// Show this capture file in the packet monitor, instead of the live frames.
+    OpenCapture(std::path::PathBuf),
+    /// Back to the live frames.
+    CloseCapture,
     /// A status-line message.
     Notify(Notice),
     /// Remember the file last used for this purpose.

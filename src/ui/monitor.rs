@@ -99,12 +99,26 @@ impl MonitorPanel {
     /// Draws the panel.
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
-        let profile = rt.device.profile.clone();
         let log = &rt.packets;
-        let rows: Vec<(u64, &LogEntry)> = log
-            .numbered()
-            .filter(|(_, e)| self.matches(&profile, e))
-            .collect();
+        // A capture opened offline is shown in place of the live log, decoded with its profile.
+        let (profile, entries_len, rows): (_, usize, Vec<(u64, &LogEntry)>) = match &log.offline {
+            Some(o) => (
+                o.profile.clone(),
+                o.entries.len(),
+                (0u64..)
+                    .zip(o.entries.iter())
+                    .filter(|(_, e)| self.matches(&o.profile, e))
+                    .collect(),
+            ),
+            None => (
+                rt.device.profile.clone(),
+                log.entries.len(),
+                log.numbered()
+                    .filter(|(_, e)| self.matches(&rt.device.profile, e))
+                    .collect(),
+            ),
+        };
+        ui.horizontal_wrapped(|ui| capture_bar(ui, lang, rt, &mut actions));
         ui.horizontal_wrapped(|ui| {
             let label = ui.label(lang.tr("Filter", "筛选"));
             ui.add(
@@ -137,7 +151,7 @@ impl MonitorPanel {
                 "{} {} / {}{}",
                 rows.len(),
                 lang.tr("shown", "条显示"),
-                log.entries.len(),
+                entries_len,
                 if log.dropped > 0 {
                     format!(
                         ", {} {}",
@@ -283,5 +297,84 @@ impl MonitorPanel {
             ],
             Err(e) => vec![Action::Notify(Notice::error(e.to_string()))],
         }
+    }
+}
+
+/// Record / Stop with the file's size growing; Open capture / Back to live.
+fn capture_bar(ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
+    match rt.recording() {
+        Some(c) => {
+            if ui.button(lang.tr("Stop recording", "停止录制")).clicked() {
+                actions.push(Action::StopCapture);
+            }
+            let lost = if c.dropped() > 0 {
+                format!(", {} {}", c.dropped(), lang.tr("chunks lost", "块丢失"))
+            } else {
+                String::new()
+            };
+            ui.colored_label(
+                egui::Color32::RED,
+                format!(
+                    "{} {}  {:.1} KiB{lost}",
+                    lang.tr("REC", "录制中"),
+                    c.path(),
+                    c.file_bytes() as f64 / 1024.0
+                ),
+            );
+            ui.ctx()
+                .request_repaint_after(std::time::Duration::from_millis(250));
+        }
+        None => {
+            let record = ui
+                .add_enabled(
+                    rt.connected(),
+                    egui::Button::new(lang.tr("Record…", "录制…")),
+                )
+                .on_hover_text(lang.tr(
+                    "record the port's bytes to a pcapng capture (Wireshark, botbench sim replay)",
+                    "将端口字节录制为 pcapng 抓包文件(Wireshark、botbench sim replay)",
+                ));
+            if record.clicked() {
+                actions.push(pick("capture.pcapng", true, Action::StartCapture));
+            }
+        }
+    }
+    match &rt.packets.offline {
+        Some(o) => {
+            ui.label(format!(
+                "{} {}{}",
+                lang.tr("viewing", "查看"),
+                o.name,
+                o.truncated
+                    .as_ref()
+                    .map_or(String::new(), |t| format!(" (cut off: {t})"))
+            ));
+            if ui.button(lang.tr("Back to live", "返回实时")).clicked() {
+                actions.push(Action::CloseCapture);
+            }
+        }
+        None => {
+            if ui.button(lang.tr("Open capture…", "打开抓包…")).clicked() {
+                actions.push(pick("capture.pcapng", false, Action::OpenCapture));
+            }
+        }
+    }
+}
+
+/// A file from the dialog made into an action, or a notice that none was chosen.
+fn pick(name: &str, save: bool, then: fn(std::path::PathBuf) -> Action) -> Action {
+    let dialog = rfd::FileDialog::new()
+        .add_filter("pcapng", &["pcapng"])
+        .set_file_name(name);
+    let path = if save {
+        dialog.save_file()
+    } else {
+        dialog.pick_file()
+    };
+    match path {
+        Some(p) => then(p),
+        None => Action::Notify(Notice::info(
+            "cancelled (no file chosen, or no file dialog on this system)",
+        )),
     }
 }

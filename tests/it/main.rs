@@ -8,12 +8,15 @@
 
 mod support;
 
+mod capture_faults;
+mod capture_record;
 mod cli_edges;
 mod cli_frame;
 mod cli_ranges;
 mod codec_props;
 mod firmware_variants;
 mod gui;
+mod gui_capture;
 mod gui_first_run;
 mod gui_msp;
 mod gui_servo;

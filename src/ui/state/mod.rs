@@ -3,6 +3,7 @@
 //! Panels read it; it changes only through the app (link events, job output, actions), once per
 //! frame.
 
+mod capture;
 mod link;
 mod model;
 mod packets;
@@ -11,7 +12,7 @@ mod tuya;
 
 pub use link::{Answering, Connection, LinkStatus, SILENT_AFTER, Target};
 pub use model::{DeviceModel, Mark, Reading, ReadingError};
-pub use packets::{LOG_CAPACITY, PacketLog};
+pub use packets::{LOG_CAPACITY, OfflineCapture, PacketLog};
 pub use running::{Running, RunningSet};
 pub use tuya::{
     DpState, LOG_CAPACITY as REPORT_LOG_CAPACITY, LogLine, RequestLine, StepResult, TuyaModel,
@@ -180,6 +181,7 @@ impl AppState {
             }
             Target::Port(path) => crate::link::serial::opener(path, baud),
         };
+        let opener = self.packets.tap.wrap(opener);
         let ctx = self.ctx.clone();
         // Background events (polled telemetry, the packet log) repaint at most twice a second;
         // a live view asks for its own frame rate, and jobs wake the UI at once.
@@ -203,6 +205,7 @@ impl AppState {
 
     /// Closes the link (a running job is cancelled); what the device showed is forgotten.
     pub fn disconnect(&mut self) {
+        self.stop_capture();
         if let Some(job) = &self.job {
             job.cancel.cancel();
         }

@@ -2,8 +2,11 @@
 //! kept has a sequence number that never changes (the first frame ever kept is 0), so that a
 //! view can hold on to a frame while older ones are dropped under it.
 
+use crate::capture::Tap;
 use crate::link::LogEntry;
+use crate::profile::Profile;
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 /// How many frames the packet monitor keeps.
 pub const LOG_CAPACITY: usize = 20_000;
@@ -20,6 +23,10 @@ pub struct PacketLog {
     pub dropped: u64,
     /// Frames ever kept: the next frame's sequence number.
     kept: u64,
+    /// Records the link's bytes while a capture is set (the monitor's Record button).
+    pub tap: Tap,
+    /// A capture file opened for viewing, shown instead of the live frames.
+    pub offline: Option<OfflineCapture>,
 }
 
 impl Default for PacketLog {
@@ -30,8 +37,22 @@ impl Default for PacketLog {
             paused: false,
             dropped: 0,
             kept: 0,
+            tap: Tap::default(),
+            offline: None,
         }
     }
+}
+
+/// A capture file's frames, decoded with its profile, for the monitor.
+pub struct OfflineCapture {
+    /// The file's name.
+    pub name: String,
+    /// The profile it was decoded with.
+    pub profile: Arc<Profile>,
+    /// Its frames in order.
+    pub entries: VecDeque<LogEntry>,
+    /// Why the file ended early, if it did.
+    pub truncated: Option<String>,
 }
 
 impl PacketLog {
