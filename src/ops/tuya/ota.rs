@@ -295,7 +295,7 @@ mod tests {
     }
 
     #[test]
-    fn a_file_is_refused_by_its_size_and_a_device_is_read_no_further_than_the_maximum() {
+    fn a_file_is_refused_by_its_size_and_a_device_is_not_an_image() {
         let dir = std::env::temp_dir().join(format!("botbench-ota-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let big = dir.join("big.bin");
@@ -319,7 +319,7 @@ mod tests {
         let err = read_image(Path::new("/dev/zero"), 1024).unwrap_err();
         assert_eq!(
             err.to_string(),
-            "/dev/zero: at least 1025 bytes is over the largest image the profile allows (1024 bytes): is it the right file?"
+            "/dev/zero: not a firmware image file (a folder, a device or a pipe)"
         );
         let small = dir.join("small.bin");
         std::fs::write(&small, [1, 2, 3]).unwrap();
