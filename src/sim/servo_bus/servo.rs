@@ -2,12 +2,9 @@
 //! each command.
 
 use super::motion::{Motion, MotionCmd, mturn, wrap};
-use super::{
-    BusCtx, FACTORY_BAUD, Reply, baud_of_option, builtin_servo_profile, fallback_default,
-    option_of_baud, param,
-};
+use super::{BusCtx, Reply, builtin_servo_profile, fallback_default, param};
 use crate::profile::codec::int_from;
-use crate::profile::{Access, ByteOrder, Field, FieldType, Param, Profile, Value};
+use crate::profile::{Access, ByteOrder, Field, FieldType, Param, ParamRole, Profile, Value};
 use crate::protocol::servo::{BROADCAST_ID, Frame, cmd};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -71,8 +68,8 @@ impl SimServo {
         let baud = defaults
             .get(&param::BAUDRATE)
             .and_then(|&o| u8::try_from(o).ok())
-            .and_then(baud_of_option)
-            .unwrap_or(FACTORY_BAUD);
+            .and_then(|o| profile.baud_of_option(o))
+            .unwrap_or(profile.baud);
         Self {
             serial,
             baud,
@@ -98,10 +95,11 @@ impl SimServo {
         self
     }
 
-    /// Sets the baud rate; parameter 36 follows when the rate is one of [`BAUD_OPTIONS`].
+    /// Sets the baud rate; the baud-option parameter follows when the rate is in the built-in servo
+    /// profile's baud table.
     pub fn with_baud(mut self, baud: u32) -> Self {
         self.baud = baud;
-        if let Some(o) = option_of_baud(baud) {
+        if let Some(o) = builtin_servo_profile().option_of_baud(baud) {
             self.params.insert(param::BAUDRATE, o as i64);
         }
         self
@@ -125,9 +123,10 @@ impl SimServo {
         self
     }
 
-    /// Sets a user parameter's raw value, unchecked (and the id or baud with it).
+    /// Sets a user parameter's raw value, unchecked (and the id or baud with it, at the built-in
+    /// servo profile's rate).
     pub fn with_param(mut self, id: u8, raw: i64) -> Self {
-        self.store(id, raw);
+        self.store(&builtin_servo_profile(), id, raw);
         self
     }
 
@@ -209,10 +208,13 @@ impl SimServo {
         s.motion
     }
 
-    fn store(&mut self, id: u8, raw: i64) {
+    /// Stores parameter `id`; the baud option takes effect at once, at `profile`'s rate.
+    fn store(&mut self, profile: &Profile, id: u8, raw: i64) {
         self.params.insert(id, raw);
         if id == param::BAUDRATE
-            && let Some(b) = u8::try_from(raw).ok().and_then(baud_of_option)
+            && let Some(b) = u8::try_from(raw)
+                .ok()
+                .and_then(|o| profile.baud_of_option(o))
         {
             self.baud = b;
         }
@@ -289,12 +291,12 @@ impl SimServo {
         if p.access != Access::ReadWrite || p.field.check(&Value::Int(raw)).is_err() {
             return false;
         }
-        match p.id {
-            param::SERVO_ID => raw != BROADCAST_ID as i64,
-            param::BAUDRATE => u8::try_from(raw)
+        match &p.role {
+            Some(ParamRole::ServoId) => raw != BROADCAST_ID as i64,
+            Some(ParamRole::BaudOption { rates }) => u8::try_from(raw)
                 .ok()
-                .and_then(baud_of_option)
-                .is_some_and(|b| self.extended || b != 1_000_000),
+                .and_then(|o| rates.get(&o))
+                .is_some_and(|&b| self.extended || b != 1_000_000),
             _ => true,
         }
     }
@@ -310,7 +312,7 @@ impl SimServo {
         if !self.writable(p, raw) {
             return false;
         }
-        self.store(id, raw);
+        self.store(profile, id, raw);
         true
     }
 
@@ -341,7 +343,7 @@ impl SimServo {
             return false;
         }
         for (id, raw) in values {
-            self.store(id, raw);
+            self.store(profile, id, raw);
         }
         true
     }
@@ -383,7 +385,7 @@ impl SimServo {
                 self.params = self.defaults.clone();
                 if let Some(b) = u8::try_from(self.p(param::BAUDRATE))
                     .ok()
-                    .and_then(baud_of_option)
+                    .and_then(|o| bus.profile.baud_of_option(o))
                 {
                     self.baud = b;
                 }
