@@ -38,10 +38,6 @@ pub mod ext {
 pub mod param {
     /// Reply to motion commands when done (1) or not at all (0).
     pub const RESPONSE_SWITCH: u8 = 33;
-    /// The bus id.
-    pub const SERVO_ID: u8 = 34;
-    /// The baud-rate option (1-8).
-    pub const BAUDRATE: u8 = 36;
     /// Hold (1) or release (0) when a wheel-mode spin stops.
     pub const WB_LOCK_SWITCH: u8 = 47;
     /// Angle limits 51/52 apply when 1.

@@ -39,6 +39,10 @@ pub struct SimServo {
     extended: bool,
     pub(super) params: BTreeMap<u8, i64>,
     defaults: BTreeMap<u8, i64>,
+    /// The `data_id` of the id parameter (the profile's role ServoId), if it has one.
+    id_param: Option<u8>,
+    /// The `data_id` of the baud-option parameter (role BaudOption), if it has one.
+    baud_param: Option<u8>,
     voltage_mv: u16,
     temperature_c: u16,
     status: u8,
@@ -65,8 +69,10 @@ impl SimServo {
         for p in profile.block_params() {
             defaults.insert(p.id, p.field.default.unwrap_or(fallback_default(p.id)));
         }
-        let baud = defaults
-            .get(&param::BAUDRATE)
+        let id_param = profile.servo_id_param().map(|p| p.id);
+        let baud_param = profile.baud_option_param().map(|(p, _)| p.id);
+        let baud = baud_param
+            .and_then(|b| defaults.get(&b))
             .and_then(|&o| u8::try_from(o).ok())
             .and_then(|o| profile.baud_of_option(o))
             .unwrap_or(profile.baud);
@@ -78,6 +84,8 @@ impl SimServo {
             extended: true,
             params: defaults.clone(),
             defaults,
+            id_param,
+            baud_param,
             voltage_mv: 7_400,
             temperature_c: 32,
             status: 0,
@@ -89,9 +97,11 @@ impl SimServo {
         }
     }
 
-    /// Sets the bus id (parameter 34).
+    /// Sets the bus id (the id parameter).
     pub fn with_id(mut self, id: u8) -> Self {
-        self.params.insert(param::SERVO_ID, id as i64);
+        if let Some(p) = self.id_param {
+            self.params.insert(p, id as i64);
+        }
         self
     }
 
@@ -99,8 +109,10 @@ impl SimServo {
     /// profile's baud table.
     pub fn with_baud(mut self, baud: u32) -> Self {
         self.baud = baud;
-        if let Some(o) = builtin_servo_profile().option_of_baud(baud) {
-            self.params.insert(param::BAUDRATE, o as i64);
+        if let Some(o) = builtin_servo_profile().option_of_baud(baud)
+            && let Some(p) = self.baud_param
+        {
+            self.params.insert(p, o as i64);
         }
         self
     }
@@ -161,10 +173,10 @@ impl SimServo {
         self.serial
     }
 
-    /// The bus id (parameter 34).
+    /// The bus id (the id parameter; 0 without one).
     pub fn id(&self) -> u8 {
-        self.params
-            .get(&param::SERVO_ID)
+        self.id_param
+            .and_then(|p| self.params.get(&p))
             .and_then(|&v| u8::try_from(v).ok())
             .unwrap_or(0)
     }
@@ -211,7 +223,7 @@ impl SimServo {
     /// Stores parameter `id`; the baud option takes effect at once, at `profile`'s rate.
     fn store(&mut self, profile: &Profile, id: u8, raw: i64) {
         self.params.insert(id, raw);
-        if id == param::BAUDRATE
+        if Some(id) == self.baud_param
             && let Some(b) = u8::try_from(raw)
                 .ok()
                 .and_then(|o| profile.baud_of_option(o))
@@ -383,8 +395,9 @@ impl SimServo {
             (cmd::PING, 1) => Some(immediate(vec![id], self)),
             (cmd::RESET_USER_DATA, 1) => {
                 self.params = self.defaults.clone();
-                if let Some(b) = u8::try_from(self.p(param::BAUDRATE))
-                    .ok()
+                if let Some(b) = self
+                    .baud_param
+                    .and_then(|p| u8::try_from(self.p(p)).ok())
                     .and_then(|o| bus.profile.baud_of_option(o))
                 {
                     self.baud = b;
