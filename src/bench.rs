@@ -198,7 +198,7 @@ pub fn servo_scans(all_bauds: bool) -> Result<Vec<Figure>, String> {
             (0..10)
                 .map(|i| SimServo::fresh(100 + i).with_id(i as u8 * 20 + 1))
                 .collect(),
-            servo::BAUDS.to_vec(),
+            profile("servo")?.servo_bauds(),
             "target ≤ 8 s",
         )?);
     }
@@ -241,7 +241,7 @@ pub fn servo_provision() -> Result<Figure, String> {
     // at the rate found; at the plan's rate, each write (8 out, 6 back) and its read-back
     // (7 out, 8-10 back), then the 13 reads of the verification and the 3 recorded ones.
     let ping = |b: u32| wire_time(6, b).as_secs_f64();
-    let sweeps: f64 = servo::BAUDS.iter().map(|&b| 4.0 * ping(b)).sum();
+    let sweeps: f64 = p.servo_bauds().iter().map(|&b| 4.0 * ping(b)).sum();
     let reads = (plan.params.len() + 13 + plan.record.len()) as f64;
     let wire = sweeps
         + 255.0 * ping(found_at)

@@ -5,7 +5,7 @@ use super::port::PortArgs;
 use super::{CliError, CliResult};
 use crate::link::Client;
 use crate::ops::servo::provision::{self as ops, Outcome, Plan, ProvisionState, Record};
-use crate::ops::servo::{self as servo_ops, BAUDS, Presence};
+use crate::ops::servo::{self as servo_ops, Presence};
 use crate::profile::{Profile, Protocol};
 use std::io::BufRead;
 use std::path::Path;
@@ -96,11 +96,12 @@ fn prompt(n: u32, count: u32) -> bool {
 /// Waits until one fresh servo answers whose serial number is not `previous` (when the previous
 /// servo's serial is unknown, until the bus has held no fresh servo once). Polls until then.
 fn wait_for_new(client: &Client, profile: &Profile, previous: Option<u32>, every: Duration) {
-    let serial = profile.param(ops::PARAM_SERIAL);
+    let serial = profile.serial_number_param();
+    let bauds = profile.servo_bauds();
     let mut emptied = previous.is_some();
     loop {
         std::thread::sleep(every);
-        let Ok(found) = ops::find_fresh(client, &BAUDS) else {
+        let Ok(found) = ops::find_fresh(client, &bauds) else {
             continue;
         };
         match found.as_slice() {

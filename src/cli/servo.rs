@@ -3,7 +3,7 @@
 use super::checks;
 use super::port::{PortArgs, op_error, print_checks};
 use super::{CliError, CliResult};
-use crate::ops::servo::{self as ops, BAUDS, Presence};
+use crate::ops::servo::{self as ops, Presence};
 use crate::profile::{Input, Profile, Protocol, Value};
 use clap::Subcommand;
 use std::path::PathBuf;
@@ -68,15 +68,15 @@ enum ServoCmd {
         #[arg(value_parser = checks::servo_id)]
         new: u8,
     },
-    /// Set servo ID's baud rate (a rate such as 57600, or option 1-8), follow it and verify.
+    /// Set servo ID's baud rate (a rate such as 57600, or its option in the profile's baud
+    /// table), follow it and verify.
     SetBaud {
         /// Servo id, 0 to 254.
         #[arg(value_parser = checks::servo_id)]
         id: u8,
-        /// The new rate (9600, 19200, 38400, 57600, 115200, 250000, 500000 or 1000000), or its
-        /// option 1 to 8.
-        #[arg(value_parser = servo_baud)]
-        baud: u8,
+        /// The new rate (the servo profile's: 9600, 19200, 38400, 57600, 115200, 250000,
+        /// 500000 or 1000000), or its option 1 to 8.
+        baud: String,
     },
     /// Turn servo ID to DEG degrees over --ms milliseconds.
     Angle {
@@ -113,18 +113,27 @@ enum ServoCmd {
     },
 }
 
-/// A servo baud rate or its option (1-8), as the option.
-fn servo_baud(text: &str) -> Result<u8, String> {
-    let allowed = || format!("give a servo baud rate ({BAUDS:?}) or its option 1 to 8");
+/// A servo baud rate or its option, as the option: both from `profile`'s baud table.
+fn servo_baud(profile: &Profile, text: &str) -> Result<u8, CliError> {
+    let (_, rates) = ops::baud_param(profile).map_err(op_error)?;
+    let allowed = || {
+        let options: Vec<u8> = rates.keys().copied().collect();
+        let bauds: Vec<u32> = rates.values().copied().collect();
+        format!("give a servo baud rate ({bauds:?}) or its option {options:?}")
+    };
     let quoted = crate::document::quote(text);
     let v: u32 = text
         .trim()
         .parse()
-        .map_err(|_| format!("'{quoted}' is not a number; {}", allowed()))?;
-    match v {
-        1..=8 => Ok(v as u8),
-        _ => ops::option_of_baud(v)
-            .ok_or_else(|| format!("{v} is not a servo baud rate or option; {}", allowed())),
+        .map_err(|_| CliError::input(format!("'{quoted}' is not a number; {}", allowed())))?;
+    match u8::try_from(v) {
+        Ok(option) if rates.contains_key(&option) => Ok(option),
+        _ => profile.option_of_baud(v).ok_or_else(|| {
+            CliError::input(format!(
+                "{v} is not a servo baud rate or option; {}",
+                allowed()
+            ))
+        }),
     }
 }
 
@@ -165,10 +174,12 @@ fn parse_id_list(s: &str) -> Result<Vec<u8>, CliError> {
     Ok(ids)
 }
 
-fn parse_bauds(s: Option<&str>, current: u32) -> Result<Vec<u32>, CliError> {
+/// The rates `--bauds` names (`all`: the profile's servo baud rates; none: `current`).
+fn parse_bauds(profile: &Profile, s: Option<&str>, current: u32) -> Result<Vec<u32>, CliError> {
+    let bauds = profile.servo_bauds();
     match s {
         None => Ok(vec![current]),
-        Some("all") => Ok(BAUDS.to_vec()),
+        Some("all") => Ok(bauds),
         Some(list) => list
             .split(',')
             .map(|b| {
@@ -176,11 +187,11 @@ fn parse_bauds(s: Option<&str>, current: u32) -> Result<Vec<u32>, CliError> {
                     .trim()
                     .parse()
                     .map_err(|_| CliError::input(format!("'{b}' is not a baud rate")))?;
-                if BAUDS.contains(&v) {
+                if bauds.contains(&v) {
                     Ok(v)
                 } else {
                     Err(CliError::input(format!(
-                        "{v} is not a servo baud rate; allowed: {BAUDS:?}"
+                        "{v} is not a servo baud rate; allowed: {bauds:?}"
                     )))
                 }
             })
@@ -219,7 +230,7 @@ fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<
     Ok(match cmd {
         ServoCmd::Scan { ids, bauds } => Checked::Scan(ops::ScanPlan {
             ids: parse_ids(ids)?,
-            bauds: parse_bauds(bauds.as_deref(), home)?,
+            bauds: parse_bauds(profile, bauds.as_deref(), home)?,
             home_baud: home,
         }),
         ServoCmd::Monitor { ids } => Checked::Monitor(parse_id_list(ids)?),
@@ -251,7 +262,7 @@ fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<
             }
             Checked::SetId(*old, *new)
         }
-        ServoCmd::SetBaud { id, baud } => Checked::SetBaud(*id, *baud),
+        ServoCmd::SetBaud { id, baud } => Checked::SetBaud(*id, servo_baud(profile, baud)?),
         ServoCmd::Angle { id, deg, ms, power } => {
             let rotate = profile.command("ROTATE").ok_or_else(|| {
                 CliError::input(format!("profile '{}' has no ROTATE", profile.id))

@@ -9,7 +9,7 @@
 
 use super::msp_device::{self, Answer, MspCore, MspRobot, builtin_profile, clamp_i};
 use super::{Device, Outgoing, SimOptions};
-use crate::profile::{CommandKind, Value};
+use crate::profile::{CommandKind, CommandRole, Value};
 use crate::protocol::msp::Request;
 use std::time::Instant;
 
@@ -80,7 +80,8 @@ impl SolarCleanbot {
     /// A solar cleanbot answering by `core`'s profile.
     pub fn with_core(core: MspCore, seed: u64) -> Self {
         let heartbeat = core
-            .command(98)
+            .profile
+            .command_with_role(CommandRole::Heartbeat)
             .and_then(|c| c.request.first())
             .and_then(|f| f.default)
             .and_then(|d| i16::try_from(d).ok())
@@ -335,10 +336,12 @@ impl SolarCleanbot {
         }
         let first = values.first().copied().unwrap_or(0);
         let i16_of = |x: i64| i16::try_from(x).unwrap_or(0);
+        // The heartbeat and the drive are where the profile's roles put them.
+        let role = self.core.command(req.command).and_then(|c| c.role);
         match req.command {
-            98 => self.heartbeat = i16_of(first),
+            _ if role == Some(CommandRole::Heartbeat) => self.heartbeat = i16_of(first),
+            _ if role == Some(CommandRole::Drive) => self.commanded = i16_of(first),
             99 => self.yaw_target = wrap(self.yaw_target + f64::from(i16_of(first))),
-            100 => self.commanded = i16_of(first),
             101 => self.line_status = req.data.clone(),
             111 => self.frame_rate = i16_of(first),
             134 => {

@@ -250,7 +250,7 @@ impl App {
             JobOutput::Read(id, r) => self.state.device.on_read(id, r),
             JobOutput::Wrote(set, r) => self.state.device.on_written(set, r),
             JobOutput::Done(r) => self.state.job_done(r),
-            JobOutput::Servo(o) => self.servo.on_output(o),
+            JobOutput::Servo(o) => self.servo.on_output(o, &self.state.device.profile),
             JobOutput::Tuya(o) => self.tuya.on_output(o),
             JobOutput::Device(o) => self.device.on_output(o),
             JobOutput::SelfTest(o) => {

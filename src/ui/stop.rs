@@ -304,6 +304,12 @@ mod tests {
     use super::*;
     use crate::link::LinkState;
 
+    /// The id of the profile's command with role Drive (the solar cleanbot's speed).
+    fn drive(rt: &AppState) -> u8 {
+        let role = crate::profile::CommandRole::Drive;
+        rt.device.profile.command_with_role(role).expect("drive").id
+    }
+
     fn runtime(profile: &str) -> AppState {
         let mut rt = AppState::new(&eframe::egui::Context::default(), profile).unwrap();
         rt.link.state = Some(LinkState::Connected {
@@ -355,9 +361,10 @@ mod tests {
         let actions = c.tick(&rt);
         assert_eq!(actions.len(), 1, "{actions:?}");
         let (cmd, payload, id) = sent(&actions[0]);
-        assert_eq!((cmd, payload), (100, vec![0, 0]));
+        assert_eq!((cmd, payload), (drive(&rt), vec![0, 0]));
         assert!(c.after_reconnect.is_some());
-        let ack = crate::packet::Packet::msp_reply(crate::protocol::msp::Reply::new(100, vec![]));
+        let ack =
+            crate::packet::Packet::msp_reply(crate::protocol::msp::Reply::new(drive(&rt), vec![]));
         rt.device.replies.insert(
             id,
             Ok(crate::link::Reply {
@@ -373,12 +380,13 @@ mod tests {
     #[test]
     fn a_stop_lost_with_the_link_is_sent_again_and_one_unanswered_is_shown() {
         let mut rt = runtime("solar-cleanbot");
+        let drive = drive(&rt);
         let mut c = StopControl::default();
         let (_, _, id) = sent(&c.stop(&rt)[0]);
         rt.device.replies.insert(
             id,
             Err(ExchangeError::Timeout {
-                command: 100,
+                command: drive,
                 attempts: 3,
                 waited_ms: 50,
             }),

@@ -314,3 +314,30 @@ fn a_simulator_held_up_past_the_answer_deadline_still_answers_in_time() {
     drop(held);
     assert_eq!(ping.join().unwrap().unwrap(), Presence::Present);
 }
+
+#[test]
+fn an_edited_baud_table_is_the_rate_the_servo_and_the_link_move_to() {
+    use botbench::link::LinkOptions;
+    use botbench::sim::servo_bus::ServoBus;
+    use std::sync::Arc;
+    let src = crate::support::builtin_src("servo");
+    assert!(src.contains(" 4: 57600,"), "test setup");
+    let src = src.replacen(" 4: 57600,", " 4: 230400,", 1);
+    let profile = Arc::new(
+        botbench::profile::registry::parse("servo.ron", &src, None).expect("the edit loads"),
+    );
+    let served = crate::support::serve(ServoBus::with_profile(
+        profile.clone(),
+        vec![SimServo::fresh_with(&profile, 5).with_id(4)],
+    ));
+    let link = crate::support::open_link(
+        served.path(),
+        profile.baud,
+        profile.clone(),
+        LinkOptions::default(),
+    );
+    let c = link.client();
+    assert_eq!(ops::set_baud(&c, &profile, 4, 4).unwrap(), 230_400);
+    assert_eq!(served.servo(5).baud(), 230_400);
+    assert_eq!(ops::ping(&c, 4, 2).unwrap(), Presence::Present);
+}

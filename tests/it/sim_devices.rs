@@ -17,6 +17,10 @@ use botbench::sim::tuya_mcu::{
 };
 use botbench::sim::{Device, Outgoing};
 
+/// The seed's servo id and baud-option parameters (the frames below are its test vectors).
+const SERVO_ID: u8 = 34;
+const BAUDRATE: u8 = 36;
+
 use crate::support::{image, ms};
 
 const B: u32 = 115_200;
@@ -281,7 +285,7 @@ fn seed_damping_example_and_broadcast() {
 fn id_change_is_answered_from_the_new_id() {
     let now = Instant::now();
     let mut bus = ServoBus::new(vec![SimServo::fresh(42)]);
-    assert_eq!(write(&mut bus, 0, param::SERVO_ID, &[7], now), [7, 34, 1]);
+    assert_eq!(write(&mut bus, 0, SERVO_ID, &[7], now), [7, 34, 1]);
     assert!(ask(&mut bus, scmd::PING, &[0], B, now).is_empty());
     assert_eq!(
         one_reply(&ask(&mut bus, scmd::PING, &[7], B, now)).content,
@@ -289,7 +293,7 @@ fn id_change_is_answered_from_the_new_id() {
     );
     assert_eq!(bus.servo_by_serial(42).expect("servo").id(), 7);
     // 255 cannot be assigned.
-    assert_eq!(write(&mut bus, 7, param::SERVO_ID, &[255], now), [7, 34, 0]);
+    assert_eq!(write(&mut bus, 7, SERVO_ID, &[255], now), [7, 34, 0]);
     assert_eq!(bus.servo_by_serial(42).expect("servo").id(), 7);
 }
 
@@ -297,7 +301,7 @@ fn id_change_is_answered_from_the_new_id() {
 fn baud_change_is_answered_at_the_new_baud() {
     let now = Instant::now();
     let mut bus = ServoBus::new(vec![SimServo::fresh(42)]);
-    let out = ask(&mut bus, scmd::WRITE_DATA, &[0, param::BAUDRATE, 1], B, now);
+    let out = ask(&mut bus, scmd::WRITE_DATA, &[0, BAUDRATE, 1], B, now);
     assert_eq!(out.len(), 1);
     assert_eq!(out[0].baud, Some(9_600));
     assert_eq!(

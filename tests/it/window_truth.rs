@@ -237,6 +237,14 @@ fn a_disconnect_forgets_the_units_version_values_and_marks() {
             && a.state.device.value(130, "pwmValue").is_some()
             && a.state.link.answering() == botbench::ui::state::Answering::Yes
     });
+    // Whether the device answers comes with the worker's next statistics report, which may
+    // arrive after the values: wait for it, not for a number of frames.
+    step_until(&mut h, "the answer counted", |a| {
+        matches!(
+            a.state.link.answering(),
+            botbench::ui::state::Answering::Yes
+        )
+    });
     h.run_steps(2);
     assert!(h.query_by_label_contains("device answering").is_some());
     assert!(

@@ -19,28 +19,42 @@ pub use setup::{Location, factory_location, locate, reset_user_data, set_baud, s
 
 use super::OpError;
 use crate::link::{Client, ExchangeError, Match, ReplySpec, Request};
-use crate::profile::{Param, Profile};
+use crate::profile::{Param, ParamRole, Profile};
 use crate::protocol::servo::cmd;
 use serde::Serialize;
+use std::collections::BTreeMap;
 
-/// Baud rates by option number 1-8 (option 8 on newer servos only).
-pub const BAUDS: [u32; 8] = [
-    9600, 19200, 38400, 57600, 115_200, 250_000, 500_000, 1_000_000,
-];
-
-/// The `data_id` of the servo id parameter.
-pub const PARAM_ID: u8 = 34;
-/// The `data_id` of the baud-rate option parameter.
-pub const PARAM_BAUD: u8 = 36;
-
-/// The baud rate of option 1-8.
-pub fn baud_of_option(option: u8) -> Option<u32> {
-    BAUDS.get(usize::from(option).checked_sub(1)?).copied()
+/// The servo id parameter: the profile's parameter with role [`ParamRole::ServoId`], or an
+/// [`OpError::UnknownParam`] naming the role when the profile has none.
+pub fn id_param(profile: &Profile) -> Result<&Param, OpError> {
+    profile
+        .servo_id_param()
+        .ok_or_else(|| OpError::unknown_param(profile, "with role ServoId"))
 }
 
-/// The option 1-8 of a baud rate.
-pub fn option_of_baud(baud: u32) -> Option<u8> {
-    BAUDS.iter().position(|&b| b == baud).map(|i| i as u8 + 1)
+/// The baud-option parameter and its option → baud table (role [`ParamRole::BaudOption`]), or
+/// an [`OpError::UnknownParam`] naming the role when the profile has none.
+pub fn baud_param(profile: &Profile) -> Result<(&Param, &BTreeMap<u8, u32>), OpError> {
+    profile
+        .baud_option_param()
+        .ok_or_else(|| OpError::unknown_param(profile, "with role BaudOption"))
+}
+
+/// The serial-number parameter (role [`ParamRole::SerialNumber`]), or an
+/// [`OpError::UnknownParam`] naming the role when the profile has none.
+pub fn serial_param(profile: &Profile) -> Result<&Param, OpError> {
+    profile
+        .serial_number_param()
+        .ok_or_else(|| OpError::unknown_param(profile, "with role SerialNumber"))
+}
+
+/// Whether `param` follows the servo (its id or baud option): those have their own operations,
+/// never a block write or a preset.
+pub fn follows_servo(param: &Param) -> bool {
+    matches!(
+        param.role,
+        Some(ParamRole::ServoId | ParamRole::BaudOption { .. })
+    )
 }
 
 /// What answers at one id.
@@ -106,4 +120,61 @@ pub fn switch(client: &Client, baud: u32) -> Result<(), OpError> {
     client
         .set_baud(baud)
         .map_err(|error| OpError::Port { baud, error })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::provision::{IdSequence, Plan, search_order};
+    use crate::profile::registry::{BUILTIN, parse};
+
+    /// The built-in servo profile with option 4's rate edited to `baud`.
+    fn servo_with_option_4_at(baud: u32) -> crate::profile::Profile {
+        let src = BUILTIN
+            .iter()
+            .find(|(n, _)| *n == "servo")
+            .expect("built-in")
+            .1;
+        assert!(src.contains(" 4: 57600,"), "test setup");
+        let src = src.replacen(" 4: 57600,", &format!(" 4: {baud},"), 1);
+        parse("servo.ron", &src, None).expect("the edited profile loads")
+    }
+
+    #[test]
+    fn an_edited_baud_table_is_what_provisioning_searches_and_accepts() {
+        let edited = servo_with_option_4_at(230_400);
+        let order = search_order(&edited, 230_400);
+        assert_eq!(order[0], 230_400);
+        assert!(!order.contains(&57_600), "{order:?}");
+        assert_eq!(order.len(), edited.servo_bauds().len());
+
+        let plan = Plan {
+            target_baud: 230_400,
+            ids: IdSequence::Start(1),
+            params: Vec::new(),
+            record: Vec::new(),
+        };
+        assert_eq!(plan.resolve(&edited).expect("resolves").option, 4);
+        let builtin = parse(
+            "servo.ron",
+            BUILTIN.iter().find(|(n, _)| *n == "servo").unwrap().1,
+            None,
+        )
+        .expect("loads");
+        let err = plan.resolve(&builtin).unwrap_err();
+        assert!(
+            err.message.contains("not a servo baud rate"),
+            "{}",
+            err.message
+        );
+    }
+
+    #[test]
+    fn a_profile_without_the_roles_is_refused_naming_the_role() {
+        let empty = crate::profile::Profile::empty("bare", crate::profile::Protocol::Servo, 9600);
+        let err = super::id_param(&empty).unwrap_err();
+        assert!(err.to_string().contains("role ServoId"), "{err}");
+        let err = super::baud_param(&empty).unwrap_err();
+        assert!(err.to_string().contains("role BaudOption"), "{err}");
+        assert!(empty.servo_bauds().is_empty());
+    }
 }

@@ -1,7 +1,7 @@
 //! A servo's parameters: one at a time (read, and write with read-back), or the 32-byte user
 //! block in one exchange.
 
-use super::{PARAM_BAUD, PARAM_ID, command, param_by_id};
+use super::{baud_param, command, id_param};
 use crate::link::{Client, Match, ReplySpec, Request};
 use crate::ops::{Cancel, Check, OpError, Progress};
 use crate::profile::model::Access;
@@ -145,8 +145,8 @@ pub fn read_block(client: &Client, profile: &Profile, id: u8) -> Result<Vec<(u8,
 
 /// Writes the whole 32-byte user block of servo `id` in one exchange, then reads it back.
 /// `values` must give every user parameter (raw, by `data_id`); each is checked against the
-/// profile first. The block also holds the id (34) and the baud option (36): they must be what
-/// the servo holds now (they are changed with [`set_id`] and [`set_baud`], which follow the servo).
+/// profile first. The block also holds the id and the baud option (the parameters with those
+/// roles): they must be what the servo holds now (they are changed with [`set_id`] and [`set_baud`], which follow the servo).
 pub fn write_block(
     client: &Client,
     profile: &Profile,
@@ -167,12 +167,13 @@ pub fn write_block(
         inputs.push((p.field.ident.clone(), Input::Raw(Value::Int(raw))));
     }
     let before = read_block(client, profile, id)?;
-    for pid in [PARAM_ID, PARAM_BAUD] {
+    for followed in [id_param(profile)?, baud_param(profile)?.0] {
+        let pid = followed.id;
         let now = before.iter().find(|(p, _)| *p == pid).map(|(_, v)| *v);
         let new = values.iter().find(|(p, _)| *p == pid).map(|(_, v)| *v);
         if now != new {
             return Err(OpError::FollowedChange {
-                param: param_by_id(profile, pid)?.field.ident.clone(),
+                param: followed.field.ident.clone(),
                 now,
                 new,
             });

@@ -12,7 +12,7 @@
 //! )
 //! ```
 
-use super::{PARAM_BAUD, PARAM_ID};
+use super::follows_servo;
 use crate::document::{self, DocumentError, ErrorKind, Source, Step};
 use crate::profile::value::Typed;
 use crate::profile::{Access, Profile, Value};
@@ -42,7 +42,7 @@ struct Doc {
 
 /// Whether a parameter belongs in a preset: a user parameter other than the id and baud rate.
 pub fn in_preset(p: &crate::profile::Param) -> bool {
-    p.access == Access::ReadWrite && p.id != PARAM_ID && p.id != PARAM_BAUD
+    p.access == Access::ReadWrite && !follows_servo(p)
 }
 
 impl ParamPreset {
@@ -172,7 +172,9 @@ mod tests {
     #[test]
     fn a_saved_preset_loads_back_the_same() {
         let p = profile();
-        let values = vec![(41, 70), (48, 1), (53, -15), (34, 9), (36, 8)];
+        let id = p.servo_id_param().expect("id").id;
+        let baud = p.baud_option_param().expect("baud").0.id;
+        let values = vec![(41, 70), (48, 1), (53, -15), (id, 9), (baud, 8)];
         let preset = ParamPreset::from_values(&p, "note \"x\"", &values);
         assert!(
             preset

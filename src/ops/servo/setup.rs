@@ -1,10 +1,7 @@
 //! Where a servo is on the bus: its id and baud rate changed (each verified, the port following
 //! the servo), its user data reset to the factory id and rate, a lost servo found again.
 
-use super::{
-    BAUDS, PARAM_BAUD, PARAM_ID, Presence, baud_of_option, command, param_by_id, ping, ping_detail,
-    read_param, switch,
-};
+use super::{Presence, baud_param, command, id_param, ping, ping_detail, read_param, switch};
 use crate::link::{Client, ExchangeError, Match, ReplySpec, Request};
 use crate::ops::{Cancel, OpError};
 use crate::profile::{Profile, Value};
@@ -56,13 +53,13 @@ pub fn set_id(
         }
     }
     let write = command(profile, cmd::WRITE_DATA)?;
-    let req = Request::new(cmd::WRITE_DATA, vec![old, PARAM_ID, new])
+    let id_param = id_param(profile)?;
+    let req = Request::new(cmd::WRITE_DATA, vec![old, id_param.id, new])
         .reply(ReplySpec::Required(Match::servo(write.id, &[old, new])));
     let reply = client.request(req)?;
     if reply.payload().and_then(|p| p.get(2)) != Some(&1) {
         return Err(OpError::Verify(format!("servo {old} refused the id {new}")));
     }
-    let id_param = param_by_id(profile, PARAM_ID)?;
     let now = read_param(client, profile, new, id_param)
         .map_err(|e| OpError::Verify(format!("no answer at the new id {new}: {e}")))?;
     if now != i64::from(new) {
@@ -97,9 +94,10 @@ fn ids_on_bus(client: &Client, cancel: &Cancel) -> Result<Vec<u8>, OpError> {
     Ok(out)
 }
 
-/// Where a servo was found after a baud change that could not be verified.
-fn recover(client: &Client, id: u8) -> Result<Option<u32>, OpError> {
-    for &b in &BAUDS {
+/// Where a servo was found after a baud change that could not be verified: each of the
+/// profile's baud rates in turn.
+fn recover(client: &Client, profile: &Profile, id: u8) -> Result<Option<u32>, OpError> {
+    for b in profile.servo_bauds() {
         switch(client, b)?;
         if ping(client, id, 2)? == Presence::Present {
             return Ok(Some(b));
@@ -108,20 +106,23 @@ fn recover(client: &Client, id: u8) -> Result<Option<u32>, OpError> {
     Ok(None)
 }
 
-/// Sets servo `id`'s baud option (1-8), switches the port to the new rate and verifies there.
+/// Sets servo `id`'s baud option (the profile's baud table), switches the port to the new rate and verifies there.
 /// If the servo is not found at the new rate, every rate is scanned for it: the error says where
 /// it is, and the port is left at that rate.
 pub fn set_baud(client: &Client, profile: &Profile, id: u8, option: u8) -> Result<u32, OpError> {
-    let Some(baud) = baud_of_option(option) else {
+    let (baud_param, rates) = baud_param(profile)?;
+    let Some(&baud) = rates.get(&option) else {
+        let first = rates.keys().next().copied().unwrap_or(0);
+        let last = rates.keys().next_back().copied().unwrap_or(0);
+        let table: Vec<String> = rates.iter().map(|(o, b)| format!("{o}: {b}")).collect();
         return Err(OpError::OutOfRange {
             what: "baud option",
             value: option.into(),
-            min: 1,
-            max: BAUDS.len() as i64,
-            note: format!(" ({})", BAUDS.map(|b| b.to_string()).join(", ")),
+            min: first.into(),
+            max: last.into(),
+            note: format!(" ({})", table.join(", ")),
         });
     };
-    let baud_param = param_by_id(profile, PARAM_BAUD)?;
     baud_param.field.check(&Value::Int(option.into()))?;
     match ping(client, id, 2)? {
         Presence::Present => {}
@@ -132,7 +133,7 @@ pub fn set_baud(client: &Client, profile: &Profile, id: u8, option: u8) -> Resul
         }
     }
     // The servo switches at once and may answer at the new rate: its answer is not awaited here.
-    let req = Request::new(cmd::WRITE_DATA, vec![id, PARAM_BAUD, option])
+    let req = Request::new(cmd::WRITE_DATA, vec![id, baud_param.id, option])
         .reply(ReplySpec::Optional(Match::servo(cmd::WRITE_DATA, &[id])))
         .attempts(1);
     match client.request(req) {
@@ -148,7 +149,7 @@ pub fn set_baud(client: &Client, profile: &Profile, id: u8, option: u8) -> Resul
     Err(OpError::NotAtNewRate {
         id,
         baud,
-        found: recover(client, id)?,
+        found: recover(client, profile, id)?,
     })
 }
 
@@ -161,18 +162,19 @@ pub struct Location {
     pub baud: u32,
 }
 
-/// The id and baud rate the user parameters reset to (the profile's defaults of 34 and 36).
+/// The id and baud rate the user parameters reset to (the defaults of the profile's id and
+/// baud-option parameters; id 0 and the profile's baud when it has none).
 pub fn factory_location(profile: &Profile) -> Location {
     let id = profile
-        .param(PARAM_ID)
+        .servo_id_param()
         .and_then(|p| p.field.default)
         .and_then(|v| u8::try_from(v).ok())
         .unwrap_or(0);
     let baud = profile
-        .param(PARAM_BAUD)
-        .and_then(|p| p.field.default)
+        .baud_option_param()
+        .and_then(|(p, _)| p.field.default)
         .and_then(|v| u8::try_from(v).ok())
-        .and_then(baud_of_option)
+        .and_then(|o| profile.baud_of_option(o))
         .unwrap_or(profile.baud);
     Location { id, baud }
 }
@@ -228,7 +230,7 @@ pub fn reset_user_data(
     if ping(client, home.id, 3)? == Presence::Present {
         return Ok(home);
     }
-    match recover(client, home.id)? {
+    match recover(client, profile, home.id)? {
         Some(b) => Err(OpError::Verify(format!(
             "after the reset servo {} answers at {b} baud, not at {} (the port is now at {b})",
             home.id, home.baud
@@ -243,7 +245,8 @@ pub fn reset_user_data(
     }
 }
 
-/// Looks for servo `id` at every baud rate; the port is left where it answered. Returns that rate.
-pub fn locate(client: &Client, id: u8) -> Result<Option<u32>, OpError> {
-    recover(client, id)
+/// Looks for servo `id` at every baud rate of `profile`; the port is left where it answered.
+/// Returns that rate.
+pub fn locate(client: &Client, profile: &Profile, id: u8) -> Result<Option<u32>, OpError> {
+    recover(client, profile, id)
 }

@@ -38,10 +38,6 @@ pub mod ext {
 pub mod param {
     /// Reply to motion commands when done (1) or not at all (0).
     pub const RESPONSE_SWITCH: u8 = 33;
-    /// The bus id.
-    pub const SERVO_ID: u8 = 34;
-    /// The baud-rate option (1-8).
-    pub const BAUDRATE: u8 = 36;
     /// Hold (1) or release (0) when a wheel-mode spin stops.
     pub const WB_LOCK_SWITCH: u8 = 47;
     /// Angle limits 51/52 apply when 1.
@@ -52,39 +48,12 @@ pub mod param {
     pub const ANGLE_LIMIT_LOW: u8 = 52;
 }
 
-/// Baud-rate options of parameter 36 (option 8 on newer servos only).
-pub const BAUD_OPTIONS: [(u8, u32); 8] = [
-    (1, 9_600),
-    (2, 19_200),
-    (3, 38_400),
-    (4, 57_600),
-    (5, 115_200),
-    (6, 250_000),
-    (7, 500_000),
-    (8, 1_000_000),
-];
-
-/// The baud rate of an option of parameter 36.
-pub fn baud_of_option(option: u8) -> Option<u32> {
-    BAUD_OPTIONS
-        .iter()
-        .find(|(o, _)| *o == option)
-        .map(|(_, b)| *b)
-}
-
-/// The option of parameter 36 for a baud rate.
-pub fn option_of_baud(baud: u32) -> Option<u8> {
-    BAUD_OPTIONS
-        .iter()
-        .find(|(_, b)| *b == baud)
-        .map(|(o, _)| *o)
-}
-
 /// The default reply latency: how long after a request ends a servo starts answering.
 pub const DEFAULT_LATENCY: Duration = Duration::from_micros(300);
 
-/// The factory baud rate.
-pub const FACTORY_BAUD: u32 = 115_200;
+/// The baud rate of the empty profile that stands in should the built-in one ever fail to
+/// parse (the servos' factory rate); otherwise the profile's own `baud` is used.
+const FALLBACK_BAUD: u32 = 115_200;
 
 /// Defaults for the user parameters the seed leaves open ("?" or no value): the vendor's usual
 /// factory settings. The profile's own `default`s win where it has them.
@@ -118,7 +87,7 @@ pub fn builtin_servo_profile() -> Arc<Profile> {
                 .map_or("", |(_, src)| *src);
             Arc::new(
                 parse("builtin:assets/profiles/servo.ron", src, Some("servo"))
-                    .unwrap_or_else(|_| Profile::empty("servo", Protocol::Servo, FACTORY_BAUD)),
+                    .unwrap_or_else(|_| Profile::empty("servo", Protocol::Servo, FALLBACK_BAUD)),
             )
         })
         .clone()

@@ -2,12 +2,9 @@
 //! each command.
 
 use super::motion::{Motion, MotionCmd, mturn, wrap};
-use super::{
-    BusCtx, FACTORY_BAUD, Reply, baud_of_option, builtin_servo_profile, fallback_default,
-    option_of_baud, param,
-};
+use super::{BusCtx, Reply, builtin_servo_profile, fallback_default, param};
 use crate::profile::codec::int_from;
-use crate::profile::{Access, ByteOrder, Field, FieldType, Param, Profile, Value};
+use crate::profile::{Access, ByteOrder, Field, FieldType, Param, ParamRole, Profile, Value};
 use crate::protocol::servo::{BROADCAST_ID, Frame, cmd};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -42,6 +39,10 @@ pub struct SimServo {
     extended: bool,
     pub(super) params: BTreeMap<u8, i64>,
     defaults: BTreeMap<u8, i64>,
+    /// The `data_id` of the id parameter (the profile's role ServoId), if it has one.
+    id_param: Option<u8>,
+    /// The `data_id` of the baud-option parameter (role BaudOption), if it has one.
+    baud_param: Option<u8>,
     voltage_mv: u16,
     temperature_c: u16,
     status: u8,
@@ -68,11 +69,13 @@ impl SimServo {
         for p in profile.block_params() {
             defaults.insert(p.id, p.field.default.unwrap_or(fallback_default(p.id)));
         }
-        let baud = defaults
-            .get(&param::BAUDRATE)
+        let id_param = profile.servo_id_param().map(|p| p.id);
+        let baud_param = profile.baud_option_param().map(|(p, _)| p.id);
+        let baud = baud_param
+            .and_then(|b| defaults.get(&b))
             .and_then(|&o| u8::try_from(o).ok())
-            .and_then(baud_of_option)
-            .unwrap_or(FACTORY_BAUD);
+            .and_then(|o| profile.baud_of_option(o))
+            .unwrap_or(profile.baud);
         Self {
             serial,
             baud,
@@ -81,6 +84,8 @@ impl SimServo {
             extended: true,
             params: defaults.clone(),
             defaults,
+            id_param,
+            baud_param,
             voltage_mv: 7_400,
             temperature_c: 32,
             status: 0,
@@ -92,17 +97,22 @@ impl SimServo {
         }
     }
 
-    /// Sets the bus id (parameter 34).
+    /// Sets the bus id (the id parameter).
     pub fn with_id(mut self, id: u8) -> Self {
-        self.params.insert(param::SERVO_ID, id as i64);
+        if let Some(p) = self.id_param {
+            self.params.insert(p, id as i64);
+        }
         self
     }
 
-    /// Sets the baud rate; parameter 36 follows when the rate is one of [`BAUD_OPTIONS`].
+    /// Sets the baud rate; the baud-option parameter follows when the rate is in the built-in servo
+    /// profile's baud table.
     pub fn with_baud(mut self, baud: u32) -> Self {
         self.baud = baud;
-        if let Some(o) = option_of_baud(baud) {
-            self.params.insert(param::BAUDRATE, o as i64);
+        if let Some(o) = builtin_servo_profile().option_of_baud(baud)
+            && let Some(p) = self.baud_param
+        {
+            self.params.insert(p, o as i64);
         }
         self
     }
@@ -125,9 +135,10 @@ impl SimServo {
         self
     }
 
-    /// Sets a user parameter's raw value, unchecked (and the id or baud with it).
+    /// Sets a user parameter's raw value, unchecked (and the id or baud with it, at the built-in
+    /// servo profile's rate).
     pub fn with_param(mut self, id: u8, raw: i64) -> Self {
-        self.store(id, raw);
+        self.store(&builtin_servo_profile(), id, raw);
         self
     }
 
@@ -162,10 +173,10 @@ impl SimServo {
         self.serial
     }
 
-    /// The bus id (parameter 34).
+    /// The bus id (the id parameter; 0 without one).
     pub fn id(&self) -> u8 {
-        self.params
-            .get(&param::SERVO_ID)
+        self.id_param
+            .and_then(|p| self.params.get(&p))
             .and_then(|&v| u8::try_from(v).ok())
             .unwrap_or(0)
     }
@@ -209,10 +220,13 @@ impl SimServo {
         s.motion
     }
 
-    fn store(&mut self, id: u8, raw: i64) {
+    /// Stores parameter `id`; the baud option takes effect at once, at `profile`'s rate.
+    fn store(&mut self, profile: &Profile, id: u8, raw: i64) {
         self.params.insert(id, raw);
-        if id == param::BAUDRATE
-            && let Some(b) = u8::try_from(raw).ok().and_then(baud_of_option)
+        if Some(id) == self.baud_param
+            && let Some(b) = u8::try_from(raw)
+                .ok()
+                .and_then(|o| profile.baud_of_option(o))
         {
             self.baud = b;
         }
@@ -289,12 +303,12 @@ impl SimServo {
         if p.access != Access::ReadWrite || p.field.check(&Value::Int(raw)).is_err() {
             return false;
         }
-        match p.id {
-            param::SERVO_ID => raw != BROADCAST_ID as i64,
-            param::BAUDRATE => u8::try_from(raw)
+        match &p.role {
+            Some(ParamRole::ServoId) => raw != BROADCAST_ID as i64,
+            Some(ParamRole::BaudOption { rates }) => u8::try_from(raw)
                 .ok()
-                .and_then(baud_of_option)
-                .is_some_and(|b| self.extended || b != 1_000_000),
+                .and_then(|o| rates.get(&o))
+                .is_some_and(|&b| self.extended || b != 1_000_000),
             _ => true,
         }
     }
@@ -310,7 +324,7 @@ impl SimServo {
         if !self.writable(p, raw) {
             return false;
         }
-        self.store(id, raw);
+        self.store(profile, id, raw);
         true
     }
 
@@ -341,7 +355,7 @@ impl SimServo {
             return false;
         }
         for (id, raw) in values {
-            self.store(id, raw);
+            self.store(profile, id, raw);
         }
         true
     }
@@ -381,9 +395,10 @@ impl SimServo {
             (cmd::PING, 1) => Some(immediate(vec![id], self)),
             (cmd::RESET_USER_DATA, 1) => {
                 self.params = self.defaults.clone();
-                if let Some(b) = u8::try_from(self.p(param::BAUDRATE))
-                    .ok()
-                    .and_then(baud_of_option)
+                if let Some(b) = self
+                    .baud_param
+                    .and_then(|p| u8::try_from(self.p(p)).ok())
+                    .and_then(|o| bus.profile.baud_of_option(o))
                 {
                     self.baud = b;
                 }

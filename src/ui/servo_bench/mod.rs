@@ -400,8 +400,9 @@ impl ServoBenchPanel {
         }
     }
 
-    /// Takes what one of its jobs reported.
-    pub fn on_output(&mut self, out: Output) {
+    /// Takes what one of its jobs reported; `profile` (the servo profile) says which
+    /// parameters hold the id and the baud option.
+    pub fn on_output(&mut self, out: Output, profile: &crate::profile::Profile) {
         match out {
             Output::Found(row) => self.scan.on_found(row),
             Output::Scanned(result) => {
@@ -449,7 +450,9 @@ impl ServoBenchPanel {
                 if result.is_ok() {
                     let to = Servo { id: new, ..servo };
                     self.moved(servo, to);
-                    if let Some(v) = self.params.values.get_mut(&crate::ops::servo::PARAM_ID) {
+                    if let Some(p) = profile.servo_id_param()
+                        && let Some(v) = self.params.values.get_mut(&p.id)
+                    {
                         *v = Ok(new.into());
                     }
                 }
@@ -463,8 +466,9 @@ impl ServoBenchPanel {
                 let now = result.as_ref().ok().copied().or(found);
                 if let Some(b) = now {
                     self.moved(servo, Servo { baud: b, ..servo });
-                    if let Some(opt) = crate::ops::servo::option_of_baud(b)
-                        && let Some(v) = self.params.values.get_mut(&crate::ops::servo::PARAM_BAUD)
+                    if let Some(opt) = profile.option_of_baud(b)
+                        && let Some((p, _)) = profile.baud_option_param()
+                        && let Some(v) = self.params.values.get_mut(&p.id)
                     {
                         *v = Ok(opt.into());
                     }

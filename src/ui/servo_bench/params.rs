@@ -6,7 +6,7 @@
 use super::{Output, Servo, error_label, ok_label, send};
 use super::{header_row, selection_or_hint};
 use crate::i18n::Lang;
-use crate::ops::servo::{self as ops, Location, PARAM_BAUD, PARAM_ID};
+use crate::ops::servo::{self as ops, Location};
 use crate::ops::{Check, OpError};
 use crate::profile::{Access, Param, Profile, Value};
 use crate::ui::Action;
@@ -53,7 +53,7 @@ pub struct ParamsState {
 
 /// Whether the table edits this parameter (the id and the baud rate have their own tab).
 pub(super) fn editable(p: &Param) -> bool {
-    p.access == Access::ReadWrite && p.id != PARAM_ID && p.id != PARAM_BAUD
+    p.access == Access::ReadWrite && !ops::follows_servo(p)
 }
 
 impl ParamsState {

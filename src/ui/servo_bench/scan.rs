@@ -5,7 +5,8 @@ use super::header_row;
 use super::{Output, Servo, error_label, ok_label, port_baud, send};
 use crate::i18n::Lang;
 use crate::ops::OpError;
-use crate::ops::servo::{self as ops, BAUDS, Presence, ScanPlan, ScanRow};
+use crate::ops::servo::{self as ops, Presence, ScanPlan, ScanRow};
+use crate::profile::Profile;
 use crate::ui::Action;
 use crate::ui::jobs::Job;
 use crate::ui::state::AppState;
@@ -18,8 +19,9 @@ pub struct ScanState {
     pub first: String,
     /// The last id, as typed.
     pub last: String,
-    /// Which of [`BAUDS`] to scan.
-    pub bauds: [bool; 8],
+    /// Which of the profile's servo baud rates to scan (`None` until chosen: the profile's own
+    /// rate, the factory rate).
+    pub bauds: Option<Vec<u32>>,
     /// The servos found, in scan order.
     pub rows: Vec<ScanRow>,
     /// How the last scan ended (`None`: none yet, or running).
@@ -28,12 +30,10 @@ pub struct ScanState {
 
 impl Default for ScanState {
     fn default() -> Self {
-        let mut bauds = [false; 8];
-        bauds[4] = true; // 115200, the factory rate
         Self {
             first: "0".into(),
             last: "254".into(),
-            bauds,
+            bauds: None,
             rows: Vec::new(),
             outcome: None,
         }
@@ -113,12 +113,16 @@ impl ScanState {
         Ok(a..=b)
     }
 
-    fn chosen_bauds(&self) -> Vec<u32> {
-        BAUDS
-            .iter()
-            .zip(self.bauds)
-            .filter(|(_, on)| *on)
-            .map(|(b, _)| *b)
+    /// The chosen rates, in the profile's option order.
+    fn chosen_bauds(&self, profile: &Profile) -> Vec<u32> {
+        let chosen = self
+            .bauds
+            .as_deref()
+            .unwrap_or(std::slice::from_ref(&profile.baud));
+        profile
+            .servo_bauds()
+            .into_iter()
+            .filter(|b| chosen.contains(b))
             .collect()
     }
 
@@ -179,7 +183,9 @@ impl ScanState {
     ) -> Option<Servo> {
         let mut picked = None;
         let ids = self.ids();
-        let bauds = self.chosen_bauds();
+        let profile = &rt.device.profile;
+        let all = profile.servo_bauds();
+        let bauds = self.chosen_bauds(profile);
         ui.horizontal(|ui| {
             let l = ui.label(lang.tr("First id", "起始ID"));
             ui.add(egui::TextEdit::singleline(&mut self.first).desired_width(40.0))
@@ -193,15 +199,32 @@ impl ScanState {
         });
         ui.horizontal_wrapped(|ui| {
             ui.label(lang.tr("Baud rates:", "波特率:"));
-            for (i, b) in BAUDS.iter().enumerate() {
-                ui.checkbox(&mut self.bauds[i], b.to_string());
+            for b in &all {
+                let mut on = bauds.contains(b);
+                if ui.checkbox(&mut on, b.to_string()).changed() {
+                    let mut chosen = bauds.clone();
+                    chosen.retain(|c| c != b);
+                    if on {
+                        chosen.push(*b);
+                    }
+                    self.bauds = Some(chosen);
+                }
             }
-            if ui.button(lang.tr("All 8", "全部8种")).clicked() {
-                self.bauds = [true; 8];
+            let n = all.len();
+            let every = match lang {
+                Lang::En => format!("All {n}"),
+                Lang::Zh => format!("全部{n}种"),
+            };
+            if ui.button(every).clicked() {
+                self.bauds = Some(all.clone());
             }
-            if ui.button(lang.tr("Only 115200", "仅115200")).clicked() {
-                self.bauds = [false; 8];
-                self.bauds[4] = true;
+            let home = profile.baud;
+            let only = match lang {
+                Lang::En => format!("Only {home}"),
+                Lang::Zh => format!("仅{home}"),
+            };
+            if ui.button(only).clicked() {
+                self.bauds = Some(vec![home]);
             }
         });
         ui.horizontal(|ui| {

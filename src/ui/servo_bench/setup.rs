@@ -8,7 +8,7 @@ use super::selection_or_hint;
 use super::{Output, Servo, error_label, ok_label, send};
 use crate::i18n::Lang;
 use crate::ops::OpError;
-use crate::ops::servo::{self as ops, BAUDS, Presence};
+use crate::ops::servo::{self as ops, Presence};
 use crate::ui::Action;
 use crate::ui::jobs::Job;
 use crate::ui::state::AppState;
@@ -19,7 +19,7 @@ use eframe::egui;
 pub struct SetupState {
     /// The new id, as typed.
     pub new_id: String,
-    /// The baud option chosen, 1-8 (0: none yet).
+    /// The baud option chosen, one of the profile's baud table (0: none yet).
     pub option: u8,
     /// The last result: ok, and what happened.
     pub message: Option<(bool, String)>,
@@ -205,26 +205,36 @@ impl SetupState {
         ui.heading(lang.tr("Baud rate", "波特率"));
         ui.horizontal(|ui| {
             let l = ui.label(lang.tr("New baud rate", "新波特率"));
-            let text = ops::baud_of_option(self.option).map_or_else(
+            let profile = &rt.device.profile;
+            let text = profile.baud_of_option(self.option).map_or_else(
                 || lang.tr("choose…", "请选择…").to_string(),
                 |b| format!("{} ({b})", self.option),
             );
             egui::ComboBox::from_id_salt("servo-new-baud")
                 .selected_text(text)
                 .show_ui(ui, |ui| {
-                    for (i, b) in BAUDS.iter().enumerate() {
-                        let opt = i as u8 + 1;
-                        let label = if opt == 8 {
-                            format!("{opt} ({b}, {})", lang.tr("newer servos", "新款舵机"))
-                        } else {
-                            format!("{opt} ({b})")
+                    // Each option with its rate, or its label's name where that says more
+                    // (e.g. newer servos only).
+                    let Ok((param, rates)) = ops::baud_param(profile) else {
+                        return;
+                    };
+                    for (&opt, b) in rates {
+                        let name = param
+                            .field
+                            .labels
+                            .iter()
+                            .find(|l| l.value == i64::from(opt))
+                            .map(|l| l.name.get(lang));
+                        let label = match name {
+                            Some(name) if name != b.to_string() => format!("{opt} ({name})"),
+                            _ => format!("{opt} ({b})"),
                         };
                         ui.selectable_value(&mut self.option, opt, label);
                     }
                 })
                 .response
                 .labelled_by(l.id);
-            let target = ops::baud_of_option(self.option);
+            let target = profile.baud_of_option(self.option);
             let set = ui.add_enabled(
                 can && target.is_some_and(|b| b != servo.baud),
                 egui::Button::new(lang.tr("Set baud rate", "设置波特率")),
@@ -276,7 +286,7 @@ fn baud_job(rt: &AppState, servo: Servo, option: u8) -> Action {
         let found = match &result {
             Ok(_) => None,
             Err(OpError::NotAtNewRate { found, .. }) => *found,
-            Err(_) => ops::locate(client, servo.id).ok().flatten(),
+            Err(_) => ops::locate(client, &profile, servo.id).ok().flatten(),
         };
         if result.is_err() && found.is_none() {
             let _ = ops::switch(client, servo.baud);

@@ -8,14 +8,12 @@ use super::super::Action;
 use super::super::state::AppState;
 use crate::link::{LinkCommand, ReplyTo};
 use crate::ops::exchange;
-use crate::profile::{Input, Value};
+use crate::profile::{CommandRole, Input, Value};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
 pub use super::super::stop::{Outcome, SendError};
 
-/// CMD_SET_HEARTBEAT: set when the dead-man is armed.
-pub const CMD_SET_HEARTBEAT: u8 = 98;
 /// The dead-man intervals offered, seconds.
 pub const DEADMAN_SECS: std::ops::RangeInclusive<u32> = 1..=10;
 
@@ -106,7 +104,9 @@ impl Control {
     }
 
     /// Arms or disarms the dead-man; arming sets the robot's heartbeat interval to the same
-    /// period, so that the robot's own watchdog (where its firmware has one) agrees.
+    /// period, so that the robot's own watchdog (where its firmware has one) agrees: the first
+    /// request field of the profile's command with role [`CommandRole::Heartbeat`] (none sent
+    /// when the profile has no such command).
     pub fn arm(&mut self, rt: &AppState, on: bool) -> Option<Action> {
         self.deadman = on;
         if !on {
@@ -115,11 +115,12 @@ impl Control {
         self.confirm();
         self.trip = None;
         let secs = i64::from(self.deadman_secs);
-        self.send(
-            rt,
-            CMD_SET_HEARTBEAT,
-            &[("heartbeat".into(), Input::Raw(Value::Int(secs)))],
-        )
+        let heartbeat = rt
+            .device
+            .profile
+            .command_with_role(CommandRole::Heartbeat)?;
+        let field = heartbeat.request.first()?.ident.clone();
+        self.send(rt, heartbeat.id, &[(field, Input::Raw(Value::Int(secs)))])
     }
 
     /// Time left before the dead-man stops the robot.
@@ -204,26 +205,67 @@ mod tests {
         }
     }
 
+    /// The id and first request field of the command with `role`.
+    fn with_role(rt: &AppState, role: CommandRole) -> (u8, String) {
+        let c = rt.device.profile.command_with_role(role).expect("role");
+        (c.id, c.request[0].ident.clone())
+    }
+
     #[test]
     fn out_of_range_values_are_refused_before_sending() {
         let rt = runtime();
+        let (drive, speed) = with_role(&rt, CommandRole::Drive);
         let mut c = Control::default();
-        let a = c.send(&rt, 100, &[("speed".into(), Input::Text("1001".into()))]);
+        let a = c.send(&rt, drive, &[(speed.clone(), Input::Text("1001".into()))]);
         assert!(a.is_none());
         assert!(matches!(
-            c.outcomes.get(&100),
+            c.outcomes.get(&drive),
             Some((Outcome::Failed(e), _)) if e.to_string().contains("out of range")
         ));
-        let a = c.send(&rt, 100, &[("speed".into(), Input::Text("-250".into()))]);
-        assert_eq!(sent(&a.unwrap()), (100, (-250i16).to_le_bytes().to_vec()));
+        let a = c.send(&rt, drive, &[(speed, Input::Text("-250".into()))]);
+        assert_eq!(sent(&a.unwrap()), (drive, (-250i16).to_le_bytes().to_vec()));
+    }
+
+    #[test]
+    fn the_dead_man_sets_the_command_with_role_heartbeat_wherever_the_profile_puts_it() {
+        let mut rt = runtime();
+        let (heartbeat, _) = with_role(&rt, CommandRole::Heartbeat);
+        let mut c = Control::default();
+        let arm = c.arm(&rt, true).expect("the heartbeat is set");
+        assert_eq!(sent(&arm), (heartbeat, 2i16.to_le_bytes().to_vec()));
+
+        // A firmware whose heartbeat is another command (here CMD_SET_ROTATE): an edited
+        // profile moves the role, and arming follows it.
+        let src = crate::profile::registry::BUILTIN
+            .iter()
+            .find(|(n, _)| *n == "solar-cleanbot")
+            .expect("built-in")
+            .1;
+        let (from, to) = ("kind: Action, role: Some(Heartbeat),", "kind: Action,");
+        let rotate = "ident: \"CMD_SET_ROTATE\", name: (en: \"Rotate\", zh: \"设置旋转角度值\"),\n            kind: Action, confirm: true,";
+        assert!(src.contains(from) && src.contains(rotate), "test setup");
+        let moved = src.replacen(from, to, 1).replacen(
+            rotate,
+            &format!("{rotate} role: Some(Heartbeat),"),
+            1,
+        );
+        let edited = crate::profile::registry::parse("solar-cleanbot.ron", &moved, None)
+            .expect("the edited profile loads");
+        let rotate_id = edited.command("CMD_SET_ROTATE").expect("rotate").id;
+        assert_ne!(rotate_id, heartbeat);
+        rt.device.profile = std::sync::Arc::new(edited);
+        let mut c = Control::default();
+        let arm = c.arm(&rt, true).expect("the moved heartbeat is set");
+        assert_eq!(sent(&arm), (rotate_id, 2i16.to_le_bytes().to_vec()));
     }
 
     #[test]
     fn the_dead_man_asks_for_stop_when_the_link_goes_down() {
         let mut rt = runtime();
         let mut c = Control::default();
+        let (heartbeat, _) = with_role(&rt, CommandRole::Heartbeat);
         let arm = c.arm(&rt, true).expect("the heartbeat is set");
-        assert_eq!(sent(&arm), (98, 2i16.to_le_bytes().to_vec()));
+        assert_eq!(sent(&arm), (heartbeat, 2i16.to_le_bytes().to_vec()));
         assert!(c.tick(&rt).is_empty(), "confirmed just now");
         rt.link.state = Some(LinkState::Lost {
             reason: "unplugged".into(),

@@ -27,13 +27,10 @@ pub use log::{append_csv, check_log, log_columns, log_row};
 pub use plan::{IdSequence, Issue, Plan, Resolved};
 
 use crate::link::{Client, ExchangeError};
-use crate::ops::servo::{self, BAUDS, PARAM_BAUD, PARAM_ID, Presence, switch};
+use crate::ops::servo::{self, Presence, switch};
 use crate::ops::{Cancel, OpError, Progress};
 use crate::profile::{Input, Param, Profile, Value};
 use serde::Serialize;
-
-/// The `data_id` of the serial number.
-pub const PARAM_SERIAL: u8 = 8;
 
 /// The names of the steps, as records and progress messages give them.
 pub mod step {
@@ -146,10 +143,10 @@ pub fn find_fresh(client: &Client, bauds: &[u32]) -> Result<Vec<(u32, Presence)>
     Ok(out)
 }
 
-/// The plan's target rate first, then the others.
-pub fn search_order(target: u32) -> Vec<u32> {
+/// The plan's target rate first, then the profile's other servo baud rates.
+pub fn search_order(profile: &Profile, target: u32) -> Vec<u32> {
     std::iter::once(target)
-        .chain(BAUDS.iter().copied().filter(|&b| b != target))
+        .chain(profile.servo_bauds().into_iter().filter(|&b| b != target))
         .collect()
 }
 
@@ -230,7 +227,7 @@ fn run(
     // Detect: exactly one fresh servo, at one baud rate.
     at(step::DETECT, String::new(), &mut done);
     check_cancel!(step::DETECT);
-    let found = match find_fresh(client, &search_order(target)) {
+    let found = match find_fresh(client, &search_order(profile, target)) {
         Ok(f) => f,
         Err(e) => return fail(record, step::DETECT, e.to_string()),
     };
@@ -272,7 +269,7 @@ fn run(
     // Its serial number, so that even a failure names the servo.
     at(step::SERIAL, String::new(), &mut done);
     check_cancel!(step::SERIAL);
-    let serial = match read(client, profile, 0, PARAM_SERIAL) {
+    let serial = match servo::serial_param(profile).and_then(|p| read(client, profile, 0, p.id)) {
         Ok(v) => v,
         Err(e) => return fail(record, step::SERIAL, reason(&e, 0, baud)),
     };
@@ -299,7 +296,7 @@ fn run(
             state.next = i + 1;
             continue;
         }
-        match id_is_free(client, id, &search_order(target)) {
+        match id_is_free(client, id, &search_order(profile, target)) {
             Ok(true) => {
                 chosen = Some((i, id));
                 break;
@@ -388,10 +385,21 @@ fn run(
         }
         Err(e) => return fail(record, step::VERIFY, reason(&e, id, target)),
     }
+    let roles = servo::serial_param(profile).and_then(|s| {
+        Ok((
+            s.id,
+            servo::id_param(profile)?.id,
+            servo::baud_param(profile)?.0.id,
+        ))
+    });
+    let (serial_pid, id_pid, baud_pid) = match roles {
+        Ok(ids) => ids,
+        Err(e) => return fail(record, step::VERIFY, e.to_string()),
+    };
     let mut expected: Vec<(u8, i64)> = vec![
-        (PARAM_SERIAL, i64::from(serial)),
-        (PARAM_ID, i64::from(id)),
-        (PARAM_BAUD, i64::from(resolved.option)),
+        (serial_pid, i64::from(serial)),
+        (id_pid, i64::from(id)),
+        (baud_pid, i64::from(resolved.option)),
     ];
     expected.extend(resolved.writes.iter().map(|(p, raw)| (p.id, *raw)));
     for (pid, want) in expected {

@@ -1,7 +1,7 @@
 //! The provisioning plan: its RON shape, and its check against the servo profile.
 
 use crate::document::{self, DocumentError, ErrorKind, Source, Step};
-use crate::ops::servo::{self, BAUDS, PARAM_BAUD, PARAM_ID};
+use crate::ops::{OpError, servo};
 use crate::profile::value::Typed as DisplayText;
 use crate::profile::{Access, Param, Profile, Value};
 use serde::{Deserialize, Serialize};
@@ -29,7 +29,7 @@ impl IdSequence {
 /// A provisioning plan, as written in its RON file.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Plan {
-    /// The baud rate every servo leaves with: one of [`BAUDS`].
+    /// The baud rate every servo leaves with: one of the profile's servo baud rates.
     pub target_baud: u32,
     /// The ids to give out.
     pub ids: IdSequence,
@@ -100,21 +100,27 @@ impl Plan {
     /// (known, writable, not the id or baud rate, its value in range) and every recorded one.
     pub fn resolve<'p>(&self, profile: &'p Profile) -> Result<Resolved<'p>, Issue> {
         let issue = |path: Vec<Step>, message: String| Issue { path, message };
-        let Some(option) = servo::option_of_baud(self.target_baud) else {
+        let role_issue = |e: OpError| issue(vec![Step::Key("target_baud")], e.to_string());
+        let id_pid = servo::id_param(profile).map_err(role_issue)?.id;
+        let (baud, _) = servo::baud_param(profile).map_err(role_issue)?;
+        let Some(option) = profile.option_of_baud(self.target_baud) else {
             return Err(issue(
                 vec![Step::Key("target_baud")],
                 format!(
                     "{} is not a servo baud rate; allowed: {}",
                     self.target_baud,
-                    BAUDS.map(|b| b.to_string()).join(", ")
+                    profile
+                        .servo_bauds()
+                        .iter()
+                        .map(|b| b.to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
             ));
         };
-        if let Some(baud) = profile.param(PARAM_BAUD) {
-            baud.field
-                .check(&Value::Int(option.into()))
-                .map_err(|e| issue(vec![Step::Key("target_baud")], e.to_string()))?;
-        }
+        baud.field
+            .check(&Value::Int(option.into()))
+            .map_err(|e| issue(vec![Step::Key("target_baud")], e.to_string()))?;
         let ids_at = vec![Step::Key("ids")];
         match &self.ids {
             IdSequence::Start(0) => {
@@ -171,7 +177,7 @@ impl Plan {
                     format!("{ident} is read-only and cannot be written"),
                 ));
             }
-            if param.id == PARAM_ID || param.id == PARAM_BAUD {
+            if param.id == id_pid || param.id == baud.id {
                 return Err(issue(
                     at,
                     format!("{ident} is set by the plan's `ids` and `target_baud`, not by params"),
