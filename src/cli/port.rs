@@ -107,14 +107,27 @@ pub(crate) fn print_checks(
     field_of: impl Fn(&str) -> Option<Field>,
     json: bool,
 ) -> u8 {
+    print_checks_with(checks, field_of, json, None)
+}
+
+/// [`print_checks`], with one more member of the JSON document (`extra`: name, value).
+pub(crate) fn print_checks_with(
+    checks: &[Check],
+    field_of: impl Fn(&str) -> Option<Field>,
+    json: bool,
+    extra: Option<(&str, serde_json::Value)>,
+) -> u8 {
     let bad = checks.iter().filter(|c| !c.ok()).count();
     if json {
-        let doc = serde_json::json!({
+        let mut doc = serde_json::json!({
             "verified": bad == 0,
             "fields": checks.iter().map(|c| serde_json::json!({
                 "field": c.field, "written": c.written, "read": c.read, "ok": c.ok(),
             })).collect::<Vec<_>>(),
         });
+        if let Some((name, value)) = extra {
+            doc[name] = value;
+        }
         println!("{doc}");
     } else {
         for c in checks {

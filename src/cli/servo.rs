@@ -47,12 +47,16 @@ enum ServoCmd {
     },
     /// Write one user parameter and read it back.
     Write {
-        /// Servo id.
+        /// Servo id (255, every servo, only with --broadcast).
         id: u8,
         /// Parameter name or data_id.
         param: String,
         /// Value in display units, or a label.
         value: String,
+        /// With id 255: tell every servo at this rate, expecting no answer and reading nothing
+        /// back.
+        #[arg(long)]
+        broadcast: bool,
     },
     /// Give servo OLD the id NEW (refuses 255 and ids in use; a fresh servo must be alone).
     SetId {
@@ -81,6 +85,9 @@ enum ServoCmd {
         /// Power in mW (0: the servo's limit).
         #[arg(long, default_value_t = 0)]
         power: u16,
+        /// With id 255: turn every servo at this rate.
+        #[arg(long)]
+        broadcast: bool,
     },
     /// Provision fresh servos by a plan: find each (id 0, at any baud rate), give it the next
     /// free id, the plan's baud rate and parameters, verify everything, and log it.
@@ -115,7 +122,12 @@ fn parse_ids(s: &str) -> Result<std::ops::RangeInclusive<u8>, CliError> {
             (v, v)
         }
     };
-    if a > b || b == 255 {
+    if b == crate::protocol::servo::BROADCAST_ID {
+        return Err(CliError::input(format!(
+            "'{s}': id 255 is the broadcast address: every servo acts on it and none answers; give ids 0-254"
+        )));
+    }
+    if a > b {
         return Err(bad());
     }
     Ok(a..=b)
@@ -173,9 +185,61 @@ fn param<'p>(profile: &'p Profile, name: &str) -> Result<&'p crate::profile::Par
     })
 }
 
+/// The broadcast address where an answer is expected (or a broadcast was not asked for), and
+/// `--broadcast` with another id: refused before the port is opened.
+fn check_broadcast(cmd: &ServoCmd) -> Result<(), CliError> {
+    use crate::protocol::servo::BROADCAST_ID;
+    let refuse = |what: &'static str, hint: &'static str| {
+        Err(CliError::input(crate::ops::OpError::BroadcastAnswer {
+            what,
+            hint,
+        }))
+    };
+    match *cmd {
+        ServoCmd::Ping { id: BROADCAST_ID } => refuse("ping a servo", ""),
+        ServoCmd::Read {
+            id: BROADCAST_ID, ..
+        } => refuse("read a parameter", ""),
+        ServoCmd::SetId {
+            old: BROADCAST_ID, ..
+        } => refuse("give a servo a new id", ""),
+        ServoCmd::SetBaud {
+            id: BROADCAST_ID, ..
+        } => refuse("change a servo's baud rate and follow it", ""),
+        ServoCmd::Write {
+            id: BROADCAST_ID,
+            broadcast: false,
+            ..
+        } => refuse(
+            "write a parameter and read it back",
+            "; or add --broadcast to tell every servo, with nothing read back",
+        ),
+        ServoCmd::Angle {
+            id: BROADCAST_ID,
+            broadcast: false,
+            ..
+        } => refuse("turn a servo", "; or add --broadcast to turn every servo"),
+        ServoCmd::Write {
+            id,
+            broadcast: true,
+            ..
+        }
+        | ServoCmd::Angle {
+            id,
+            broadcast: true,
+            ..
+        } if id != BROADCAST_ID => Err(CliError::input(format!(
+            "--broadcast goes with id 255 (every servo), not {id}"
+        ))),
+        ServoCmd::Monitor { ref ids } => parse_id_list(ids).map(|_| ()),
+        _ => Ok(()),
+    }
+}
+
 pub(crate) fn run(args: ServoArgs) -> CliResult {
     let json = args.port.json;
     // Check what can be checked before touching the port.
+    check_broadcast(&args.cmd)?;
     if let ServoCmd::SetId { new: 255, .. } = args.cmd {
         return Err(CliError::input(
             "id 255 is the broadcast address and cannot be assigned",
@@ -216,19 +280,26 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
                 bauds,
                 home_baud: home,
             };
-            let rows = ops::scan(&client, &profile, &plan, &cancel, &mut |_| {}, &mut |_| {})
+            let report = ops::scan(&client, &profile, &plan, &cancel, &mut |_| {}, &mut |_| {})
                 .map_err(op_error)?;
+            let rows = &report.rows;
             if json {
                 println!(
                     "{}",
-                    serde_json::json!({"servos": rows, "seconds": started.elapsed().as_secs_f64()})
+                    serde_json::json!({
+                        "servos": rows,
+                        "seconds": started.elapsed().as_secs_f64(),
+                        "asked_again": report.asked_again,
+                        "late_answers": report.late_answers,
+                        "margin_ms": report.margin_ms,
+                    })
                 );
             } else {
                 println!(
                     "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>18} {:>6}  presence",
                     "id", "baud", "type", "firmware", "serial", "mV", "temp", "status"
                 );
-                for r in &rows {
+                for r in rows {
                     let o = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
                     let presence = match &r.presence {
                         Presence::Present => "ok".to_string(),
@@ -248,9 +319,12 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
                     );
                 }
                 println!(
-                    "{} found in {:.2} s",
+                    "{} found in {:.2} s; {} id(s) asked again, {} late answer(s), margin {:.1} ms",
                     rows.len(),
-                    started.elapsed().as_secs_f64()
+                    started.elapsed().as_secs_f64(),
+                    report.asked_again,
+                    report.late_answers,
+                    report.margin_ms
                 );
             }
             Ok(0)
@@ -334,6 +408,31 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
             id,
             param: name,
             value,
+            broadcast: true,
+        } => {
+            let p = param(&profile, &name)?;
+            p.field.parse(&value).map_err(CliError::input)?;
+            let written = ops::write_param_broadcast(&client, &profile, p, Input::Text(value))
+                .map_err(op_error)?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::json!({"servo": id, "param": p.field.ident, "written": written, "broadcast": true, "verified": false})
+                );
+            } else {
+                println!(
+                    "{:<24} {:>12}  broadcast to every servo at this rate; none answers a broadcast, nothing read back",
+                    p.field.ident,
+                    p.field.format(&written)
+                );
+            }
+            Ok(0)
+        }
+        ServoCmd::Write {
+            id,
+            param: name,
+            value,
+            broadcast: false,
         } => {
             let p = param(&profile, &name)?;
             p.field.parse(&value).map_err(CliError::input)?;
@@ -371,7 +470,9 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
             }
             Ok(0)
         }
-        ServoCmd::Angle { id, deg, ms, power } => {
+        ServoCmd::Angle {
+            id, deg, ms, power, ..
+        } => {
             let rotate = profile
                 .command("ROTATE")
                 .ok_or_else(|| CliError::input("the profile has no ROTATE"))?;

@@ -42,6 +42,8 @@ pub(crate) struct SimArgs {
     /// firmware whose payloads differ from botbench's profile.
     #[arg(long)]
     profile: Option<String>,
+    #[command(flatten)]
+    field: super::sim_field::FieldArgs,
 }
 
 pub(crate) fn run(args: SimArgs) -> CliResult {
@@ -52,6 +54,7 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         extra_latency: Duration::from_millis(args.latency_ms),
         silent: false,
         seed: args.seed,
+        line: args.field.line(kind)?,
     };
     faults.check().map_err(CliError::input)?;
     if args.baud == Some(0) {
@@ -62,6 +65,8 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         latency: None,
         seed: args.seed,
         servos: args.servos,
+        msp: args.field.msp(kind)?,
+        ignore_baud_change: args.field.ignore_baud_change(kind)?,
     };
     let firmware = match &args.profile {
         None => None,
@@ -88,6 +93,7 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
             if let Some(l) = opts.latency {
                 core.latency = l;
             }
+            core.quirks = opts.msp.clone();
             let wc = Arc::new(Mutex::new(WindowCleaner::with_core(core, opts.seed)));
             (wc.clone(), Some(Control::WindowCleaner(wc)))
         }
@@ -102,7 +108,8 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
                 opts.baud.unwrap_or_else(|| kind.default_baud()),
             )
             .map_err(CliError::input)?
-            .with_seed(opts.seed);
+            .with_seed(opts.seed)
+            .with_baud_change_ignored(opts.ignore_baud_change);
             (Arc::new(Mutex::new(bus)), None)
         }
         (_, Some(_)) => {
@@ -124,6 +131,7 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
             _ => (build(kind, &opts).map_err(CliError::input)?, None),
         },
     };
+    let vanish_after = faults.line.vanish_after_bytes;
     let server = PtyServer::start(device, faults).map_err(CliError::device)?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", server.path())
@@ -146,11 +154,12 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         }
     }
     while server.is_running() {
-        std::thread::sleep(Duration::from_millis(200));
+        std::thread::sleep(Duration::from_millis(20));
     }
-    Err(CliError::device(
-        "the simulator stopped: the pseudo-terminal failed",
-    ))
+    Err(CliError::device(match vanish_after {
+        Some(n) => format!("the port vanished after {n} bytes from the host, as asked"),
+        None => "the simulator stopped: the pseudo-terminal failed".into(),
+    }))
 }
 
 /// Commands typed on the simulator's stdin, for what a device does on its own.

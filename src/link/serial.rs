@@ -22,6 +22,8 @@ pub struct PortInfo {
     pub manufacturer: Option<String>,
     /// USB product name.
     pub product: Option<String>,
+    /// The adapter's driver and latency timer, as the system tells ([`super::adapter`]).
+    pub adapter: super::adapter::Adapter,
 }
 
 impl PortInfo {
@@ -37,6 +39,10 @@ impl PortInfo {
         if let Some(sn) = &self.serial_number {
             s.push_str(&format!(" (sn {sn})"));
         }
+        let adapter = self.adapter.summary();
+        if !adapter.is_empty() {
+            s.push_str(&format!("  [{adapter}]"));
+        }
         s
     }
 }
@@ -50,8 +56,10 @@ pub fn list_ports() -> Vec<PortInfo> {
     ports
         .into_iter()
         .map(|p| {
+            let path = p.port_name;
             let mut info = PortInfo {
-                path: p.port_name,
+                adapter: super::adapter::adapter_of(&path),
+                path,
                 kind: "unknown",
                 vid: None,
                 pid: None,
@@ -82,6 +90,8 @@ pub struct SerialTransport {
     port: Box<dyn SerialPort>,
     path: String,
     baud: u32,
+    /// The adapter's latency timer, read when the port was opened.
+    latency_timer: Option<Duration>,
 }
 
 impl std::fmt::Debug for SerialTransport {
@@ -132,6 +142,7 @@ impl SerialTransport {
             port,
             path: path.to_string(),
             baud,
+            latency_timer: super::adapter::adapter_of(path).latency_timer(),
         })
     }
 
@@ -203,6 +214,10 @@ impl Transport for SerialTransport {
 
     fn describe(&self) -> String {
         self.path.clone()
+    }
+
+    fn latency_timer(&self) -> Option<Duration> {
+        self.latency_timer
     }
 
     fn check(&mut self) -> Result<(), LinkError> {

@@ -87,6 +87,8 @@ impl Worker {
                     if t.baud() != self.baud {
                         let _ = t.set_baud(self.baud);
                     }
+                    self.timing = super::timing::AnswerTiming::new(t.latency_timer());
+                    self.owed.clear();
                     self.transport = Some(t);
                     self.decoder.clear();
                     self.emit_connected();
