@@ -1,3 +1,27 @@
+//! botbench: tune, provision and test serial-connected robots at the bench and on the line.
+//!
+//! One crate, a library and the `botbench` binary (window and command line). Four kinds of device
+//! share one serial port: the MSP window-cleaning robot and solar-panel cleaning robot, UART bus
+//! servos, and a Tuya robot-vacuum MCU, for which botbench plays the Wi-Fi module.
+//!
+//! The house, bottom up (the README's "Architecture" section has the full map):
+//!
+//! - [`protocol`]: pure codecs, one streaming decoder engine; no I/O, no panics on any input.
+//! - [`profile`]: every device fact as data (RON profiles under `assets/profiles/`), the one
+//!   field codec, validation and roles that code asks for.
+//! - [`document`]: RON documents a person writes (presets, plans): reading, located errors,
+//!   atomic saves.
+//! - [`link`]: the worker thread that owns the port, its deadlines, polling and the protocol
+//!   sessions (MSP identify, Tuya handshake); [`link::Client`] for blocking callers.
+//! - [`ops`]: every operation of several exchanges (tuning, scans, provisioning, self-test, OTA),
+//!   run by the command line directly and by the window on a job thread.
+//! - [`sim`]: device simulators on a simulated wire or a pseudo-terminal, including the field's
+//!   misbehaviour.
+//! - [`ui`]: the eframe window; [`cli`]: the command line; [`bench`]: end-to-end figures.
+//!
+//! The window never touches the port: panels return actions, the app turns them into link
+//! commands and jobs, and the worker answers with events over bounded channels.
+
 pub mod bench;
 pub mod cli;
 pub mod document;

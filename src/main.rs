@@ -1,3 +1,5 @@
+//! The `botbench` binary: the window with no arguments, the command line otherwise (see `botbench --help`).
+
 use std::process::ExitCode;
 
 fn main() -> ExitCode {

@@ -218,7 +218,8 @@ pub mod platform {
     }
 }
 
-#[cfg(all(test, target_os = "linux"))]
+#[cfg(test)]
+#[cfg(target_os = "linux")]
 mod tests {
     use super::platform::{read, set};
     use super::*;

@@ -235,6 +235,10 @@ impl Transport for SerialTransport {
 /// Opens `path`, and after a loss reopens it by path, or by the adapter's USB serial number when
 /// the OS gave the port a new path.
 pub fn opener(path: &str, baud: u32) -> super::Opener {
+    // A pty that a simulator in this process serves in lockstep (the tests).
+    if let Some(lockstep) = crate::sim::lockstep::opener(path, baud) {
+        return lockstep;
+    }
     let path = path.to_string();
     let usb_serial = SerialTransport::usb_serial_of(&path);
     Box::new(move || {

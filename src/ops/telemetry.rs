@@ -44,7 +44,7 @@ pub fn polls(profile: &Profile, rate: Option<f64>) -> Vec<Poll> {
             && c.request.is_empty()
             && !c.reply.is_empty()
             && !plotted.contains(&c.id)
-            && c.id > 9
+            && !profile.is_core(c)
     });
     polls.extend(others.map(|cmd| poll(profile, cmd, Some(Duration::from_secs(1)))));
     polls

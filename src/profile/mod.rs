@@ -10,9 +10,11 @@ pub mod encode;
 pub mod fault;
 pub mod registry;
 pub mod relation;
+pub mod roles;
 pub mod validate;
 pub mod value;
 
 pub use codec::{Decoded, FieldValue, Input};
 pub use registry::{ProfileError, Registry, Source};
+pub use roles::{CommandRole, ParamRole};
 pub use value::{FieldError, Misfit, Value};

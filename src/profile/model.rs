@@ -102,10 +102,10 @@ pub struct Profile {
     /// Live plots: which telemetry fields to draw together.
     #[serde(default)]
     pub plots: Vec<Plot>,
-    /// MSP: the device's own panels (solar cleanbot, self-test), and the CMD_VERSION capability
-    /// bit a panel needs. The generic panels (tuning, telemetry…) are shown whenever the command
-    /// set has what they need; listing one here with a `flag` also hides it when the device
-    /// reports that bit clear.
+    /// The panels the window shows for this device, in order (the packet monitor is always
+    /// there). One meaning: a listed panel is shown, unless it names a CMD_VERSION capability
+    /// `flag` (MSP) that the device reports clear. Each is checked at load for what it shows
+    /// (Tuning needs a Set, Solar a command with role Drive...).
     #[serde(default)]
     pub panels: Vec<PanelRule>,
     /// Relations between fields that every write must keep (minimum ≤ default ≤ maximum...).
@@ -191,6 +191,10 @@ pub enum PanelKind {
     Solar,
     /// The production self-test (test plans).
     SelfTest,
+    /// Bus servos: scan, parameters, provisioning, motion.
+    ServoBench,
+    /// Tuya: the Wi-Fi module's side, data points, MCU requests, OTA.
+    TuyaConsole,
 }
 
 /// A panel of a profile and the capability it needs.
@@ -272,6 +276,9 @@ pub struct Command {
     /// The robot moves: ask the operator first.
     #[serde(default)]
     pub confirm: bool,
+    /// What code finds this command by (MSP core, the solar drive or heartbeat).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub role: Option<super::roles::CommandRole>,
     /// The initiator's payload. A Set with none sends its Get's reply layout; a Set with its own
     /// (firmware that takes fewer fields than its Get answers with) sends that, and every field
     /// of it must be a field of the Get's reply, so that the write can be read back.
@@ -479,6 +486,10 @@ pub struct Param {
     pub id: u8,
     /// Read-only (1-8) or user (32-53).
     pub access: Access,
+    /// What code finds this parameter by (the servo id, the baud option and its rates, the
+    /// serial number).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub role: Option<super::roles::ParamRole>,
     /// Its layout, name, unit, range and labels.
     pub field: Field,
 }

@@ -65,6 +65,8 @@ pub fn validate(profile: &mut Profile) -> Result<(), Issue> {
     check_data_points(profile)?;
     check_plots(profile)?;
     check_panels(profile)?;
+    super::roles::check_panel_needs(profile)?;
+    super::roles::check_roles(profile)?;
     super::relation::validate_relations(profile)?;
     Ok(())
 }
@@ -73,13 +75,16 @@ fn check_panels(p: &Profile) -> Result<(), Issue> {
     let mut seen = HashSet::new();
     for (i, rule) in p.panels.iter().enumerate() {
         let at = |k| vec![Key("panels"), Index(i), Key(k)];
-        if p.protocol != Protocol::Msp {
-            return Err(issue(at("panel"), "panels are for MSP profiles only"));
-        }
         if !seen.insert(rule.panel) {
             return Err(issue(
                 at("panel"),
                 format!("{:?} is listed twice", rule.panel),
+            ));
+        }
+        if rule.flag.is_some() && p.protocol != Protocol::Msp {
+            return Err(issue(
+                at("flag"),
+                "a capability flag is an MSP CMD_VERSION bit: MSP profiles only",
             ));
         }
         if let Some(bit) = rule.flag

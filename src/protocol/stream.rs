@@ -14,8 +14,11 @@ pub const JUNK_SAMPLE: usize = 64;
 pub enum Scan<F> {
     /// These bytes cannot start a frame: skip one.
     NoHeader,
-    /// A valid prefix of a frame; `need` is the whole frame's length once the length is known.
-    NeedMore { need: Option<usize> },
+    /// A valid prefix of a frame.
+    NeedMore {
+        /// The whole frame's length in bytes, once the length field has arrived.
+        need: Option<usize>,
+    },
     /// A whole, valid frame of `len` bytes.
     Frame(F, usize),
     /// A header followed by a bad frame: report it, then search again from the next byte.

@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 
 mod kind;
 pub mod line;
+pub mod lockstep;
 pub mod msp_device;
 pub mod pty;
 pub mod runner;

@@ -1,9 +1,11 @@
 //! A simulated device served on a pseudo-terminal: a client opens [`PtyServer::path`] as it
 //! would open a USB serial adapter.
 
+use super::lockstep::{self, HostAction, Lockstep};
 use super::runner::{Faults, SharedDevice, VanishHandle, Wire, sleep_until};
 use crate::link::LinkError;
 use serialport::{SerialPort, TTYPort};
+use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -30,6 +32,8 @@ pub struct PtyServer {
     thread: Option<JoinHandle<()>>,
     /// Held open so that the path stays valid between clients.
     _slave: TTYPort,
+    /// Served in lockstep with a host in this process.
+    lockstep: Option<Arc<Lockstep>>,
 }
 
 impl std::fmt::Debug for PtyServer {
@@ -45,6 +49,22 @@ impl PtyServer {
     /// Opens a pseudo-terminal and starts serving `device` on it with `faults`. The device's
     /// baud rate is whatever the client sets on the port.
     pub fn start(device: SharedDevice, faults: Faults) -> Result<PtyServer, LinkError> {
+        Self::spawn(device, faults, None)
+    }
+
+    /// As [`PtyServer::start`], served in lockstep with a host in this process that opens the
+    /// path with [`crate::link::serial::opener`] (see [`super::lockstep`]): for tests, whose
+    /// verdicts must not depend on how fast threads are scheduled. A client in another process
+    /// gets no answer.
+    pub fn start_lockstep(device: SharedDevice, faults: Faults) -> Result<PtyServer, LinkError> {
+        Self::spawn(device, faults, Some(Lockstep::new()))
+    }
+
+    fn spawn(
+        device: SharedDevice,
+        faults: Faults,
+        lockstep: Option<Arc<Lockstep>>,
+    ) -> Result<PtyServer, LinkError> {
         let open_err = |reason: String| LinkError::Open {
             path: "pseudo-terminal".into(),
             reason,
@@ -58,19 +78,27 @@ impl PtyServer {
         let flags = Arc::new(Flags::default());
         let wire = Wire::new(device.clone(), baud, faults);
         let thread_flags = flags.clone();
+        let thread_lockstep = lockstep.clone();
         let thread = std::thread::Builder::new()
             .name("sim-pty".into())
             .spawn(move || {
-                serve(master, wire, &thread_flags);
+                match &thread_lockstep {
+                    None => serve(master, wire, &thread_flags),
+                    Some(l) => serve_lockstep(master, wire, &thread_flags, l),
+                }
                 thread_flags.exited.store(true, Ordering::SeqCst);
             })
             .map_err(|e| open_err(format!("cannot start the server thread: {e}")))?;
+        if let Some(l) = &lockstep {
+            lockstep::register(&path, l.clone());
+        }
         Ok(PtyServer {
             path,
             device,
             flags,
             thread: Some(thread),
             _slave: slave,
+            lockstep,
         })
     }
 
@@ -117,6 +145,9 @@ impl PtyServer {
 impl Drop for PtyServer {
     fn drop(&mut self) {
         self.stop();
+        if self.lockstep.is_some() {
+            lockstep::unregister(&self.path);
+        }
     }
 }
 
@@ -136,7 +167,7 @@ fn serve(mut master: TTYPort, mut wire: Wire, flags: &Flags) {
             if n == 0 {
                 break;
             }
-            if !write_frame(&mut master, &out[..n]) {
+            if write_frame(&mut master, &out[..n]).is_none() {
                 return;
             }
         }
@@ -174,20 +205,89 @@ fn follow_baud(master: &TTYPort, wire: &mut Wire) {
     }
 }
 
-/// Writes bytes that have arrived; `false` when the port is gone. A frame nobody makes room for is dropped.
-fn write_frame(master: &mut TTYPort, frame: &[u8]) -> bool {
+/// Writes bytes that have arrived; how many were written, `None` when the port is gone. What
+/// nobody makes room for is dropped.
+fn write_frame(master: &mut TTYPort, frame: &[u8]) -> Option<usize> {
     if master.set_timeout(WRITE_TIMEOUT).is_err() {
-        return false;
+        return None;
     }
     let mut rest = frame;
     while !rest.is_empty() {
         match master.write(rest) {
-            Ok(0) => return true,
+            Ok(0) => break,
             Ok(n) => rest = &rest[n..],
             Err(e) if e.kind() == ErrorKind::Interrupted => {}
-            Err(e) if e.kind() == ErrorKind::TimedOut => return true,
-            Err(_) => return false,
+            Err(e) if e.kind() == ErrorKind::TimedOut => break,
+            Err(_) => return None,
         }
     }
-    true
+    Some(frame.len() - rest.len())
+}
+
+/// The server loop in lockstep with the host (see [`super::lockstep`]): the host's writes and
+/// baud switches are taken at the instants the host stamped them, in order; the device's time
+/// never passes the stamp of an action not yet taken.
+fn serve_lockstep(mut master: TTYPort, mut wire: Wire, flags: &Flags, lockstep: &Lockstep) {
+    // However the loop ends (a panicking device too), the host stops waiting for it.
+    let _stopped = lockstep.serving();
+    let mut buf = [0u8; 4096];
+    // Bytes read from the pty whose stamped write has not been taken yet.
+    let mut heard: VecDeque<u8> = VecDeque::new();
+    let mut out = [0u8; 4096];
+    loop {
+        if flags.stop.load(Ordering::SeqCst) || flags.vanish.is_vanished() {
+            return;
+        }
+        let mut due: Vec<u8> = Vec::new();
+        let now = {
+            let mut s = lockstep.lock();
+            let now = Instant::now();
+            while let Some(&(at, action)) = s.actions.front() {
+                match action {
+                    HostAction::Wrote(n) if heard.len() >= n => {
+                        let bytes: Vec<u8> = heard.drain(..n).collect();
+                        wire.host_wrote(&bytes, at);
+                    }
+                    HostAction::Wrote(_) => break,
+                    HostAction::Baud(baud) => wire.set_baud(baud, at),
+                }
+                s.actions.pop_front();
+            }
+            let horizon = s.actions.front().map_or(now, |(at, _)| now.min(*at));
+            wire.pump(horizon);
+            let first = wire.next_byte_due().unwrap_or(now);
+            loop {
+                let n = wire.take_due(now, &mut out);
+                if n == 0 {
+                    break;
+                }
+                due.extend_from_slice(&out[..n]);
+            }
+            s.wrote(due.len(), first);
+            s.next_due = wire.next_due();
+            now
+        };
+        if !due.is_empty() {
+            let Some(written) = write_frame(&mut master, &due) else {
+                return;
+            };
+            if written < due.len() {
+                lockstep.lock().dropped(due.len() - written);
+            }
+        }
+        let next = wire.next_event().min(now + POLL);
+        let wait = next.saturating_duration_since(Instant::now());
+        if master.set_timeout(wait).is_err() {
+            return;
+        }
+        match master.read(&mut buf) {
+            Ok(n) => heard.extend(&buf[..n]),
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    ErrorKind::TimedOut | ErrorKind::Interrupted | ErrorKind::WouldBlock
+                ) => {}
+            Err(_) => return,
+        }
+    }
 }

@@ -348,6 +348,23 @@ impl Wire {
         }
     }
 
+    /// When the next byte on its way to the host arrives there.
+    pub(crate) fn next_byte_due(&self) -> Option<Instant> {
+        self.outbound
+            .front()
+            .map(|d| d.start + d.byte * (self.taken as u32 + 1))
+    }
+
+    /// The earliest instant the device side may still send the host a byte: when the host's next
+    /// chunk has reached the device (its answer comes later), or the next byte on its way back.
+    pub(crate) fn next_due(&self) -> Option<Instant> {
+        let inbound = self.inbound.front().map(|i| i.at);
+        match (inbound, self.next_byte_due()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
     /// When something happens next: a chunk reaches the device, a frame reaches the host, or
     /// the device is due a tick.
     pub(crate) fn next_event(&self) -> Instant {

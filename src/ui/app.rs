@@ -12,7 +12,7 @@ use super::{
 };
 use crate::i18n::Lang;
 use crate::link::LinkCommand;
-use crate::profile::{PanelKind, ProfileError, Protocol};
+use crate::profile::{PanelKind, ProfileError};
 use eframe::egui;
 use serde::{Deserialize, Serialize};
 
@@ -52,6 +52,8 @@ impl PanelId {
             PanelKind::Actions => PanelId::Actions,
             PanelKind::Solar => PanelId::Solar,
             PanelKind::SelfTest => PanelId::SelfTest,
+            PanelKind::ServoBench => PanelId::ServoBench,
+            PanelKind::TuyaConsole => PanelId::TuyaConsole,
         }
     }
 
@@ -253,53 +255,25 @@ impl App {
         }
     }
 
-    /// The panels the profile has.
+    /// The panels the profile lists, then the packet monitor. A panel whose CMD_VERSION
+    /// capability bit the device reports clear is hidden (nothing is hidden before the device
+    /// has answered CMD_VERSION).
     pub fn panels(&self) -> Vec<PanelId> {
         let profile = &self.state.device.profile;
-        let mut v = Vec::new();
-        match profile.protocol {
-            Protocol::Servo => return vec![PanelId::ServoBench, PanelId::Monitor],
-            Protocol::Tuya => return vec![PanelId::TuyaConsole, PanelId::Monitor],
-            Protocol::Msp => v.push(PanelId::Device),
-        }
-        if profile
-            .commands
+        let info = match &self.state.device.info {
+            Some(Ok(info)) => Some(info),
+            _ => None,
+        };
+        let mut v: Vec<PanelId> = profile
+            .panels
             .iter()
-            .any(|c| c.kind == crate::profile::CommandKind::Set)
-        {
-            v.push(PanelId::Tuning);
-        }
-        if !profile.plots.is_empty() {
-            v.push(PanelId::Telemetry);
-        }
-        if !crate::preset::preset_commands(profile).is_empty() {
-            v.push(PanelId::Presets);
-        }
-        if profile
-            .commands
-            .iter()
-            .any(|c| c.kind == crate::profile::CommandKind::Action)
-        {
-            v.push(PanelId::Actions);
-        }
-        for rule in &profile.panels {
-            match rule.panel {
-                PanelKind::Solar => v.push(PanelId::Solar),
-                PanelKind::SelfTest => v.push(PanelId::SelfTest),
-                _ => {}
-            }
-        }
+            .filter(|r| {
+                r.flag
+                    .is_none_or(|bit| info.is_none_or(|i| i.supports(bit)))
+            })
+            .map(|r| PanelId::of(r.panel))
+            .collect();
         v.push(PanelId::Monitor);
-        // A panel whose capability bit the device reports clear is hidden (nothing is hidden
-        // before the device has answered CMD_VERSION).
-        if let Some(Ok(info)) = &self.state.device.info {
-            v.retain(|p| {
-                profile.panels.iter().all(|r| {
-                    r.flag
-                        .is_none_or(|bit| PanelId::of(r.panel) != *p || info.supports(bit))
-                })
-            });
-        }
         v
     }
 

@@ -108,6 +108,7 @@ impl Worker {
         let margin = self.margin(&f.request);
         let deadline = f.deadline.max(Instant::now() + margin);
         let baud = self.baud;
+        let mut answered_other = false;
         let result = match self.wait_for(&each, None, deadline, baud) {
             Err(e) => Err(e),
             Ok(Waited {
@@ -126,6 +127,7 @@ impl Worker {
                 })
             }
             Ok(w) => {
+                answered_other = w.mismatch.is_some();
                 // Its answer may still come: owed, never taken for the next poll's.
                 let expires = Instant::now() + self.timing.late_limit(margin);
                 self.owed.push(Owed {
@@ -154,6 +156,25 @@ impl Worker {
             at,
             result,
         });
+        if answered_other {
+            // The device answers in order: this poll's answer was lost, and what came instead
+            // answered a later poll, whose answer is now gone too. The polls still in flight
+            // are reported unanswered, so that the next answer awaited is the next one sent;
+            // otherwise every later poll would wait out its deadline for an answer already
+            // taken.
+            for f in std::mem::take(&mut self.in_flight) {
+                let waited_ms = f.sent.elapsed().as_millis() as u64;
+                self.emit(LinkEvent::Telemetry {
+                    command: f.request.command,
+                    at: Instant::now(),
+                    result: Err(ExchangeError::Timeout {
+                        command: f.request.command,
+                        attempts: 1,
+                        waited_ms,
+                    }),
+                });
+            }
+        }
     }
 
     pub(super) fn run_poll(&mut self, i: usize) {

@@ -213,7 +213,7 @@ impl SolarPanel {
         ui.strong(lang.tr("Readouts", "实时读数"));
         let cmds = rt.device.profile.commands.iter().filter(|c| {
             c.kind == CommandKind::Telemetry
-                && c.id > 9
+                && !rt.device.profile.is_core(c)
                 && c.request.is_empty()
                 && !c.reply.is_empty()
         });

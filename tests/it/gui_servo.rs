@@ -1,0 +1,575 @@
+//! The servo bench panel of the real app, driven through egui_kittest against the simulated
+//! servo bus on a pty.
+
+use botbench::i18n::Lang;
+use botbench::ops::OpError;
+use botbench::ops::servo::Presence;
+use botbench::sim::servo_bus::{Motion, ServoBus, SimServo};
+use botbench::ui::{Action, App, PanelId};
+use egui_kittest::kittest::{NodeT, Queryable};
+use std::time::Instant;
+
+use crate::support::gui::{H, app, app_mut, settings, step_until, type_into};
+use crate::support::{Served, serve, temp_dir};
+
+/// The simulated bus on its pty, in lockstep with the app's link.
+type Bench = Served<ServoBus>;
+
+fn bench(servos: Vec<SimServo>) -> Bench {
+    serve(ServoBus::new(servos))
+}
+
+/// The app on the servo bench panel, connected with the servo protocol's own answer margin.
+fn harness(b: &Bench, lang: Lang) -> H {
+    let mut h =
+        crate::support::gui::harness(settings(b.path(), "servo", PanelId::ServoBench, lang));
+    step_until(&mut h, "the link", |a| a.state.connected());
+    h
+}
+
+fn idle(a: &App) -> bool {
+    a.state.job_progress().is_none()
+}
+
+/// Selects `servo` in the scan table and asks for the baud option labelled `option`.
+fn set_baud(h: &mut H, servo: &str, option: &str) {
+    h.get_by_label(servo).click();
+    h.step();
+    h.get_by_label("ID & baud rate").click();
+    h.step();
+    h.get_by_label("New baud rate").click();
+    h.run_steps(2);
+    h.get_by_label(option).click();
+    h.step();
+    h.get_by_label("Set baud rate").click();
+    h.step();
+}
+
+/// Scans ids `first`-`last` at the checked rates and waits for the end.
+fn scan(h: &mut H, first: &str, last: &str) {
+    type_into(h, "First id", first);
+    type_into(h, "Last id", last);
+    h.get_by_label("Scan").click();
+    h.step();
+    step_until(h, "the scan", |a| idle(a) && a.servo.scan.outcome.is_some());
+    h.step();
+}
+
+#[test]
+fn a_scan_finds_the_configured_servos_and_shows_a_duplicate_as_such() {
+    let b = bench(vec![
+        SimServo::fresh(11).with_id(3).with_type(77),
+        SimServo::fresh(12).with_id(9),
+        SimServo::fresh(13).with_id(9),
+        SimServo::fresh(14).with_id(30).with_baud(57_600),
+    ]);
+    let mut h = harness(&b, Lang::En);
+    h.get_by_label("57600").click();
+    h.step();
+    scan(&mut h, "0", "40");
+    let mut rows: Vec<(u8, u32, bool)> = app(&h)
+        .servo
+        .scan
+        .rows
+        .iter()
+        .map(|r| {
+            (
+                r.id,
+                r.baud,
+                matches!(r.presence, Presence::PossibleDuplicate(_)),
+            )
+        })
+        .collect();
+    rows.sort();
+    assert_eq!(
+        rows,
+        vec![(3, 115_200, false), (9, 115_200, true), (30, 57_600, false)]
+    );
+    assert!(
+        h.query_by_label("possible duplicate id").is_some(),
+        "the duplicate is shown as such"
+    );
+    assert_eq!(
+        app(&h)
+            .servo
+            .scan
+            .rows
+            .iter()
+            .find(|r| r.id == 3)
+            .unwrap()
+            .servo_type,
+        Some(77)
+    );
+    // Two clean servos: none is picked for the technician.
+    assert_eq!(app(&h).servo.selected, None);
+    h.get_by_label("Servo 30").click();
+    h.step();
+    let sel = app(&h).servo.selected.expect("selected");
+    assert_eq!((sel.id, sel.baud), (30, 57_600));
+    // Rescanning the duplicate id still finds it garbled, never "no servo".
+    h.get_by_label("Rescan 9").click();
+    h.step();
+    step_until(&mut h, "the rescan", idle);
+    assert!(
+        app(&h)
+            .servo
+            .scan
+            .rows
+            .iter()
+            .any(|r| r.id == 9 && matches!(r.presence, Presence::PossibleDuplicate(_)))
+    );
+}
+
+#[test]
+fn a_parameter_out_of_range_is_refused_and_one_in_range_is_written_and_verified() {
+    let b = bench(vec![SimServo::fresh(21).with_id(5).with_param(41, 77)]);
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "0", "10");
+    let sel = app(&h).servo.selected.expect("the only servo is selected");
+    assert_eq!(sel.id, 5);
+    h.get_by_label("Parameters").click();
+    h.step();
+    h.get_by_label("Read all").click();
+    h.step();
+    step_until(&mut h, "the parameters", |a| {
+        idle(a) && a.servo.params.values.len() == 30
+    });
+    h.step();
+    assert_eq!(app(&h).servo.params.values.get(&41), Some(&Ok(77)));
+    type_into(&mut h, "Temperature limit", "70000");
+    assert!(
+        app(&h)
+            .servo
+            .params
+            .pending(&app(&h).state.device.profile)
+            .is_err()
+    );
+    assert!(
+        h.query_all_by_label_contains("out of range")
+            .next()
+            .is_some()
+    );
+    h.get_by_label_contains("Write changes").click();
+    h.run_steps(5);
+    assert!(idle(app(&h)), "nothing is written");
+    assert_eq!(b.servo(21).param(41), Some(77));
+    type_into(&mut h, "Temperature limit", "65");
+    h.get_by_label("Write changes (1)").click();
+    h.step();
+    step_until(&mut h, "the write", |a| {
+        idle(a) && !a.servo.params.marks.is_empty()
+    });
+    h.step();
+    assert_eq!(b.servo(21).param(41), Some(65));
+    assert_eq!(app(&h).servo.params.values.get(&41), Some(&Ok(65)));
+    assert!(h.query_by_label("verified").is_some());
+}
+
+#[test]
+fn an_id_change_from_the_panel_is_verified_and_bad_ids_are_refused() {
+    let b = bench(vec![
+        SimServo::fresh(31).with_id(5),
+        SimServo::fresh(32).with_id(7),
+    ]);
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "0", "10");
+    h.get_by_label("Servo 5").click();
+    h.step();
+    h.get_by_label("ID & baud rate").click();
+    h.step();
+    for (bad, why) in [("7", "already answers"), ("255", "broadcast")] {
+        type_into(&mut h, "New id", bad);
+        assert!(
+            h.query_by_label_contains(why).is_some(),
+            "{bad} is refused because of {why}"
+        );
+        h.get_by_label("Set ID").click();
+        h.run_steps(3);
+        assert!(idle(app(&h)));
+    }
+    type_into(&mut h, "New id", "12");
+    h.get_by_label("Set ID").click();
+    h.step();
+    step_until(&mut h, "the id change", |a| {
+        idle(a) && a.servo.setup.message.is_some()
+    });
+    h.step();
+    assert_eq!(b.servo(31).id(), 12);
+    assert_eq!(b.servo(32).id(), 7);
+    let sel = app(&h).servo.selected.unwrap();
+    assert_eq!((sel.id, sel.baud), (12, 115_200));
+    assert!(
+        h.query_by_label_contains("verified at the new id")
+            .is_some()
+    );
+    assert!(app(&h).servo.scan.rows.iter().any(|r| r.id == 12));
+}
+
+#[test]
+fn provision_next_on_a_fresh_servo_shows_pass_and_the_servo_has_the_plans_id_and_baud() {
+    let b = bench(vec![SimServo::fresh(4001)]);
+    let dir = temp_dir();
+    let log = dir.path().join("provision.csv");
+    let mut h = harness(&b, Lang::En);
+    h.get_by_label("Production").click();
+    h.step();
+    let plan = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/presets/servo-provision-plan.ron"
+    );
+    type_into(&mut h, "Plan", plan);
+    type_into(&mut h, "CSV log", &log.display().to_string());
+    h.get_by_label("Load plan").click();
+    h.step();
+    assert!(
+        app(&h).servo.production.plan.is_some(),
+        "{:?}",
+        app(&h).servo.production.plan_error
+    );
+    h.get_by_label("Provision next").click();
+    h.step();
+    step_until(&mut h, "provisioning", |a| {
+        idle(a) && !a.servo.production.history.is_empty()
+    });
+    h.step();
+    assert!(
+        h.query_all_by_label("PASS").next().is_some(),
+        "{:?}",
+        app(&h).servo.production.history
+    );
+    let s = b.servo(4001);
+    assert_eq!((s.id(), s.baud()), (1, 500_000));
+    assert_eq!(s.param(41), Some(70));
+    let text = std::fs::read_to_string(&log).unwrap();
+    assert_eq!(text.lines().count(), 2, "{text}");
+    assert!(text.lines().nth(1).unwrap().contains("PASS"));
+    // No fresh servo left: the next one fails and names the step.
+    h.get_by_label("Provision next").click();
+    h.step();
+    step_until(&mut h, "the second attempt", |a| {
+        idle(a) && a.servo.production.history.len() == 2
+    });
+    h.step();
+    assert!(h.query_by_label_contains("FAIL · step detect").is_some());
+}
+
+#[test]
+fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
+    let b = bench(vec![
+        SimServo::fresh(51).with_id(1),
+        SimServo::fresh(52).with_id(2).with_extended(false),
+        SimServo::fresh(53).with_id(3).with_baud(57_600),
+    ]);
+    let mut h = harness(&b, Lang::En);
+    h.get_by_label("57600").click();
+    scan(&mut h, "0", "3");
+    for (servo, serial) in [("Servo 1", 51), ("Servo 3", 53)] {
+        h.get_by_label("Bus scan").click();
+        h.step();
+        h.get_by_label(servo).click();
+        h.step();
+        h.get_by_label("Motion").click();
+        h.step();
+        type_into(&mut h, "Angle (°)", "90");
+        type_into(&mut h, "Interval (ms)", "60000");
+        h.get_by_label("Go to angle").click();
+        h.step();
+        step_until(&mut h, "the servo to move", |_| {
+            matches!(
+                b.servo(serial).motion_at(Instant::now()),
+                Motion::Move { .. }
+            )
+        });
+    }
+    // The port is at 57600 now; the stop reaches the servos at 115200 too.
+    h.get_by_label("STOP ALL").click();
+    h.step();
+    step_until(&mut h, "the servos to stop", |_| {
+        b.servo(51).motion_at(Instant::now()) == Motion::Hold
+            && b.servo(53).motion_at(Instant::now()) == Motion::Hold
+    });
+    assert_eq!(
+        b.servo(52).motion_at(Instant::now()),
+        Motion::Damping { power: 0 }
+    );
+    step_until(&mut h, "the port back at 57600", |a| {
+        matches!(
+            &a.state.link.state,
+            Some(botbench::link::LinkState::Connected { baud: 57_600, .. })
+        )
+    });
+    // While a long scan runs, the button is still there and enabled.
+    h.get_by_label("Bus scan").click();
+    h.step();
+    h.get_by_label("All 8").click();
+    type_into(&mut h, "Last id", "254");
+    h.get_by_label("Scan").click();
+    h.step();
+    h.step();
+    assert!(!idle(app(&h)), "the scan runs");
+    let stop = h.get_by_label("STOP ALL");
+    assert!(!stop.accesskit_node().is_disabled());
+    stop.click();
+    h.step();
+    h.get_by_label("Cancel job").click();
+    step_until(&mut h, "the cancel", |a| {
+        idle(a) && a.servo.scan.outcome.is_some()
+    });
+    h.step();
+    assert!(
+        matches!(&app(&h).servo.scan.outcome, Some(Err(OpError::Cancelled))),
+        "{:?}",
+        app(&h).servo.scan.outcome
+    );
+    assert!(h.query_by_label_contains("scan stopped").is_some());
+}
+
+#[test]
+fn the_live_angle_follows_a_move() {
+    let b = bench(vec![SimServo::fresh(61).with_id(4)]);
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "4", "4");
+    h.get_by_label("Motion").click();
+    h.step();
+    h.get_by_label("Live angle").click();
+    h.step();
+    type_into(&mut h, "Angle (°)", "-45.5");
+    type_into(&mut h, "Interval (ms)", "100");
+    h.get_by_label("Go to angle").click();
+    step_until(&mut h, "the plotted angle", |a| {
+        a.servo
+            .motion
+            .series
+            .last()
+            .is_some_and(|p| (p[1] + 45.5).abs() < 1e-6)
+    });
+    h.step();
+    assert!(h.query_by_label("-45.5°").is_some());
+}
+
+#[test]
+fn the_panel_renders_every_tab_in_english_and_chinese() {
+    let b = bench(vec![SimServo::fresh(71).with_id(2)]);
+    let mut h = harness(&b, Lang::En);
+    // Scans of id 2 alone: every tab has something to show, and scanning is drawn too.
+    type_into(&mut h, "First id", "2");
+    type_into(&mut h, "Last id", "2");
+    for (lang, tabs) in [
+        (
+            Lang::En,
+            [
+                "Bus scan",
+                "Parameters",
+                "ID & baud rate",
+                "Motion",
+                "Production",
+            ],
+        ),
+        (
+            Lang::Zh,
+            ["总线扫描", "参数", "ID与波特率", "运动测试", "产线烧录"],
+        ),
+    ] {
+        app_mut(&mut h).settings.lang = lang;
+        h.run_steps(2);
+        h.get_by_label(tabs[0]).click();
+        h.run_steps(2);
+        h.get_by_label(lang.tr("Scan", "扫描")).click();
+        h.step();
+        step_until(&mut h, "the scan", |a| {
+            idle(a) && a.servo.scan.outcome.is_some()
+        });
+        for tab in tabs {
+            h.get_by_label(tab).click();
+            h.run_steps(2);
+        }
+    }
+}
+
+#[test]
+fn a_baud_change_is_followed_and_verified_and_a_lost_servo_is_found() {
+    let b = bench(vec![
+        SimServo::fresh(81).with_id(4),
+        // An old servo does not take option 8 (1 Mbaud): it stays at 115200.
+        SimServo::fresh(82).with_id(6).with_extended(false),
+    ]);
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "0", "8");
+    set_baud(&mut h, "Servo 4", "4 (57600)");
+    step_until(&mut h, "the baud change", |a| {
+        idle(a) && a.servo.setup.message.is_some()
+    });
+    h.step();
+    assert_eq!(b.servo(81).baud(), 57_600);
+    let sel = app(&h).servo.selected.unwrap();
+    assert_eq!((sel.id, sel.baud), (4, 57_600));
+    assert!(h.query_by_label_contains("57600 baud: verified").is_some());
+
+    h.get_by_label("Bus scan").click();
+    h.step();
+    set_baud(&mut h, "Servo 6", "8 (1000000, newer servos)");
+    step_until(&mut h, "the failed baud change", |a| {
+        idle(a)
+            && a.servo
+                .setup
+                .message
+                .as_ref()
+                .is_some_and(|(ok, m)| !ok && m.contains("found at 115200"))
+    });
+    let sel = app(&h).servo.selected.unwrap();
+    assert_eq!(
+        (sel.id, sel.baud),
+        (6, 115_200),
+        "the servo is where it was found"
+    );
+    assert_eq!(b.servo(82).baud(), 115_200);
+}
+
+#[test]
+fn a_parameter_preset_saves_loads_and_writes_and_a_bad_one_is_refused_with_its_place() {
+    let b = bench(vec![SimServo::fresh(91).with_id(3).with_param(41, 66)]);
+    let dir = temp_dir();
+    let path = dir.path().join("servo-preset.ron");
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "3", "3");
+    h.get_by_label("Parameters").click();
+    h.step();
+    h.get_by_label("Read all").click();
+    h.step();
+    step_until(&mut h, "the parameters", |a| {
+        idle(a) && a.servo.params.values.len() == 30
+    });
+    type_into(&mut h, "Parameter preset", &path.display().to_string());
+    h.get_by_label("Save preset").click();
+    h.step();
+    assert!(path.exists(), "{:?}", app(&h).servo.params.message);
+    // The servo drifts from the preset; loading it brings the preset's value back as an edit.
+    b.sim()
+        .servo_by_serial_mut(91)
+        .unwrap()
+        .clone_from(&SimServo::fresh(91).with_id(3).with_param(41, 80));
+    h.get_by_label("Read all").click();
+    h.step();
+    step_until(&mut h, "the new value", |a| {
+        idle(a) && a.servo.params.values.get(&41) == Some(&Ok(80))
+    });
+    h.get_by_label("Load preset").click();
+    h.step();
+    h.step();
+    h.get_by_label("Write changes (1)").click();
+    h.step();
+    step_until(&mut h, "the write", |a| {
+        idle(a) && !a.servo.params.marks.is_empty()
+    });
+    assert_eq!(b.servo(91).param(41), Some(66));
+
+    std::fs::write(
+        &path,
+        "(\n    version: 1,\n    params: [\n        (\"over_temprature\", \"70\"),\n        (\"accel_switch\", \"sometimes\"),\n    ],\n)\n",
+    )
+    .unwrap();
+    h.get_by_label("Load preset").click();
+    h.step();
+    let msg = app(&h).servo.params.message.clone().unwrap();
+    assert!(
+        !msg.0 && msg.1.contains(":5:9:") && msg.1.contains("accel_switch"),
+        "{msg:?}"
+    );
+    assert!(
+        app(&h).servo.params.edits.is_empty(),
+        "nothing of a bad preset is taken"
+    );
+}
+
+#[test]
+fn reset_user_data_asks_first_then_follows_the_servo_to_id_0() {
+    let b = bench(vec![
+        SimServo::fresh(95)
+            .with_id(9)
+            .with_baud(57_600)
+            .with_param(41, 61),
+    ]);
+    let mut h = harness(&b, Lang::En);
+    h.get_by_label("57600").click();
+    scan(&mut h, "9", "9");
+    h.get_by_label("Parameters").click();
+    // The tab reads the selected servo as soon as it shows it.
+    step_until(&mut h, "the parameters read", |a| {
+        idle(a) && a.servo.params.values.get(&41) == Some(&Ok(61))
+    });
+    h.get_by_label("Reset user data…").click();
+    h.run_steps(2);
+    h.get_by_label("Keep").click();
+    h.run_steps(3);
+    assert!(idle(app(&h)));
+    assert_eq!(b.servo(95).id(), 9);
+    h.get_by_label("Reset user data…").click();
+    h.run_steps(2);
+    h.get_by_label("Reset").click();
+    h.step();
+    step_until(&mut h, "the reset", |a| {
+        idle(a) && a.servo.params.message.is_some()
+    });
+    let s = b.servo(95);
+    assert_eq!((s.id(), s.baud()), (0, 115_200));
+    let sel = app(&h).servo.selected.unwrap();
+    assert_eq!((sel.id, sel.baud), (0, 115_200));
+    assert!(
+        app(&h).servo.params.values.get(&34) == Some(&Ok(0)),
+        "read again"
+    );
+}
+
+#[test]
+fn wheel_mode_and_damping_reach_the_servo() {
+    let b = bench(vec![SimServo::fresh(97).with_id(8)]);
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "8", "8");
+    h.get_by_label("Motion").click();
+    h.step();
+    h.get_by_label("Method").click();
+    h.run_steps(2);
+    h.get_by_label("Continuous").click();
+    h.step();
+    type_into(&mut h, "Speed (°/s)", "120");
+    h.get_by_label("Run wheel").click();
+    h.step();
+    step_until(
+        &mut h,
+        "the spin",
+        |_| matches!(b.servo(97).motion_at(Instant::now()), Motion::Spin { rate, .. } if rate > 0.0),
+    );
+    // Out of range speeds are refused before sending.
+    type_into(&mut h, "Speed (°/s)", "70000");
+    assert!(
+        h.query_all_by_label_contains("out of range")
+            .next()
+            .is_some()
+    );
+    type_into(&mut h, "Holding power (mW, 0 = limit)", "1500");
+    h.get_by_label("Damping mode").click();
+    h.step();
+    step_until(&mut h, "damping", |_| {
+        b.servo(97).motion_at(Instant::now()) == Motion::Damping { power: 1500 }
+    });
+}
+
+#[test]
+fn a_new_connection_forgets_the_servos_found_on_the_last_one() {
+    let b = bench(vec![SimServo::fresh(51).with_id(4)]);
+    let other = serve(ServoBus::new(Vec::new()));
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "0", "10");
+    assert_eq!(app(&h).servo.scan.rows.len(), 1);
+    assert!(app(&h).servo.selected.is_some(), "a lone servo is selected");
+    app_mut(&mut h).apply(Action::Connect {
+        target: botbench::ui::Target::Port(other.path().to_string()),
+        baud: 115_200,
+        profile: "servo".into(),
+        margin_ms: None,
+    });
+    step_until(&mut h, "the new link", |a| a.state.connected());
+    let a = app(&h);
+    assert!(a.servo.scan.rows.is_empty(), "{:?}", a.servo.scan.rows);
+    assert!(a.servo.selected.is_none());
+}

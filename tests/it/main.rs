@@ -1,0 +1,37 @@
+//! The integration tests, in one binary: one module per area, and the helpers they share in
+//! [`support`]. Tests run on parallel threads, so none of them sets process-wide state
+//! (environment, current directory, fixed paths or ports): each gets its own temporary
+//! directory and passes its configuration in.
+
+// Tests and benchmarks stop at the first thing that is not as set up: a panic is their report.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod support;
+
+mod cli_frame;
+mod codec_props;
+mod field_msp;
+mod field_servo;
+mod field_vanish;
+mod firmware_variants;
+mod gui;
+mod gui_msp;
+mod gui_servo;
+mod gui_tuya;
+mod i18n;
+mod interop_fields;
+mod link_msp;
+mod link_servo;
+mod link_tuya;
+mod preset;
+mod profile_codec;
+mod profile_load;
+mod provision;
+mod sdk_driver;
+mod sdk_vectors;
+mod seed_vectors;
+mod selftest;
+mod series;
+mod servo_sync;
+mod sim_devices;
+mod sim_msp;

@@ -1,0 +1,533 @@
+//! Production provisioning against the simulated servo bus on a pseudo-terminal.
+
+use botbench::ops::servo::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
+use botbench::ops::{Cancel, Progress};
+use botbench::profile::Profile;
+use botbench::sim::servo_bus::SimServo;
+use std::collections::BTreeMap;
+
+use crate::support::cli::{self, SimProcess};
+use crate::support::servo::Bench;
+use crate::support::{profile, temp_dir};
+
+impl Bench {
+    fn provision_with(
+        &self,
+        plan: &Plan,
+        state: &mut ProvisionState,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Record {
+        prov::provision_next(
+            &self.client(),
+            &self.profile,
+            plan,
+            state,
+            &Cancel::new(),
+            progress,
+        )
+    }
+
+    fn provision(&self, plan: &Plan, state: &mut ProvisionState) -> Record {
+        self.provision_with(plan, state, &mut |_| {})
+    }
+}
+
+const PLAN_FILE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/presets/servo-provision-plan.ron"
+);
+const PLAN: &str = include_str!("../../presets/servo-provision-plan.ron");
+
+fn plan(profile: &Profile) -> Plan {
+    Plan::parse("plan.ron", PLAN, profile).unwrap()
+}
+
+/// The plan's parameters as raw values by data_id.
+fn plan_raw(plan: &Plan, profile: &Profile) -> Vec<(u8, i64)> {
+    plan.resolve(profile)
+        .unwrap()
+        .writes
+        .iter()
+        .map(|(p, raw)| (p.id, *raw))
+        .collect()
+}
+
+/// An RFC 4180 reader, written apart from the writer under test.
+fn parse_csv(text: &str) -> Vec<Vec<String>> {
+    let mut rows = Vec::new();
+    let mut row = Vec::new();
+    let mut field = String::new();
+    let mut quoted = false;
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (quoted, c) {
+            (true, '"') if chars.peek() == Some(&'"') => {
+                chars.next();
+                field.push('"');
+            }
+            (true, '"') => quoted = false,
+            (true, c) => field.push(c),
+            (false, '"') => quoted = true,
+            (false, ',') => row.push(std::mem::take(&mut field)),
+            (false, '\n') => {
+                row.push(std::mem::take(&mut field));
+                rows.push(std::mem::take(&mut row));
+            }
+            (false, c) => field.push(c),
+        }
+    }
+    assert!(field.is_empty() && row.is_empty(), "the log ends mid-line");
+    rows
+}
+
+fn col(header: &[String], name: &str) -> usize {
+    header.iter().position(|h| h == name).unwrap()
+}
+
+fn assert_provisioned(bench: &Bench, plan: &Plan, serial: u32, id: u8) {
+    let s = bench.servo(serial);
+    assert_eq!(s.id(), id, "servo {serial}");
+    assert_eq!(s.baud(), plan.target_baud, "servo {serial}");
+    for (pid, raw) in plan_raw(plan, &bench.profile) {
+        assert_eq!(s.param(pid), Some(raw), "servo {serial} parameter {pid}");
+    }
+}
+
+#[test]
+fn three_fresh_servos_plugged_one_after_another_get_ids_baud_params_and_pass_lines() {
+    let bench = Bench::new(vec![SimServo::fresh(1001)]);
+    let plan = plan(&bench.profile);
+    assert_eq!(plan.params.len(), 10);
+    let dir = temp_dir();
+    let log = dir.path().join("three.csv");
+    let mut state = ProvisionState::new();
+    let mut records = Vec::new();
+    for serial in [1001, 1002, 1003] {
+        if serial != 1001 {
+            // The operator plugs the next one; the ones done stay on the bus.
+            bench.bus().add(SimServo::fresh(serial));
+        }
+        let r = bench.provision(&plan, &mut state);
+        assert_eq!(r.result, Outcome::Pass, "{r:?}");
+        assert_eq!(r.serial, Some(serial));
+        assert!(r.mismatches.is_empty());
+        prov::append_csv(&log, &r).unwrap();
+        records.push(r);
+    }
+    let ids: Vec<u8> = records.iter().map(|r| r.id.unwrap()).collect();
+    assert_eq!(ids, [1, 2, 3]);
+    assert_eq!(state.assigned, [1, 2, 3]);
+    for (serial, id) in [(1001, 1), (1002, 2), (1003, 3)] {
+        assert_provisioned(&bench, &plan, serial, id);
+    }
+    let rows = parse_csv(&std::fs::read_to_string(&log).unwrap());
+    assert_eq!(rows.len(), 4, "{rows:?}");
+    let header = &rows[0];
+    assert_eq!(
+        header[..8],
+        [
+            "time",
+            "serial",
+            "id",
+            "baud",
+            "result",
+            "step",
+            "reason",
+            "mismatches"
+        ]
+    );
+    assert_eq!(header[8..], ["firmware_version", "servo_type", "voltage"]);
+    for (row, (serial, id)) in rows[1..].iter().zip([(1001, 1), (1002, 2), (1003, 3)]) {
+        assert_eq!(row.len(), header.len());
+        assert_eq!(row[col(header, "result")], "PASS");
+        assert_eq!(row[col(header, "serial")], serial.to_string());
+        assert_eq!(row[col(header, "id")], id.to_string());
+        assert_eq!(row[col(header, "baud")], "500000");
+        assert!(chrono::DateTime::parse_from_rfc3339(&row[col(header, "time")]).is_ok());
+        assert_eq!(row[col(header, "firmware_version")], "515");
+        assert!(!row[col(header, "voltage")].is_empty());
+    }
+}
+
+#[test]
+fn a_fresh_servo_at_another_baud_rate_is_found_and_moved_to_the_plans() {
+    let bench = Bench::new(vec![SimServo::fresh(2001).with_baud(38_400)]);
+    let plan = plan(&bench.profile);
+    let r = bench.provision(&plan, &mut ProvisionState::new());
+    assert_eq!(r.result, Outcome::Pass, "{r:?}");
+    assert_eq!((r.id, r.baud), (Some(1), Some(500_000)));
+    assert_provisioned(&bench, &plan, 2001, 1);
+}
+
+#[test]
+fn ids_that_already_answer_at_any_rate_are_skipped() {
+    // Servo 1 is already on the bus at the plan's rate, servo 3 at another rate.
+    let bench = Bench::new(vec![
+        SimServo::fresh(1).with_id(1).with_baud(500_000),
+        SimServo::fresh(3).with_id(3).with_baud(57_600),
+        SimServo::fresh(3001),
+    ]);
+    let mut plan = plan(&bench.profile);
+    plan.ids = prov::IdSequence::List(vec![1, 3, 9]);
+    let mut state = ProvisionState::new();
+    let r = bench.provision(&plan, &mut state);
+    assert_eq!(r.result, Outcome::Pass, "{r:?}");
+    assert_eq!(r.id, Some(9));
+    assert_eq!(state.next, 3, "ids in use are not offered again");
+    assert_eq!(bench.servo(3001).id(), 9);
+    assert_eq!((bench.servo(1).id(), bench.servo(3).id()), (1, 3));
+    // The list is used up.
+    bench.bus().add(SimServo::fresh(3002));
+    let r = bench.provision(&plan, &mut state);
+    assert!(
+        matches!(&r.result, Outcome::Fail { step, reason } if step == "assign id" && reason.contains("no free id")),
+        "{r:?}"
+    );
+    assert_eq!(bench.servo(3002).id(), 0, "nothing written");
+}
+
+#[test]
+fn a_fresh_servo_is_given_an_id_only_when_alone_at_its_rate() {
+    // Servo 6 shares the fresh servo's rate: set_id's rule refuses, and nothing is written.
+    let bench = Bench::new(vec![
+        SimServo::fresh(6).with_id(6).with_baud(250_000),
+        SimServo::fresh(3002).with_baud(250_000),
+    ]);
+    let plan = plan(&bench.profile);
+    let mut state = ProvisionState::new();
+    let r = bench.provision(&plan, &mut state);
+    assert!(
+        matches!(&r.result, Outcome::Fail { step, reason } if step == "assign id" && reason.contains("alone on the bus")),
+        "{r:?}"
+    );
+    assert_eq!(r.serial, Some(3002));
+    assert_eq!(bench.servo(3002).id(), 0, "nothing written");
+    // The operator unplugs servo 6; the same session goes on, and id 1 is still free.
+    bench.bus().remove(6);
+    let r = bench.provision(&plan, &mut state);
+    assert_eq!(r.result, Outcome::Pass, "{r:?}");
+    assert_eq!(r.id, Some(1));
+}
+
+#[test]
+fn two_fresh_servos_on_the_bus_fail_at_detect_with_nothing_written() {
+    for (a, b) in [(115_200, 115_200), (115_200, 57_600)] {
+        let bench = Bench::new(vec![
+            SimServo::fresh(4001).with_baud(a),
+            SimServo::fresh(4002).with_baud(b),
+        ]);
+        let before: Vec<(u32, BTreeMap<u8, i64>)> = [4001, 4002]
+            .iter()
+            .map(|&s| (bench.servo(s).baud(), bench.servo(s).params().clone()))
+            .collect();
+        let mut state = ProvisionState::new();
+        let r = bench.provision(&plan(&bench.profile), &mut state);
+        match &r.result {
+            Outcome::Fail { step, reason } => {
+                assert_eq!(step, "detect", "{r:?}");
+                assert!(reason.contains("more than one servo"), "{reason}");
+            }
+            Outcome::Pass => panic!("{r:?}"),
+        }
+        assert_eq!((r.serial, r.id), (None, None));
+        assert!(state.assigned.is_empty());
+        let after: Vec<(u32, BTreeMap<u8, i64>)> = [4001, 4002]
+            .iter()
+            .map(|&s| (bench.servo(s).baud(), bench.servo(s).params().clone()))
+            .collect();
+        assert_eq!(before, after, "nothing written at {a} and {b} baud");
+    }
+}
+
+#[test]
+fn no_fresh_servo_fails_at_detect() {
+    let bench = Bench::new(vec![SimServo::fresh(1).with_id(4)]);
+    let r = bench.provision(&plan(&bench.profile), &mut ProvisionState::new());
+    assert!(
+        matches!(&r.result, Outcome::Fail { step, reason } if step == "detect" && reason.contains("no fresh servo")),
+        "{r:?}"
+    );
+}
+
+/// Provisions servo `serial`, unplugging it when progress first reports `when`.
+fn vanish_at(when: &str) -> (Bench, Record) {
+    let bench = Bench::new(vec![SimServo::fresh(5001)]);
+    let plan = plan(&bench.profile);
+    let bus = bench.served.sim.clone();
+    let mut gone = false;
+    let r = bench.provision_with(&plan, &mut ProvisionState::new(), &mut |p| {
+        if !gone && p.message.starts_with(when) {
+            gone = true;
+            bus.lock().unwrap().remove(5001);
+        }
+    });
+    assert!(gone, "progress never reported {when}");
+    (bench, r)
+}
+
+#[test]
+fn a_servo_unplugged_after_its_id_is_set_fails_at_set_baud() {
+    let (_bench, r) = vanish_at("set baud");
+    match &r.result {
+        Outcome::Fail { step, reason } => {
+            assert_eq!(step, "set baud");
+            assert!(
+                reason.contains("servo 1 did not answer at 115200 baud"),
+                "{reason}"
+            );
+        }
+        Outcome::Pass => panic!("{r:?}"),
+    }
+    assert_eq!((r.serial, r.id), (Some(5001), Some(1)));
+    let dir = temp_dir();
+    let log = dir.path().join("vanish.csv");
+    prov::append_csv(&log, &r).unwrap();
+    let rows = parse_csv(&std::fs::read_to_string(&log).unwrap());
+    assert_eq!(rows[1][col(&rows[0], "result")], "FAIL");
+    assert_eq!(rows[1][col(&rows[0], "step")], "set baud");
+    assert_eq!(rows[1][col(&rows[0], "voltage")], "", "nothing recorded");
+}
+
+#[test]
+fn a_servo_unplugged_while_its_params_are_written_fails_there() {
+    let (_bench, r) = vanish_at("apply params: over_volt_high");
+    match &r.result {
+        Outcome::Fail { step, reason } => {
+            assert_eq!(step, "apply params");
+            assert!(reason.starts_with("over_volt_high: "), "{reason}");
+            assert!(
+                reason.contains("servo 1 did not answer at 500000 baud"),
+                "{reason}"
+            );
+        }
+        Outcome::Pass => panic!("{r:?}"),
+    }
+    assert!(r.recorded.iter().all(|(_, v)| v.is_none()));
+}
+
+#[test]
+fn a_servo_swapped_before_verify_is_caught_by_its_serial_number() {
+    // Another servo with the same id and rate takes its place: verify reads the serial again.
+    let bench = Bench::new(vec![SimServo::fresh(6001)]);
+    let plan = plan(&bench.profile);
+    let bus = bench.served.sim.clone();
+    let r = bench.provision_with(&plan, &mut ProvisionState::new(), &mut |p| {
+        if p.message == "verify" {
+            let mut bus = bus.lock().unwrap();
+            let old = bus.remove(6001).unwrap();
+            let mut twin = SimServo::fresh(6002).with_id(1).with_baud(500_000);
+            for (&k, &v) in old.params() {
+                twin = twin.with_param(k, v);
+            }
+            bus.add(twin);
+        }
+    });
+    match &r.result {
+        Outcome::Fail { step, .. } => assert_eq!(step, "verify"),
+        Outcome::Pass => panic!("{r:?}"),
+    }
+    assert!(
+        r.mismatches
+            .iter()
+            .any(|m| m.starts_with("serial_number: wrote 6001")),
+        "{:?}",
+        r.mismatches
+    );
+}
+
+/// The plan text with `from` replaced by `to`, and the 1-based line and column of `to` plus
+/// `skip` characters (where the value sits).
+fn edited(from: &str, to: &str, skip: usize) -> (String, usize, usize) {
+    assert_eq!(PLAN.matches(from).count(), 1, "{from}");
+    let text = PLAN.replacen(from, to, 1);
+    let pos = text.find(to).unwrap() + skip;
+    let line = text[..pos].matches('\n').count() + 1;
+    let col = pos - text[..pos].rfind('\n').map_or(0, |n| n + 1) + 1;
+    (text, line, col)
+}
+
+#[test]
+fn bad_plans_are_refused_at_load_with_line_and_column() {
+    let profile = profile("servo");
+    let cases = [
+        (
+            r#"("over_temprature", "70")"#,
+            r#"("over_temperature", "70")"#,
+            "no servo parameter 'over_temperature'",
+        ),
+        (
+            r#"("over_current", "2500")"#,
+            r#"("voltage", "2500")"#,
+            "read-only",
+        ),
+        (
+            r#"("stall_power_limit", "3500")"#,
+            r#"("stall_power_limit", "70000")"#,
+            "stall_power_limit",
+        ),
+        (
+            r#"("stall_protect_mode", "limit_power")"#,
+            r#"("stall_protect_mode", "3")"#,
+            "stall_protect_mode",
+        ),
+        (
+            "target_baud: 500000",
+            "target_baud: 400000",
+            "400000 is not a servo baud rate",
+        ),
+        (
+            r#"("over_volt_high", "12500")"#,
+            r#"("over_volt_high", "4500")"#,
+            "(over_volt_low) 5000 mV must be ≤ Voltage upper limit (over_volt_high) 4500 mV",
+        ),
+        ("ids: Start(1)", "ids: Start(0)", "cannot start at 0"),
+        (
+            r#"("soft_start_time", "1500")"#,
+            r#"("assigned_id", "3")"#,
+            "set by the plan's `ids`",
+        ),
+        (
+            r#""servo_type""#,
+            r#""servo_kind""#,
+            "no servo parameter 'servo_kind' to record",
+        ),
+    ];
+    for (from, to, says) in cases {
+        // The error points at the value after `key: `, or at the list entry.
+        let skip = to.find(": ").map_or(0, |i| i + 2);
+        let (text, line, col) = edited(from, to, skip);
+        let e = Plan::parse("plan.ron", &text, &profile).unwrap_err();
+        assert!(e.message().contains(says), "{to}: {e}");
+        assert_eq!(e.at(), (line, col), "{to}: {e}");
+        assert!(
+            e.to_string()
+                .starts_with(&format!("plan.ron:{line}:{col}: ")),
+            "{e}"
+        );
+    }
+    // A syntax error, and an unknown key, from the RON reader.
+    let (text, line, _) = edited("    record: [", "    recrod: [", 0);
+    let e = Plan::parse("plan.ron", &text, &profile).unwrap_err();
+    assert_eq!(e.at().0, line, "{e}");
+    assert!(e.message().contains("recrod"), "{e}");
+    let e = Plan::parse("plan.ron", "(target_baud: 500000, ids: Start(1),", &profile).unwrap_err();
+    assert_eq!(e.at().0, 1, "{e}");
+}
+
+#[test]
+fn a_log_for_other_recorded_params_is_not_mixed() {
+    let dir = temp_dir();
+    let log = dir.path().join("mixed.csv");
+    let mut r = Record {
+        time: "2025-01-01T00:00:00+00:00".into(),
+        serial: Some(1),
+        id: Some(2),
+        baud: Some(500_000),
+        result: Outcome::Fail {
+            step: "verify".into(),
+            reason: "odd, \"quoted\"\nand two lines".into(),
+        },
+        mismatches: vec!["a: wrote 1, servo holds 2".into(), "b, c".into()],
+        recorded: vec![("voltage".into(), Some("7400".into()))],
+    };
+    prov::append_csv(&log, &r).unwrap();
+    let rows = parse_csv(&std::fs::read_to_string(&log).unwrap());
+    assert_eq!(
+        rows[1][col(&rows[0], "reason")],
+        "odd, \"quoted\"\nand two lines"
+    );
+    assert_eq!(
+        rows[1][col(&rows[0], "mismatches")],
+        "a: wrote 1, servo holds 2; b, c"
+    );
+    r.recorded = vec![("servo_type".into(), None)];
+    let e = prov::append_csv(&log, &r).unwrap_err();
+    assert!(e.to_string().contains("another header"), "{e}");
+    assert_eq!(parse_csv(&std::fs::read_to_string(&log).unwrap()).len(), 2);
+}
+
+#[test]
+fn the_cli_provisions_one_servo_with_a_pass_line_and_a_log() {
+    let sim = SimProcess::start(&["servo-bus", "--servos", "0"]);
+    let dir = temp_dir();
+    let log = dir.path().join("cli.csv");
+    let provision = || {
+        let mut c = cli::botbench(["servo", "--port", &sim.path, "--margin-ms", cli::MARGIN_MS]);
+        c.args(["provision", PLAN_FILE]).arg("--log").arg(&log);
+        cli::output(&mut c)
+    };
+    let out = provision();
+    // A second run finds no fresh servo: a FAIL, exit 1, and a second line in the log.
+    let again = provision();
+    drop(sim);
+    assert_eq!(out.code, 0, "{}{}", out.out, out.err);
+    let lines: Vec<&str> = out.out.lines().collect();
+    assert_eq!(lines.len(), 1, "{}", out.out);
+    assert!(
+        lines[0].contains("PASS") && lines[0].contains("id 1"),
+        "{}",
+        out.out
+    );
+    assert_eq!(again.code, 1, "{}", again.out);
+    assert!(
+        again.out.contains("FAIL") && !again.out.contains("PASS"),
+        "{}",
+        again.out
+    );
+    let rows = parse_csv(&std::fs::read_to_string(&log).unwrap());
+    assert_eq!(rows.len(), 3, "{rows:?}");
+    assert_eq!(rows[1][col(&rows[0], "result")], "PASS");
+    assert_eq!(rows[2][col(&rows[0], "result")], "FAIL");
+    assert_eq!(rows[2][col(&rows[0], "step")], "detect");
+}
+
+#[test]
+fn the_cli_refuses_a_bad_plan_before_opening_the_port() {
+    let dir = temp_dir();
+    let plan = dir.path().join("bad-plan.ron");
+    std::fs::write(
+        &plan,
+        PLAN.replace("target_baud: 500000", "target_baud: 400000"),
+    )
+    .unwrap();
+    let mut c = cli::botbench(["servo", "--port", "/nonexistent/port", "provision"]);
+    let ran = cli::output(c.arg(&plan));
+    assert_eq!(ran.code, 2, "{}", ran.err);
+    assert!(
+        ran.err.contains("400000 is not a servo baud rate"),
+        "{}",
+        ran.err
+    );
+    assert!(!ran.err.contains("nonexistent"), "{}", ran.err);
+}
+
+#[test]
+fn the_cli_asks_for_the_next_servo_and_stops_when_told() {
+    use std::io::Write;
+    use std::process::Stdio;
+    // Only a provisioned servo (id 7) on the bus: the first attempt fails at once, at detect
+    // (one that passes is above); then the operator is asked for the next.
+    let sim = SimProcess::start(&["servo-bus", "--servos", "7"]);
+    let mut run = cli::botbench(["servo", "--port", &sim.path, "--margin-ms", cli::MARGIN_MS])
+        .args(["provision", PLAN_FILE, "--count", "3"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The operator has no second servo and types q at the prompt.
+    run.stdin.take().unwrap().write_all(b"q\n").unwrap();
+    let out = run.wait_with_output().unwrap();
+    drop(sim);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stdout}{stderr}");
+    assert!(stderr.contains("plug in servo 2 of 3"), "{stderr}");
+    assert!(
+        stderr.contains("stopped by the operator before servo 2 of 3"),
+        "{stderr}"
+    );
+    assert_eq!(stdout.matches("FAIL ####").count(), 1, "{stdout}");
+    assert!(stdout.contains("at step \"detect\""), "{stdout}");
+    assert!(stdout.contains("0 PASS, 1 FAIL"), "{stdout}");
+}

@@ -1,0 +1,74 @@
+//! The servo vendor's own SDK drives `botbench sim servo-bus` through a pty
+//! (`tests/sdk/sdk_drive_sim.py`, tests/sdk/README.md) and every check it makes must pass.
+//!
+//! Needs the SDK in a Python virtual environment: `BOTBENCH_SDK_PYTHON` names its interpreter,
+//! else `/work/sdk-venv/bin/python` (the README's set-up) is tried. Without it the test says so
+//! on stderr and passes without running: CI installs the SDK (two `pip` wheels) to run it. It
+//! takes about 20 s (the SDK waits up to 100 ms for every reply).
+
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+
+use crate::support::cli::SimProcess;
+
+/// The SDK's interpreter, if it is installed.
+fn sdk_python() -> Result<PathBuf, String> {
+    let python = std::env::var_os("BOTBENCH_SDK_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("/work/sdk-venv/bin/python"));
+    let ok = Command::new(&python)
+        .args(["-c", "import fashionstar_uart_sdk, serial"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if ok {
+        Ok(python)
+    } else {
+        Err(format!(
+            "{} cannot import fashionstar_uart_sdk and serial (set BOTBENCH_SDK_PYTHON; set-up in tests/sdk/README.md)",
+            python.display()
+        ))
+    }
+}
+
+#[test]
+fn the_vendor_sdk_gets_correct_answers_from_the_servo_bus_simulator() {
+    let python = match sdk_python() {
+        Ok(p) => p,
+        Err(why) => {
+            eprintln!(
+                "SKIPPED the_vendor_sdk_gets_correct_answers_from_the_servo_bus_simulator: {why}"
+            );
+            return;
+        }
+    };
+    let sim = SimProcess::start(&["servo-bus", "--servos", "1,2,3"]);
+    let pty = sim.path.as_str();
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/sdk/sdk_drive_sim.py");
+    let out = Command::new(&python)
+        .args([script, pty, "--ids", "1,2,3"])
+        .output()
+        .expect("the driver runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let summary: serde_json::Value = stdout
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .find(|d| d["kind"] == "summary")
+        .unwrap_or_else(|| {
+            panic!(
+                "no summary; stderr:\n{}",
+                String::from_utf8_lossy(&out.stderr)
+            )
+        });
+    eprintln!("{summary}");
+    let failed: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.contains("\"ok\": false"))
+        .collect();
+    assert_eq!(summary["failed"], serde_json::json!([]), "{failed:#?}");
+    assert!(out.status.success(), "driver exit {:?}", out.status);
+    // Every step the SDK can do was checked: only the SDK's own defects and steps with nothing
+    // to observe are unchecked.
+    assert!(summary["ok"].as_u64().unwrap_or(0) >= 59, "{summary}");
+}
