@@ -227,7 +227,7 @@ fn slow_window_cleaner(
     };
     let wc = Arc::new(Mutex::new(WindowCleaner::new(&opts).unwrap()));
     let shared: SharedDevice = wc.clone();
-    let server = PtyServer::start(shared, Faults::default()).unwrap();
+    let server = PtyServer::start_lockstep(shared, Faults::default()).unwrap();
     let profile = Registry::builtin().unwrap().get("window-cleaner").unwrap();
     let options = LinkOptions {
         margin,

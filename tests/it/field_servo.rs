@@ -12,7 +12,7 @@ use botbench::sim::servo_bus::{ServoBus, SimServo};
 use botbench::sim::{Faults, PtyServer, SharedDevice};
 use std::sync::{Arc, Mutex};
 
-use crate::support::cli::{Ran, SimProcess, run_watched};
+use crate::support::cli::{MARGIN_MS, Ran, SimProcess, run_watched};
 
 /// The ids a `servo --json scan` found, each with its presence status.
 fn scanned(run: &Ran) -> Vec<(u64, String)> {
@@ -144,9 +144,29 @@ fn a_slow_host_still_finds_every_servo_and_every_answer() {
 fn a_one_wire_bus_echo_is_not_taken_for_an_answer() {
     let sim = SimProcess::start(&["servo-bus", "--servos", "2,3", "--echo"]);
     let p = sim.path.as_str();
-    let scan = run_watched(&["servo", "--port", p, "--json", "scan", "--ids", "0-10"]);
+    let scan = run_watched(&[
+        "servo",
+        "--port",
+        p,
+        "--margin-ms",
+        MARGIN_MS,
+        "--json",
+        "scan",
+        "--ids",
+        "0-10",
+    ]);
     assert_eq!(scanned(&scan), present(&[2, 3]), "{}", scan.text());
-    let write = run_watched(&["servo", "--port", p, "write", "3", "over_temprature", "70"]);
+    let write = run_watched(&[
+        "servo",
+        "--port",
+        p,
+        "--margin-ms",
+        MARGIN_MS,
+        "write",
+        "3",
+        "over_temprature",
+        "70",
+    ]);
     assert_eq!(write.code, 0, "{}", write.text());
     assert!(write.out.contains("verified"), "{}", write.text());
 }
@@ -155,14 +175,23 @@ fn a_one_wire_bus_echo_is_not_taken_for_an_answer() {
 fn a_servo_that_ignores_a_baud_change_is_reported_where_it_still_is() {
     let sim = SimProcess::start(&["servo-bus", "--servos", "4", "--ignore-baud-change"]);
     let p = sim.path.as_str();
-    let set = run_watched(&["servo", "--port", p, "set-baud", "4", "57600"]);
+    let set = run_watched(&[
+        "servo",
+        "--port",
+        p,
+        "--margin-ms",
+        MARGIN_MS,
+        "set-baud",
+        "4",
+        "57600",
+    ]);
     assert_eq!(set.code, 1, "{}", set.text());
     assert!(
         set.err.contains("57600") && set.err.contains("115200"),
         "the error says where the servo is: {}",
         set.text()
     );
-    let ping = run_watched(&["servo", "--port", p, "ping", "4"]);
+    let ping = run_watched(&["servo", "--port", p, "--margin-ms", MARGIN_MS, "ping", "4"]);
     assert_eq!(ping.code, 0, "still at 115200: {}", ping.text());
 }
 
@@ -200,6 +229,8 @@ fn an_explicit_broadcast_changes_every_servo_and_reads_nothing_back() {
         "servo",
         "--port",
         p,
+        "--margin-ms",
+        MARGIN_MS,
         "write",
         "255",
         "over_temprature",
@@ -213,6 +244,8 @@ fn an_explicit_broadcast_changes_every_servo_and_reads_nothing_back() {
             "servo",
             "--port",
             p,
+            "--margin-ms",
+            MARGIN_MS,
             "--json",
             "read",
             id,
@@ -233,7 +266,7 @@ fn operations_refuse_the_broadcast_id_and_send_nothing() {
     let bus: SharedDevice = Arc::new(Mutex::new(ServoBus::new(vec![
         SimServo::fresh(1).with_id(1),
     ])));
-    let server = PtyServer::start(bus, Faults::default()).unwrap();
+    let server = PtyServer::start_lockstep(bus, Faults::default()).unwrap();
     let link = Link::open(
         serial::opener(server.path(), 115_200),
         profile.clone(),

@@ -4,7 +4,7 @@
 //! each operation must then end with exit 1 and the reason, never hang (the watchdog of
 //! [`run_watched`] fails the test instead).
 
-use crate::support::cli::{Ran, SimProcess, run_watched};
+use crate::support::cli::{MARGIN_MS, Ran, SimProcess, run_watched};
 
 fn preset(name: &str) -> String {
     format!("{}/presets/{name}", env!("CARGO_MANIFEST_DIR"))
@@ -55,6 +55,8 @@ fn provisioning_ends_when_the_port_vanishes() {
             "servo",
             "--port",
             "PORT",
+            "--margin-ms",
+            MARGIN_MS,
             "provision",
             &preset("servo-provision-plan.ron"),
         ],

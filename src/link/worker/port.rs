@@ -31,6 +31,10 @@ impl Worker {
         match &result {
             Ok(()) => {
                 self.decoder.clear();
+                // An answer owed to a request sent at the old rate can never come clean: were it
+                // kept, the same answer at the new rate (a ping of the same id) would be taken
+                // for the old request's.
+                self.owed.clear();
                 self.emit_connected();
             }
             Err(e) => self.emit(LinkEvent::State(LinkState::Lost {
