@@ -152,7 +152,8 @@ fn servo_scan(
         &mut |_| {},
         &mut |_| {},
     )
-    .map_err(|e| e.to_string())?;
+    .map_err(|e| e.to_string())?
+    .rows;
     let secs = started.elapsed().as_secs_f64();
     // Each absent id costs a 6-byte ping; each found servo a ping and 6 parameter reads
     // (7-byte request, 8-9 byte answer) and its 6-byte reply.

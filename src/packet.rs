@@ -158,7 +158,7 @@ impl Packet {
             kind: msp::ReplyKind::Async,
         } = self.header
         {
-            s.push_str(" (async)");
+            s.push_str(" (unsolicited, kind 0xFE: answers nothing)");
         }
         let d = profile.decode_lenient(cmd, self.direction, &self.payload);
         for v in &d.values {

@@ -28,6 +28,8 @@ pub struct PortInfo {
     pub manufacturer: Option<String>,
     /// USB product name.
     pub product: Option<String>,
+    /// The adapter's driver and latency timer, as the system tells ([`crate::link::adapter`]).
+    pub adapter: crate::link::adapter::Adapter,
 }
 
 impl PortInfo {
@@ -43,6 +45,10 @@ impl PortInfo {
         if let Some(sn) = &self.serial_number {
             s.push_str(&format!(" (sn {sn})"));
         }
+        let adapter = self.adapter.summary();
+        if !adapter.is_empty() {
+            s.push_str(&format!("  [{adapter}]"));
+        }
         s
     }
 }
@@ -57,6 +63,7 @@ pub fn list_ports() -> Vec<PortInfo> {
         .into_iter()
         .map(|p| {
             let mut info = PortInfo {
+                adapter: crate::link::adapter::adapter_of(&p.port_name),
                 path: p.port_name,
                 kind: "unknown",
                 vid: None,

@@ -103,6 +103,12 @@ pub(crate) fn servo_id(text: &str) -> Result<u8, String> {
     within(text, &(0..=254), "a servo id")
 }
 
+/// A servo id where the broadcast id may be given too (`servo write` and `servo angle` with
+/// `--broadcast`): 0 to 255.
+pub(crate) fn servo_id_or_broadcast(text: &str) -> Result<u8, String> {
+    within(text, &(0..=255), "a servo id")
+}
+
 /// `msp watch --rate`: polls per second for each command.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Rate {

@@ -12,6 +12,7 @@ mod provision;
 mod replay;
 mod servo;
 mod sim;
+mod sim_field;
 mod tuya;
 
 use clap::{Parser, Subcommand};
@@ -93,11 +94,16 @@ enum Cmd {
         #[arg(long)]
         json: bool,
     },
-    /// List the serial ports (USB VID:PID, serial number and product where known).
+    /// List the serial ports (USB VID:PID, serial number, product, and the adapter's driver and
+    /// latency timer where the system tells them).
     Ports {
         /// Print JSON.
         #[arg(long)]
         json: bool,
+        /// Set the USB adapter's latency timer of PORT to MS ms (FTDI on Linux; 1 ms makes
+        /// answers reach botbench soonest), then list the ports.
+        #[arg(long, num_args = 2, value_names = ["PORT", "MS"])]
+        set_latency_timer: Option<Vec<String>>,
     },
     /// Window cleaner and solar cleanbot (MSP).
     Msp(msp::MspArgs),
@@ -169,7 +175,10 @@ fn run(cli: Cli) -> CliResult {
     match cli.command {
         Some(Cmd::Frame(cmd)) => frame::run(cmd),
         Some(Cmd::Profiles { json }) => profiles(json),
-        Some(Cmd::Ports { json }) => ports(json),
+        Some(Cmd::Ports {
+            json,
+            set_latency_timer,
+        }) => ports(json, set_latency_timer),
         Some(Cmd::Msp(args)) => msp::run(args),
         Some(Cmd::Servo(args)) => servo::run(args),
         Some(Cmd::Tuya(args)) => tuya::run(args),
@@ -221,7 +230,21 @@ fn profiles(json: bool) -> CliResult {
     Ok(0)
 }
 
-fn ports(json: bool) -> CliResult {
+fn ports(json: bool, set_latency_timer: Option<Vec<String>>) -> CliResult {
+    if let Some(args) = set_latency_timer {
+        let [port, ms] = args.as_slice() else {
+            return Err(CliError::input("--set-latency-timer takes PORT and MS"));
+        };
+        let ms: u32 = ms.trim().parse().map_err(|_| {
+            CliError::input(format!(
+                "--set-latency-timer {port} {ms}: MS is a number of ms, 1-255"
+            ))
+        })?;
+        let now = crate::link::adapter::set_latency_timer(port, ms).map_err(CliError::device)?;
+        if !json {
+            println!("{port}: latency timer set to {now} ms");
+        }
+    }
     let ports = crate::link::serial::list_ports();
     if json {
         println!("{}", serde_json::json!({ "ports": ports }));

@@ -1,9 +1,10 @@
 //! `botbench msp`: the window cleaner and the solar cleanbot from the command line.
 
 use super::checks::{self, Rate};
-use super::port::{PortArgs, exchange_error, op_error, parse_assignments, print_checks_kept};
+use super::port::{PortArgs, exchange_error, op_error, parse_assignments, print_checks_with};
 use super::{CliError, CliResult};
-use crate::link::{LinkCommand, LinkEvent};
+use crate::link::{Link, LinkCommand, LinkEvent};
+use crate::packet::Packet;
 
 use crate::ops::exchange::{self as ops, Use};
 use crate::ops::selftest::{self, Operator, Plan};
@@ -17,6 +18,10 @@ use std::time::{Duration, Instant};
 pub(crate) struct MspArgs {
     #[command(flatten)]
     port: PortArgs,
+    /// Refuse to send when the device did not identify itself (CMD_VERSION unanswered or
+    /// garbled): without it, requests go to the profile's device code, with a warning.
+    #[arg(long, global = true)]
+    strict: bool,
     #[command(subcommand)]
     cmd: MspCmd,
 }
@@ -164,19 +169,81 @@ fn check<'p>(cmd: &MspCmd, profile: &'p Profile) -> Result<Checked<'p>, CliError
     })
 }
 
+/// Frames the device sent on its own meanwhile (MSP kind 0xFE), from the link's events.
+fn unsolicited(link: &Link) -> Vec<Packet> {
+    link.events()
+        .try_iter()
+        .filter_map(|ev| match ev {
+            LinkEvent::Report(p) => Some(p),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Unsolicited frames as JSON: each with its command, fields (out-of-range ones marked) and
+/// bytes.
+fn unsolicited_json(profile: &Profile, frames: &[Packet]) -> serde_json::Value {
+    frames
+        .iter()
+        .map(|p| {
+            let fields = p.decode_lenient(profile).map(|d| {
+                d.values
+                    .iter()
+                    .map(|v| {
+                        serde_json::json!({
+                            "field": v.ident, "value": v.value, "display": v.display(),
+                            "out_of_range": v.out_of_range,
+                        })
+                    })
+                    .collect::<Vec<_>>()
+            });
+            serde_json::json!({
+                "kind": "unsolicited",
+                "command": p.command_in(profile).map_or(p.command.to_string(), |c| c.ident.clone()),
+                "fields": fields,
+                "summary": p.summary(profile),
+                "bytes": crate::protocol::hex::format(&p.wire),
+            })
+        })
+        .collect()
+}
+
+/// Prints frames the device sent on its own (text mode), each as what it is.
+fn print_unsolicited(profile: &Profile, frames: &[Packet]) {
+    for p in frames {
+        println!(
+            "~~ unsolicited frame (answers nothing): {}",
+            p.summary(profile)
+        );
+    }
+}
+
 /// Prints an answer's fields. A payload that does not fit the layout is shown as such: the
-/// fields read before the fault, the fault and the raw bytes; the exit code is then 1.
-fn print_fields(profile: &Profile, cmd: &Command, payload: &[u8], json: bool) -> u8 {
+/// fields read before the fault, the fault and the raw bytes; a value outside its field's range
+/// is marked. The exit code is then 1. Frames the device sent on its own meanwhile are shown
+/// apart, as what they are.
+fn print_fields(
+    profile: &Profile,
+    cmd: &Command,
+    payload: &[u8],
+    frames: &[Packet],
+    json: bool,
+) -> u8 {
     let d = profile.decode_lenient(cmd, Direction::DeviceToHost, payload);
     let misfit = d.misfit();
+    let out_of_range = d.values.iter().any(|v| v.out_of_range);
     if json {
         let mut doc = serde_json::json!({
             "command": cmd.ident,
-            "ok": misfit.is_none(),
+            "ok": misfit.is_none() && !out_of_range,
             "fields": d.values.iter().map(|v| serde_json::json!({
                 "field": v.ident, "value": v.value, "display": v.display(), "unit": v.field.unit,
+                "out_of_range": v.out_of_range,
             })).collect::<Vec<_>>(),
         });
+        if !frames.is_empty() {
+            doc["unsolicited"] = unsolicited_json(profile, frames);
+        }
         if let Some(m) = &misfit {
             doc["error"] = serde_json::json!(m.fault.to_string());
             doc["payload"] = serde_json::json!(crate::protocol::hex::format(&m.payload));
@@ -185,6 +252,7 @@ fn print_fields(profile: &Profile, cmd: &Command, payload: &[u8], json: bool) ->
         }
         println!("{doc}");
     } else {
+        print_unsolicited(profile, frames);
         for v in &d.values {
             println!("{:<24} {}", v.ident, v.display());
         }
@@ -198,7 +266,7 @@ fn print_fields(profile: &Profile, cmd: &Command, payload: &[u8], json: bool) ->
             );
         }
     }
-    u8::from(misfit.is_some())
+    u8::from(misfit.is_some() || out_of_range)
 }
 
 pub(crate) fn run(args: MspArgs) -> CliResult {
@@ -210,6 +278,17 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
     // The session asks CMD_VERSION first, to learn the device code; later requests wait for it.
     let client = link.client();
     let identified = client.device_info();
+    // A request without the device's identity goes to the profile's device code: said, or
+    // refused with --strict.
+    if let (Err(e), Checked::Get(..) | Checked::Set(..) | Checked::Watch { .. }) =
+        (&identified, &checked)
+    {
+        let warning = crate::ops::device::unidentified(&profile, e);
+        if args.strict {
+            return Err(CliError::device(format!("{warning}: refused (--strict)")));
+        }
+        eprintln!("botbench: warning: {warning}");
+    }
     match checked {
         Checked::Version => match identified {
             Ok(info) => {
@@ -236,6 +315,7 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
                 &profile,
                 cmd,
                 reply.payload().unwrap_or_default(),
+                &unsolicited(&link),
                 json,
             ))
         }
@@ -243,7 +323,19 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
             let written = ops::write_keeping(&client, &profile, cmd, &inputs).map_err(op_error)?;
             let field_of = |ident: &str| cmd.request.iter().find(|f| f.ident == ident).cloned();
             let kept: Vec<&str> = written.kept.iter().map(|(k, _)| k).collect();
-            Ok(print_checks_kept(&written.checks, &kept, field_of, json))
+            let frames = unsolicited(&link);
+            if !json {
+                print_unsolicited(&profile, &frames);
+            }
+            let extra =
+                (!frames.is_empty()).then(|| ("unsolicited", unsolicited_json(&profile, &frames)));
+            Ok(print_checks_with(
+                &written.checks,
+                &kept,
+                field_of,
+                json,
+                extra,
+            ))
         }
         Checked::Watch {
             commands,
@@ -327,6 +419,15 @@ fn watch(
                         failures += 1;
                         println!("{t:9.3} {} !{e}", cmd.ident);
                     }
+                }
+            }
+            LinkEvent::Report(p) => {
+                let t = started.elapsed().as_secs_f64();
+                if json {
+                    let doc = unsolicited_json(profile, std::slice::from_ref(&p));
+                    println!("{}", serde_json::json!({"t": t, "unsolicited": doc[0]}));
+                } else {
+                    println!("{t:9.3} ~~ unsolicited: {}", p.summary(profile));
                 }
             }
             LinkEvent::State(crate::link::LinkState::Lost { reason }) => {

@@ -134,27 +134,32 @@ pub(crate) fn print_checks(
     field_of: impl Fn(&str) -> Option<Field>,
     json: bool,
 ) -> u8 {
-    print_checks_kept(checks, &[], field_of, json)
+    print_checks_with(checks, &[], field_of, json, None)
 }
 
 /// Prints read-back checks, marking the fields in `kept` (not given: the device's own values
-/// written back) as such; returns exit code 1 if any mismatched.
-pub(crate) fn print_checks_kept(
+/// written back) as such, with `extra` (name, value) as one more member of the JSON document;
+/// returns exit code 1 if any mismatched.
+pub(crate) fn print_checks_with(
     checks: &[Check],
     kept: &[&str],
     field_of: impl Fn(&str) -> Option<Field>,
     json: bool,
+    extra: Option<(&str, serde_json::Value)>,
 ) -> u8 {
     let bad = checks.iter().filter(|c| !c.ok()).count();
     let is_kept = |field: &str| kept.iter().any(|k| k.eq_ignore_ascii_case(field));
     if json {
-        let doc = serde_json::json!({
+        let mut doc = serde_json::json!({
             "verified": bad == 0,
             "fields": checks.iter().map(|c| serde_json::json!({
                 "field": c.field, "written": c.written, "read": c.read, "ok": c.ok(),
                 "kept": is_kept(&c.field),
             })).collect::<Vec<_>>(),
         });
+        if let Some((name, value)) = extra {
+            doc[name] = value;
+        }
         println!("{doc}");
     } else {
         for c in checks {

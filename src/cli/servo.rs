@@ -50,14 +50,18 @@ enum ServoCmd {
     },
     /// Write one user parameter and read it back.
     Write {
-        /// Servo id, 0 to 254.
-        #[arg(value_parser = checks::servo_id)]
+        /// Servo id, 0 to 255 (255, every servo, only with --broadcast).
+        #[arg(value_parser = checks::servo_id_or_broadcast)]
         id: u8,
         /// Parameter name or data_id.
         param: String,
         /// Value in display units, or a label (the parameter's range, as `read` shows it).
         #[arg(allow_hyphen_values = true)]
         value: String,
+        /// With id 255: tell every servo at this rate, expecting no answer and reading nothing
+        /// back.
+        #[arg(long)]
+        broadcast: bool,
     },
     /// Give servo OLD the id NEW (refuses 255 and ids in use; a fresh servo must be alone).
     SetId {
@@ -80,8 +84,8 @@ enum ServoCmd {
     },
     /// Turn servo ID to DEG degrees over --ms milliseconds.
     Angle {
-        /// Servo id, 0 to 254.
-        #[arg(value_parser = checks::servo_id)]
+        /// Servo id, 0 to 255 (255, every servo, only with --broadcast).
+        #[arg(value_parser = checks::servo_id_or_broadcast)]
         id: u8,
         /// Target angle in degrees, in 0.1° steps, within the profile's range (the built-in
         /// servo's: -180.0 to 180.0).
@@ -93,6 +97,9 @@ enum ServoCmd {
         /// Power, 0 to 65535 mW (0: the servo's limit).
         #[arg(long, default_value_t = 0)]
         power: u16,
+        /// With id 255: turn every servo at this rate.
+        #[arg(long)]
+        broadcast: bool,
     },
     /// Provision fresh servos by a plan: find each (id 0, at any baud rate), give it the next
     /// free id, the plan's baud rate and parameters, verify everything, and log it.
@@ -153,7 +160,12 @@ fn parse_ids(s: &str) -> Result<std::ops::RangeInclusive<u8>, CliError> {
             (v, v)
         }
     };
-    if a > b || b == 255 {
+    if b == crate::protocol::servo::BROADCAST_ID {
+        return Err(CliError::input(format!(
+            "'{s}': id 255 is the broadcast address: every servo acts on it and none answers; give ids 0-254"
+        )));
+    }
+    if a > b {
         return Err(bad());
     }
     Ok(a..=b)
@@ -219,7 +231,8 @@ enum Checked<'p> {
     Monitor(Vec<u8>),
     Ping(u8),
     Read(u8, Vec<&'p crate::profile::Param>),
-    Write(u8, &'p crate::profile::Param, Value),
+    /// The id, the parameter, its value, and whether it is broadcast (nothing read back).
+    Write(u8, &'p crate::profile::Param, Value, bool),
     SetId(u8, u8),
     SetBaud(u8, u8),
     Angle(u8, Vec<(String, Input)>, u16),
@@ -246,6 +259,7 @@ fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<
             id,
             param: name,
             value,
+            broadcast,
         } => {
             let p = param(profile, name)?;
             if p.access == crate::profile::Access::ReadOnly {
@@ -254,7 +268,7 @@ fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<
                 }));
             }
             let value = p.field.parse(value).map_err(CliError::input)?;
-            Checked::Write(*id, p, value)
+            Checked::Write(*id, p, value, *broadcast)
         }
         ServoCmd::SetId { old, new } => {
             if old == new {
@@ -263,7 +277,9 @@ fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<
             Checked::SetId(*old, *new)
         }
         ServoCmd::SetBaud { id, baud } => Checked::SetBaud(*id, servo_baud(profile, baud)?),
-        ServoCmd::Angle { id, deg, ms, power } => {
+        ServoCmd::Angle {
+            id, deg, ms, power, ..
+        } => {
             let rotate = profile.command("ROTATE").ok_or_else(|| {
                 CliError::input(format!("profile '{}' has no ROTATE", profile.id))
             })?;
@@ -282,8 +298,61 @@ fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<
     })
 }
 
+/// The broadcast address where an answer is expected (or a broadcast was not asked for), and
+/// `--broadcast` with another id: refused before the port is opened.
+fn check_broadcast(cmd: &ServoCmd) -> Result<(), CliError> {
+    use crate::protocol::servo::BROADCAST_ID;
+    let refuse = |what: &'static str, hint: &'static str| {
+        Err(CliError::input(crate::ops::OpError::BroadcastAnswer {
+            what,
+            hint,
+        }))
+    };
+    match *cmd {
+        ServoCmd::Ping { id: BROADCAST_ID } => refuse("ping a servo", ""),
+        ServoCmd::Read {
+            id: BROADCAST_ID, ..
+        } => refuse("read a parameter", ""),
+        ServoCmd::SetId {
+            old: BROADCAST_ID, ..
+        } => refuse("give a servo a new id", ""),
+        ServoCmd::SetBaud {
+            id: BROADCAST_ID, ..
+        } => refuse("change a servo's baud rate and follow it", ""),
+        ServoCmd::Write {
+            id: BROADCAST_ID,
+            broadcast: false,
+            ..
+        } => refuse(
+            "write a parameter and read it back",
+            "; or add --broadcast to tell every servo, with nothing read back",
+        ),
+        ServoCmd::Angle {
+            id: BROADCAST_ID,
+            broadcast: false,
+            ..
+        } => refuse("turn a servo", "; or add --broadcast to turn every servo"),
+        ServoCmd::Write {
+            id,
+            broadcast: true,
+            ..
+        }
+        | ServoCmd::Angle {
+            id,
+            broadcast: true,
+            ..
+        } if id != BROADCAST_ID => Err(CliError::input(format!(
+            "--broadcast goes with id 255 (every servo), not {id}"
+        ))),
+        ServoCmd::Monitor { ref ids } => parse_id_list(ids).map(|_| ()),
+        _ => Ok(()),
+    }
+}
+
 pub(crate) fn run(args: ServoArgs) -> CliResult {
     let json = args.port.json;
+    // The broadcast id where an answer is expected is refused before the port is opened.
+    check_broadcast(&args.cmd)?;
     if let ServoCmd::Provision {
         plan,
         log,
@@ -303,9 +372,9 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
     match checked {
         Checked::Scan(plan) => {
             let started = std::time::Instant::now();
-            let rows = ops::scan(&client, &profile, &plan, &cancel, &mut |_| {}, &mut |_| {})
+            let report = ops::scan(&client, &profile, &plan, &cancel, &mut |_| {}, &mut |_| {})
                 .map_err(op_error)?;
-            print_scan(&profile, &rows, started.elapsed().as_secs_f64(), json);
+            print_scan(&profile, &report, started.elapsed().as_secs_f64(), json);
             Ok(0)
         }
         Checked::Monitor(ids) => monitor(&client, &profile, &ids, json),
@@ -342,7 +411,24 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
             }
             Ok(0)
         }
-        Checked::Write(id, p, value) => {
+        Checked::Write(id, p, value, true) => {
+            let written = ops::write_param_broadcast(&client, &profile, p, Input::Raw(value))
+                .map_err(op_error)?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::json!({"servo": id, "param": p.field.ident, "written": written, "broadcast": true, "verified": false})
+                );
+            } else {
+                println!(
+                    "{:<24} {:>12}  broadcast to every servo at this rate; none answers a broadcast, nothing read back",
+                    p.field.ident,
+                    p.field.format(&written)
+                );
+            }
+            Ok(0)
+        }
+        Checked::Write(id, p, value, false) => {
             let check =
                 ops::write_param(&client, &profile, id, p, Input::Raw(value)).map_err(op_error)?;
             let field = p.field.clone();
@@ -385,11 +471,20 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
     }
 }
 
-fn print_scan(profile: &Profile, rows: &[ops::ScanRow], seconds: f64, json: bool) {
+/// The scan's table (or JSON), with how it adapted: ids asked again, late answers and the
+/// margin it ended with.
+fn print_scan(profile: &Profile, report: &ops::ScanReport, seconds: f64, json: bool) {
+    let rows = &report.rows;
     if json {
         println!(
             "{}",
-            serde_json::json!({"servos": rows, "seconds": seconds})
+            serde_json::json!({
+                "servos": rows,
+                "seconds": seconds,
+                "asked_again": report.asked_again,
+                "late_answers": report.late_answers,
+                "margin_ms": report.margin_ms,
+            })
         );
         return;
     }
@@ -416,7 +511,13 @@ fn print_scan(profile: &Profile, rows: &[ops::ScanRow], seconds: f64, json: bool
             r.status_hex()
         );
     }
-    println!("{} found in {seconds:.2} s", rows.len());
+    println!(
+        "{} found in {seconds:.2} s; {} id(s) asked again, {} late answer(s), margin {:.1} ms",
+        rows.len(),
+        report.asked_again,
+        report.late_answers,
+        report.margin_ms
+    );
 }
 
 fn monitor(client: &crate::link::Client, profile: &Profile, ids: &[u8], json: bool) -> CliResult {

@@ -47,6 +47,8 @@ pub(crate) struct SimArgs {
     profile: Option<String>,
     #[command(flatten)]
     tuya: TuyaSimArgs,
+    #[command(flatten)]
+    field: super::sim_field::FieldArgs,
 }
 
 /// How the simulated Tuya MCU misbehaves, as MCUs in the field do (PROTOCOL_NOTES §4).
@@ -67,18 +69,12 @@ struct TuyaSimArgs {
     /// `ID:TYPE:LEN` (e.g. `3:value:4`); repeat for more.
     #[arg(long, value_name = "ID:TYPE:LEN", value_parser = crate::sim::tuya_mcu::parse_misreport)]
     misreport: Vec<(u8, crate::sim::tuya_mcu::WireForm)>,
-    /// Tuya vacuum: the line echoes every frame the module sends (a one-wire adapter).
-    #[arg(long)]
-    echo: bool,
 }
 
 impl TuyaSimArgs {
     /// Whether any was given.
     fn any(&self) -> bool {
-        self.frame_version.is_some()
-            || self.report_every.is_some()
-            || !self.misreport.is_empty()
-            || self.echo
+        self.frame_version.is_some() || self.report_every.is_some() || !self.misreport.is_empty()
     }
 
     /// Applies them to the MCU's settings.
@@ -93,7 +89,6 @@ impl TuyaSimArgs {
             config.report_every = Some((self.report_dp, Duration::from_millis(ms)));
         }
         config.misreport.extend(self.misreport.iter().copied());
-        config.echo = self.echo;
         Ok(())
     }
 }
@@ -120,7 +115,7 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
     let kind: SimKind = args.kind.parse().map_err(CliError::input)?;
     if args.tuya.any() && kind != SimKind::TuyaVacuum {
         return Err(CliError::input(format!(
-            "--frame-version, --report-every, --misreport and --echo are for the tuya-vacuum simulator, not {kind}"
+            "--frame-version, --report-every and --misreport are for the tuya-vacuum simulator, not {kind}"
         )));
     }
     let faults = Faults {
@@ -129,6 +124,7 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         extra_latency: Duration::from_millis(args.latency_ms),
         silent: false,
         seed: args.seed,
+        line: args.field.line(kind)?,
     };
     faults.check().map_err(CliError::input)?;
     let opts = SimOptions {
@@ -136,6 +132,8 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         latency: None,
         seed: args.seed,
         servos: args.servos,
+        msp: args.field.msp(kind)?,
+        ignore_baud_change: args.field.ignore_baud_change(kind)?,
     };
     let firmware = match &args.profile {
         None => None,
@@ -162,6 +160,7 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
             if let Some(l) = opts.latency {
                 core.latency = l;
             }
+            core.quirks = opts.msp.clone();
             let wc = Arc::new(Mutex::new(WindowCleaner::with_core(core, opts.seed)));
             (wc.clone(), Some(Control::WindowCleaner(wc)))
         }
@@ -176,7 +175,8 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
                 opts.baud.unwrap_or_else(|| kind.default_baud()),
             )
             .map_err(CliError::input)?
-            .with_seed(opts.seed);
+            .with_seed(opts.seed)
+            .with_baud_change_ignored(opts.ignore_baud_change);
             (Arc::new(Mutex::new(bus)), None)
         }
         (_, Some(_)) => {
@@ -208,6 +208,7 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
             _ => (build(kind, &opts).map_err(CliError::input)?, None),
         },
     };
+    let vanish_after = faults.line.vanish_after_bytes;
     let server = PtyServer::start(device, faults).map_err(CliError::device)?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", server.path())
@@ -230,11 +231,12 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         }
     }
     while server.is_running() {
-        std::thread::sleep(Duration::from_millis(200));
+        std::thread::sleep(Duration::from_millis(20));
     }
-    Err(CliError::device(
-        "the simulator stopped: the pseudo-terminal failed",
-    ))
+    Err(CliError::device(match vanish_after {
+        Some(n) => format!("the port vanished after {n} bytes from the host, as asked"),
+        None => "the simulator stopped: the pseudo-terminal failed".into(),
+    }))
 }
 
 /// Commands typed on the simulator's stdin, for what a device does on its own.

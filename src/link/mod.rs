@@ -3,6 +3,7 @@
 //! crossbeam channels, and a waker callback tells the UI to repaint. Threads that may block (the
 //! command line, long jobs) use a [`Client`], whose requests carry their own reply channel.
 
+pub mod adapter;
 mod decoder;
 pub mod request;
 pub mod serial;
@@ -80,12 +81,58 @@ pub enum LinkCommand {
         /// exchange failed with.
         reply: Sender<Result<DeviceInfo, ExchangeError>>,
     },
+    /// Requests sent at the pace of the bus, each answer taken for its request whenever it
+    /// comes ([`Sweep`]); in order with the requests around it.
+    Sweep {
+        /// The requests.
+        sweep: Sweep,
+        /// Gets what came.
+        reply: Sender<Result<SweepReply, ExchangeError>>,
+    },
     /// Tuya: runs the start-up handshake again.
     Handshake,
     /// Tuya: changes what the module answers the MCU.
     TuyaOptions(TuyaModuleOptions),
     /// Closes the port and ends the worker.
     Shutdown,
+}
+
+/// Requests sent one after another at the pace of the bus rather than of the host (a servo
+/// scan): the next goes out once the last one's answer can have ended on the wire, and each
+/// answer is taken for its request whenever it reaches the host (a USB adapter may hold it back
+/// for its latency timer). Every request must wait for a [`ReplySpec::Required`] answer that
+/// tells it from the others (a servo's answer names its id).
+#[derive(Debug, Clone)]
+pub struct Sweep {
+    /// The requests, in order.
+    pub requests: Vec<Request>,
+    /// The longest answer, in bytes on the wire.
+    pub answer_bytes: usize,
+    /// The longest a device takes on the bus before it answers.
+    pub device_latency: Duration,
+}
+
+/// An answer a sweep brought.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SweepAnswer {
+    /// The answer.
+    pub packet: Packet,
+    /// It came after its request's window (the margin): the automatic margin has widened.
+    pub late: bool,
+}
+
+/// What a sweep brought.
+#[derive(Debug, Clone)]
+pub struct SweepReply {
+    /// For each request, in order: its answer, if one came.
+    pub answers: Vec<Option<SweepAnswer>>,
+    /// Each damaged frame, with the requests (indices) it can have come from: those sent before
+    /// it came, after the last clean answer before it and before the first clean answer after it.
+    pub garbled: Vec<(FrameError, Vec<usize>)>,
+    /// Answers to none of the sweep's requests (late answers to earlier ones).
+    pub strays: Vec<Packet>,
+    /// The margin the sweep waited with.
+    pub margin: Duration,
 }
 
 /// The state of the link.
@@ -121,6 +168,8 @@ pub struct LogEntry {
     pub direction: Direction,
     /// The frame, or what was wrong with the bytes.
     pub frame: Result<Packet, FrameError>,
+    /// What the link took it for, when that is not plain: `late answer to an earlier request`.
+    pub note: Option<String>,
 }
 
 /// Counters for the status bar.
@@ -140,6 +189,17 @@ pub struct LinkStats {
     pub retries: u64,
     /// Events dropped because nobody read them.
     pub dropped_events: u64,
+    /// Answers that came after their attempt's window (taken for their own request, and the
+    /// automatic margin widened).
+    pub late_answers: u64,
+    /// The margin in use now: `--margin-ms`, or the automatic one (the device's, the adapter's
+    /// latency timer, the answer latency measured on this connection).
+    pub margin: Option<Duration>,
+    /// The largest recent answer latency measured on this connection (device, adapter and host
+    /// together), from a request's last byte on the wire to its answer's first byte read.
+    pub answer_latency: Option<Duration>,
+    /// The USB adapter's latency timer, where the OS gives it.
+    pub latency_timer: Option<Duration>,
 }
 
 /// What the worker reports.
@@ -319,6 +379,15 @@ impl Client {
     pub fn identify(&self) -> Result<DeviceInfo, ExchangeError> {
         self.send(LinkCommand::Identify);
         self.device_info()
+    }
+
+    /// Sends a [`Sweep`] and waits for what it brought.
+    pub fn sweep(&self, sweep: Sweep) -> Result<SweepReply, ExchangeError> {
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        self.commands
+            .send(LinkCommand::Sweep { sweep, reply: tx })
+            .map_err(|_| ExchangeError::Cancelled)?;
+        rx.recv().unwrap_or(Err(ExchangeError::Cancelled))
     }
 
     /// Switches the port's baud rate after the requests before it, and waits until it has.

@@ -106,15 +106,33 @@ impl Match {
         }
     }
 
+    /// Whether some frame could answer both: the same command, servo ids in common (or either
+    /// takes any), and one prefix the start of the other.
+    pub fn overlaps(&self, other: &Match) -> bool {
+        let ids = self.from.is_empty()
+            || other.from.is_empty()
+            || self.from.iter().any(|id| other.from.contains(id));
+        let prefixes =
+            self.prefix.starts_with(&other.prefix) || other.prefix.starts_with(&self.prefix);
+        self.command == other.command && ids && prefixes
+    }
+
     /// Also requires the answer's payload to start with `prefix`.
     pub fn with_prefix(mut self, prefix: Vec<u8>) -> Self {
         self.prefix = prefix;
         self
     }
 
-    /// Whether `p` (an incoming frame) is the answer.
+    /// Whether `p` (an incoming frame) is the answer. Only a reply answers: an MSP frame the
+    /// device sends on its own (kind 0xFE) never does, whatever its command.
     pub fn accepts(&self, p: &Packet) -> bool {
         p.direction == crate::protocol::Direction::DeviceToHost
+            && !matches!(
+                p.header,
+                crate::packet::Header::MspReply {
+                    kind: crate::protocol::msp::ReplyKind::Async
+                }
+            )
             && p.command == self.command
             && (self.from.is_empty() || p.payload.first().is_some_and(|id| self.from.contains(id)))
             && p.payload.starts_with(&self.prefix)

@@ -12,6 +12,8 @@ pub struct SerialTransport {
     port: Box<dyn SerialPort>,
     path: String,
     baud: u32,
+    /// The adapter's latency timer, read when the port was opened.
+    latency_timer: Option<Duration>,
 }
 
 impl std::fmt::Debug for SerialTransport {
@@ -50,6 +52,7 @@ impl SerialTransport {
             port,
             path: path.to_string(),
             baud,
+            latency_timer: super::adapter::adapter_of(path).latency_timer(),
         })
     }
 
@@ -121,6 +124,10 @@ impl Transport for SerialTransport {
 
     fn describe(&self) -> String {
         self.path.clone()
+    }
+
+    fn latency_timer(&self) -> Option<Duration> {
+        self.latency_timer
     }
 
     fn check(&mut self) -> Result<(), LinkError> {

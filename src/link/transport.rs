@@ -37,6 +37,11 @@ pub trait Transport: Send {
     fn clear_input(&mut self) -> Result<(), LinkError>;
     /// A short description for the status bar: the path, or `simulated window cleaner`.
     fn describe(&self) -> String;
+    /// The USB adapter's latency timer (how long it holds received bytes before handing them
+    /// over), where it is known ([`super::adapter`]).
+    fn latency_timer(&self) -> Option<Duration> {
+        None
+    }
     /// Checks, while idle, that the port is still there (a USB adapter unplugged).
     fn check(&mut self) -> Result<(), LinkError> {
         Ok(())

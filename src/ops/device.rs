@@ -66,3 +66,15 @@ pub fn description(info: &DeviceInfo) -> String {
     }
     s
 }
+
+/// What is said when the device did not identify itself (`why`): requests then go to the
+/// profile's device code, which may not be this device's.
+pub fn unidentified(profile: &Profile, why: &dyn std::fmt::Display) -> String {
+    let code = profile
+        .device_code
+        .map_or(msp::DEVICE_CORE, crate::profile::DeviceCode::initial);
+    format!(
+        "the device did not identify itself ({why}); requests go to the profile's device code \
+         {code:#04x}, which may not be this device's"
+    )
+}

@@ -86,6 +86,17 @@ pub enum OpError {
     /// 255, the broadcast address, given as a servo id to assign. Nothing was written.
     #[error("id 255 is the broadcast address and cannot be assigned")]
     BroadcastId,
+    /// 255, the broadcast address, given to an operation that waits for an answer: every servo
+    /// would act and none answers a broadcast. Nothing was sent.
+    #[error(
+        "id 255 is the broadcast address: every servo acts on it and none answers, so it cannot be used to {what}; give one servo's id{hint}"
+    )]
+    BroadcastAnswer {
+        /// What was asked, e.g. `read a parameter`.
+        what: &'static str,
+        /// How to broadcast on purpose, with a leading `; `, or empty.
+        hint: &'static str,
+    },
     /// A servo given the id it already has. Nothing was written.
     #[error("servo {id} already has id {id}")]
     SameId {
@@ -231,6 +242,7 @@ impl OpError {
                 | OpError::OutOfRange { .. }
                 | OpError::ReadOnly { .. }
                 | OpError::BroadcastId
+                | OpError::BroadcastAnswer { .. }
                 | OpError::SameId { .. }
                 | OpError::IdInUse { .. }
                 | OpError::NotAlone { .. }

@@ -23,10 +23,14 @@ pub struct FieldValue<'p> {
     pub field: &'p Field,
     /// The raw value.
     pub value: Value,
+    /// The value lies outside the field's range: a device sent what the field does not allow.
+    /// It is shown with the mark ([`Field::display`]), never as a clean value.
+    pub out_of_range: bool,
 }
 
 impl FieldValue<'_> {
-    /// The value as shown: scaled or converted (raw beside it), labelled, with its unit.
+    /// The value as shown: scaled or converted (raw beside it), labelled, with its unit, and
+    /// marked when it is out of the field's range.
     pub fn display(&self) -> String {
         self.field.display(&self.value)
     }
@@ -228,6 +232,9 @@ impl Profile {
         };
         let mut values = Vec::new();
         let error = self.read_fields(fields, &mut r, &mut values, "").err();
+        for v in &mut values {
+            v.out_of_range = v.field.out_of_range(&v.value).is_some();
+        }
         Decoded {
             command: String::new(),
             values,
@@ -278,6 +285,7 @@ impl Profile {
                     ident: named(field),
                     field,
                     value: Value::Int(v),
+                    out_of_range: false,
                 });
                 continue;
             }
@@ -289,6 +297,7 @@ impl Profile {
                         ident: named(field),
                         field,
                         value: Value::Int(id as i64),
+                        out_of_range: false,
                     });
                 }
                 FieldType::ParamValue => match param.and_then(|id| self.param(id)) {
@@ -296,11 +305,13 @@ impl Profile {
                         ident: named(&p.field),
                         field: &p.field,
                         value: read_scalar(r, &p.field, order)?,
+                        out_of_range: false,
                     }),
                     None => values.push(FieldValue {
                         ident: named(field),
                         field,
                         value: Value::Bytes(r.rest().to_vec()),
+                        out_of_range: false,
                     }),
                 },
                 FieldType::ParamBlock => {
@@ -311,6 +322,7 @@ impl Profile {
                             ident: named(&p.field),
                             field: &p.field,
                             value: read_scalar(&mut br, &p.field, order)?,
+                            out_of_range: false,
                         });
                     }
                 }
@@ -336,6 +348,7 @@ impl Profile {
                         ident: named(field),
                         field,
                         value,
+                        out_of_range: false,
                     });
                 }
             }
@@ -396,6 +409,7 @@ impl Profile {
                     ident: format!("{}[{i}]", field.ident),
                     field,
                     value: Value::Bytes(bytes.to_vec()),
+                    out_of_range: false,
                 }),
             }
         }
@@ -432,6 +446,7 @@ impl Profile {
             ident: def.field.ident.clone(),
             field: &def.field,
             value,
+            out_of_range: false,
         })
     }
 

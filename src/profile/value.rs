@@ -128,8 +128,39 @@ impl Field {
         }
     }
 
-    /// A value as shown with its unit: `2.75`, `90.0 °`, `25.0 °C (raw 2048)`, `on`.
+    /// The field's range, when `value` (a number read from a device) lies outside it: such a
+    /// value is never shown as a clean one. Only an explicit `range` counts (a decoded number
+    /// always fits its type).
+    pub fn out_of_range(&self, value: &Value) -> Option<(i64, i64)> {
+        match (self.range, value) {
+            (Some((lo, hi)), Value::Int(raw)) if !(lo..=hi).contains(raw) => Some((lo, hi)),
+            _ => None,
+        }
+    }
+
+    /// The mark an out-of-range value is shown with: `!! out of range 0 to 100 %`; `None` for a
+    /// value in range.
+    pub fn range_mark(&self, value: &Value) -> Option<String> {
+        let (lo, hi) = self.out_of_range(value)?;
+        Some(format!(
+            "!! out of range {} to {}{}",
+            self.format_number(lo),
+            self.format_number(hi),
+            self.unit_suffix()
+        ))
+    }
+
+    /// A value as shown with its unit: `2.75`, `90.0 °`, `25.0 °C (raw 2048)`, `on`; a value
+    /// outside the field's range carries its mark: `238 % !! out of range 0 to 100 %`.
     pub fn display(&self, value: &Value) -> String {
+        let shown = self.display_plain(value);
+        match self.range_mark(value) {
+            Some(mark) => format!("{shown} {mark}"),
+            None => shown,
+        }
+    }
+
+    fn display_plain(&self, value: &Value) -> String {
         match value {
             Value::Int(raw) if self.label(*raw).is_none() => match self.convert {
                 Some(c) => match c.apply(*raw) {
@@ -158,9 +189,9 @@ impl Field {
             (FieldType::Bytes(len), Value::Bytes(b)) => check_len(self, len, b.len()),
             (ty, Value::Int(raw)) if ty.int_bounds().is_some() => match self.allowed() {
                 Allowed::Range(lo, hi) if (lo..=hi).contains(raw) => Ok(()),
-                Allowed::Range(..) => Err(self.out_of_range(self.format_number(*raw))),
+                Allowed::Range(..) => Err(self.out_of_range_error(self.format_number(*raw))),
                 Allowed::Labels(_) if self.label(*raw).is_some() => Ok(()),
-                Allowed::Labels(_) => Err(self.out_of_range(raw.to_string())),
+                Allowed::Labels(_) => Err(self.out_of_range_error(raw.to_string())),
             },
             _ => Err(FieldError::WrongType {
                 field: self.ident.clone(),
@@ -171,7 +202,7 @@ impl Field {
 
     /// `shown` (a value as displayed, or as typed) is not what the field allows: out of its
     /// range, or not one of its labels.
-    fn out_of_range(&self, shown: String) -> FieldError {
+    fn out_of_range_error(&self, shown: String) -> FieldError {
         match self.allowed() {
             Allowed::Range(lo, hi) => FieldError::OutOfRange {
                 field: self.ident.clone(),
@@ -303,7 +334,7 @@ impl Field {
                 step: format!("{:.*}", self.decimals(), self.scale),
             },
             // Beyond any integer: out of the field's own range (not its type's).
-            ScaledError::Huge => self.out_of_range(text.to_string()),
+            ScaledError::Huge => self.out_of_range_error(text.to_string()),
         })
     }
 

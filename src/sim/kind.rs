@@ -111,6 +111,10 @@ pub struct SimOptions {
     pub seed: u64,
     /// Servo bus only: the IDs of the servos on the bus (empty = the simulator's default).
     pub servos: Vec<u8>,
+    /// MSP devices: how the board misbehaves (unsolicited frames, garbled replies).
+    pub msp: super::msp_device::MspQuirks,
+    /// Servo bus only: every servo acknowledges a baud change and keeps its old rate.
+    pub ignore_baud_change: bool,
 }
 
 /// The Tuya vacuum MCU with these options.
@@ -142,7 +146,8 @@ pub fn build(kind: SimKind, opts: &SimOptions) -> Result<SharedDevice, String> {
             let baud = opts.baud.unwrap_or(kind.default_baud());
             let mut bus =
                 ServoBus::with_profile_ids(super::servo_bus::builtin_servo_profile(), ids, baud)?
-                    .with_seed(opts.seed);
+                    .with_seed(opts.seed)
+                    .with_baud_change_ignored(opts.ignore_baud_change);
             if let Some(l) = opts.latency {
                 bus = bus.with_latency(l);
             }

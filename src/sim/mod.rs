@@ -5,6 +5,7 @@
 use std::time::{Duration, Instant};
 
 mod kind;
+pub mod line;
 pub mod lockstep;
 pub mod msp_device;
 pub mod pty;
@@ -13,6 +14,7 @@ pub mod solar_cleanbot;
 pub mod window_cleaner;
 
 pub use kind::{SimKind, SimOptions, build, tuya_mcu};
+pub use line::{Line, Split};
 pub use pty::PtyServer;
 pub use runner::{Faults, SharedDevice, SimTransport, VanishHandle};
 

@@ -6,7 +6,7 @@ use super::Outgoing;
 use crate::profile::{Command, Decoded, Input, Profile, Registry, Value};
 use crate::protocol::Direction;
 use crate::protocol::msp::{
-    CMD_BUILD_INFO, CMD_PING, CMD_VERSION, DEVICE_CORE, Reply, Request, RequestDecoder,
+    CMD_BUILD_INFO, CMD_PING, CMD_VERSION, DEVICE_CORE, Reply, ReplyKind, Request, RequestDecoder,
 };
 use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
@@ -82,6 +82,38 @@ impl Answer {
     }
 }
 
+/// An unsolicited frame (kind 0xFE) a board pushes.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AsyncFrame {
+    /// Its command number.
+    pub command: u8,
+    /// Its payload.
+    pub payload: Vec<u8>,
+}
+
+/// How an MSP board misbehaves in the field (PROTOCOL_NOTES §4). `Default`: as documented.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MspQuirks {
+    /// Before each reply, an unsolicited frame of the same command with this payload (a board
+    /// that reports a value on its own just as it is asked for it).
+    pub async_before_reply: Option<Vec<u8>>,
+    /// This frame, pushed on its own every period.
+    pub async_every: Option<(Duration, AsyncFrame)>,
+    /// Replies to these commands fail their checksum (a firmware bug, a noisy line).
+    pub garble: Vec<u8>,
+}
+
+impl MspQuirks {
+    fn async_frame(command: u8, payload: Vec<u8>, after: Duration) -> Option<Outgoing> {
+        let frame = Reply {
+            kind: ReplyKind::Async,
+            command,
+            data: payload,
+        };
+        frame.encode().ok().map(|b| Outgoing::new(after, b))
+    }
+}
+
 /// The MSP plumbing of one simulated device.
 #[derive(Debug, Clone)]
 pub struct MspCore {
@@ -97,6 +129,10 @@ pub struct MspCore {
     pub identity: Identity,
     /// The last reply the profile could not encode (a simulator bug): for tests.
     pub last_error: Option<String>,
+    /// How it misbehaves.
+    pub quirks: MspQuirks,
+    /// When the next pushed frame is due.
+    next_push: Option<Instant>,
     decoder: RequestDecoder,
 }
 
@@ -110,8 +146,26 @@ impl MspCore {
             latency: DEFAULT_LATENCY,
             identity: Identity::default(),
             last_error: None,
+            quirks: MspQuirks::default(),
+            next_push: None,
             decoder: RequestDecoder::new(),
         }
+    }
+
+    /// The frames pushed on their own by `now` ([`MspQuirks::async_every`]); call from
+    /// [`super::Device::tick`].
+    pub fn pushes(&mut self, now: Instant) -> Vec<Outgoing> {
+        let Some((period, frame)) = self.quirks.async_every.clone() else {
+            return Vec::new();
+        };
+        let due = *self.next_push.get_or_insert(now + period);
+        if now < due {
+            return Vec::new();
+        }
+        self.next_push = Some(now + period.max(Duration::from_millis(1)));
+        MspQuirks::async_frame(frame.command, frame.payload, Duration::ZERO)
+            .into_iter()
+            .collect()
     }
 
     /// The requests addressed to this device in `bytes` (received at `baud`). Bytes at another
@@ -199,8 +253,22 @@ impl MspCore {
                 }
             }
         };
+        if let Some(payload) = &self.quirks.async_before_reply {
+            out.extend(MspQuirks::async_frame(
+                req.command,
+                payload.clone(),
+                self.latency,
+            ));
+        }
         match Reply::new(req.command, data).encode() {
-            Ok(bytes) => out.push(Outgoing::new(self.latency, bytes)),
+            Ok(mut bytes) => {
+                if self.quirks.garble.contains(&req.command)
+                    && let Some(crc) = bytes.last_mut()
+                {
+                    *crc ^= 0x01;
+                }
+                out.push(Outgoing::new(self.latency, bytes));
+            }
             Err(e) => self.last_error = Some(e.to_string()),
         }
     }

@@ -155,7 +155,7 @@ impl Drop for PtyServer {
 fn serve(mut master: TTYPort, mut wire: Wire, flags: &Flags) {
     let mut buf = [0u8; 4096];
     loop {
-        if flags.stop.load(Ordering::SeqCst) || flags.vanish.is_vanished() {
+        if flags.stop.load(Ordering::SeqCst) || flags.vanish.is_vanished() || wire.vanished() {
             return;
         }
         let now = Instant::now();

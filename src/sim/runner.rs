@@ -11,6 +11,7 @@
 //! An [`Outgoing`] sent at another baud rate than the host's arrives as pseudo-random garbage of
 //! about `len × host_baud / device_baud` bytes (at least one).
 
+use super::line::{Line, Seen, garble_overlap};
 use super::{Device, Outgoing};
 use crate::link::{LinkError, Transport, wire_time};
 use std::collections::VecDeque;
@@ -40,6 +41,9 @@ pub struct Faults {
     pub silent: bool,
     /// Seed of the fault dice, for repeatable runs.
     pub seed: u64,
+    /// How the line itself misbehaves: a USB adapter's latency timer, a split reply, a slow
+    /// host, an echoing or half-duplex bus, a vanishing port ([`Line`]).
+    pub line: Line,
 }
 
 impl Faults {
@@ -50,7 +54,7 @@ impl Faults {
                 return Err(format!("{name} probability {p} is not between 0 and 1"));
             }
         }
-        Ok(())
+        self.line.check()
     }
 }
 
@@ -67,11 +71,15 @@ struct Inbound {
 
 /// A frame on its way to the host, byte by byte as a UART delivers it.
 struct Delivery {
-    /// When its first byte starts.
+    /// When its first byte starts on the wire.
     start: Instant,
     /// One byte's time on the wire.
     byte: Duration,
     bytes: Vec<u8>,
+    /// When the host sees each byte (the adapter, the host: [`Line`]).
+    seen: Seen,
+    /// The host's own request read back (a one-wire bus): not the device's frame.
+    echo: bool,
 }
 
 impl Delivery {
@@ -80,14 +88,17 @@ impl Delivery {
         self.start + self.byte * self.bytes.len() as u32
     }
 
-    /// How many of its bytes have arrived by `now`.
+    /// When byte `i` is seen by the host.
+    fn seen_at(&self, i: usize) -> Instant {
+        self.seen.at(i, self.start + self.byte * (i as u32 + 1))
+    }
+
+    /// How many of its bytes the host has seen by `now`.
     fn arrived(&self, now: Instant) -> usize {
-        if now >= self.end() {
-            return self.bytes.len();
-        }
-        let since = now.saturating_duration_since(self.start).as_nanos();
-        let byte = self.byte.as_nanos().max(1);
-        ((since / byte) as usize).min(self.bytes.len())
+        // Seen times rise with the byte index.
+        (0..self.bytes.len())
+            .find(|&i| self.seen_at(i) > now)
+            .unwrap_or(self.bytes.len())
     }
 }
 
@@ -109,6 +120,14 @@ pub(crate) struct Wire {
     rx_free: Instant,
     tx_free: Instant,
     next_tick: Instant,
+    /// The adapter's clock starts with the wire.
+    epoch: Instant,
+    /// When the host saw the last frame: frames are never seen out of order.
+    seen_until: Instant,
+    /// Bytes the host has sent.
+    host_bytes: u64,
+    /// The port has vanished ([`Line::vanish_after_bytes`]).
+    vanished: bool,
 }
 
 impl Wire {
@@ -125,7 +144,46 @@ impl Wire {
             rx_free: now,
             tx_free: now,
             next_tick: now,
+            epoch: now,
+            seen_until: now,
+            host_bytes: 0,
+            vanished: false,
         }
+    }
+
+    /// Whether the port has vanished after the bytes [`Line::vanish_after_bytes`] allowed.
+    pub(crate) fn vanished(&self) -> bool {
+        self.vanished
+    }
+
+    fn line(&self) -> &Line {
+        &self.faults.line
+    }
+
+    /// When the host sees the bytes of the next frame.
+    fn next_seen(&mut self) -> Seen {
+        if self.faults.line.delays() {
+            self.faults
+                .line
+                .seen(self.epoch, self.seen_until, &mut self.rng)
+        } else {
+            Seen::at_once()
+        }
+    }
+
+    /// Queues a frame for the host, in order of its start on the wire.
+    fn deliver(&mut self, d: Delivery) {
+        if self.line().delays() && !d.bytes.is_empty() {
+            self.seen_until = self.seen_until.max(d.seen_at(d.bytes.len() - 1));
+        }
+        let at = self
+            .outbound
+            .iter()
+            .rposition(|o| o.start <= d.start)
+            .map_or(0, |i| i + 1);
+        // The front may be partly handed over already: nothing goes before it then.
+        let at = if self.taken > 0 { at.max(1) } else { at };
+        self.outbound.insert(at, d);
     }
 
     pub(crate) fn baud(&self) -> u32 {
@@ -150,12 +208,41 @@ impl Wire {
         if bytes.is_empty() {
             return;
         }
+        self.host_bytes += bytes.len() as u64;
+        if self
+            .line()
+            .vanish_after_bytes
+            .is_some_and(|n| self.host_bytes >= n)
+        {
+            self.vanished = true;
+        }
         let start = now.max(self.rx_free);
         let at = start + wire_time(bytes.len(), self.baud);
         self.rx_free = at;
+        let mut bytes = bytes.to_vec();
+        if self.line().half_duplex {
+            // A reply still on the wire and this request garble each other.
+            let byte = wire_time(1, self.baud);
+            let rng = &mut self.rng;
+            for d in self.outbound.iter_mut().filter(|d| !d.echo) {
+                if garble_overlap(&mut d.bytes, d.start, d.byte, (start, at), rng) {
+                    garble_overlap(&mut bytes, start, byte, (d.start, d.end()), rng);
+                }
+            }
+        }
+        if self.line().echo {
+            let seen = self.next_seen();
+            self.deliver(Delivery {
+                start,
+                byte: wire_time(1, self.baud),
+                bytes: bytes.clone(),
+                seen,
+                echo: true,
+            });
+        }
         self.inbound.push_back(Inbound {
             at,
-            bytes: bytes.to_vec(),
+            bytes,
             baud: self.baud,
         });
     }
@@ -202,7 +289,25 @@ impl Wire {
             let start = (cause + o.after + self.faults.extra_latency).max(self.tx_free);
             self.tx_free = start + duration;
             let byte = duration / bytes.len().max(1) as u32;
-            self.outbound.push_back(Delivery { start, byte, bytes });
+            if self.faults.line.half_duplex {
+                // A request the host has already started on the wire collides with this reply.
+                let rng = &mut self.rng;
+                for i in self.inbound.iter_mut() {
+                    let from = i.at - wire_time(i.bytes.len(), i.baud);
+                    if garble_overlap(&mut bytes, start, byte, (from, i.at), rng) {
+                        let i_byte = wire_time(1, i.baud);
+                        garble_overlap(&mut i.bytes, from, i_byte, (start, start + duration), rng);
+                    }
+                }
+            }
+            let seen = self.next_seen();
+            self.deliver(Delivery {
+                start,
+                byte,
+                bytes,
+                seen,
+                echo: false,
+            });
         }
     }
 
@@ -268,14 +373,15 @@ impl Wire {
             t = t.min(i.at);
         }
         if let Some(d) = self.outbound.front() {
-            // The next chunk of bytes: the first byte alone, then up to DELIVERY_CHUNK's worth.
-            let per_chunk = if self.taken == 0 {
+            // The next chunk of bytes: the first byte alone, then up to DELIVERY_CHUNK's worth;
+            // behind an adapter or a late host, whatever is seen next.
+            let per_chunk = if self.taken == 0 || self.line().delays() {
                 1
             } else {
                 (DELIVERY_CHUNK.as_nanos() / d.byte.as_nanos().max(1)).max(1) as usize
             };
             let upto = (self.taken + per_chunk).min(d.bytes.len());
-            t = t.min(d.start + d.byte * upto as u32);
+            t = t.min(d.seen_at(upto.max(1) - 1));
         }
         t
     }
@@ -346,6 +452,9 @@ impl SimTransport {
         faults: Faults,
     ) -> Result<Self, String> {
         faults.check()?;
+        // A servo bus is one half-duplex line.
+        let mut faults = faults;
+        faults.line.half_duplex |= kind == super::SimKind::ServoBus;
         let device = super::build(kind, opts)?;
         let baud = opts.baud.unwrap_or_else(|| kind.default_baud());
         Ok(Self::new(device, baud, faults, kind.describe()))
@@ -367,6 +476,9 @@ impl SimTransport {
     }
 
     fn alive(&self) -> Result<(), LinkError> {
+        if self.wire.vanished() {
+            self.vanished.vanish();
+        }
         if self.vanished.is_vanished() {
             Err(LinkError::Disconnected(format!("{} vanished", self.name)))
         } else {

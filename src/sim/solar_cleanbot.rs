@@ -74,6 +74,7 @@ impl SolarCleanbot {
         if let Some(l) = opts.latency {
             core.latency = l;
         }
+        core.quirks = opts.msp.clone();
         Ok(Self::with_core(core, opts.seed))
     }
 
@@ -396,7 +397,7 @@ impl Device for SolarCleanbot {
 
     fn tick(&mut self, now: Instant) -> Vec<Outgoing> {
         SolarCleanbot::advance(self, now);
-        Vec::new()
+        self.core.pushes(now)
     }
 }
 

@@ -140,6 +140,7 @@ impl WindowCleaner {
         if let Some(l) = opts.latency {
             core.latency = l;
         }
+        core.quirks = opts.msp.clone();
         Ok(Self::with_core(core, opts.seed))
     }
 
@@ -626,7 +627,7 @@ impl Device for WindowCleaner {
 
     fn tick(&mut self, now: Instant) -> Vec<Outgoing> {
         WindowCleaner::advance(self, now);
-        Vec::new()
+        self.core.pushes(now)
     }
 }
 

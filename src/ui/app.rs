@@ -355,6 +355,23 @@ impl App {
                 self.state.disconnect();
                 self.state.notify(Notice::info("disconnected").zh("已断开"));
             }
+            Action::SetLatencyTimer { port, ms } => {
+                match crate::link::adapter::set_latency_timer(&port, ms) {
+                    Ok(now) => {
+                        // The link reads the latency timer when it opens the port.
+                        if self.state.link.target() == Some(&Target::Port(port.clone())) {
+                            let profile = self.settings.profile.clone();
+                            let (baud, margin_ms) = port_for(&self.settings, &self.state, &profile);
+                            self.connect(Target::Port(port.clone()), baud, profile, margin_ms);
+                        }
+                        self.state.link.refresh_ports_now();
+                        self.state.notify(Notice::info(format!(
+                            "{port}: latency timer set to {now} ms"
+                        )));
+                    }
+                    Err(e) => self.state.notify(Notice::error(e)),
+                }
+            }
             Action::StartJob(job) => self.state.start_job(job),
             Action::CancelJob => self.state.cancel_job(),
             Action::SetPollRate(hz) => {

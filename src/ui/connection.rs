@@ -184,11 +184,12 @@ impl ConnectionBar {
                 .label(lang.tr("Margin", "应答余量"))
                 .on_hover_text(lang.tr(
                     "How long the device may take to start answering, beyond the bytes' wire time. \
-                 Auto: MSP 20 ms, servo 1.5 ms, Tuya 300 ms. Raise it for a USB adapter with a \
-                 latency timer (FTDI: 16 ms unless set to 1 ms).",
-                    "设备开始应答前允许的时间(不含字节在线路上的传输时间)。自动: MSP 20 ms, \
-                 舵机 1.5 ms, 涂鸦 300 ms。USB 转串口适配器有延迟定时器时请加大\
-                 (FTDI 默认 16 ms, 可设为 1 ms)。",
+                 Auto: the device's own (MSP 20 ms, servo 1.5 ms, Tuya 300 ms) plus the USB \
+                 adapter's latency timer where the system tells it, or the answer latency \
+                 measured on this connection, whichever is more.",
+                    "设备开始应答前允许的时间(不含字节在线路上的传输时间)。自动: 设备自身的余量\
+                 (MSP 20 ms, 舵机 1.5 ms, 涂鸦 300 ms)加上系统给出的 USB 适配器延迟定时器,\
+                 或本次连接实测的应答延迟, 取较大者。",
                 ));
             let shown = |m: Option<u64>| match m {
                 None => lang.tr("auto", "自动").to_string(),
@@ -234,6 +235,11 @@ impl ConnectionBar {
                     .clicked()
             {
                 actions.push(connect());
+            }
+            // The margin in use and the adapter's latency timer, after the buttons: nothing
+            // before them moves when they appear.
+            if open {
+                timing(ui, lang, rt, &mut actions);
             }
         }
         actions
@@ -331,3 +337,72 @@ fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
 
 /// The link badge's width, points: its longest English text at the default size.
 pub const BADGE_WIDTH: f32 = 290.0;
+
+/// The margin in use, the answer latency measured, and the USB adapter's latency timer with a
+/// button to set it to 1 ms where the system lets us.
+fn timing(ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
+    let stats = &rt.link.stats;
+    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
+    if let Some(m) = stats.margin {
+        let mut text = format!("{} {:.1} ms", lang.tr("margin", "余量"), ms(m));
+        if let Some(l) = stats.answer_latency {
+            text.push_str(&format!(
+                " ({} {:.1} ms)",
+                lang.tr("measured", "实测"),
+                ms(l)
+            ));
+        }
+        ui.weak(text).on_hover_text(format!(
+            "{}: {}",
+            lang.tr("late answers", "迟到应答"),
+            stats.late_answers
+        ));
+    }
+    let Some((port, adapter)) = rt.link.adapter() else {
+        return;
+    };
+    match adapter.latency_timer_ms {
+        Some(t) => {
+            let color = if t > 1 {
+                egui::Color32::from_rgb(220, 150, 0)
+            } else {
+                ui.visuals().weak_text_color()
+            };
+            ui.colored_label(
+                color,
+                format!("{} {t} ms", lang.tr("latency timer", "延迟定时器")),
+            )
+            .on_hover_text(adapter.summary());
+            if t > 1 {
+                let set = ui
+                    .add_enabled(
+                        adapter.latency_timer_writable,
+                        egui::Button::new(lang.tr("Set to 1 ms", "设为 1 ms")),
+                    )
+                    .on_hover_text(lang.tr(
+                        "Answers reach botbench up to 1 ms after they arrive instead of 16",
+                        "应答到达后最多 1 ms 即交给 botbench, 而不是 16 ms",
+                    ))
+                    .on_disabled_hover_text(format!(
+                        "{} sudo botbench ports --set-latency-timer {port} 1",
+                        lang.tr(
+                            "The file is writable by root only: run",
+                            "该文件仅 root 可写, 请运行"
+                        )
+                    ));
+                if set.clicked() {
+                    actions.push(Action::SetLatencyTimer {
+                        port: port.to_string(),
+                        ms: 1,
+                    });
+                }
+            }
+        }
+        None => {
+            if let Some(note) = &adapter.note {
+                ui.weak(lang.tr("no latency timer", "无延迟定时器"))
+                    .on_hover_text(note);
+            }
+        }
+    }
+}

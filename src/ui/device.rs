@@ -187,6 +187,7 @@ impl DevicePanel {
             Some(Ok(info)) => self.show_info(ui, lang, &profile, info),
             Some(Err(e)) => {
                 ui.colored_label(egui::Color32::RED, e.to_string());
+                super::tuning::unidentified_warning(ui, lang, rt);
             }
             None => {
                 ui.weak(lang.tr(

@@ -2,7 +2,8 @@
 //! step), and the allowed values as a person reads them.
 
 use crate::profile::value::Allowed;
-use crate::profile::{Command, Field, FieldError, Input};
+use crate::profile::{Command, Field, FieldError, Input, Value};
+use eframe::egui;
 use std::collections::HashMap;
 
 /// Why what was typed cannot be sent.
@@ -69,4 +70,19 @@ pub fn range_text(field: &Field) -> String {
 /// widgets after it stay where they are.
 pub fn steady_button(text: &str) -> eframe::egui::Button<'_> {
     eframe::egui::Button::new(text).min_size(eframe::egui::vec2(80.0, 0.0))
+}
+
+/// A value a device sent, as a readout shows it (monospace, as [`Field::format`] writes it); a
+/// value outside the field's range in red with its mark, never as a clean value.
+pub fn device_value(ui: &mut egui::Ui, field: &Field, value: &Value) -> egui::Response {
+    let text = field.format(value);
+    match field.range_mark(value) {
+        Some(mark) => ui
+            .colored_label(
+                egui::Color32::from_rgb(210, 40, 40),
+                egui::RichText::new(format!("{text} {mark}")).monospace(),
+            )
+            .on_hover_text(format!("{}: {}", field.ident, range_text(field))),
+        None => ui.monospace(text),
+    }
 }

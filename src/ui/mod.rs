@@ -53,6 +53,13 @@ pub enum Action {
     },
     /// Close the link.
     Disconnect,
+    /// Set the USB adapter's latency timer of a port (Linux, FTDI), then reconnect to it.
+    SetLatencyTimer {
+        /// The port's path.
+        port: String,
+        /// The new latency timer, ms.
+        ms: u32,
+    },
     /// Start a job (the one way to start one).
     StartJob(Job),
     /// Cancel the running job.

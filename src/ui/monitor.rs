@@ -62,10 +62,13 @@ pub fn line(profile: &Profile, e: &LogEntry) -> String {
     let time = chrono::DateTime::<chrono::Local>::from(e.at).format("%H:%M:%S%.3f");
     match &e.frame {
         Ok(p) => format!(
-            "{time} {} {:<40} {}",
+            "{time} {} {:<40} {}{}",
             e.direction.arrow(),
             hex::format(&p.wire),
-            p.summary(profile)
+            p.summary(profile),
+            e.note
+                .as_ref()
+                .map_or(String::new(), |n| format!("  [{n}]"))
         ),
         Err(err) => format!(
             "{time} {} {:<40} !! {err}",
@@ -236,9 +239,14 @@ impl MonitorPanel {
             .show_rows(ui, text_h, rows.len(), |ui, range| {
                 for (_, e) in &rows[range] {
                     let text = line(profile, e);
+                    let unsolicited = matches!(&e.frame, Ok(p) if matches!(p.header, crate::packet::Header::MspReply { kind: crate::protocol::msp::ReplyKind::Async }));
                     let color = match (&e.frame, e.direction) {
                         (Err(_), _) => egui::Color32::RED,
                         (Ok(_), Direction::HostToDevice) => ui.visuals().text_color(),
+                        // Frames that answer nothing they were sent for: unsolicited, late.
+                        (Ok(_), Direction::DeviceToHost) if unsolicited || e.note.is_some() => {
+                            egui::Color32::from_rgb(220, 150, 0)
+                        }
                         (Ok(_), Direction::DeviceToHost) => egui::Color32::from_rgb(40, 140, 200),
                     };
                     ui.add(

@@ -256,6 +256,7 @@ impl TuningPanel {
                 ui.colored_label(egui::Color32::RED, pending_text(e, rt, lang));
             }
         });
+        unidentified_warning(ui, lang, rt);
         ui.separator();
         egui::ScrollArea::vertical()
             .auto_shrink(false)
@@ -326,7 +327,7 @@ impl TuningPanel {
             .on_hover_text(&f.ident);
         let device = rt.device.value(get, &f.ident);
         match device {
-            Some(v) => ui.monospace(f.format(v)),
+            Some(v) => super::inputs::device_value(ui, f, v),
             None => ui.weak(lang.tr("not read yet", "尚未读取")),
         };
         let writable =
@@ -532,4 +533,27 @@ fn pending_text(e: &PendingError, rt: &AppState, lang: Lang) -> String {
                 .map_or(text.clone(), |f| named(&text, f, lang))
         }
     }
+}
+
+/// MSP: when the device did not identify itself, writes go to the profile's device code: said
+/// above the values, in the UI's language.
+pub(super) fn unidentified_warning(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    let profile = &rt.device.profile;
+    let Some(Err(e)) = &rt.device.info else {
+        return;
+    };
+    if profile.protocol != crate::profile::Protocol::Msp {
+        return;
+    }
+    let text = match lang {
+        Lang::En => crate::ops::device::unidentified(profile, e),
+        Lang::Zh => format!(
+            "设备未能识别自身({e}); 请求将发往配置文件中的设备码 {:#04x}, 可能不是本设备的",
+            profile.device_code.map_or(
+                crate::protocol::msp::DEVICE_CORE,
+                crate::profile::DeviceCode::initial
+            )
+        ),
+    };
+    ui.colored_label(egui::Color32::from_rgb(220, 150, 0), format!("⚠ {text}"));
 }

@@ -165,7 +165,6 @@ fn msp_an_async_frame_before_the_reply_reaches_the_host_first_as_recorded() {
 }
 
 #[test]
-#[ignore = "the link on main takes the async frame for the answer: enable with issue 11's fix"]
 fn msp_only_the_reply_answers_a_request_after_an_async_frame() {
     let (_server, link, _device) = replay("msp-async-before-reply.pcapng", 200);
     let reply = link

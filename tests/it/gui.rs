@@ -258,14 +258,15 @@ fn the_parameters_are_read_as_soon_as_the_link_is_up() {
 }
 
 #[test]
-fn a_slow_device_is_read_once_the_answer_margin_allows_for_it() {
+fn a_slow_device_is_read_with_the_automatic_margin_it_learns() {
     let slow = Faults {
         extra_latency: Duration::from_millis(150),
         ..Faults::default()
     };
     let served = serve_with(window_cleaner(), slow);
-    // The protocol's own 20 ms is too short for it, even over three attempts: reads fail, and
-    // say so.
+    // Far beyond the protocol's own 20 ms: the automatic margin learns the device's answer
+    // latency from its late answers, and every parameter is read without a margin chosen by
+    // hand.
     let saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
     assert_eq!(
         saved.port_of("window-cleaner").margin_ms,

@@ -26,6 +26,7 @@ impl Bench {
             &mut |_| {},
         )
         .unwrap()
+        .rows
         .into_iter()
         .map(|r| (r.id, r.baud, r.presence))
         .collect()
@@ -67,7 +68,8 @@ fn a_scan_reads_each_servos_details() {
         &mut |_| {},
         &mut |_| {},
     )
-    .unwrap();
+    .unwrap()
+    .rows;
     assert_eq!(rows.len(), 1);
     assert_eq!(rows[0].serial, Some(4242));
     assert_eq!(rows[0].servo_type, Some(321));

@@ -12,7 +12,7 @@ pub mod tuya;
 
 pub use msp::{DeviceInfo, build_date};
 
-use crate::link::request::{ExchangeError, Reply, ReplySpec, Request};
+use crate::link::request::{ExchangeError, Match, Reply, ReplySpec, Request};
 use crate::link::{LinkEvent, LinkOptions};
 use crate::packet::{Header, Packet};
 use crate::profile::{Profile, Protocol};
@@ -144,6 +144,43 @@ impl ProtocolSession {
     /// MSP only, whose line is full duplex and whose device answers in order.
     pub(crate) fn pipelines_polls(&self) -> bool {
         matches!(self, Self::Msp(_))
+    }
+
+    /// Whether the device answers requests one by one, in order, so that an answer owed to an
+    /// earlier request comes before a later request's (MSP, the servo bus); the Tuya MCU also
+    /// speaks on its own and is not.
+    pub(crate) fn in_order(&self) -> bool {
+        matches!(self, Self::Msp(_) | Self::Servo)
+    }
+
+    /// A request whose answer cannot be taken for `owed` (another command to the same device),
+    /// to send before a request an owed answer could be taken for: when its answer comes, the
+    /// owed one has come or never will. `None` where there is none (Tuya).
+    pub(crate) fn fence_request(&self, owed: &Match) -> Option<Request> {
+        match self {
+            Self::Msp(_) if owed.command == msp_codec::CMD_PING => Some(
+                Request::new(msp_codec::CMD_VERSION, Vec::new())
+                    .device(msp_codec::DEVICE_CORE)
+                    .attempts(2),
+            ),
+            Self::Msp(_) => Some(Request::new(msp_codec::CMD_PING, Vec::new()).attempts(2)),
+            Self::Servo => {
+                let id = *owed.from.first()?;
+                let (command, payload) = if owed.command == servo::cmd::PING {
+                    // The servo id parameter: every servo has it.
+                    (servo::cmd::READ_DATA, vec![id, 34])
+                } else {
+                    (servo::cmd::PING, vec![id])
+                };
+                let answer = Match::servo(command, &[id]).with_prefix(payload.clone());
+                Some(
+                    Request::new(command, payload)
+                        .reply(ReplySpec::Required(answer))
+                        .attempts(2),
+                )
+            }
+            Self::Tuya(_) => None,
+        }
     }
 
     /// A new connection after a reconnect, at `now`.

@@ -3,6 +3,7 @@
 //! else, or silence). Frames that answer no request are passed on here too.
 
 use super::Worker;
+use super::timing::Owed;
 use crate::link::request::{ExchangeError, Match, Reply, ReplySpec, Request};
 use crate::link::session::Unasked;
 use crate::link::{LinkEvent, wire_time};
@@ -71,9 +72,15 @@ impl Worker {
     /// How long the device may take to start answering `req`, beyond the wire time: the
     /// request's own margin, else the link's, else the protocol's default.
     pub(super) fn margin(&self, req: &Request) -> Duration {
-        req.margin
-            .or(self.opts.margin)
-            .unwrap_or(default_margin(self.session.protocol()))
+        req.margin.unwrap_or_else(|| self.auto_margin())
+    }
+
+    /// The link's margin: `--margin-ms`, else the automatic one (the protocol's default, the
+    /// adapter's latency timer, the answer latency measured on this connection).
+    pub(super) fn auto_margin(&self) -> Duration {
+        self.opts
+            .margin
+            .unwrap_or_else(|| self.timing.margin(default_margin(self.session.protocol())))
     }
 
     /// Writes `bytes` (the frame `sent`, for the packet log); a failed write loses the port.
@@ -90,7 +97,7 @@ impl Worker {
         self.sent_until = self.sent_until.max(now) + wire_time(bytes.len(), self.baud);
         self.stats.sent += 1;
         self.session.wrote(&sent);
-        self.log(Direction::HostToDevice, Ok(sent));
+        self.log(Direction::HostToDevice, Ok(sent), None);
         Ok(())
     }
 
@@ -126,13 +133,16 @@ impl Worker {
             match item {
                 Ok(p) => {
                     self.stats.received += 1;
-                    self.log(p.direction, Ok(p.clone()));
+                    if self.late_answer(&p) {
+                        continue;
+                    }
+                    self.log_in(Ok(p.clone()), None);
                     let unasked = self.session.unasked(&p);
                     let _ = self.take_unasked(p, unasked);
                 }
                 Err(e) => {
                     self.stats.frame_errors += 1;
-                    self.log(Direction::DeviceToHost, Err(e));
+                    self.log_in(Err(e), None);
                 }
             }
         }
@@ -160,8 +170,14 @@ impl Worker {
     }
 
     /// Sends `req` and waits for its answer, with bounded attempts. Returns at the first valid
-    /// answer; a frame that answers something else is never taken for it.
+    /// answer; a frame that answers something else is never taken for it, nor is an answer owed
+    /// to an earlier request. After the last attempt, an in-order device (MSP, servo) is given
+    /// the grace period to answer late; attempts left unanswered are owed.
     pub(super) fn exchange(&mut self, req: &Request) -> Result<Reply, ExchangeError> {
+        self.exchange_with(req, true)
+    }
+
+    fn exchange_with(&mut self, req: &Request, fence: bool) -> Result<Reply, ExchangeError> {
         let (bytes, sent) = self.session.encode(req)?;
         let margin = self.margin(req);
         let attempts = req.attempts.max(1);
@@ -169,64 +185,68 @@ impl Worker {
         // this request is sent, so that it cannot be taken for this request's answer.
         self.read_some(Instant::now())?;
         self.drain_unsolicited();
+        let each = match &req.reply {
+            ReplySpec::None => None,
+            ReplySpec::Required(m) | ReplySpec::Optional(m) => Some(m.clone()),
+            ReplySpec::Burst { each, .. } | ReplySpec::Reports { each, .. } => Some(each.clone()),
+        };
+        let in_order = self.session.in_order() && matches!(req.reply, ReplySpec::Required(_));
+        if fence
+            && in_order
+            && let Some(m) = &each
+        {
+            self.fence(m)?;
+        }
         let mut last = ExchangeError::Timeout {
             command: req.command,
             attempts,
             waited_ms: 0,
         };
+        let baud = self.baud;
+        let on_wire = wire_time(bytes.len(), baud);
+        let mut sends: Vec<Instant> = Vec::new();
+        let (mut frame_err, mut mismatch) = (None, None);
         for attempt in 1..=attempts {
             if attempt > 1 {
                 self.stats.retries += 1;
             }
             let t0 = Instant::now();
             self.write(&bytes, sent.clone())?;
-            let baud = self.baud;
-            let (each, burst) = match &req.reply {
-                ReplySpec::None => {
-                    return Ok(Reply {
-                        packets: Vec::new(),
-                        rtt: Duration::ZERO,
-                        attempts: attempt,
-                    });
-                }
-                ReplySpec::Required(m) | ReplySpec::Optional(m) => (m.clone(), None),
-                ReplySpec::Burst { each, quiet } => (each.clone(), Some(BurstEnd::Quiet(*quiet))),
+            sends.push(t0);
+            let Some(each) = &each else {
+                return Ok(Reply {
+                    packets: Vec::new(),
+                    rtt: Duration::ZERO,
+                    attempts: attempt,
+                });
+            };
+            let burst = match &req.reply {
+                ReplySpec::Burst { quiet, .. } => Some(BurstEnd::Quiet(*quiet)),
+                // The reports' wire time twice over, after the request and the margin.
                 ReplySpec::Reports {
-                    each,
                     ids,
                     bytes: expected,
-                } => {
-                    // The reports' wire time twice over, after the request and the margin.
-                    let wire = wire_time(bytes.len(), baud) + wire_time(*expected, baud) * 2;
-                    let end = BurstEnd::Reported {
-                        ids: ids.clone(),
-                        until: t0 + wire + margin,
-                    };
-                    (each.clone(), Some(end))
-                }
+                    ..
+                } => Some(BurstEnd::Reported {
+                    ids: ids.clone(),
+                    until: t0
+                        + wire_time(bytes.len(), baud)
+                        + wire_time(*expected, baud) * 2
+                        + margin,
+                }),
+                _ => None,
             };
             let first = t0 + wire_time(bytes.len() + 1, baud) + margin;
-            let Waited {
-                outcome,
-                frame_err,
-                mismatch,
-            } = self.wait_for(&each, burst, first, baud)?;
-            match outcome {
-                Outcome::Answered {
-                    packets,
-                    first,
-                    last,
-                } => {
-                    // The link's round trip is the first answering frame's; a burst's reply
-                    // lasts until its last frame (never until the end of the wait).
-                    self.stats.rtt = Some(first.saturating_duration_since(t0));
-                    return Ok(Reply {
-                        packets,
-                        rtt: last.saturating_duration_since(t0),
-                        attempts: attempt,
-                    });
-                }
-                Outcome::Nothing => {}
+            let waited = self.wait_for(each, burst, first, baud)?;
+            frame_err = waited.frame_err.or(frame_err);
+            mismatch = waited.mismatch.or(mismatch);
+            if let Outcome::Answered {
+                packets,
+                first,
+                last,
+            } = waited.outcome
+            {
+                return Ok(self.answered(packets, (first, last), &sends, on_wire, in_order, each));
             }
             if matches!(req.reply, ReplySpec::Optional(_)) && frame_err.is_none() {
                 return Ok(Reply {
@@ -235,9 +255,104 @@ impl Worker {
                     attempts: attempt,
                 });
             }
-            last = self.unanswered(req.command, each.command, frame_err, mismatch, attempts, t0);
+            last = self.unanswered(
+                req.command,
+                each.command,
+                frame_err.clone(),
+                mismatch,
+                attempts,
+                t0,
+            );
+        }
+        let Some(each) = &each else {
+            return Err(last);
+        };
+        if in_order {
+            // An answer to any attempt answers this request, however late within the grace.
+            let grace = Instant::now() + self.timing.grace(margin);
+            let waited = self.wait_for(each, None, grace, baud)?;
+            if let Outcome::Answered {
+                packets,
+                first,
+                last,
+            } = waited.outcome
+            {
+                self.stats.late_answers += 1;
+                return Ok(self.answered(packets, (first, last), &sends, on_wire, in_order, each));
+            }
+            let expires = Instant::now() + self.timing.late_limit(margin);
+            for t in sends {
+                self.owed.push(Owed {
+                    answer: each.clone(),
+                    sent: t + on_wire,
+                    expires,
+                });
+            }
         }
         Err(last)
+    }
+
+    /// An answer came after the attempts sent at `sends`: its latency is learned (counted from
+    /// the first attempt: an in-order device answers the oldest first), and the later attempts'
+    /// answers are owed.
+    ///
+    /// `read` is when the answer's first and last frames were read: the link's round trip is
+    /// the first's, and a burst's reply lasts until its last frame (never until the end of the
+    /// wait).
+    fn answered(
+        &mut self,
+        packets: Vec<Packet>,
+        read: (Instant, Instant),
+        sends: &[Instant],
+        on_wire: Duration,
+        in_order: bool,
+        each: &Match,
+    ) -> Reply {
+        let sent = sends.first().copied().unwrap_or(read.0);
+        let rtt = read.0.saturating_duration_since(sent);
+        self.stats.rtt = Some(rtt);
+        if in_order {
+            let answer_wire = packets
+                .first()
+                .map_or(Duration::ZERO, |p| wire_time(p.wire.len(), self.baud));
+            self.timing
+                .observe(rtt.saturating_sub(on_wire + answer_wire));
+            let expires =
+                Instant::now() + self.timing.late_limit(self.timing.margin(Duration::ZERO));
+            for &t in sends.iter().skip(1) {
+                self.owed.push(Owed {
+                    answer: each.clone(),
+                    sent: t + on_wire,
+                    expires,
+                });
+            }
+        }
+        Reply {
+            packets,
+            rtt: read.1.saturating_duration_since(sent),
+            attempts: sends.len() as u8,
+        }
+    }
+
+    /// Before a request whose answer an owed answer could be taken for: asks the device
+    /// something else and waits for that answer. The device answers in order, so by then the
+    /// owed answer has come (and was taken for its own request) or never will.
+    fn fence(&mut self, answer: &Match) -> Result<(), ExchangeError> {
+        self.owed.expire(Instant::now());
+        let Some(owed) = self.owed.overlaps(answer) else {
+            return Ok(());
+        };
+        let Some(fence) = self.session.fence_request(&owed.answer) else {
+            return Ok(());
+        };
+        match self.exchange_with(&fence, false) {
+            Ok(_) => self.owed.clear(),
+            Err(ExchangeError::Disconnected(r)) => return Err(ExchangeError::Disconnected(r)),
+            Err(ExchangeError::Cancelled) => return Err(ExchangeError::Cancelled),
+            // A device that answers nothing now: what is owed expires in time.
+            Err(_) => {}
+        }
+        Ok(())
     }
 
     /// Why a request sent at `sent` got no answer: a garbled frame, an answer to something
@@ -271,6 +386,8 @@ impl Worker {
 
     /// Reads until the answer (or the end of a burst) or the deadline. Returns what came, the
     /// last frame error and the last mismatching command seen (with the servo id it came from).
+    /// Once a frame has started, its rest is awaited for the frame gap (an adapter's bursts);
+    /// at the deadline, what has arrived meanwhile is still read.
     pub(super) fn wait_for(
         &mut self,
         each: &Match,
@@ -290,6 +407,7 @@ impl Worker {
         let mut frame_err = None;
         let mut mismatch = None;
         let mut flushed = false;
+        let gap = self.timing.frame_gap();
         // How far the last read that found nothing looked.
         let mut looked_to: Option<Instant> = None;
         loop {
@@ -297,8 +415,15 @@ impl Worker {
                 match item {
                     Ok(p) => {
                         self.stats.received += 1;
-                        self.log(p.direction, Ok(p.clone()));
+                        if self.late_answer(&p) {
+                            continue;
+                        }
                         if each.accepts(&p) {
+                            if self.session.in_order() {
+                                // Nothing owed before this answer will come now.
+                                self.owed.clear();
+                            }
+                            self.log_in(Ok(p.clone()), None);
                             if self.session.answer_is_report(&p) {
                                 self.emit(LinkEvent::Report(p.clone()));
                             }
@@ -322,6 +447,7 @@ impl Worker {
                                 }
                             };
                         } else {
+                            self.log_in(Ok(p.clone()), None);
                             let unasked = self.session.unasked(&p);
                             if unasked.answers_other() {
                                 let from = matches!(p.header, Header::Servo)
@@ -334,7 +460,7 @@ impl Worker {
                     }
                     Err(e) => {
                         self.stats.frame_errors += 1;
-                        self.log(Direction::DeviceToHost, Err(e.clone()));
+                        self.log_in(Err(e.clone()), None);
                         frame_err = Some(e);
                     }
                 }
@@ -347,8 +473,9 @@ impl Worker {
                     looked_to = Some(deadline);
                     if self.read_some(deadline)? > 0 {
                         flushed = false;
-                        let more = Instant::now() + wire_time(8, baud) + INTER_BYTE_SLACK;
-                        deadline = deadline.max(more).min(cap.max(first_deadline));
+                        deadline = self
+                            .rest_deadline(deadline, baud, gap)
+                            .min(cap.max(first_deadline));
                     }
                     continue;
                 }
@@ -375,11 +502,56 @@ impl Worker {
             let slice = deadline.min(now + Duration::from_millis(50));
             if self.read_some(slice)? > 0 {
                 flushed = false;
-                let more = Instant::now() + wire_time(8, baud) + INTER_BYTE_SLACK;
-                deadline = deadline.max(more).min(cap.max(first_deadline));
+                deadline = self
+                    .rest_deadline(deadline, baud, gap)
+                    .min(cap.max(first_deadline));
             } else {
                 looked_to = Some(slice);
             }
         }
+    }
+
+    /// The deadline after bytes came: a frame under way gets its rest, however the adapter
+    /// splits it (the frame gap); a line that keeps talking, a little more.
+    fn rest_deadline(&self, deadline: Instant, baud: u32, gap: Duration) -> Instant {
+        let rest = if self.decoder.buffered() > 0 {
+            gap
+        } else {
+            INTER_BYTE_SLACK
+        };
+        deadline.max(Instant::now() + wire_time(8, baud) + rest)
+    }
+
+    /// If `p` is an answer owed to an earlier request (MSP, servo), takes it for that request:
+    /// its lateness is learned (the automatic margin widens), it is counted, and logged as a
+    /// late answer; a servo's is passed on as a report. Never taken for another request.
+    pub(super) fn late_answer(&mut self, p: &Packet) -> bool {
+        if !self.session.in_order() {
+            return false;
+        }
+        let now = Instant::now();
+        self.owed.expire(now);
+        let Some(sent) = self.owed.take(p) else {
+            return false;
+        };
+        let late = now
+            .saturating_duration_since(sent)
+            .saturating_sub(wire_time(p.wire.len(), self.baud));
+        self.timing.observe(late);
+        self.stats.late_answers += 1;
+        let note = format!(
+            "late answer to an earlier request ({} ms after it)",
+            late.as_millis()
+        );
+        self.log_in(Ok(p.clone()), Some(note));
+        if matches!(p.header, Header::Servo) {
+            self.emit(LinkEvent::Report(p.clone()));
+        }
+        true
+    }
+
+    /// Logs a frame (or frame error) from the device, with a note on what it was taken for.
+    pub(super) fn log_in(&mut self, frame: Result<Packet, FrameError>, note: Option<String>) {
+        self.log(Direction::DeviceToHost, frame, note);
     }
 }

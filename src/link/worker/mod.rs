@@ -5,16 +5,19 @@
 mod exchange;
 mod polls;
 mod port;
+mod sweep;
+mod timing;
 
 pub use exchange::default_margin;
 use polls::InFlight;
+use timing::{AnswerTiming, OwedAnswers};
 
 use super::decoder::AnyDecoder;
 use super::request::{ExchangeError, Reply, Request};
 use super::session::{Precedence, ProtocolSession};
 use super::{
     LinkCommand, LinkError, LinkEvent, LinkOptions, LinkState, LinkStats, LogEntry, Opener, Poll,
-    ReplyTo, Transport, Waker,
+    ReplyTo, Sweep, SweepReply, Transport, Waker,
 };
 use crate::packet::Packet;
 use crate::profile::Profile;
@@ -56,6 +59,10 @@ pub(super) struct Worker {
     baud: u32,
     /// When the bytes written so far have crossed the wire (at the rate they were sent at).
     sent_until: Instant,
+    /// How late answers come on this connection (the automatic margin).
+    timing: AnswerTiming,
+    /// Answers still owed to attempts that went unanswered.
+    owed: OwedAnswers,
     stats: LinkStats,
     stats_reported: LinkStats,
     stats_at: Instant,
@@ -70,6 +77,7 @@ pub(super) struct Worker {
 enum Queued {
     Exchange(Request, ReplyTo),
     Baud(u32, Option<Sender<Result<(), LinkError>>>),
+    Sweep(Sweep, Sender<Result<SweepReply, ExchangeError>>),
 }
 
 impl Worker {
@@ -84,6 +92,7 @@ impl Worker {
     ) -> Self {
         let now = Instant::now();
         let baud = transport.baud();
+        let timing = AnswerTiming::new(transport.latency_timer());
         Self {
             decoder: AnyDecoder::new(profile.protocol),
             session: ProtocolSession::new(profile, &opts, now),
@@ -99,6 +108,8 @@ impl Worker {
             poll_cursor: 0,
             in_flight: VecDeque::new(),
             sent_until: now,
+            timing,
+            owed: OwedAnswers::default(),
             baud,
             stats: LinkStats::default(),
             stats_reported: LinkStats::default(),
@@ -135,6 +146,10 @@ impl Worker {
                         self.deliver(to, result);
                     }
                     Queued::Baud(baud, ack) => self.switch_baud(baud, ack),
+                    Queued::Sweep(sweep, reply) => {
+                        let result = self.run_sweep(&sweep);
+                        let _ = reply.send(result);
+                    }
                 }
             } else if self.session.due(Instant::now()).is_some() {
                 self.run_session();
@@ -204,7 +219,23 @@ impl Worker {
                 self.polls = polls.into_iter().map(|p| (p, now)).collect();
                 self.poll_cursor = 0;
             }
-            LinkCommand::SetBaud { baud, ack } => self.queue.push_back(Queued::Baud(baud, ack)),
+            LinkCommand::SetBaud { baud, ack } => {
+                if self.transport.is_none() {
+                    // A lost port: nobody would ever take this from the queue.
+                    if let Some(ack) = ack {
+                        let _ = ack.send(Err(LinkError::Disconnected("port lost".into())));
+                    }
+                } else {
+                    self.queue.push_back(Queued::Baud(baud, ack));
+                }
+            }
+            LinkCommand::Sweep { sweep, reply } => {
+                if self.transport.is_none() {
+                    let _ = reply.send(Err(ExchangeError::Disconnected("port lost".into())));
+                } else {
+                    self.queue.push_back(Queued::Sweep(sweep, reply));
+                }
+            }
             LinkCommand::Identify => self.session.identify_again(),
             LinkCommand::DeviceInfo { reply } => {
                 if self.transport.is_none() {
@@ -227,6 +258,9 @@ impl Worker {
                     let _ = tx.send(Err(LinkError::Disconnected(err().to_string())));
                 }
                 Queued::Baud(_, None) => {}
+                Queued::Sweep(_, tx) => {
+                    let _ = tx.send(Err(err()));
+                }
             }
         }
     }
@@ -287,6 +321,9 @@ impl Worker {
 
     fn housekeeping(&mut self) {
         let now = Instant::now();
+        self.stats.margin = Some(self.auto_margin());
+        self.stats.answer_latency = self.timing.measured();
+        self.stats.latency_timer = self.timing.latency_timer;
         if now.duration_since(self.stats_at) >= STATS_EVERY && self.stats != self.stats_reported {
             self.stats_at = now;
             self.stats_reported = self.stats.clone();
@@ -295,11 +332,17 @@ impl Worker {
         self.flush_wake();
     }
 
-    fn log(&mut self, direction: Direction, frame: Result<Packet, FrameError>) {
+    fn log(
+        &mut self,
+        direction: Direction,
+        frame: Result<Packet, FrameError>,
+        note: Option<String>,
+    ) {
         self.emit(LinkEvent::Frame(LogEntry {
             at: SystemTime::now(),
             direction,
             frame,
+            note,
         }));
     }
 

@@ -4,6 +4,7 @@
 
 use super::Worker;
 use super::exchange::{Outcome, Waited};
+use super::timing::Owed;
 use crate::link::request::{ExchangeError, ReplySpec, Request};
 use crate::link::{LinkEvent, wire_time};
 use std::time::Instant;
@@ -16,6 +17,8 @@ pub(super) struct InFlight {
     sent: Instant,
     /// When its answer is due at the latest, counted from its own write.
     deadline: Instant,
+    /// The request's own wire time.
+    on_wire: std::time::Duration,
 }
 
 impl Worker {
@@ -47,12 +50,23 @@ impl Worker {
             return;
         }
         let request = self.polls[i].0.request.clone();
-        self.poll_cursor = (i + 1) % self.polls.len().max(1);
+        let owed = match &request.reply {
+            ReplySpec::Required(m) => self.owed.overlaps(m).is_some(),
+            _ => false,
+        };
         let Ok((bytes, sent)) = self.session.encode(&request) else {
             // Not encodable: report it as the sequential path would.
             self.run_poll(i);
             return;
         };
+        if owed {
+            // An answer to an earlier poll is owed and could be taken for this one's: the
+            // sequential path fences it off first.
+            self.settle_polls();
+            self.run_poll(i);
+            return;
+        }
+        self.poll_cursor = (i + 1) % self.polls.len().max(1);
         if self.in_flight.is_empty() {
             // As in an exchange: what has already arrived is dealt with before sending.
             if self.read_some(Instant::now()).is_err() {
@@ -68,6 +82,7 @@ impl Worker {
         self.in_flight.push_back(InFlight {
             index: i,
             deadline: t0 + wire_time(bytes.len() + 1, self.baud) + margin,
+            on_wire: wire_time(bytes.len(), self.baud),
             request,
             sent: t0,
         });
@@ -100,7 +115,11 @@ impl Worker {
                 outcome: Outcome::Answered { packets, .. },
                 ..
             }) => {
-                self.stats.rtt = Some(f.sent.elapsed());
+                let rtt = f.sent.elapsed();
+                self.stats.rtt = Some(rtt);
+                let answer = packets.first().map_or(0, |p| p.wire.len());
+                self.timing
+                    .observe(rtt.saturating_sub(f.on_wire + wire_time(answer, baud)));
                 packets.into_iter().next().ok_or(ExchangeError::Timeout {
                     command: f.request.command,
                     attempts: 1,
@@ -109,6 +128,13 @@ impl Worker {
             }
             Ok(w) => {
                 answered_other = w.mismatch.is_some();
+                // Its answer may still come: owed, never taken for the next poll's.
+                let expires = Instant::now() + self.timing.late_limit(margin);
+                self.owed.push(Owed {
+                    answer: each.clone(),
+                    sent: f.sent + f.on_wire,
+                    expires,
+                });
                 Err(self.unanswered(
                     f.request.command,
                     each.command,

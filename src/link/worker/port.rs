@@ -31,6 +31,10 @@ impl Worker {
         match &result {
             Ok(()) => {
                 self.decoder.clear();
+                // An answer owed to a request sent at the old rate can never come clean: were it
+                // kept, the same answer at the new rate (a ping of the same id) would be taken
+                // for the old request's.
+                self.owed.clear();
                 self.emit_connected();
             }
             Err(e) => self.emit(LinkEvent::State(LinkState::Lost {
@@ -87,6 +91,8 @@ impl Worker {
                     if t.baud() != self.baud {
                         let _ = t.set_baud(self.baud);
                     }
+                    self.timing = super::timing::AnswerTiming::new(t.latency_timer());
+                    self.owed.clear();
                     self.transport = Some(t);
                     self.decoder.clear();
                     self.emit_connected();

@@ -13,8 +13,10 @@ pub use motion::{
     Wheel, damping_request, monitor_request, read_angle, read_angle_request, rotate_request,
     spin_request, stop_all_requests,
 };
-pub use params::{read_all, read_block, read_param, write_block, write_param, write_params};
-pub use scan::{ScanPlan, ScanRow, scan};
+pub use params::{
+    read_all, read_block, read_param, write_block, write_param, write_param_broadcast, write_params,
+};
+pub use scan::{ScanPlan, ScanReport, ScanRow, scan};
 pub use setup::{Location, factory_location, locate, reset_user_data, set_baud, set_id};
 
 use super::OpError;
@@ -69,34 +71,37 @@ pub enum Presence {
     PossibleDuplicate(String),
 }
 
-/// Pings `id` once (a scan) or with retries.
-pub fn ping(client: &Client, id: u8, attempts: u8) -> Result<Presence, OpError> {
-    Ok(ping_detail(client, id, attempts)?.0)
+/// Refuses the broadcast address for an operation that waits for an answer from servo `id`
+/// (`what` it is): nothing is sent.
+pub fn addressed(id: u8, what: &'static str) -> Result<(), OpError> {
+    if id == crate::protocol::servo::BROADCAST_ID {
+        return Err(OpError::BroadcastAnswer { what, hint: "" });
+    }
+    Ok(())
 }
 
-/// Pings `id`; also returns the id of another servo whose late answer turned up meanwhile (on a
-/// loaded machine an answer can miss its deadline and arrive during the next ping).
-fn ping_detail(client: &Client, id: u8, attempts: u8) -> Result<(Presence, Option<u8>), OpError> {
+/// Pings `id` with `attempts` attempts: present, absent, or garbled on every attempt (possibly
+/// two servos on one id). A clean answer from another servo is its late answer, not a sign of
+/// trouble at this id.
+pub fn ping(client: &Client, id: u8, attempts: u8) -> Result<Presence, OpError> {
+    addressed(id, "ping a servo")?;
     let req = Request::new(cmd::PING, vec![id])
         .reply(ReplySpec::Required(Match::servo(cmd::PING, &[id])))
         .attempts(attempts);
     match client.request(req) {
-        Ok(_) => Ok((Presence::Present, None)),
-        Err(ExchangeError::Timeout { .. }) => Ok((Presence::Absent, None)),
+        Ok(_) => Ok(Presence::Present),
+        Err(ExchangeError::Timeout { .. }) => Ok(Presence::Absent),
         Err(ExchangeError::Garbled { error, .. }) => {
-            Ok((Presence::PossibleDuplicate(error.to_string()), None))
+            Ok(Presence::PossibleDuplicate(error.to_string()))
         }
-        // A clean answer from another servo is that servo's late answer, not a sign of trouble at
-        // this id.
         Err(ExchangeError::Mismatch {
             got: cmd::PING,
             from: Some(other),
             ..
-        }) if other != id => Ok((Presence::Absent, Some(other))),
-        Err(ExchangeError::Mismatch { got, .. }) => Ok((
-            Presence::PossibleDuplicate(format!("answered with command {got}")),
-            None,
-        )),
+        }) if other != id => Ok(Presence::Absent),
+        Err(ExchangeError::Mismatch { got, .. }) => Ok(Presence::PossibleDuplicate(format!(
+            "answered with command {got}"
+        ))),
         Err(e) => Err(e.into()),
     }
 }

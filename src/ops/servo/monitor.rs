@@ -74,6 +74,9 @@ pub fn sync_monitor_request(profile: &Profile, ids: &[u8]) -> Result<Request, Op
             note: String::new(),
         });
     }
+    for &id in ids {
+        super::addressed(id, "read live values")?;
+    }
     let mut inputs = vec![(
         "sub_command".to_string(),
         Input::Raw(Value::Int(cmd::MONITOR.into())),

@@ -129,6 +129,7 @@ pub fn monitor_request(id: u8) -> Request {
 
 /// Reads servo `id`'s angle, 0.1°.
 pub fn read_angle(client: &Client, profile: &Profile, id: u8) -> Result<i64, OpError> {
+    super::addressed(id, "read an angle")?;
     let c = super::command(profile, cmd::READ_ANGLE)?;
     let reply = client.request(read_angle_request(id).attempts(2))?;
     let d = profile

@@ -16,14 +16,29 @@ pub fn read_param(
     id: u8,
     param: &Param,
 ) -> Result<i64, OpError> {
+    let reply = client.request(read_request(profile, id, param)?)?;
+    read_value(profile, id, param, reply.payload().unwrap_or_default())
+}
+
+/// The request that reads parameter `param` of servo `id` (READ_DATA, two attempts).
+pub(super) fn read_request(profile: &Profile, id: u8, param: &Param) -> Result<Request, OpError> {
+    super::addressed(id, "read a parameter")?;
     let read = command(profile, cmd::READ_DATA)?;
     // The answer must name this parameter: a late answer to an earlier read is not this one.
     let answer = Match::servo(cmd::READ_DATA, &[id]).with_prefix(vec![id, param.id]);
-    let req = Request::for_command(profile, read, vec![id, param.id])
+    Ok(Request::for_command(profile, read, vec![id, param.id])
         .reply(ReplySpec::Required(answer))
-        .attempts(2);
-    let reply = client.request(req)?;
-    let payload = reply.payload().unwrap_or_default();
+        .attempts(2))
+}
+
+/// The value of `param` in servo `id`'s READ_DATA answer `payload`.
+pub(super) fn read_value(
+    profile: &Profile,
+    id: u8,
+    param: &Param,
+    payload: &[u8],
+) -> Result<i64, OpError> {
+    let read = command(profile, cmd::READ_DATA)?;
     if payload.get(1) != Some(&param.id) {
         return Err(OpError::Verify(format!(
             "servo {id} answered parameter {:?} for {}",
@@ -51,26 +66,8 @@ pub fn write_param(
     param: &Param,
     input: Input,
 ) -> Result<Check, OpError> {
-    if param.access == Access::ReadOnly {
-        return Err(OpError::ReadOnly {
-            param: param.field.ident.clone(),
-        });
-    }
-    let write = command(profile, cmd::WRITE_DATA)?;
-    let inputs = vec![
-        ("servo_id".to_string(), Input::Raw(Value::Int(id.into()))),
-        (
-            "data_id".to_string(),
-            Input::Raw(Value::Int(param.id.into())),
-        ),
-        ("data".to_string(), input),
-    ];
-    let payload = profile.encode(write, Direction::HostToDevice, &inputs)?;
-    let written = profile
-        .decode(write, Direction::HostToDevice, &payload)
-        .ok()
-        .and_then(|d| d.values.get(2).map(|v| v.value.clone()))
-        .unwrap_or(Value::Bytes(Vec::new()));
+    super::addressed(id, "write a parameter and read it back")?;
+    let (write, payload, written) = write_payload(profile, id, param, input)?;
     // A relation with other parameters (angle limits low ≤ high) is checked against what the
     // servo holds now, before anything is written.
     if let Value::Int(raw) = written {
@@ -98,6 +95,52 @@ pub fn write_param(
     })
 }
 
+/// Writes one user parameter to every servo at the port's rate (id 255, the broadcast address),
+/// asked for on purpose: nobody answers a broadcast, so nothing is read back. The value is
+/// checked against the profile first. Returns the raw value written.
+pub fn write_param_broadcast(
+    client: &Client,
+    profile: &Profile,
+    param: &Param,
+    input: Input,
+) -> Result<Value, OpError> {
+    let id = crate::protocol::servo::BROADCAST_ID;
+    let (write, payload, written) = write_payload(profile, id, param, input)?;
+    client.request(Request::for_command(profile, write, payload).reply(ReplySpec::None))?;
+    Ok(written)
+}
+
+/// The WRITE_DATA command, its payload for `param` of servo `id` and the raw value in it,
+/// checked against the profile.
+fn write_payload<'p>(
+    profile: &'p Profile,
+    id: u8,
+    param: &Param,
+    input: Input,
+) -> Result<(&'p crate::profile::Command, Vec<u8>, Value), OpError> {
+    if param.access == Access::ReadOnly {
+        return Err(OpError::ReadOnly {
+            param: param.field.ident.clone(),
+        });
+    }
+    let write = command(profile, cmd::WRITE_DATA)?;
+    let inputs = vec![
+        ("servo_id".to_string(), Input::Raw(Value::Int(id.into()))),
+        (
+            "data_id".to_string(),
+            Input::Raw(Value::Int(param.id.into())),
+        ),
+        ("data".to_string(), input),
+    ];
+    let payload = profile.encode(write, Direction::HostToDevice, &inputs)?;
+    let written = profile
+        .decode(write, Direction::HostToDevice, &payload)
+        .ok()
+        .and_then(|d| d.values.get(2).map(|v| v.value.clone()))
+        .unwrap_or(Value::Bytes(Vec::new()));
+    Ok((write, payload, written))
+}
+
 /// The user parameters (32-53) of the 32-byte block, in block order.
 fn block_params(profile: &Profile) -> Vec<&Param> {
     profile.block_params().collect()
@@ -106,6 +149,7 @@ fn block_params(profile: &Profile) -> Vec<&Param> {
 /// Reads the 32-byte user block (parameters 32-53) in one exchange: raw values by `data_id`, in
 /// block order.
 pub fn read_block(client: &Client, profile: &Profile, id: u8) -> Result<Vec<(u8, i64)>, OpError> {
+    super::addressed(id, "read the user block")?;
     let read = command(profile, cmd::READ_BATCH_DATA)?;
     let req = Request::for_command(profile, read, vec![id])
         .reply(ReplySpec::Required(Match::servo(
@@ -153,6 +197,7 @@ pub fn write_block(
     id: u8,
     values: &[(u8, i64)],
 ) -> Result<Vec<Check>, OpError> {
+    super::addressed(id, "write the user block and read it back")?;
     let write = command(profile, cmd::WRITE_BATCH_DATA)?;
     let params = block_params(profile);
     let mut inputs = vec![("servo_id".to_string(), Input::Raw(Value::Int(id.into())))];

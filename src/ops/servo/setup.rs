@@ -1,7 +1,7 @@
 //! Where a servo is on the bus: its id and baud rate changed (each verified, the port following
 //! the servo), its user data reset to the factory id and rate, a lost servo found again.
 
-use super::{Presence, baud_param, command, id_param, ping, ping_detail, read_param, switch};
+use super::{Presence, baud_param, command, id_param, ping, read_param, switch};
 use crate::link::{Client, ExchangeError, Match, ReplySpec, Request};
 use crate::ops::{Cancel, OpError};
 use crate::profile::{Profile, Value};
@@ -19,6 +19,7 @@ pub fn set_id(
     if new == crate::protocol::servo::BROADCAST_ID {
         return Err(OpError::BroadcastId);
     }
+    super::addressed(old, "give a servo a new id")?;
     if new == old {
         return Err(OpError::SameId { id: new });
     }
@@ -74,24 +75,11 @@ pub fn set_id(
     Ok(())
 }
 
-/// The ids that answer at the current baud rate.
+/// The ids that answer at the current baud rate (a garbled answer counts).
 fn ids_on_bus(client: &Client, cancel: &Cancel) -> Result<Vec<u8>, OpError> {
-    let mut out = Vec::new();
-    for id in 0..crate::protocol::servo::BROADCAST_ID {
-        if cancel.is_cancelled() {
-            return Err(OpError::Cancelled);
-        }
-        let (presence, late) = ping_detail(client, id, 1)?;
-        if presence != Presence::Absent {
-            out.push(id);
-        }
-        // A late answer still proves that servo is there.
-        if let Some(other) = late.filter(|o| !out.contains(o)) {
-            out.push(other);
-        }
-    }
-    out.sort_unstable();
-    Ok(out)
+    let ids: Vec<u8> = (0..crate::protocol::servo::BROADCAST_ID).collect();
+    let (found, _) = super::scan::find_ids(client, &ids, cancel, &mut |_, _| {})?;
+    Ok(found.into_iter().map(|(id, _)| id).collect())
 }
 
 /// Where a servo was found after a baud change that could not be verified: each of the
@@ -110,6 +98,7 @@ fn recover(client: &Client, profile: &Profile, id: u8) -> Result<Option<u32>, Op
 /// If the servo is not found at the new rate, every rate is scanned for it: the error says where
 /// it is, and the port is left at that rate.
 pub fn set_baud(client: &Client, profile: &Profile, id: u8, option: u8) -> Result<u32, OpError> {
+    super::addressed(id, "change a servo's baud rate and follow it")?;
     let (baud_param, rates) = baud_param(profile)?;
     let Some(&baud) = rates.get(&option) else {
         let first = rates.keys().next().copied().unwrap_or(0);
@@ -190,6 +179,7 @@ pub fn reset_user_data(
     id: u8,
     baud: u32,
 ) -> Result<Location, OpError> {
+    super::addressed(id, "reset a servo's user data and find it again")?;
     let reset = command(profile, cmd::RESET_USER_DATA)?;
     let home = factory_location(profile);
     let switch = |b: u32| switch(client, b);

@@ -118,6 +118,9 @@ pub struct ServoBus {
     latency: Duration,
     decoder: ServoDecoder,
     decoder_baud: Option<u32>,
+    /// When the last byte from the host arrived: a servo's receiver starts afresh after a
+    /// quiet line (a request garbled by a collision does not swallow the next one).
+    last_rx: Option<Instant>,
 }
 
 impl ServoBus {
@@ -135,6 +138,7 @@ impl ServoBus {
             latency: DEFAULT_LATENCY,
             decoder: ServoDecoder::new(),
             decoder_baud: None,
+            last_rx: None,
         }
     }
 
@@ -170,6 +174,14 @@ impl ServoBus {
     /// The reply latency of every servo (the vendor's servos take 0.2-1 ms).
     pub fn with_latency(mut self, latency: Duration) -> Self {
         self.latency = latency;
+        self
+    }
+
+    /// Every servo acknowledges a baud change and keeps its old rate (`ignored`).
+    pub fn with_baud_change_ignored(mut self, ignored: bool) -> Self {
+        for s in &mut self.servos {
+            *s = s.clone().with_baud_change_ignored(ignored);
+        }
         self
     }
 
@@ -358,6 +370,16 @@ impl Device for ServoBus {
             self.decoder.clear();
             self.decoder_baud = Some(baud);
         }
+        // A gap of a few byte times ends whatever partial frame the receiver holds.
+        let started = now - crate::link::wire_time(bytes.len(), baud);
+        let quiet = crate::link::wire_time(3, baud) + Duration::from_micros(500);
+        if self
+            .last_rx
+            .is_some_and(|last| started.saturating_duration_since(last) > quiet)
+        {
+            self.decoder.clear();
+        }
+        self.last_rx = Some(now);
         self.decoder.push(bytes);
         let frames: Vec<Frame> = self
             .decoder

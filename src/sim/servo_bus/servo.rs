@@ -54,6 +54,9 @@ pub struct SimServo {
     pub(super) holding: bool,
     /// The motion command held (the last one received while holding).
     pub(super) held: Option<MotionCmd>,
+    /// Stores a new baud option but keeps talking at its old rate (firmware that applies it
+    /// only after a power cycle, or not at all).
+    ignores_baud_change: bool,
 }
 
 impl SimServo {
@@ -94,7 +97,14 @@ impl SimServo {
             queued: None,
             holding: false,
             held: None,
+            ignores_baud_change: false,
         }
+    }
+
+    /// A servo that acknowledges a baud change and keeps its old rate.
+    pub fn with_baud_change_ignored(mut self, ignored: bool) -> Self {
+        self.ignores_baud_change = ignored;
+        self
     }
 
     /// Sets the bus id (the id parameter).
@@ -224,6 +234,7 @@ impl SimServo {
     fn store(&mut self, profile: &Profile, id: u8, raw: i64) {
         self.params.insert(id, raw);
         if Some(id) == self.baud_param
+            && !self.ignores_baud_change
             && let Some(b) = u8::try_from(raw)
                 .ok()
                 .and_then(|o| profile.baud_of_option(o))

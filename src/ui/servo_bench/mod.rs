@@ -98,13 +98,13 @@ pub enum Output {
     /// A scan found a servo (or a possible duplicate).
     Found(ScanRow),
     /// A scan ended: every row, or why it stopped.
-    Scanned(Result<Vec<ScanRow>, OpError>),
+    Scanned(Result<crate::ops::servo::ScanReport, OpError>),
     /// One id was scanned again at one rate: what answers there now.
     Rescanned {
         /// Where.
         at: Servo,
         /// What answers (empty: nothing), or why the scan failed.
-        rows: Result<Vec<ScanRow>, OpError>,
+        rows: Result<crate::ops::servo::ScanReport, OpError>,
     },
     /// Parameters read from a servo: raw values by `data_id`, or why not.
     Values {

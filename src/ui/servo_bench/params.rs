@@ -331,7 +331,7 @@ impl ParamsState {
         let device = self.device(p.id);
         match self.values.get(&p.id) {
             Some(Ok(v)) => {
-                ui.monospace(f.format(&Value::Int(*v)));
+                crate::ui::inputs::device_value(ui, f, &Value::Int(*v));
             }
             Some(Err(e)) => {
                 ui.colored_label(

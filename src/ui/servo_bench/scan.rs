@@ -5,7 +5,7 @@ use super::header_row;
 use super::{Output, Servo, error_label, ok_label, port_baud, send};
 use crate::i18n::Lang;
 use crate::ops::OpError;
-use crate::ops::servo::{self as ops, Presence, ScanPlan, ScanRow};
+use crate::ops::servo::{self as ops, Presence, ScanPlan, ScanReport, ScanRow};
 use crate::profile::Profile;
 use crate::ui::Action;
 use crate::ui::jobs::Job;
@@ -25,7 +25,32 @@ pub struct ScanState {
     /// The servos found, in scan order.
     pub rows: Vec<ScanRow>,
     /// How the last scan ended (`None`: none yet, or running).
-    pub outcome: Option<Result<usize, OpError>>,
+    pub outcome: Option<Result<ScanTally, OpError>>,
+}
+
+/// What the last scan says beside its rows: how many servos, how many ids it asked again, the
+/// late answers, and the margin it waited with.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScanTally {
+    /// Servos in the list.
+    pub found: usize,
+    /// Ids pinged again one by one.
+    pub asked_again: usize,
+    /// Answers that came after their window.
+    pub late_answers: usize,
+    /// The margin, in ms.
+    pub margin_ms: f64,
+}
+
+impl ScanTally {
+    fn of(report: &ScanReport, found: usize) -> Self {
+        Self {
+            found,
+            asked_again: report.asked_again,
+            late_answers: report.late_answers,
+            margin_ms: report.margin_ms,
+        }
+    }
 }
 
 impl Default for ScanState {
@@ -136,20 +161,22 @@ impl ScanState {
         }
     }
 
-    pub(super) fn on_scanned(&mut self, result: Result<Vec<ScanRow>, OpError>) {
+    pub(super) fn on_scanned(&mut self, result: Result<ScanReport, OpError>) {
         match result {
-            Ok(rows) => {
-                self.outcome = Some(Ok(rows.len()));
-                self.rows = rows;
+            Ok(report) => {
+                self.outcome = Some(Ok(ScanTally::of(&report, report.rows.len())));
+                self.rows = report.rows;
             }
             // Partial results stay: what was found was found.
             Err(e) => self.outcome = Some(Err(e)),
         }
     }
 
-    pub(super) fn on_rescanned(&mut self, at: Servo, rows: Result<Vec<ScanRow>, OpError>) {
-        match rows {
-            Ok(rows) => {
+    pub(super) fn on_rescanned(&mut self, at: Servo, report: Result<ScanReport, OpError>) {
+        match report {
+            Ok(report) => {
+                let tally = ScanTally::of(&report, 0);
+                let rows = report.rows;
                 let pos = self
                     .rows
                     .iter()
@@ -165,7 +192,10 @@ impl ScanState {
                         self.rows.insert(at_pos + i, row);
                     }
                 }
-                self.outcome = Some(Ok(self.rows.len()));
+                self.outcome = Some(Ok(ScanTally {
+                    found: self.rows.len(),
+                    ..tally
+                }));
             }
             Err(e) => self.outcome = Some(Err(e)),
         }
@@ -253,11 +283,24 @@ impl ScanState {
                 actions.push(scan_job(rt, plan, None));
             }
             match &self.outcome {
-                Some(Ok(n)) => {
+                Some(Ok(t)) => {
                     ok_label(
                         ui,
-                        format!("{n} {}", lang.tr("servo(s) found", "个舵机已找到")),
+                        format!("{} {}", t.found, lang.tr("servo(s) found", "个舵机已找到")),
                     );
+                    ui.weak(format!(
+                        "{} {}, {} {}, {} {:.1} ms",
+                        t.asked_again,
+                        lang.tr("id(s) asked again", "个ID重新询问"),
+                        t.late_answers,
+                        lang.tr("late answer(s)", "个迟到应答"),
+                        lang.tr("margin", "余量"),
+                        t.margin_ms
+                    ))
+                    .on_hover_text(lang.tr(
+                        "Ids pinged again one by one (a damaged answer, an answer after its sweep), answers that came after their window, and the answer margin the scan waited with",
+                        "逐个重新询问的ID(应答损坏或扫描结束后才到),超出等待窗口的应答,以及扫描使用的应答余量",
+                    ));
                 }
                 Some(Err(e)) => {
                     error_label(
@@ -384,7 +427,12 @@ fn scan_job(rt: &AppState, plan: ScanPlan, again: Option<Servo>) -> Action {
             },
         );
         let summary = match &result {
-            Ok(rows) => Ok(format!("{} servo(s) found", rows.len())),
+            Ok(r) => Ok(format!(
+                "{} servo(s) found; {} id(s) asked again, margin {:.1} ms",
+                r.rows.len(),
+                r.asked_again,
+                r.margin_ms
+            )),
             Err(e) => Err(e.clone().into()),
         };
         match again {

@@ -48,7 +48,10 @@ fn shown(f: &Field, v: &Value, lang: Lang) -> String {
     {
         return format!("{} ({raw})", lang.tr(&l.name.en, &l.name.zh));
     }
-    format!("{}{}", f.format(v), f.unit_suffix())
+    match f.range_mark(v) {
+        Some(mark) => format!("{}{} {mark}", f.format(v), f.unit_suffix()),
+        None => format!("{}{}", f.format(v), f.unit_suffix()),
+    }
 }
 
 impl SolarPanel {
@@ -189,6 +192,11 @@ impl SolarPanel {
                                     );
                                     if stale {
                                         ui.weak(text);
+                                    } else if f.out_of_range(v).is_some() {
+                                        ui.colored_label(
+                                            RED,
+                                            egui::RichText::new(text).monospace(),
+                                        );
                                     } else {
                                         ui.monospace(text);
                                     }

@@ -80,6 +80,7 @@ impl AppState {
                 at: UNIX_EPOCH + Duration::from_micros(f.at_us),
                 direction: f.direction,
                 frame: f.item.result,
+                note: None,
             })
             .collect();
         let name = path.file_name().map_or_else(

@@ -157,6 +157,23 @@ impl LinkStatus {
         }
     }
 
+    /// Re-lists the serial ports now (after a port's setting changed).
+    pub fn refresh_ports_now(&mut self) {
+        self.ports_at = None;
+        self.refresh_ports();
+    }
+
+    /// The USB adapter of the port the link is open on, as last listed.
+    pub fn adapter(&self) -> Option<(&str, &crate::link::adapter::Adapter)> {
+        let Some(Target::Port(path)) = self.target() else {
+            return None;
+        };
+        self.ports
+            .iter()
+            .find(|p| &p.path == path)
+            .map(|p| (p.path.as_str(), &p.adapter))
+    }
+
     /// A fresh id for a request whose result comes back as a `LinkEvent::Reply` (kept in
     /// [`super::DeviceModel::replies`]).
     pub fn reply_id(&self) -> u64 {

@@ -125,6 +125,7 @@ mod tests {
             at: std::time::SystemTime::now(),
             direction: Direction::HostToDevice,
             frame: Ok(Packet::msp_request(request)),
+            note: None,
         }
     }
 

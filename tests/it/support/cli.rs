@@ -66,6 +66,55 @@ impl Ran {
     }
 }
 
+/// How long [`run_watched`] lets a command run before the test fails instead of hanging: far
+/// beyond what a loaded machine needs, since a command that ends returns at once.
+pub const WATCHDOG: std::time::Duration = std::time::Duration::from_secs(120);
+
+impl Ran {
+    /// Both outputs and the exit code, for assertion messages.
+    pub fn text(&self) -> String {
+        format!(
+            "exit {}\n--- stdout\n{}--- stderr\n{}",
+            self.code, self.out, self.err
+        )
+    }
+
+    /// The lines of standard output that are JSON documents (others are skipped).
+    pub fn json_docs(&self) -> Vec<serde_json::Value> {
+        self.out
+            .lines()
+            .filter(|l| l.trim_start().starts_with('{'))
+            .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+            .collect()
+    }
+}
+
+/// Runs `botbench` with `args` to its end, for a command that might hang (a vanished port, a
+/// silent device): the test fails once it has run for [`WATCHDOG`]. The watchdog never decides
+/// a verdict.
+pub fn run_watched(args: &[&str]) -> Ran {
+    let mut child = botbench(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("runs botbench");
+    let deadline = std::time::Instant::now() + WATCHDOG;
+    loop {
+        if child.try_wait().expect("waits on botbench").is_some() {
+            return Ran::of(child.wait_with_output().expect("botbench's output"));
+        }
+        if std::time::Instant::now() >= deadline {
+            let _ = child.kill();
+            let ran = Ran::of(child.wait_with_output().expect("botbench's output"));
+            panic!(
+                "botbench {args:?} did not end within {WATCHDOG:?}: {}",
+                ran.text()
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+}
+
 /// Runs `botbench` with `args` to its end.
 pub fn run(args: &[&str]) -> Ran {
     output(&mut botbench(args))
@@ -105,6 +154,21 @@ impl SimProcess {
             child,
             path,
             stderr,
+        }
+    }
+
+    /// Waits, within [`WATCHDOG`], for the simulator to end on its own (its port vanished).
+    pub fn wait_exit(&mut self) -> std::process::ExitStatus {
+        let deadline = std::time::Instant::now() + WATCHDOG;
+        loop {
+            if let Some(s) = self.child.try_wait().expect("waits on the simulator") {
+                return s;
+            }
+            assert!(
+                std::time::Instant::now() < deadline,
+                "the simulator did not end"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(10));
         }
     }
 

@@ -1,0 +1,122 @@
+//! `botbench sim` options that make a simulator misbehave as real adapters, buses, hosts and
+//! firmware do (PROTOCOL_NOTES §4).
+
+use super::CliError;
+use crate::sim::msp_device::{AsyncFrame, MspQuirks};
+use crate::sim::{Line, SimKind, Split};
+use clap::Args;
+use std::time::Duration;
+
+/// The field's misbehaviours.
+#[derive(Debug, Args)]
+pub(crate) struct FieldArgs {
+    /// A USB adapter's latency timer, in ms (FTDI: 16 by default): the host sees the bytes the
+    /// device sent only at ticks of this period, in bursts.
+    #[arg(long, value_name = "MS")]
+    latency_timer_ms: Option<u64>,
+    /// Every reply longer than N bytes reaches the host in two bursts: N bytes, then the rest
+    /// --split-gap-ms later (a latency tick inside the frame).
+    #[arg(long, value_name = "N")]
+    split_after: Option<usize>,
+    /// With --split-after: how much later the rest of a reply is seen, in ms.
+    #[arg(long, value_name = "MS", default_value_t = 16)]
+    split_gap_ms: u64,
+    /// A slow host: each frame is seen up to this many ms late (random, in order).
+    #[arg(long, value_name = "MS")]
+    host_delay_ms: Option<u64>,
+    /// A one-wire bus (TX and RX tied): the host reads back every request it sends.
+    #[arg(long)]
+    echo: bool,
+    /// The port vanishes (an adapter unplugged) once N bytes have come from the host; the
+    /// simulator then exits.
+    #[arg(long, value_name = "N")]
+    vanish_after_bytes: Option<u64>,
+    /// MSP: before each reply, an unsolicited frame (kind 0xFE) of the same command with this
+    /// payload (hex, e.g. `ee`).
+    #[arg(long, value_name = "HEX")]
+    async_before_reply: Option<String>,
+    /// MSP: push an unsolicited frame (kind 0xFE) every MS ms: --async-frame says which.
+    #[arg(long, value_name = "MS")]
+    async_every_ms: Option<u64>,
+    /// MSP: the frame --async-every-ms pushes, as COMMAND:HEX (default `130:ee`).
+    #[arg(long, value_name = "COMMAND:HEX", default_value = "130:ee")]
+    async_frame: String,
+    /// MSP: replies to this command fail their checksum (repeat for several).
+    #[arg(long, value_name = "COMMAND")]
+    garble_command: Vec<u8>,
+    /// Servo bus: every servo acknowledges a baud change and keeps talking at its old rate.
+    #[arg(long)]
+    ignore_baud_change: bool,
+}
+
+fn hex(what: &str, text: &str) -> Result<Vec<u8>, CliError> {
+    crate::protocol::hex::parse(text).map_err(|e| CliError::input(format!("{what} '{text}': {e}")))
+}
+
+impl FieldArgs {
+    /// The line's misbehaviour for a simulator of `kind`: a servo bus is half-duplex.
+    pub(crate) fn line(&self, kind: SimKind) -> Result<Line, CliError> {
+        let line = Line {
+            latency_timer: self.latency_timer_ms.map(Duration::from_millis),
+            split: self.split_after.map(|after_bytes| Split {
+                after_bytes,
+                gap: Duration::from_millis(self.split_gap_ms),
+            }),
+            host_delay: self.host_delay_ms.map(Duration::from_millis),
+            echo: self.echo,
+            half_duplex: kind == SimKind::ServoBus,
+            vanish_after_bytes: self.vanish_after_bytes,
+        };
+        line.check().map_err(CliError::input)?;
+        Ok(line)
+    }
+
+    /// The MSP board's misbehaviour; refused for a simulator that is not an MSP device.
+    pub(crate) fn msp(&self, kind: SimKind) -> Result<MspQuirks, CliError> {
+        let quirks = MspQuirks {
+            async_before_reply: self
+                .async_before_reply
+                .as_deref()
+                .map(|h| hex("--async-before-reply", h))
+                .transpose()?,
+            async_every: match self.async_every_ms {
+                None => None,
+                Some(0) => return Err(CliError::input("--async-every-ms 0: give 1 ms or more")),
+                Some(ms) => Some((Duration::from_millis(ms), self.async_frame()?)),
+            },
+            garble: self.garble_command.clone(),
+        };
+        if quirks != MspQuirks::default()
+            && kind.profile_protocol() != crate::profile::Protocol::Msp
+        {
+            return Err(CliError::input(format!(
+                "--async-before-reply, --async-every-ms and --garble-command are for MSP devices, not a {kind}"
+            )));
+        }
+        Ok(quirks)
+    }
+
+    /// Whether servos ignore a baud change; refused for a simulator that is not a servo bus.
+    pub(crate) fn ignore_baud_change(&self, kind: SimKind) -> Result<bool, CliError> {
+        if self.ignore_baud_change && kind != SimKind::ServoBus {
+            return Err(CliError::input(format!(
+                "--ignore-baud-change is for the servo-bus simulator, not a {kind}"
+            )));
+        }
+        Ok(self.ignore_baud_change)
+    }
+
+    fn async_frame(&self) -> Result<AsyncFrame, CliError> {
+        let bad = || {
+            CliError::input(format!(
+                "--async-frame '{}': give COMMAND:HEX, e.g. 130:ee",
+                self.async_frame
+            ))
+        };
+        let (command, payload) = self.async_frame.split_once(':').ok_or_else(bad)?;
+        Ok(AsyncFrame {
+            command: command.trim().parse().map_err(|_| bad())?,
+            payload: hex("--async-frame", payload)?,
+        })
+    }
+}

@@ -1,0 +1,210 @@
+//! A sweep: requests sent one after another at the pace of the bus, not of the host. A USB
+//! adapter delays only what the host receives (its latency timer), so a servo scan that waited
+//! for each answer would cost 255 latency ticks; on the bus itself a ping and its answer fit in
+//! about 2 ms. Each answer is taken for its request whenever it reaches the host (the answers
+//! name their servo), a damaged frame is narrowed down to the requests it can have come from
+//! (the devices answer in order), and what answers none of the sweep's requests is handed back.
+
+use super::Worker;
+use crate::link::request::{ExchangeError, ReplySpec};
+use crate::link::{Sweep, SweepAnswer, SweepReply, wire_time};
+use crate::packet::Packet;
+use crate::protocol::{Direction, FrameError};
+use std::time::{Duration, Instant};
+
+/// What came, in the order it came: an answer to request `i`, or a damaged frame when request
+/// `sent` was the last one sent.
+enum Seen {
+    Answer(usize),
+    Damaged { error: FrameError, sent: usize },
+}
+
+/// A sweep under way.
+struct Run {
+    sent: Vec<Instant>,
+    answers: Vec<Option<SweepAnswer>>,
+    order: Vec<Seen>,
+    strays: Vec<Packet>,
+    on_wire: Vec<Duration>,
+    margin: Duration,
+}
+
+impl Worker {
+    /// Runs `sweep`: every request at the bus's pace, then the answers still on their way, until
+    /// the line has been quiet for the margin after the last request's window.
+    pub(super) fn run_sweep(&mut self, sweep: &Sweep) -> Result<SweepReply, ExchangeError> {
+        let margin = self.auto_margin();
+        let n = sweep.requests.len();
+        let mut run = Run {
+            sent: Vec::with_capacity(n),
+            answers: vec![None; n],
+            order: Vec::new(),
+            strays: Vec::new(),
+            on_wire: Vec::with_capacity(n),
+            margin,
+        };
+        let baud = self.baud;
+        let answer_time = sweep.device_latency + wire_time(sweep.answer_bytes, baud);
+        let mut next = Instant::now();
+        for (i, req) in sweep.requests.iter().enumerate() {
+            if !matches!(req.reply, ReplySpec::Required(_)) {
+                return Err(ExchangeError::Encode(format!(
+                    "a sweep's request {i} (command {}) waits for no answer",
+                    req.command
+                )));
+            }
+            let (bytes, packet) = self.session.encode(req)?;
+            // The bus is free once the last answer can have ended.
+            self.sweep_read(sweep, &mut run, next, false)?;
+            self.commands_during_exchange()?;
+            let t = Instant::now();
+            self.write(&bytes, packet)?;
+            let on_wire = wire_time(bytes.len(), baud);
+            run.sent.push(t);
+            run.on_wire.push(on_wire);
+            next = t + on_wire + answer_time;
+        }
+        let window = match run.sent.last() {
+            Some(&last) => {
+                last + run.on_wire.last().copied().unwrap_or_default() + answer_time + margin
+            }
+            // A sweep of nothing collects what is still on its way: the grace an exchange gives.
+            None => Instant::now() + self.timing.grace(margin),
+        };
+        self.sweep_read(sweep, &mut run, window.max(next), true)?;
+        Ok(finish(run))
+    }
+
+    /// Reads and sorts what comes until `until`; when `settle`, also for as long as the line
+    /// keeps talking (the frame gap after a frame's first bytes, the margin after a whole one).
+    fn sweep_read(
+        &mut self,
+        sweep: &Sweep,
+        run: &mut Run,
+        until: Instant,
+        settle: bool,
+    ) -> Result<(), ExchangeError> {
+        let mut deadline = until;
+        let gap = self.timing.frame_gap();
+        let mut flushed = false;
+        loop {
+            self.sweep_sort(sweep, run);
+            let now = Instant::now();
+            if now >= deadline {
+                let n = self.read_some(now)?;
+                if n > 0 {
+                    flushed = false;
+                    if settle {
+                        deadline = self.settle_deadline(deadline, gap, run.margin);
+                    }
+                    continue;
+                }
+                if settle && self.decoder.buffered() > 0 && !flushed {
+                    self.decoder.flush();
+                    flushed = true;
+                    continue;
+                }
+                return Ok(());
+            }
+            let slice = deadline.min(now + Duration::from_millis(50));
+            if self.read_some(slice)? > 0 && settle {
+                flushed = false;
+                deadline = self.settle_deadline(deadline, gap, run.margin);
+            }
+        }
+    }
+
+    fn settle_deadline(&self, deadline: Instant, gap: Duration, margin: Duration) -> Instant {
+        let rest = if self.decoder.buffered() > 0 {
+            gap
+        } else {
+            margin
+        };
+        deadline.max(Instant::now() + wire_time(8, self.baud) + rest)
+    }
+
+    /// Sorts the decoded frames: an answer to the earliest request sent that it answers and that
+    /// has none yet, a late answer owed to an earlier exchange, an echo, or a stray.
+    fn sweep_sort(&mut self, sweep: &Sweep, run: &mut Run) {
+        while let Some(item) = self.decoder.next_packet() {
+            let now = Instant::now();
+            match item {
+                Ok(p) => {
+                    self.stats.received += 1;
+                    if p.direction != Direction::DeviceToHost {
+                        self.log_in(Ok(p), None);
+                        continue;
+                    }
+                    let found = (0..run.sent.len()).find(|&i| {
+                        run.answers[i].is_none()
+                            && matches!(&sweep.requests[i].reply, ReplySpec::Required(m) if m.accepts(&p))
+                    });
+                    match found {
+                        Some(i) => {
+                            let latency = now
+                                .saturating_duration_since(run.sent[i] + run.on_wire[i])
+                                .saturating_sub(wire_time(p.wire.len(), self.baud));
+                            self.timing.observe(latency);
+                            let late = latency > run.margin;
+                            if late {
+                                self.stats.late_answers += 1;
+                            }
+                            self.log_in(Ok(p.clone()), None);
+                            run.answers[i] = Some(SweepAnswer { packet: p, late });
+                            run.order.push(Seen::Answer(i));
+                        }
+                        None if self.late_answer(&p) => {}
+                        None => {
+                            self.log_in(
+                                Ok(p.clone()),
+                                Some("answers no request of this sweep".into()),
+                            );
+                            run.strays.push(p);
+                        }
+                    }
+                }
+                Err(error) => {
+                    self.stats.frame_errors += 1;
+                    self.log_in(Err(error.clone()), None);
+                    run.order.push(Seen::Damaged {
+                        error,
+                        sent: run.sent.len().saturating_sub(1),
+                    });
+                }
+            }
+        }
+    }
+}
+
+/// The sweep's result: each damaged frame with the requests it can have come from, those after
+/// the last clean answer before it and before the first clean answer after it, sent before it
+/// came.
+fn finish(run: Run) -> SweepReply {
+    let mut garbled = Vec::new();
+    for (k, seen) in run.order.iter().enumerate() {
+        let Seen::Damaged { error, sent } = seen else {
+            continue;
+        };
+        let after = run.order[..k].iter().rev().find_map(|s| match s {
+            Seen::Answer(i) => Some(*i + 1),
+            Seen::Damaged { .. } => None,
+        });
+        let before = run.order[k + 1..].iter().find_map(|s| match s {
+            Seen::Answer(i) => Some(*i),
+            Seen::Damaged { .. } => None,
+        });
+        let lo = after.unwrap_or(0);
+        // Exclusive: the first clean answer after it, or one past the last request sent.
+        let hi = before.unwrap_or(*sent + 1).min(*sent + 1);
+        let candidates: Vec<usize> = (lo..hi)
+            .filter(|&i| i < run.answers.len() && run.answers[i].is_none())
+            .collect();
+        garbled.push((error.clone(), candidates));
+    }
+    SweepReply {
+        answers: run.answers,
+        garbled,
+        strays: run.strays,
+        margin: run.margin,
+    }
+}

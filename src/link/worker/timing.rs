@@ -1,0 +1,215 @@
+//! How long to wait for an answer, learned while connected, and the answers still owed.
+//!
+//! The deadlines of an exchange (see the README, "Deadlines from the wire"):
+//! - the first byte of an answer is awaited for the request's wire time, one byte and the
+//!   **margin**: the request's, else the link's `--margin-ms`, else the automatic margin: the
+//!   device's own (the protocol's default) plus the adapter's latency timer where the OS gives
+//!   it, or the answer latency measured on this connection with headroom, whichever is more;
+//! - once a frame has started, the rest is awaited for its wire time plus the **frame gap**: an
+//!   adapter hands a frame over in bursts, one latency tick apart, so the gap is never less than
+//!   the margin, the adapter's latency timer, or [`FRAME_GAP_MIN`];
+//! - after the last attempt, an exchange still listens for the **grace** period for an answer
+//!   that comes late (a slow adapter not known yet, a loaded host);
+//! - an attempt that went unanswered is **owed**: its answer may still come. An owed answer is
+//!   taken for its own request when it comes (counted, its latency learned), never for a later
+//!   request, and it is forgotten when an answer to a later request comes first (the devices
+//!   answer in order) or after [`LATE_LIMIT_MIN`] (or ten margins).
+
+use crate::link::request::Match;
+use crate::packet::Packet;
+use std::collections::VecDeque;
+use std::time::{Duration, Instant};
+
+/// The least time allowed for the rest of a frame that has started: a USB adapter's default
+/// latency timer (16 ms) with slack.
+pub(crate) const FRAME_GAP_MIN: Duration = Duration::from_millis(20);
+/// The least time an exchange keeps listening after its last attempt, for a late answer: a
+/// loaded host can see an answer 100 ms or more after it came (a default 16 ms latency timer,
+/// and a scheduler that wakes the reader late, twice an exchange: measured up to 50 ms each on
+/// a loaded 2-core machine), before anything has been measured on the connection. Only an
+/// exchange left unanswered pays it.
+pub(crate) const GRACE_MIN: Duration = Duration::from_millis(150);
+/// The longest automatic margin (beyond it a device is taken for silent).
+const MARGIN_CAP: Duration = Duration::from_millis(250);
+/// How long an owed answer is waited for at least.
+pub(crate) const LATE_LIMIT_MIN: Duration = Duration::from_millis(500);
+/// How many answer latencies the automatic margin looks back on.
+const RECENT: usize = 32;
+/// How many owed answers are kept at most.
+const OWED_CAP: usize = 64;
+
+/// What the link has measured of how late answers come on this connection: the device's own
+/// latency, the adapter's bursts and the host's scheduling all in one figure.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct AnswerTiming {
+    /// The adapter's latency timer, where the OS told it.
+    pub(crate) latency_timer: Option<Duration>,
+    /// The latest answer latencies, from the request's last byte on the wire to the answer's
+    /// first byte read.
+    recent: VecDeque<Duration>,
+}
+
+impl AnswerTiming {
+    /// A new connection: nothing measured yet.
+    pub(crate) fn new(latency_timer: Option<Duration>) -> Self {
+        Self {
+            latency_timer,
+            recent: VecDeque::new(),
+        }
+    }
+
+    /// Takes one answer latency.
+    pub(crate) fn observe(&mut self, latency: Duration) {
+        if self.recent.len() >= RECENT {
+            self.recent.pop_front();
+        }
+        self.recent.push_back(latency);
+    }
+
+    /// The largest recent answer latency, if any answer came.
+    pub(crate) fn measured(&self) -> Option<Duration> {
+        self.recent.iter().max().copied()
+    }
+
+    /// The automatic margin for a device whose own margin is `device`: that plus the adapter's
+    /// latency timer, or the measured latency with a quarter and a millisecond of headroom,
+    /// whichever is more (at most [`MARGIN_CAP`], unless the device's own is more).
+    pub(crate) fn margin(&self, device: Duration) -> Duration {
+        let known = device + self.latency_timer.unwrap_or_default();
+        let measured = self
+            .measured()
+            .map_or(Duration::ZERO, |m| m + m / 4 + Duration::from_millis(1));
+        known.max(measured).min(MARGIN_CAP.max(device))
+    }
+
+    /// How long the rest of a started frame may take, beyond its wire time: a burst the adapter
+    /// holds back (its latency timer, or the latency measured), at least [`FRAME_GAP_MIN`].
+    pub(crate) fn frame_gap(&self) -> Duration {
+        FRAME_GAP_MIN
+            .max(self.latency_timer.unwrap_or_default() + Duration::from_millis(4))
+            .max(self.margin(Duration::ZERO))
+    }
+
+    /// How long an exchange keeps listening after its last attempt's window.
+    pub(crate) fn grace(&self, margin: Duration) -> Duration {
+        GRACE_MIN.max(self.margin(Duration::ZERO)).max(margin / 2)
+    }
+
+    /// How long an owed answer is waited for.
+    pub(crate) fn late_limit(&self, margin: Duration) -> Duration {
+        LATE_LIMIT_MIN.max(margin * 10)
+    }
+}
+
+/// An answer still owed to an attempt that went unanswered.
+#[derive(Debug, Clone)]
+pub(crate) struct Owed {
+    /// What the answer looks like.
+    pub(crate) answer: Match,
+    /// When the request's last byte was on the wire.
+    pub(crate) sent: Instant,
+    /// When it is given up.
+    pub(crate) expires: Instant,
+}
+
+/// The answers owed, oldest first.
+#[derive(Debug, Default)]
+pub(crate) struct OwedAnswers(VecDeque<Owed>);
+
+impl OwedAnswers {
+    /// Adds one.
+    pub(crate) fn push(&mut self, owed: Owed) {
+        if self.0.len() >= OWED_CAP {
+            self.0.pop_front();
+        }
+        self.0.push_back(owed);
+    }
+
+    /// Forgets those given up by `now`.
+    pub(crate) fn expire(&mut self, now: Instant) {
+        self.0.retain(|o| o.expires > now);
+    }
+
+    /// Whether an owed answer could be taken for an answer `answer` matches.
+    pub(crate) fn overlaps(&self, answer: &Match) -> Option<&Owed> {
+        self.0.iter().find(|o| o.answer.overlaps(answer))
+    }
+
+    /// If `p` is an owed answer, takes it: the oldest owed answer that `p` is; the ones owed
+    /// before it are forgotten (they would have come first). Returns its request's send time.
+    pub(crate) fn take(&mut self, p: &Packet) -> Option<Instant> {
+        let i = self.0.iter().position(|o| o.answer.accepts(p))?;
+        let owed = self.0.drain(..=i).next_back()?;
+        Some(owed.sent)
+    }
+
+    /// An answer to a later request came: nothing owed before it will come.
+    pub(crate) fn clear(&mut self) {
+        self.0.clear();
+    }
+
+    /// Whether nothing is owed.
+    #[cfg(test)]
+    pub(crate) fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::servo;
+
+    fn ms(n: u64) -> Duration {
+        Duration::from_millis(n)
+    }
+
+    #[test]
+    fn the_margin_follows_the_adapter_and_the_measured_latency() {
+        let mut t = AnswerTiming::new(None);
+        let device = Duration::from_micros(1500);
+        assert_eq!(t.margin(device), device);
+        t.observe(ms(16));
+        assert_eq!(t.margin(device), ms(21));
+        // A long stall widens it up to the cap only.
+        t.observe(ms(2000));
+        assert_eq!(t.margin(device), MARGIN_CAP);
+        let known = AnswerTiming::new(Some(ms(16)));
+        assert_eq!(known.margin(device), device + ms(16));
+        assert!(known.frame_gap() >= ms(20));
+        // Old latencies roll out.
+        for _ in 0..RECENT {
+            t.observe(ms(1));
+        }
+        assert_eq!(t.measured(), Some(ms(1)));
+    }
+
+    #[test]
+    fn an_owed_answer_is_taken_once_and_earlier_ones_are_forgotten() {
+        let now = Instant::now();
+        let ping = |id: u8| Match::servo(servo::cmd::PING, &[id]);
+        let answer = |id: u8| Packet::servo(servo::Frame::reply(servo::cmd::PING, vec![id]));
+        let mut owed = OwedAnswers::default();
+        for id in [3, 5, 5] {
+            owed.push(Owed {
+                answer: ping(id),
+                sent: now,
+                expires: now + ms(500),
+            });
+        }
+        assert!(owed.overlaps(&ping(5)).is_some());
+        assert!(owed.overlaps(&ping(4)).is_none());
+        assert_eq!(owed.take(&answer(5)), Some(now));
+        // 3 was owed before 5's answer came: it is forgotten.
+        assert_eq!(owed.take(&answer(3)), None);
+        assert!(owed.take(&answer(5)).is_some());
+        assert!(owed.is_empty());
+        owed.push(Owed {
+            answer: ping(7),
+            sent: now,
+            expires: now + ms(1),
+        });
+        owed.expire(now + ms(2));
+        assert!(owed.is_empty());
+    }
+}

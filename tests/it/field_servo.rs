@@ -1,0 +1,298 @@
+//! Servo buses as they behave in the field (issue 11, PROTOCOL_NOTES §4), through pseudo-terminals:
+//! replies split by a USB adapter's latency tick, adapters that hold answers back, a slow host, a
+//! one-wire bus that echoes every request, a servo that ignores a baud change, and the broadcast
+//! id. Verdicts only: every servo found, the right value, the right error; never how fast.
+
+use botbench::link::{Link, LinkEvent, LinkOptions, serial};
+use botbench::ops::OpError;
+use botbench::ops::servo as ops;
+use botbench::profile::{Input, Registry};
+use botbench::protocol::Direction;
+use botbench::sim::servo_bus::{ServoBus, SimServo};
+use botbench::sim::{Faults, PtyServer, SharedDevice};
+use std::sync::{Arc, Mutex};
+
+use crate::support::cli::{MARGIN_MS, Ran, SimProcess, run_watched};
+
+/// The ids a `servo --json scan` found, each with its presence status.
+fn scanned(run: &Ran) -> Vec<(u64, String)> {
+    let doc = &run.json_docs()[0];
+    doc["servos"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no servos: {}", run.text()))
+        .iter()
+        .map(|s| {
+            (
+                s["id"].as_u64().unwrap_or(999),
+                s["presence"]["status"].as_str().unwrap_or("?").to_string(),
+            )
+        })
+        .collect()
+}
+
+fn present(ids: &[u64]) -> Vec<(u64, String)> {
+    ids.iter().map(|&i| (i, "present".to_string())).collect()
+}
+
+#[test]
+fn a_reply_split_by_a_latency_tick_is_read_whole() {
+    // The servo answers 8 ms late, its 9-byte reply as 4 bytes, then 5 bytes 16 ms later.
+    let sim = SimProcess::start(&[
+        "servo-bus",
+        "--servos",
+        "1",
+        "--latency-ms",
+        "8",
+        "--split-after",
+        "4",
+        "--split-gap-ms",
+        "16",
+    ]);
+    let p = sim.path.as_str();
+    for _ in 0..4 {
+        let read = run_watched(&[
+            "servo",
+            "--port",
+            p,
+            "--margin-ms",
+            "20",
+            "--json",
+            "read",
+            "1",
+            "voltage",
+        ]);
+        assert_eq!(read.code, 0, "{}", read.text());
+        let mv = read.json_docs()[0]["params"][0]["value"].as_i64();
+        assert!(
+            mv.is_some_and(|v| (7380..=7420).contains(&v)),
+            "{}",
+            read.text()
+        );
+    }
+    // Nor is a lone servo taken for a duplicate, at the default margin.
+    let scan = run_watched(&["servo", "--port", p, "--json", "scan", "--ids", "0-20"]);
+    assert_eq!(scan.code, 0, "{}", scan.text());
+    assert_eq!(scanned(&scan), present(&[1]), "{}", scan.text());
+}
+
+#[test]
+fn a_default_scan_behind_a_16_ms_adapter_finds_every_servo_and_says_how() {
+    let sim = SimProcess::start(&["servo-bus", "--servos", "0,1,5", "--latency-timer-ms", "16"]);
+    let p = sim.path.as_str();
+    for _ in 0..3 {
+        let scan = run_watched(&["servo", "--port", p, "--json", "scan"]);
+        assert_eq!(scan.code, 0, "{}", scan.text());
+        assert_eq!(scanned(&scan), present(&[0, 1, 5]), "{}", scan.text());
+        let doc = &scan.json_docs()[0];
+        assert!(doc["asked_again"].is_u64(), "{}", scan.text());
+        assert!(
+            doc["margin_ms"].as_f64().is_some_and(|m| m >= 1.5),
+            "{}",
+            scan.text()
+        );
+        // Every found servo's details were read, however late they came.
+        for s in doc["servos"].as_array().unwrap() {
+            assert!(s["serial"].is_u64(), "{}", scan.text());
+        }
+    }
+    let text = run_watched(&["servo", "--port", p, "scan", "--ids", "0-10"]);
+    assert!(
+        text.out.contains("id(s) asked again") && text.out.contains("margin"),
+        "{}",
+        text.text()
+    );
+    // Single exchanges too, at the default margin.
+    for _ in 0..4 {
+        let ping = run_watched(&["servo", "--port", p, "ping", "5"]);
+        assert_eq!(ping.code, 0, "{}", ping.text());
+    }
+}
+
+#[test]
+fn a_slow_host_still_finds_every_servo_and_every_answer() {
+    // Each answer is seen up to 25 ms late, at random.
+    let sim = SimProcess::start(&[
+        "servo-bus",
+        "--servos",
+        "0,1,5",
+        "--host-delay-ms",
+        "25",
+        "--seed",
+        "7",
+    ]);
+    let p = sim.path.as_str();
+    for _ in 0..3 {
+        let scan = run_watched(&["servo", "--port", p, "--json", "scan"]);
+        assert_eq!(scan.code, 0, "{}", scan.text());
+        assert_eq!(scanned(&scan), present(&[0, 1, 5]), "{}", scan.text());
+    }
+    for _ in 0..6 {
+        let ping = run_watched(&["servo", "--port", p, "ping", "5"]);
+        assert_eq!(ping.code, 0, "{}", ping.text());
+        let read = run_watched(&["servo", "--port", p, "--json", "read", "1", "assigned_id"]);
+        assert_eq!(read.code, 0, "{}", read.text());
+        assert_eq!(
+            read.json_docs()[0]["params"][0]["value"],
+            1,
+            "{}",
+            read.text()
+        );
+    }
+}
+
+#[test]
+fn a_one_wire_bus_echo_is_not_taken_for_an_answer() {
+    let sim = SimProcess::start(&["servo-bus", "--servos", "2,3", "--echo"]);
+    let p = sim.path.as_str();
+    let scan = run_watched(&[
+        "servo",
+        "--port",
+        p,
+        "--margin-ms",
+        MARGIN_MS,
+        "--json",
+        "scan",
+        "--ids",
+        "0-10",
+    ]);
+    assert_eq!(scanned(&scan), present(&[2, 3]), "{}", scan.text());
+    let write = run_watched(&[
+        "servo",
+        "--port",
+        p,
+        "--margin-ms",
+        MARGIN_MS,
+        "write",
+        "3",
+        "over_temprature",
+        "70",
+    ]);
+    assert_eq!(write.code, 0, "{}", write.text());
+    assert!(write.out.contains("verified"), "{}", write.text());
+}
+
+#[test]
+fn a_servo_that_ignores_a_baud_change_is_reported_where_it_still_is() {
+    let sim = SimProcess::start(&["servo-bus", "--servos", "4", "--ignore-baud-change"]);
+    let p = sim.path.as_str();
+    let set = run_watched(&[
+        "servo",
+        "--port",
+        p,
+        "--margin-ms",
+        MARGIN_MS,
+        "set-baud",
+        "4",
+        "57600",
+    ]);
+    assert_eq!(set.code, 1, "{}", set.text());
+    assert!(
+        set.err.contains("57600") && set.err.contains("115200"),
+        "the error says where the servo is: {}",
+        set.text()
+    );
+    let ping = run_watched(&["servo", "--port", p, "--margin-ms", MARGIN_MS, "ping", "4"]);
+    assert_eq!(ping.code, 0, "still at 115200: {}", ping.text());
+}
+
+#[test]
+fn the_broadcast_id_is_refused_where_an_answer_is_expected_before_the_port_is_opened() {
+    let port = "/nonexistent/botbench-port";
+    for args in [
+        &["write", "255", "over_temprature", "70"][..],
+        &["read", "255", "voltage"],
+        &["read", "255"],
+        &["ping", "255"],
+        &["set-baud", "255", "57600"],
+        &["set-id", "255", "3"],
+        &["angle", "255", "90"],
+        &["monitor", "1,255"],
+        &["write", "3", "over_temprature", "70", "--broadcast"],
+    ] {
+        let mut all = vec!["servo", "--port", port];
+        all.extend_from_slice(args);
+        let run = run_watched(&all);
+        assert_eq!(run.code, 2, "{args:?}: {}", run.text());
+        assert!(
+            run.err.contains("255") && !run.err.contains("nonexistent"),
+            "{args:?}: {}",
+            run.text()
+        );
+    }
+}
+
+#[test]
+fn an_explicit_broadcast_changes_every_servo_and_reads_nothing_back() {
+    let sim = SimProcess::start(&["servo-bus", "--servos", "1,2"]);
+    let p = sim.path.as_str();
+    let run = run_watched(&[
+        "servo",
+        "--port",
+        p,
+        "--margin-ms",
+        MARGIN_MS,
+        "write",
+        "255",
+        "over_temprature",
+        "70",
+        "--broadcast",
+    ]);
+    assert_eq!(run.code, 0, "{}", run.text());
+    assert!(run.out.contains("nothing read back"), "{}", run.text());
+    for id in ["1", "2"] {
+        let read = run_watched(&[
+            "servo",
+            "--port",
+            p,
+            "--margin-ms",
+            MARGIN_MS,
+            "--json",
+            "read",
+            id,
+            "over_temprature",
+        ]);
+        assert_eq!(
+            read.json_docs()[0]["params"][0]["value"],
+            70,
+            "{}",
+            read.text()
+        );
+    }
+}
+
+#[test]
+fn operations_refuse_the_broadcast_id_and_send_nothing() {
+    let profile = Registry::builtin().unwrap().get("servo").unwrap();
+    let bus: SharedDevice = Arc::new(Mutex::new(ServoBus::new(vec![
+        SimServo::fresh(1).with_id(1),
+    ])));
+    let server = PtyServer::start_lockstep(bus, Faults::default()).unwrap();
+    let link = Link::open(
+        serial::opener(server.path(), 115_200),
+        profile.clone(),
+        LinkOptions::default(),
+        None,
+    )
+    .unwrap();
+    let client = link.client();
+    let param = profile.find_param("over_temprature").unwrap();
+    let refused = [
+        ops::ping(&client, 255, 1).err(),
+        ops::read_param(&client, &profile, 255, param).err(),
+        ops::write_param(&client, &profile, 255, param, Input::Text("70".into())).err(),
+        ops::read_block(&client, &profile, 255).err(),
+        ops::set_baud(&client, &profile, 255, 4).err(),
+        ops::set_id(&client, &profile, 255, 3, &botbench::ops::Cancel::new()).err(),
+    ];
+    for e in refused {
+        assert!(matches!(e, Some(OpError::BroadcastAnswer { .. })), "{e:?}");
+        assert!(e.unwrap().is_input());
+    }
+    // Nothing went out: the next frame written is this ping's.
+    assert_eq!(ops::ping(&client, 1, 2).unwrap(), ops::Presence::Present);
+    let first = link.events().try_iter().find_map(|ev| match ev {
+        LinkEvent::Frame(e) if e.direction == Direction::HostToDevice => e.frame.ok(),
+        _ => None,
+    });
+    assert_eq!(first.map(|p| p.payload), Some(vec![1]));
+}

@@ -1,0 +1,149 @@
+//! A port that vanishes in the middle of a long operation (issue 11, fault 4): a USB adapter
+//! unplugged, a simulator killed. The simulator vanishes once the host has sent it a given number
+//! of bytes (`botbench sim --vanish-after-bytes`), so the loss comes mid-operation on every run;
+//! each operation must then end with exit 1 and the reason, never hang (the watchdog of
+//! [`run_watched`] fails the test instead).
+
+use crate::support::cli::{MARGIN_MS, Ran, SimProcess, run_watched};
+
+fn preset(name: &str) -> String {
+    format!("{}/presets/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Runs `args` (with `PORT` replaced by the pty's path) against `botbench sim SIM...` that
+/// vanishes after `bytes` bytes from the host, and checks the run ended on the loss: the
+/// simulator did vanish, and the command exited 1 saying the link was lost.
+fn ends_on_the_loss(sim: &[&str], bytes: u64, args: &[&str]) -> Ran {
+    let bytes = bytes.to_string();
+    let mut all = sim.to_vec();
+    all.extend(["--vanish-after-bytes", &bytes]);
+    let mut sim = SimProcess::start(&all);
+    let path = sim.path.clone();
+    let args: Vec<&str> = args
+        .iter()
+        .map(|a| if *a == "PORT" { path.as_str() } else { a })
+        .collect();
+    let run = run_watched(&args);
+    // The simulator ends on its own once its port has vanished: the loss did happen.
+    assert!(!sim.wait_exit().success(), "the port vanished");
+    assert_eq!(run.code, 1, "{args:?}: {}", run.text());
+    let said = format!("{}{}", run.out, run.err);
+    assert!(
+        said.contains("link lost") && said.contains("port disconnected"),
+        "{args:?} says why it stopped: {}",
+        run.text()
+    );
+    run
+}
+
+#[test]
+fn a_scan_ends_when_the_port_vanishes() {
+    // A 0-254 scan sends 6 bytes an id: the port goes about 100 ids in.
+    ends_on_the_loss(
+        &["servo-bus", "--servos", "1,2,3"],
+        600,
+        &["servo", "--port", "PORT", "scan"],
+    );
+}
+
+#[test]
+fn provisioning_ends_when_the_port_vanishes() {
+    let run = ends_on_the_loss(
+        &["servo-bus", "--servos", "0"],
+        400,
+        &[
+            "servo",
+            "--port",
+            "PORT",
+            "--margin-ms",
+            MARGIN_MS,
+            "provision",
+            &preset("servo-provision-plan.ron"),
+        ],
+    );
+    assert!(run.out.contains("FAIL"), "{}", run.text());
+}
+
+#[test]
+fn a_watch_ends_when_the_port_vanishes() {
+    ends_on_the_loss(
+        &["window-cleaner"],
+        200,
+        &["msp", "--port", "PORT", "watch", "MSP_GET_PWMVALUE"],
+    );
+}
+
+#[test]
+fn a_preset_save_ends_when_the_port_vanishes_and_writes_no_file() {
+    let file = std::env::temp_dir().join(format!("botbench-vanish-{}.ron", std::process::id()));
+    let _ = std::fs::remove_file(&file);
+    ends_on_the_loss(
+        &["window-cleaner"],
+        40,
+        &["preset", "save", file.to_str().unwrap(), "--port", "PORT"],
+    );
+    assert!(!file.exists(), "a preset read half-way is not saved");
+}
+
+#[test]
+fn a_preset_apply_ends_when_the_port_vanishes() {
+    ends_on_the_loss(
+        &["window-cleaner"],
+        100,
+        &[
+            "preset",
+            "apply",
+            &preset("window-cleaner-factory.ron"),
+            "--port",
+            "PORT",
+        ],
+    );
+}
+
+#[test]
+fn a_self_test_ends_when_the_port_vanishes() {
+    let run = ends_on_the_loss(
+        &["window-cleaner"],
+        300,
+        &[
+            "msp",
+            "--port",
+            "PORT",
+            "selftest",
+            &preset("window-cleaner-selftest.ron"),
+            "--yes",
+        ],
+    );
+    assert!(run.out.contains("FAIL"), "{}", run.text());
+}
+
+#[test]
+fn a_firmware_upload_ends_when_the_port_vanishes() {
+    let image = std::env::temp_dir().join(format!("botbench-vanish-{}.bin", std::process::id()));
+    std::fs::write(
+        &image,
+        (0..65_536u32).map(|i| (i * 7) as u8).collect::<Vec<u8>>(),
+    )
+    .unwrap();
+    let run = ends_on_the_loss(
+        &["tuya-vacuum"],
+        3000,
+        &["tuya", "--port", "PORT", "ota", image.to_str().unwrap()],
+    );
+    let _ = std::fs::remove_file(&image);
+    assert!(
+        run.err.contains("at offset"),
+        "says how far it got: {}",
+        run.text()
+    );
+}
+
+#[test]
+fn a_tuya_init_ends_when_the_port_vanishes() {
+    ends_on_the_loss(&["tuya-vacuum"], 30, &["tuya", "--port", "PORT", "init"]);
+}
+
+#[test]
+fn a_tuya_status_ends_when_the_port_vanishes() {
+    ends_on_the_loss(&["tuya-vacuum"], 30, &["tuya", "--port", "PORT", "status"]);
+}
