@@ -11,37 +11,38 @@ use std::time::Duration;
 #[derive(Debug, Args)]
 pub(crate) struct FieldArgs {
     /// A USB adapter's latency timer, in ms (FTDI: 16 by default): the host sees the bytes the
-    /// device sent only at ticks of this period, in bursts.
-    #[arg(long, value_name = "MS")]
+    /// device sent only at ticks of this period, in bursts: 1 to 255.
+    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=255))]
     latency_timer_ms: Option<u64>,
     /// Every reply longer than N bytes reaches the host in two bursts: N bytes, then the rest
-    /// --split-gap-ms later (a latency tick inside the frame).
-    #[arg(long, value_name = "N")]
-    split_after: Option<usize>,
-    /// With --split-after: how much later the rest of a reply is seen, in ms.
-    #[arg(long, value_name = "MS", default_value_t = 16)]
+    /// --split-gap-ms later (a latency tick inside the frame): 1 to 65535.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    split_after: Option<u16>,
+    /// With --split-after: how much later the rest of a reply is seen, 0 to 10000 ms.
+    #[arg(long, value_name = "MS", default_value_t = 16, value_parser = clap::value_parser!(u64).range(0..=10_000))]
     split_gap_ms: u64,
-    /// A slow host: each frame is seen up to this many ms late (random, in order).
-    #[arg(long, value_name = "MS")]
+    /// A slow host: each frame is seen up to this many ms late (random, in order), 0 to 10000.
+    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(0..=10_000))]
     host_delay_ms: Option<u64>,
     /// A one-wire bus (TX and RX tied): the host reads back every request it sends.
     #[arg(long)]
     echo: bool,
     /// The port vanishes (an adapter unplugged) once N bytes have come from the host; the
-    /// simulator then exits.
-    #[arg(long, value_name = "N")]
+    /// simulator then exits: 1 to 4294967295.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=u64::from(u32::MAX)))]
     vanish_after_bytes: Option<u64>,
     /// MSP: before each reply, an unsolicited frame (kind 0xFE) of the same command with this
     /// payload (hex, e.g. `ee`).
     #[arg(long, value_name = "HEX")]
     async_before_reply: Option<String>,
-    /// MSP: push an unsolicited frame (kind 0xFE) every MS ms: --async-frame says which.
-    #[arg(long, value_name = "MS")]
+    /// MSP: push an unsolicited frame (kind 0xFE) every MS ms, 1 to 60000; --async-frame says
+    /// which.
+    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=60_000))]
     async_every_ms: Option<u64>,
     /// MSP: the frame --async-every-ms pushes, as COMMAND:HEX (default `130:ee`).
     #[arg(long, value_name = "COMMAND:HEX", default_value = "130:ee")]
     async_frame: String,
-    /// MSP: replies to this command fail their checksum (repeat for several).
+    /// MSP: replies to this command, 0 to 255, fail their checksum (repeat for several).
     #[arg(long, value_name = "COMMAND")]
     garble_command: Vec<u8>,
     /// Servo bus: every servo acknowledges a baud change and keeps talking at its old rate.
@@ -59,7 +60,7 @@ impl FieldArgs {
         let line = Line {
             latency_timer: self.latency_timer_ms.map(Duration::from_millis),
             split: self.split_after.map(|after_bytes| Split {
-                after_bytes,
+                after_bytes: usize::from(after_bytes),
                 gap: Duration::from_millis(self.split_gap_ms),
             }),
             host_delay: self.host_delay_ms.map(Duration::from_millis),

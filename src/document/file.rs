@@ -343,9 +343,18 @@ mod tests {
         expected.extend([".other.ron.d4e5f6.botbench-tmp".into(), "target.ron".into()]);
         expected.sort();
         assert_eq!(names(dir.path()), expected);
-        // Once its writer is gone, the next save takes it too.
+        // Once its writer is gone, the next save takes it too. A child process that another
+        // test is starting holds a copy of every open descriptor (and so the lock) until it
+        // execs: wait for the lock to be free, not for a time.
         drop(holder);
-        check_destination(&target).unwrap();
+        let give_up = std::time::Instant::now() + std::time::Duration::from_secs(60);
+        loop {
+            check_destination(&target).unwrap();
+            if !live.exists() || std::time::Instant::now() > give_up {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
         assert!(!live.exists());
     }
 

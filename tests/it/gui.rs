@@ -271,16 +271,8 @@ fn a_slow_device_is_read_with_the_automatic_margin_it_learns() {
     assert_eq!(
         saved.port_of("window-cleaner").margin_ms,
         None,
-        "the protocol's own margin"
+        "the automatic margin"
     );
-    let mut h = crate::support::gui::harness(saved);
-    step_until(&mut h, "the first read to fail", |a| {
-        matches!(a.state.device.readings.get(&130), Some(Reading::Failed(_)))
-    });
-    drop(h);
-    // 300 ms chosen in the connection bar: every parameter is read.
-    let mut saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
-    saved.port_mut().margin_ms = Some(300);
     let mut h = crate::support::gui::harness(saved);
     step_until(&mut h, "every parameter read", all_read);
 }
