@@ -122,7 +122,7 @@ fn replay(name: &str, margin_ms: u64) -> (PtyServer, Link, Arc<Mutex<ReplayDevic
     let file = capture::read_path(&captures_dir().join(name)).expect("reads");
     let device = Arc::new(Mutex::new(ReplayDevice::new(&file).expect("replayable")));
     let shared: SharedDevice = device.clone();
-    let server = PtyServer::start(shared, Faults::default()).expect("pty");
+    let server = PtyServer::start_lockstep(shared, Faults::default()).expect("pty");
     let profile = Registry::builtin()
         .and_then(|r| r.get(&file.info.profile))
         .expect("profile");
