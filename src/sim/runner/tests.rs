@@ -1,0 +1,122 @@
+//! The simulated wire's timing, faults and garbling.
+
+use super::*;
+
+/// Echoes every chunk after 1 ms, optionally at another baud.
+struct Echo(Option<u32>);
+
+impl Device for Echo {
+    fn receive(&mut self, bytes: &[u8], _baud: u32, _now: Instant) -> Vec<Outgoing> {
+        vec![Outgoing {
+            after: Duration::from_millis(1),
+            bytes: bytes.to_vec(),
+            baud: self.0,
+        }]
+    }
+}
+
+fn echo(baud: Option<u32>, faults: Faults) -> SimTransport {
+    SimTransport::new(Arc::new(Mutex::new(Echo(baud))), 9600, faults, "echo")
+}
+
+fn read_all(t: &mut SimTransport, within: Duration) -> Vec<u8> {
+    let deadline = Instant::now() + within;
+    let mut out = Vec::new();
+    let mut buf = [0u8; 64];
+    while let Ok(n) = t.read(&mut buf, deadline) {
+        if n == 0 {
+            break;
+        }
+        out.extend_from_slice(&buf[..n]);
+    }
+    out
+}
+
+#[test]
+fn echo_arrives_byte_by_byte_after_the_request_and_the_latency() {
+    let mut t = echo(None, Faults::default());
+    let start = Instant::now();
+    t.write(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10]).unwrap();
+    let mut buf = [0u8; 64];
+    let mut got = Vec::new();
+    let mut first = None;
+    while got.len() < 10 {
+        let n = t.read(&mut buf, start + Duration::from_secs(5)).unwrap();
+        assert!(n > 0, "timed out with {got:?}");
+        first.get_or_insert(start.elapsed());
+        got.extend_from_slice(&buf[..n]);
+    }
+    let took = start.elapsed();
+    assert_eq!(got, [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]);
+    // The request takes 10.4 ms at 9600 baud, the device 1 ms, each echoed byte 1.04 ms.
+    let first = first.unwrap();
+    assert!(
+        first >= Duration::from_micros(12_400),
+        "first byte after {first:?}"
+    );
+    assert!(
+        took >= Duration::from_micros(21_800),
+        "last byte after {took:?}"
+    );
+}
+
+#[test]
+fn nothing_arrives_before_the_deadline_when_dropped() {
+    let faults = Faults {
+        drop: 1.0,
+        ..Faults::default()
+    };
+    let mut t = echo(None, faults);
+    t.write(&[1, 2, 3]).unwrap();
+    assert!(read_all(&mut t, Duration::from_millis(50)).is_empty());
+}
+
+#[test]
+fn another_baud_arrives_as_garbage_of_the_scaled_length() {
+    let mut t = echo(Some(9600 * 4), Faults::default());
+    t.write(&[0x55; 40]).unwrap();
+    let got = read_all(&mut t, Duration::from_millis(200));
+    assert_eq!(got.len(), 10);
+    assert_ne!(got, vec![0x55; 10]);
+}
+
+#[test]
+fn corrupt_flips_one_bit_of_the_last_byte() {
+    let faults = Faults {
+        corrupt: 1.0,
+        seed: 7,
+        ..Faults::default()
+    };
+    let mut t = echo(None, faults);
+    t.write(&[0, 0, 0, 0]).unwrap();
+    let got = read_all(&mut t, Duration::from_millis(100));
+    assert_eq!(&got[..3], &[0, 0, 0]);
+    assert_eq!(got[3].count_ones(), 1);
+}
+
+#[test]
+fn clear_input_drops_what_arrived_and_vanish_disconnects() {
+    let mut t = echo(None, Faults::default());
+    t.write(&[9]).unwrap();
+    std::thread::sleep(Duration::from_millis(20));
+    t.clear_input().unwrap();
+    assert!(read_all(&mut t, Duration::from_millis(10)).is_empty());
+    let h = t.vanish_handle();
+    h.vanish();
+    assert!(matches!(t.write(&[1]), Err(LinkError::Disconnected(_))));
+    let mut buf = [0u8; 4];
+    assert!(matches!(
+        t.read(&mut buf, Instant::now()),
+        Err(LinkError::Disconnected(_))
+    ));
+}
+
+#[test]
+fn checks_fault_probabilities() {
+    let bad = Faults {
+        drop: 1.5,
+        ..Faults::default()
+    };
+    assert!(bad.check().is_err());
+    assert!(Faults::default().check().is_ok());
+}
