@@ -624,3 +624,55 @@ fn at_1024_px_a_bit_field_takes_its_rows_height_and_draws_over_no_other_row() {
         );
     }
 }
+
+#[test]
+fn other_telemetry_lists_every_telemetry_command_in_a_box_of_many_rows() {
+    use botbench::profile::CommandKind;
+    let b = bench();
+    let mut h = telemetry(b.path(), Lang::En);
+    h.run_steps(3);
+    let profile = app(&h).state.device.profile.clone();
+    let others: Vec<_> = profile
+        .commands
+        .iter()
+        .filter(|c| c.kind == CommandKind::Telemetry && !c.reply.is_empty())
+        .collect();
+    assert!(others.len() > 10, "{} telemetry commands", others.len());
+    let heading = h.get_by_label("Other telemetry").rect();
+    let window = h.ctx.content_rect();
+    let visible = others
+        .iter()
+        .filter(|c| {
+            h.query_all_by_label(&c.name.en)
+                .map(|n| n.rect())
+                .any(|r| r.top() >= heading.bottom() && r.bottom() <= window.bottom())
+        })
+        .count();
+    // A box two rows high was the fault: at 1000 px it holds at least ten.
+    assert!(visible >= 10, "{visible} of {} rows in view", others.len());
+}
+
+#[test]
+fn a_profiles_port_settings_are_its_own() {
+    let b = bench();
+    let mut saved = settings(b.path(), "window-cleaner", PanelId::Telemetry, Lang::En);
+    saved.port_mut().margin_ms = Some(300);
+    let mut h = crate::support::gui::harness(saved);
+    h.run_steps(3);
+    assert_eq!(app(&h).connection.port().1, Some(300));
+    let choose = |h: &mut H, id: &str| {
+        h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Profile")
+            .click();
+        h.run_steps(2);
+        h.get_by_label_contains(&format!("{id} — ")).click();
+        h.run_steps(2);
+    };
+    choose(&mut h, "servo");
+    assert_eq!(
+        app(&h).connection.port().1,
+        None,
+        "the servo takes the automatic margin, not the window cleaner's 300 ms"
+    );
+    choose(&mut h, "window-cleaner");
+    assert_eq!(app(&h).connection.port().1, Some(300));
+}
