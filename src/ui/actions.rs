@@ -54,7 +54,11 @@ impl ActionsPanel {
                                         if bad {
                                             edit = edit.text_color(egui::Color32::RED);
                                         }
-                                        ui.add(edit).labelled_by(name.id);
+                                        // The hint may be cut at this width: the
+                                        // whole range is on hover.
+                                        ui.add(edit)
+                                            .labelled_by(name.id)
+                                            .on_hover_text(range_text(f));
                                     } else {
                                         let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
                                         egui::ComboBox::from_id_salt(("act", cmd.id, &f.ident))

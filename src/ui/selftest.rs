@@ -426,6 +426,16 @@ impl SelfTestPanel {
     fn table(&self, ui: &mut egui::Ui, lang: Lang, profile: &Profile) {
         let Some(plan) = &self.plan else { return };
         egui::ScrollArea::both().auto_shrink(false).show(ui, |ui| {
+            // Four text columns share what the PASS/FAIL column leaves, each wrapping its text:
+            // Measured and Result stay in the window at 1024 px.
+            let gap = ui.spacing().item_spacing.x;
+            let w = ((ui.available_width() - 60.0 - 5.0 * gap) / 4.0).max(80.0);
+            let cell = |ui: &mut egui::Ui, text: egui::RichText| {
+                ui.allocate_ui(egui::vec2(w, 0.0), |ui| {
+                    ui.set_max_width(w);
+                    ui.add(egui::Label::new(text).wrap());
+                });
+            };
             egui::Grid::new("selftest-results")
                 .num_columns(5)
                 .striped(true)
@@ -438,21 +448,24 @@ impl SelfTestPanel {
                     ui.end_row();
                     // The identity step appears only when it failed.
                     for r in self.results.iter().filter(|r| r.kind == "Identify") {
-                        ui.label(&r.name);
-                        ui.label("CMD_VERSION");
-                        ui.label("—");
-                        ui.label(&r.detail);
+                        cell(ui, r.name.as_str().into());
+                        cell(ui, "CMD_VERSION".into());
+                        cell(ui, "—".into());
+                        cell(ui, r.detail.as_str().into());
                         ui.colored_label(egui::Color32::RED, "FAIL");
                         ui.end_row();
                     }
                     let done = self.results.iter().filter(|r| r.kind != "Identify").count();
                     for (i, step) in plan.steps.iter().enumerate() {
-                        ui.label(&step.name);
-                        ui.weak(what(&step.kind));
-                        ui.monospace(bounds(&step.kind, profile));
+                        cell(ui, step.name.as_str().into());
+                        cell(ui, egui::RichText::new(what(&step.kind)).weak());
+                        cell(
+                            ui,
+                            egui::RichText::new(bounds(&step.kind, profile)).monospace(),
+                        );
                         match self.results.iter().find(|r| r.name == step.name) {
                             Some(r) => {
-                                ui.label(&r.detail);
+                                cell(ui, r.detail.as_str().into());
                                 if r.pass {
                                     ui.colored_label(egui::Color32::from_rgb(0, 140, 60), "PASS");
                                 } else {

@@ -8,7 +8,7 @@ use botbench::sim::window_cleaner::{Fault, WindowCleaner};
 use botbench::ui::{App, PanelId, SolarTrip};
 use egui_kittest::kittest::Queryable;
 
-use crate::support::gui::{H, app, app_mut, settings, type_into};
+use crate::support::gui::{H, app, app_mut, has_label, settings, type_into};
 use crate::support::{SELFTEST_PLAN, Served, selftest_plan, serve, temp_dir};
 
 type Bench<D> = Served<D>;
@@ -442,4 +442,46 @@ fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step
             .is_some()
     );
     assert!(h.query_all_by_label("PASS").count() < report.results.len() + 1);
+}
+
+#[test]
+fn a_fan_left_on_is_shown_running_the_self_test_starts_safe_and_its_verdict_belongs_to_one_unit() {
+    use botbench::profile::Input;
+    use botbench::ui::{Action, jobs};
+    let b = window_cleaner(Some(0x0F), &[]);
+    let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
+    step_until(&mut h, "the device identified", |a| {
+        identified(a) && a.state.job_progress().is_none()
+    });
+    // The fan left on from Actions: the window says so on every panel.
+    let profile = app(&h).state.device.profile.clone();
+    let fan = profile.command("MSP_SET_FAN").expect("the fan command").id;
+    app_mut(&mut h).apply(Action::StartJob(jobs::send(
+        &profile,
+        fan,
+        vec![("pwm".into(), Input::Text("60".into()))],
+    )));
+    step_until(&mut h, "the fan running", |a| {
+        !a.state.device.running.is_empty() && a.state.job_progress().is_none()
+    });
+    h.run_steps(2);
+    assert!(h.query_by_label("Running:").is_some());
+    assert!(has_label(&h, "60 %"), "the running fan with its value");
+    assert!(b.sim().fan_pwm() > 0);
+    // The plan starts from the safe state it sets: no false "Fan current" failure.
+    let dir = temp_dir();
+    run_selftest(&mut h, &b, &dir);
+    let report = app(&h).selftest.report.clone().unwrap();
+    assert!(report.pass, "{report:#?}");
+    assert!(!report.safe_state.is_empty());
+    assert!(h.query_by_label("Running:").is_none(), "nothing runs after");
+    assert!(h.query_all_by_label("PASS").next().is_some(), "the banner");
+    // Another connection is maybe another unit: the verdict goes with the old one.
+    app_mut(&mut h).apply(Action::Disconnect);
+    h.run_steps(3);
+    assert!(app(&h).selftest.report.is_none());
+    assert!(
+        h.query_all_by_label("PASS").next().is_none(),
+        "no banner left"
+    );
 }

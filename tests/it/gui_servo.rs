@@ -6,11 +6,13 @@ use botbench::ops::OpError;
 use botbench::ops::servo::Presence;
 use botbench::sim::servo_bus::{Motion, ServoBus, SimServo};
 use botbench::ui::{Action, App, PanelId};
-use egui_kittest::kittest::{NodeT, Queryable};
+use egui::accesskit::Role;
+use egui_kittest::kittest::{By, NodeT, Queryable};
 use std::time::Instant;
 
-use crate::support::gui::{H, app, app_mut, settings, step_until, type_into};
+use crate::support::gui::{H, app, app_mut, has_label, settings, step_until, type_into};
 use crate::support::{Served, serve, temp_dir};
+use eframe::egui;
 
 /// The simulated bus on its pty, in lockstep with the app's link.
 type Bench = Served<ServoBus>;
@@ -572,4 +574,71 @@ fn a_new_connection_forgets_the_servos_found_on_the_last_one() {
     let a = app(&h);
     assert!(a.servo.scan.rows.is_empty(), "{:?}", a.servo.scan.rows);
     assert!(a.servo.selected.is_none());
+}
+
+/// The name label of the parameter row named `name`.
+fn row_name<'a>(h: &'a H, name: &'a str) -> egui_kittest::Node<'a> {
+    h.get(By::new().role(Role::Label).value(name))
+}
+
+#[test]
+fn an_invalid_keystroke_moves_no_row_keeps_focus_enums_are_chosen_and_reserved_is_read_only() {
+    let b = bench(vec![SimServo::fresh(21).with_id(5).with_param(41, 77)]);
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "0", "10");
+    h.get_by_label("Parameters").click();
+    h.step();
+    step_until(&mut h, "the parameters", |a| {
+        idle(a) && a.servo.params.values.len() == 30
+    });
+    h.step();
+    let rows = |h: &H| {
+        ["Temperature limit", "Soft start time", "Angle limit"].map(|l| row_name(h, l).rect())
+    };
+    let before = rows(&h);
+    type_into(&mut h, "Temperature limit", "7x");
+    assert!(has_label(&h, "invalid"), "the error is shown in its row");
+    assert_eq!(rows(&h), before, "an invalid value moves no row");
+    assert!(
+        h.get_by_role_and_label(Role::TextInput, "Temperature limit")
+            .is_focused(),
+        "the field keeps its focus"
+    );
+    h.event(egui::Event::Text("9".into()));
+    h.run_steps(2);
+    assert_eq!(
+        app(&h).servo.params.edits.get(&41).map(String::as_str),
+        Some("7x9"),
+        "no keystroke is lost"
+    );
+    assert_eq!(rows(&h), before);
+
+    // An enum parameter is chosen from its labels, never typed.
+    assert!(
+        h.query_by_role_and_label(Role::TextInput, "Angle limit")
+            .is_none()
+    );
+    h.get_by_role_and_label(Role::ComboBox, "Angle limit")
+        .click();
+    h.run_steps(2);
+    assert!(has_label(&h, "Off (off)"));
+    h.get_by_label("On (on)").click();
+    h.run_steps(2);
+    assert_eq!(
+        app(&h).servo.params.edits.get(&48).map(String::as_str),
+        Some("on")
+    );
+
+    // Reserved rows have no editor: nothing is labelled by their names.
+    assert_eq!(
+        h.query_all(By::new().role(Role::Label).value("Reserved"))
+            .count(),
+        3
+    );
+    assert!(
+        h.query_all(By::new().predicate(|n| n.label().as_deref() == Some("Reserved")))
+            .next()
+            .is_none(),
+        "a reserved parameter has no editor"
+    );
 }

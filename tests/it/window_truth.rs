@@ -554,3 +554,125 @@ fn factory_defaults_leave_no_file_named_and_a_typed_preset_path_is_remembered() 
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn at_1024_px_the_self_tests_measured_and_result_columns_stay_in_the_window() {
+    let b = bench();
+    let mut saved = settings(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
+    saved.port_mut().margin_ms = Some(100);
+    let mut h = crate::support::gui::harness_sized(saved, egui::vec2(1024.0, 600.0), |_| {});
+    h.run_steps(3);
+    h.get_by_label("Open plan").click();
+    h.run_steps(2);
+    let Some(plan) = app(&h).selftest.plan.clone() else {
+        panic!("the shipped plan opens: {:?}", app(&h).selftest.error)
+    };
+    // Every step measured, with a detail as long as a failing range check writes.
+    app_mut(&mut h).selftest.results = plan
+        .steps
+        .iter()
+        .map(|s| botbench::ops::selftest::StepResult {
+            name: s.name.clone(),
+            kind: "Range".into(),
+            pass: false,
+            detail: "batteryVoltage 10.2 V below 11.5 V; current 0.00 A within 0.00 A to 2.50 A"
+                .into(),
+        })
+        .collect();
+    h.run_steps(3);
+    for header in ["Measured", "Result"] {
+        let r = h.get_by_label(header).rect();
+        assert!(r.right() <= 1024.0, "{header} at {r:?}");
+    }
+    let fails: Vec<egui::Rect> = h.query_all_by_label("FAIL").map(|n| n.rect()).collect();
+    assert!(fails.len() >= plan.steps.len());
+    assert!(fails.iter().all(|r| r.right() <= 1024.0), "{fails:?}");
+}
+
+#[test]
+fn at_1024_px_a_bit_field_takes_its_rows_height_and_draws_over_no_other_row() {
+    use egui_kittest::kittest::By;
+    let b = serve(botbench::sim::tuya_mcu::TuyaMcu::new(
+        botbench::sim::tuya_mcu::TuyaConfig {
+            baud: Some(115_200),
+            ..Default::default()
+        },
+    ));
+    let mut saved = settings(b.path(), "tuya-vacuum", PanelId::TuyaConsole, Lang::En);
+    saved.port_mut().baud = Some(115_200);
+    let mut h = crate::support::gui::harness_sized(saved, egui::vec2(1024.0, 600.0), |_| {});
+    crate::gui_tuya::handshake(&mut h);
+    crate::gui_tuya::tab(&mut h, "Data points");
+    step_until(&mut h, "DP 18 reported", |a| {
+        crate::gui_tuya::reported(a, 18).is_some()
+    });
+    h.run_steps(3);
+    let label = |h: &H, text: &str| {
+        h.get(By::new().role(egui::accesskit::Role::Label).value(text))
+            .rect()
+    };
+    let next_row = label(&h, "19 Map parameters").top();
+    let profile = app(&h).state.device.profile.clone();
+    let fault = profile.data_points.iter().find(|d| d.id == 18).unwrap();
+    assert!(!fault.field.bits.is_empty());
+    for bit in &fault.field.bits {
+        let r = label(&h, &bit.name.en);
+        assert!(
+            r.bottom() <= next_row,
+            "{} at {r:?}, DP 19 at {next_row}",
+            bit.name.en
+        );
+    }
+}
+
+#[test]
+fn other_telemetry_lists_every_telemetry_command_in_a_box_of_many_rows() {
+    use botbench::profile::CommandKind;
+    let b = bench();
+    let mut h = telemetry(b.path(), Lang::En);
+    h.run_steps(3);
+    let profile = app(&h).state.device.profile.clone();
+    let others: Vec<_> = profile
+        .commands
+        .iter()
+        .filter(|c| c.kind == CommandKind::Telemetry && !c.reply.is_empty())
+        .collect();
+    assert!(others.len() > 10, "{} telemetry commands", others.len());
+    let heading = h.get_by_label("Other telemetry").rect();
+    let window = h.ctx.content_rect();
+    let visible = others
+        .iter()
+        .filter(|c| {
+            h.query_all_by_label(&c.name.en)
+                .map(|n| n.rect())
+                .any(|r| r.top() >= heading.bottom() && r.bottom() <= window.bottom())
+        })
+        .count();
+    // A box two rows high was the fault: at 1000 px it holds at least ten.
+    assert!(visible >= 10, "{visible} of {} rows in view", others.len());
+}
+
+#[test]
+fn a_profiles_port_settings_are_its_own() {
+    let b = bench();
+    let mut saved = settings(b.path(), "window-cleaner", PanelId::Telemetry, Lang::En);
+    saved.port_mut().margin_ms = Some(300);
+    let mut h = crate::support::gui::harness(saved);
+    h.run_steps(3);
+    assert_eq!(app(&h).connection.port().1, Some(300));
+    let choose = |h: &mut H, id: &str| {
+        h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Profile")
+            .click();
+        h.run_steps(2);
+        h.get_by_label_contains(&format!("{id} — ")).click();
+        h.run_steps(2);
+    };
+    choose(&mut h, "servo");
+    assert_eq!(
+        app(&h).connection.port().1,
+        None,
+        "the servo takes the automatic margin, not the window cleaner's 300 ms"
+    );
+    choose(&mut h, "window-cleaner");
+    assert_eq!(app(&h).connection.port().1, Some(300));
+}

@@ -285,8 +285,13 @@ impl ParamsState {
                 self.confirm_reset = true;
             }
         });
-        if let Err(e) = &pending {
-            error_label(ui, e.to_string());
+        // The first reason the edits cannot be written, on a line that is always there: an
+        // invalid keystroke never moves the table under the pointer.
+        match &pending {
+            Err(e) => error_label(ui, e.to_string()),
+            Ok(_) => {
+                ui.label("");
+            }
         }
         self.preset_row(ui, lang, &profile);
         match &self.message {
@@ -345,18 +350,29 @@ impl ParamsState {
             }
         }
         let parsed = self.edits.get(&p.id).map(|t| f.parse(t));
-        if editable(p) {
+        if p.reserved {
+            ui.weak(lang.tr("reserved", "保留"));
+        } else if editable(p) {
             let mut text =
                 self.edits.get(&p.id).cloned().unwrap_or_else(|| {
                     device.map(|v| f.format(&Value::Int(v))).unwrap_or_default()
                 });
-            let invalid = matches!(parsed, Some(Err(_)));
-            let mut edit = egui::TextEdit::singleline(&mut text).desired_width(110.0);
-            if invalid {
-                edit = edit.text_color(egui::Color32::from_rgb(210, 40, 40));
-            }
-            let resp = ui.add(edit).labelled_by(name.id);
-            if resp.changed() {
+            // An id of the parameter's own: the field keeps its focus whatever the rows above
+            // it show.
+            let salt = ("servo-param", p.id);
+            let changed = if f.labels.is_empty() || f.range.is_some() {
+                let invalid = matches!(parsed, Some(Err(_)));
+                let mut edit = egui::TextEdit::singleline(&mut text)
+                    .id_salt(salt)
+                    .desired_width(110.0);
+                if invalid {
+                    edit = edit.text_color(egui::Color32::from_rgb(210, 40, 40));
+                }
+                ui.add(edit).labelled_by(name.id).changed()
+            } else {
+                label_choice(ui, lang, f, salt, &mut text, name.id)
+            };
+            if changed {
                 self.edits.insert(p.id, text);
             }
         } else if p.access == Access::ReadWrite {
@@ -449,6 +465,48 @@ impl ParamsState {
             }
         }
     }
+}
+
+/// A ComboBox of an enum parameter's labels (its readable name and ident); sets `text` to the
+/// chosen label's ident, as [`crate::profile::Field::parse`] reads it. True when a label was chosen.
+fn label_choice(
+    ui: &mut egui::Ui,
+    lang: Lang,
+    f: &crate::profile::Field,
+    salt: (&str, u8),
+    text: &mut String,
+    name: egui::Id,
+) -> bool {
+    let shown = f
+        .labels
+        .iter()
+        .find(|l| l.ident == text.trim())
+        .map_or_else(
+            || {
+                if text.is_empty() {
+                    "—".to_string()
+                } else {
+                    text.clone()
+                }
+            },
+            |l| lang.tr(&l.name.en, &l.name.zh).to_string(),
+        );
+    let mut chosen = false;
+    egui::ComboBox::from_id_salt(salt)
+        .selected_text(shown)
+        .width(110.0)
+        .show_ui(ui, |ui| {
+            for l in &f.labels {
+                let label = format!("{} ({})", lang.tr(&l.name.en, &l.name.zh), l.ident);
+                if ui.selectable_label(*text == l.ident, label).clicked() {
+                    *text = l.ident.clone();
+                    chosen = true;
+                }
+            }
+        })
+        .response
+        .labelled_by(name);
+    chosen
 }
 
 fn read_all_job(rt: &AppState, servo: Servo) -> Action {

@@ -346,7 +346,10 @@ impl SolarPanel {
             if bad {
                 edit = edit.text_color(RED);
             }
-            ui.add(edit).labelled_by(name.id);
+            // The hint may be cut at this width: the whole range is on hover.
+            ui.add(edit)
+                .labelled_by(name.id)
+                .on_hover_text(range_text(f));
         } else {
             egui::ComboBox::from_id_salt(("solar", cmd.id, &f.ident))
                 .selected_text(match f.labels.iter().find(|l| l.ident == *text) {

@@ -507,25 +507,30 @@ impl DpView {
     }
 }
 
-/// A bitmap: its value and each named bit, lit when set.
+/// A bitmap: its value and each named bit, lit when set, four names a line: the row takes the
+/// height of its lines (a wrapped line in a grid cell was drawn over the next row).
 fn bits(ui: &mut egui::Ui, lang: Lang, def: &DataPointDef, v: &Value) {
     let Value::Int(raw) = v else {
         ui.monospace(format!("{v:?}"));
         return;
     };
-    ui.horizontal_wrapped(|ui| {
+    ui.vertical(|ui| {
         ui.monospace(format!("{raw:#04x}"));
-        for b in &def.field.bits {
-            let name = lang.tr(&b.name.en, &b.name.zh);
-            if b.bit < 64 && raw >> b.bit & 1 == 1 {
-                ui.label(
-                    egui::RichText::new(name)
-                        .color(egui::Color32::WHITE)
-                        .background_color(egui::Color32::from_rgb(200, 40, 40)),
-                );
-            } else {
-                ui.weak(name);
-            }
+        for line in def.field.bits.chunks(4) {
+            ui.horizontal(|ui| {
+                for b in line {
+                    let name = lang.tr(&b.name.en, &b.name.zh);
+                    if b.bit < 64 && raw >> b.bit & 1 == 1 {
+                        ui.label(
+                            egui::RichText::new(name)
+                                .color(egui::Color32::WHITE)
+                                .background_color(egui::Color32::from_rgb(200, 40, 40)),
+                        );
+                    } else {
+                        ui.weak(name);
+                    }
+                }
+            });
         }
     });
 }
