@@ -236,11 +236,6 @@ impl ConnectionBar {
             {
                 actions.push(connect());
             }
-            // The margin in use and the adapter's latency timer, after the buttons: nothing
-            // before them moves when they appear.
-            if open {
-                timing(ui, lang, rt, &mut actions);
-            }
         }
         actions
     }
@@ -340,7 +335,8 @@ pub const BADGE_WIDTH: f32 = 290.0;
 
 /// The margin in use, the answer latency measured, and the USB adapter's latency timer with a
 /// button to set it to 1 ms where the system lets us.
-fn timing(ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
+/// Shown in the status bar, beside the round trip, so that the connection bar keeps one line.
+pub(super) fn timing(ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
     let stats = &rt.link.stats;
     let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
     if let Some(m) = stats.margin {

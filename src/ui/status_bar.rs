@@ -22,6 +22,10 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
                 }
                 ui.separator();
                 link_stats(ui, lang, rt);
+                if rt.link.connection.is_some() {
+                    ui.separator();
+                    super::connection::timing(ui, lang, rt, &mut actions);
+                }
             }
             None => {
                 ui.label(lang.tr("not connected", "未连接"));
