@@ -1,15 +1,15 @@
-//! What differs between operating systems, in one place: the serial ports the OS lists, a USB
-//! adapter's latency timer, why a port cannot be opened (permissions, another program holding
-//! it), and where the shipped example files (presets, plans, profiles) are.
+//! What differs between operating systems, in one place: the serial ports the OS lists, why a
+//! port cannot be opened (permissions, another program holding it), and where the shipped
+//! example files (presets, plans, profiles) are. A USB adapter's latency timer (sysfs, read and
+//! set) is [`crate::link::adapter`]'s, which each [`PortInfo`] carries.
 //!
 //! Verified on Linux (Debian 12) only. Elsewhere this file compiles to the fallbacks under
 //! `cfg(not(target_os = "linux"))`: port listing through the serialport crate (which has its own
-//! Windows and macOS code), no latency timer, the OS's own words for an open failure, and the
+//! Windows and macOS code), the OS's own words for an open failure, and the
 //! example files next to the executable. A Windows or macOS build starts here.
 
 use serialport::SerialPortType;
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 /// A port as the OS lists it.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
@@ -88,43 +88,6 @@ pub fn list_ports() -> Vec<PortInfo> {
             info
         })
         .collect()
-}
-
-/// The latency timer of the USB serial adapter behind `path` (FTDI: 16 ms unless set to 1 ms):
-/// on Linux the `latency_timer` attribute of its USB serial device in sysfs
-/// (`/sys/class/tty/ttyUSB0/device/latency_timer`, in ms). `Err` says why there is none: not such
-/// an adapter (a CH340, a pty), an unreadable attribute, or another system.
-pub fn latency_timer(path: &str) -> Result<Duration, String> {
-    #[cfg(target_os = "linux")]
-    {
-        latency_timer_in(Path::new("/sys/class/tty"), path)
-    }
-    #[cfg(not(target_os = "linux"))]
-    {
-        Err(format!("{path}: the latency timer is read on Linux only"))
-    }
-}
-
-/// [`latency_timer`] with the sysfs `class/tty` folder given (tests use a fake one).
-#[cfg(target_os = "linux")]
-fn latency_timer_in(class_tty: &Path, path: &str) -> Result<Duration, String> {
-    // /dev/serial/by-id/... is a link to /dev/ttyUSB0.
-    let real = std::fs::canonicalize(path).unwrap_or_else(|_| PathBuf::from(path));
-    let Some(name) = real.file_name() else {
-        return Err(format!("{path}: not a device path"));
-    };
-    let attr = class_tty.join(name).join("device/latency_timer");
-    match std::fs::read_to_string(&attr) {
-        Ok(text) => text
-            .trim()
-            .parse::<u64>()
-            .map(Duration::from_millis)
-            .map_err(|_| format!("{}: not a number: {:?}", attr.display(), text.trim())),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(format!(
-            "{path}: no latency timer (not an FTDI-style USB serial adapter)"
-        )),
-        Err(e) => Err(format!("{}: {e}", attr.display())),
-    }
 }
 
 /// Why `path` could not be opened, in words that say the fix: for lack of permission, the group
@@ -520,25 +483,6 @@ mod tests {
 
     #[cfg(target_os = "linux")]
     #[test]
-    fn the_latency_timer_is_read_from_sysfs() {
-        let sys = tempfile::tempdir().unwrap();
-        let dev = sys.path().join("ttyUSB0/device");
-        std::fs::create_dir_all(&dev).unwrap();
-        std::fs::write(dev.join("latency_timer"), "16\n").unwrap();
-        assert_eq!(
-            latency_timer_in(sys.path(), "/dev/ttyUSB0"),
-            Ok(Duration::from_millis(16))
-        );
-        std::fs::write(dev.join("latency_timer"), "fast\n").unwrap();
-        let e = latency_timer_in(sys.path(), "/dev/ttyUSB0").unwrap_err();
-        assert!(e.contains("not a number"), "{e}");
-        // A CH340 (or a pty) has none.
-        let e = latency_timer_in(sys.path(), "/dev/ttyACM0").unwrap_err();
-        assert!(e.contains("no latency timer"), "{e}");
-    }
-
-    #[cfg(target_os = "linux")]
-    #[test]
     fn holders_names_the_other_processes_that_have_a_port_open() {
         use serialport::SerialPort;
         let (master, slave) = serialport::TTYPort::pair().unwrap();
@@ -563,7 +507,7 @@ mod tests {
             if std::fs::read_to_string(&comm).is_ok_and(|c| c.trim() == "sleep") {
                 break;
             }
-            std::thread::sleep(Duration::from_millis(10));
+            std::thread::sleep(std::time::Duration::from_millis(10));
         }
         let found = holders(&path);
         let _ = child.kill();
