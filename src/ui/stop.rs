@@ -110,25 +110,15 @@ impl StopControl {
     /// A STOP lost with the link is sent again when it is back; one the robot did not answer
     /// on a working link is shown, and the operator presses again.
     pub fn tick(&mut self, rt: &AppState) -> Vec<Action> {
-        let answered: Vec<u64> = self
-            .sent
-            .keys()
-            .filter(|id| rt.device.replies.contains_key(id))
-            .copied()
-            .collect();
-        for id in answered {
-            let Some(ident) = self.sent.remove(&id) else {
-                continue;
-            };
-            let outcome = match rt.device.replies.get(&id) {
-                Some(Ok(_)) => Outcome::Acked(ident.clone()),
-                Some(Err(e)) => {
+        for (ident, reply) in rt.device.take_answered(&mut self.sent) {
+            let outcome = match reply {
+                Ok(_) => Outcome::Acked(ident.clone()),
+                Err(e) => {
                     if !rt.connected() {
                         self.pending = true;
                     }
                     Outcome::Failed(e.clone().into())
                 }
-                None => continue,
             };
             if let Some(slot) = self.last.iter_mut().find(|(i, _)| *i == ident) {
                 slot.1 = outcome;

@@ -140,26 +140,16 @@ impl Control {
     /// link).
     pub fn tick(&mut self, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
-        let answered: Vec<u64> = self
-            .sent
-            .keys()
-            .filter(|id| rt.device.replies.contains_key(id))
-            .copied()
-            .collect();
-        for reply_id in answered {
-            let Some(cmd) = self.sent.remove(&reply_id) else {
-                continue;
-            };
-            let outcome = match rt.device.replies.get(&reply_id) {
-                Some(Ok(_)) => {
+        for (cmd, reply) in rt.device.take_answered(&mut self.sent) {
+            let outcome = match reply {
+                Ok(_) => {
                     let what = match self.outcomes.get(&cmd) {
                         Some((Outcome::Waiting(t), _)) => t.clone(),
                         _ => String::new(),
                     };
                     Outcome::Acked(what)
                 }
-                Some(Err(e)) => Outcome::Failed(e.clone().into()),
-                None => continue,
+                Err(e) => Outcome::Failed(e.clone().into()),
             };
             self.outcomes.insert(cmd, (outcome, Instant::now()));
         }

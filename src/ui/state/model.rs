@@ -80,6 +80,23 @@ pub struct DeviceModel {
 }
 
 impl DeviceModel {
+    /// The answers that have come for requests in `sent` (reply id → what the caller keeps of
+    /// the request): each taken out of `sent` with its answer, so that it is handled once.
+    pub fn take_answered<'a, T>(
+        &'a self,
+        sent: &mut HashMap<u64, T>,
+    ) -> Vec<(T, &'a Result<Reply, ExchangeError>)> {
+        let answered: Vec<u64> = sent
+            .keys()
+            .filter(|id| self.replies.contains_key(id))
+            .copied()
+            .collect();
+        answered
+            .into_iter()
+            .filter_map(|id| Some((sent.remove(&id)?, self.replies.get(&id)?)))
+            .collect()
+    }
+
     /// A model of a device with `profile`, knowing nothing yet.
     pub fn new(profile: Arc<Profile>) -> Self {
         Self {
