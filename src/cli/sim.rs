@@ -155,12 +155,7 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
     // typed handle to them.
     let (device, control): (SharedDevice, Option<Control>) = match (kind, firmware) {
         (SimKind::WindowCleaner, Some(p)) => {
-            let baud = opts.baud.unwrap_or(p.baud);
-            let mut core = MspCore::new(p, crate::sim::window_cleaner::DEVICE_CODE, baud);
-            if let Some(l) = opts.latency {
-                core.latency = l;
-            }
-            core.quirks = opts.msp.clone();
+            let core = MspCore::with_options(p, crate::sim::window_cleaner::DEVICE_CODE, &opts);
             let wc = Arc::new(Mutex::new(WindowCleaner::with_core(core, opts.seed)));
             (wc.clone(), Some(Control::WindowCleaner(wc)))
         }

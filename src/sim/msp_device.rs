@@ -137,6 +137,18 @@ pub struct MspCore {
 }
 
 impl MspCore {
+    /// Plumbing for `profile`, answering device `code` as `opts` ask: their baud rate (else the
+    /// profile's), reply latency and the field's quirks.
+    pub fn with_options(profile: Arc<Profile>, code: u8, opts: &super::SimOptions) -> Self {
+        let baud = opts.baud.unwrap_or(profile.baud);
+        let mut core = Self::new(profile, code, baud);
+        if let Some(l) = opts.latency {
+            core.latency = l;
+        }
+        core.quirks = opts.msp.clone();
+        core
+    }
+
     /// Plumbing for `profile`, answering device `code` at `baud`.
     pub fn new(profile: Arc<Profile>, code: u8, baud: u32) -> Self {
         Self {

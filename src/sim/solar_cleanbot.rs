@@ -69,12 +69,7 @@ impl SolarCleanbot {
     /// A solar cleanbot with the built-in profile, at rest.
     pub fn new(opts: &SimOptions) -> Result<Self, String> {
         let profile = builtin_profile("solar-cleanbot")?;
-        let baud = opts.baud.unwrap_or(profile.baud);
-        let mut core = MspCore::new(profile, DEVICE_CODE, baud);
-        if let Some(l) = opts.latency {
-            core.latency = l;
-        }
-        core.quirks = opts.msp.clone();
+        let core = MspCore::with_options(profile, DEVICE_CODE, opts);
         Ok(Self::with_core(core, opts.seed))
     }
 

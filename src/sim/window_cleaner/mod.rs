@@ -81,12 +81,7 @@ impl WindowCleaner {
     /// A window cleaner with the built-in profile, as it leaves the factory.
     pub fn new(opts: &SimOptions) -> Result<Self, String> {
         let profile = builtin_profile("window-cleaner")?;
-        let baud = opts.baud.unwrap_or(profile.baud);
-        let mut core = MspCore::new(profile, DEVICE_CODE, baud);
-        if let Some(l) = opts.latency {
-            core.latency = l;
-        }
-        core.quirks = opts.msp.clone();
+        let core = MspCore::with_options(profile, DEVICE_CODE, opts);
         Ok(Self::with_core(core, opts.seed))
     }
 
