@@ -6,7 +6,6 @@
 use super::{CliError, CliResult};
 use crate::capture::{ReplayDevice, read_path};
 use crate::sim::{Faults, PtyServer, SharedDevice};
-use std::io::Write;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -23,11 +22,7 @@ pub(crate) fn serve(path: Option<&std::path::Path>) -> CliResult {
     let requests = device.requests();
     let device: SharedDevice = Arc::new(Mutex::new(device));
     let server = PtyServer::start(device, Faults::default()).map_err(CliError::device)?;
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "{}", server.path())
-        .and_then(|()| out.flush())
-        .map_err(|e| CliError::device(format!("cannot write to stdout: {e}")))?;
-    drop(out);
+    super::sim::print_path(server.path())?;
     eprintln!(
         "botbench: replaying {} ({}, profile {}, {} baud, {} chunks, {requests} distinct requests) on {}; stop with Ctrl-C",
         path.display(),

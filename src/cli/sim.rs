@@ -102,6 +102,15 @@ fn parse_byte(text: &str) -> Result<u8, String> {
     .map_err(|_| format!("'{text}' is not a byte (0-255 or 0x00-0xff)"))
 }
 
+/// Prints a served pty's path alone on stdout's first line, flushed at once (scripts and tests
+/// read it before the simulator is stopped).
+pub(super) fn print_path(path: &str) -> Result<(), CliError> {
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{path}")
+        .and_then(|()| out.flush())
+        .map_err(|e| CliError::device(format!("cannot write to stdout: {e}")))
+}
+
 pub(crate) fn run(args: SimArgs) -> CliResult {
     if args.kind == "replay" {
         return super::replay::serve(args.capture.as_deref());
@@ -205,11 +214,7 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
     };
     let vanish_after = faults.line.vanish_after_bytes;
     let server = PtyServer::start(device, faults).map_err(CliError::device)?;
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "{}", server.path())
-        .and_then(|()| out.flush())
-        .map_err(|e| CliError::device(format!("cannot write to stdout: {e}")))?;
-    drop(out);
+    print_path(server.path())?;
     eprintln!(
         "botbench: serving a {} at {} baud on {}; stop with Ctrl-C",
         kind.describe(),
