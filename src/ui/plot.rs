@@ -5,6 +5,8 @@
 //! without decimals) and a key of the fields' names in the window's language above the plot,
 //! where it covers no data.
 
+use super::inputs::readout_text;
+use super::state::AppState;
 use crate::i18n::Lang;
 use crate::profile::{Command, Field};
 use crate::series::SeriesSet;
@@ -123,13 +125,41 @@ pub fn axes<'a>(plot: Plot<'a>, lang: Lang, t0: SystemTime, legend: &Legend) -> 
 }
 
 /// The fields' names in their colours, on a line above the plot (a legend inside it would
-/// cover the newest data).
-pub fn key(ui: &mut egui::Ui, legend: &Legend) {
+/// cover the newest data), then the plot's states as they read now (see [`states`]).
+pub fn key(ui: &mut egui::Ui, legend: &Legend, states: &[String]) {
     ui.horizontal_wrapped(|ui| {
         for (i, name) in legend.names.iter().enumerate() {
             ui.colored_label(color(i), format!("— {name}"));
         }
+        for s in states {
+            ui.separator();
+            ui.strong(s);
+        }
     });
+}
+
+/// The plot's state fields (enums, flags, bit fields: never drawn as lines) as the last reading
+/// of its command has them, names in `lang`: `Battery state: Warning (1)`; `Battery state: —`
+/// while no reading has one (before the first, or after the link was lost).
+pub fn states(rt: &AppState, plot: &crate::profile::Plot, lang: Lang) -> Vec<String> {
+    let Some(cmd) = rt.device.profile.command(&plot.command) else {
+        return Vec::new();
+    };
+    plot.states
+        .iter()
+        .filter_map(|ident| {
+            cmd.reply
+                .iter()
+                .find(|f| f.ident.eq_ignore_ascii_case(ident))
+        })
+        .map(|f| {
+            let value = rt
+                .device
+                .value(cmd.id, &f.ident)
+                .map_or_else(|| "—".to_string(), |v| readout_text(f, v, lang));
+            format!("{}: {value}", lang.tr(&f.name.en, &f.name.zh))
+        })
+        .collect()
 }
 
 /// Draws `fields` of `set` over `[t0, t1]`, decimated to `width_px` columns: one line per

@@ -194,7 +194,7 @@ impl TelemetryPanel {
                     ui.label(egui::RichText::new(lang.tr(&p.name.en, &p.name.zh)).strong());
                     let legend =
                         plot::Legend::new(rt.device.profile.command(&p.command), &p.fields, lang);
-                    plot::key(ui, &legend);
+                    plot::key(ui, &legend, &plot::states(rt, p, lang));
                     let set = rt.device.plots.get(&p.id);
                     let end = if follow {
                         rt.plot_end()

@@ -8,7 +8,7 @@ mod control;
 
 pub use control::{Control, Outcome, Trip};
 
-use super::inputs::{command_inputs, range_text};
+use super::inputs::{command_inputs, range_text, readout_text};
 use super::state::{AppState, Reading};
 use super::stop::StopControl;
 use super::{Action, plot};
@@ -40,19 +40,6 @@ pub struct SolarPanel {
 
 const RED: egui::Color32 = egui::Color32::from_rgb(200, 30, 30);
 const GREEN: egui::Color32 = egui::Color32::from_rgb(0, 140, 60);
-
-/// A value as a person reads it, labels in the UI's language.
-fn shown(f: &Field, v: &Value, lang: Lang) -> String {
-    if let Value::Int(raw) = v
-        && let Some(l) = f.label(*raw)
-    {
-        return format!("{} ({raw})", lang.tr(&l.name.en, &l.name.zh));
-    }
-    match f.range_mark(v) {
-        Some(mark) => format!("{}{} {mark}", f.format(v), f.unit_suffix()),
-        None => format!("{}{}", f.format(v), f.unit_suffix()),
-    }
-}
 
 impl SolarPanel {
     /// Called every frame whichever panel is shown (the dead-man).
@@ -188,7 +175,7 @@ impl SolarPanel {
                                     let text = format!(
                                         "{}: {}",
                                         lang.tr(&f.name.en, &f.name.zh),
-                                        shown(f, v, lang)
+                                        readout_text(f, v, lang)
                                     );
                                     if stale {
                                         ui.weak(text);
@@ -231,7 +218,7 @@ impl SolarPanel {
         for p in &rt.device.profile.plots {
             ui.label(egui::RichText::new(lang.tr(&p.name.en, &p.name.zh)).strong());
             let legend = plot::Legend::new(rt.device.profile.command(&p.command), &p.fields, lang);
-            plot::key(ui, &legend);
+            plot::key(ui, &legend, &plot::states(rt, p, lang));
             let set = rt.device.plots.get(&p.id);
             let scratch = &mut self.scratch;
             let shown = Plot::new(("solar-plot", &p.id)).height(130.0);

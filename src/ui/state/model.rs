@@ -222,10 +222,13 @@ impl DeviceModel {
             }
             let set = self.plots.entry(plot.id.clone()).or_default();
             for name in &plot.fields {
+                // As the readouts show it: scaled, or converted (a thermistor's °C); no point
+                // where a conversion is undefined.
                 if let Some(v) = d.values.iter().find(|v| v.ident.eq_ignore_ascii_case(name))
                     && let Value::Int(raw) = v.value
+                    && let Some(y) = v.field.display_number(raw)
                 {
-                    let _ = set.push(name, t, raw as f64 * v.field.scale);
+                    let _ = set.push(name, t, y);
                 }
             }
         }
