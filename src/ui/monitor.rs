@@ -2,6 +2,9 @@
 //! meaning (command name, fields, errors). Filter by command, pause, copy, save as text to a
 //! typed or chosen file.
 //!
+//! Each frame is decoded with the profile it came under: after a change of device, the earlier
+//! frames keep their commands' names, marked with their profile's id.
+//!
 //! The view follows the newest frame unless the technician scrolls away; then it stays on the
 //! frames they scrolled to (held by sequence number, so that frames dropped from the front of a
 //! full log or arriving at the end do not move it), says how far behind the newest it is, and
@@ -57,9 +60,19 @@ impl Default for MonitorPanel {
     }
 }
 
-/// One log line: `12:00:01.234 >> ff ff 03 82 00 81  MSP_GET_PWMVALUE`.
-pub fn line(profile: &Profile, e: &LogEntry) -> String {
+/// A frame to show: its sequence number, the profile it is decoded with, the frame.
+type Row<'a> = (u64, &'a Profile, &'a LogEntry);
+
+/// One log line: `12:00:01.234 >> ff ff 03 82 00 81  MSP_GET_PWMVALUE`, decoded with `profile`;
+/// a frame of another profile than `current` (the device in use now) is marked with its
+/// profile's id: `[window-cleaner] 12:00:01.234 >> …`.
+pub fn line(current: &Profile, profile: &Profile, e: &LogEntry) -> String {
     let time = chrono::DateTime::<chrono::Local>::from(e.at).format("%H:%M:%S%.3f");
+    let time = if profile.id == current.id {
+        time.to_string()
+    } else {
+        format!("[{}] {time}", profile.id)
+    };
     match &e.frame {
         Ok(p) => format!(
             "{time} {} {:<40} {}{}",
@@ -103,21 +116,24 @@ impl MonitorPanel {
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
         let log = &rt.packets;
-        // A capture opened offline is shown in place of the live log, decoded with its profile.
-        let (profile, entries_len, rows): (_, usize, Vec<(u64, &LogEntry)>) = match &log.offline {
+        // A capture opened offline is shown in place of the live log, decoded with its profile;
+        // the live log's frames each with the profile they came under.
+        let (profile, entries_len, rows): (_, usize, Vec<Row<'_>>) = match &log.offline {
             Some(o) => (
                 o.profile.clone(),
                 o.entries.len(),
                 (0u64..)
                     .zip(o.entries.iter())
-                    .filter(|(_, e)| self.matches(&o.profile, e))
+                    .map(|(s, e)| (s, &*o.profile, e))
+                    .filter(|(_, p, e)| self.matches(p, e))
                     .collect(),
             ),
             None => (
                 rt.device.profile.clone(),
                 log.entries.len(),
                 log.numbered()
-                    .filter(|(_, e)| self.matches(&rt.device.profile, e))
+                    .map(|(s, l)| (s, &*l.profile, &l.entry))
+                    .filter(|(_, p, e)| self.matches(p, e))
                     .collect(),
             ),
         };
@@ -143,7 +159,8 @@ impl MonitorPanel {
                 actions.push(Action::ClearPacketLog);
             }
             if ui.button(lang.tr("Copy", "复制")).clicked() {
-                let shown: Vec<String> = rows.iter().map(|(_, e)| line(&profile, e)).collect();
+                let shown: Vec<String> =
+                    rows.iter().map(|(_, p, e)| line(&profile, p, e)).collect();
                 ui.ctx().copy_text(shown.join("\n"));
                 actions.push(Action::Notify(Notice::info(format!(
                     "{} line(s) copied",
@@ -212,7 +229,7 @@ impl MonitorPanel {
     }
 
     /// The rows, in a scroll area with a solid scroll bar, placed where the view is held.
-    fn rows(&mut self, ui: &mut egui::Ui, profile: &Profile, rows: &[(u64, &LogEntry)]) {
+    fn rows(&mut self, ui: &mut egui::Ui, profile: &Profile, rows: &[Row<'_>]) {
         // show_rows adds the spacing between rows itself.
         let text_h = ui.text_style_height(&egui::TextStyle::Monospace);
         let row_h = text_h + ui.spacing().item_spacing.y;
@@ -228,7 +245,9 @@ impl MonitorPanel {
             (content - view_h).max(0.0)
         } else {
             match self.anchor {
-                Some((seq, into)) => rows.partition_point(|(s, _)| *s < seq) as f32 * row_h + into,
+                Some((seq, into)) => {
+                    rows.partition_point(|(s, _, _)| *s < seq) as f32 * row_h + into
+                }
                 None => self.placed.unwrap_or(0.0),
             }
         };
@@ -237,8 +256,8 @@ impl MonitorPanel {
             .scroll_bar_visibility(egui::scroll_area::ScrollBarVisibility::AlwaysVisible)
             .vertical_scroll_offset(offset)
             .show_rows(ui, text_h, rows.len(), |ui, range| {
-                for (_, e) in &rows[range] {
-                    let text = line(profile, e);
+                for (_, p, e) in &rows[range] {
+                    let text = line(profile, p, e);
                     let unsolicited = matches!(&e.frame, Ok(p) if matches!(p.header, crate::packet::Header::MspReply { kind: crate::protocol::msp::ReplyKind::Async }));
                     let color = match (&e.frame, e.direction) {
                         (Err(_), _) => egui::Color32::RED,
@@ -265,14 +284,14 @@ impl MonitorPanel {
             self.follow = now >= max - 1.0;
         }
         let top = ((now / row_h).floor() as usize).min(rows.len().saturating_sub(1));
-        self.top = rows.get(top).map(|(s, _)| *s);
+        self.top = rows.get(top).map(|(s, _, _)| *s);
         self.anchor = (!self.follow)
             .then(|| self.top.map(|s| (s, now - top as f32 * row_h)))
             .flatten();
         self.placed = Some(now);
         let last_in_view = (((now + view_h) / row_h).ceil() as usize).min(rows.len());
         self.behind = match (rows.get(last_in_view.saturating_sub(1)), rows.last()) {
-            (Some((_, seen)), Some((_, newest))) if !self.follow => {
+            (Some((_, _, seen)), Some((_, _, newest))) if !self.follow => {
                 let secs = newest
                     .at
                     .duration_since(seen.at)
@@ -284,14 +303,14 @@ impl MonitorPanel {
     }
 
     /// Writes the rows shown to the typed (or chosen) file.
-    fn save(&self, profile: &Profile, rows: &[(u64, &LogEntry)]) -> Vec<Action> {
+    fn save(&self, profile: &Profile, rows: &[Row<'_>]) -> Vec<Action> {
         let path = self.save_path.trim();
         if path.is_empty() {
             return vec![Action::Notify(Notice::error(
                 "save: give the file's path (type it, or Browse)",
             ))];
         }
-        let lines: Vec<String> = rows.iter().map(|(_, e)| line(profile, e)).collect();
+        let lines: Vec<String> = rows.iter().map(|(_, p, e)| line(profile, p, e)).collect();
         match crate::document::write_atomic(
             std::path::Path::new(path),
             (lines.join("\n") + "\n").as_bytes(),
