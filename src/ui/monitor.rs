@@ -42,6 +42,8 @@ pub struct MonitorPanel {
     pub behind: Option<(usize, f64)>,
     /// The file the log is saved to.
     pub save_path: String,
+    /// The capture file recorded to or opened.
+    pub capture_path: String,
 }
 
 impl Default for MonitorPanel {
@@ -56,6 +58,7 @@ impl Default for MonitorPanel {
             top: None,
             behind: None,
             save_path: String::new(),
+            capture_path: String::new(),
         }
     }
 }
@@ -92,6 +95,93 @@ pub fn line(current: &Profile, profile: &Profile, e: &LogEntry) -> String {
 }
 
 impl MonitorPanel {
+    /// The capture file row: its path (typed, or chosen with Browse…: opened at once), Record /
+    /// Stop recording with the file's size growing, Open capture / Back to live.
+    fn capture_bar(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+        let mut actions = Vec::new();
+        let recording = rt.recording();
+        let event = files::row(
+            ui,
+            lang,
+            lang.tr("Capture", "抓包文件"),
+            &mut self.capture_path,
+            "capture.pcapng",
+            files::Pick::Open(&["pcapng"]),
+            &rt.dialogs,
+            recording.is_none(),
+        );
+        let path = self.capture_path.trim().to_string();
+        match recording {
+            Some(c) => {
+                if ui.button(lang.tr("Stop recording", "停止录制")).clicked() {
+                    actions.push(Action::StopCapture);
+                }
+                let lost = if c.dropped() > 0 {
+                    format!(", {} {}", c.dropped(), lang.tr("chunks lost", "块丢失"))
+                } else {
+                    String::new()
+                };
+                ui.colored_label(
+                    egui::Color32::RED,
+                    format!(
+                        "{} {}  {:.1} KiB{lost}",
+                        lang.tr("REC", "录制中"),
+                        c.path(),
+                        c.file_bytes() as f64 / 1024.0
+                    ),
+                );
+                ui.ctx()
+                    .request_repaint_after(std::time::Duration::from_millis(250));
+            }
+            None => {
+                let record = ui
+                    .add_enabled(rt.connected(), egui::Button::new(lang.tr("Record", "录制")))
+                    .on_hover_text(lang.tr(
+                        "record the port's bytes to a new pcapng capture at the path typed \
+                         (Wireshark, botbench sim replay)",
+                        "将端口字节录制到所填路径的新 pcapng 抓包文件(Wireshark、botbench sim replay)",
+                    ));
+                if record.clicked() {
+                    match record_to(&path) {
+                        Ok(p) => {
+                            actions.push(Action::RememberFile(FileKind::Capture, path.clone()));
+                            actions.push(Action::StartCapture(p));
+                        }
+                        Err(n) => actions.push(Action::Notify(n)),
+                    }
+                }
+            }
+        }
+        match &rt.packets.offline {
+            Some(o) => {
+                ui.label(format!(
+                    "{} {}{}",
+                    lang.tr("viewing", "查看"),
+                    o.name,
+                    o.truncated
+                        .as_ref()
+                        .map_or(String::new(), |t| format!(" (cut off: {t})"))
+                ));
+                if ui.button(lang.tr("Back to live", "返回实时")).clicked() {
+                    actions.push(Action::CloseCapture);
+                }
+            }
+            None => {
+                let open = ui
+                    .add_enabled(
+                        !path.is_empty(),
+                        egui::Button::new(lang.tr("Open capture", "打开抓包")),
+                    )
+                    .clicked();
+                if event.go(open, &mut actions) {
+                    actions.push(Action::RememberFile(FileKind::Capture, path.clone()));
+                    actions.push(Action::OpenCapture(path.into()));
+                }
+            }
+        }
+        actions
+    }
+
     fn matches(&self, profile: &Profile, e: &LogEntry) -> bool {
         if self.errors_only && e.frame.is_ok() {
             return false;
@@ -137,7 +227,7 @@ impl MonitorPanel {
                     .collect(),
             ),
         };
-        ui.horizontal_wrapped(|ui| capture_bar(ui, lang, rt, &mut actions));
+        ui.horizontal_wrapped(|ui| actions.extend(self.capture_bar(ui, lang, rt)));
         ui.horizontal_wrapped(|ui| {
             let label = ui.label(lang.tr("Filter", "筛选"));
             ui.add(
@@ -195,11 +285,8 @@ impl MonitorPanel {
                 true,
             );
             let save = ui.button(lang.tr("Save", "保存")).clicked();
-            match event {
-                files::FileEvent::NoDialog(why) => actions.push(Action::Notify(Notice::error(why))),
-                files::FileEvent::Chosen(_) => actions.extend(self.save(&profile, &rows)),
-                files::FileEvent::None if save => actions.extend(self.save(&profile, &rows)),
-                files::FileEvent::None => {}
+            if event.go(save, &mut actions) {
+                actions.extend(self.save(&profile, &rows));
             }
         });
         self.where_the_view_is(ui, lang);
@@ -327,81 +414,20 @@ impl MonitorPanel {
     }
 }
 
-/// Record / Stop with the file's size growing; Open capture / Back to live.
-fn capture_bar(ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
-    match rt.recording() {
-        Some(c) => {
-            if ui.button(lang.tr("Stop recording", "停止录制")).clicked() {
-                actions.push(Action::StopCapture);
-            }
-            let lost = if c.dropped() > 0 {
-                format!(", {} {}", c.dropped(), lang.tr("chunks lost", "块丢失"))
-            } else {
-                String::new()
-            };
-            ui.colored_label(
-                egui::Color32::RED,
-                format!(
-                    "{} {}  {:.1} KiB{lost}",
-                    lang.tr("REC", "录制中"),
-                    c.path(),
-                    c.file_bytes() as f64 / 1024.0
-                ),
-            );
-            ui.ctx()
-                .request_repaint_after(std::time::Duration::from_millis(250));
-        }
-        None => {
-            let record = ui
-                .add_enabled(
-                    rt.connected(),
-                    egui::Button::new(lang.tr("Record…", "录制…")),
-                )
-                .on_hover_text(lang.tr(
-                    "record the port's bytes to a pcapng capture (Wireshark, botbench sim replay)",
-                    "将端口字节录制为 pcapng 抓包文件(Wireshark、botbench sim replay)",
-                ));
-            if record.clicked() {
-                actions.push(pick("capture.pcapng", true, Action::StartCapture));
-            }
-        }
+/// Where a capture is recorded to: the typed path, unless there is none or it names a file
+/// that exists (a recording replaces nothing; the dialog asks before it does).
+fn record_to(path: &str) -> Result<std::path::PathBuf, Notice> {
+    let path = path.trim();
+    if path.is_empty() {
+        return Err(Notice::error(
+            "record: give the capture file's path (type it, or Browse)",
+        ));
     }
-    match &rt.packets.offline {
-        Some(o) => {
-            ui.label(format!(
-                "{} {}{}",
-                lang.tr("viewing", "查看"),
-                o.name,
-                o.truncated
-                    .as_ref()
-                    .map_or(String::new(), |t| format!(" (cut off: {t})"))
-            ));
-            if ui.button(lang.tr("Back to live", "返回实时")).clicked() {
-                actions.push(Action::CloseCapture);
-            }
-        }
-        None => {
-            if ui.button(lang.tr("Open capture…", "打开抓包…")).clicked() {
-                actions.push(pick("capture.pcapng", false, Action::OpenCapture));
-            }
-        }
+    let p = std::path::PathBuf::from(path);
+    if p.exists() {
+        return Err(Notice::error(format!(
+            "record: {path} exists; a recording replaces no file: give a new name"
+        )));
     }
-}
-
-/// A file from the dialog made into an action, or a notice that none was chosen.
-fn pick(name: &str, save: bool, then: fn(std::path::PathBuf) -> Action) -> Action {
-    let dialog = rfd::FileDialog::new()
-        .add_filter("pcapng", &["pcapng"])
-        .set_file_name(name);
-    let path = if save {
-        dialog.save_file()
-    } else {
-        dialog.pick_file()
-    };
-    match path {
-        Some(p) => then(p),
-        None => Action::Notify(Notice::info(
-            "cancelled (no file chosen, or no file dialog on this system)",
-        )),
-    }
+    Ok(p)
 }

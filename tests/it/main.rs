@@ -20,6 +20,7 @@ mod field_vanish;
 mod firmware_variants;
 mod gui;
 mod gui_capture;
+mod gui_files;
 mod gui_first_run;
 mod gui_msp;
 mod gui_servo;

@@ -293,7 +293,7 @@ impl ParamsState {
                 ui.label("");
             }
         }
-        self.preset_row(ui, lang, &profile);
+        self.preset_row(ui, lang, rt, actions);
         match &self.message {
             Some((true, m)) => ok_label(ui, m),
             Some((false, m)) => error_label(ui, m),
