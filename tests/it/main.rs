@@ -22,6 +22,7 @@ mod gui;
 mod gui_capture;
 mod gui_files;
 mod gui_first_run;
+mod gui_hints;
 mod gui_msp;
 mod gui_servo;
 mod gui_tuya;

@@ -10,7 +10,7 @@ mod packets;
 mod running;
 mod tuya;
 
-pub use link::{Answering, Connection, LinkStatus, SILENT_AFTER, Target};
+pub use link::{Answering, Connection, LinkStatus, PortLister, SILENT_AFTER, Target};
 pub use model::{DeviceModel, Mark, Reading, ReadingError};
 pub use packets::{LOG_CAPACITY, Logged, OfflineCapture, PacketLog};
 pub use running::{Running, RunningSet};
