@@ -17,10 +17,7 @@ use crate::profile::{Command, CommandKind, Field, FieldType, Input, Value};
 use eframe::egui;
 use egui_plot::Plot;
 use std::collections::HashMap;
-use std::time::Duration;
 
-/// Readings older than this are shown as stale.
-const STALE: Duration = Duration::from_secs(3);
 /// The plots' time window, seconds.
 const WINDOW_SECS: f64 = 30.0;
 
@@ -165,7 +162,7 @@ impl SolarPanel {
                         .on_hover_text(format!("{} ({})", cmd.ident, cmd.id));
                     match rt.device.readings.get(&cmd.id) {
                         Some(Reading::Values(values, at)) => {
-                            let stale = at.elapsed() > STALE;
+                            let stale = at.elapsed() > plot::STALE;
                             // One field a line: wrapped runs of values overlap the next row.
                             ui.vertical(|ui| {
                                 for (k, v) in values {
