@@ -15,22 +15,20 @@ use std::sync::Arc;
 use crate::support::gui::{H, app_mut, harness_with, settings, step_until};
 use crate::support::{serve, window_cleaner};
 
-/// The widget with `label` (a text's value) and `role`.
-fn widget<'a>(h: &'a H, label: &'a str, role: Role) -> egui_kittest::Node<'a> {
-    h.get_by(move |n| {
-        n.role() == role
-            && (n.label().as_deref() == Some(label) || n.value().as_deref() == Some(label))
-    })
-}
-
-/// Rests the pointer on the widget with `label` and `role`, then says whether some text
-/// containing `hint` is shown; it is not before.
+/// Rests the pointer on the (first) widget with `label` (a text's value) and `role`, then says
+/// whether some text containing `hint` is shown; it is not before.
 fn hint_on(h: &mut H, label: &str, role: Role, hint: &str) {
     assert!(
         h.query_all_by_label_contains(hint).next().is_none(),
         "'{hint}' is shown before the pointer rests on {label}"
     );
-    widget(h, label, role).hover();
+    h.query_all_by(|n| {
+        n.role() == role
+            && (n.label().as_deref() == Some(label) || n.value().as_deref() == Some(label))
+    })
+    .next()
+    .unwrap_or_else(|| panic!("no {role:?} {label}"))
+    .hover();
     // The tooltip shows once the pointer has rested for egui's delay (0.5 s; a step is 0.25 s).
     h.run_steps(4);
     assert!(
@@ -95,33 +93,21 @@ fn hover_hints_say_the_wire_name_the_range_why_not_what_stop_sends_and_the_laten
     app_mut(&mut h).settings.panel = PanelId::Actions;
     h.run_steps(2);
     hint_on(&mut h, "Fan PWM", Role::TextInput, "0 – 100 %");
-    let send = h
-        .query_all_by_label("⚠ Send…")
-        .next()
-        .map(|n| n.rect())
-        .expect("the Fan's Send");
-    h.hover_at(send.center());
-    h.run_steps(4);
-    assert!(
-        h.query_all_by_label_contains("pwm: give a value (0 – 100 %)")
-            .next()
-            .is_some(),
-        "a greyed-out Send says why"
+    // The Fan's comes first.
+    hint_on(
+        &mut h,
+        "⚠ Send…",
+        Role::Button,
+        "pwm: give a value (0 – 100 %)",
     );
 
     // A Browse that cannot open a dialog says why before it is clicked.
     app_mut(&mut h).settings.panel = PanelId::Monitor;
     h.run_steps(2);
-    let browse = h
-        .query_all_by_label("Browse…")
-        .next()
-        .map(|n| n.rect())
-        .expect("a Browse");
-    h.hover_at(browse.center());
-    h.run_steps(4);
-    assert!(
-        h.query_all_by_label_contains("no file dialog on this system (test)")
-            .next()
-            .is_some()
+    hint_on(
+        &mut h,
+        "Browse…",
+        Role::Button,
+        "no file dialog on this system (test)",
     );
 }

@@ -7,7 +7,7 @@ use botbench::sim::solar_cleanbot::SolarCleanbot;
 use botbench::ui::{Action, App, Job, PanelId, Target};
 use egui_kittest::kittest::Queryable;
 
-use crate::support::gui::{app, app_mut, harness, settings, step_until};
+use crate::support::gui::{H, app, app_mut, harness, settings, step_until};
 use crate::support::{serve, window_cleaner};
 
 #[test]
@@ -87,30 +87,32 @@ fn frames_logged_before_a_device_change_keep_the_profile_they_came_under() {
     assert!(old > 0, "the window cleaner's frames are kept");
 
     // The old frames still read as the window cleaner's commands, marked with its profile.
-    app_mut(&mut h).monitor.filter = "MSP_ATTITUDE".into();
-    h.run_steps(2);
-    let rows: Vec<String> = h
-        .query_all_by_label_contains("MSP_ATTITUDE")
-        .filter_map(|n| n.value())
-        .collect();
+    let rows = filtered(&mut h, "MSP_ATTITUDE");
     assert!(
         !rows.is_empty(),
         "the old frames are found by their MSP names"
     );
     assert!(
-        rows.iter().all(|r| r.starts_with("[window-cleaner] ")),
+        rows.iter()
+            .all(|r| r.starts_with("[window-cleaner] ") && r.contains("MSP_ATTITUDE")),
         "{rows:?}"
     );
     // The servo's own frames, by the servo's names, unmarked.
-    app_mut(&mut h).monitor.filter = "PING".into();
-    h.run_steps(2);
-    let rows: Vec<String> = h
-        .query_all_by_label_contains(">> ")
-        .filter_map(|n| n.value())
-        .collect();
+    let rows = filtered(&mut h, "PING");
     assert!(
         rows.iter()
             .any(|r| r.contains("PING") && !r.starts_with('[')),
         "{rows:?}"
     );
+}
+
+/// The monitor's rows with `filter` typed in its box.
+fn filtered(h: &mut H, filter: &str) -> Vec<String> {
+    app_mut(h).monitor.filter = filter.into();
+    h.run_steps(2);
+    // Each row holds its frame's time: hh:mm:ss.mmm.
+    h.query_all_by_label_contains(":")
+        .filter_map(|n| n.value())
+        .filter(|v| v.contains(" >> ") || v.contains(" << "))
+        .collect()
 }
