@@ -112,16 +112,6 @@ pub enum UiError {
     Window(String),
 }
 
-/// A file dialog for RON documents (presets, plans) that starts in the shipped examples' folder
-/// (`/usr/share/botbench/presets` when installed).
-pub(crate) fn ron_dialog() -> rfd::FileDialog {
-    let d = rfd::FileDialog::new().add_filter("RON", &["ron"]);
-    match crate::system::presets_dir() {
-        Some(dir) => d.set_directory(dir),
-        None => d,
-    }
-}
-
 /// The settings the window opens with: the saved ones, overridden by what the command line
 /// gave. A built-in demo device named without a baud rate runs at its profile's rate (the Tuya
 /// vacuum at 9600, as its profile and the protocol document say), not the last port's.
