@@ -144,6 +144,14 @@ pub fn launch_settings(
     saved
 }
 
+/// The window's icon: the bundled 256×256 PNG (assets/icons/botbench-256.png, rendered from the
+/// desktop entry's botbench.svg). A PNG that cannot be decoded gives egui's default icon, never
+/// a failed start.
+fn window_icon() -> std::sync::Arc<eframe::egui::IconData> {
+    let png = include_bytes!("../../assets/icons/botbench-256.png");
+    std::sync::Arc::new(eframe::icon_data::from_png_bytes(png).unwrap_or_default())
+}
+
 /// Opens the window. `target`, `baud` and `profile` override the saved settings. With
 /// `screenshots`, the window tours the demo devices and saves screenshots there, then closes
 /// (see [`tour`]); it then neither reads nor keeps saved settings.
@@ -159,7 +167,8 @@ pub fn run(
         viewport: eframe::egui::ViewportBuilder::default()
             .with_inner_size([1200.0, 780.0])
             .with_min_inner_size([800.0, 500.0])
-            .with_title(app::TITLE),
+            .with_title(app::TITLE)
+            .with_icon(window_icon()),
         // Dithering is a per-pixel cost that software rendering pays on every frame, for
         // gradients the window does not draw.
         dithering: false,
@@ -182,4 +191,14 @@ pub fn run(
         }),
     )
     .map_err(|e| UiError::Window(e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_bundled_window_icon_decodes_to_256_by_256() {
+        let icon = super::window_icon();
+        assert_eq!((icon.width, icon.height), (256, 256));
+        assert_eq!(icon.rgba.len(), 256 * 256 * 4);
+    }
 }
