@@ -56,7 +56,9 @@ run botbench profiles | tee profiles.txt
 grep -q '^window-cleaner ' profiles.txt
 
 step "a shipped preset, by its relative path, against the simulated window cleaner"
-run botbench sim window-cleaner > sim.txt 2>&1 &
+# Not through run(): a function in the background is a subshell, and $! would name it, not the
+# simulator, which `kill $sim` then left running.
+env -i PATH=/usr/bin:/bin HOME="$home" LANG=C.UTF-8 botbench sim window-cleaner > sim.txt 2>&1 &
 sim=$!
 for _ in $(seq 1 100); do [ -s sim.txt ] && break; sleep 0.1; done
 port=$(head -1 sim.txt)
