@@ -199,6 +199,14 @@ impl SimProcess {
         }
     }
 
+    /// Runs `botbench GROUP --port PATH --margin-ms MARGIN_MS ARGS...` against this simulator
+    /// (watched: [`run_watched`]), for a test whose verdict is not about the margin.
+    pub fn cli(&self, group: &str, args: &[&str]) -> Ran {
+        let mut all = vec![group, "--port", &self.path, "--margin-ms", MARGIN_MS];
+        all.extend_from_slice(args);
+        run_watched(&all)
+    }
+
     /// Waits, within [`WATCHDOG`], for the simulator to end on its own (its port vanished).
     pub fn wait_exit(&mut self) -> std::process::ExitStatus {
         let deadline = std::time::Instant::now() + WATCHDOG;
