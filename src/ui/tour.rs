@@ -1,12 +1,16 @@
 //! The screenshot tour (`botbench gui --screenshots DIR`, used by `.ci/screenshot.sh`): one
-//! launch of the window connects to each built-in demo device in turn, lets it answer and plot
-//! for [`SETTLE`], then shows every panel the device has at each size in [`SIZES`] and in each
-//! language, and saves each view as `DIR/<device>-<panel>-<w>x<h>-<lang>.png`; then it closes
-//! the window. The shot is the window's own framebuffer (egui's viewport screenshot).
+//! launch of the window connects to each built-in demo device in turn, waits until it has come
+//! up (see [`settled`]: answering, identified or shaken hands with, every plot holding
+//! [`PLOTTED_SECS`] of samples), then shows every panel the device has at each size in
+//! [`SIZES`] and in each language, and saves each view as
+//! `DIR/<device>-<panel>-<w>x<h>-<lang>.png`; then it closes the window. The shot is the
+//! window's own framebuffer (egui's viewport screenshot).
 
 use super::state::Target;
 use super::{Action, AppState, PanelId};
 use crate::i18n::Lang;
+use crate::profile::Protocol;
+use crate::series::SeriesSet;
 use crate::sim::SimKind;
 use eframe::egui;
 use std::path::PathBuf;
@@ -15,9 +19,9 @@ use std::time::{Duration, Instant};
 
 /// The window sizes shot, logical points: the line PCs' usual screen and a small one.
 pub const SIZES: [[f32; 2]; 2] = [[1280.0, 800.0], [1024.0, 600.0]];
-/// How long a device is left to answer, read and plot before its first shot.
-pub const SETTLE: Duration = Duration::from_secs(4);
-/// A device that is not answering after this long is shot as it is (and reported).
+/// Seconds of samples each plot of a device holds before its first shot.
+pub const PLOTTED_SECS: f64 = 1.5;
+/// A device that has not come up after this long is shot as it is (and reported).
 const CONNECT_PATIENCE: Duration = Duration::from_secs(30);
 /// Frames drawn at a shot's size before it is taken (egui lays out a new size over two passes).
 const FRAMES_BEFORE_SHOT: u32 = 3;
@@ -34,7 +38,7 @@ struct Shot {
 enum Phase {
     /// Connect to the next device.
     Connect,
-    /// Connected at this instant; waiting for it to answer and [`SETTLE`].
+    /// Connected at this instant; waiting until it has come up ([`settled`]).
     Settle(Instant),
     /// Arrange the next shot.
     Next,
@@ -96,11 +100,14 @@ impl Tour {
                 }
             },
             Phase::Settle(since) => {
-                let answering = rt.connected() && rt.job_progress().is_none();
-                let waited = since.elapsed();
-                if (answering && waited >= SETTLE) || waited >= CONNECT_PATIENCE {
-                    if !answering {
-                        self.fail(format!("{} did not answer", self.device_name()));
+                let up = settled(rt);
+                if up || since.elapsed() >= CONNECT_PATIENCE {
+                    if !up {
+                        self.fail(format!(
+                            "{} did not come up within {} s",
+                            self.device_name(),
+                            CONNECT_PATIENCE.as_secs()
+                        ));
                     }
                     self.shots = panels
                         .iter()
@@ -185,6 +192,29 @@ impl Tour {
         eprintln!("tour: {what}");
         self.failures.push(what);
     }
+}
+
+/// Whether the connected device has come up far enough to be shown: answering with no job
+/// running, and by protocol: MSP identified (CMD_VERSION answered) and each plot of its profile
+/// holding [`PLOTTED_SECS`] of samples (they are polled from the connection on:
+/// [`crate::ops::telemetry::polls`]); Tuya shaken hands with; a servo bus at once (nothing is
+/// polled until the servo bench asks).
+fn settled(rt: &AppState) -> bool {
+    let d = &rt.device;
+    let plotted = || {
+        d.profile.plots.iter().all(|p| {
+            d.plots
+                .get(&p.id)
+                .and_then(SeriesSet::span)
+                .is_some_and(|(first, last)| last - first >= PLOTTED_SECS)
+        })
+    };
+    let up = match d.profile.protocol {
+        Protocol::Msp => matches!(d.info, Some(Ok(_))) && plotted(),
+        Protocol::Tuya => d.tuya.done_at.is_some(),
+        Protocol::Servo => true,
+    };
+    rt.connected() && rt.job_progress().is_none() && up
 }
 
 /// Writes `image` to `path` as PNG (the folder is created if missing).
