@@ -160,9 +160,11 @@ fn parse_ids(s: &str) -> Result<std::ops::RangeInclusive<u8>, CliError> {
             (v, v)
         }
     };
-    if b == crate::protocol::servo::BROADCAST_ID {
+    let broadcast = crate::protocol::servo::BROADCAST_ID;
+    if b == broadcast {
         return Err(CliError::input(format!(
-            "'{s}': id 255 is the broadcast address: every servo acts on it and none answers; give ids 0-254"
+            "'{s}': id {broadcast} is the broadcast address: every servo acts on it and none answers; give ids 0-{}",
+            broadcast - 1
         )));
     }
     if a > b {

@@ -3,7 +3,6 @@
 use botbench::i18n::Lang;
 use botbench::profile::Value;
 use botbench::sim::Faults;
-use botbench::sim::window_cleaner::WindowCleaner;
 use botbench::ui::state::Reading;
 use botbench::ui::{App, PanelId};
 use egui_kittest::kittest::Queryable;
@@ -12,11 +11,7 @@ use std::time::Duration;
 use crate::support::gui::{
     self, H, app, app_mut, edit_value, idle, settings, step_until, tuning_values,
 };
-use crate::support::{Served, serve, serve_with, temp_dir, window_cleaner};
-
-fn bench() -> Served<WindowCleaner> {
-    serve(window_cleaner())
-}
+use crate::support::{serve_with, served_window_cleaner as bench, temp_dir, window_cleaner};
 
 /// The app on the window cleaner at `path`, with the protocol's own answer margin.
 fn harness(path: &str, panel: PanelId) -> H {

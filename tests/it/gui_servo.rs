@@ -5,59 +5,17 @@ use botbench::i18n::Lang;
 use botbench::ops::OpError;
 use botbench::ops::servo::Presence;
 use botbench::sim::servo_bus::{Motion, ServoBus, SimServo};
+use botbench::ui::Action;
 use botbench::ui::files::Dialogs;
 use botbench::ui::settings::FileKind;
-use botbench::ui::{Action, App, PanelId};
 use egui::accesskit::Role;
 use egui_kittest::kittest::{By, NodeT, Queryable};
 use std::time::Instant;
 
-use crate::support::gui::{H, app, app_mut, has_label, settings, step_until, type_into};
-use crate::support::{Served, serve, temp_dir};
+use crate::support::gui::{H, app, app_mut, has_label, idle, step_until, type_into};
+use crate::support::servo_bench::{bench, harness, scan};
+use crate::support::{serve, temp_dir};
 use eframe::egui;
-
-/// The simulated bus on its pty, in lockstep with the app's link.
-type Bench = Served<ServoBus>;
-
-fn bench(servos: Vec<SimServo>) -> Bench {
-    serve(ServoBus::new(servos))
-}
-
-/// The app on the servo bench panel, connected with the servo protocol's own answer margin.
-fn harness(b: &Bench, lang: Lang) -> H {
-    let mut h =
-        crate::support::gui::harness(settings(b.path(), "servo", PanelId::ServoBench, lang));
-    step_until(&mut h, "the link", |a| a.state.connected());
-    h
-}
-
-fn idle(a: &App) -> bool {
-    a.state.job_progress().is_none()
-}
-
-/// Selects `servo` in the scan table and asks for the baud option labelled `option`.
-fn set_baud(h: &mut H, servo: &str, option: &str) {
-    h.get_by_label(servo).click();
-    h.step();
-    h.get_by_label("ID & baud rate").click();
-    h.step();
-    h.get_by_label("New baud rate").click();
-    h.run_steps(2);
-    h.get_by_label(option).click();
-    h.step();
-    h.get_by_label("Set baud rate").click();
-    h.step();
-}
-
-/// Scans ids `first`-`last` at the checked rates and waits for the end.
-fn scan(h: &mut H, first: &str, last: &str) {
-    type_into(h, "First id", first);
-    type_into(h, "Last id", last);
-    h.get_by_label("Scan").click();
-    h.step();
-    step_until(h, "the scan", |a| idle(a) && a.servo.scan.outcome.is_some());
-    h.step();
-}
 
 #[test]
 fn a_scan_finds_the_configured_servos_and_shows_a_duplicate_as_such() {
@@ -167,46 +125,6 @@ fn a_parameter_out_of_range_is_refused_and_one_in_range_is_written_and_verified(
     assert_eq!(b.servo(21).param(41), Some(65));
     assert_eq!(app(&h).servo.params.values.get(&41), Some(&Ok(65)));
     assert!(h.query_by_label("verified").is_some());
-}
-
-#[test]
-fn an_id_change_from_the_panel_is_verified_and_bad_ids_are_refused() {
-    let b = bench(vec![
-        SimServo::fresh(31).with_id(5),
-        SimServo::fresh(32).with_id(7),
-    ]);
-    let mut h = harness(&b, Lang::En);
-    scan(&mut h, "0", "10");
-    h.get_by_label("Servo 5").click();
-    h.step();
-    h.get_by_label("ID & baud rate").click();
-    h.step();
-    for (bad, why) in [("7", "already answers"), ("255", "broadcast")] {
-        type_into(&mut h, "New id", bad);
-        assert!(
-            h.query_by_label_contains(why).is_some(),
-            "{bad} is refused because of {why}"
-        );
-        h.get_by_label("Set ID").click();
-        h.run_steps(3);
-        assert!(idle(app(&h)));
-    }
-    type_into(&mut h, "New id", "12");
-    h.get_by_label("Set ID").click();
-    h.step();
-    step_until(&mut h, "the id change", |a| {
-        idle(a) && a.servo.setup.message.is_some()
-    });
-    h.step();
-    assert_eq!(b.servo(31).id(), 12);
-    assert_eq!(b.servo(32).id(), 7);
-    let sel = app(&h).servo.selected.unwrap();
-    assert_eq!((sel.id, sel.baud), (12, 115_200));
-    assert!(
-        h.query_by_label_contains("verified at the new id")
-            .is_some()
-    );
-    assert!(app(&h).servo.scan.rows.iter().any(|r| r.id == 12));
 }
 
 #[test]
@@ -346,29 +264,6 @@ fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
 }
 
 #[test]
-fn the_live_angle_follows_a_move() {
-    let b = bench(vec![SimServo::fresh(61).with_id(4)]);
-    let mut h = harness(&b, Lang::En);
-    scan(&mut h, "4", "4");
-    h.get_by_label("Motion").click();
-    h.step();
-    h.get_by_label("Live angle").click();
-    h.step();
-    type_into(&mut h, "Angle (°)", "-45.5");
-    type_into(&mut h, "Interval (ms)", "100");
-    h.get_by_label("Go to angle").click();
-    step_until(&mut h, "the plotted angle", |a| {
-        a.servo
-            .motion
-            .series
-            .last()
-            .is_some_and(|p| (p[1] + 45.5).abs() < 1e-6)
-    });
-    h.step();
-    assert!(h.query_by_label("-45.5°").is_some());
-}
-
-#[test]
 fn the_panel_renders_every_tab_in_english_and_chinese() {
     let b = bench(vec![SimServo::fresh(71).with_id(2)]);
     let mut h = harness(&b, Lang::En);
@@ -405,45 +300,6 @@ fn the_panel_renders_every_tab_in_english_and_chinese() {
             h.run_steps(2);
         }
     }
-}
-
-#[test]
-fn a_baud_change_is_followed_and_verified_and_a_lost_servo_is_found() {
-    let b = bench(vec![
-        SimServo::fresh(81).with_id(4),
-        // An old servo does not take option 8 (1 Mbaud): it stays at 115200.
-        SimServo::fresh(82).with_id(6).with_extended(false),
-    ]);
-    let mut h = harness(&b, Lang::En);
-    scan(&mut h, "0", "8");
-    set_baud(&mut h, "Servo 4", "4 (57600)");
-    step_until(&mut h, "the baud change", |a| {
-        idle(a) && a.servo.setup.message.is_some()
-    });
-    h.step();
-    assert_eq!(b.servo(81).baud(), 57_600);
-    let sel = app(&h).servo.selected.unwrap();
-    assert_eq!((sel.id, sel.baud), (4, 57_600));
-    assert!(h.query_by_label_contains("57600 baud: verified").is_some());
-
-    h.get_by_label("Bus scan").click();
-    h.step();
-    set_baud(&mut h, "Servo 6", "8 (1000000, newer servos)");
-    step_until(&mut h, "the failed baud change", |a| {
-        idle(a)
-            && a.servo
-                .setup
-                .message
-                .as_ref()
-                .is_some_and(|(ok, m)| !ok && m.contains("found at 115200"))
-    });
-    let sel = app(&h).servo.selected.unwrap();
-    assert_eq!(
-        (sel.id, sel.baud),
-        (6, 115_200),
-        "the servo is where it was found"
-    );
-    assert_eq!(b.servo(82).baud(), 115_200);
 }
 
 #[test]
@@ -505,79 +361,6 @@ fn a_parameter_preset_saves_loads_and_writes_and_a_bad_one_is_refused_with_its_p
         app(&h).servo.params.edits.is_empty(),
         "nothing of a bad preset is taken"
     );
-}
-
-#[test]
-fn reset_user_data_asks_first_then_follows_the_servo_to_id_0() {
-    let b = bench(vec![
-        SimServo::fresh(95)
-            .with_id(9)
-            .with_baud(57_600)
-            .with_param(41, 61),
-    ]);
-    let mut h = harness(&b, Lang::En);
-    h.get_by_label("57600").click();
-    scan(&mut h, "9", "9");
-    h.get_by_label("Parameters").click();
-    // The tab reads the selected servo as soon as it shows it.
-    step_until(&mut h, "the parameters read", |a| {
-        idle(a) && a.servo.params.values.get(&41) == Some(&Ok(61))
-    });
-    h.get_by_label("Reset user data…").click();
-    h.run_steps(2);
-    h.get_by_label("Keep").click();
-    h.run_steps(3);
-    assert!(idle(app(&h)));
-    assert_eq!(b.servo(95).id(), 9);
-    h.get_by_label("Reset user data…").click();
-    h.run_steps(2);
-    h.get_by_label("Reset").click();
-    h.step();
-    step_until(&mut h, "the reset", |a| {
-        idle(a) && a.servo.params.message.is_some()
-    });
-    let s = b.servo(95);
-    assert_eq!((s.id(), s.baud()), (0, 115_200));
-    let sel = app(&h).servo.selected.unwrap();
-    assert_eq!((sel.id, sel.baud), (0, 115_200));
-    assert!(
-        app(&h).servo.params.values.get(&34) == Some(&Ok(0)),
-        "read again"
-    );
-}
-
-#[test]
-fn wheel_mode_and_damping_reach_the_servo() {
-    let b = bench(vec![SimServo::fresh(97).with_id(8)]);
-    let mut h = harness(&b, Lang::En);
-    scan(&mut h, "8", "8");
-    h.get_by_label("Motion").click();
-    h.step();
-    h.get_by_label("Method").click();
-    h.run_steps(2);
-    h.get_by_label("Continuous").click();
-    h.step();
-    type_into(&mut h, "Speed (°/s)", "120");
-    h.get_by_label("Run wheel").click();
-    h.step();
-    step_until(
-        &mut h,
-        "the spin",
-        |_| matches!(b.servo(97).motion_at(Instant::now()), Motion::Spin { rate, .. } if rate > 0.0),
-    );
-    // Out of range speeds are refused before sending.
-    type_into(&mut h, "Speed (°/s)", "70000");
-    assert!(
-        h.query_all_by_label_contains("out of range")
-            .next()
-            .is_some()
-    );
-    type_into(&mut h, "Holding power (mW, 0 = limit)", "1500");
-    h.get_by_label("Damping mode").click();
-    h.step();
-    step_until(&mut h, "damping", |_| {
-        b.servo(97).motion_at(Instant::now()) == Motion::Damping { power: 1500 }
-    });
 }
 
 #[test]

@@ -57,7 +57,8 @@ impl Default for ScanState {
     fn default() -> Self {
         Self {
             first: "0".into(),
-            last: "254".into(),
+            // The last id a servo can have: the broadcast id is none's.
+            last: (crate::protocol::servo::BROADCAST_ID - 1).to_string(),
             bauds: None,
             rows: Vec::new(),
             outcome: None,

@@ -9,6 +9,7 @@
 pub mod cli;
 pub mod gui;
 pub mod servo;
+pub mod servo_bench;
 
 use botbench::link::{Link, LinkEvent, LinkOptions, serial};
 use botbench::profile::{Profile, Registry};
@@ -88,6 +89,11 @@ pub fn lossy(seed: u64) -> Faults {
         seed,
         ..Faults::default()
     }
+}
+
+/// The window cleaner as it leaves the factory, served in lockstep ([`serve`]).
+pub fn served_window_cleaner() -> Served<WindowCleaner> {
+    serve(window_cleaner())
 }
 
 /// A simulated device served on a pseudo-terminal, and a handle to look inside it.

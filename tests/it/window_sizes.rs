@@ -1,0 +1,145 @@
+//! The window at the sizes the line PCs have (issue 14): at 1024 px and 1280 px the top bar, the
+//! solar plots, the self-test's columns and the Tuya console's bit fields stay whole and in the
+//! window.
+
+use botbench::i18n::Lang;
+use botbench::sim::SimOptions;
+use botbench::ui::PanelId;
+use eframe::egui;
+use egui_kittest::kittest::Queryable;
+
+use crate::support::gui::{H, app, app_mut, settings, step_until};
+use crate::support::{serve, served_window_cleaner as bench};
+
+fn sized(path: &str, size: egui::Vec2, lang: Lang) -> H {
+    let mut saved = settings(path, "window-cleaner", PanelId::Tuning, lang);
+    saved.port_mut().margin_ms = Some(100);
+    crate::support::gui::harness_sized(saved, size, |_| {})
+}
+
+#[test]
+fn the_top_bar_keeps_its_badge_whole_and_its_switch_in_place() {
+    let b = bench();
+    for (width, lang, answering, switch) in [
+        (1200.0, Lang::En, "● device answering", "中文"),
+        (1024.0, Lang::En, "● device answering", "中文"),
+        (1024.0, Lang::Zh, "● 设备应答中", "English"),
+    ] {
+        let mut h = sized(b.path(), egui::vec2(width, 600.0), lang);
+        h.run_steps(2);
+        let before = h.get_by_label(switch).rect();
+        step_until(&mut h, "answers", |a| {
+            a.state.link.answering() == botbench::ui::state::Answering::Yes
+        });
+        h.run_steps(2);
+        let badge = h.get_by_label(answering).rect();
+        let line = h.get_by_label(switch).rect().height();
+        assert!(
+            badge.height() <= line + 1.0,
+            "{width} {lang:?}: the badge is on one line ({badge:?})"
+        );
+        assert_eq!(
+            h.get_by_label(switch).rect(),
+            before,
+            "{width} {lang:?}: the language switch stays put"
+        );
+        assert!(before.right() <= width);
+        h.get_by_label(switch).click();
+        h.run_steps(3);
+        let other = if lang == Lang::En {
+            "English"
+        } else {
+            "中文"
+        };
+        assert_eq!(
+            h.get_by_label(other).rect().right(),
+            before.right(),
+            "{width}: switching language moves the switch not"
+        );
+    }
+}
+
+#[test]
+fn the_solar_plots_take_the_whole_width() {
+    let b =
+        serve(botbench::sim::solar_cleanbot::SolarCleanbot::new(&SimOptions::default()).unwrap());
+    let mut saved = settings(b.path(), "solar-cleanbot", PanelId::Solar, Lang::En);
+    saved.port_mut().margin_ms = Some(100);
+    let mut h = crate::support::gui::harness_sized(saved, egui::vec2(1280.0, 800.0), |_| {});
+    step_until(&mut h, "the plots drawn", |a| a.solar.plot_width > 0.0);
+    assert!(
+        app(&h).solar.plot_width > 1280.0 * 0.8,
+        "{}",
+        app(&h).solar.plot_width
+    );
+}
+
+#[test]
+fn at_1024_px_the_self_tests_measured_and_result_columns_stay_in_the_window() {
+    let b = bench();
+    let mut saved = settings(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
+    saved.port_mut().margin_ms = Some(100);
+    let mut h = crate::support::gui::harness_sized(saved, egui::vec2(1024.0, 600.0), |_| {});
+    h.run_steps(3);
+    h.get_by_label("Open plan").click();
+    h.run_steps(2);
+    let Some(plan) = app(&h).selftest.plan.clone() else {
+        panic!("the shipped plan opens: {:?}", app(&h).selftest.error)
+    };
+    // Every step measured, with a detail as long as a failing range check writes.
+    app_mut(&mut h).selftest.results = plan
+        .steps
+        .iter()
+        .map(|s| botbench::ops::selftest::StepResult {
+            name: s.name.clone(),
+            kind: "Range".into(),
+            pass: false,
+            detail: "batteryVoltage 10.2 V below 11.5 V; current 0.00 A within 0.00 A to 2.50 A"
+                .into(),
+        })
+        .collect();
+    h.run_steps(3);
+    for header in ["Measured", "Result"] {
+        let r = h.get_by_label(header).rect();
+        assert!(r.right() <= 1024.0, "{header} at {r:?}");
+    }
+    let fails: Vec<egui::Rect> = h.query_all_by_label("FAIL").map(|n| n.rect()).collect();
+    assert!(fails.len() >= plan.steps.len());
+    assert!(fails.iter().all(|r| r.right() <= 1024.0), "{fails:?}");
+}
+
+#[test]
+fn at_1024_px_a_bit_field_takes_its_rows_height_and_draws_over_no_other_row() {
+    use egui_kittest::kittest::By;
+    let b = serve(botbench::sim::tuya_mcu::TuyaMcu::new(
+        botbench::sim::tuya_mcu::TuyaConfig {
+            baud: Some(115_200),
+            ..Default::default()
+        },
+    ));
+    let mut saved = settings(b.path(), "tuya-vacuum", PanelId::TuyaConsole, Lang::En);
+    saved.port_mut().baud = Some(115_200);
+    let mut h = crate::support::gui::harness_sized(saved, egui::vec2(1024.0, 600.0), |_| {});
+    crate::gui_tuya::handshake(&mut h);
+    crate::gui_tuya::tab(&mut h, "Data points");
+    step_until(&mut h, "DP 18 reported", |a| {
+        crate::gui_tuya::reported(a, 18).is_some()
+    });
+    h.run_steps(3);
+    let label = |h: &H, text: &str| {
+        h.get(By::new().role(egui::accesskit::Role::Label).value(text))
+            .rect()
+    };
+    let next_row = label(&h, "19 Map parameters").top();
+    let profile = app(&h).state.device.profile.clone();
+    let fault = profile.data_points.iter().find(|d| d.id == 18).unwrap();
+    assert!(!fault.field.bits.is_empty());
+    for bit in &fault.field.bits {
+        let r = label(&h, &bit.name.en);
+        assert!(
+            r.bottom() <= next_row,
+            "{} at {r:?}, DP 19 at {next_row}",
+            bit.name.en
+        );
+    }
+}
