@@ -7,8 +7,8 @@ use super::jobs::{self, JobOutput};
 use super::settings::{self, FileKind, Settings};
 use super::state::{AppState, Notice, Target};
 use super::{
-    Action, actions, connection, demo_hint, device, files, monitor, presets, repaint, selftest,
-    servo_bench, solar, status_bar, stop, telemetry, tour, tuning, tuya_console,
+    Action, actions, connection, demo_hint, device, files, layout, monitor, presets, repaint,
+    selftest, servo_bench, solar, status_bar, stop, telemetry, tour, tuning, tuya_console,
 };
 use crate::i18n::Lang;
 use crate::link::LinkCommand;
@@ -45,6 +45,20 @@ pub enum PanelId {
 }
 
 impl PanelId {
+    /// Every panel.
+    pub const ALL: [PanelId; 10] = [
+        PanelId::Device,
+        PanelId::Tuning,
+        PanelId::Telemetry,
+        PanelId::Presets,
+        PanelId::Actions,
+        PanelId::Solar,
+        PanelId::SelfTest,
+        PanelId::ServoBench,
+        PanelId::TuyaConsole,
+        PanelId::Monitor,
+    ];
+
     /// The panel a profile names.
     pub fn of(kind: PanelKind) -> PanelId {
         match kind {
@@ -276,27 +290,33 @@ impl App {
             actions.extend(status_bar::show(ui, lang, state));
         });
         let panels = self.panels();
-        egui::Panel::left("nav").resizable(false).show(ui, |ui| {
-            ui.add_space(4.0);
-            for &panel in &panels {
-                if ui
-                    .selectable_label(settings.panel == panel, panel.name(lang))
-                    .clicked()
-                {
-                    actions.push(Action::ShowPanel(panel));
+        egui::Panel::left("nav")
+            .resizable(false)
+            .exact_size(nav_width(ui))
+            .show(ui, |ui| {
+                ui.add_space(4.0);
+                ui.scope(|ui| {
+                    layout::keep_words_whole(ui);
+                    for &panel in &panels {
+                        if ui
+                            .selectable_label(settings.panel == panel, panel.name(lang))
+                            .clicked()
+                        {
+                            actions.push(Action::ShowPanel(panel));
+                        }
+                    }
+                });
+                // STOP is on every panel of a robot whose profile names one (the solar panel
+                // shows its own at the top), with what the robot may be doing.
+                if !state.device.profile.stop.is_empty() {
+                    ui.separator();
+                    if settings.panel != PanelId::Solar {
+                        actions.extend(self.stop.button(ui, lang, state));
+                        self.stop.status(ui, lang);
+                    }
+                    stop::running(ui, lang, state);
                 }
-            }
-            // STOP is on every panel of a robot whose profile names one (the solar panel
-            // shows its own at the top), with what the robot may be doing.
-            if !state.device.profile.stop.is_empty() {
-                ui.separator();
-                if settings.panel != PanelId::Solar {
-                    actions.extend(self.stop.button(ui, lang, state));
-                    self.stop.status(ui, lang);
-                }
-                stop::running(ui, lang, state);
-            }
-        });
+            });
         egui::CentralPanel::default().show(ui, |ui| match settings.panel {
             PanelId::Tuning => actions.extend(self.tuning.show(ui, lang, state)),
             PanelId::Telemetry => actions.extend(self.telemetry.show(ui, settings, state)),
@@ -471,6 +491,19 @@ impl App {
         };
         self.state.send(LinkCommand::SetPolls(polls));
     }
+}
+
+/// The navigation's width, points: its longest panel name in either language on one line (so
+/// that switching the language moves nothing), or the STOP button, whichever is wider.
+fn nav_width(ui: &egui::Ui) -> f32 {
+    let names = PanelId::ALL
+        .iter()
+        .flat_map(|p| Lang::ALL.map(|l| p.name(l)));
+    let text = layout::text_width(ui, &layout::body_font(ui), names);
+    let button = text + 2.0 * ui.spacing().button_padding.x;
+    // The panel's frame: its inner margin on both sides, and a little air.
+    let margin = 2.0 * 8.0 + 4.0;
+    button.max(stop::BUTTON_WIDTH) + margin
 }
 
 /// The baud rate and margin to open `profile` with: its saved ones, or its usual rate and the

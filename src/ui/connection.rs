@@ -100,6 +100,7 @@ impl ConnectionBar {
             let ltr = egui::Layout::left_to_right(egui::Align::Center).with_main_wrap(true);
             let rest = egui::vec2(ui.available_width(), row.y);
             ui.allocate_ui_with_layout(rest, ltr, |ui| {
+                super::layout::keep_words_whole(ui);
                 actions.extend(self.settings_row(ui, saved, rt))
             });
         });

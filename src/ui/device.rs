@@ -107,7 +107,7 @@ impl DevicePanel {
             self.asked = true;
             actions.push(read_job(&profile));
         }
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             if ui
                 .add_enabled(ready, egui::Button::new(lang.tr("Ping", "通讯检测")))
                 .clicked()

@@ -12,6 +12,7 @@ mod device;
 pub mod files;
 mod inputs;
 pub mod jobs;
+pub mod layout;
 mod monitor;
 mod plot;
 mod presets;
@@ -27,6 +28,7 @@ mod telemetry;
 pub mod tour;
 mod tuning;
 mod tuya_console;
+pub mod views;
 
 pub use app::{App, PanelId};
 pub use jobs::Job;
@@ -34,6 +36,7 @@ pub use settings::Settings;
 pub use solar::{Outcome as SolarOutcome, Trip as SolarTrip};
 pub use state::{AppState, Notice, Target};
 pub use tuya_console::FirmwareFileError;
+pub use views::View;
 
 use crate::i18n::Lang;
 

@@ -121,8 +121,8 @@ impl MonitorPanel {
                     .collect(),
             ),
         };
-        ui.horizontal_wrapped(|ui| capture_bar(ui, lang, rt, &mut actions));
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| capture_bar(ui, lang, rt, &mut actions));
+        crate::ui::layout::toolbar(ui, |ui| {
             let label = ui.label(lang.tr("Filter", "筛选"));
             ui.add(
                 egui::TextEdit::singleline(&mut self.filter)
@@ -166,7 +166,7 @@ impl MonitorPanel {
                 }
             ));
         });
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
                 lang,

@@ -125,7 +125,7 @@ pub fn axes<'a>(plot: Plot<'a>, lang: Lang, t0: SystemTime, legend: &Legend) -> 
 /// The fields' names in their colours, on a line above the plot (a legend inside it would
 /// cover the newest data).
 pub fn key(ui: &mut egui::Ui, legend: &Legend) {
-    ui.horizontal_wrapped(|ui| {
+    crate::ui::layout::toolbar(ui, |ui| {
         for (i, name) in legend.names.iter().enumerate() {
             ui.colored_label(color(i), format!("— {name}"));
         }

@@ -108,7 +108,7 @@ impl PresetsPanel {
         let profile = &rt.device.profile;
         let busy = rt.job_progress().is_some();
         let ready = rt.connected() && !busy;
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
                 lang,
@@ -127,7 +127,7 @@ impl PresetsPanel {
                 files::FileEvent::None => {}
             }
         });
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let label = ui.label(lang.tr("Note", "备注"));
             ui.add(egui::TextEdit::singleline(&mut self.note).desired_width(240.0))
                 .labelled_by(label.id);

@@ -276,7 +276,7 @@ impl SelfTestPanel {
             // The job ended without a report (it could not start).
             self.running = false;
         }
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
                 lang,
@@ -300,7 +300,7 @@ impl SelfTestPanel {
                 files::FileEvent::None => {}
             }
         });
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let label = ui.label(lang.tr("Log file (JSON lines)", "日志文件(JSON 行)"));
             ui.add_enabled(
                 !self.running,
@@ -326,7 +326,7 @@ impl SelfTestPanel {
             return actions;
         };
         let (name, steps) = (plan.name.clone(), plan.steps.len());
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             ui.strong(name);
             ui.weak(format!("{steps} {}", lang.tr("steps", "个步骤")));
             let can_run = rt.connected() && !busy && !self.running;

@@ -89,7 +89,7 @@ impl TelemetryPanel {
     pub fn show(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
         let lang = saved.lang;
         let mut actions = Vec::new();
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let label = ui.label(lang.tr("Poll rate", "采样率"));
             egui::ComboBox::from_id_salt("rate")
                 .selected_text(rate_label(saved.poll_hz, lang))
@@ -131,7 +131,7 @@ impl TelemetryPanel {
                 .labelled_by(label.id);
             ui.checkbox(&mut self.follow, lang.tr("Follow", "跟随"));
         });
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
                 lang,

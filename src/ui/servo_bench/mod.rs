@@ -54,7 +54,8 @@ pub enum Tab {
 }
 
 impl Tab {
-    const ALL: [Tab; 5] = [
+    /// Every tab, in the order shown.
+    pub(crate) const ALL: [Tab; 5] = [
         Tab::Scan,
         Tab::Params,
         Tab::Setup,

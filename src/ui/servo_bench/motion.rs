@@ -216,7 +216,7 @@ impl MotionState {
         let angle = raw(rt, cmd::ROTATE, "angle", &self.angle_text);
         let interval = raw(rt, cmd::ROTATE, "interval", &self.interval);
         let power = raw(rt, cmd::ROTATE, "power", &self.power);
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let l = ui.label(lang.tr("Target angle", "目标角度"));
             let slider = ui
                 .add(
@@ -319,7 +319,7 @@ impl MotionState {
         let speed = raw(rt, cmd::SPIN, "speed", &self.speed);
         let needs_value = matches!(self.wheel, WheelMode::Turns | WheelMode::Timed);
         let value = raw(rt, cmd::SPIN, "value", &self.value);
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let l = ui.label(lang.tr("Method", "方式"));
             egui::ComboBox::from_id_salt("servo-wheel")
                 .selected_text(self.wheel.name(lang))
@@ -442,7 +442,7 @@ impl MotionState {
                 let Some(mon) = rt.device.profile.command_by_id(cmd::MONITOR) else {
                     return;
                 };
-                ui.horizontal_wrapped(|ui| {
+                crate::ui::layout::toolbar(ui, |ui| {
                     for f in mon.reply.iter().skip(1) {
                         if let Some(v) = values.get(&f.ident) {
                             let shown = if f.ident == "status" {

@@ -10,7 +10,7 @@ use eframe::egui;
 
 impl ParamsState {
     pub(super) fn preset_row(&mut self, ui: &mut egui::Ui, lang: Lang, profile: &Profile) {
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let l = ui.label(lang.tr("Parameter preset", "参数预设"));
             ui.add(egui::TextEdit::singleline(&mut self.preset_path).desired_width(260.0))
                 .labelled_by(l.id);

@@ -212,7 +212,7 @@ impl ParamsState {
             self.read_on_show = Some(servo);
             actions.push(read_all_job(rt, servo));
         }
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             if ui
                 .add_enabled(can, egui::Button::new(lang.tr("Read all", "全部读取")))
                 .on_hover_text(lang.tr(

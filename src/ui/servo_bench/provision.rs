@@ -68,7 +68,7 @@ impl ProvisionPanel {
         busy: bool,
         actions: &mut Vec<Action>,
     ) {
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let l = ui.label(lang.tr("Plan", "计划文件"));
             ui.add(egui::TextEdit::singleline(&mut self.plan_path).desired_width(320.0))
                 .labelled_by(l.id);
@@ -91,7 +91,7 @@ impl ProvisionPanel {
         if let Some(e) = &self.plan_error {
             error_label(ui, e.to_string());
         }
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let l = ui.label(lang.tr("CSV log", "CSV日志"));
             ui.add(egui::TextEdit::singleline(&mut self.log_path).desired_width(320.0))
                 .labelled_by(l.id);

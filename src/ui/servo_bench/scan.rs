@@ -227,7 +227,7 @@ impl ScanState {
                 error_label(ui, e.text(lang));
             }
         });
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             ui.label(lang.tr("Baud rates:", "波特率:"));
             for b in &all {
                 let mut on = bauds.contains(b);

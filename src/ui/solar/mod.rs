@@ -69,7 +69,7 @@ impl SolarPanel {
         stop: &mut StopControl,
     ) -> Vec<Action> {
         let mut actions = Vec::new();
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             actions.extend(stop.button(ui, lang, rt));
             stop.status(ui, lang);
             self.trip_status(ui, lang, rt);
@@ -111,7 +111,7 @@ impl SolarPanel {
     }
 
     fn deadman(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let mut on = self.control.deadman;
             if ui
                 .checkbox(&mut on, lang.tr("Dead-man", "失能保护"))
@@ -265,13 +265,13 @@ impl SolarPanel {
             .iter()
             .filter(|c| c.kind == CommandKind::Action && !c.request.is_empty());
         for cmd in cmds {
-            ui.horizontal_wrapped(|ui| {
+            crate::ui::layout::toolbar(ui, |ui| {
                 for f in &cmd.request {
                     self.input(ui, lang, cmd, f);
                 }
             });
             let inputs = command_inputs(cmd, &self.inputs);
-            ui.horizontal_wrapped(|ui| {
+            crate::ui::layout::toolbar(ui, |ui| {
                 let resp = ui.add_enabled(
                     rt.connected() && inputs.is_ok(),
                     egui::Button::new(lang.tr(&cmd.name.en, &cmd.name.zh)),

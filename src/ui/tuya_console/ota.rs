@@ -142,7 +142,7 @@ impl OtaView {
             ),
             lang.tr("bytes.", "字节。")
         ));
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let label = ui.label(lang.tr("Firmware file", "固件文件"));
             let resp = ui
                 .add_enabled(
@@ -196,7 +196,7 @@ impl OtaView {
                     .text(format!("{} / {} B", p.done, p.total))
                     .desired_width(420.0),
             );
-            ui.horizontal_wrapped(|ui| {
+            crate::ui::layout::toolbar(ui, |ui| {
                 ui.label(format!(
                     "{:.0} B/s, {} {}",
                     p.rate,

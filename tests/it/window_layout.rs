@@ -1,0 +1,153 @@
+//! The window at 1024×600, as a technician reads it: no label parts a word over two lines (in
+//! Chinese, where any two characters may be parted, nor in English), the navigation and the
+//! status line stay one line each, and every view of the four demo devices is walked.
+
+use botbench::i18n::Lang;
+use botbench::sim::SimKind;
+use botbench::ui::layout::{one_line, split_words};
+use botbench::ui::state::Answering;
+use botbench::ui::{App, PanelId, Settings, Target};
+use eframe::egui;
+use egui_kittest::Harness;
+
+use crate::support::gui::{H, app, app_mut, harness_sized, step_until};
+
+const SMALL: egui::Vec2 = egui::vec2(1024.0, 600.0);
+/// The window's least size (`ui::run`'s `min_inner_size`).
+const LEAST: egui::Vec2 = egui::vec2(800.0, 500.0);
+
+/// Every text the last frame drew: its text, where, and how many rows it took.
+fn texts(h: &H) -> Vec<(String, egui::Rect, usize)> {
+    fn visit(shape: &egui::Shape, out: &mut Vec<(String, egui::Rect, usize)>) {
+        match shape {
+            egui::Shape::Text(t) => out.push((
+                t.galley.text().to_string(),
+                t.galley.rect.translate(t.pos.to_vec2()),
+                t.galley.rows.len(),
+            )),
+            egui::Shape::Vec(v) => v.iter().for_each(|s| visit(s, out)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    for c in &h.output().shapes {
+        visit(&c.shape, &mut out);
+    }
+    out
+}
+
+#[test]
+fn the_check_finds_a_label_split_over_two_lines_and_a_one_line_label_passes() {
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(200.0, 200.0))
+        .build_ui(|ui| {
+            botbench::i18n::install_cjk_font(ui.ctx());
+            ui.set_max_width(50.0);
+            ui.label("光伏清扫机器人");
+            ui.label("Configuration");
+        });
+    h.run_steps(2);
+    let split = split_words(&h.output().shapes);
+    assert_eq!(split, ["光伏清扫机器人", "Configuration"], "{split:?}");
+
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(200.0, 200.0))
+        .build_ui(|ui| {
+            botbench::i18n::install_cjk_font(ui.ctx());
+            ui.set_max_width(50.0);
+            one_line(ui, "光伏清扫机器人");
+            // A sentence may wrap between any two characters.
+            ui.label("失能保护开启时,若在间隔内无人确认,发送停止。");
+        });
+    h.run_steps(2);
+    assert!(split_words(&h.output().shapes).is_empty());
+}
+
+/// The app on the built-in demo `kind` at `size` in `lang`, stepped until the device answers
+/// and is identified (so that the navigation lists its panels).
+fn demo(kind: SimKind, lang: Lang, size: egui::Vec2) -> H {
+    let mut saved = Settings {
+        target: Target::Demo(kind.name().to_string()),
+        profile: kind.profile_id().to_string(),
+        panel: PanelId::Monitor,
+        lang,
+        ..Settings::default()
+    };
+    saved.port_mut().baud = Some(kind.default_baud());
+    let mut h = harness_sized(saved, size, |_| {});
+    step_until(&mut h, "the device to answer", move |a| ready(kind, a));
+    h
+}
+
+fn ready(kind: SimKind, a: &App) -> bool {
+    match kind {
+        SimKind::ServoBus => a.state.connected(),
+        SimKind::TuyaVacuum => a.state.device.tuya.done_at.is_some(),
+        _ => a.state.link.answering() == Answering::Yes && a.state.device.info.is_some(),
+    }
+}
+
+#[test]
+fn at_1024_and_800_px_no_view_of_a_demo_device_parts_a_word_in_either_language() {
+    let mut split = Vec::new();
+    for kind in SimKind::ALL {
+        let mut h = demo(kind, Lang::Zh, SMALL);
+        for (size, lang) in [SMALL, LEAST]
+            .into_iter()
+            .flat_map(|s| Lang::ALL.map(|l| (s, l)))
+        {
+            h.set_size(size);
+            app_mut(&mut h).settings.lang = lang;
+            for view in app(&h).views() {
+                app_mut(&mut h).show_view(&view);
+                // egui lays a new panel out over two passes.
+                h.run_steps(3);
+                for text in split_words(&h.output().shapes) {
+                    split.push(format!(
+                        "{} {} {}×{} {lang:?}: {text:?}",
+                        kind.name(),
+                        view.name,
+                        size.x,
+                        size.y
+                    ));
+                }
+            }
+        }
+    }
+    assert!(
+        split.is_empty(),
+        "words split over two lines:\n{}",
+        split.join("\n")
+    );
+}
+
+#[test]
+fn at_1024_px_in_chinese_the_navigation_and_the_status_line_keep_one_line() {
+    for kind in [SimKind::TuyaVacuum, SimKind::SolarCleanbot] {
+        let mut h = demo(kind, Lang::Zh, SMALL);
+        h.run_steps(2);
+        let drawn = texts(&h);
+        let panels = app(&h).panels();
+        for panel in panels {
+            let name = panel.name(Lang::Zh);
+            let (_, rect, rows) = drawn
+                .iter()
+                .find(|(t, ..)| t == name)
+                .unwrap_or_else(|| panic!("{name} is in the navigation"));
+            assert_eq!(*rows, 1, "{}: {name} on one line ({rect:?})", kind.name());
+        }
+        // The status line: the bottom row of the window, every text on it whole and inside.
+        let line = SMALL.y - 30.0;
+        let status: Vec<_> = drawn.iter().filter(|(_, r, _)| r.top() > line).collect();
+        assert!(status.len() >= 3, "{}: {status:?}", kind.name());
+        for (text, rect, rows) in status {
+            assert_eq!(*rows, 1, "{}: {text} on one line", kind.name());
+            assert!(
+                rect.right() <= SMALL.x + 0.5,
+                "{}: {text} ends at {} past the window",
+                kind.name(),
+                rect.right()
+            );
+        }
+    }
+}
