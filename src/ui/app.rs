@@ -131,6 +131,9 @@ impl App {
     /// An app with `settings`, connected to its target.
     pub fn new(ctx: &egui::Context, settings: Settings) -> Result<Self, ProfileError> {
         crate::i18n::install_cjk_font(ctx);
+        // Scroll bars shown solid wherever a panel has more than its room (egui's floating
+        // ones show only under the pointer: a technician does not see that more is below).
+        ctx.all_styles_mut(|s| s.spacing.scroll = egui::style::ScrollStyle::solid());
         let state = AppState::new(ctx, &settings.profile)?;
         let (baud, margin_ms) = port_for(&settings, &state, &settings.profile);
         let mut app = Self {

@@ -141,68 +141,74 @@ impl DevicePanel {
             }
         });
         ui.separator();
-        egui::Grid::new("device-core")
-            .num_columns(2)
-            .striped(true)
+        // Scrolls where the window is too low for it (800×500).
+        egui::ScrollArea::vertical()
+            .auto_shrink(false)
             .show(ui, |ui| {
-                ui.label(lang.tr("Ping round trip", "通讯往返时间"));
-                match &self.ping {
-                    Some(Ok(d)) => {
-                        ui.monospace(format!("{:.1} ms", d.as_secs_f64() * 1e3));
-                    }
-                    Some(Err(e)) => {
-                        ui.colored_label(egui::Color32::RED, e.to_string());
-                    }
-                    None => {
-                        ui.weak(lang.tr("not pinged yet", "尚未检测"));
-                    }
-                }
-                ui.end_row();
-                ui.label(lang.tr("Power state (raw)", "电源状态(原始数据)"))
+                egui::Grid::new("device-core")
+                    .num_columns(2)
+                    .striped(true)
+                    .show(ui, |ui| {
+                        ui.label(lang.tr("Ping round trip", "通讯往返时间"));
+                        match &self.ping {
+                            Some(Ok(d)) => {
+                                ui.monospace(format!("{:.1} ms", d.as_secs_f64() * 1e3));
+                            }
+                            Some(Err(e)) => {
+                                ui.colored_label(egui::Color32::RED, e.to_string());
+                            }
+                            None => {
+                                ui.weak(lang.tr("not pinged yet", "尚未检测"));
+                            }
+                        }
+                        ui.end_row();
+                        ui.label(lang.tr("Power state (raw)", "电源状态(原始数据)"))
                     .on_hover_text(lang.tr(
                         "No layout is published for this answer: its bytes are shown as sent.",
                         "此应答的格式未公开:按原始字节显示。",
                     ));
-                match &self.power {
-                    Some(Ok(b)) if b.is_empty() => {
-                        ui.monospace(lang.tr("(empty answer)", "(空应答)"));
-                    }
-                    Some(Ok(b)) => {
-                        ui.monospace(hex::format(b));
-                    }
+                        match &self.power {
+                            Some(Ok(b)) if b.is_empty() => {
+                                ui.monospace(lang.tr("(empty answer)", "(空应答)"));
+                            }
+                            Some(Ok(b)) => {
+                                ui.monospace(hex::format(b));
+                            }
+                            Some(Err(e)) => {
+                                ui.colored_label(egui::Color32::RED, e.to_string());
+                            }
+                            None => {
+                                ui.weak(lang.tr("not read yet", "尚未读取"));
+                            }
+                        }
+                        ui.end_row();
+                    });
+                ui.separator();
+                ui.strong(lang.tr("Version", "版本信息"));
+                // This panel's own read wins; until then, what the session learned on connect.
+                let info = self.version.as_ref().or(rt.device.info.as_ref());
+                match info {
+                    Some(Ok(info)) => self.show_info(ui, lang, &profile, info),
                     Some(Err(e)) => {
                         ui.colored_label(egui::Color32::RED, e.to_string());
+                        super::tuning::unidentified_warning(ui, lang, rt);
                     }
                     None => {
-                        ui.weak(lang.tr("not read yet", "尚未读取"));
+                        ui.weak(lang.tr(
+                            "the device has not answered CMD_VERSION yet",
+                            "设备尚未应答版本查询",
+                        ));
                     }
                 }
-                ui.end_row();
+                if let Some(at) = self.at {
+                    ui.weak(format!(
+                        "{} {:.0} {}",
+                        lang.tr("last answer", "上次应答"),
+                        at.elapsed().as_secs_f64(),
+                        lang.tr("s ago", "秒前")
+                    ));
+                }
             });
-        ui.separator();
-        ui.strong(lang.tr("Version", "版本信息"));
-        // This panel's own read wins; until then, what the session learned on connect.
-        let info = self.version.as_ref().or(rt.device.info.as_ref());
-        match info {
-            Some(Ok(info)) => self.show_info(ui, lang, &profile, info),
-            Some(Err(e)) => {
-                ui.colored_label(egui::Color32::RED, e.to_string());
-                super::tuning::unidentified_warning(ui, lang, rt);
-            }
-            None => {
-                ui.weak(lang.tr(
-                    "the device has not answered CMD_VERSION yet",
-                    "设备尚未应答版本查询",
-                ));
-            }
-        }
-        if let Some(at) = self.at {
-            ui.weak(format!(
-                "{} {:.0} s",
-                lang.tr("last answer", "上次应答"),
-                at.elapsed().as_secs_f64()
-            ));
-        }
         actions
     }
 

@@ -35,6 +35,7 @@ pub use jobs::Job;
 pub use settings::Settings;
 pub use solar::{Outcome as SolarOutcome, Trip as SolarTrip};
 pub use state::{AppState, Notice, Target};
+pub use telemetry::MIN_PLOT_HEIGHT;
 pub use tuya_console::FirmwareFileError;
 pub use views::View;
 

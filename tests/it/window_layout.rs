@@ -151,3 +151,45 @@ fn at_1024_px_in_chinese_the_navigation_and_the_status_line_keep_one_line() {
         }
     }
 }
+
+#[test]
+fn at_1024_px_every_solar_plot_keeps_its_height_and_scrolls_into_view() {
+    let mut h = demo(SimKind::SolarCleanbot, Lang::Zh, SMALL);
+    app_mut(&mut h).settings.panel = PanelId::Telemetry;
+    step_until(&mut h, "every plot drawn", |a| {
+        a.telemetry.shown.len() == a.state.device.profile.plots.len()
+    });
+    h.run_steps(2);
+    let inside = |a: &App| {
+        let last = a.telemetry.shown.last().expect("a plot").rect;
+        a.telemetry.plots_view.expand(1.0).contains_rect(last)
+    };
+    let a = app(&h);
+    assert!(a.telemetry.shown.len() >= 3);
+    for s in &a.telemetry.shown {
+        assert!(
+            s.rect.height() >= botbench::ui::MIN_PLOT_HEIGHT - 1.0,
+            "{} is {} high",
+            s.id,
+            s.rect.height()
+        );
+    }
+    assert!(
+        !inside(a),
+        "at 600 points the last plot starts below the view"
+    );
+    // The mouse wheel over the plots brings the last one into view.
+    let over = a.telemetry.plots_view.center();
+    h.hover_at(over);
+    for _ in 0..4 {
+        h.event(egui::Event::MouseWheel {
+            unit: egui::MouseWheelUnit::Point,
+            delta: egui::vec2(0.0, -400.0),
+            phase: egui::TouchPhase::Move,
+            source: egui::MouseWheelSource::Unknown,
+            modifiers: egui::Modifiers::NONE,
+        });
+        h.step();
+    }
+    step_until(&mut h, "the last plot in view", inside);
+}
