@@ -11,8 +11,9 @@ use super::{
     selftest, servo_bench, solar, status_bar, stop, telemetry, tour, tuning, tuya_console,
 };
 use crate::i18n::Lang;
+use crate::i18n::Zh;
 use crate::link::LinkCommand;
-use crate::profile::{PanelKind, ProfileError};
+use crate::profile::{PanelKind, ProfileError, Text};
 use eframe::egui;
 use serde::{Deserialize, Serialize};
 
@@ -194,12 +195,10 @@ impl App {
         if back {
             self.state.device.forget_unit();
             self.state.send(LinkCommand::Identify);
-            self.state.notify(
-                Notice::info(
-                    "the device answers again: identified and read again (it may be another unit)",
-                )
-                .zh("设备重新应答:已重新识别并读取(可能是另一台设备)"),
-            );
+            self.state.notify(Notice::info(Text::new(
+                "the device answers again: identified and read again (it may be another unit)",
+                "设备重新应答:已重新识别并读取(可能是另一台设备)",
+            )));
         } else if fresh {
             self.state.device.unit += 1;
         }
@@ -376,7 +375,8 @@ impl App {
             } => self.connect(target, baud, profile, margin_ms),
             Action::Disconnect => {
                 self.state.disconnect();
-                self.state.notify(Notice::info("disconnected").zh("已断开"));
+                self.state
+                    .notify(Notice::info(Text::new("disconnected", "已断开")));
             }
             Action::SetLatencyTimer { port, ms } => {
                 match crate::link::adapter::set_latency_timer(&port, ms) {
@@ -388,11 +388,15 @@ impl App {
                             self.connect(Target::Port(port.clone()), baud, profile, margin_ms);
                         }
                         self.state.link.refresh_ports_now();
-                        self.state.notify(Notice::info(format!(
-                            "{port}: latency timer set to {now} ms"
+                        self.state.notify(Notice::info(Text::new(
+                            format!("{port}: latency timer set to {now} ms"),
+                            format!("{port}:延迟定时器已设为 {now} ms"),
                         )));
                     }
-                    Err(e) => self.state.notify(Notice::error(e)),
+                    Err(e) => self.state.notify(Notice::error(Text::new(
+                        format!("{port}: latency timer not set: {e}"),
+                        format!("{port}:延迟定时器未设置:{e}"),
+                    ))),
                 }
             }
             Action::StartJob(job) => self.state.start_job(job),
@@ -465,8 +469,9 @@ impl App {
     fn connect(&mut self, target: Target, baud: u32, profile: String, margin_ms: Option<u64>) {
         self.state.link.options.margin = margin_ms.map(std::time::Duration::from_millis);
         if let Err(e) = self.state.connect(target.clone(), baud, &profile) {
-            self.state
-                .notify(Notice::error(format!("cannot connect: {e}")).zh(format!("无法连接:{e}")));
+            self.state.notify(Notice::error(
+                Text::new("cannot connect", "无法连接").then(": ", &e.said()),
+            ));
             return;
         }
         self.settings.target = target;

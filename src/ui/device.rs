@@ -4,11 +4,11 @@
 use super::Action;
 use super::jobs::{Job, JobOutput};
 use super::state::AppState;
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::link::{DeviceInfo, LinkCommand};
 use crate::ops::OpError;
 use crate::ops::device as ops;
-use crate::profile::Profile;
+use crate::profile::{Profile, Text};
 use crate::protocol::{hex, msp};
 use eframe::egui;
 use std::time::{Duration, Instant};
@@ -45,18 +45,24 @@ pub enum Output {
 /// Reads CMD_VERSION, CMD_BUILD_INFO and the power state.
 fn read_job(profile: &std::sync::Arc<Profile>) -> Action {
     let p = profile.clone();
-    Action::StartJob(Job::new("version", move |client, cancel, sink| {
-        let v = ops::identify(client);
-        sink.send(JobOutput::Device(Output::Version(v.clone())));
-        if cancel.is_cancelled() {
-            return Err(OpError::Cancelled.into());
-        }
-        let pw = ops::power_state(client, &p);
-        sink.send(JobOutput::Device(Output::Power(pw.clone())));
-        v?;
-        pw?;
-        Ok("version and power state read".into())
-    }))
+    Action::StartJob(Job::new(
+        Text::new("version", "版本"),
+        move |client, cancel, sink| {
+            let v = ops::identify(client);
+            sink.send(JobOutput::Device(Output::Version(v.clone())));
+            if cancel.is_cancelled() {
+                return Err(OpError::Cancelled.into());
+            }
+            let pw = ops::power_state(client, &p);
+            sink.send(JobOutput::Device(Output::Power(pw.clone())));
+            v?;
+            pw?;
+            Ok(Text::new(
+                "version and power state read",
+                "已读取版本与电源状态",
+            ))
+        },
+    ))
 }
 
 /// The capability bits by name, from the profile's CMD_VERSION `flags` field: (bit, English,
@@ -114,12 +120,16 @@ impl DevicePanel {
             {
                 let p = profile.clone();
                 actions.push(Action::StartJob(Job::new(
-                    "ping",
+                    Text::new("ping", "通讯检测"),
                     move |client, _cancel, sink| {
                         let r = ops::ping(client, &p).map(|ping| ping.rtt);
                         sink.send(JobOutput::Device(Output::Ping(r.clone())));
                         let rtt = r?;
-                        Ok(format!("answered in {:.1} ms", rtt.as_secs_f64() * 1e3))
+                        let ms = rtt.as_secs_f64() * 1e3;
+                        Ok(Text::new(
+                            format!("answered in {ms:.1} ms"),
+                            format!("{ms:.1} ms 内应答"),
+                        ))
                     },
                 )));
             }
@@ -155,7 +165,7 @@ impl DevicePanel {
                                 ui.monospace(format!("{:.1} ms", d.as_secs_f64() * 1e3));
                             }
                             Some(Err(e)) => {
-                                ui.colored_label(egui::Color32::RED, e.to_string());
+                                ui.colored_label(egui::Color32::RED, e.in_lang(lang));
                             }
                             None => {
                                 ui.weak(lang.tr("not pinged yet", "尚未检测"));
@@ -175,7 +185,7 @@ impl DevicePanel {
                                 ui.monospace(hex::format(b));
                             }
                             Some(Err(e)) => {
-                                ui.colored_label(egui::Color32::RED, e.to_string());
+                                ui.colored_label(egui::Color32::RED, e.in_lang(lang));
                             }
                             None => {
                                 ui.weak(lang.tr("not read yet", "尚未读取"));
@@ -190,7 +200,7 @@ impl DevicePanel {
                 match info {
                     Some(Ok(info)) => self.show_info(ui, lang, &profile, info),
                     Some(Err(e)) => {
-                        ui.colored_label(egui::Color32::RED, e.to_string());
+                        ui.colored_label(egui::Color32::RED, e.in_lang(lang));
                         super::tuning::unidentified_warning(ui, lang, rt);
                     }
                     None => {

@@ -10,7 +10,7 @@ mod connection;
 pub mod demo_hint;
 mod device;
 pub mod files;
-mod inputs;
+pub(crate) mod inputs;
 pub mod jobs;
 pub mod layout;
 mod monitor;
@@ -26,7 +26,7 @@ mod status_bar;
 pub mod stop;
 mod telemetry;
 pub mod tour;
-mod tuning;
+pub(crate) mod tuning;
 mod tuya_console;
 pub mod views;
 
@@ -114,6 +114,15 @@ pub enum UiError {
     /// eframe could not open the window.
     #[error("{0}")]
     Window(String),
+}
+
+/// The status line's message when a file dialog could not open ([`files::FileEvent::NoDialog`]
+/// says why, in English).
+pub(crate) fn no_dialog(why: String) -> crate::profile::Text {
+    crate::profile::Text::new(
+        why,
+        "文件对话框无法打开(没有可用的 xdg 桌面门户或 zenity):请在框中输入路径",
+    )
 }
 
 /// A file dialog for RON documents (presets, plans) that starts in the shipped examples' folder

@@ -8,12 +8,12 @@
 //! follows again from the bottom or with "Newest".
 
 use super::Action;
-use super::files;
 use super::settings::FileKind;
 use super::state::{AppState, Notice};
-use crate::i18n::Lang;
+use super::{files, no_dialog};
+use crate::i18n::{Lang, Zh};
 use crate::link::LogEntry;
-use crate::profile::Profile;
+use crate::profile::{Profile, Text};
 use crate::protocol::{Direction, hex};
 use eframe::egui;
 
@@ -145,9 +145,9 @@ impl MonitorPanel {
             if ui.button(lang.tr("Copy", "复制")).clicked() {
                 let shown: Vec<String> = rows.iter().map(|(_, e)| line(&profile, e)).collect();
                 ui.ctx().copy_text(shown.join("\n"));
-                actions.push(Action::Notify(Notice::info(format!(
-                    "{} line(s) copied",
-                    shown.len()
+                actions.push(Action::Notify(Notice::info(Text::new(
+                    format!("{} line(s) copied", shown.len()),
+                    format!("已复制 {} 行", shown.len()),
                 ))));
             }
             ui.weak(format!(
@@ -179,7 +179,9 @@ impl MonitorPanel {
             );
             let save = ui.button(lang.tr("Save", "保存")).clicked();
             match event {
-                files::FileEvent::NoDialog(why) => actions.push(Action::Notify(Notice::error(why))),
+                files::FileEvent::NoDialog(why) => {
+                    actions.push(Action::Notify(Notice::error(no_dialog(why))))
+                }
                 files::FileEvent::Chosen(_) => actions.extend(self.save(&profile, &rows)),
                 files::FileEvent::None if save => actions.extend(self.save(&profile, &rows)),
                 files::FileEvent::None => {}
@@ -287,9 +289,10 @@ impl MonitorPanel {
     fn save(&self, profile: &Profile, rows: &[(u64, &LogEntry)]) -> Vec<Action> {
         let path = self.save_path.trim();
         if path.is_empty() {
-            return vec![Action::Notify(Notice::error(
+            return vec![Action::Notify(Notice::error(Text::new(
                 "save: give the file's path (type it, or Browse)",
-            ))];
+                "保存:请给出文件路径(输入,或点击浏览)",
+            )))];
         }
         let lines: Vec<String> = rows.iter().map(|(_, e)| line(profile, e)).collect();
         match crate::document::write_atomic(
@@ -298,12 +301,12 @@ impl MonitorPanel {
         ) {
             Ok(()) => vec![
                 Action::RememberFile(FileKind::Packets, path.to_string()),
-                Action::Notify(Notice::info(format!(
-                    "{} line(s) saved to {path}",
-                    lines.len()
+                Action::Notify(Notice::info(Text::new(
+                    format!("{} line(s) saved to {path}", lines.len()),
+                    format!("已保存 {} 行到 {path}", lines.len()),
                 ))),
             ],
-            Err(e) => vec![Action::Notify(Notice::error(e.to_string()))],
+            Err(e) => vec![Action::Notify(Notice::error(e.said()))],
         }
     }
 }
@@ -381,8 +384,9 @@ fn pick(name: &str, save: bool, then: fn(std::path::PathBuf) -> Action) -> Actio
     };
     match path {
         Some(p) => then(p),
-        None => Action::Notify(Notice::info(
+        None => Action::Notify(Notice::info(Text::new(
             "cancelled (no file chosen, or no file dialog on this system)",
-        )),
+            "已取消(未选择文件,或此系统没有文件对话框)",
+        ))),
     }
 }

@@ -6,10 +6,10 @@ use super::settings::FileKind;
 use super::state::{AppState, Notice, Reading};
 use super::{Action, files};
 use crate::document::DocumentError;
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::ops;
 use crate::preset::{CommandValues, Loaded, Preset, preset_commands};
-use crate::profile::Profile;
+use crate::profile::{Profile, Text};
 use eframe::egui;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -33,45 +33,58 @@ pub struct PresetsPanel {
 /// ([`ops::preset::capture`]).
 fn save_job(profile: &Arc<Profile>, path: PathBuf, note: String) -> Job {
     let profile = profile.clone();
-    Job::new("save preset", move |client, cancel, sink| {
-        let mut preset = ops::preset::capture(client, &profile, cancel, &mut |p| sink.progress(p))?;
-        preset.note = note;
-        preset.save_annotated(&path, &profile)?;
-        Ok(format!("saved to {}", path.display()))
-    })
+    Job::new(
+        Text::new("save preset", "保存预设"),
+        move |client, cancel, sink| {
+            let mut preset =
+                ops::preset::capture(client, &profile, cancel, &mut |p| sink.progress(p))?;
+            preset.note = note;
+            preset.save_annotated(&path, &profile)?;
+            Ok(Text::new(
+                format!("saved to {}", path.display()),
+                format!("已保存到 {}", path.display()),
+            ))
+        },
+    )
 }
 
 /// Writes a (checked) preset, each command read back ([`ops::preset::apply_each`]); each
 /// command's checks go to the device model.
 fn apply_job(profile: &Arc<Profile>, preset: Preset) -> Job {
     let profile = profile.clone();
-    Job::new("apply preset", move |client, cancel, sink| {
-        let mut total = 0;
-        let mut bad = 0;
-        ops::preset::apply_each(
-            client,
-            &profile,
-            &preset,
-            cancel,
-            &mut |p| sink.progress(p),
-            &mut |command, checks| {
-                total += checks.len();
-                bad += checks.iter().filter(|c| !c.ok()).count();
-                if let Some(cmd) = profile.command(command) {
-                    sink.send(JobOutput::Wrote(cmd.id, Ok(checks.to_vec())));
-                }
-            },
-        )?;
-        if bad == 0 {
-            Ok(format!("{total} field(s) written and verified"))
-        } else {
-            Err(JobError::Incomplete {
-                failed: bad,
-                total,
-                what: "field(s) do not hold the preset's value".into(),
-            })
-        }
-    })
+    Job::new(
+        Text::new("apply preset", "应用预设"),
+        move |client, cancel, sink| {
+            let mut total = 0;
+            let mut bad = 0;
+            ops::preset::apply_each(
+                client,
+                &profile,
+                &preset,
+                cancel,
+                &mut |p| sink.progress(p),
+                &mut |command, checks| {
+                    total += checks.len();
+                    bad += checks.iter().filter(|c| !c.ok()).count();
+                    if let Some(cmd) = profile.command(command) {
+                        sink.send(JobOutput::Wrote(cmd.id, Ok(checks.to_vec())));
+                    }
+                },
+            )?;
+            if bad == 0 {
+                Ok(Text::new(
+                    format!("{total} field(s) written and verified"),
+                    format!("{total} 个字段已写入并校验"),
+                ))
+            } else {
+                Err(JobError::Incomplete {
+                    failed: bad,
+                    total,
+                    what: "field(s) do not hold the preset's value".into(),
+                })
+            }
+        },
+    )
 }
 
 /// The device's values of the preset commands, from the readings replies brought.
@@ -121,7 +134,9 @@ impl PresetsPanel {
             );
             let open = ui.button(lang.tr("Open", "打开")).clicked();
             match event {
-                files::FileEvent::NoDialog(why) => actions.push(Action::Notify(Notice::error(why))),
+                files::FileEvent::NoDialog(why) => {
+                    actions.push(Action::Notify(Notice::error(super::no_dialog(why))))
+                }
                 files::FileEvent::Chosen(_) => actions.extend(self.open_and_remember(rt)),
                 files::FileEvent::None if open => actions.extend(self.open_and_remember(rt)),
                 files::FileEvent::None => {}
@@ -166,7 +181,7 @@ impl PresetsPanel {
             }
         });
         if let Some(e) = &self.error {
-            ui.colored_label(egui::Color32::RED, e.to_string());
+            ui.colored_label(egui::Color32::RED, e.in_lang(lang));
         }
         ui.separator();
         let Some(loaded) = &self.loaded else {

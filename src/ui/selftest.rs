@@ -8,9 +8,9 @@ use super::settings::FileKind;
 use super::state::{AppState, Notice};
 use super::{Action, files};
 use crate::document::DocumentError;
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::ops::selftest::{self, Plan, Report, StepKind, StepResult};
-use crate::profile::Profile;
+use crate::profile::{Profile, Text};
 use crossbeam_channel::Sender;
 use eframe::egui;
 use std::path::PathBuf;
@@ -186,7 +186,7 @@ impl SelfTestPanel {
         self.logged = None;
         self.running = true;
         Some(Action::StartJob(Job::new(
-            "self-test",
+            Text::new("self-test", "自检"),
             move |client, cancel, sink| {
                 let mut operator = |text: &str| -> bool {
                     let (tx, rx) = crossbeam_channel::bounded(1);
@@ -233,7 +233,7 @@ impl SelfTestPanel {
                     return Err(e.into());
                 }
                 match (pass, aborted) {
-                    (true, _) => Ok("PASS".into()),
+                    (true, _) => Ok(Text::new("PASS", "合格")),
                     (false, Some(a)) => Err(JobError::Failed(a)),
                     (false, None) => Err(JobError::Failed(failed.join(", "))),
                 }
@@ -294,7 +294,9 @@ impl SelfTestPanel {
                 )
                 .clicked();
             match event {
-                files::FileEvent::NoDialog(why) => actions.push(Action::Notify(Notice::error(why))),
+                files::FileEvent::NoDialog(why) => {
+                    actions.push(Action::Notify(Notice::error(super::no_dialog(why))))
+                }
                 files::FileEvent::Chosen(_) => actions.extend(self.open_and_remember(rt)),
                 files::FileEvent::None if open => actions.extend(self.open_and_remember(rt)),
                 files::FileEvent::None => {}
@@ -346,7 +348,11 @@ impl SelfTestPanel {
         if self.running
             && let Some((_, fraction, msg)) = rt.job_progress()
         {
-            ui.add(egui::ProgressBar::new(fraction).show_percentage().text(msg));
+            ui.add(
+                egui::ProgressBar::new(fraction)
+                    .show_percentage()
+                    .text(msg.get(lang)),
+            );
         }
         self.banner(ui, lang);
         ui.separator();
@@ -415,7 +421,7 @@ impl SelfTestPanel {
                 ));
             }
             Some(Err(e)) => {
-                ui.colored_label(egui::Color32::RED, e.to_string());
+                ui.colored_label(egui::Color32::RED, e.in_lang(lang));
             }
             None => {
                 ui.weak(lang.tr("Not logged (no log file).", "未记录(未指定日志文件)。"));

@@ -15,7 +15,7 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         super::layout::keep_words_whole(ui);
         match rt.link.target() {
             Some(target) => {
-                ui.label(target.label());
+                ui.label(target.label_in(lang));
                 if let Some(Ok(info)) = &rt.device.info {
                     ui.separator();
                     ui.label(format!(
@@ -36,7 +36,7 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         }
         if let Some((title, fraction, msg)) = rt.job_progress() {
             ui.separator();
-            ui.label(lang.tr(title, crate::i18n::job_title_zh(title)));
+            ui.label(title.get(lang));
             ui.add(
                 egui::ProgressBar::new(fraction)
                     .desired_width(160.0)
@@ -49,7 +49,7 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
             // keeps the rest.
             let room = egui::vec2(ui.available_width() / 3.0, ui.spacing().interact_size.y);
             ui.allocate_ui(room, |ui| {
-                super::layout::one_line(ui, egui::RichText::new(msg).weak())
+                super::layout::one_line(ui, egui::RichText::new(msg.get(lang)).weak())
             });
         }
         if let Some(s) = &rt.notice {

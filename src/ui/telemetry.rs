@@ -8,7 +8,8 @@ use super::settings::{FileKind, Settings};
 use super::state::{AppState, Notice, Reading};
 use super::{Action, files, plot};
 use crate::i18n::Lang;
-use crate::profile::CommandKind;
+use crate::i18n::Zh;
+use crate::profile::{CommandKind, Text};
 use eframe::egui;
 use egui_plot::{Plot, VLine};
 
@@ -167,7 +168,9 @@ impl TelemetryPanel {
             );
             let export = ui.button(lang.tr("Export CSV", "导出 CSV")).clicked();
             match event {
-                files::FileEvent::NoDialog(why) => actions.push(Action::Notify(Notice::error(why))),
+                files::FileEvent::NoDialog(why) => {
+                    actions.push(Action::Notify(Notice::error(super::no_dialog(why))))
+                }
                 files::FileEvent::Chosen(_) => actions.extend(export_csv(rt, &self.csv_path)),
                 files::FileEvent::None if export => actions.extend(export_csv(rt, &self.csv_path)),
                 files::FileEvent::None => {}
@@ -342,7 +345,7 @@ impl TelemetryPanel {
                                     ));
                                 }
                                 Some(Reading::Failed(e)) => {
-                                    ui.colored_label(egui::Color32::RED, e.to_string());
+                                    ui.colored_label(egui::Color32::RED, e.in_lang(lang));
                                 }
                                 None => {
                                     ui.weak(lang.tr("not read yet", "尚未读取"));
@@ -399,20 +402,21 @@ fn readout_line(
 fn export_csv(rt: &AppState, path: &str) -> Vec<Action> {
     let path = path.trim();
     if path.is_empty() {
-        return vec![Action::Notify(Notice::error(
+        return vec![Action::Notify(Notice::error(Text::new(
             "export: give the CSV file's path (type it, or Browse)",
-        ))];
+            "导出:请给出 CSV 文件路径(输入,或点击浏览)",
+        )))];
     }
     let path = std::path::PathBuf::from(path);
     match write_csv(rt, &path) {
         Ok(n) => vec![
             Action::RememberFile(FileKind::TelemetryCsv, path.display().to_string()),
-            Action::Notify(Notice::info(format!(
-                "{n} plot(s) written to {}",
-                path.display()
+            Action::Notify(Notice::info(Text::new(
+                format!("{n} plot(s) written to {}", path.display()),
+                format!("{n} 个图已写入 {}", path.display()),
             ))),
         ],
-        Err(e) => vec![Action::Notify(Notice::error(e.to_string()))],
+        Err(e) => vec![Action::Notify(Notice::error(e.said()))],
     }
 }
 

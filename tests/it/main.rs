@@ -46,5 +46,6 @@ mod sim_devices;
 mod sim_msp;
 mod tuya_field;
 mod tuya_sdk_vectors;
+mod window_language;
 mod window_layout;
 mod window_truth;

@@ -6,7 +6,7 @@ use super::{Output, Servo, error_label, ok_label, port_baud, send};
 use crate::i18n::Lang;
 use crate::ops::OpError;
 use crate::ops::servo::{self as ops, Presence, ScanPlan, ScanReport, ScanRow};
-use crate::profile::Profile;
+use crate::profile::{Profile, Text};
 use crate::ui::Action;
 use crate::ui::jobs::Job;
 use crate::ui::state::AppState;
@@ -412,7 +412,11 @@ impl ScanState {
 /// A scan as a job; `again` marks the rescan of one servo.
 fn scan_job(rt: &AppState, plan: ScanPlan, again: Option<Servo>) -> Action {
     let profile = rt.device.profile.clone();
-    let title = if again.is_some() { "rescan" } else { "scan" };
+    let title = if again.is_some() {
+        Text::new("rescan", "重新扫描")
+    } else {
+        Text::new("scan", "扫描")
+    };
     Action::StartJob(Job::new(title, move |client, cancel, sink| {
         let result = ops::scan(
             client,
@@ -427,11 +431,19 @@ fn scan_job(rt: &AppState, plan: ScanPlan, again: Option<Servo>) -> Action {
             },
         );
         let summary = match &result {
-            Ok(r) => Ok(format!(
-                "{} servo(s) found; {} id(s) asked again, margin {:.1} ms",
-                r.rows.len(),
-                r.asked_again,
-                r.margin_ms
+            Ok(r) => Ok(Text::new(
+                format!(
+                    "{} servo(s) found; {} id(s) asked again, margin {:.1} ms",
+                    r.rows.len(),
+                    r.asked_again,
+                    r.margin_ms
+                ),
+                format!(
+                    "找到 {} 个舵机;{} 个 ID 重问,余量 {:.1} ms",
+                    r.rows.len(),
+                    r.asked_again,
+                    r.margin_ms
+                ),
             )),
             Err(e) => Err(e.clone().into()),
         };

@@ -12,7 +12,7 @@ use super::inputs::{command_inputs, range_text};
 use super::state::{AppState, Reading};
 use super::stop::StopControl;
 use super::{Action, plot};
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Value};
 use eframe::egui;
 use egui_plot::Plot;
@@ -214,7 +214,7 @@ impl SolarPanel {
                             });
                         }
                         Some(Reading::Failed(e)) => {
-                            ui.colored_label(RED, e.to_string());
+                            ui.colored_label(RED, e.in_lang(lang));
                         }
                         None => {
                             ui.weak(lang.tr("no answer yet", "尚无应答"));
@@ -277,7 +277,7 @@ impl SolarPanel {
                     egui::Button::new(lang.tr(&cmd.name.en, &cmd.name.zh)),
                 );
                 let resp = match &inputs {
-                    Err(e) => resp.on_disabled_hover_text(e.to_string()),
+                    Err(e) => resp.on_disabled_hover_text(e.in_lang(lang)),
                     Ok(_) => resp.on_hover_text(format!("{} ({})", cmd.ident, cmd.id)),
                 };
                 if resp.clicked()
@@ -320,7 +320,7 @@ impl SolarPanel {
                             );
                         }
                         Some((Outcome::Failed(e), _)) => {
-                            ui.colored_label(RED, e.to_string());
+                            ui.colored_label(RED, e.in_lang(lang));
                         }
                         None => {}
                     }

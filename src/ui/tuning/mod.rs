@@ -8,7 +8,7 @@ mod table;
 use super::Action;
 use super::jobs;
 use super::state::AppState;
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::ops::tuning::SetWrite;
 use crate::profile::{Command, CommandKind, Field, FieldError, Value};
 use eframe::egui;
@@ -343,7 +343,7 @@ fn pending_text(e: &PendingError, rt: &AppState, lang: Lang) -> String {
             }
         }
         other => {
-            let text = other.to_string();
+            let text = other.in_lang(lang);
             fields()
                 .find(|f| text.starts_with(&format!("{}:", f.ident)))
                 .map_or(text.clone(), |f| named(&text, f, lang))

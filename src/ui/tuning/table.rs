@@ -2,7 +2,7 @@
 //! places, the names' column as wide as the longest name.
 
 use super::{TuningPanel, named, profile_set};
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::profile::{Command, CommandKind, Field};
 use crate::ui::inputs::range_text;
 use crate::ui::state::{AppState, Mark, Reading};
@@ -190,7 +190,7 @@ impl TuningPanel {
                 )
                 .on_hover_text(format!(
                     "{}\n{}: {}",
-                    named(&e.to_string(), f, lang),
+                    named(&e.in_lang(lang), f, lang),
                     lang.tr("allowed", "允许"),
                     range_text(f)
                 ));
