@@ -231,16 +231,7 @@ impl App {
             ctx.request_repaint_after(after);
         }
         if let Some(mut tour) = self.tour.take() {
-            let panels = self.panels();
-            for a in tour.step(ctx, &self.state, &panels) {
-                let connect = matches!(a, Action::Connect { .. });
-                self.apply(a);
-                if connect {
-                    // The connection bar shows the device the tour moved to.
-                    let (baud, _) = port_for(&self.settings, &self.state, &self.settings.profile);
-                    self.connection = connection::ConnectionBar::new(&self.settings, baud);
-                }
-            }
+            tour.step(ctx, self);
             self.tour = Some(tour);
         }
     }
@@ -334,6 +325,22 @@ impl App {
         for a in actions {
             self.apply(a);
         }
+        if let Some(tour) = &mut self.tour {
+            tour.after_ui(ui.ctx());
+        }
+    }
+
+    /// Connects to the built-in demo device `kind` at its own rate with its profile, as the
+    /// port picker does (the connection bar shows it).
+    pub fn connect_demo(&mut self, kind: crate::sim::SimKind) {
+        self.apply(Action::Connect {
+            target: Target::Demo(kind.name().to_string()),
+            baud: kind.default_baud(),
+            profile: kind.profile_id().to_string(),
+            margin_ms: None,
+        });
+        let (baud, _) = port_for(&self.settings, &self.state, &self.settings.profile);
+        self.connection = connection::ConnectionBar::new(&self.settings, baud);
     }
 
     /// The window's title: `botbench 0.1.0 — built-in simulated window-cleaner — Window-cleaning

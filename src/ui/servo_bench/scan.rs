@@ -201,6 +201,20 @@ impl ScanState {
         }
     }
 
+    /// A scan of the ids and rates chosen, as the Scan button starts it (`None`: the ids typed
+    /// do not read).
+    pub(crate) fn start(&mut self, rt: &AppState) -> Option<Action> {
+        let ids = self.ids().ok()?;
+        self.rows.clear();
+        self.outcome = None;
+        let plan = ScanPlan {
+            ids,
+            bauds: self.chosen_bauds(&rt.device.profile),
+            home_baud: port_baud(rt).unwrap_or(rt.device.profile.baud),
+        };
+        Some(scan_job(rt, plan, None))
+    }
+
     /// Draws the tab; returns a servo the technician selected.
     pub(super) fn show(
         &mut self,
@@ -270,17 +284,8 @@ impl ScanState {
                     lang.tr("choose at least one baud rate", "请至少选择一种波特率"),
                 );
             }
-            if scan.clicked()
-                && let Ok(ids) = ids.clone()
-            {
-                self.rows.clear();
-                self.outcome = None;
-                let plan = ScanPlan {
-                    ids,
-                    bauds: bauds.clone(),
-                    home_baud: port_baud(rt).unwrap_or(rt.device.profile.baud),
-                };
-                actions.push(scan_job(rt, plan, None));
+            if scan.clicked() {
+                actions.extend(self.start(rt));
             }
             match &self.outcome {
                 Some(Ok(t)) => {
