@@ -21,6 +21,7 @@ if [ ${#need[@]} -gt 0 ] || [ ! -e /usr/lib/x86_64-linux-gnu/dri/swrast_dri.so ]
     export DEBIAN_FRONTEND=noninteractive
     apt-get update -qq
     apt-get install -y -qq xvfb xauth imagemagick xdotool libegl1 libegl-mesa0 libgl1-mesa-dri libglx-mesa0 >/dev/null
+    echo "== installed in $SECONDS s"
 fi
 [ -x "$bin" ] || cargo build
 bin=$(realpath "$bin")
@@ -54,6 +55,7 @@ exit 1
 SCRIPT
 chmod +x "$home/run.sh"
 # Two xvfb-run -a started at once can race for a display number: one retry.
+tour_start=$SECONDS
 xvfb-run -a -s "-screen 0 1280x800x24" "$home/run.sh" || {
     echo "== the X session failed; retrying once"
     sleep 2
@@ -61,6 +63,7 @@ xvfb-run -a -s "-screen 0 1280x800x24" "$home/run.sh" || {
 }
 grep "^tour: .* shots in" "$home/app.log" || true
 grep "^tour: done" "$home/app.log"
+echo "== the tour took $((SECONDS - tour_start)) s (X server and launches included)"
 if ! grep -q "^tour: done, 0 failure" "$home/app.log"; then
     grep "^tour:" "$home/app.log" | grep -v "\.png$"
     exit 1

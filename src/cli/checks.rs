@@ -94,13 +94,14 @@ pub(crate) fn probability(text: &str) -> Result<f64, String> {
 /// A servo id that a command addresses and expects an answer from: 0 to 254 (255 is the
 /// broadcast id, which every servo obeys and none answers).
 pub(crate) fn servo_id(text: &str) -> Result<u8, String> {
-    if text.trim() == "255" {
-        return Err(
-            "255 is the broadcast id: every servo obeys it and none answers; give an id from 0 to 254"
-                .into(),
-        );
+    let broadcast = crate::protocol::servo::BROADCAST_ID;
+    if text.trim() == broadcast.to_string() {
+        return Err(format!(
+            "{broadcast} is the broadcast id: every servo obeys it and none answers; give an id from 0 to {}",
+            broadcast - 1
+        ));
     }
-    within(text, &(0..=254), "a servo id")
+    within(text, &(0..=broadcast - 1), "a servo id")
 }
 
 /// A servo id where the broadcast id may be given too (`servo write` and `servo angle` with

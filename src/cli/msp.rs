@@ -3,7 +3,7 @@
 use super::checks::{self, Rate};
 use super::port::{PortArgs, exchange_error, op_error, parse_assignments, print_checks_with};
 use super::{CliError, CliResult};
-use crate::link::{Link, LinkCommand, LinkEvent};
+use crate::link::{Link, LinkCommand, LinkEvent, capabilities};
 use crate::packet::Packet;
 
 use crate::ops::exchange::{self as ops, Use};
@@ -292,7 +292,7 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
     match checked {
         Checked::Version => match identified {
             Ok(info) => {
-                print_version(&info, json);
+                print_version(&profile, &info, json);
                 Ok(0)
             }
             Err(e) => Err(exchange_error(e)),
@@ -348,7 +348,7 @@ pub(crate) fn run(args: MspArgs) -> CliResult {
     }
 }
 
-fn print_version(info: &crate::link::DeviceInfo, json: bool) {
+fn print_version(profile: &Profile, info: &crate::link::DeviceInfo, json: bool) {
     if json {
         println!("{}", serde_json::to_string(info).unwrap_or_default());
         return;
@@ -362,13 +362,13 @@ fn print_version(info: &crate::link::DeviceInfo, json: bool) {
         println!("!! bytes past the profile's CMD_VERSION layout: {extra}");
     }
     match info.flags {
-        Some(f) => println!(
-            "flags      {f:#04x}: config page {}, PID page {}, charging module {}, collision switches {}",
-            yes(info.supports(0)),
-            yes(info.supports(1)),
-            yes(info.supports(2)),
-            yes(info.supports(3))
-        ),
+        Some(f) => {
+            let bits: Vec<String> = capabilities(profile, f)
+                .iter()
+                .map(|c| format!("{} {}", c.name.en, yes(c.set)))
+                .collect();
+            println!("flags      {f:#04x}: {}", bits.join(", "));
+        }
         None => println!("flags      none (older firmware)"),
     }
 }

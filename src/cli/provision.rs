@@ -101,7 +101,7 @@ fn wait_for_new(client: &Client, profile: &Profile, previous: Option<u32>, every
     let mut emptied = previous.is_some();
     loop {
         std::thread::sleep(every);
-        let Ok(found) = ops::find_fresh(client, &bauds) else {
+        let Ok(found) = ops::find_fresh(client, profile, &bauds) else {
             continue;
         };
         match found.as_slice() {
@@ -111,7 +111,8 @@ fn wait_for_new(client: &Client, profile: &Profile, previous: Option<u32>, every
                 if client.set_baud(*baud).is_err() {
                     continue;
                 }
-                match servo_ops::read_param(client, profile, 0, param) {
+                let fresh = servo_ops::factory_location(profile).id;
+                match servo_ops::read_param(client, profile, fresh, param) {
                     Ok(s) if previous.is_some_and(|p| i64::from(p) == s) => {}
                     Ok(_) => return,
                     Err(_) => {}

@@ -77,19 +77,15 @@ impl TuyaSimArgs {
         self.frame_version.is_some() || self.report_every.is_some() || !self.misreport.is_empty()
     }
 
-    /// Applies them to the MCU's settings.
-    fn apply(&self, config: &mut crate::sim::tuya_mcu::TuyaConfig) -> Result<(), CliError> {
+    /// Applies them to the MCU's settings (clap has checked their ranges).
+    fn apply(&self, config: &mut crate::sim::tuya_mcu::TuyaConfig) {
         if let Some(v) = self.frame_version {
             config.frame_version = v;
         }
         if let Some(ms) = self.report_every {
-            if ms == 0 {
-                return Err(CliError::input("--report-every takes at least 1 ms"));
-            }
             config.report_every = Some((self.report_dp, Duration::from_millis(ms)));
         }
         config.misreport.extend(self.misreport.iter().copied());
-        Ok(())
     }
 }
 
@@ -199,7 +195,7 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
                         "--report-dp {id}: the vacuum has no data point {id}"
                     )));
                 }
-                args.tuya.apply(mcu.config_mut())?;
+                args.tuya.apply(mcu.config_mut());
                 let mcu = Arc::new(Mutex::new(mcu));
                 (mcu.clone(), Some(Control::Tuya(mcu)))
             }

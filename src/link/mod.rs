@@ -13,8 +13,8 @@ mod worker;
 pub use worker::default_margin;
 
 pub use request::{ExchangeError, Match, Reply, ReplySpec, Request};
-pub use session::DeviceInfo;
 pub use session::tuya::{HandshakeStep, ProductInfo, TuyaEvent, TuyaModuleOptions};
+pub use session::{Capability, DeviceInfo, capabilities};
 pub use transport::{LinkError, Transport, wire_time};
 
 use crate::packet::Packet;

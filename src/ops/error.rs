@@ -83,13 +83,17 @@ pub enum OpError {
         /// The parameter's ident.
         param: String,
     },
-    /// 255, the broadcast address, given as a servo id to assign. Nothing was written.
-    #[error("id 255 is the broadcast address and cannot be assigned")]
+    /// The broadcast address, given as a servo id to assign. Nothing was written.
+    #[error(
+        "id {} is the broadcast address and cannot be assigned",
+        crate::protocol::servo::BROADCAST_ID
+    )]
     BroadcastId,
-    /// 255, the broadcast address, given to an operation that waits for an answer: every servo
+    /// The broadcast address, given to an operation that waits for an answer: every servo
     /// would act and none answers a broadcast. Nothing was sent.
     #[error(
-        "id 255 is the broadcast address: every servo acts on it and none answers, so it cannot be used to {what}; give one servo's id{hint}"
+        "id {} is the broadcast address: every servo acts on it and none answers, so it cannot be used to {what}; give one servo's id{hint}",
+        crate::protocol::servo::BROADCAST_ID
     )]
     BroadcastAnswer {
         /// What was asked, e.g. `read a parameter`.

@@ -561,6 +561,12 @@ pub struct Plot {
     pub name: Text,
     /// The telemetry command's ident.
     pub command: String,
-    /// The field idents to draw.
+    /// The field idents drawn as lines: measurements only (a number with a unit or a count,
+    /// see [`Field::is_measurement`]), never an enum, flag or bit field (its codes are no
+    /// quantity).
     pub fields: Vec<String>,
+    /// The enum, flag and bit fields of the same command shown beside the plot by their names
+    /// (the last value read), e.g. the battery's state beside its voltage.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub states: Vec<String>,
 }

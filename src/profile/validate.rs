@@ -494,16 +494,45 @@ fn check_plots(p: &Profile) -> Result<(), Issue> {
                 format!("plot '{}': no command '{}'", plot.id, plot.command),
             ));
         };
-        for (j, name) in plot.fields.iter().enumerate() {
-            let ok = cmd
-                .reply
+        let reply = |name: &str| {
+            cmd.reply
                 .iter()
-                .any(|f| f.ident.eq_ignore_ascii_case(name) && f.ty.int_bounds().is_some());
-            if !ok {
+                .find(|f| f.ident.eq_ignore_ascii_case(name))
+        };
+        for (j, name) in plot.fields.iter().enumerate() {
+            let at = vec![Key("plots"), Index(i), Key("fields"), Index(j)];
+            match reply(name) {
+                Some(f) if f.is_measurement() => {}
+                Some(f) if f.is_state() => {
+                    return Err(issue(
+                        at,
+                        format!(
+                            "plot '{}': {}'s '{name}' is {} (its codes are no quantity to draw \
+                             as a line): list it under states, to show its names beside the plot",
+                            plot.id,
+                            cmd.ident,
+                            state_kind(f)
+                        ),
+                    ));
+                }
+                _ => {
+                    return Err(issue(
+                        at,
+                        format!(
+                            "plot '{}': {} has no numeric reply field '{name}'",
+                            plot.id, cmd.ident
+                        ),
+                    ));
+                }
+            }
+        }
+        for (j, name) in plot.states.iter().enumerate() {
+            if !reply(name).is_some_and(Field::is_state) {
                 return Err(issue(
-                    vec![Key("plots"), Index(i), Key("fields"), Index(j)],
+                    vec![Key("plots"), Index(i), Key("states"), Index(j)],
                     format!(
-                        "plot '{}': {} has no numeric reply field '{name}'",
+                        "plot '{}': {} has no enum, flag or bit field '{name}' (a measurement \
+                         goes under fields)",
                         plot.id, cmd.ident
                     ),
                 ));
@@ -511,4 +540,15 @@ fn check_plots(p: &Profile) -> Result<(), Issue> {
         }
     }
     Ok(())
+}
+
+/// What kind of state field `f` is, for a message.
+fn state_kind(f: &Field) -> &'static str {
+    if !f.bits.is_empty() {
+        "a bit field"
+    } else if !f.labels.is_empty() {
+        "an enum (named values)"
+    } else {
+        "a flag"
+    }
 }

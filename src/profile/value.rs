@@ -62,6 +62,24 @@ impl Field {
         }
     }
 
+    /// A measurement: a whole-number wire type that stands for a quantity or a count (with or
+    /// without a unit), so that a line through its values means something. Not an enum (named
+    /// values), a flag (bool) or a bit field, nor a command id or length.
+    pub fn is_measurement(&self) -> bool {
+        let number = !matches!(
+            self.ty,
+            FieldType::Bool | FieldType::CommandId | FieldType::RecordLen | FieldType::RecordCount
+        ) && self.ty.int_bounds().is_some();
+        number && !self.is_state()
+    }
+
+    /// A state: an enum (named values), a flag (bool) or a bit field, read by its names, never
+    /// as a quantity.
+    pub fn is_state(&self) -> bool {
+        self.ty.int_bounds().is_some()
+            && (self.ty == FieldType::Bool || !self.labels.is_empty() || !self.bits.is_empty())
+    }
+
     /// Digits after the decimal point that the scale calls for.
     pub fn decimals(&self) -> usize {
         decimals_for(self.scale)

@@ -33,7 +33,9 @@ pub struct Line {
     /// A one-wire bus (TX and RX tied): the host reads back every byte it sends.
     pub echo: bool,
     /// A half-duplex bus: a reply still on the wire when the next request starts collides with
-    /// it, and both arrive garbled (the servo bus is one).
+    /// it, and both arrive garbled (the servo bus is one). Modelled where the simulator knows
+    /// when the host wrote (in process); a plain pty learns of the host's bytes only when the
+    /// operating system hands them over, too late to tell.
     pub half_duplex: bool,
     /// The port vanishes (an adapter unplugged) once this many bytes have come from the host.
     pub vanish_after_bytes: Option<u64>,

@@ -76,7 +76,10 @@ impl PtyServer {
             .ok_or_else(|| open_err("the pseudo-terminal has no path".into()))?;
         let baud = master.baud_rate().unwrap_or(9600);
         let flags = Arc::new(Flags::default());
-        let wire = Wire::new(device.clone(), baud, faults);
+        let mut wire = Wire::new(device.clone(), baud, faults);
+        if lockstep.is_none() {
+            wire.host_times_uncertain();
+        }
         let thread_flags = flags.clone();
         let thread_lockstep = lockstep.clone();
         let thread = std::thread::Builder::new()

@@ -128,6 +128,10 @@ pub(crate) struct Wire {
     host_bytes: u64,
     /// The port has vanished ([`Line::vanish_after_bytes`]).
     vanished: bool,
+    /// The host's writes are stamped with when the host made them (in process, in lockstep),
+    /// rather than with when the simulator read them (a plain pty): only then is a request known
+    /// to overlap a reply on a half-duplex line (see [`Wire::host_times_uncertain`]).
+    host_times_exact: bool,
 }
 
 impl Wire {
@@ -148,7 +152,19 @@ impl Wire {
             seen_until: now,
             host_bytes: 0,
             vanished: false,
+            host_times_exact: true,
         }
+    }
+
+    /// The host's writes are known only when the simulator reads them (a plain pty served to
+    /// another process): the operating system hands them over up to a scheduling delay late, a
+    /// millisecond and more on a loaded machine, longer than a servo's reply takes on the wire.
+    /// A request and a reply are then not said to collide on a half-duplex line: a request that
+    /// merely reached the simulator late would garble a reply it never met (a host retrying
+    /// 2 ms after a ping whose reply had ended at 1.6 ms). Collisions between devices (two
+    /// servos on one id) are the simulator's own timing and stay.
+    pub(crate) fn host_times_uncertain(&mut self) {
+        self.host_times_exact = false;
     }
 
     /// Whether the port has vanished after the bytes [`Line::vanish_after_bytes`] allowed.
@@ -220,7 +236,7 @@ impl Wire {
         let at = start + wire_time(bytes.len(), self.baud);
         self.rx_free = at;
         let mut bytes = bytes.to_vec();
-        if self.line().half_duplex {
+        if self.line().half_duplex && self.host_times_exact {
             // A reply still on the wire and this request garble each other.
             let byte = wire_time(1, self.baud);
             let rng = &mut self.rng;
@@ -289,7 +305,7 @@ impl Wire {
             let start = (cause + o.after + self.faults.extra_latency).max(self.tx_free);
             self.tx_free = start + duration;
             let byte = duration / bytes.len().max(1) as u32;
-            if self.faults.line.half_duplex {
+            if self.faults.line.half_duplex && self.host_times_exact {
                 // A request the host has already started on the wire collides with this reply.
                 let rng = &mut self.rng;
                 for i in self.inbound.iter_mut() {

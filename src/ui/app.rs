@@ -448,8 +448,9 @@ impl App {
         }
     }
 
-    /// The files last used, back in their boxes; the self-test plan, when none was used yet,
-    /// is the shipped one (found wherever the binary runs, see [`files::shipped_in`]).
+    /// The files last used, back in their boxes; the self-test and provisioning plans, when
+    /// none was used yet, are the shipped ones (found wherever the binary runs, see
+    /// [`files::shipped_in`]).
     fn restore_files(&mut self) {
         let file = |k| self.settings.file(k).map(str::to_string);
         if let Some(p) = file(FileKind::Packets) {
@@ -461,15 +462,35 @@ impl App {
         if let Some(p) = file(FileKind::Preset) {
             self.presets.path = p;
         }
-        match file(FileKind::SelfTestPlan) {
-            Some(p) => self.selftest.path = p,
-            None => {
-                let shipped =
-                    files::shipped_in(&files::shipped_dir(), "window-cleaner-selftest.ron");
-                if let Ok(p) = shipped {
-                    self.selftest.path = p.display().to_string();
-                }
-            }
+        if let Some(p) = file(FileKind::SelfTestLog) {
+            self.selftest.log_path = p;
+        }
+        if let Some(p) = file(FileKind::ServoPreset) {
+            self.servo.params.preset_path = p;
+        }
+        if let Some(p) = file(FileKind::ProvisionLog) {
+            self.servo.production.log_path = p;
+        }
+        if let Some(p) = file(FileKind::Firmware) {
+            self.tuya.ota.path = p;
+        }
+        if let Some(p) = file(FileKind::Capture) {
+            self.monitor.capture_path = p;
+        }
+        let shipped = |name| {
+            files::shipped_in(&files::shipped_dir(), name)
+                .ok()
+                .map(|p| p.display().to_string())
+        };
+        if let Some(p) =
+            file(FileKind::SelfTestPlan).or_else(|| shipped("window-cleaner-selftest.ron"))
+        {
+            self.selftest.path = p;
+        }
+        if let Some(p) =
+            file(FileKind::ProvisionPlan).or_else(|| shipped("servo-provision-plan.ron"))
+        {
+            self.servo.production.plan_path = p;
         }
     }
 

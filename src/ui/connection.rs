@@ -380,9 +380,12 @@ pub(super) fn timing(ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut
                         adapter.latency_timer_writable,
                         egui::Button::new(lang.tr("Set to 1 ms", "设为 1 ms")),
                     )
-                    .on_hover_text(lang.tr(
-                        "Answers reach botbench up to 1 ms after they arrive instead of 16",
-                        "应答到达后最多 1 ms 即交给 botbench, 而不是 16 ms",
+                    .on_hover_text(format!(
+                        "{} {t} ms",
+                        lang.tr(
+                            "Answers reach botbench up to 1 ms after they arrive instead of",
+                            "应答到达后最多 1 ms 即交给 botbench, 而不是",
+                        )
                     ))
                     .on_disabled_hover_text(format!(
                         "{} sudo botbench ports --set-latency-timer {port} 1",

@@ -5,11 +5,11 @@ use super::Action;
 use super::jobs::{Job, JobOutput};
 use super::state::AppState;
 use crate::i18n::{Lang, Zh};
-use crate::link::{DeviceInfo, LinkCommand};
+use crate::link::{DeviceInfo, LinkCommand, capabilities};
 use crate::ops::OpError;
 use crate::ops::device as ops;
 use crate::profile::{Profile, Text};
-use crate::protocol::{hex, msp};
+use crate::protocol::hex;
 use eframe::egui;
 use std::time::{Duration, Instant};
 
@@ -63,36 +63,6 @@ fn read_job(profile: &std::sync::Arc<Profile>) -> Action {
             ))
         },
     ))
-}
-
-/// The capability bits by name, from the profile's CMD_VERSION `flags` field: (bit, English,
-/// Chinese, set).
-pub fn flag_names(profile: &Profile, flags: u8) -> Vec<(u8, String, String, bool)> {
-    let bits = profile
-        .command_by_id(msp::CMD_VERSION)
-        .and_then(|c| c.reply.iter().find(|f| f.ident == "flags"))
-        .map(|f| f.bits.clone())
-        .unwrap_or_default();
-    let mut out: Vec<(u8, String, String, bool)> = bits
-        .iter()
-        .filter(|b| b.bit < 8)
-        .map(|b| {
-            (
-                b.bit,
-                b.name.en.clone(),
-                b.name.zh.clone(),
-                flags >> b.bit & 1 == 1,
-            )
-        })
-        .collect();
-    // Bits the profile does not name, when set, are shown by number.
-    for bit in 0..8u8 {
-        if flags >> bit & 1 == 1 && !out.iter().any(|(b, ..)| *b == bit) {
-            out.push((bit, format!("bit {bit}"), format!("第 {bit} 位"), true));
-        }
-    }
-    out.sort_by_key(|(b, ..)| *b);
-    out
 }
 
 impl DevicePanel {
@@ -267,10 +237,10 @@ impl DevicePanel {
                     .num_columns(3)
                     .striped(true)
                     .show(ui, |ui| {
-                        for (bit, en, zh, set) in flag_names(profile, flags) {
-                            ui.monospace(format!("bit {bit}"));
-                            ui.label(lang.tr(&en, &zh));
-                            if set {
+                        for c in capabilities(profile, flags) {
+                            ui.monospace(format!("bit {}", c.bit));
+                            ui.label(lang.tr(&c.name.en, &c.name.zh));
+                            if c.set {
                                 ui.colored_label(
                                     egui::Color32::from_rgb(0, 150, 60),
                                     lang.tr("supported", "支持"),

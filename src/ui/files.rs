@@ -3,6 +3,8 @@
 //! zenity, and there rfd's dialog returns at once with nothing: botbench looks for them when it
 //! starts, and a Browse that cannot open a dialog says so instead of doing nothing.
 
+use super::Action;
+use super::state::Notice;
 use crate::i18n::Lang;
 use eframe::egui;
 use std::path::{Path, PathBuf};
@@ -72,6 +74,31 @@ pub enum FileEvent {
     NoDialog(String),
 }
 
+impl FileEvent {
+    /// Whether the panel goes on with the path in the box: one was chosen in the dialog, or
+    /// `pressed` (the panel's own button beside the row was clicked: a typed path). A dialog
+    /// that could not open is said in the status line, pushed onto `actions`.
+    pub fn go(self, pressed: bool, actions: &mut Vec<Action>) -> bool {
+        match self {
+            FileEvent::NoDialog(why) => {
+                actions.push(Action::Notify(Notice::error(no_dialog(why))));
+                pressed
+            }
+            FileEvent::Chosen(_) => true,
+            FileEvent::None => pressed,
+        }
+    }
+}
+
+/// The status line's message when a file dialog could not open: `why` in English (what
+/// [`FileEvent::NoDialog`] carries), the advice in Chinese.
+pub(crate) fn no_dialog(why: String) -> crate::profile::Text {
+    crate::profile::Text::new(
+        why,
+        "文件对话框无法打开(没有可用的 xdg 桌面门户或 zenity):请在框中输入路径",
+    )
+}
+
 /// A dialog that returns nothing sooner than this did not show (a person takes longer).
 const TOO_QUICK: Duration = Duration::from_millis(150);
 
@@ -109,14 +136,15 @@ pub fn row(
     }
     let mut dialog = rfd::FileDialog::new();
     let typed = PathBuf::from(path.trim());
-    // Where the typed path points, else the shipped examples (`/usr/share/botbench/presets`
-    // when installed).
+    // Where the typed path points, else, for a plan or preset to open, the shipped examples
+    // (`/usr/share/botbench/presets` when installed: not where a file is written).
+    let document = matches!(pick, Pick::Open(exts) if exts.contains(&"ron"));
     if let Some(dir) = typed
         .parent()
         .filter(|d| d.is_dir() && !d.as_os_str().is_empty())
     {
         dialog = dialog.set_directory(dir);
-    } else if let Some(dir) = crate::system::presets_dir() {
+    } else if let Some(dir) = crate::system::presets_dir().filter(|_| document) {
         dialog = dialog.set_directory(dir);
     }
     let started = Instant::now();

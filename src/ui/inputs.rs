@@ -1,6 +1,7 @@
 //! Values typed into a command's fields, checked as typed against the profile (range, labels,
 //! step), and the allowed values as a person reads them.
 
+use crate::i18n::Lang;
 use crate::profile::value::Allowed;
 use crate::profile::{Command, Field, FieldError, Input, Value};
 use eframe::egui;
@@ -85,4 +86,26 @@ pub fn device_value(ui: &mut egui::Ui, field: &Field, value: &Value) -> egui::Re
             .on_hover_text(format!("{}: {}", field.ident, range_text(field))),
         None => ui.monospace(text),
     }
+}
+
+/// A value a device sent as a person reads it, names in the window's language: an enum by its
+/// label's name and code (`Warning (1)`), a bit field by its raw value and the names of its set
+/// bits (`0x05 [Brush, Fan]`), anything else as [`Field::display`] gives it (with its unit and,
+/// outside its range, its mark).
+pub fn readout_text(f: &Field, v: &Value, lang: Lang) -> String {
+    if let Value::Int(raw) = v {
+        if let Some(l) = f.label(*raw) {
+            return format!("{} ({raw})", lang.tr(&l.name.en, &l.name.zh));
+        }
+        if !f.bits.is_empty() {
+            let set: Vec<&str> = f
+                .bits
+                .iter()
+                .filter(|b| b.bit < 64 && raw >> b.bit & 1 == 1)
+                .map(|b| lang.tr(&b.name.en, &b.name.zh))
+                .collect();
+            return format!("{raw:#04x} [{}]", set.join(", "));
+        }
+    }
+    f.display(v)
 }

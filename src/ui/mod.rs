@@ -116,25 +116,6 @@ pub enum UiError {
     Window(String),
 }
 
-/// The status line's message when a file dialog could not open ([`files::FileEvent::NoDialog`]
-/// says why, in English).
-pub(crate) fn no_dialog(why: String) -> crate::profile::Text {
-    crate::profile::Text::new(
-        why,
-        "文件对话框无法打开(没有可用的 xdg 桌面门户或 zenity):请在框中输入路径",
-    )
-}
-
-/// A file dialog for RON documents (presets, plans) that starts in the shipped examples' folder
-/// (`/usr/share/botbench/presets` when installed).
-pub(crate) fn ron_dialog() -> rfd::FileDialog {
-    let d = rfd::FileDialog::new().add_filter("RON", &["ron"]);
-    match crate::system::presets_dir() {
-        Some(dir) => d.set_directory(dir),
-        None => d,
-    }
-}
-
 /// The settings the window opens with: the saved ones, overridden by what the command line
 /// gave. A built-in demo device named without a baud rate runs at its profile's rate (the Tuya
 /// vacuum at 9600, as its profile and the protocol document say), not the last port's.
@@ -167,6 +148,14 @@ pub fn launch_settings(
     saved
 }
 
+/// The window's icon: the bundled 256×256 PNG (assets/icons/botbench-256.png, rendered from the
+/// desktop entry's botbench.svg). A PNG that cannot be decoded gives egui's default icon, never
+/// a failed start.
+fn window_icon() -> std::sync::Arc<eframe::egui::IconData> {
+    let png = include_bytes!("../../assets/icons/botbench-256.png");
+    std::sync::Arc::new(eframe::icon_data::from_png_bytes(png).unwrap_or_default())
+}
+
 /// Opens the window. `target`, `baud` and `profile` override the saved settings. With
 /// `screenshots`, the window tours the demo devices and saves screenshots there, then closes
 /// (see [`tour`]); it then neither reads nor keeps saved settings.
@@ -182,7 +171,8 @@ pub fn run(
         viewport: eframe::egui::ViewportBuilder::default()
             .with_inner_size([1200.0, 780.0])
             .with_min_inner_size([800.0, 500.0])
-            .with_title(app::TITLE),
+            .with_title(app::TITLE)
+            .with_icon(window_icon()),
         // Dithering is a per-pixel cost that software rendering pays on every frame, for
         // gradients the window does not draw.
         dithering: false,
@@ -205,4 +195,14 @@ pub fn run(
         }),
     )
     .map_err(|e| UiError::Window(e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_bundled_window_icon_decodes_to_256_by_256() {
+        let icon = super::window_icon();
+        assert_eq!((icon.width, icon.height), (256, 256));
+        assert_eq!(icon.rgba.len(), 256 * 256 * 4);
+    }
 }

@@ -2,15 +2,18 @@
 //! meaning (command name, fields, errors). Filter by command, pause, copy, save as text to a
 //! typed or chosen file.
 //!
+//! Each frame is decoded with the profile it came under: after a change of device, the earlier
+//! frames keep their commands' names, marked with their profile's id.
+//!
 //! The view follows the newest frame unless the technician scrolls away; then it stays on the
 //! frames they scrolled to (held by sequence number, so that frames dropped from the front of a
 //! full log or arriving at the end do not move it), says how far behind the newest it is, and
 //! follows again from the bottom or with "Newest".
 
 use super::Action;
+use super::files;
 use super::settings::FileKind;
 use super::state::{AppState, Notice};
-use super::{files, no_dialog};
 use crate::i18n::{Lang, Zh};
 use crate::link::LogEntry;
 use crate::profile::{Profile, Text};
@@ -39,6 +42,8 @@ pub struct MonitorPanel {
     pub behind: Option<(usize, f64)>,
     /// The file the log is saved to.
     pub save_path: String,
+    /// The capture file recorded to or opened.
+    pub capture_path: String,
 }
 
 impl Default for MonitorPanel {
@@ -53,13 +58,24 @@ impl Default for MonitorPanel {
             top: None,
             behind: None,
             save_path: String::new(),
+            capture_path: String::new(),
         }
     }
 }
 
-/// One log line: `12:00:01.234 >> ff ff 03 82 00 81  MSP_GET_PWMVALUE`.
-pub fn line(profile: &Profile, e: &LogEntry) -> String {
+/// A frame to show: its sequence number, the profile it is decoded with, the frame.
+type Row<'a> = (u64, &'a Profile, &'a LogEntry);
+
+/// One log line: `12:00:01.234 >> ff ff 03 82 00 81  MSP_GET_PWMVALUE`, decoded with `profile`;
+/// a frame of another profile than `current` (the device in use now) is marked with its
+/// profile's id: `[window-cleaner] 12:00:01.234 >> …`.
+pub fn line(current: &Profile, profile: &Profile, e: &LogEntry) -> String {
     let time = chrono::DateTime::<chrono::Local>::from(e.at).format("%H:%M:%S%.3f");
+    let time = if profile.id == current.id {
+        time.to_string()
+    } else {
+        format!("[{}] {time}", profile.id)
+    };
     match &e.frame {
         Ok(p) => format!(
             "{time} {} {:<40} {}{}",
@@ -79,6 +95,93 @@ pub fn line(profile: &Profile, e: &LogEntry) -> String {
 }
 
 impl MonitorPanel {
+    /// The capture file row: its path (typed, or chosen with Browse…: opened at once), Record /
+    /// Stop recording with the file's size growing, Open capture / Back to live.
+    fn capture_bar(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+        let mut actions = Vec::new();
+        let recording = rt.recording();
+        let event = files::row(
+            ui,
+            lang,
+            lang.tr("Capture", "抓包文件"),
+            &mut self.capture_path,
+            "capture.pcapng",
+            files::Pick::Open(&["pcapng"]),
+            &rt.dialogs,
+            recording.is_none(),
+        );
+        let path = self.capture_path.trim().to_string();
+        match recording {
+            Some(c) => {
+                if ui.button(lang.tr("Stop recording", "停止录制")).clicked() {
+                    actions.push(Action::StopCapture);
+                }
+                let lost = if c.dropped() > 0 {
+                    format!(", {} {}", c.dropped(), lang.tr("chunks lost", "块丢失"))
+                } else {
+                    String::new()
+                };
+                ui.colored_label(
+                    egui::Color32::RED,
+                    format!(
+                        "{} {}  {:.1} KiB{lost}",
+                        lang.tr("REC", "录制中"),
+                        c.path(),
+                        c.file_bytes() as f64 / 1024.0
+                    ),
+                );
+                ui.ctx()
+                    .request_repaint_after(std::time::Duration::from_millis(250));
+            }
+            None => {
+                let record = ui
+                    .add_enabled(rt.connected(), egui::Button::new(lang.tr("Record", "录制")))
+                    .on_hover_text(lang.tr(
+                        "record the port's bytes to a new pcapng capture at the path typed \
+                         (Wireshark, botbench sim replay)",
+                        "将端口字节录制到所填路径的新 pcapng 抓包文件(Wireshark、botbench sim replay)",
+                    ));
+                if record.clicked() {
+                    match record_to(&path) {
+                        Ok(p) => {
+                            actions.push(Action::RememberFile(FileKind::Capture, path.clone()));
+                            actions.push(Action::StartCapture(p));
+                        }
+                        Err(n) => actions.push(Action::Notify(n)),
+                    }
+                }
+            }
+        }
+        match &rt.packets.offline {
+            Some(o) => {
+                ui.label(format!(
+                    "{} {}{}",
+                    lang.tr("viewing", "查看"),
+                    o.name,
+                    o.truncated
+                        .as_ref()
+                        .map_or(String::new(), |t| format!(" (cut off: {t})"))
+                ));
+                if ui.button(lang.tr("Back to live", "返回实时")).clicked() {
+                    actions.push(Action::CloseCapture);
+                }
+            }
+            None => {
+                let open = ui
+                    .add_enabled(
+                        !path.is_empty(),
+                        egui::Button::new(lang.tr("Open capture", "打开抓包")),
+                    )
+                    .clicked();
+                if event.go(open, &mut actions) {
+                    actions.push(Action::RememberFile(FileKind::Capture, path.clone()));
+                    actions.push(Action::OpenCapture(path.into()));
+                }
+            }
+        }
+        actions
+    }
+
     fn matches(&self, profile: &Profile, e: &LogEntry) -> bool {
         if self.errors_only && e.frame.is_ok() {
             return false;
@@ -103,25 +206,28 @@ impl MonitorPanel {
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
         let log = &rt.packets;
-        // A capture opened offline is shown in place of the live log, decoded with its profile.
-        let (profile, entries_len, rows): (_, usize, Vec<(u64, &LogEntry)>) = match &log.offline {
+        // A capture opened offline is shown in place of the live log, decoded with its profile;
+        // the live log's frames each with the profile they came under.
+        let (profile, entries_len, rows): (_, usize, Vec<Row<'_>>) = match &log.offline {
             Some(o) => (
                 o.profile.clone(),
                 o.entries.len(),
                 (0u64..)
                     .zip(o.entries.iter())
-                    .filter(|(_, e)| self.matches(&o.profile, e))
+                    .map(|(s, e)| (s, &*o.profile, e))
+                    .filter(|(_, p, e)| self.matches(p, e))
                     .collect(),
             ),
             None => (
                 rt.device.profile.clone(),
                 log.entries.len(),
                 log.numbered()
-                    .filter(|(_, e)| self.matches(&rt.device.profile, e))
+                    .map(|(s, l)| (s, &*l.profile, &l.entry))
+                    .filter(|(_, p, e)| self.matches(p, e))
                     .collect(),
             ),
         };
-        crate::ui::layout::toolbar(ui, |ui| capture_bar(ui, lang, rt, &mut actions));
+        crate::ui::layout::toolbar(ui, |ui| actions.extend(self.capture_bar(ui, lang, rt)));
         crate::ui::layout::toolbar(ui, |ui| {
             let label = ui.label(lang.tr("Filter", "筛选"));
             ui.add(
@@ -143,7 +249,8 @@ impl MonitorPanel {
                 actions.push(Action::ClearPacketLog);
             }
             if ui.button(lang.tr("Copy", "复制")).clicked() {
-                let shown: Vec<String> = rows.iter().map(|(_, e)| line(&profile, e)).collect();
+                let shown: Vec<String> =
+                    rows.iter().map(|(_, p, e)| line(&profile, p, e)).collect();
                 ui.ctx().copy_text(shown.join("\n"));
                 actions.push(Action::Notify(Notice::info(Text::new(
                     format!("{} line(s) copied", shown.len()),
@@ -178,13 +285,8 @@ impl MonitorPanel {
                 true,
             );
             let save = ui.button(lang.tr("Save", "保存")).clicked();
-            match event {
-                files::FileEvent::NoDialog(why) => {
-                    actions.push(Action::Notify(Notice::error(no_dialog(why))))
-                }
-                files::FileEvent::Chosen(_) => actions.extend(self.save(&profile, &rows)),
-                files::FileEvent::None if save => actions.extend(self.save(&profile, &rows)),
-                files::FileEvent::None => {}
+            if event.go(save, &mut actions) {
+                actions.extend(self.save(&profile, &rows));
             }
         });
         self.where_the_view_is(ui, lang);
@@ -214,7 +316,7 @@ impl MonitorPanel {
     }
 
     /// The rows, in a scroll area with a solid scroll bar, placed where the view is held.
-    fn rows(&mut self, ui: &mut egui::Ui, profile: &Profile, rows: &[(u64, &LogEntry)]) {
+    fn rows(&mut self, ui: &mut egui::Ui, profile: &Profile, rows: &[Row<'_>]) {
         // show_rows adds the spacing between rows itself.
         let text_h = ui.text_style_height(&egui::TextStyle::Monospace);
         let row_h = text_h + ui.spacing().item_spacing.y;
@@ -230,7 +332,9 @@ impl MonitorPanel {
             (content - view_h).max(0.0)
         } else {
             match self.anchor {
-                Some((seq, into)) => rows.partition_point(|(s, _)| *s < seq) as f32 * row_h + into,
+                Some((seq, into)) => {
+                    rows.partition_point(|(s, _, _)| *s < seq) as f32 * row_h + into
+                }
                 None => self.placed.unwrap_or(0.0),
             }
         };
@@ -239,8 +343,8 @@ impl MonitorPanel {
             .scroll_bar_visibility(egui::scroll_area::ScrollBarVisibility::AlwaysVisible)
             .vertical_scroll_offset(offset)
             .show_rows(ui, text_h, rows.len(), |ui, range| {
-                for (_, e) in &rows[range] {
-                    let text = line(profile, e);
+                for (_, p, e) in &rows[range] {
+                    let text = line(profile, p, e);
                     let unsolicited = matches!(&e.frame, Ok(p) if matches!(p.header, crate::packet::Header::MspReply { kind: crate::protocol::msp::ReplyKind::Async }));
                     let color = match (&e.frame, e.direction) {
                         (Err(_), _) => egui::Color32::RED,
@@ -267,14 +371,14 @@ impl MonitorPanel {
             self.follow = now >= max - 1.0;
         }
         let top = ((now / row_h).floor() as usize).min(rows.len().saturating_sub(1));
-        self.top = rows.get(top).map(|(s, _)| *s);
+        self.top = rows.get(top).map(|(s, _, _)| *s);
         self.anchor = (!self.follow)
             .then(|| self.top.map(|s| (s, now - top as f32 * row_h)))
             .flatten();
         self.placed = Some(now);
         let last_in_view = (((now + view_h) / row_h).ceil() as usize).min(rows.len());
         self.behind = match (rows.get(last_in_view.saturating_sub(1)), rows.last()) {
-            (Some((_, seen)), Some((_, newest))) if !self.follow => {
+            (Some((_, _, seen)), Some((_, _, newest))) if !self.follow => {
                 let secs = newest
                     .at
                     .duration_since(seen.at)
@@ -286,7 +390,7 @@ impl MonitorPanel {
     }
 
     /// Writes the rows shown to the typed (or chosen) file.
-    fn save(&self, profile: &Profile, rows: &[(u64, &LogEntry)]) -> Vec<Action> {
+    fn save(&self, profile: &Profile, rows: &[Row<'_>]) -> Vec<Action> {
         let path = self.save_path.trim();
         if path.is_empty() {
             return vec![Action::Notify(Notice::error(Text::new(
@@ -294,7 +398,7 @@ impl MonitorPanel {
                 "保存:请给出文件路径(输入,或点击浏览)",
             )))];
         }
-        let lines: Vec<String> = rows.iter().map(|(_, e)| line(profile, e)).collect();
+        let lines: Vec<String> = rows.iter().map(|(_, p, e)| line(profile, p, e)).collect();
         match crate::document::write_atomic(
             std::path::Path::new(path),
             (lines.join("\n") + "\n").as_bytes(),
@@ -311,82 +415,22 @@ impl MonitorPanel {
     }
 }
 
-/// Record / Stop with the file's size growing; Open capture / Back to live.
-fn capture_bar(ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
-    match rt.recording() {
-        Some(c) => {
-            if ui.button(lang.tr("Stop recording", "停止录制")).clicked() {
-                actions.push(Action::StopCapture);
-            }
-            let lost = if c.dropped() > 0 {
-                format!(", {} {}", c.dropped(), lang.tr("chunks lost", "块丢失"))
-            } else {
-                String::new()
-            };
-            ui.colored_label(
-                egui::Color32::RED,
-                format!(
-                    "{} {}  {:.1} KiB{lost}",
-                    lang.tr("REC", "录制中"),
-                    c.path(),
-                    c.file_bytes() as f64 / 1024.0
-                ),
-            );
-            ui.ctx()
-                .request_repaint_after(std::time::Duration::from_millis(250));
-        }
-        None => {
-            let record = ui
-                .add_enabled(
-                    rt.connected(),
-                    egui::Button::new(lang.tr("Record…", "录制…")),
-                )
-                .on_hover_text(lang.tr(
-                    "record the port's bytes to a pcapng capture (Wireshark, botbench sim replay)",
-                    "将端口字节录制为 pcapng 抓包文件(Wireshark、botbench sim replay)",
-                ));
-            if record.clicked() {
-                actions.push(pick("capture.pcapng", true, Action::StartCapture));
-            }
-        }
+/// Where a capture is recorded to: the typed path, unless there is none or it names a file
+/// that exists (a recording replaces nothing; the dialog asks before it does).
+fn record_to(path: &str) -> Result<std::path::PathBuf, Notice> {
+    let path = path.trim();
+    if path.is_empty() {
+        return Err(Notice::error(Text::new(
+            "record: give the capture file's path (type it, or Browse)",
+            "录制:请给出抓包文件的路径(输入或浏览)",
+        )));
     }
-    match &rt.packets.offline {
-        Some(o) => {
-            ui.label(format!(
-                "{} {}{}",
-                lang.tr("viewing", "查看"),
-                o.name,
-                o.truncated
-                    .as_ref()
-                    .map_or(String::new(), |t| format!(" (cut off: {t})"))
-            ));
-            if ui.button(lang.tr("Back to live", "返回实时")).clicked() {
-                actions.push(Action::CloseCapture);
-            }
-        }
-        None => {
-            if ui.button(lang.tr("Open capture…", "打开抓包…")).clicked() {
-                actions.push(pick("capture.pcapng", false, Action::OpenCapture));
-            }
-        }
+    let p = std::path::PathBuf::from(path);
+    if p.exists() {
+        return Err(Notice::error(Text::new(
+            format!("record: {path} exists; a recording replaces no file: give a new name"),
+            format!("录制:{path} 已存在;录制不覆盖任何文件:请换一个文件名"),
+        )));
     }
-}
-
-/// A file from the dialog made into an action, or a notice that none was chosen.
-fn pick(name: &str, save: bool, then: fn(std::path::PathBuf) -> Action) -> Action {
-    let dialog = rfd::FileDialog::new()
-        .add_filter("pcapng", &["pcapng"])
-        .set_file_name(name);
-    let path = if save {
-        dialog.save_file()
-    } else {
-        dialog.pick_file()
-    };
-    match path {
-        Some(p) => then(p),
-        None => Action::Notify(Notice::info(Text::new(
-            "cancelled (no file chosen, or no file dialog on this system)",
-            "已取消(未选择文件,或此系统没有文件对话框)",
-        ))),
-    }
+    Ok(p)
 }

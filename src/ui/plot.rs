@@ -5,8 +5,10 @@
 //! without decimals) and a key of the fields' names in the window's language above the plot,
 //! where it covers no data.
 
+use super::inputs::readout_text;
+use super::state::{AppState, Reading};
 use crate::i18n::Lang;
-use crate::profile::{Command, Field};
+use crate::profile::{Command, Field, Value};
 use crate::series::SeriesSet;
 use eframe::egui;
 use egui_plot::{GridMark, Line, Plot, PlotPoints, PlotUi};
@@ -122,13 +124,61 @@ pub fn axes<'a>(plot: Plot<'a>, lang: Lang, t0: SystemTime, legend: &Legend) -> 
 }
 
 /// The fields' names in their colours, on a line above the plot (a legend inside it would
-/// cover the newest data).
-pub fn key(ui: &mut egui::Ui, legend: &Legend) {
+/// cover the newest data), then the plot's states as they read now (see [`states`]).
+pub fn key(ui: &mut egui::Ui, legend: &Legend, states: &[String]) {
     crate::ui::layout::toolbar(ui, |ui| {
         for (i, name) in legend.names.iter().enumerate() {
             ui.colored_label(color(i), format!("— {name}"));
         }
+        for s in states {
+            ui.separator();
+            ui.strong(s);
+        }
     });
+}
+
+/// A reading older than this is shown with its age.
+pub const STALE: Duration = Duration::from_secs(3);
+
+/// The plot's state fields (enums, flags, bit fields: never drawn as lines) as the last reading
+/// of its command has them, names in `lang`: `Battery state: Warning (1)`, with its age when it
+/// is older than [`STALE`] (`… (12 s ago)`); `Battery state: —` while no reading has one (before
+/// the first, after a failed poll, after the link was lost).
+pub fn states(rt: &AppState, plot: &crate::profile::Plot, lang: Lang) -> Vec<String> {
+    let Some(cmd) = rt.device.profile.command(&plot.command) else {
+        return Vec::new();
+    };
+    let reading = match rt.device.readings.get(&cmd.id) {
+        Some(Reading::Values(values, at)) => Some((values, at.elapsed())),
+        _ => None,
+    };
+    plot.states
+        .iter()
+        .filter_map(|ident| {
+            cmd.reply
+                .iter()
+                .find(|f| f.ident.eq_ignore_ascii_case(ident))
+        })
+        .map(|f| {
+            let value = reading.and_then(|(values, age)| Some((values.get(&f.ident)?, age)));
+            state_text(f, value, lang)
+        })
+        .collect()
+}
+
+/// One state as [`states`] shows it, from its value and that value's age.
+fn state_text(f: &Field, value: Option<(&Value, Duration)>, lang: Lang) -> String {
+    let name = lang.tr(&f.name.en, &f.name.zh);
+    match value {
+        Some((v, age)) if age > STALE => format!(
+            "{name}: {} ({:.0} s {})",
+            readout_text(f, v, lang),
+            age.as_secs_f64(),
+            lang.tr("ago", "前")
+        ),
+        Some((v, _)) => format!("{name}: {}", readout_text(f, v, lang)),
+        None => format!("{name}: —"),
+    }
 }
 
 /// Draws `fields` of `set` over `[t0, t1]`, decimated to `width_px` columns: one line per
@@ -243,6 +293,25 @@ mod tests {
             Legend::new(None, &["eulerX".to_string()], Lang::Zh).y_label,
             "单位未公布"
         );
+    }
+
+    #[test]
+    fn a_state_reads_by_its_name_with_its_age_once_stale_and_a_dash_without_a_value() {
+        let p = crate::sim::msp_device::builtin_profile("solar-cleanbot").unwrap();
+        let f = p.command("CMD_BATTERY_STATE").unwrap().reply[1].clone();
+        let warning = Value::Int(1);
+        let fresh = Some((&warning, Duration::from_millis(200)));
+        assert_eq!(
+            state_text(&f, fresh, Lang::En),
+            "Battery state: Warning (1)"
+        );
+        assert_eq!(state_text(&f, fresh, Lang::Zh), "电池状态: 警告 (1)");
+        let old = Some((&warning, Duration::from_secs(12)));
+        assert_eq!(
+            state_text(&f, old, Lang::En),
+            "Battery state: Warning (1) (12 s ago)"
+        );
+        assert_eq!(state_text(&f, None, Lang::En), "Battery state: —");
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use super::jobs::{self, Job, JobError, JobOutput};
 use super::settings::FileKind;
-use super::state::{AppState, Notice, Reading};
+use super::state::{AppState, Reading};
 use super::{Action, files};
 use crate::document::DocumentError;
 use crate::i18n::{Lang, Zh};
@@ -133,13 +133,8 @@ impl PresetsPanel {
                 true,
             );
             let open = ui.button(lang.tr("Open", "打开")).clicked();
-            match event {
-                files::FileEvent::NoDialog(why) => {
-                    actions.push(Action::Notify(Notice::error(super::no_dialog(why))))
-                }
-                files::FileEvent::Chosen(_) => actions.extend(self.open_and_remember(rt)),
-                files::FileEvent::None if open => actions.extend(self.open_and_remember(rt)),
-                files::FileEvent::None => {}
+            if event.go(open, &mut actions) {
+                actions.extend(self.open_and_remember(rt));
             }
         });
         crate::ui::layout::toolbar(ui, |ui| {

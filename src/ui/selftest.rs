@@ -5,7 +5,7 @@
 
 use super::jobs::{Job, JobError, JobOutput, LogError};
 use super::settings::FileKind;
-use super::state::{AppState, Notice};
+use super::state::AppState;
 use super::{Action, files};
 use crate::document::DocumentError;
 use crate::i18n::{Lang, Zh};
@@ -293,24 +293,22 @@ impl SelfTestPanel {
                     egui::Button::new(lang.tr("Open plan", "打开方案")),
                 )
                 .clicked();
-            match event {
-                files::FileEvent::NoDialog(why) => {
-                    actions.push(Action::Notify(Notice::error(super::no_dialog(why))))
-                }
-                files::FileEvent::Chosen(_) => actions.extend(self.open_and_remember(rt)),
-                files::FileEvent::None if open => actions.extend(self.open_and_remember(rt)),
-                files::FileEvent::None => {}
+            if event.go(open, &mut actions) {
+                actions.extend(self.open_and_remember(rt));
             }
         });
         crate::ui::layout::toolbar(ui, |ui| {
-            let label = ui.label(lang.tr("Log file (JSON lines)", "日志文件(JSON 行)"));
-            ui.add_enabled(
+            let event = files::row(
+                ui,
+                lang,
+                lang.tr("Log file (JSON lines)", "日志文件(JSON 行)"),
+                &mut self.log_path,
+                lang.tr("empty: no log", "留空:不记录"),
+                files::Pick::Save(DEFAULT_LOG),
+                &rt.dialogs,
                 !self.running,
-                egui::TextEdit::singleline(&mut self.log_path)
-                    .desired_width(320.0)
-                    .hint_text(lang.tr("empty: no log", "留空:不记录")),
-            )
-            .labelled_by(label.id);
+            );
+            event.go(false, &mut actions);
         });
         if let Some(e) = &self.error {
             ui.colored_label(
@@ -339,6 +337,10 @@ impl SelfTestPanel {
                 )
                 .clicked()
             {
+                let log = self.log_path.trim().to_string();
+                if !log.is_empty() {
+                    actions.push(Action::RememberFile(FileKind::SelfTestLog, log));
+                }
                 actions.extend(self.start(rt));
             }
             if self.running && ui.button(lang.tr("Cancel", "取消")).clicked() {

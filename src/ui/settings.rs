@@ -62,6 +62,10 @@ pub enum FileKind {
     ProvisionPlan,
     /// The provisioning CSV log.
     ProvisionLog,
+    /// A Tuya MCU firmware image (OTA).
+    Firmware,
+    /// A capture file (pcapng) recorded or opened in the packet monitor.
+    Capture,
 }
 
 impl Default for Settings {

@@ -167,13 +167,8 @@ impl TelemetryPanel {
                 true,
             );
             let export = ui.button(lang.tr("Export CSV", "导出 CSV")).clicked();
-            match event {
-                files::FileEvent::NoDialog(why) => {
-                    actions.push(Action::Notify(Notice::error(super::no_dialog(why))))
-                }
-                files::FileEvent::Chosen(_) => actions.extend(export_csv(rt, &self.csv_path)),
-                files::FileEvent::None if export => actions.extend(export_csv(rt, &self.csv_path)),
-                files::FileEvent::None => {}
+            if event.go(export, &mut actions) {
+                actions.extend(export_csv(rt, &self.csv_path));
             }
         });
         ui.separator();
@@ -226,7 +221,7 @@ impl TelemetryPanel {
                     ui.label(egui::RichText::new(lang.tr(&p.name.en, &p.name.zh)).strong());
                     let legend =
                         plot::Legend::new(rt.device.profile.command(&p.command), &p.fields, lang);
-                    plot::key(ui, &legend);
+                    plot::key(ui, &legend, &plot::states(rt, p, lang));
                     let set = rt.device.plots.get(&p.id);
                     let end = if follow {
                         rt.plot_end()

@@ -1,6 +1,7 @@
 //! The screenshot tour (`botbench gui --screenshots DIR`, used by `.ci/screenshot.sh`): one
-//! launch of the window connects to each built-in demo device in turn, lets it answer and plot
-//! (for [`SETTLE`] where it has plots), prepares what a technician would have on screen (the
+//! launch of the window connects to each built-in demo device in turn, waits until it has come
+//! up (see [`settled`]: answering, identified or shaken hands with, every plot holding
+//! [`PLOTTED_SECS`] of samples), prepares what a technician would have on screen (the
 //! servo bus scanned and a servo's parameters read, the Tuya MCU's own requests, the self-test
 //! plan and the factory preset opened), then shows every view the device has ([`App::views`]:
 //! each panel, each tab, each tuning group) at each size in [`SIZES`] and in each language,
@@ -11,8 +12,11 @@
 //! is written on a thread of its own while the next view is drawn. Each shot's frame is also
 //! checked: a label it parts over two lines ([`super::layout::split_words`]) is a failure.
 
+use super::state::AppState;
 use super::{App, View};
 use crate::i18n::Lang;
+use crate::profile::Protocol;
+use crate::series::SeriesSet;
 use crate::sim::SimKind;
 use crate::sim::tuya_mcu::McuRequest;
 use eframe::egui;
@@ -23,10 +27,10 @@ use std::time::{Duration, Instant};
 
 /// The window sizes shot, logical points: the line PCs' usual screen and a small one.
 pub const SIZES: [[f32; 2]; 2] = [[1280.0, 800.0], [1024.0, 600.0]];
-/// How long a device with plots is left to answer, read and plot before its first shot.
-pub const SETTLE: Duration = Duration::from_secs(4);
-/// A device that is not answering (or a preparation not done) after this long is shot as it
-/// is (and reported).
+/// Seconds of samples each plot of a device holds before its first shot.
+pub const PLOTTED_SECS: f64 = 1.5;
+/// A device that has not come up (or a preparation not done) after this long is shot as it is
+/// (and reported).
 const PATIENCE: Duration = Duration::from_secs(30);
 /// Frames drawn for a view before it is shot (egui lays a new view out over two passes).
 const FRAMES_BEFORE_SHOT: u32 = 3;
@@ -50,7 +54,7 @@ struct Prep {
 enum Phase {
     /// Connect to the next device.
     Connect,
-    /// Connected at this instant; waiting for it to answer (and plot).
+    /// Connected at this instant; waiting until it has come up ([`settled`]).
     Settle(Instant),
     /// The preparation step at this index, started at this instant.
     Prepare(usize, Instant),
@@ -117,17 +121,14 @@ impl Tour {
                 None => self.finish(ctx),
             },
             Phase::Settle(since) => {
-                let rt = &app.state;
-                let answering = rt.connected() && rt.job_progress().is_none();
-                let settle = if rt.device.profile.plots.is_empty() {
-                    Duration::ZERO
-                } else {
-                    SETTLE
-                };
-                let waited = since.elapsed();
-                if (answering && waited >= settle) || waited >= PATIENCE {
-                    if !answering {
-                        self.fail(format!("{} did not answer", self.device_name()));
+                let up = settled(&app.state);
+                if up || since.elapsed() >= PATIENCE {
+                    if !up {
+                        self.fail(format!(
+                            "{} did not come up within {} s",
+                            self.device_name(),
+                            PATIENCE.as_secs()
+                        ));
                     }
                     self.phase = Phase::Prepare(0, Instant::now());
                     self.start_prep(app, 0);
@@ -375,6 +376,29 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
         }],
         SimKind::SolarCleanbot => Vec::new(),
     }
+}
+
+/// Whether the connected device has come up far enough to be shown: answering with no job
+/// running, and by protocol: MSP identified (CMD_VERSION answered) and each plot of its profile
+/// holding [`PLOTTED_SECS`] of samples (they are polled from the connection on:
+/// [`crate::ops::telemetry::polls`]); Tuya shaken hands with; a servo bus at once (nothing is
+/// polled until the servo bench asks).
+fn settled(rt: &AppState) -> bool {
+    let d = &rt.device;
+    let plotted = || {
+        d.profile.plots.iter().all(|p| {
+            d.plots
+                .get(&p.id)
+                .and_then(SeriesSet::span)
+                .is_some_and(|(first, last)| last - first >= PLOTTED_SECS)
+        })
+    };
+    let up = match d.profile.protocol {
+        Protocol::Msp => matches!(d.info, Some(Ok(_))) && plotted(),
+        Protocol::Tuya => d.tuya.done_at.is_some(),
+        Protocol::Servo => true,
+    };
+    rt.connected() && rt.job_progress().is_none() && up
 }
 
 /// Writes `image` to `path` as PNG (the folder is created if missing).

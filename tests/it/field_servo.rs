@@ -12,7 +12,7 @@ use botbench::sim::servo_bus::{ServoBus, SimServo};
 use botbench::sim::{Faults, PtyServer, SharedDevice};
 use std::sync::{Arc, Mutex};
 
-use crate::support::cli::{MARGIN_MS, Ran, SimProcess, run_watched};
+use crate::support::cli::{Ran, SimProcess, run_watched};
 
 /// The ids a `servo --json scan` found, each with its presence status.
 fn scanned(run: &Ran) -> Vec<(u64, String)> {
@@ -143,30 +143,9 @@ fn a_slow_host_still_finds_every_servo_and_every_answer() {
 #[test]
 fn a_one_wire_bus_echo_is_not_taken_for_an_answer() {
     let sim = SimProcess::start(&["servo-bus", "--servos", "2,3", "--echo"]);
-    let p = sim.path.as_str();
-    let scan = run_watched(&[
-        "servo",
-        "--port",
-        p,
-        "--margin-ms",
-        MARGIN_MS,
-        "--json",
-        "scan",
-        "--ids",
-        "0-10",
-    ]);
+    let scan = sim.cli("servo", &["--json", "scan", "--ids", "0-10"]);
     assert_eq!(scanned(&scan), present(&[2, 3]), "{}", scan.text());
-    let write = run_watched(&[
-        "servo",
-        "--port",
-        p,
-        "--margin-ms",
-        MARGIN_MS,
-        "write",
-        "3",
-        "over_temprature",
-        "70",
-    ]);
+    let write = sim.cli("servo", &["write", "3", "over_temprature", "70"]);
     assert_eq!(write.code, 0, "{}", write.text());
     assert!(write.out.contains("verified"), "{}", write.text());
 }
@@ -174,24 +153,14 @@ fn a_one_wire_bus_echo_is_not_taken_for_an_answer() {
 #[test]
 fn a_servo_that_ignores_a_baud_change_is_reported_where_it_still_is() {
     let sim = SimProcess::start(&["servo-bus", "--servos", "4", "--ignore-baud-change"]);
-    let p = sim.path.as_str();
-    let set = run_watched(&[
-        "servo",
-        "--port",
-        p,
-        "--margin-ms",
-        MARGIN_MS,
-        "set-baud",
-        "4",
-        "57600",
-    ]);
+    let set = sim.cli("servo", &["set-baud", "4", "57600"]);
     assert_eq!(set.code, 1, "{}", set.text());
     assert!(
         set.err.contains("57600") && set.err.contains("115200"),
         "the error says where the servo is: {}",
         set.text()
     );
-    let ping = run_watched(&["servo", "--port", p, "--margin-ms", MARGIN_MS, "ping", "4"]);
+    let ping = sim.cli("servo", &["ping", "4"]);
     assert_eq!(ping.code, 0, "still at 115200: {}", ping.text());
 }
 
@@ -224,33 +193,14 @@ fn the_broadcast_id_is_refused_where_an_answer_is_expected_before_the_port_is_op
 #[test]
 fn an_explicit_broadcast_changes_every_servo_and_reads_nothing_back() {
     let sim = SimProcess::start(&["servo-bus", "--servos", "1,2"]);
-    let p = sim.path.as_str();
-    let run = run_watched(&[
+    let run = sim.cli(
         "servo",
-        "--port",
-        p,
-        "--margin-ms",
-        MARGIN_MS,
-        "write",
-        "255",
-        "over_temprature",
-        "70",
-        "--broadcast",
-    ]);
+        &["write", "255", "over_temprature", "70", "--broadcast"],
+    );
     assert_eq!(run.code, 0, "{}", run.text());
     assert!(run.out.contains("nothing read back"), "{}", run.text());
     for id in ["1", "2"] {
-        let read = run_watched(&[
-            "servo",
-            "--port",
-            p,
-            "--margin-ms",
-            MARGIN_MS,
-            "--json",
-            "read",
-            id,
-            "over_temprature",
-        ]);
+        let read = sim.cli("servo", &["--json", "read", id, "over_temprature"]);
         assert_eq!(
             read.json_docs()[0]["params"][0]["value"],
             70,

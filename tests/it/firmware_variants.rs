@@ -13,7 +13,7 @@ use botbench::sim::msp_device::MspCore;
 use botbench::sim::window_cleaner::{DEVICE_CODE, WindowCleaner};
 use std::sync::Arc;
 
-use crate::support::cli::{self, SimProcess, run as botbench};
+use crate::support::cli::{SimProcess, run as botbench};
 use crate::support::{Served, builtin_src, connect, inputs, line_of, profile, serve, temp_dir};
 
 #[test]
@@ -198,15 +198,7 @@ fn msp_get_shows_a_short_answer_as_such_with_its_raw_bytes() {
     let file = dir.path().join("window-cleaner-drift.ron");
     std::fs::write(&file, DRIFT).unwrap();
     let sim = SimProcess::start(&["window-cleaner", "--profile", file.to_str().unwrap()]);
-    let o = botbench(&[
-        "msp",
-        "--margin-ms",
-        cli::MARGIN_MS,
-        "--port",
-        &sim.path,
-        "get",
-        "MSP_GET_SPRAY_VALUE",
-    ]);
+    let o = sim.cli("msp", &["get", "MSP_GET_SPRAY_VALUE"]);
     assert_eq!(o.code, 1, "{}{}", o.out, o.err);
     let out = o.out;
     assert!(
@@ -214,29 +206,12 @@ fn msp_get_shows_a_short_answer_as_such_with_its_raw_bytes() {
         "{out}"
     );
     assert!(out.contains("payload = 96 00 1e 03"), "{out}");
-    let o = botbench(&[
-        "msp",
-        "--margin-ms",
-        cli::MARGIN_MS,
-        "--port",
-        &sim.path,
-        "get",
-        "MSP_GET_SPRAY_VALUE",
-        "--json",
-    ]);
+    let o = sim.cli("msp", &["get", "MSP_GET_SPRAY_VALUE", "--json"]);
     let doc = o.json();
     assert_eq!(doc["ok"], false);
     assert_eq!(doc["payload"], "96 00 1e 03");
     // A clean answer still exits 0.
-    let o = botbench(&[
-        "msp",
-        "--margin-ms",
-        cli::MARGIN_MS,
-        "--port",
-        &sim.path,
-        "get",
-        "MSP_GET_MOTOR_VALUE",
-    ]);
+    let o = sim.cli("msp", &["get", "MSP_GET_MOTOR_VALUE"]);
     assert_eq!(o.code, 0, "{}{}", o.out, o.err);
     drop(sim);
 }

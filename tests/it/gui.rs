@@ -9,7 +9,9 @@ use botbench::ui::{App, PanelId};
 use egui_kittest::kittest::Queryable;
 use std::time::Duration;
 
-use crate::support::gui::{H, app, app_mut, edit_value, settings, step_until};
+use crate::support::gui::{
+    self, H, app, app_mut, edit_value, idle, settings, step_until, tuning_values,
+};
 use crate::support::{Served, serve, serve_with, temp_dir, window_cleaner};
 
 fn bench() -> Served<WindowCleaner> {
@@ -18,25 +20,11 @@ fn bench() -> Served<WindowCleaner> {
 
 /// The app on the window cleaner at `path`, with the protocol's own answer margin.
 fn harness(path: &str, panel: PanelId) -> H {
-    crate::support::gui::harness(settings(path, "window-cleaner", panel, Lang::En))
+    gui::on_window_cleaner(path, panel, None)
 }
 
-fn all_read(app: &App) -> bool {
-    (130..=136).all(|id| {
-        matches!(
-            app.state.device.readings.get(&id),
-            Some(Reading::Values(..))
-        )
-    })
-}
-
-fn read_all(h: &mut H) {
-    step_until(h, "the link", |a| a.state.connected());
-    h.get_by_label("Read all").click();
-    // Also the read job's end: while it runs, writing is disabled.
-    step_until(h, "every parameter read", |a| {
-        all_read(a) && a.state.job_progress().is_none()
-    });
+fn all_read(a: &App) -> bool {
+    tuning_values(a, None).is_some()
 }
 
 #[test]
@@ -48,7 +36,7 @@ fn read_all_brings_every_parameter_from_the_device() {
         .set_param("waterPumpDuration", 4321)
         .unwrap();
     let mut h = harness(b.path(), PanelId::Tuning);
-    read_all(&mut h);
+    gui::read_all(&mut h);
     let want = b.sim().param("waterPumpDuration").unwrap();
     let got = match app(&h).state.device.readings.get(&135) {
         Some(Reading::Values(v, _)) => v.get("waterPumpDuration").cloned(),
@@ -67,7 +55,7 @@ fn an_out_of_range_edit_is_refused_for_writing() {
     let b = bench();
     b.sim().set_param("pwmValue", 33).unwrap();
     let mut h = harness(b.path(), PanelId::Tuning);
-    read_all(&mut h);
+    gui::read_all(&mut h);
     h.step();
     edit_value(&mut h, "33", "101");
     let a = app(&h);
@@ -95,7 +83,7 @@ fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
     let b = bench();
     b.sim().set_param("pwmValue", 33).unwrap();
     let mut h = harness(b.path(), PanelId::Tuning);
-    read_all(&mut h);
+    gui::read_all(&mut h);
     h.step();
     edit_value(&mut h, "33", "64");
     h.get_by_label_contains("Write changes (1)").click();
@@ -135,9 +123,7 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
     let dir = temp_dir();
     let path = dir.path().join("preset.ron");
     let mut h = harness(b.path(), PanelId::Presets);
-    step_until(&mut h, "the first read", |a| {
-        all_read(a) && a.state.job_progress().is_none()
-    });
+    step_until(&mut h, "the first read", |a| all_read(a) && idle(a));
     app_mut(&mut h).presets.path = path.display().to_string();
     h.step();
     h.get_by_label("Save device to file").click();

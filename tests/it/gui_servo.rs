@@ -5,6 +5,8 @@ use botbench::i18n::Lang;
 use botbench::ops::OpError;
 use botbench::ops::servo::Presence;
 use botbench::sim::servo_bus::{Motion, ServoBus, SimServo};
+use botbench::ui::files::Dialogs;
+use botbench::ui::settings::FileKind;
 use botbench::ui::{Action, App, PanelId};
 use egui::accesskit::Role;
 use egui_kittest::kittest::{By, NodeT, Queryable};
@@ -219,6 +221,18 @@ fn provision_next_on_a_fresh_servo_shows_pass_and_the_servo_has_the_plans_id_and
         env!("CARGO_MANIFEST_DIR"),
         "/presets/servo-provision-plan.ron"
     );
+    // Without a file dialog, Browse says so; typed paths work.
+    app_mut(&mut h).state.dialogs = Dialogs::Missing("no file dialog here (test)".into());
+    for i in 0..2 {
+        app_mut(&mut h).state.notice = None;
+        h.query_all_by_label("Browse…")
+            .nth(i)
+            .expect("Browse")
+            .click();
+        h.step();
+        let notice = app(&h).state.notice.clone().expect("said");
+        assert!(notice.error && notice.text == "no file dialog here (test)");
+    }
     type_into(&mut h, "Plan", plan);
     type_into(&mut h, "CSV log", &log.display().to_string());
     h.get_by_label("Load plan").click();
@@ -228,6 +242,7 @@ fn provision_next_on_a_fresh_servo_shows_pass_and_the_servo_has_the_plans_id_and
         "{:?}",
         app(&h).servo.production.plan_error
     );
+    assert_eq!(app(&h).settings.file(FileKind::ProvisionPlan), Some(plan));
     h.get_by_label("Provision next").click();
     h.step();
     step_until(&mut h, "provisioning", |a| {
@@ -242,6 +257,10 @@ fn provision_next_on_a_fresh_servo_shows_pass_and_the_servo_has_the_plans_id_and
     let s = b.servo(4001);
     assert_eq!((s.id(), s.baud()), (1, 500_000));
     assert_eq!(s.param(41), Some(70));
+    assert_eq!(
+        app(&h).settings.file(FileKind::ProvisionLog),
+        Some(log.display().to_string().as_str())
+    );
     let text = std::fs::read_to_string(&log).unwrap();
     assert_eq!(text.lines().count(), 2, "{text}");
     assert!(text.lines().nth(1).unwrap().contains("PASS"));
@@ -445,6 +464,11 @@ fn a_parameter_preset_saves_loads_and_writes_and_a_bad_one_is_refused_with_its_p
     h.get_by_label("Save preset").click();
     h.step();
     assert!(path.exists(), "{:?}", app(&h).servo.params.message);
+    assert_eq!(
+        app(&h).settings.file(FileKind::ServoPreset),
+        Some(path.display().to_string().as_str()),
+        "the preset's path is remembered"
+    );
     // The servo drifts from the preset; loading it brings the preset's value back as an edit.
     b.sim()
         .servo_by_serial_mut(91)

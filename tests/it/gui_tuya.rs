@@ -230,6 +230,7 @@ fn sent_dp_commands(a: &App) -> usize {
         .packets
         .entries
         .iter()
+        .map(|l| &l.entry)
         .filter(|e| {
             e.direction == botbench::protocol::Direction::HostToDevice
                 && e.frame.as_ref().is_ok_and(|p| p.command == 0x06)
@@ -359,8 +360,7 @@ fn update_asked(img: &[u8]) -> (tempfile::TempDir, Bench, H) {
     let mut h = harness(b.path(), "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "Firmware update");
-    app_mut(&mut h).tuya.ota.path = file.display().to_string();
-    h.step();
+    type_into(&mut h, "Firmware file", &file.display().to_string());
     h.get_by_label("Start update").click();
     h.run_steps(2);
     (tmp, b, h)
@@ -369,8 +369,16 @@ fn update_asked(img: &[u8]) -> (tempfile::TempDir, Bench, H) {
 #[test]
 fn an_update_from_the_panel_completes_and_the_mcu_holds_the_image() {
     let img = image(3000);
-    let (_dir, b, mut h) = update_asked(&img);
+    let (dir, b, mut h) = update_asked(&img);
     assert!(h.query_by_label("Update the MCU firmware?").is_some());
+    let typed = dir.path().join("firmware.bin").display().to_string();
+    assert_eq!(
+        app(&h)
+            .settings
+            .file(botbench::ui::settings::FileKind::Firmware),
+        Some(typed.as_str()),
+        "the typed image's path is remembered"
+    );
     h.get_by_label("Update").click();
     step_until(&mut h, "the update to end", |a| a.tuya.ota.result.is_some());
     let result = app(&h).tuya.ota.result.clone().unwrap();

@@ -12,7 +12,7 @@ use std::cell::Cell;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use crate::support::{Served, next_event, profile, serve_with};
+use crate::support::{Served, lossy, next_event, profile, serve_with};
 
 fn window_cleaner(faults: Faults) -> Served<WindowCleaner> {
     serve_with(crate::support::window_cleaner(), faults)
@@ -80,16 +80,22 @@ fn an_out_of_range_value_is_refused_before_anything_is_sent() {
     assert_eq!(b.sim().param("pwmValue"), before);
 }
 
+/// Whether `e` is what a lossy line gives: no answer, a garbled one, or one to something else.
+fn lost(e: &OpError) -> bool {
+    matches!(
+        e,
+        OpError::Exchange(
+            ExchangeError::Timeout { .. }
+                | ExchangeError::Garbled { .. }
+                | ExchangeError::Mismatch { .. }
+        )
+    )
+}
+
 #[test]
 fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_typed_errors() {
     let p = profile("window-cleaner");
-    let faults = Faults {
-        drop: 0.01,
-        corrupt: 0.01,
-        seed: 7,
-        ..Faults::default()
-    };
-    let b = window_cleaner(faults);
+    let b = window_cleaner(lossy(7));
     let link = open(b.path(), p.clone(), LinkOptions::default());
     let client = link.client();
     let get = p.command("MSP_GET_PWMVALUE").unwrap();
@@ -110,11 +116,7 @@ fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_type
                     assert_eq!(b.sim().param("pwmValue"), Some(v), "op {i}");
                     ok += 1;
                 }
-                Err(OpError::Exchange(
-                    ExchangeError::Timeout { .. }
-                    | ExchangeError::Garbled { .. }
-                    | ExchangeError::Mismatch { .. },
-                )) => errors += 1,
+                Err(e) if lost(&e) => errors += 1,
                 Err(e) => panic!("op {i}: untyped failure {e}"),
             }
         } else {
@@ -130,11 +132,7 @@ fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_type
                     );
                     ok += 1;
                 }
-                Err(OpError::Exchange(
-                    ExchangeError::Timeout { .. }
-                    | ExchangeError::Garbled { .. }
-                    | ExchangeError::Mismatch { .. },
-                )) => errors += 1,
+                Err(e) if lost(&e) => errors += 1,
                 Err(e) => panic!("op {i}: untyped failure {e}"),
             }
         }
@@ -175,13 +173,7 @@ fn polled_telemetry_arrives_as_events() {
 #[test]
 fn pipelined_polls_under_faults_never_mix_answers_with_each_other_or_with_writes() {
     let p = profile("window-cleaner");
-    let faults = Faults {
-        drop: 0.01,
-        corrupt: 0.01,
-        seed: 3,
-        ..Faults::default()
-    };
-    let b = window_cleaner(faults);
+    let b = window_cleaner(lossy(3));
     let options = LinkOptions {
         poll_pipeline: 2,
         ..LinkOptions::default()

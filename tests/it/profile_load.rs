@@ -137,3 +137,50 @@ fn a_panel_rule_with_a_bad_flag_or_an_unknown_panel_is_refused_with_its_line() {
     let err = parse("wc.ron", &src, None).unwrap_err();
     assert!(err.message.contains("listed twice"), "{err}");
 }
+
+#[test]
+fn a_plot_line_is_a_measurement_and_an_enum_is_shown_by_its_names() {
+    // Every plot of every built-in profile: lines are measurements, states are not.
+    let reg = Registry::builtin().expect("built-ins are consistent");
+    for name in reg.names() {
+        let p = reg.get(&name).unwrap();
+        for plot in &p.plots {
+            let cmd = p.command(&plot.command).expect("the plot's command");
+            let field = |ident: &String| cmd.reply.iter().find(|f| &f.ident == ident).unwrap();
+            for ident in &plot.fields {
+                assert!(
+                    field(ident).is_measurement(),
+                    "{name}: plot {} draws {ident} as a line",
+                    plot.id
+                );
+            }
+            for ident in &plot.states {
+                assert!(field(ident).is_state(), "{name}: {}: {ident}", plot.id);
+            }
+        }
+    }
+    // The solar cleanbot's battery state goes beside its voltage.
+    let solar = reg.get("solar-cleanbot").unwrap();
+    let battery = solar.plots.iter().find(|p| p.id == "battery").unwrap();
+    assert_eq!(
+        (battery.fields.as_slice(), battery.states.as_slice()),
+        (&["voltage".to_string()][..], &["state".to_string()][..])
+    );
+
+    // An enum drawn as a line is refused where it is named, saying where it goes instead.
+    let src = builtin("solar-cleanbot");
+    let line = r#"fields: ["voltage"], states: ["state"]"#;
+    assert!(src.contains(line), "test setup");
+    let bad = src.replacen(line, r#"fields: ["voltage", "state"]"#, 1);
+    let err = parse("solar-cleanbot.ron", &bad, None).unwrap_err();
+    assert!(err.message.contains("'state' is an enum"), "{err}");
+    assert!(err.message.contains("states"), "{err}");
+    assert_eq!(err.line, line_col_of(&bad, r#""state"]"#, 0).0, "{err}");
+    // …and so is a measurement listed as a state.
+    let bad = src.replacen(line, r#"fields: ["voltage"], states: ["voltage"]"#, 1);
+    let err = parse("solar-cleanbot.ron", &bad, None).unwrap_err();
+    assert!(
+        err.message.contains("a measurement goes under fields"),
+        "{err}"
+    );
+}

@@ -407,6 +407,7 @@ fn cli_sim_rejects_bad_options_with_exit_code_2() {
         &["sim", "toaster"][..],
         &["sim", "window-cleaner", "--drop", "1.5"][..],
         &["sim", "window-cleaner", "--corrupt", "-0.1"][..],
+        &["sim", "tuya-vacuum", "--report-every", "0"][..],
     ] {
         let o = cli::run(args);
         assert_eq!(o.code, 2, "{args:?}");

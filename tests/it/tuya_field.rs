@@ -12,7 +12,7 @@ use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use crate::support::cli::{Ran, SimProcess, botbench};
-use crate::support::{Served, next_event, open_link, profile, serve_plain, temp_dir};
+use crate::support::{Served, lossy, next_event, open_link, profile, serve_plain, temp_dir};
 
 /// The longest a command may run before it is taken for hung (an upload of hours).
 const HUNG: Duration = Duration::from_secs(90);
@@ -196,13 +196,7 @@ fn data_points_of_another_type_or_length_are_shown_raw_and_status_fails() {
 #[test]
 fn under_drops_and_corruption_status_asks_again_or_names_what_is_missing() {
     for seed in 1..=8u64 {
-        let faults = Faults {
-            drop: 0.01,
-            corrupt: 0.01,
-            seed,
-            ..Faults::default()
-        };
-        let served = serve(TuyaConfig::default(), faults);
+        let served = serve(TuyaConfig::default(), lossy(seed));
         let o = tuya(served.path(), &["status", "--json"]);
         let doc = o.json();
         let points = doc["data_points"].as_array().expect("data points").len();

@@ -289,9 +289,9 @@ fn stop_is_on_every_window_cleaner_panel_and_goes_straight_to_the_robot() {
     assert!(!ids.is_empty());
     step_until(&mut h, "every STOP command answered", |a| {
         ids.iter().all(|id| {
-            a.state.packets.entries.iter().any(|e| {
-                e.direction == botbench::protocol::Direction::DeviceToHost
-                    && e.frame.as_ref().is_ok_and(|p| p.command == *id)
+            a.state.packets.entries.iter().any(|l| {
+                l.entry.direction == botbench::protocol::Direction::DeviceToHost
+                    && l.entry.frame.as_ref().is_ok_and(|p| p.command == *id)
             })
         })
     });

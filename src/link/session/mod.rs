@@ -10,7 +10,7 @@
 pub mod msp;
 pub mod tuya;
 
-pub use msp::{DeviceInfo, build_date};
+pub use msp::{Capability, DeviceInfo, build_date, capabilities};
 
 use crate::link::request::{ExchangeError, Match, Reply, ReplySpec, Request};
 use crate::link::{LinkEvent, LinkOptions};
@@ -65,8 +65,13 @@ impl Unasked {
 pub(crate) enum ProtocolSession {
     /// MSP: identify once per connection.
     Msp(msp::MspSession),
-    /// The servo bus: exchanges only.
-    Servo,
+    /// The servo bus: exchanges only. `id_param` is the profile's servo id parameter
+    /// ([`crate::profile::ParamRole::ServoId`]), which every servo has: the fence after an
+    /// unanswered ping reads it.
+    Servo {
+        /// Its parameter id, if the profile has one.
+        id_param: Option<u8>,
+    },
     /// Tuya: botbench as the Wi-Fi module.
     Tuya(tuya::TuyaSession),
 }
@@ -77,7 +82,9 @@ impl ProtocolSession {
     pub(crate) fn new(profile: Arc<Profile>, options: &LinkOptions, now: Instant) -> Self {
         match profile.protocol {
             Protocol::Msp => Self::Msp(msp::MspSession::new(profile, options.start_session)),
-            Protocol::Servo => Self::Servo,
+            Protocol::Servo => Self::Servo {
+                id_param: profile.servo_id_param().map(|p| p.id),
+            },
             Protocol::Tuya => Self::Tuya(tuya::TuyaSession::new(
                 &profile,
                 options.tuya.clone(),
@@ -91,7 +98,7 @@ impl ProtocolSession {
     pub(crate) fn protocol(&self) -> Protocol {
         match self {
             Self::Msp(_) => Protocol::Msp,
-            Self::Servo => Protocol::Servo,
+            Self::Servo { .. } => Protocol::Servo,
             Self::Tuya(_) => Protocol::Tuya,
         }
     }
@@ -113,7 +120,7 @@ impl ProtocolSession {
                 }
                 (r.encode().map_err(enc)?, Packet::msp_request(r))
             }
-            Self::Servo => {
+            Self::Servo { .. } => {
                 let f = servo::Frame::request(req.command, req.payload.clone());
                 (f.encode().map_err(enc)?, Packet::servo(f))
             }
@@ -150,7 +157,7 @@ impl ProtocolSession {
     /// earlier request comes before a later request's (MSP, the servo bus); the Tuya MCU also
     /// speaks on its own and is not.
     pub(crate) fn in_order(&self) -> bool {
-        matches!(self, Self::Msp(_) | Self::Servo)
+        matches!(self, Self::Msp(_) | Self::Servo { .. })
     }
 
     /// A request whose answer cannot be taken for `owed` (another command to the same device),
@@ -164,11 +171,10 @@ impl ProtocolSession {
                     .attempts(2),
             ),
             Self::Msp(_) => Some(Request::new(msp_codec::CMD_PING, Vec::new()).attempts(2)),
-            Self::Servo => {
+            Self::Servo { id_param } => {
                 let id = *owed.from.first()?;
                 let (command, payload) = if owed.command == servo::cmd::PING {
-                    // The servo id parameter: every servo has it.
-                    (servo::cmd::READ_DATA, vec![id, 34])
+                    (servo::cmd::READ_DATA, vec![id, (*id_param)?])
                 } else {
                     (servo::cmd::PING, vec![id])
                 };
@@ -187,7 +193,7 @@ impl ProtocolSession {
     pub(crate) fn connected(&mut self, now: Instant) {
         match self {
             Self::Msp(s) => s.connected(),
-            Self::Servo => {}
+            Self::Servo { .. } => {}
             Self::Tuya(s) => s.connected(now),
         }
     }
@@ -196,7 +202,7 @@ impl ProtocolSession {
     pub(crate) fn lost(&mut self, reason: &str) {
         match self {
             Self::Msp(s) => s.lost(&ExchangeError::Disconnected(reason.to_string())),
-            Self::Servo => {}
+            Self::Servo { .. } => {}
             Self::Tuya(s) => s.lost(),
         }
     }
@@ -248,7 +254,7 @@ impl ProtocolSession {
     pub(crate) fn due(&self, now: Instant) -> Option<Precedence> {
         match self {
             Self::Msp(s) => s.due().then_some(Precedence::BeforeRequests),
-            Self::Servo => None,
+            Self::Servo { .. } => None,
             Self::Tuya(s) => s.due(now).then_some(Precedence::AfterRequests),
         }
     }
@@ -257,7 +263,7 @@ impl ProtocolSession {
     pub(crate) fn next_request(&mut self, now: Instant) -> Option<Request> {
         match self {
             Self::Msp(s) => s.next_request(),
-            Self::Servo => None,
+            Self::Servo { .. } => None,
             Self::Tuya(s) => s.next_request(now),
         }
     }
@@ -273,7 +279,7 @@ impl ProtocolSession {
     ) -> bool {
         match self {
             Self::Msp(s) => s.on_answer(result, events),
-            Self::Servo => false,
+            Self::Servo { .. } => false,
             Self::Tuya(s) => s.on_answer(result, now, events),
         }
     }
@@ -290,7 +296,7 @@ impl ProtocolSession {
                 } => Unasked::Report,
                 _ => Unasked::Stale,
             },
-            Self::Servo => Unasked::LateReply,
+            Self::Servo { .. } => Unasked::LateReply,
             Self::Tuya(s) => s.unasked(p),
         }
     }

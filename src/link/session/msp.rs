@@ -4,7 +4,7 @@
 
 use crate::link::LinkEvent;
 use crate::link::request::{ExchangeError, Reply, Request};
-use crate::profile::{DeviceCode, Profile};
+use crate::profile::{DeviceCode, Profile, Text};
 use crate::protocol::{Direction, msp};
 use crossbeam_channel::Sender;
 use serde::Serialize;
@@ -21,8 +21,8 @@ pub struct DeviceInfo {
     pub api: String,
     /// Build number.
     pub build: u8,
-    /// Capability flags (bit 0 config page, 1 PID tuning page, 2 discrete charging-module data,
-    /// 3 collision-switch data); `None` from older firmware that sends 7 bytes.
+    /// Capability flags, named by the profile's CMD_VERSION `flags` field ([`Capability`]);
+    /// `None` from older firmware that sends 7 bytes.
     pub flags: Option<u8>,
     /// Build date and time from CMD_BUILD_INFO, where the device answers it.
     pub build_date: Option<String>,
@@ -80,6 +80,51 @@ impl DeviceInfo {
     pub fn supports(&self, bit: u8) -> bool {
         self.flags.is_none_or(|f| f >> bit & 1 == 1)
     }
+}
+
+/// One capability bit of a CMD_VERSION `flags` byte.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Capability {
+    /// The bit, 0-7.
+    pub bit: u8,
+    /// Its name from the profile (`bit N` / `第 N 位` for a set bit the profile does not name).
+    pub name: Text,
+    /// Whether the device reports it set.
+    pub set: bool,
+}
+
+/// The capability bits of `flags` as the profile's CMD_VERSION `flags` field names them: each
+/// named bit, and each set bit it does not name, in bit order.
+pub fn capabilities(profile: &Profile, flags: u8) -> Vec<Capability> {
+    let set = |bit: u8| flags >> bit & 1 == 1;
+    let named: Vec<Capability> = profile
+        .command_by_id(msp::CMD_VERSION)
+        .and_then(|c| c.reply.iter().find(|f| f.ident == "flags"))
+        .map(|f| {
+            f.bits
+                .iter()
+                .filter(|b| b.bit < 8)
+                .map(|b| Capability {
+                    bit: b.bit,
+                    name: b.name.clone(),
+                    set: set(b.bit),
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut out = named.clone();
+    for bit in (0..8u8).filter(|&b| set(b) && !named.iter().any(|c| c.bit == b)) {
+        out.push(Capability {
+            bit,
+            name: Text {
+                en: format!("bit {bit}"),
+                zh: format!("第 {bit} 位"),
+            },
+            set: true,
+        });
+    }
+    out.sort_by_key(|c| c.bit);
+    out
 }
 
 /// Reads a CMD_BUILD_INFO answer: 10 date characters, then 8 time characters (such as

@@ -187,6 +187,27 @@ fn the_tuya_handshake_runs_every_step_in_order_then_beats() {
 }
 
 #[test]
+fn a_new_heartbeat_interval_moves_the_heartbeat_already_scheduled() {
+    let options = LinkOptions::default();
+    let mut d = Driver::new("tuya-vacuum", &options);
+    d.handshake(None);
+    let short = Duration::from_millis(300);
+    assert!(short < options.tuya.heartbeat, "test setup");
+    d.s.set_tuya_options(TuyaModuleOptions {
+        heartbeat: short,
+        ..options.tuya.clone()
+    });
+    assert_eq!(d.s.due(d.now + short - Duration::from_millis(1)), None);
+    d.now += short;
+    d.answer(HEARTBEAT, mcu(HEARTBEAT, &[1]));
+    // A longer one waits longer, from the last heartbeat.
+    d.s.set_tuya_options(options.tuya.clone());
+    assert_eq!(d.s.due(d.now + short), None);
+    d.now += options.tuya.heartbeat;
+    d.answer(HEARTBEAT, mcu(HEARTBEAT, &[1]));
+}
+
+#[test]
 fn a_module_that_drives_the_led_skips_the_wifi_state() {
     let mut d = Driver::new("tuya-vacuum", &LinkOptions::default());
     let events = d.handshake(Some([14, 0]));

@@ -69,6 +69,12 @@ pub(super) fn verdict(fields: impl Iterator<Item = (bool, String)>) -> (bool, St
     (pass, texts.join("; "))
 }
 
+/// How far a measured value may pass a limit and still meet it: a millionth of the field's
+/// step, so that a value equal to the limit as shown is not failed by floating-point rounding.
+pub(super) fn tolerance(f: &Field) -> f64 {
+    f.scale.abs() * 1e-6
+}
+
 /// The lowest and the highest of `values`.
 pub(super) fn span(values: &[f64]) -> (f64, f64) {
     values
@@ -153,5 +159,23 @@ impl<'a> Reader<'a> {
             }
         }
         Ok(out)
+    }
+
+    /// `n` reads `interval` apart, each field's display values judged by `judge` (the field,
+    /// its values, their lowest and highest): the step's [`verdict`].
+    pub(super) fn judge(
+        &self,
+        n: u32,
+        interval: Duration,
+        cancel: &Cancel,
+        judge: impl Fn(&Field, &[f64], (f64, f64)) -> (bool, String),
+    ) -> Result<(bool, String), Halt> {
+        let series = self.samples(n, interval, cancel)?;
+        Ok(verdict(
+            self.fields
+                .iter()
+                .zip(&series)
+                .map(|(f, values)| judge(f, values, span(values))),
+        ))
     }
 }

@@ -1,7 +1,7 @@
 //! Running a plan step by step over a link: each step measured against its thresholds, the run
 //! ended at once when the link, the device, the operator or a cancel stops it.
 
-use super::measure::{Reader, means, send_action, show, sleep, span, verdict};
+use super::measure::{Reader, means, send_action, show, sleep, tolerance, verdict};
 use super::plan::{Action, DEFAULT_INTERVAL, Plan, Step, StepKind};
 use super::record::{Report, StepResult};
 use crate::link::Client;
@@ -249,10 +249,8 @@ fn run_step(
             interval,
         } => {
             let r = Reader::new(client, profile, command, fields).map_err(halt)?;
-            let series = r.samples(*samples, *interval, cancel).map_err(halt)?;
-            Ok(verdict(r.fields.iter().zip(&series).map(|(f, values)| {
-                let (lo, hi) = span(values);
-                let tol = f.scale.abs() * 1e-6;
+            r.judge(*samples, *interval, cancel, |f, values, (lo, hi)| {
+                let tol = tolerance(f);
                 let outside = values
                     .iter()
                     .filter(|v| **v < min - tol || **v > max + tol)
@@ -274,7 +272,8 @@ fn run_step(
                     show(f, *max)
                 );
                 (outside == 0, text)
-            })))
+            })
+            .map_err(halt)
         }
         StepKind::Stable {
             command,
@@ -284,11 +283,9 @@ fn run_step(
             interval,
         } => {
             let r = Reader::new(client, profile, command, fields).map_err(halt)?;
-            let series = r.samples(*samples, *interval, cancel).map_err(halt)?;
-            Ok(verdict(r.fields.iter().zip(&series).map(|(f, values)| {
-                let (lo, hi) = span(values);
+            r.judge(*samples, *interval, cancel, |f, _, (lo, hi)| {
                 let spread = hi - lo;
-                let ok = spread <= max_spread + f.scale.abs() * 1e-6;
+                let ok = spread <= max_spread + tolerance(f);
                 let text = format!(
                     "{} spread {} ({} to {}; max {}){}",
                     f.ident,
@@ -299,7 +296,8 @@ fn run_step(
                     if ok { "" } else { " TOO NOISY" }
                 );
                 (ok, text)
-            })))
+            })
+            .map_err(halt)
         }
         StepKind::Rises {
             action,
@@ -319,7 +317,7 @@ fn run_step(
                     let (pass, detail) =
                         verdict(r.fields.iter().zip(&before).zip(&after).map(|((f, b), a)| {
                             let rise = a - b;
-                            let ok = rise >= min_rise - f.scale.abs() * 1e-6;
+                            let ok = rise >= min_rise - tolerance(f);
                             let text = format!(
                                 "{} {} → {} (rise {}, min {}){}",
                                 f.ident,

@@ -62,9 +62,9 @@ pub struct MonitorRow {
 
 /// The request for the live values of `ids`, in one frame.
 pub fn sync_monitor_request(profile: &Profile, ids: &[u8]) -> Result<Request, OpError> {
-    let sync = profile
-        .command_by_id(cmd::SYNC_COMMAND)
-        .ok_or_else(|| OpError::unknown_command(profile, "SYNC_COMMAND (25)"))?;
+    let sync = profile.command_by_id(cmd::SYNC_COMMAND).ok_or_else(|| {
+        OpError::unknown_command(profile, format!("SYNC_COMMAND ({})", cmd::SYNC_COMMAND))
+    })?;
     if ids.is_empty() || ids.len() > MAX_SERVOS {
         return Err(OpError::OutOfRange {
             what: "number of servos in a synchronous MONITOR",
@@ -139,7 +139,7 @@ pub fn monitor_all(
 pub fn read_monitor(profile: &Profile, payload: &[u8]) -> Result<Monitor, String> {
     let monitor = profile
         .command_by_id(cmd::MONITOR)
-        .ok_or("the profile has no MONITOR (22)")?;
+        .ok_or_else(|| format!("the profile has no MONITOR ({})", cmd::MONITOR))?;
     let d = profile
         .decode(monitor, Direction::DeviceToHost, payload)
         .map_err(|e| e.to_string())?;

@@ -48,9 +48,12 @@ pub fn wifi_state_request(state: u8) -> Request {
 }
 
 fn dp_command(profile: &Profile) -> Result<&Command, OpError> {
-    profile
-        .command_by_id(cmd::DP_COMMAND)
-        .ok_or_else(|| OpError::unknown_command(profile, "0x06 (data-point command)"))
+    profile.command_by_id(cmd::DP_COMMAND).ok_or_else(|| {
+        OpError::unknown_command(
+            profile,
+            format!("{:#04x} (data-point command)", cmd::DP_COMMAND),
+        )
+    })
 }
 
 /// The 0x06 command that sets data point `def` to the raw `value`, checked against the profile

@@ -2,9 +2,9 @@
 //! bound, the expected transfer time at the port's rate, and the upload itself.
 
 use super::super::{Cancel, OpError, Progress};
+use crate::document::{Limit, read_bytes};
 use crate::link::{Client, ExchangeError, Match, ReplySpec, Request, wire_time};
 use crate::protocol::tuya::cmd;
-use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -87,28 +87,20 @@ pub fn check_file(path: &Path, max: u32) -> Result<Option<u64>, FirmwareFileErro
     }
 }
 
-/// The firmware image at `path`, read with a bound: a file over `max` bytes is refused by its
-/// size before anything is read, and one whose size the system does not give (a pipe, a device
-/// such as /dev/zero) is read no further than one byte past `max`.
+/// The firmware image at `path`: checked as [`check_file`] checks it (typed errors before a
+/// byte is read), then read as every file a person names is ([`crate::document::read_bytes`]),
+/// within `max` and never past [`Limit::FIRMWARE`]; a file that grows past the bound while it
+/// is read is refused as unreadable.
 pub fn read_image(path: &Path, max: u32) -> Result<Vec<u8>, FirmwareFileError> {
     check_file(path, max)?;
-    let unreadable = |e: std::io::Error| FirmwareFileError::Unreadable {
+    let bound = u64::from(max).min(Limit::FIRMWARE.max);
+    let limit = Limit::new(Limit::FIRMWARE.what, bound);
+    let image = read_bytes(path, limit).map_err(|e| FirmwareFileError::Unreadable {
         path: path.to_path_buf(),
-        reason: e.to_string(),
-    };
-    let file = std::fs::File::open(path).map_err(unreadable)?;
-    let mut image = Vec::new();
-    file.take(u64::from(max) + 1)
-        .read_to_end(&mut image)
-        .map_err(unreadable)?;
-    if image.len() > max as usize {
-        return Err(FirmwareFileError::TooLarge {
-            path: path.to_path_buf(),
-            size: None,
-            max,
-        });
-    }
+        reason: e.message().to_string(),
+    })?;
     if image.is_empty() {
+        // Emptied since it was checked.
         return Err(FirmwareFileError::Empty {
             path: path.to_path_buf(),
         });

@@ -8,6 +8,7 @@
 //! link worker so that they never wait for a job.
 
 mod motion;
+mod param_answers;
 mod param_preset;
 mod params;
 mod provision;

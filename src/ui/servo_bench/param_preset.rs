@@ -1,64 +1,65 @@
-//! Servo parameter presets in the parameters tab: the file path, loading a preset into the
-//! edits (checked against the profile; a bad file is refused with its line and column, nothing of
+//! Servo parameter presets in the parameters tab: the file (typed, or chosen with Browse…, and
+//! remembered), loading a preset into the edits (checked against the profile; a bad file is refused with its line and column, nothing of
 //! it is taken), saving what the servo holds.
 
 use super::params::{ParamsState, editable};
 use crate::i18n::Lang;
 use crate::ops::servo::preset::ParamPreset;
 use crate::profile::{Profile, Value};
+use crate::ui::settings::FileKind;
+use crate::ui::state::AppState;
+use crate::ui::{Action, files};
 use eframe::egui;
 
 impl ParamsState {
-    pub(super) fn preset_row(&mut self, ui: &mut egui::Ui, lang: Lang, profile: &Profile) {
+    /// The preset file row (typed path, Browse…), Load preset, the note and Save preset; a
+    /// preset loaded or saved is remembered.
+    pub(super) fn preset_row(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        actions: &mut Vec<Action>,
+    ) {
+        let profile = &rt.device.profile;
         crate::ui::layout::toolbar(ui, |ui| {
-            let l = ui.label(lang.tr("Parameter preset", "参数预设"));
-            ui.add(egui::TextEdit::singleline(&mut self.preset_path).desired_width(260.0))
-                .labelled_by(l.id);
-            if ui.button(lang.tr("Open…", "打开…")).clicked()
-                && let Some(p) = rfd::FileDialog::new()
-                    .add_filter("RON", &["ron"])
-                    .pick_file()
-            {
-                self.preset_path = p.display().to_string();
-                self.load_preset(profile);
-            }
-            if ui
-                .add_enabled(
-                    !self.preset_path.trim().is_empty(),
-                    egui::Button::new(lang.tr("Load preset", "载入预设")),
-                )
-                .clicked()
-            {
-                self.load_preset(profile);
+            let event = files::row(
+                ui,
+                lang,
+                lang.tr("Parameter preset", "参数预设"),
+                &mut self.preset_path,
+                "servo-params.ron",
+                files::Pick::Open(&["ron"]),
+                &rt.dialogs,
+                true,
+            );
+            let named = !self.preset_path.trim().is_empty();
+            let load = ui
+                .add_enabled(named, egui::Button::new(lang.tr("Load preset", "载入预设")))
+                .clicked();
+            if event.go(load, actions) && self.load_preset(profile) {
+                actions.push(self.remember());
             }
             let l = ui.label(lang.tr("Note", "备注"));
             ui.add(egui::TextEdit::singleline(&mut self.note).desired_width(140.0))
                 .labelled_by(l.id);
             if ui
-                .button(lang.tr("Save preset as…", "预设另存为…"))
+                .add_enabled(named, egui::Button::new(lang.tr("Save preset", "保存预设")))
                 .clicked()
-                && let Some(p) = rfd::FileDialog::new()
-                    .add_filter("RON", &["ron"])
-                    .set_file_name("servo-params.ron")
-                    .save_file()
+                && self.save_preset(profile)
             {
-                self.preset_path = p.display().to_string();
-                self.save_preset(profile);
-            }
-            if ui
-                .add_enabled(
-                    !self.preset_path.trim().is_empty(),
-                    egui::Button::new(lang.tr("Save preset", "保存预设")),
-                )
-                .clicked()
-            {
-                self.save_preset(profile);
+                actions.push(self.remember());
             }
         });
     }
 
-    /// Loads the preset at the path into the edits (nothing is written until "Write changes").
-    pub fn load_preset(&mut self, profile: &Profile) {
+    fn remember(&self) -> Action {
+        Action::RememberFile(FileKind::ServoPreset, self.preset_path.trim().to_string())
+    }
+
+    /// Loads the preset at the path into the edits (nothing is written until "Write changes");
+    /// whether it loaded.
+    pub fn load_preset(&mut self, profile: &Profile) -> bool {
         let path = std::path::PathBuf::from(self.preset_path.trim());
         match ParamPreset::load(&path, profile) {
             Ok(preset) => {
@@ -83,10 +84,11 @@ impl ParamsState {
             }
             Err(e) => self.message = Some((false, e.to_string())),
         }
+        self.message.as_ref().is_some_and(|(ok, _)| *ok)
     }
 
-    /// Saves what the servo holds (as read) to the preset path.
-    pub fn save_preset(&mut self, profile: &Profile) {
+    /// Saves what the servo holds (as read) to the preset path; whether it was saved.
+    pub fn save_preset(&mut self, profile: &Profile) -> bool {
         let missing: Vec<&str> = profile
             .params
             .iter()
@@ -103,7 +105,7 @@ impl ParamsState {
                     missing.join(", ")
                 ),
             ));
-            return;
+            return false;
         }
         if !self.edits.is_empty() {
             self.message = Some((
@@ -115,7 +117,7 @@ impl ParamsState {
                     )
                     .into(),
             ));
-            return;
+            return false;
         }
         let values: Vec<(u8, i64)> = self
             .values
@@ -138,5 +140,6 @@ impl ParamsState {
                 format!("{}: {e}", self.lang.tr("cannot save", "无法保存")),
             ),
         });
+        self.message.as_ref().is_some_and(|(ok, _)| *ok)
     }
 }

@@ -6,8 +6,8 @@
 use super::{Output, Servo, error_label, ok_label, send};
 use super::{header_row, selection_or_hint};
 use crate::i18n::{Lang, Zh};
-use crate::ops::servo::{self as ops, Location};
-use crate::ops::{Check, OpError};
+use crate::ops::OpError;
+use crate::ops::servo as ops;
 use crate::profile::{Access, Param, Profile, Text, Value};
 use crate::ui::Action;
 use crate::ui::inputs::range_text;
@@ -115,80 +115,6 @@ impl ParamsState {
             .collect()
     }
 
-    pub(super) fn on_values(&mut self, values: Vec<(u8, Result<i64, OpError>)>) {
-        for (id, v) in values {
-            self.values.insert(id, v);
-        }
-    }
-
-    pub(super) fn on_written(&mut self, checks: Vec<(u8, Result<Check, OpError>)>) {
-        let (mut good, mut bad) = (0, 0);
-        for (id, c) in checks {
-            match c {
-                Ok(c) => {
-                    let read = match c.read {
-                        Value::Int(v) => Some(v),
-                        _ => None,
-                    };
-                    match read {
-                        Some(r) => {
-                            self.values.insert(id, Ok(r));
-                        }
-                        None => {
-                            self.values.remove(&id);
-                        }
-                    }
-                    if c.ok() {
-                        good += 1;
-                        self.marks.insert(id, ParamMark::Verified);
-                    } else {
-                        bad += 1;
-                        self.marks
-                            .insert(id, ParamMark::Mismatch(read.unwrap_or_default()));
-                    }
-                }
-                Err(e) => {
-                    bad += 1;
-                    // Nothing is known of what the servo holds now.
-                    self.values.remove(&id);
-                    self.marks.insert(id, ParamMark::Failed(e));
-                }
-            }
-        }
-        let lang = self.lang;
-        self.message = Some((
-            bad == 0,
-            format!(
-                "{good} {}, {bad} {}",
-                lang.tr("written and verified", "个已写入并校验"),
-                lang.tr("not verified", "个未通过校验")
-            ),
-        ));
-    }
-
-    pub(super) fn on_reset(&mut self, result: Result<Location, OpError>) {
-        let lang = self.lang;
-        self.message = Some(match result {
-            Ok(at) => (
-                true,
-                format!(
-                    "{} {} @ {} baud ({})",
-                    lang.tr(
-                        "user data reset: the servo is now id",
-                        "用户数据已重置: 舵机现在为ID"
-                    ),
-                    at.id,
-                    at.baud,
-                    lang.tr(
-                        "verified; its parameters were read again",
-                        "已校验; 参数已重新读取"
-                    )
-                ),
-            ),
-            Err(e) => (false, format!("{}: {e}", lang.tr("reset", "重置"))),
-        });
-    }
-
     /// Draws the tab.
     pub(super) fn show(
         &mut self,
@@ -293,7 +219,7 @@ impl ParamsState {
                 ui.label("");
             }
         }
-        self.preset_row(ui, lang, &profile);
+        self.preset_row(ui, lang, rt, actions);
         match &self.message {
             Some((true, m)) => ok_label(ui, m),
             Some((false, m)) => error_label(ui, m),

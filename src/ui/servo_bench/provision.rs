@@ -7,22 +7,23 @@ use crate::document::DocumentError;
 use crate::i18n::{Lang, Zh};
 use crate::ops::servo::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
 use crate::profile::Text;
-use crate::ui::Action;
 use crate::ui::jobs::{Job, JobError, LogError};
+use crate::ui::settings::FileKind;
 use crate::ui::state::AppState;
+use crate::ui::{Action, files};
 use eframe::egui;
 use std::path::PathBuf;
 
 /// The production tab's state.
 #[derive(Default)]
 pub struct ProvisionPanel {
-    /// The plan file, as typed.
+    /// The plan file, typed or chosen.
     pub plan_path: String,
     /// The plan loaded (checked against the profile).
     pub plan: Option<Plan>,
     /// Why the plan did not load (with line and column).
     pub plan_error: Option<DocumentError>,
-    /// The CSV log, as typed (empty: no log).
+    /// The CSV log, typed or chosen (empty: no log).
     pub log_path: String,
     /// Ids given out in this session.
     pub state: ProvisionState,
@@ -70,43 +71,47 @@ impl ProvisionPanel {
         actions: &mut Vec<Action>,
     ) {
         crate::ui::layout::toolbar(ui, |ui| {
-            let l = ui.label(lang.tr("Plan", "计划文件"));
-            ui.add(egui::TextEdit::singleline(&mut self.plan_path).desired_width(320.0))
-                .labelled_by(l.id);
-            if ui.button(lang.tr("Browse…", "浏览…")).clicked()
-                && let Some(p) = crate::ui::ron_dialog().pick_file()
-            {
-                self.plan_path = p.display().to_string();
-                self.load(rt);
-            }
-            if ui
+            let event = files::row(
+                ui,
+                lang,
+                lang.tr("Plan", "计划文件"),
+                &mut self.plan_path,
+                "servo-provision-plan.ron",
+                files::Pick::Open(&["ron"]),
+                &rt.dialogs,
+                true,
+            );
+            let load = ui
                 .add_enabled(
                     !self.plan_path.trim().is_empty(),
                     egui::Button::new(lang.tr("Load plan", "载入计划")),
                 )
-                .clicked()
-            {
+                .clicked();
+            if event.go(load, actions) {
                 self.load(rt);
+                if self.plan.is_some() {
+                    actions.push(Action::RememberFile(
+                        FileKind::ProvisionPlan,
+                        self.plan_path.trim().to_string(),
+                    ));
+                }
             }
         });
         if let Some(e) = &self.plan_error {
             error_label(ui, e.in_lang(lang));
         }
         crate::ui::layout::toolbar(ui, |ui| {
-            let l = ui.label(lang.tr("CSV log", "CSV日志"));
-            ui.add(egui::TextEdit::singleline(&mut self.log_path).desired_width(320.0))
-                .labelled_by(l.id);
-            if ui.button(lang.tr("Choose…", "选择…")).clicked()
-                && let Some(p) = rfd::FileDialog::new()
-                    .add_filter("CSV", &["csv"])
-                    .set_file_name("servo-provision.csv")
-                    .save_file()
-            {
-                self.log_path = p.display().to_string();
-            }
-            if self.log_path.trim().is_empty() {
-                ui.weak(lang.tr("(no log)", "(不记录日志)"));
-            }
+            let event = files::row(
+                ui,
+                lang,
+                lang.tr("CSV log", "CSV日志"),
+                &mut self.log_path,
+                lang.tr("empty: no log", "留空:不记录日志"),
+                files::Pick::Save("servo-provision.csv"),
+                &rt.dialogs,
+                true,
+            );
+            event.go(false, actions);
         });
         if let Some(plan) = &self.plan {
             let ids = match &plan.ids {
@@ -160,6 +165,12 @@ impl ProvisionPanel {
                 }
                 _ => {
                     self.log_error = None;
+                    if let Some(path) = &log {
+                        actions.push(Action::RememberFile(
+                            FileKind::ProvisionLog,
+                            path.display().to_string(),
+                        ));
+                    }
                     actions.push(job(rt, plan, self.state.clone(), log));
                 }
             }

@@ -175,10 +175,15 @@ impl SetupState {
         };
         let can = rt.connected() && !busy;
         ui.heading(lang.tr("Servo ID", "舵机ID"));
-        if servo.id == 0 {
-            ui.label(lang.tr(
-                "A fresh servo (id 0) gets an id only when it is the only servo on the bus: the bus is checked first.",
-                "出厂舵机(ID 0)仅在总线上只有它一个舵机时才能分配ID: 将先检查总线。",
+        let fresh = crate::ops::servo::factory_location(&rt.device.profile).id;
+        if servo.id == fresh {
+            ui.label(format!(
+                "{} {fresh}{}",
+                lang.tr("A fresh servo (id", "出厂舵机(ID"),
+                lang.tr(
+                    ") gets an id only when it is the only servo on the bus: the bus is checked first.",
+                    ")仅在总线上只有它一个舵机时才能分配ID: 将先检查总线。"
+                )
             ));
         }
         let check = self.check_id(servo, scan);

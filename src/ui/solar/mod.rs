@@ -8,7 +8,7 @@ mod control;
 
 pub use control::{Control, Outcome, Trip};
 
-use super::inputs::{command_inputs, range_text};
+use super::inputs::{command_inputs, range_text, readout_text};
 use super::state::{AppState, Reading};
 use super::stop::StopControl;
 use super::{Action, plot};
@@ -17,10 +17,7 @@ use crate::profile::{Command, CommandKind, Field, FieldType, Input, Value};
 use eframe::egui;
 use egui_plot::Plot;
 use std::collections::HashMap;
-use std::time::Duration;
 
-/// Readings older than this are shown as stale.
-const STALE: Duration = Duration::from_secs(3);
 /// The plots' time window, seconds.
 const WINDOW_SECS: f64 = 30.0;
 
@@ -40,19 +37,6 @@ pub struct SolarPanel {
 
 const RED: egui::Color32 = egui::Color32::from_rgb(200, 30, 30);
 const GREEN: egui::Color32 = egui::Color32::from_rgb(0, 140, 60);
-
-/// A value as a person reads it, labels in the UI's language.
-fn shown(f: &Field, v: &Value, lang: Lang) -> String {
-    if let Value::Int(raw) = v
-        && let Some(l) = f.label(*raw)
-    {
-        return format!("{} ({raw})", lang.tr(&l.name.en, &l.name.zh));
-    }
-    match f.range_mark(v) {
-        Some(mark) => format!("{}{} {mark}", f.format(v), f.unit_suffix()),
-        None => format!("{}{}", f.format(v), f.unit_suffix()),
-    }
-}
 
 impl SolarPanel {
     /// Called every frame whichever panel is shown (the dead-man).
@@ -178,7 +162,7 @@ impl SolarPanel {
                         .on_hover_text(format!("{} ({})", cmd.ident, cmd.id));
                     match rt.device.readings.get(&cmd.id) {
                         Some(Reading::Values(values, at)) => {
-                            let stale = at.elapsed() > STALE;
+                            let stale = at.elapsed() > plot::STALE;
                             // One field a line: wrapped runs of values overlap the next row.
                             ui.vertical(|ui| {
                                 for (k, v) in values {
@@ -188,7 +172,7 @@ impl SolarPanel {
                                     let text = format!(
                                         "{}: {}",
                                         lang.tr(&f.name.en, &f.name.zh),
-                                        shown(f, v, lang)
+                                        readout_text(f, v, lang)
                                     );
                                     if stale {
                                         ui.weak(text);
@@ -231,7 +215,7 @@ impl SolarPanel {
         for p in &rt.device.profile.plots {
             ui.label(egui::RichText::new(lang.tr(&p.name.en, &p.name.zh)).strong());
             let legend = plot::Legend::new(rt.device.profile.command(&p.command), &p.fields, lang);
-            plot::key(ui, &legend);
+            plot::key(ui, &legend, &plot::states(rt, p, lang));
             let set = rt.device.plots.get(&p.id);
             let scratch = &mut self.scratch;
             let shown = Plot::new(("solar-plot", &p.id)).height(130.0);

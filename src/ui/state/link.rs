@@ -104,6 +104,19 @@ pub struct LinkStatus {
     /// Serial ports, refreshed every second.
     pub ports: Vec<PortInfo>,
     ports_at: Option<Instant>,
+    /// Where the ports are listed from.
+    pub port_lister: PortLister,
+}
+
+/// Where the serial ports come from: the system's ([`serial::list_ports`]), unless a test lists
+/// its own (an FTDI adapter with a latency timer, on a machine that has none).
+#[derive(Clone)]
+pub struct PortLister(pub Arc<dyn Fn() -> Vec<PortInfo> + Send + Sync>);
+
+impl Default for PortLister {
+    fn default() -> Self {
+        Self(Arc::new(serial::list_ports))
+    }
 }
 
 impl LinkStatus {
@@ -172,7 +185,7 @@ impl LinkStatus {
             .ports_at
             .is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
         {
-            self.ports = serial::list_ports();
+            self.ports = (self.port_lister.0)();
             self.ports_at = Some(Instant::now());
         }
     }

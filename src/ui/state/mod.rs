@@ -10,9 +10,9 @@ mod packets;
 mod running;
 mod tuya;
 
-pub use link::{Answering, Connection, LinkStatus, SILENT_AFTER, Target};
+pub use link::{Answering, Connection, LinkStatus, PortLister, SILENT_AFTER, Target};
 pub use model::{DeviceModel, Mark, Reading, ReadingError};
-pub use packets::{LOG_CAPACITY, OfflineCapture, PacketLog};
+pub use packets::{LOG_CAPACITY, Logged, OfflineCapture, PacketLog};
 pub use running::{Running, RunningSet};
 pub use tuya::{
     DpState, LOG_CAPACITY as REPORT_LOG_CAPACITY, LogLine, RequestLine, StepResult, TuyaModel,
@@ -281,7 +281,7 @@ impl AppState {
                 self.device.tuya.on_frame(&entry);
                 let profile = self.device.profile.clone();
                 self.device.running.on_frame(&profile, &entry);
-                self.packets.push(entry)
+                self.packets.push(entry, &profile)
             }
             LinkEvent::Report(p) => self.device.on_report(p),
             LinkEvent::Telemetry {

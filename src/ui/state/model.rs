@@ -176,8 +176,21 @@ impl DeviceModel {
         self.marks.get(&(get, field.to_string()))
     }
 
-    /// Takes a read's result (a job's).
+    /// Takes a read's result (a job's). A write's mark stays on a field only while the field
+    /// reads what the mark was made on: a read that brings another value (or none) drops it.
     pub fn on_read(&mut self, command: u8, result: Result<FieldValues, OpError>) {
+        let before = match self.readings.get(&command) {
+            Some(Reading::Values(values, _)) => Some(values),
+            _ => None,
+        };
+        let after = result.as_ref().ok();
+        self.marks.retain(|(get, field), _| {
+            *get != command
+                || matches!(
+                    (&before, after),
+                    (Some(b), Some(a)) if b.get(field).is_some() && b.get(field) == a.get(field)
+                )
+        });
         let reading = match result {
             Ok(values) => Reading::Values(values, Instant::now()),
             Err(e) => Reading::Failed(ReadingError::Read(e)),
@@ -222,10 +235,13 @@ impl DeviceModel {
             }
             let set = self.plots.entry(plot.id.clone()).or_default();
             for name in &plot.fields {
+                // As the readouts show it: scaled, or converted (a thermistor's °C); no point
+                // where a conversion is undefined.
                 if let Some(v) = d.values.iter().find(|v| v.ident.eq_ignore_ascii_case(name))
                     && let Value::Int(raw) = v.value
+                    && let Some(y) = v.field.display_number(raw)
                 {
-                    let _ = set.push(name, t, raw as f64 * v.field.scale);
+                    let _ = set.push(name, t, y);
                 }
             }
         }
@@ -281,5 +297,50 @@ impl DeviceModel {
             self.replies.remove(&oldest);
         }
         self.replies.insert(id, result);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ops::Check;
+
+    fn pwm(v: i64) -> FieldValues {
+        let mut f = FieldValues::new();
+        f.push("pwmValue", Value::Int(v));
+        f
+    }
+
+    fn written(m: &mut DeviceModel, v: i64) {
+        let check = Check {
+            field: "pwmValue".into(),
+            written: Value::Int(v),
+            read: Value::Int(v),
+        };
+        m.on_written(220, Ok(vec![check]));
+    }
+
+    #[test]
+    fn a_writes_mark_stays_while_the_field_reads_its_value_and_goes_with_another() {
+        let profile = crate::sim::msp_device::builtin_profile("window-cleaner").unwrap();
+        let mut m = DeviceModel::new(profile);
+        written(&mut m, 60);
+        assert_eq!(m.mark(130, "pwmValue"), Some(&Mark::Verified));
+        m.on_read(130, Ok(pwm(60)));
+        assert_eq!(
+            m.mark(130, "pwmValue"),
+            Some(&Mark::Verified),
+            "read again, the same value"
+        );
+        m.on_read(130, Ok(pwm(85)));
+        assert_eq!(m.mark(130, "pwmValue"), None, "another value, no mark");
+        written(&mut m, 60);
+        m.on_read(130, Err(OpError::Cancelled));
+        m.on_read(130, Ok(pwm(60)));
+        assert_eq!(
+            m.mark(130, "pwmValue"),
+            None,
+            "after a failed read nothing tells that the value is the one written"
+        );
     }
 }

@@ -1,6 +1,8 @@
 //! The packet log: every frame sent and received, bounded, for the packet monitor. Each frame
 //! kept has a sequence number that never changes (the first frame ever kept is 0), so that a
-//! view can hold on to a frame while older ones are dropped under it.
+//! view can hold on to a frame while older ones are dropped under it, and keeps the profile it
+//! came under: after a change of device the earlier frames still read as what they were (a
+//! window cleaner's MSP frames are not decoded with a servo's commands), for a report.
 
 use crate::capture::Tap;
 use crate::link::LogEntry;
@@ -11,10 +13,19 @@ use std::sync::Arc;
 /// How many frames the packet monitor keeps.
 pub const LOG_CAPACITY: usize = 20_000;
 
+/// A frame kept, with the profile in use when it came (its commands name it).
+#[derive(Debug, Clone)]
+pub struct Logged {
+    /// The frame.
+    pub entry: LogEntry,
+    /// The profile of the connection it came on.
+    pub profile: Arc<Profile>,
+}
+
 /// The frames, oldest first.
 pub struct PacketLog {
     /// The frames kept, oldest first (at most [`Self::capacity`]).
-    pub entries: VecDeque<LogEntry>,
+    pub entries: VecDeque<Logged>,
     /// The most frames kept ([`LOG_CAPACITY`] unless changed).
     pub capacity: usize,
     /// The log is frozen: frames that come are counted, not kept.
@@ -56,8 +67,9 @@ pub struct OfflineCapture {
 }
 
 impl PacketLog {
-    /// Keeps a frame (dropping the oldest when full), or counts it while frozen.
-    pub fn push(&mut self, entry: LogEntry) {
+    /// Keeps a frame that came under `profile` (dropping the oldest when full), or counts it
+    /// while frozen.
+    pub fn push(&mut self, entry: LogEntry, profile: &Arc<Profile>) {
         if self.paused {
             self.dropped += 1;
             return;
@@ -65,7 +77,10 @@ impl PacketLog {
         while self.entries.len() >= self.capacity.max(1) {
             self.entries.pop_front();
         }
-        self.entries.push_back(entry);
+        self.entries.push_back(Logged {
+            entry,
+            profile: profile.clone(),
+        });
         self.kept += 1;
     }
 
@@ -75,7 +90,7 @@ impl PacketLog {
     }
 
     /// The frames kept with their sequence numbers, oldest first.
-    pub fn numbered(&self) -> impl DoubleEndedIterator<Item = (u64, &LogEntry)> + '_ {
+    pub fn numbered(&self) -> impl DoubleEndedIterator<Item = (u64, &Logged)> + '_ {
         let first = self.first_seq();
         self.entries
             .iter()

@@ -8,7 +8,9 @@ use crate::ops::OpError;
 pub use crate::ops::tuya::FirmwareFileError;
 use crate::ops::tuya::{self as ops, OtaTiming};
 use crate::profile::Text;
+use crate::ui::files;
 use crate::ui::jobs::{Job, JobError, JobOutput};
+use crate::ui::settings::FileKind;
 use eframe::egui;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -33,7 +35,7 @@ pub struct OtaProgress {
 /// The firmware update's state.
 #[derive(Debug, Default)]
 pub struct OtaView {
-    /// The firmware file's path.
+    /// The firmware file's path, typed or chosen.
     pub path: String,
     /// Why the file cannot be sent.
     pub error: Option<FirmwareFileError>,
@@ -153,27 +155,23 @@ impl OtaView {
             lang.tr("bytes.", "字节。")
         ));
         crate::ui::layout::toolbar(ui, |ui| {
-            let label = ui.label(lang.tr("Firmware file", "固件文件"));
-            let resp = ui
-                .add_enabled(
-                    !active,
-                    egui::TextEdit::singleline(&mut self.path)
-                        .hint_text("firmware.bin")
-                        .desired_width(360.0),
-                )
-                .labelled_by(label.id);
-            if resp.changed() {
+            let before = self.path.clone();
+            let event = files::row(
+                ui,
+                lang,
+                lang.tr("Firmware file", "固件文件"),
+                &mut self.path,
+                "firmware.bin",
+                files::Pick::Open(&[]),
+                &rt.dialogs,
+                !active,
+            );
+            if self.path != before {
                 self.error = None;
             }
-            if ui
-                .add_enabled(!active, egui::Button::new(lang.tr("Choose…", "选择…")))
-                .clicked()
-                && let Some(p) = rfd::FileDialog::new()
-                    .set_title(lang.tr("Firmware file", "固件文件"))
-                    .pick_file()
-            {
-                self.path = p.display().to_string();
-                self.error = ops::check_file(&p, max).err();
+            // A file chosen is checked at once; it is sent only on Start update.
+            if event.go(false, &mut actions) {
+                self.error = ops::check_file(&PathBuf::from(self.path.trim()), max).err();
             }
             if ui
                 .add_enabled(
@@ -186,6 +184,10 @@ impl OtaView {
                 match ops::check_file(&path, max) {
                     Ok(size) => {
                         self.error = None;
+                        actions.push(Action::RememberFile(
+                            FileKind::Firmware,
+                            path.display().to_string(),
+                        ));
                         self.confirm = Some((path, size));
                     }
                     Err(e) => self.error = Some(e),

@@ -322,6 +322,25 @@ fn merge_junk<F: Debug>(items: Vec<Item<F>>) -> Vec<Item<F>> {
     out
 }
 
+/// The stream `junk0 frame0 junk1 frame1 ... tail`, each frame's offsets in it, and what the
+/// decoder made of it pushed in `chunks` ([`run`]), its accounting checked.
+#[allow(clippy::type_complexity)]
+fn decoded<P>(
+    proto: &Proto<P>,
+    segments: &[(Vec<u8>, P::Frame)],
+    tail: &[u8],
+    chunks: &[usize],
+) -> (Vec<u8>, Vec<(u64, u64)>, Vec<Item<P::Frame>>)
+where
+    P: Framing,
+    P::Frame: Debug,
+{
+    let (stream, offsets) = build(proto.encode, segments, tail);
+    let items = run(proto, &stream, chunks);
+    check_accounting(proto, &stream, &items);
+    (stream, offsets, items)
+}
+
 /// Builds `junk0 frame0 junk1 frame1 ... tail`, returning the stream and each frame's offsets.
 fn build<F>(
     proto_encode: fn(&F) -> Vec<u8>,

@@ -41,9 +41,7 @@ fn prop_clean_stream<P>(
     P: Framing,
     P::Frame: Debug + PartialEq + Clone,
 {
-    let (stream, offsets) = build(proto.encode, segments, tail);
-    let items = run(proto, &stream, chunks);
-    check_accounting(proto, &stream, &items);
+    let (stream, offsets, items) = decoded(proto, segments, tail, chunks);
     let items = merge_junk(items);
 
     let mut want: Vec<(u64, u64, Result<P::Frame, usize>)> = Vec::new();
@@ -90,9 +88,7 @@ fn prop_arbitrary_junk<P>(
     P: Framing,
     P::Frame: Debug + PartialEq + Clone,
 {
-    let (stream, offsets) = build(proto.encode, segments, tail);
-    let items = run(proto, &stream, chunks);
-    check_accounting(proto, &stream, &items);
+    let (_, offsets, items) = decoded(proto, segments, tail, chunks);
     let frames: Vec<(u64, u64, &P::Frame)> = items
         .iter()
         .filter_map(|i| i.res.as_ref().ok().map(|f| (i.start, i.after, f)))

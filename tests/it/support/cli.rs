@@ -26,10 +26,52 @@ where
     S: AsRef<std::ffi::OsStr>,
 {
     let mut c = Command::new(env!("CARGO_BIN_EXE_botbench"));
-    c.args(args)
-        .env(botbench::profile::registry::DIR_ENV, no_user_profiles())
+    c.args(args);
+    as_user(c)
+}
+
+/// `c` with no user profiles and nothing on standard input.
+fn as_user(mut c: Command) -> Command {
+    c.env(botbench::profile::registry::DIR_ENV, no_user_profiles())
         .stdin(Stdio::null());
     c
+}
+
+/// Whether this process may start a program under real-time scheduling (`chrt --fifo`: root,
+/// or CAP_SYS_NICE, as CI has).
+fn may_run_realtime() -> bool {
+    static MAY: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *MAY.get_or_init(|| {
+        Command::new("chrt")
+            .args(["--fifo", SIM_PRIORITY, "true"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success())
+    })
+}
+
+/// The real-time priority a `botbench sim` process runs at where it may (1-99; low: it only
+/// has to come before the ordinary processes of a loaded machine).
+const SIM_PRIORITY: &str = "10";
+
+/// `botbench sim` with `args`. The simulator stands in for a device that has a processor of its
+/// own: where this process may, it runs under real-time scheduling, so that the load of the
+/// tests beside it (and of whatever else the machine runs) does not make it answer late, as a
+/// device never would; the command under test keeps ordinary scheduling, late as a loaded host
+/// is. Elsewhere it runs as any process, and a heavily loaded machine can then make a test of
+/// the field's timing fail.
+fn sim_command(args: &[&str]) -> Command {
+    let bin = env!("CARGO_BIN_EXE_botbench");
+    let mut c = if may_run_realtime() {
+        let mut c = Command::new("chrt");
+        c.args(["--fifo", SIM_PRIORITY, bin]);
+        c
+    } else {
+        Command::new(bin)
+    };
+    c.arg("sim").args(args);
+    as_user(c)
 }
 
 /// How a run ended: its exit code and what it printed.
@@ -137,7 +179,7 @@ pub struct SimProcess {
 impl SimProcess {
     /// Starts `botbench sim` with `args` (the kind first) and reads the pty path it prints.
     pub fn start(args: &[&str]) -> Self {
-        let mut child = botbench(["sim"].iter().chain(args))
+        let mut child = sim_command(args)
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -155,6 +197,14 @@ impl SimProcess {
             path,
             stderr,
         }
+    }
+
+    /// Runs `botbench GROUP --port PATH --margin-ms MARGIN_MS ARGS...` against this simulator
+    /// (watched: [`run_watched`]), for a test whose verdict is not about the margin.
+    pub fn cli(&self, group: &str, args: &[&str]) -> Ran {
+        let mut all = vec![group, "--port", &self.path, "--margin-ms", MARGIN_MS];
+        all.extend_from_slice(args);
+        run_watched(&all)
     }
 
     /// Waits, within [`WATCHDOG`], for the simulator to end on its own (its port vanished).

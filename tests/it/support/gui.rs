@@ -3,10 +3,13 @@
 
 use super::PATIENCE;
 use botbench::i18n::Lang;
+use botbench::profile::{CommandKind, Value};
+use botbench::ui::state::Reading;
 use botbench::ui::{App, PanelId, Settings, Target};
 use eframe::egui;
 use egui_kittest::Harness;
 use egui_kittest::kittest::{AccessKitNode, Queryable};
+use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 /// The app in a harness.
@@ -24,6 +27,14 @@ pub fn settings(path: &str, profile: &str, panel: PanelId, lang: Lang) -> Settin
     };
     saved.port_mut().baud = Some(115_200);
     saved
+}
+
+/// The app on the window cleaner at `path`, showing `panel`, in English, with the protocol's own
+/// answer margin or `margin_ms`.
+pub fn on_window_cleaner(path: &str, panel: PanelId, margin_ms: Option<u64>) -> H {
+    let mut saved = settings(path, "window-cleaner", panel, Lang::En);
+    saved.port_mut().margin_ms = margin_ms;
+    harness(saved)
 }
 
 /// The app with `saved` settings, in a 1400×1000 window: each step runs its logic and draws it.
@@ -122,4 +133,49 @@ fn replace_text(h: &mut H, which: impl Fn(&AccessKitNode<'_>) -> bool, text: &st
 /// Whether some widget's label contains `text`.
 pub fn has_label(h: &H, text: &str) -> bool {
     h.query_all_by_label_contains(text).next().is_some()
+}
+
+/// Whether no job runs.
+pub fn idle(a: &App) -> bool {
+    a.state.job_progress().is_none()
+}
+
+/// Each tuning value (every Get with a Set pair: what *Read all* reads), by command id, once
+/// every one of them has been read, at `since` or later when given.
+pub fn tuning_values(
+    a: &App,
+    since: Option<Instant>,
+) -> Option<BTreeMap<u8, BTreeMap<String, Value>>> {
+    let p = &a.state.device.profile;
+    p.commands
+        .iter()
+        .filter(|c| c.kind == CommandKind::Get && c.pair.is_some())
+        .map(|c| match a.state.device.readings.get(&c.id) {
+            Some(Reading::Values(v, at)) if since.is_none_or(|t| *at >= t) => Some((
+                c.id,
+                v.iter().map(|(k, v)| (k.to_string(), v.clone())).collect(),
+            )),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Waits until the read the app makes on connecting has brought every tuning value and ended.
+pub fn read_on_connecting(h: &mut H) {
+    step_until(h, "every tuning value read on connecting", |a| {
+        a.state.connected() && tuning_values(a, None).is_some() && idle(a)
+    });
+}
+
+/// Clicks *Read all* on the tuning panel (once the read on connecting has ended: the button
+/// waits for a running job) and waits until every tuning value has been read again and the job
+/// has ended; returns the values.
+pub fn read_all(h: &mut H) -> BTreeMap<u8, BTreeMap<String, Value>> {
+    read_on_connecting(h);
+    let asked = Instant::now();
+    h.get_by_label("Read all").click();
+    step_until(h, "every tuning value read again", |a| {
+        tuning_values(a, Some(asked)).is_some() && idle(a)
+    });
+    tuning_values(app(h), Some(asked)).expect("every value read")
 }

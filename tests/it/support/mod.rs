@@ -80,6 +80,16 @@ pub fn window_cleaner() -> WindowCleaner {
     WindowCleaner::new(&SimOptions::default()).expect("the window cleaner builds")
 }
 
+/// The faults of a lossy line: 1 % of frames dropped and 1 % corrupted, drawn from `seed`.
+pub fn lossy(seed: u64) -> Faults {
+    Faults {
+        drop: 0.01,
+        corrupt: 0.01,
+        seed,
+        ..Faults::default()
+    }
+}
+
 /// A simulated device served on a pseudo-terminal, and a handle to look inside it.
 pub struct Served<D> {
     /// The server; `vanish` it to unplug the port.

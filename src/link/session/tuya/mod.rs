@@ -173,8 +173,15 @@ impl TuyaSession {
         session
     }
 
-    /// Changes what the module answers the MCU (and the heartbeat interval).
+    /// Changes what the module answers the MCU, and the heartbeat interval: a heartbeat already
+    /// scheduled moves to the new interval after the last one (a shorter interval does not wait
+    /// out the old one).
     pub(crate) fn set_options(&mut self, options: TuyaModuleOptions) {
+        if let Phase::Heartbeat(due) = self.phase
+            && let Some(last) = due.checked_sub(self.options.heartbeat)
+        {
+            self.phase = Phase::Heartbeat(last + options.heartbeat);
+        }
         self.options = options;
     }
 

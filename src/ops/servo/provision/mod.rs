@@ -34,7 +34,7 @@ use serde::Serialize;
 
 /// The names of the steps, as records and progress messages give them.
 pub mod step {
-    /// Find the one fresh servo (id 0) at any baud rate.
+    /// Find the one fresh servo (at the profile's factory id) at any baud rate.
     pub const DETECT: &str = "detect";
     /// Read its serial number.
     pub const SERIAL: &str = "read serial";
@@ -145,13 +145,18 @@ fn fail(record: &mut Record, step: &str, reason: String) {
     };
 }
 
-/// Finds the fresh servos (id 0): pings id 0 at `bauds` in order and returns each rate where
-/// something answered, and how.
-pub fn find_fresh(client: &Client, bauds: &[u32]) -> Result<Vec<(u32, Presence)>, OpError> {
+/// Finds the fresh servos (at the factory id, [`servo::factory_location`]): pings that id at
+/// `bauds` in order and returns each rate where something answered, and how.
+pub fn find_fresh(
+    client: &Client,
+    profile: &Profile,
+    bauds: &[u32],
+) -> Result<Vec<(u32, Presence)>, OpError> {
+    let fresh = servo::factory_location(profile).id;
     let mut out = Vec::new();
     for &b in bauds {
         switch(client, b)?;
-        let presence = servo::ping(client, 0, 2)?;
+        let presence = servo::ping(client, fresh, 2)?;
         if presence != Presence::Absent {
             out.push((b, presence));
         }
@@ -166,7 +171,8 @@ pub fn search_order(profile: &Profile, target: u32) -> Vec<u32> {
         .collect()
 }
 
-/// Provisions the one fresh servo on the bus: detect (id 0, at any baud rate, exactly one),
+/// Provisions the one fresh servo on the bus: detect (the factory id, at any baud rate, exactly
+/// one),
 /// read its serial number, give it the next free id, switch it to the plan's rate, write the
 /// plan's parameters, verify everything at the new id and rate, and read the recorded
 /// parameters. Stops at the first step that fails; the record names it. `state` carries the ids
@@ -246,7 +252,8 @@ fn run(
     // Detect: exactly one fresh servo, at one baud rate.
     at(step::DETECT, String::new(), &mut done);
     check_cancel!(step::DETECT);
-    let found = match find_fresh(client, &search_order(profile, target)) {
+    let fresh = servo::factory_location(profile).id;
+    let found = match find_fresh(client, profile, &search_order(profile, target)) {
         Ok(f) => f,
         Err(e) => return fail(record, step::DETECT, e.to_string()),
     };
@@ -255,7 +262,7 @@ fn run(
             return fail(
                 record,
                 step::DETECT,
-                "no fresh servo (id 0) answers at any baud rate".into(),
+                format!("no fresh servo (id {fresh}) answers at any baud rate"),
             );
         }
         [(b, Presence::Present)] => *b,
@@ -264,7 +271,7 @@ fn run(
                 record,
                 step::DETECT,
                 format!(
-                    "more than one servo answers at id 0 at {b} baud (garbled answers: {e}); leave one fresh servo on the bus"
+                    "more than one servo answers at id {fresh} at {b} baud (garbled answers: {e}); leave one fresh servo on the bus"
                 ),
             );
         }
@@ -274,7 +281,7 @@ fn run(
                 record,
                 step::DETECT,
                 format!(
-                    "more than one servo: fresh servos (id 0) answer at {} baud; leave one on the bus",
+                    "more than one servo: fresh servos (id {fresh}) answer at {} baud; leave one on the bus",
                     rates.join(" and ")
                 ),
             );
@@ -288,9 +295,10 @@ fn run(
     // Its serial number, so that even a failure names the servo.
     at(step::SERIAL, String::new(), &mut done);
     check_cancel!(step::SERIAL);
-    let serial = match servo::serial_param(profile).and_then(|p| read(client, profile, 0, p.id)) {
+    let serial = match servo::serial_param(profile).and_then(|p| read(client, profile, fresh, p.id))
+    {
         Ok(v) => v,
-        Err(e) => return fail(record, step::SERIAL, reason(&e, 0, baud)),
+        Err(e) => return fail(record, step::SERIAL, reason(&e, fresh, baud)),
     };
     let Ok(serial) = u32::try_from(serial) else {
         return fail(
@@ -335,8 +343,8 @@ fn run(
             "no free id left in the plan's ids".into(),
         );
     };
-    if let Err(e) = servo::set_id(client, profile, 0, id, cancel) {
-        return fail(record, step::ASSIGN_ID, reason(&e, 0, baud));
+    if let Err(e) = servo::set_id(client, profile, fresh, id, cancel) {
+        return fail(record, step::ASSIGN_ID, reason(&e, fresh, baud));
     }
     state.next = index + 1;
     state.assigned.push(id);

@@ -122,17 +122,21 @@ impl Plan {
             .check(&Value::Int(option.into()))
             .map_err(|e| issue(vec![Step::Key("target_baud")], e.to_string()))?;
         let ids_at = vec![Step::Key("ids")];
+        let fresh = servo::factory_location(profile).id;
+        let broadcast = crate::protocol::servo::BROADCAST_ID;
         match &self.ids {
-            IdSequence::Start(0) => {
+            IdSequence::Start(first) if *first == fresh => {
                 return Err(issue(
                     ids_at,
-                    "ids cannot start at 0: 0 is the factory id of a fresh servo".into(),
+                    format!(
+                        "ids cannot start at {fresh}: {fresh} is the factory id of a fresh servo"
+                    ),
                 ));
             }
-            IdSequence::Start(255) => {
+            IdSequence::Start(first) if *first == broadcast => {
                 return Err(issue(
                     ids_at,
-                    "id 255 is the broadcast address and cannot be assigned".into(),
+                    format!("id {broadcast} is the broadcast address and cannot be assigned"),
                 ));
             }
             IdSequence::Start(_) => {}
@@ -141,10 +145,12 @@ impl Plan {
                     return Err(issue(ids_at, "the id list is empty".into()));
                 }
                 for (i, &id) in ids.iter().enumerate() {
-                    if id == 0 || id == 255 {
+                    if id == fresh || id == broadcast {
                         return Err(issue(
                             ids_at,
-                            format!("id {id} cannot be assigned: give ids 1 to 254"),
+                            format!(
+                                "id {id} cannot be assigned: {fresh} is the factory id and {broadcast} the broadcast address"
+                            ),
                         ));
                     }
                     if ids[..i].contains(&id) {
