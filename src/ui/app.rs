@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 pub const TITLE: &str = concat!("botbench ", env!("CARGO_PKG_VERSION"));
 
 /// The panels.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum PanelId {
     /// Window cleaner parameters.
     Tuning,
@@ -310,17 +310,22 @@ impl App {
                     stop::running(ui, lang, state);
                 }
             });
-        egui::CentralPanel::default().show(ui, |ui| match settings.panel {
-            PanelId::Tuning => actions.extend(self.tuning.show(ui, lang, state)),
-            PanelId::Telemetry => actions.extend(self.telemetry.show(ui, settings, state)),
-            PanelId::Monitor => actions.extend(self.monitor.show(ui, lang, state)),
-            PanelId::Presets => actions.extend(self.presets.show(ui, lang, state)),
-            PanelId::Actions => actions.extend(self.actions.show(ui, lang, state)),
-            PanelId::Device => actions.extend(self.device.show(ui, lang, state)),
-            PanelId::Solar => actions.extend(self.solar.show(ui, lang, state, &mut self.stop)),
-            PanelId::SelfTest => actions.extend(self.selftest.show(ui, lang, state)),
-            PanelId::ServoBench => actions.extend(self.servo.show(ui, lang, state)),
-            PanelId::TuyaConsole => actions.extend(self.tuya.show(ui, lang, state)),
+        // Each panel's widgets have ids of their own: a scroll area of one panel keeps its own
+        // place, not the place of the panel shown before it.
+        let panel = settings.panel;
+        egui::CentralPanel::default().show(ui, |ui| {
+            ui.push_id(panel, |ui| match panel {
+                PanelId::Tuning => actions.extend(self.tuning.show(ui, lang, state)),
+                PanelId::Telemetry => actions.extend(self.telemetry.show(ui, settings, state)),
+                PanelId::Monitor => actions.extend(self.monitor.show(ui, lang, state)),
+                PanelId::Presets => actions.extend(self.presets.show(ui, lang, state)),
+                PanelId::Actions => actions.extend(self.actions.show(ui, lang, state)),
+                PanelId::Device => actions.extend(self.device.show(ui, lang, state)),
+                PanelId::Solar => actions.extend(self.solar.show(ui, lang, state, &mut self.stop)),
+                PanelId::SelfTest => actions.extend(self.selftest.show(ui, lang, state)),
+                PanelId::ServoBench => actions.extend(self.servo.show(ui, lang, state)),
+                PanelId::TuyaConsole => actions.extend(self.tuya.show(ui, lang, state)),
+            })
         });
         for a in actions {
             self.apply(a);

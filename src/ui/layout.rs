@@ -44,6 +44,19 @@ pub fn one_line(ui: &mut egui::Ui, text: impl Into<egui::WidgetText>) -> egui::R
     }
 }
 
+/// A grid cell `width` points wide whose label wraps inside it, its row as high as its lines
+/// (a cell allocated with no height is centred on the row's old height and runs over the rows
+/// below). A one-line label sits where the row's other, centred, cells have their text.
+pub fn wrapped_cell(ui: &mut egui::Ui, width: f32, label: egui::Label) -> egui::Response {
+    ui.vertical(|ui| {
+        ui.set_width(width);
+        let text_h = ui.text_style_height(&egui::TextStyle::Body);
+        ui.add_space(((ui.spacing().interact_size.y - text_h) / 2.0).max(0.0));
+        ui.add(label.wrap())
+    })
+    .inner
+}
+
 /// The width, points, of the widest of `texts` on one line in `font` (the body font: the
 /// labels' own), as this window's fonts draw it (the bundled CJK font for Chinese).
 pub fn text_width<'a>(
@@ -90,11 +103,52 @@ pub fn split_words(shapes: &[egui::epaint::ClippedShape]) -> Vec<String> {
 }
 
 fn visit_texts(shape: &egui::Shape, f: &mut impl FnMut(&egui::Galley)) {
+    visit_placed(shape, &mut |t| f(&t.galley));
+}
+
+fn visit_placed(shape: &egui::Shape, f: &mut impl FnMut(&egui::epaint::TextShape)) {
     match shape {
-        egui::Shape::Text(t) => f(&t.galley),
-        egui::Shape::Vec(v) => v.iter().for_each(|s| visit_texts(s, f)),
+        egui::Shape::Text(t) => f(t),
+        egui::Shape::Vec(v) => v.iter().for_each(|s| visit_placed(s, f)),
         _ => {}
     }
+}
+
+/// Pairs of texts drawn in `shapes` over each other: the parts of their rows that can be seen
+/// (inside their clip) overlap by more than a point each way. Texts on different layers (a
+/// popup over a panel) are the caller's to keep apart: pass one layer's shapes.
+pub fn overlapping_texts(shapes: &[egui::epaint::ClippedShape]) -> Vec<(String, String)> {
+    // (where, its text, which text shape)
+    let mut seen: Vec<(egui::Rect, String, usize)> = Vec::new();
+    let mut n = 0;
+    for clipped in shapes {
+        visit_placed(&clipped.shape, &mut |t| {
+            n += 1;
+            let text = t.galley.text();
+            // A turned text (a plot's y axis label) has boxes this check does not turn.
+            if text.trim().is_empty() || t.angle != 0.0 {
+                return;
+            }
+            // Row by row: a label continuing a wrapped row starts where the row's text does.
+            for row in t.galley.rows.iter().filter(|r| !r.row.glyphs.is_empty()) {
+                let rect = row.rect_without_leading_space().translate(t.pos.to_vec2());
+                let visible = rect.intersect(clipped.clip_rect);
+                if visible.is_positive() {
+                    seen.push((visible, text.to_string(), n));
+                }
+            }
+        });
+    }
+    let mut found = Vec::new();
+    for (i, (a, ta, na)) in seen.iter().enumerate() {
+        for (b, tb, nb) in &seen[i + 1..] {
+            let both = a.intersect(*b);
+            if na != nb && both.width() > 1.0 && both.height() > 1.0 {
+                found.push((ta.clone(), tb.clone()));
+            }
+        }
+    }
+    found
 }
 
 /// Whether `c` is a Chinese character or full-width sign.

@@ -234,8 +234,21 @@ impl PresetsPanel {
                         ui.strong(lang.tr("Device", "设备值"));
                         ui.end_row();
                         for r in &rows {
-                            ui.monospace(&r.command);
-                            ui.label(&r.field);
+                            // The profile's names, the wire names on hover.
+                            let cmd = profile.command(&r.command);
+                            let field = cmd.and_then(|c| {
+                                c.request
+                                    .iter()
+                                    .chain(&c.reply)
+                                    .find(|f| f.ident == r.field)
+                            });
+                            let named = |t: Option<&crate::profile::Text>, wire: &str| {
+                                t.map_or(wire.to_string(), |t| t.get(lang).to_string())
+                            };
+                            ui.label(named(cmd.map(|c| &c.name), &r.command))
+                                .on_hover_text(&r.command);
+                            ui.label(named(field.map(|f| &f.name), &r.field))
+                                .on_hover_text(&r.field);
                             if r.differs {
                                 ui.colored_label(egui::Color32::from_rgb(220, 150, 0), &r.preset);
                             } else {

@@ -439,10 +439,7 @@ impl SelfTestPanel {
             let gap = ui.spacing().item_spacing.x;
             let w = ((ui.available_width() - 60.0 - 5.0 * gap) / 4.0).max(80.0);
             let cell = |ui: &mut egui::Ui, text: egui::RichText| {
-                ui.allocate_ui(egui::vec2(w, 0.0), |ui| {
-                    ui.set_max_width(w);
-                    ui.add(egui::Label::new(text).wrap());
-                });
+                crate::ui::layout::wrapped_cell(ui, w, egui::Label::new(text));
             };
             egui::Grid::new("selftest-results")
                 .num_columns(5)

@@ -98,13 +98,15 @@ fn rate_label(rate: Option<f64>, lang: Lang) -> String {
     }
 }
 
-/// The telemetry commands listed under the plots: every one with a reply.
+/// The telemetry commands listed under the plots: every one with a reply, but the core ones
+/// (version, power state, build info), which the device panel reads and shows.
 fn other_commands(rt: &AppState) -> Vec<&crate::profile::Command> {
-    rt.device
-        .profile
+    let profile = &rt.device.profile;
+    profile
         .commands
         .iter()
         .filter(|c| c.kind == CommandKind::Telemetry && !c.reply.is_empty())
+        .filter(|c| !profile.is_core(c))
         .collect()
 }
 
@@ -187,7 +189,8 @@ impl TelemetryPanel {
         egui::Panel::bottom("other-telemetry")
             .resizable(true)
             .default_size(default)
-            .size_range(row_h * 3.0..=(avail * 0.8).max(row_h * 3.0))
+            // Kept so when the window shrinks (the part keeps its size from a larger window).
+            .size_range(row_h * 3.0..=(avail - one_plot).max(row_h * 3.0))
             .show(ui, |ui| {
                 actions.extend(self.other_telemetry(ui, lang, rt, &cmds))
             });

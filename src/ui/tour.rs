@@ -10,7 +10,8 @@
 //! The shot is the window's own framebuffer (egui's viewport screenshot). Shots go size by
 //! size and language by language, so that the window is resized twice a device, and each PNG
 //! is written on a thread of its own while the next view is drawn. Each shot's frame is also
-//! checked: a label it parts over two lines ([`super::layout::split_words`]) is a failure.
+//! checked: a label it parts over two lines ([`super::layout::split_words`]) or a text drawn
+//! over another ([`super::layout::overlapping_texts`]) is a failure.
 
 use super::state::AppState;
 use super::{App, View};
@@ -210,9 +211,19 @@ impl Tour {
                 .collect()
         });
         let split = super::layout::split_words(&shapes);
+        let name = name.clone();
         if !split.is_empty() {
-            let name = name.clone();
             self.fail(format!("{name}: words split over two lines: {split:?}"));
+        }
+        // Over each other on the panels' own layer (a popup is drawn over them on purpose).
+        let panels = ctx.graphics(|g| {
+            g.get(egui::LayerId::background())
+                .map(|l| l.all_entries().cloned().collect::<Vec<_>>())
+                .unwrap_or_default()
+        });
+        let over = super::layout::overlapping_texts(&panels);
+        if !over.is_empty() {
+            self.fail(format!("{name}: texts drawn over texts: {over:?}"));
         }
     }
 

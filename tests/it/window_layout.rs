@@ -1,14 +1,16 @@
-//! The window at 1024×600, as a technician reads it: no label parts a word over two lines (in
-//! Chinese, where any two characters may be parted, nor in English), the navigation and the
-//! status line stay one line each, and every view of the four demo devices is walked.
+//! The window at 1024×600, as a technician reads it: in every view of the four demo devices no
+//! label parts a word over two lines (in Chinese, where any two characters may be parted, nor
+//! in English) and no text is drawn over another; the navigation and the status line stay one
+//! line each; the telemetry plots keep their height and scroll into view.
 
 use botbench::i18n::Lang;
 use botbench::sim::SimKind;
-use botbench::ui::layout::{one_line, split_words};
+use botbench::ui::layout::{one_line, overlapping_texts, split_words};
 use botbench::ui::state::Answering;
 use botbench::ui::{App, PanelId, Settings, Target};
 use eframe::egui;
 use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
 
 use crate::support::gui::{H, app, app_mut, harness_sized, step_until};
 
@@ -88,10 +90,20 @@ fn ready(kind: SimKind, a: &App) -> bool {
 }
 
 #[test]
-fn at_1024_and_800_px_no_view_of_a_demo_device_parts_a_word_in_either_language() {
-    let mut split = Vec::new();
+fn at_1024_and_800_px_no_view_of_a_demo_device_parts_a_word_or_draws_text_over_text() {
+    let mut bad = Vec::new();
     for kind in SimKind::ALL {
         let mut h = demo(kind, Lang::Zh, SMALL);
+        if kind == SimKind::WindowCleaner {
+            // The self-test's plan and a preset open, as a technician has them.
+            let a = app_mut(&mut h);
+            a.selftest.open(&a.state);
+            let dir = botbench::ui::files::shipped_dir();
+            let preset = botbench::ui::files::shipped_in(&dir, "window-cleaner-factory.ron");
+            a.presets.path = preset.unwrap().display().to_string();
+            a.presets.open(&a.state);
+            assert!(a.selftest.plan.is_some() && a.presets.loaded.is_some());
+        }
         for (size, lang) in [SMALL, LEAST]
             .into_iter()
             .flat_map(|s| Lang::ALL.map(|l| (s, l)))
@@ -102,9 +114,18 @@ fn at_1024_and_800_px_no_view_of_a_demo_device_parts_a_word_in_either_language()
                 app_mut(&mut h).show_view(&view);
                 // egui lays a new panel out over two passes.
                 h.run_steps(3);
+                for (a, b) in overlapping_texts(&h.output().shapes) {
+                    bad.push(format!(
+                        "{} {} {}×{} {lang:?}: {a:?} over {b:?}",
+                        kind.name(),
+                        view.name,
+                        size.x,
+                        size.y
+                    ));
+                }
                 for text in split_words(&h.output().shapes) {
-                    split.push(format!(
-                        "{} {} {}×{} {lang:?}: {text:?}",
+                    bad.push(format!(
+                        "{} {} {}×{} {lang:?}: {text:?} split",
                         kind.name(),
                         view.name,
                         size.x,
@@ -115,9 +136,9 @@ fn at_1024_and_800_px_no_view_of_a_demo_device_parts_a_word_in_either_language()
         }
     }
     assert!(
-        split.is_empty(),
-        "words split over two lines:\n{}",
-        split.join("\n")
+        bad.is_empty(),
+        "words split over two lines, texts over texts:\n{}",
+        bad.join("\n")
     );
 }
 
@@ -192,4 +213,36 @@ fn at_1024_px_every_solar_plot_keeps_its_height_and_scrolls_into_view() {
         h.step();
     }
     step_until(&mut h, "the last plot in view", inside);
+}
+
+#[test]
+fn a_panel_keeps_its_own_scroll_place_when_another_panel_was_scrolled() {
+    let mut h = demo(SimKind::WindowCleaner, Lang::En, SMALL);
+    let a = app_mut(&mut h);
+    let dir = botbench::ui::files::shipped_dir();
+    let preset = botbench::ui::files::shipped_in(&dir, "window-cleaner-factory.ron");
+    a.presets.path = preset.unwrap().display().to_string();
+    a.presets.open(&a.state);
+    // The tuning table scrolled to its last group…
+    let last = app(&h)
+        .views()
+        .into_iter()
+        .rfind(|v| v.panel == PanelId::Tuning);
+    app_mut(&mut h).show_view(&last.expect("a tuning group"));
+    h.run_steps(3);
+    let read_all = h.get_by_label("Read all").rect();
+    let first = h.query_by_label("Fan PWM");
+    assert!(
+        first.is_none_or(|n| n.rect().bottom() < read_all.bottom()),
+        "the tuning table is scrolled down"
+    );
+    // …and the presets' table starts at its top.
+    app_mut(&mut h).settings.panel = PanelId::Presets;
+    h.run_steps(3);
+    let compare = h.get_by_label("Compare with device").rect();
+    let header = h.get_by_label("Command").rect();
+    assert!(
+        header.top() > compare.bottom(),
+        "the presets' header row is in view ({header:?} under {compare:?})"
+    );
 }

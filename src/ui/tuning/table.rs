@@ -76,11 +76,7 @@ impl TuningPanel {
         let name_col = names.clamp(width / 6.0, width * 0.4).max(60.0);
         let col = ((width - name_col) / 5.0).max(60.0);
         let name_cell = |ui: &mut egui::Ui, text: egui::RichText| {
-            ui.allocate_ui(egui::vec2(name_col, 0.0), |ui| {
-                ui.set_min_width(name_col);
-                ui.label(text)
-            })
-            .inner
+            crate::ui::layout::wrapped_cell(ui, name_col, egui::Label::new(text))
         };
         egui::Grid::new(("fields", &group.id))
             .num_columns(6)
@@ -247,6 +243,15 @@ pub(super) fn name_width(ui: &egui::Ui, lang: Lang, rt: &AppState) -> f32 {
 fn profile_range(f: &Field, lang: Lang) -> String {
     if f.range.is_none() && f.labels.is_empty() {
         return lang.tr("— (not given)", "—(未规定)").to_string();
+    }
+    if f.range.is_some() && !f.labels.is_empty() {
+        // Named values within a wider range (a pump that is off, on, or any byte): both.
+        let names: Vec<&str> = f
+            .labels
+            .iter()
+            .map(|l| lang.tr(&l.name.en, &l.name.zh))
+            .collect();
+        return format!("{} ({})", names.join(" / "), range_text(f));
     }
     range_text(f)
 }
