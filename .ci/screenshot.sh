@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Opens the window once under Xvfb (software rendering) for its screenshot tour (`botbench gui
-# --screenshots DIR`): each built-in demo device in turn, every panel it has, at 1280×800 and
-# 1024×600, in English and 中文. Fails if the window did not come up, the tour reported a
-# failure, a panel lacks one of its four shots, or a shot is blank.
+# --screenshots DIR`): each built-in demo device in turn, every view it has (each panel, each
+# tab, each tuning group), at 1280×800 and 1024×600, in English and 中文. Fails if the window
+# did not come up, the tour reported a failure (a device that did not answer, a label split
+# over two lines), a view lacks one of its four shots, or a shot is blank.
 # Usage: .ci/screenshot.sh [DIR] [BINARY]
 #   DIR     default target/screenshots (emptied of old shots first)
 #   BINARY  default target/debug/botbench: the one `cargo test` builds, so CI builds once
@@ -60,6 +61,7 @@ xvfb-run -a -s "-screen 0 1280x800x24" "$home/run.sh" || {
     sleep 2
     xvfb-run -a -s "-screen 0 1280x800x24" "$home/run.sh"
 }
+grep "^tour: .* shots in" "$home/app.log" || true
 grep "^tour: done" "$home/app.log"
 echo "== the tour took $((SECONDS - tour_start)) s (X server and launches included)"
 if ! grep -q "^tour: done, 0 failure" "$home/app.log"; then
@@ -67,13 +69,13 @@ if ! grep -q "^tour: done, 0 failure" "$home/app.log"; then
     exit 1
 fi
 
-# Every device's shots, and each panel shown at both sizes in both languages.
+# Every device's shots, and each view shown at both sizes in both languages.
 for device in window-cleaner solar-cleanbot servo-bus tuya-vacuum; do
     ls "$dir/$device"-*.png >/dev/null 2>&1 || { echo "no shot of $device"; exit 1; }
 done
-for panel in $(ls "$dir" | sed -n 's/-[0-9]*x[0-9]*-[a-z]*\.png$//p' | sort -u); do
+for view in $(ls "$dir" | sed -n 's/-[0-9]*x[0-9]*-[a-z]*\.png$//p' | sort -u); do
     for shot in 1280x800-en 1280x800-zh 1024x600-en 1024x600-zh; do
-        [ -s "$dir/$panel-$shot.png" ] || { echo "missing $panel-$shot.png"; exit 1; }
+        [ -s "$dir/$view-$shot.png" ] || { echo "missing $view-$shot.png"; exit 1; }
     done
 done
 # Blank means a single colour: its standard deviation is (about) zero.

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # make-subset.sh — regenerates assets/fonts/NotoSansCJKsc-Regular-subset.otf, the CJK font that
-# botbench embeds (src/i18n.rs, `include_bytes!`) so that its Chinese labels render.
+# botbench embeds (src/i18n/mod.rs, `include_bytes!`) so that its Chinese labels render.
 #
 # The generated font is committed: building botbench never runs this script. Run it again when
-# the UI strings grow, that is when `cargo test --test i18n` (or the unit tests in src/i18n.rs)
+# the UI strings grow, that is when `cargo test --test i18n` (or the unit tests in src/i18n/mod.rs)
 # report a Chinese character that has no glyph in the bundled font.
 #
 # Needs (Debian + PyPI):

@@ -50,7 +50,7 @@ pub(crate) fn run(
         }
         let record = ops::provision_next(&client, &profile, &plan, &mut state, &cancel, &mut |p| {
             if !port.json {
-                eprintln!("  {}", p.message);
+                eprintln!("  {}", p.message.en);
             }
         });
         if record.result.is_pass() {

@@ -266,7 +266,7 @@ pub(crate) fn run(args: TuyaArgs) -> CliResult {
                     let pct = (p.fraction() * 100.0) as u32;
                     if !json && pct >= last_pct + 10 {
                         last_pct = pct;
-                        eprintln!("{pct:3}%  {}", p.message);
+                        eprintln!("{pct:3}%  {}", p.message.en);
                     }
                 },
             )

@@ -59,8 +59,8 @@ pub struct Progress {
     pub done: u64,
     /// Steps in all.
     pub total: u64,
-    /// What is happening now.
-    pub message: String,
+    /// What is happening now, in both languages (the command line prints the English).
+    pub message: crate::profile::Text,
 }
 
 impl Progress {

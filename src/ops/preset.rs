@@ -39,7 +39,10 @@ pub fn read_device(
         progress(Progress {
             done: i as u64 + 1,
             total,
-            message: format!("read {}", get.ident),
+            message: crate::profile::Text::new(
+                format!("read {}", get.name.en),
+                format!("已读取 {}", get.name.zh),
+            ),
         });
     }
     Ok(values)
@@ -103,7 +106,7 @@ pub fn apply_each(
     progress(Progress {
         done: 0,
         total,
-        message: "checked; writing".into(),
+        message: crate::profile::Text::new("checked; writing", "已检查,正在写入"),
     });
     for (i, w) in writes.iter().enumerate() {
         if cancel.is_cancelled() {
@@ -117,7 +120,10 @@ pub fn apply_each(
         progress(Progress {
             done: i as u64 + 1,
             total,
-            message: format!("wrote {}", set.ident),
+            message: crate::profile::Text::new(
+                format!("wrote {}", set.name.en),
+                format!("已写入 {}", set.name.zh),
+            ),
         });
     }
     Ok(())

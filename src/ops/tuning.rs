@@ -51,7 +51,7 @@ pub fn read_commands(
         progress(Progress {
             done: i as u64 + 1,
             total: ids.len() as u64,
-            message: cmd.ident.clone(),
+            message: cmd.name.clone(),
         });
     }
     Ok(tally)
@@ -89,7 +89,7 @@ pub fn write_commands(
         progress(Progress {
             done: i as u64 + 1,
             total: writes.len() as u64,
-            message: cmd.ident.clone(),
+            message: cmd.name.clone(),
         });
     }
     Ok(tally)

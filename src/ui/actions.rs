@@ -6,7 +6,7 @@ use super::Action;
 use super::inputs::{command_inputs, range_text};
 use super::jobs;
 use super::state::AppState;
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::profile::{Command, CommandKind, Input};
 use eframe::egui;
 use std::collections::HashMap;
@@ -98,7 +98,7 @@ impl ActionsPanel {
                             let resp =
                                 ui.add_enabled(ready && inputs.is_ok(), egui::Button::new(label));
                             let resp = match &inputs {
-                                Err(e) => resp.on_disabled_hover_text(e.to_string()),
+                                Err(e) => resp.on_disabled_hover_text(e.in_lang(lang)),
                                 Ok(_) => resp,
                             };
                             if resp.clicked()

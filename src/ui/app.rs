@@ -7,12 +7,13 @@ use super::jobs::{self, JobOutput};
 use super::settings::{self, FileKind, Settings};
 use super::state::{AppState, Notice, Target};
 use super::{
-    Action, actions, connection, demo_hint, device, files, monitor, presets, repaint, selftest,
-    servo_bench, solar, status_bar, stop, telemetry, tour, tuning, tuya_console,
+    Action, actions, connection, demo_hint, device, files, layout, monitor, presets, repaint,
+    selftest, servo_bench, solar, status_bar, stop, telemetry, tour, tuning, tuya_console,
 };
 use crate::i18n::Lang;
+use crate::i18n::Zh;
 use crate::link::LinkCommand;
-use crate::profile::{PanelKind, ProfileError};
+use crate::profile::{PanelKind, ProfileError, Text};
 use eframe::egui;
 use serde::{Deserialize, Serialize};
 
@@ -20,7 +21,7 @@ use serde::{Deserialize, Serialize};
 pub const TITLE: &str = concat!("botbench ", env!("CARGO_PKG_VERSION"));
 
 /// The panels.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum PanelId {
     /// Window cleaner parameters.
     Tuning,
@@ -45,6 +46,20 @@ pub enum PanelId {
 }
 
 impl PanelId {
+    /// Every panel.
+    pub const ALL: [PanelId; 10] = [
+        PanelId::Device,
+        PanelId::Tuning,
+        PanelId::Telemetry,
+        PanelId::Presets,
+        PanelId::Actions,
+        PanelId::Solar,
+        PanelId::SelfTest,
+        PanelId::ServoBench,
+        PanelId::TuyaConsole,
+        PanelId::Monitor,
+    ];
+
     /// The panel a profile names.
     pub fn of(kind: PanelKind) -> PanelId {
         match kind {
@@ -117,6 +132,9 @@ impl App {
     /// An app with `settings`, connected to its target.
     pub fn new(ctx: &egui::Context, settings: Settings) -> Result<Self, ProfileError> {
         crate::i18n::install_cjk_font(ctx);
+        // Scroll bars shown solid wherever a panel has more than its room (egui's floating
+        // ones show only under the pointer: a technician does not see that more is below).
+        ctx.all_styles_mut(|s| s.spacing.scroll = egui::style::ScrollStyle::solid());
         let state = AppState::new(ctx, &settings.profile)?;
         let (baud, margin_ms) = port_for(&settings, &state, &settings.profile);
         let mut app = Self {
@@ -177,12 +195,10 @@ impl App {
         if back {
             self.state.device.forget_unit();
             self.state.send(LinkCommand::Identify);
-            self.state.notify(
-                Notice::info(
-                    "the device answers again: identified and read again (it may be another unit)",
-                )
-                .zh("设备重新应答:已重新识别并读取(可能是另一台设备)"),
-            );
+            self.state.notify(Notice::info(Text::new(
+                "the device answers again: identified and read again (it may be another unit)",
+                "设备重新应答:已重新识别并读取(可能是另一台设备)",
+            )));
         } else if fresh {
             self.state.device.unit += 1;
         }
@@ -215,16 +231,7 @@ impl App {
             ctx.request_repaint_after(after);
         }
         if let Some(mut tour) = self.tour.take() {
-            let panels = self.panels();
-            for a in tour.step(ctx, &self.state, &panels) {
-                let connect = matches!(a, Action::Connect { .. });
-                self.apply(a);
-                if connect {
-                    // The connection bar shows the device the tour moved to.
-                    let (baud, _) = port_for(&self.settings, &self.state, &self.settings.profile);
-                    self.connection = connection::ConnectionBar::new(&self.settings, baud);
-                }
-            }
+            tour.step(ctx, self);
             self.tour = Some(tour);
         }
     }
@@ -276,42 +283,69 @@ impl App {
             actions.extend(status_bar::show(ui, lang, state));
         });
         let panels = self.panels();
-        egui::Panel::left("nav").resizable(false).show(ui, |ui| {
-            ui.add_space(4.0);
-            for &panel in &panels {
-                if ui
-                    .selectable_label(settings.panel == panel, panel.name(lang))
-                    .clicked()
-                {
-                    actions.push(Action::ShowPanel(panel));
+        egui::Panel::left("nav")
+            .resizable(false)
+            .exact_size(nav_width(ui))
+            .show(ui, |ui| {
+                ui.add_space(4.0);
+                ui.scope(|ui| {
+                    layout::keep_words_whole(ui);
+                    for &panel in &panels {
+                        if ui
+                            .selectable_label(settings.panel == panel, panel.name(lang))
+                            .clicked()
+                        {
+                            actions.push(Action::ShowPanel(panel));
+                        }
+                    }
+                });
+                // STOP is on every panel of a robot whose profile names one (the solar panel
+                // shows its own at the top), with what the robot may be doing.
+                if !state.device.profile.stop.is_empty() {
+                    ui.separator();
+                    if settings.panel != PanelId::Solar {
+                        actions.extend(self.stop.button(ui, lang, state));
+                        self.stop.status(ui, lang);
+                    }
+                    stop::running(ui, lang, state);
                 }
-            }
-            // STOP is on every panel of a robot whose profile names one (the solar panel
-            // shows its own at the top), with what the robot may be doing.
-            if !state.device.profile.stop.is_empty() {
-                ui.separator();
-                if settings.panel != PanelId::Solar {
-                    actions.extend(self.stop.button(ui, lang, state));
-                    self.stop.status(ui, lang);
-                }
-                stop::running(ui, lang, state);
-            }
-        });
-        egui::CentralPanel::default().show(ui, |ui| match settings.panel {
-            PanelId::Tuning => actions.extend(self.tuning.show(ui, lang, state)),
-            PanelId::Telemetry => actions.extend(self.telemetry.show(ui, settings, state)),
-            PanelId::Monitor => actions.extend(self.monitor.show(ui, lang, state)),
-            PanelId::Presets => actions.extend(self.presets.show(ui, lang, state)),
-            PanelId::Actions => actions.extend(self.actions.show(ui, lang, state)),
-            PanelId::Device => actions.extend(self.device.show(ui, lang, state)),
-            PanelId::Solar => actions.extend(self.solar.show(ui, lang, state, &mut self.stop)),
-            PanelId::SelfTest => actions.extend(self.selftest.show(ui, lang, state)),
-            PanelId::ServoBench => actions.extend(self.servo.show(ui, lang, state)),
-            PanelId::TuyaConsole => actions.extend(self.tuya.show(ui, lang, state)),
+            });
+        // Each panel's widgets have ids of their own: a scroll area of one panel keeps its own
+        // place, not the place of the panel shown before it.
+        let panel = settings.panel;
+        egui::CentralPanel::default().show(ui, |ui| {
+            ui.push_id(panel, |ui| match panel {
+                PanelId::Tuning => actions.extend(self.tuning.show(ui, lang, state)),
+                PanelId::Telemetry => actions.extend(self.telemetry.show(ui, settings, state)),
+                PanelId::Monitor => actions.extend(self.monitor.show(ui, lang, state)),
+                PanelId::Presets => actions.extend(self.presets.show(ui, lang, state)),
+                PanelId::Actions => actions.extend(self.actions.show(ui, lang, state)),
+                PanelId::Device => actions.extend(self.device.show(ui, lang, state)),
+                PanelId::Solar => actions.extend(self.solar.show(ui, lang, state, &mut self.stop)),
+                PanelId::SelfTest => actions.extend(self.selftest.show(ui, lang, state)),
+                PanelId::ServoBench => actions.extend(self.servo.show(ui, lang, state)),
+                PanelId::TuyaConsole => actions.extend(self.tuya.show(ui, lang, state)),
+            })
         });
         for a in actions {
             self.apply(a);
         }
+        if let Some(tour) = &mut self.tour {
+            tour.after_ui(ui.ctx());
+        }
+    }
+
+    /// Connects to the built-in demo device `kind` at its own rate with its profile, as the
+    /// port picker does (the connection bar shows it).
+    pub fn connect_demo(&mut self, kind: crate::sim::SimKind) {
+        self.apply(Action::Connect {
+            target: Target::Demo(kind.name().to_string()),
+            baud: kind.default_baud(),
+            profile: kind.profile_id().to_string(),
+            margin_ms: None,
+        });
+        let (baud, _) = port_for(&self.settings, &self.state, &self.settings.profile);
+        self.connection = connection::ConnectionBar::new(&self.settings, baud);
     }
 
     /// The window's title: `botbench 0.1.0 — built-in simulated window-cleaner — Window-cleaning
@@ -353,7 +387,8 @@ impl App {
             } => self.connect(target, baud, profile, margin_ms),
             Action::Disconnect => {
                 self.state.disconnect();
-                self.state.notify(Notice::info("disconnected").zh("已断开"));
+                self.state
+                    .notify(Notice::info(Text::new("disconnected", "已断开")));
             }
             Action::SetLatencyTimer { port, ms } => {
                 match crate::link::adapter::set_latency_timer(&port, ms) {
@@ -365,11 +400,15 @@ impl App {
                             self.connect(Target::Port(port.clone()), baud, profile, margin_ms);
                         }
                         self.state.link.refresh_ports_now();
-                        self.state.notify(Notice::info(format!(
-                            "{port}: latency timer set to {now} ms"
+                        self.state.notify(Notice::info(Text::new(
+                            format!("{port}: latency timer set to {now} ms"),
+                            format!("{port}:延迟定时器已设为 {now} ms"),
                         )));
                     }
-                    Err(e) => self.state.notify(Notice::error(e)),
+                    Err(e) => self.state.notify(Notice::error(Text::new(
+                        format!("{port}: latency timer not set: {e}"),
+                        format!("{port}:延迟定时器未设置:{e}"),
+                    ))),
                 }
             }
             Action::StartJob(job) => self.state.start_job(job),
@@ -463,8 +502,9 @@ impl App {
     fn connect(&mut self, target: Target, baud: u32, profile: String, margin_ms: Option<u64>) {
         self.state.link.options.margin = margin_ms.map(std::time::Duration::from_millis);
         if let Err(e) = self.state.connect(target.clone(), baud, &profile) {
-            self.state
-                .notify(Notice::error(format!("cannot connect: {e}")).zh(format!("无法连接:{e}")));
+            self.state.notify(Notice::error(
+                Text::new("cannot connect", "无法连接").then(": ", &e.said()),
+            ));
             return;
         }
         self.settings.target = target;
@@ -492,6 +532,19 @@ impl App {
         };
         self.state.send(LinkCommand::SetPolls(polls));
     }
+}
+
+/// The navigation's width, points: its longest panel name in either language on one line (so
+/// that switching the language moves nothing), or the STOP button, whichever is wider.
+fn nav_width(ui: &egui::Ui) -> f32 {
+    let names = PanelId::ALL
+        .iter()
+        .flat_map(|p| Lang::ALL.map(|l| p.name(l)));
+    let text = layout::text_width(ui, &layout::body_font(ui), names);
+    let button = text + 2.0 * ui.spacing().button_padding.x;
+    // The panel's frame: its inner margin on both sides, and a little air.
+    let margin = 2.0 * 8.0 + 4.0;
+    button.max(stop::BUTTON_WIDTH) + margin
 }
 
 /// The baud rate and margin to open `profile` with: its saved ones, or its usual rate and the

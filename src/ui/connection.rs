@@ -100,6 +100,7 @@ impl ConnectionBar {
             let ltr = egui::Layout::left_to_right(egui::Align::Center).with_main_wrap(true);
             let rest = egui::vec2(ui.available_width(), row.y);
             ui.allocate_ui_with_layout(rest, ltr, |ui| {
+                super::layout::keep_words_whole(ui);
                 actions.extend(self.settings_row(ui, saved, rt))
             });
         });
@@ -114,11 +115,15 @@ impl ConnectionBar {
             let port_label = ui.label(lang.tr("Port", "端口"));
             egui::ComboBox::from_id_salt("port")
                 .width(220.0)
-                .selected_text(self.target.label())
+                .selected_text(self.target.label_in(lang))
                 .show_ui(ui, |ui| {
                     for kind in SimKind::ALL {
                         let t = Target::Demo(kind.name().to_string());
-                        let label = format!("{} ({})", lang.tr("Demo", "演示"), kind.describe());
+                        let label = format!(
+                            "{} ({})",
+                            lang.tr("Demo", "演示"),
+                            kind.described().get(lang)
+                        );
                         if ui.selectable_label(self.target == t, label).clicked() {
                             self.take_profile(kind.profile_id(), saved, rt);
                             if saved.port_of(kind.profile_id()).baud.is_none() {

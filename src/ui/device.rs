@@ -4,11 +4,11 @@
 use super::Action;
 use super::jobs::{Job, JobOutput};
 use super::state::AppState;
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::link::{DeviceInfo, LinkCommand, capabilities};
 use crate::ops::OpError;
 use crate::ops::device as ops;
-use crate::profile::Profile;
+use crate::profile::{Profile, Text};
 use crate::protocol::hex;
 use eframe::egui;
 use std::time::{Duration, Instant};
@@ -45,18 +45,24 @@ pub enum Output {
 /// Reads CMD_VERSION, CMD_BUILD_INFO and the power state.
 fn read_job(profile: &std::sync::Arc<Profile>) -> Action {
     let p = profile.clone();
-    Action::StartJob(Job::new("version", move |client, cancel, sink| {
-        let v = ops::identify(client);
-        sink.send(JobOutput::Device(Output::Version(v.clone())));
-        if cancel.is_cancelled() {
-            return Err(OpError::Cancelled.into());
-        }
-        let pw = ops::power_state(client, &p);
-        sink.send(JobOutput::Device(Output::Power(pw.clone())));
-        v?;
-        pw?;
-        Ok("version and power state read".into())
-    }))
+    Action::StartJob(Job::new(
+        Text::new("version", "版本"),
+        move |client, cancel, sink| {
+            let v = ops::identify(client);
+            sink.send(JobOutput::Device(Output::Version(v.clone())));
+            if cancel.is_cancelled() {
+                return Err(OpError::Cancelled.into());
+            }
+            let pw = ops::power_state(client, &p);
+            sink.send(JobOutput::Device(Output::Power(pw.clone())));
+            v?;
+            pw?;
+            Ok(Text::new(
+                "version and power state read",
+                "已读取版本与电源状态",
+            ))
+        },
+    ))
 }
 
 impl DevicePanel {
@@ -77,19 +83,23 @@ impl DevicePanel {
             self.asked = true;
             actions.push(read_job(&profile));
         }
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             if ui
                 .add_enabled(ready, egui::Button::new(lang.tr("Ping", "通讯检测")))
                 .clicked()
             {
                 let p = profile.clone();
                 actions.push(Action::StartJob(Job::new(
-                    "ping",
+                    Text::new("ping", "通讯检测"),
                     move |client, _cancel, sink| {
                         let r = ops::ping(client, &p).map(|ping| ping.rtt);
                         sink.send(JobOutput::Device(Output::Ping(r.clone())));
                         let rtt = r?;
-                        Ok(format!("answered in {:.1} ms", rtt.as_secs_f64() * 1e3))
+                        let ms = rtt.as_secs_f64() * 1e3;
+                        Ok(Text::new(
+                            format!("answered in {ms:.1} ms"),
+                            format!("{ms:.1} ms 内应答"),
+                        ))
                     },
                 )));
             }
@@ -111,68 +121,74 @@ impl DevicePanel {
             }
         });
         ui.separator();
-        egui::Grid::new("device-core")
-            .num_columns(2)
-            .striped(true)
+        // Scrolls where the window is too low for it (800×500).
+        egui::ScrollArea::vertical()
+            .auto_shrink(false)
             .show(ui, |ui| {
-                ui.label(lang.tr("Ping round trip", "通讯往返时间"));
-                match &self.ping {
-                    Some(Ok(d)) => {
-                        ui.monospace(format!("{:.1} ms", d.as_secs_f64() * 1e3));
-                    }
-                    Some(Err(e)) => {
-                        ui.colored_label(egui::Color32::RED, e.to_string());
-                    }
-                    None => {
-                        ui.weak(lang.tr("not pinged yet", "尚未检测"));
-                    }
-                }
-                ui.end_row();
-                ui.label(lang.tr("Power state (raw)", "电源状态(原始数据)"))
+                egui::Grid::new("device-core")
+                    .num_columns(2)
+                    .striped(true)
+                    .show(ui, |ui| {
+                        ui.label(lang.tr("Ping round trip", "通讯往返时间"));
+                        match &self.ping {
+                            Some(Ok(d)) => {
+                                ui.monospace(format!("{:.1} ms", d.as_secs_f64() * 1e3));
+                            }
+                            Some(Err(e)) => {
+                                ui.colored_label(egui::Color32::RED, e.in_lang(lang));
+                            }
+                            None => {
+                                ui.weak(lang.tr("not pinged yet", "尚未检测"));
+                            }
+                        }
+                        ui.end_row();
+                        ui.label(lang.tr("Power state (raw)", "电源状态(原始数据)"))
                     .on_hover_text(lang.tr(
                         "No layout is published for this answer: its bytes are shown as sent.",
                         "此应答的格式未公开:按原始字节显示。",
                     ));
-                match &self.power {
-                    Some(Ok(b)) if b.is_empty() => {
-                        ui.monospace(lang.tr("(empty answer)", "(空应答)"));
-                    }
-                    Some(Ok(b)) => {
-                        ui.monospace(hex::format(b));
-                    }
+                        match &self.power {
+                            Some(Ok(b)) if b.is_empty() => {
+                                ui.monospace(lang.tr("(empty answer)", "(空应答)"));
+                            }
+                            Some(Ok(b)) => {
+                                ui.monospace(hex::format(b));
+                            }
+                            Some(Err(e)) => {
+                                ui.colored_label(egui::Color32::RED, e.in_lang(lang));
+                            }
+                            None => {
+                                ui.weak(lang.tr("not read yet", "尚未读取"));
+                            }
+                        }
+                        ui.end_row();
+                    });
+                ui.separator();
+                ui.strong(lang.tr("Version", "版本信息"));
+                // This panel's own read wins; until then, what the session learned on connect.
+                let info = self.version.as_ref().or(rt.device.info.as_ref());
+                match info {
+                    Some(Ok(info)) => self.show_info(ui, lang, &profile, info),
                     Some(Err(e)) => {
-                        ui.colored_label(egui::Color32::RED, e.to_string());
+                        ui.colored_label(egui::Color32::RED, e.in_lang(lang));
+                        super::tuning::unidentified_warning(ui, lang, rt);
                     }
                     None => {
-                        ui.weak(lang.tr("not read yet", "尚未读取"));
+                        ui.weak(lang.tr(
+                            "the device has not answered CMD_VERSION yet",
+                            "设备尚未应答版本查询",
+                        ));
                     }
                 }
-                ui.end_row();
+                if let Some(at) = self.at {
+                    ui.weak(format!(
+                        "{} {:.0} {}",
+                        lang.tr("last answer", "上次应答"),
+                        at.elapsed().as_secs_f64(),
+                        lang.tr("s ago", "秒前")
+                    ));
+                }
             });
-        ui.separator();
-        ui.strong(lang.tr("Version", "版本信息"));
-        // This panel's own read wins; until then, what the session learned on connect.
-        let info = self.version.as_ref().or(rt.device.info.as_ref());
-        match info {
-            Some(Ok(info)) => self.show_info(ui, lang, &profile, info),
-            Some(Err(e)) => {
-                ui.colored_label(egui::Color32::RED, e.to_string());
-                super::tuning::unidentified_warning(ui, lang, rt);
-            }
-            None => {
-                ui.weak(lang.tr(
-                    "the device has not answered CMD_VERSION yet",
-                    "设备尚未应答版本查询",
-                ));
-            }
-        }
-        if let Some(at) = self.at {
-            ui.weak(format!(
-                "{} {:.0} s",
-                lang.tr("last answer", "上次应答"),
-                at.elapsed().as_secs_f64()
-            ));
-        }
         actions
     }
 

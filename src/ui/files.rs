@@ -81,13 +81,22 @@ impl FileEvent {
     pub fn go(self, pressed: bool, actions: &mut Vec<Action>) -> bool {
         match self {
             FileEvent::NoDialog(why) => {
-                actions.push(Action::Notify(Notice::error(why)));
+                actions.push(Action::Notify(Notice::error(no_dialog(why))));
                 pressed
             }
             FileEvent::Chosen(_) => true,
             FileEvent::None => pressed,
         }
     }
+}
+
+/// The status line's message when a file dialog could not open: `why` in English (what
+/// [`FileEvent::NoDialog`] carries), the advice in Chinese.
+pub(crate) fn no_dialog(why: String) -> crate::profile::Text {
+    crate::profile::Text::new(
+        why,
+        "文件对话框无法打开(没有可用的 xdg 桌面门户或 zenity):请在框中输入路径",
+    )
 }
 
 /// A dialog that returns nothing sooner than this did not show (a person takes longer).

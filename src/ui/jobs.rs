@@ -6,15 +6,16 @@
 //! operation of [`crate::ops`].
 
 use crate::document::DocumentError;
+use crate::i18n::Key;
 use crate::link::Client;
 use crate::ops::{self, Cancel, Check, FieldValues, OpError, Progress};
-use crate::profile::{Input, Profile};
+use crate::profile::{Input, Profile, Text};
 use crossbeam_channel::{Receiver, Sender};
 use std::path::PathBuf;
 use std::sync::Arc;
 
-/// What a job ends with: a summary for the status line, or why it failed.
-pub type JobResult = Result<String, JobError>;
+/// What a job ends with: a summary for the status line (in both languages), or why it failed.
+pub type JobResult = Result<Text, JobError>;
 
 /// Why a job failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -143,15 +144,15 @@ pub type Work = Box<dyn FnOnce(&Client, &Cancel, &JobSink) -> JobResult + Send>;
 
 /// A job to start: a title for the status line, and its work.
 pub struct Job {
-    /// What it does, for the status bar.
-    pub title: String,
+    /// What it does, for the status bar, in both languages.
+    pub title: Text,
     work: Work,
 }
 
 impl Job {
     /// A job titled `title` that runs `work`.
     pub fn new(
-        title: impl Into<String>,
+        title: impl Into<Text>,
         work: impl FnOnce(&Client, &Cancel, &JobSink) -> JobResult + Send + 'static,
     ) -> Self {
         Self {
@@ -164,15 +165,15 @@ impl Job {
 impl std::fmt::Debug for Job {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Job")
-            .field("title", &self.title)
+            .field("title", &self.title.en)
             .finish_non_exhaustive()
     }
 }
 
 /// A job that runs (or ran).
 pub struct RunningJob {
-    /// What it does, for the status bar.
-    pub title: String,
+    /// What it does, for the status bar, in both languages.
+    pub title: Text,
     /// Its latest progress.
     pub progress: Option<Progress>,
     /// Raise to stop it.
@@ -232,7 +233,7 @@ impl RunningJob {
 /// to the device model.
 pub fn read(profile: &Arc<Profile>, ids: Vec<u8>) -> Job {
     let profile = profile.clone();
-    Job::new("read", move |client, cancel, sink| {
+    Job::new(Key::Read, move |client, cancel, sink| {
         let tally = ops::tuning::read_commands(
             client,
             &profile,
@@ -242,7 +243,10 @@ pub fn read(profile: &Arc<Profile>, ids: Vec<u8>) -> Job {
             &mut |id, r| sink.send(JobOutput::Read(id, r)),
         )?;
         if tally.failed == 0 {
-            Ok(format!("{} read", tally.total))
+            Ok(Text::new(
+                format!("{} read", tally.total),
+                format!("已读取 {} 项", tally.total),
+            ))
         } else {
             Err(JobError::Incomplete {
                 failed: tally.failed,
@@ -257,7 +261,7 @@ pub fn read(profile: &Arc<Profile>, ids: Vec<u8>) -> Job {
 /// ([`ops::tuning::write_commands`]); each result goes to the device model.
 pub fn write(profile: &Arc<Profile>, writes: Vec<ops::tuning::SetWrite>) -> Job {
     let profile = profile.clone();
-    Job::new("write", move |client, cancel, sink| {
+    Job::new(Key::Write, move |client, cancel, sink| {
         let mut done = 0;
         let tally = ops::tuning::write_commands(
             client,
@@ -279,7 +283,10 @@ pub fn write(profile: &Arc<Profile>, writes: Vec<ops::tuning::SetWrite>) -> Job 
             e => e.into(),
         })?;
         if tally.failed == 0 {
-            Ok(format!("{} command(s) written and verified", tally.done))
+            Ok(Text::new(
+                format!("{} command(s) written and verified", tally.done),
+                format!("{} 条命令已写入并校验", tally.done),
+            ))
         } else {
             Err(JobError::Incomplete {
                 failed: tally.failed,
@@ -293,8 +300,14 @@ pub fn write(profile: &Arc<Profile>, writes: Vec<ops::tuning::SetWrite>) -> Job 
 /// Sends command `id` (an action) with `inputs` and waits for its acknowledgement.
 pub fn send(profile: &Arc<Profile>, id: u8, inputs: Vec<(String, Input)>) -> Job {
     let profile = profile.clone();
-    Job::new("send", move |client, _cancel, _sink| {
+    Job::new(Key::Send, move |client, _cancel, _sink| {
         let ident = ops::tuning::send_command(client, &profile, id, &inputs)?;
-        Ok(format!("{ident} acknowledged"))
+        let name = profile
+            .command(&ident)
+            .map_or_else(|| Text::same(&ident), |c| c.name.clone());
+        Ok(Text::new(
+            format!("{} acknowledged", name.en),
+            format!("{} 已确认", name.zh),
+        ))
     })
 }

@@ -10,8 +10,9 @@ mod connection;
 pub mod demo_hint;
 mod device;
 pub mod files;
-mod inputs;
+pub(crate) mod inputs;
 pub mod jobs;
+pub mod layout;
 mod monitor;
 mod plot;
 mod presets;
@@ -25,15 +26,18 @@ mod status_bar;
 pub mod stop;
 mod telemetry;
 pub mod tour;
-mod tuning;
+pub(crate) mod tuning;
 mod tuya_console;
+pub mod views;
 
 pub use app::{App, PanelId};
 pub use jobs::Job;
 pub use settings::Settings;
 pub use solar::{Outcome as SolarOutcome, Trip as SolarTrip};
 pub use state::{AppState, Notice, Target};
+pub use telemetry::MIN_PLOT_HEIGHT;
 pub use tuya_console::FirmwareFileError;
+pub use views::View;
 
 use crate::i18n::Lang;
 

@@ -14,9 +14,9 @@ use super::Action;
 use super::files;
 use super::settings::FileKind;
 use super::state::{AppState, Notice};
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::link::LogEntry;
-use crate::profile::Profile;
+use crate::profile::{Profile, Text};
 use crate::protocol::{Direction, hex};
 use eframe::egui;
 
@@ -227,8 +227,8 @@ impl MonitorPanel {
                     .collect(),
             ),
         };
-        ui.horizontal_wrapped(|ui| actions.extend(self.capture_bar(ui, lang, rt)));
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| actions.extend(self.capture_bar(ui, lang, rt)));
+        crate::ui::layout::toolbar(ui, |ui| {
             let label = ui.label(lang.tr("Filter", "筛选"));
             ui.add(
                 egui::TextEdit::singleline(&mut self.filter)
@@ -252,9 +252,9 @@ impl MonitorPanel {
                 let shown: Vec<String> =
                     rows.iter().map(|(_, p, e)| line(&profile, p, e)).collect();
                 ui.ctx().copy_text(shown.join("\n"));
-                actions.push(Action::Notify(Notice::info(format!(
-                    "{} line(s) copied",
-                    shown.len()
+                actions.push(Action::Notify(Notice::info(Text::new(
+                    format!("{} line(s) copied", shown.len()),
+                    format!("已复制 {} 行", shown.len()),
                 ))));
             }
             ui.weak(format!(
@@ -273,7 +273,7 @@ impl MonitorPanel {
                 }
             ));
         });
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
                 lang,
@@ -393,9 +393,10 @@ impl MonitorPanel {
     fn save(&self, profile: &Profile, rows: &[Row<'_>]) -> Vec<Action> {
         let path = self.save_path.trim();
         if path.is_empty() {
-            return vec![Action::Notify(Notice::error(
+            return vec![Action::Notify(Notice::error(Text::new(
                 "save: give the file's path (type it, or Browse)",
-            ))];
+                "保存:请给出文件路径(输入,或点击浏览)",
+            )))];
         }
         let lines: Vec<String> = rows.iter().map(|(_, p, e)| line(profile, p, e)).collect();
         match crate::document::write_atomic(
@@ -404,12 +405,12 @@ impl MonitorPanel {
         ) {
             Ok(()) => vec![
                 Action::RememberFile(FileKind::Packets, path.to_string()),
-                Action::Notify(Notice::info(format!(
-                    "{} line(s) saved to {path}",
-                    lines.len()
+                Action::Notify(Notice::info(Text::new(
+                    format!("{} line(s) saved to {path}", lines.len()),
+                    format!("已保存 {} 行到 {path}", lines.len()),
                 ))),
             ],
-            Err(e) => vec![Action::Notify(Notice::error(e.to_string()))],
+            Err(e) => vec![Action::Notify(Notice::error(e.said()))],
         }
     }
 }
@@ -419,14 +420,16 @@ impl MonitorPanel {
 fn record_to(path: &str) -> Result<std::path::PathBuf, Notice> {
     let path = path.trim();
     if path.is_empty() {
-        return Err(Notice::error(
+        return Err(Notice::error(Text::new(
             "record: give the capture file's path (type it, or Browse)",
-        ));
+            "录制:请给出抓包文件的路径(输入或浏览)",
+        )));
     }
     let p = std::path::PathBuf::from(path);
     if p.exists() {
-        return Err(Notice::error(format!(
-            "record: {path} exists; a recording replaces no file: give a new name"
+        return Err(Notice::error(Text::new(
+            format!("record: {path} exists; a recording replaces no file: give a new name"),
+            format!("录制:{path} 已存在;录制不覆盖任何文件:请换一个文件名"),
         )));
     }
     Ok(p)

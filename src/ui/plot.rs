@@ -39,7 +39,8 @@ pub struct Legend {
     /// Per field, in order: `Battery voltage (V)` / `电池电压 (V)`; a field the command does not
     /// have keeps its ident.
     pub names: Vec<String>,
-    /// The y axis label: the fields' units (`V`, `g`), or "value (unit not published)".
+    /// The y axis label: the fields' units (`V`, `g`), or "unit not published" (short enough
+    /// for a plot at its least height).
     pub y_label: String,
     /// Every field is a whole number (no scale): ticks and readouts show no decimals.
     pub integer: bool,
@@ -67,9 +68,7 @@ impl Legend {
         units.dedup();
         let y_label = match units.as_slice() {
             [one] if !one.is_empty() => one.to_string(),
-            [] | [_] => lang
-                .tr("value (unit not published)", "数值(单位未公布)")
-                .to_string(),
+            [] | [_] => lang.tr("unit not published", "单位未公布").to_string(),
             many => many.join(", "),
         };
         let integer = fields
@@ -127,7 +126,7 @@ pub fn axes<'a>(plot: Plot<'a>, lang: Lang, t0: SystemTime, legend: &Legend) -> 
 /// The fields' names in their colours, on a line above the plot (a legend inside it would
 /// cover the newest data), then the plot's states as they read now (see [`states`]).
 pub fn key(ui: &mut egui::Ui, legend: &Legend, states: &[String]) {
-    ui.horizontal_wrapped(|ui| {
+    crate::ui::layout::toolbar(ui, |ui| {
         for (i, name) in legend.names.iter().enumerate() {
             ui.colored_label(color(i), format!("— {name}"));
         }
@@ -292,7 +291,7 @@ mod tests {
         assert!(!en.y_label.is_empty() && !zh.y_label.is_empty());
         assert_eq!(
             Legend::new(None, &["eulerX".to_string()], Lang::Zh).y_label,
-            "数值(单位未公布)"
+            "单位未公布"
         );
     }
 

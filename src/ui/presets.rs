@@ -6,10 +6,10 @@ use super::settings::FileKind;
 use super::state::{AppState, Reading};
 use super::{Action, files};
 use crate::document::DocumentError;
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::ops;
 use crate::preset::{CommandValues, Loaded, Preset, preset_commands};
-use crate::profile::Profile;
+use crate::profile::{Profile, Text};
 use eframe::egui;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -33,45 +33,58 @@ pub struct PresetsPanel {
 /// ([`ops::preset::capture`]).
 fn save_job(profile: &Arc<Profile>, path: PathBuf, note: String) -> Job {
     let profile = profile.clone();
-    Job::new("save preset", move |client, cancel, sink| {
-        let mut preset = ops::preset::capture(client, &profile, cancel, &mut |p| sink.progress(p))?;
-        preset.note = note;
-        preset.save_annotated(&path, &profile)?;
-        Ok(format!("saved to {}", path.display()))
-    })
+    Job::new(
+        Text::new("save preset", "保存预设"),
+        move |client, cancel, sink| {
+            let mut preset =
+                ops::preset::capture(client, &profile, cancel, &mut |p| sink.progress(p))?;
+            preset.note = note;
+            preset.save_annotated(&path, &profile)?;
+            Ok(Text::new(
+                format!("saved to {}", path.display()),
+                format!("已保存到 {}", path.display()),
+            ))
+        },
+    )
 }
 
 /// Writes a (checked) preset, each command read back ([`ops::preset::apply_each`]); each
 /// command's checks go to the device model.
 fn apply_job(profile: &Arc<Profile>, preset: Preset) -> Job {
     let profile = profile.clone();
-    Job::new("apply preset", move |client, cancel, sink| {
-        let mut total = 0;
-        let mut bad = 0;
-        ops::preset::apply_each(
-            client,
-            &profile,
-            &preset,
-            cancel,
-            &mut |p| sink.progress(p),
-            &mut |command, checks| {
-                total += checks.len();
-                bad += checks.iter().filter(|c| !c.ok()).count();
-                if let Some(cmd) = profile.command(command) {
-                    sink.send(JobOutput::Wrote(cmd.id, Ok(checks.to_vec())));
-                }
-            },
-        )?;
-        if bad == 0 {
-            Ok(format!("{total} field(s) written and verified"))
-        } else {
-            Err(JobError::Incomplete {
-                failed: bad,
-                total,
-                what: "field(s) do not hold the preset's value".into(),
-            })
-        }
-    })
+    Job::new(
+        Text::new("apply preset", "应用预设"),
+        move |client, cancel, sink| {
+            let mut total = 0;
+            let mut bad = 0;
+            ops::preset::apply_each(
+                client,
+                &profile,
+                &preset,
+                cancel,
+                &mut |p| sink.progress(p),
+                &mut |command, checks| {
+                    total += checks.len();
+                    bad += checks.iter().filter(|c| !c.ok()).count();
+                    if let Some(cmd) = profile.command(command) {
+                        sink.send(JobOutput::Wrote(cmd.id, Ok(checks.to_vec())));
+                    }
+                },
+            )?;
+            if bad == 0 {
+                Ok(Text::new(
+                    format!("{total} field(s) written and verified"),
+                    format!("{total} 个字段已写入并校验"),
+                ))
+            } else {
+                Err(JobError::Incomplete {
+                    failed: bad,
+                    total,
+                    what: "field(s) do not hold the preset's value".into(),
+                })
+            }
+        },
+    )
 }
 
 /// The device's values of the preset commands, from the readings replies brought.
@@ -108,7 +121,7 @@ impl PresetsPanel {
         let profile = &rt.device.profile;
         let busy = rt.job_progress().is_some();
         let ready = rt.connected() && !busy;
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
                 lang,
@@ -124,7 +137,7 @@ impl PresetsPanel {
                 actions.extend(self.open_and_remember(rt));
             }
         });
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let label = ui.label(lang.tr("Note", "备注"));
             ui.add(egui::TextEdit::singleline(&mut self.note).desired_width(240.0))
                 .labelled_by(label.id);
@@ -163,7 +176,7 @@ impl PresetsPanel {
             }
         });
         if let Some(e) = &self.error {
-            ui.colored_label(egui::Color32::RED, e.to_string());
+            ui.colored_label(egui::Color32::RED, e.in_lang(lang));
         }
         ui.separator();
         let Some(loaded) = &self.loaded else {
@@ -221,8 +234,21 @@ impl PresetsPanel {
                         ui.strong(lang.tr("Device", "设备值"));
                         ui.end_row();
                         for r in &rows {
-                            ui.monospace(&r.command);
-                            ui.label(&r.field);
+                            // The profile's names, the wire names on hover.
+                            let cmd = profile.command(&r.command);
+                            let field = cmd.and_then(|c| {
+                                c.request
+                                    .iter()
+                                    .chain(&c.reply)
+                                    .find(|f| f.ident == r.field)
+                            });
+                            let named = |t: Option<&crate::profile::Text>, wire: &str| {
+                                t.map_or(wire.to_string(), |t| t.get(lang).to_string())
+                            };
+                            ui.label(named(cmd.map(|c| &c.name), &r.command))
+                                .on_hover_text(&r.command);
+                            ui.label(named(field.map(|f| &f.name), &r.field))
+                                .on_hover_text(&r.field);
                             if r.differs {
                                 ui.colored_label(egui::Color32::from_rgb(220, 150, 0), &r.preset);
                             } else {

@@ -8,9 +8,9 @@ use super::settings::FileKind;
 use super::state::AppState;
 use super::{Action, files};
 use crate::document::DocumentError;
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::ops::selftest::{self, Plan, Report, StepKind, StepResult};
-use crate::profile::Profile;
+use crate::profile::{Profile, Text};
 use crossbeam_channel::Sender;
 use eframe::egui;
 use std::path::PathBuf;
@@ -186,7 +186,7 @@ impl SelfTestPanel {
         self.logged = None;
         self.running = true;
         Some(Action::StartJob(Job::new(
-            "self-test",
+            Text::new("self-test", "自检"),
             move |client, cancel, sink| {
                 let mut operator = |text: &str| -> bool {
                     let (tx, rx) = crossbeam_channel::bounded(1);
@@ -233,7 +233,7 @@ impl SelfTestPanel {
                     return Err(e.into());
                 }
                 match (pass, aborted) {
-                    (true, _) => Ok("PASS".into()),
+                    (true, _) => Ok(Text::new("PASS", "合格")),
                     (false, Some(a)) => Err(JobError::Failed(a)),
                     (false, None) => Err(JobError::Failed(failed.join(", "))),
                 }
@@ -276,7 +276,7 @@ impl SelfTestPanel {
             // The job ended without a report (it could not start).
             self.running = false;
         }
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
                 lang,
@@ -297,7 +297,7 @@ impl SelfTestPanel {
                 actions.extend(self.open_and_remember(rt));
             }
         });
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
                 lang,
@@ -326,7 +326,7 @@ impl SelfTestPanel {
             return actions;
         };
         let (name, steps) = (plan.name.clone(), plan.steps.len());
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             ui.strong(name);
             ui.weak(format!("{steps} {}", lang.tr("steps", "个步骤")));
             let can_run = rt.connected() && !busy && !self.running;
@@ -350,7 +350,11 @@ impl SelfTestPanel {
         if self.running
             && let Some((_, fraction, msg)) = rt.job_progress()
         {
-            ui.add(egui::ProgressBar::new(fraction).show_percentage().text(msg));
+            ui.add(
+                egui::ProgressBar::new(fraction)
+                    .show_percentage()
+                    .text(msg.get(lang)),
+            );
         }
         self.banner(ui, lang);
         ui.separator();
@@ -419,7 +423,7 @@ impl SelfTestPanel {
                 ));
             }
             Some(Err(e)) => {
-                ui.colored_label(egui::Color32::RED, e.to_string());
+                ui.colored_label(egui::Color32::RED, e.in_lang(lang));
             }
             None => {
                 ui.weak(lang.tr("Not logged (no log file).", "未记录(未指定日志文件)。"));
@@ -435,10 +439,7 @@ impl SelfTestPanel {
             let gap = ui.spacing().item_spacing.x;
             let w = ((ui.available_width() - 60.0 - 5.0 * gap) / 4.0).max(80.0);
             let cell = |ui: &mut egui::Ui, text: egui::RichText| {
-                ui.allocate_ui(egui::vec2(w, 0.0), |ui| {
-                    ui.set_max_width(w);
-                    ui.add(egui::Label::new(text).wrap());
-                });
+                crate::ui::layout::wrapped_cell(ui, w, egui::Label::new(text));
             };
             egui::Grid::new("selftest-results")
                 .num_columns(5)

@@ -10,9 +10,12 @@ use eframe::egui;
 pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
     let mut actions = Vec::new();
     ui.horizontal(|ui| {
+        // One line: every part keeps its words whole; the message last, cut to the room left
+        // (whole on hover).
+        super::layout::keep_words_whole(ui);
         match rt.link.target() {
             Some(target) => {
-                ui.label(target.label());
+                ui.label(target.label_in(lang));
                 if let Some(Ok(info)) = &rt.device.info {
                     ui.separator();
                     ui.label(format!(
@@ -33,16 +36,21 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         }
         if let Some((title, fraction, msg)) = rt.job_progress() {
             ui.separator();
-            ui.label(lang.tr(title, crate::i18n::job_title_zh(title)));
+            ui.label(title.get(lang));
             ui.add(
                 egui::ProgressBar::new(fraction)
                     .desired_width(160.0)
                     .show_percentage(),
             );
-            ui.weak(msg);
             if ui.button(lang.tr("Cancel", "取消")).clicked() {
                 actions.push(Action::CancelJob);
             }
+            // What the job is doing, in at most a third of the room left: the message after it
+            // keeps the rest.
+            let room = egui::vec2(ui.available_width() / 3.0, ui.spacing().interact_size.y);
+            ui.allocate_ui(room, |ui| {
+                super::layout::one_line(ui, egui::RichText::new(msg.get(lang)).weak())
+            });
         }
         if let Some(s) = &rt.notice {
             ui.separator();
@@ -51,7 +59,7 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
             } else {
                 ui.visuals().text_color()
             };
-            ui.colored_label(color, s.text_in(lang));
+            super::layout::one_line(ui, egui::RichText::new(s.text_in(lang)).color(color));
         }
     });
     actions

@@ -18,6 +18,8 @@ use std::time::{Duration, Instant};
 const RED: egui::Color32 = egui::Color32::from_rgb(200, 30, 30);
 const GREEN: egui::Color32 = egui::Color32::from_rgb(0, 140, 60);
 const AMBER: egui::Color32 = egui::Color32::from_rgb(200, 120, 0);
+/// The STOP button's least width, points.
+pub const BUTTON_WIDTH: f32 = 90.0;
 
 /// The last outcome of a command sent from a panel.
 #[derive(Debug, Clone, PartialEq)]
@@ -169,7 +171,7 @@ impl StopControl {
                 .color(egui::Color32::WHITE),
         )
         .fill(RED)
-        .min_size(egui::vec2(90.0, 32.0));
+        .min_size(egui::vec2(BUTTON_WIDTH, 32.0));
         let what = rt
             .device
             .profile

@@ -8,7 +8,8 @@ use super::settings::{FileKind, Settings};
 use super::state::{AppState, Notice, Reading};
 use super::{Action, files, plot};
 use crate::i18n::Lang;
-use crate::profile::CommandKind;
+use crate::i18n::Zh;
+use crate::profile::{CommandKind, Text};
 use eframe::egui;
 use egui_plot::{Plot, VLine};
 
@@ -38,6 +39,28 @@ pub struct TelemetryPanel {
     pub shown: Vec<Shown>,
     /// The CSV export's file (typed, or chosen with Browse).
     pub csv_path: String,
+    /// Where the plots' scroll area showed them when last drawn.
+    pub plots_view: egui::Rect,
+}
+
+/// The least height of a plot's drawing (its data area, without axes), points: below it the
+/// plots scroll instead of shrinking.
+pub const MIN_PLOT_HEIGHT: f32 = 100.0;
+
+/// The height a plot takes beside its data area: its title, key and readout line above and
+/// below it, and its x axis (tick labels and the axis' label).
+fn plot_chrome(ui: &egui::Ui) -> f32 {
+    3.0 * line_height(ui) + x_axis_height(ui)
+}
+
+/// A line of body text with the space after it.
+fn line_height(ui: &egui::Ui) -> f32 {
+    ui.text_style_height(&egui::TextStyle::Body) + ui.spacing().item_spacing.y
+}
+
+/// The x axis under a plot's data area: its tick labels and its label, with some air.
+fn x_axis_height(ui: &egui::Ui) -> f32 {
+    2.0 * line_height(ui) + 4.0
 }
 
 /// What one plot showed when last drawn.
@@ -63,6 +86,7 @@ impl Default for TelemetryPanel {
             scratch: plot::Scratch::default(),
             shown: Vec::new(),
             csv_path: String::new(),
+            plots_view: egui::Rect::NOTHING,
         }
     }
 }
@@ -74,13 +98,15 @@ fn rate_label(rate: Option<f64>, lang: Lang) -> String {
     }
 }
 
-/// The telemetry commands listed under the plots: every one with a reply.
+/// The telemetry commands listed under the plots: every one with a reply, but the core ones
+/// (version, power state, build info), which the device panel reads and shows.
 fn other_commands(rt: &AppState) -> Vec<&crate::profile::Command> {
-    rt.device
-        .profile
+    let profile = &rt.device.profile;
+    profile
         .commands
         .iter()
         .filter(|c| c.kind == CommandKind::Telemetry && !c.reply.is_empty())
+        .filter(|c| !profile.is_core(c))
         .collect()
 }
 
@@ -89,7 +115,7 @@ impl TelemetryPanel {
     pub fn show(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
         let lang = saved.lang;
         let mut actions = Vec::new();
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let label = ui.label(lang.tr("Poll rate", "采样率"));
             egui::ComboBox::from_id_salt("rate")
                 .selected_text(rate_label(saved.poll_hz, lang))
@@ -131,7 +157,7 @@ impl TelemetryPanel {
                 .labelled_by(label.id);
             ui.checkbox(&mut self.follow, lang.tr("Follow", "跟随"));
         });
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
                 lang,
@@ -149,16 +175,22 @@ impl TelemetryPanel {
         });
         ui.separator();
         // The other telemetry below, in a part the technician can resize: by default room for
-        // every command, up to 45 % of the panel.
+        // every command, up to 45 % of the panel, and never so much that a plot at its least
+        // height does not fit above it (on a 600-point screen the plots come first).
         let cmds = other_commands(rt);
         let avail = ui.available_height();
         let row_h = ui.spacing().interact_size.y + ui.spacing().item_spacing.y;
         let wanted = (cmds.len() as f32 + 2.0) * row_h;
-        let default = wanted.clamp(avail * 0.25, avail * 0.45);
+        let one_plot = MIN_PLOT_HEIGHT + plot_chrome(ui);
+        let default = wanted
+            .clamp(avail * 0.25, avail * 0.45)
+            .min(avail - one_plot)
+            .max(row_h * 3.0);
         egui::Panel::bottom("other-telemetry")
             .resizable(true)
             .default_size(default)
-            .size_range(row_h * 3.0..=(avail * 0.8).max(row_h * 3.0))
+            // Kept so when the window shrinks (the part keeps its size from a larger window).
+            .size_range(row_h * 3.0..=(avail - one_plot).max(row_h * 3.0))
             .show(ui, |ui| {
                 actions.extend(self.other_telemetry(ui, lang, rt, &cmds))
             });
@@ -166,24 +198,25 @@ impl TelemetryPanel {
         actions
     }
 
-    /// The profile's plots, sharing the height left; each with its cursor readout below it, on
-    /// a line kept whether or not there is one, so that nothing below moves.
+    /// The profile's plots, sharing the height left, each at least [`MIN_PLOT_HEIGHT`] (below
+    /// that they scroll, with their scroll bar shown); each with its cursor readout below it,
+    /// on a line kept whether or not there is one, so that nothing below moves.
     fn plots(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) {
         let lang = saved.lang;
         let plots = &rt.device.profile.plots;
         let text_h = ui.text_style_height(&egui::TextStyle::Body);
-        let gap = ui.spacing().item_spacing.y;
-        // Title, key, readout and the x axis' label.
-        let chrome = 4.0 * (text_h + gap) + gap;
+        let chrome = plot_chrome(ui);
         let n = plots.len().max(1) as f32;
-        let height = ((ui.available_height() - n * chrome) / n).max(90.0);
+        // The plot widget's height: its data area and its x axis.
+        let height =
+            ((ui.available_height() - n * chrome) / n).max(MIN_PLOT_HEIGHT) + x_axis_height(ui);
         let window = saved.window_secs;
         let follow = self.follow;
         let link = egui::Id::unique("telemetry-x");
         let cursor = self.cursor;
         let mut hovered = None;
         self.shown.clear();
-        egui::ScrollArea::vertical()
+        let scrolled = egui::ScrollArea::vertical()
             .id_salt("plots")
             .auto_shrink(false)
             .show(ui, |ui| {
@@ -250,6 +283,7 @@ impl TelemetryPanel {
                     });
                 }
             });
+        self.plots_view = scrolled.inner_rect;
         self.cursor = hovered;
     }
 
@@ -309,7 +343,7 @@ impl TelemetryPanel {
                                     ));
                                 }
                                 Some(Reading::Failed(e)) => {
-                                    ui.colored_label(egui::Color32::RED, e.to_string());
+                                    ui.colored_label(egui::Color32::RED, e.in_lang(lang));
                                 }
                                 None => {
                                     ui.weak(lang.tr("not read yet", "尚未读取"));
@@ -366,20 +400,21 @@ fn readout_line(
 fn export_csv(rt: &AppState, path: &str) -> Vec<Action> {
     let path = path.trim();
     if path.is_empty() {
-        return vec![Action::Notify(Notice::error(
+        return vec![Action::Notify(Notice::error(Text::new(
             "export: give the CSV file's path (type it, or Browse)",
-        ))];
+            "导出:请给出 CSV 文件路径(输入,或点击浏览)",
+        )))];
     }
     let path = std::path::PathBuf::from(path);
     match write_csv(rt, &path) {
         Ok(n) => vec![
             Action::RememberFile(FileKind::TelemetryCsv, path.display().to_string()),
-            Action::Notify(Notice::info(format!(
-                "{n} plot(s) written to {}",
-                path.display()
+            Action::Notify(Notice::info(Text::new(
+                format!("{n} plot(s) written to {}", path.display()),
+                format!("{n} 个图已写入 {}", path.display()),
             ))),
         ],
-        Err(e) => vec![Action::Notify(Notice::error(e.to_string()))],
+        Err(e) => vec![Action::Notify(Notice::error(e.said()))],
     }
 }
 

@@ -1,37 +1,54 @@
 //! The screenshot tour (`botbench gui --screenshots DIR`, used by `.ci/screenshot.sh`): one
 //! launch of the window connects to each built-in demo device in turn, waits until it has come
 //! up (see [`settled`]: answering, identified or shaken hands with, every plot holding
-//! [`PLOTTED_SECS`] of samples), then shows every panel the device has at each size in
-//! [`SIZES`] and in each language, and saves each view as
-//! `DIR/<device>-<panel>-<w>x<h>-<lang>.png`; then it closes the window. The shot is the
-//! window's own framebuffer (egui's viewport screenshot).
+//! [`PLOTTED_SECS`] of samples), prepares what a technician would have on screen (the
+//! servo bus scanned and a servo's parameters read, the Tuya MCU's own requests, the self-test
+//! plan and the factory preset opened), then shows every view the device has ([`App::views`]:
+//! each panel, each tab, each tuning group) at each size in [`SIZES`] and in each language,
+//! and saves each as `DIR/<device>-<view>-<w>x<h>-<lang>.png`; then it closes the window.
+//!
+//! The shot is the window's own framebuffer (egui's viewport screenshot). Shots go size by
+//! size and language by language, so that the window is resized twice a device, and each PNG
+//! is written on a thread of its own while the next view is drawn. Each shot's frame is also
+//! checked: a label it parts over two lines ([`super::layout::split_words`]) or a text drawn
+//! over another ([`super::layout::overlapping_texts`]) is a failure.
 
-use super::state::Target;
-use super::{Action, AppState, PanelId};
+use super::state::AppState;
+use super::{App, View};
 use crate::i18n::Lang;
 use crate::profile::Protocol;
 use crate::series::SeriesSet;
 use crate::sim::SimKind;
+use crate::sim::tuya_mcu::McuRequest;
 use eframe::egui;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// The window sizes shot, logical points: the line PCs' usual screen and a small one.
 pub const SIZES: [[f32; 2]; 2] = [[1280.0, 800.0], [1024.0, 600.0]];
 /// Seconds of samples each plot of a device holds before its first shot.
 pub const PLOTTED_SECS: f64 = 1.5;
-/// A device that has not come up after this long is shot as it is (and reported).
-const CONNECT_PATIENCE: Duration = Duration::from_secs(30);
-/// Frames drawn at a shot's size before it is taken (egui lays out a new size over two passes).
+/// A device that has not come up (or a preparation not done) after this long is shot as it is
+/// (and reported).
+const PATIENCE: Duration = Duration::from_secs(30);
+/// Frames drawn for a view before it is shot (egui lays a new view out over two passes).
 const FRAMES_BEFORE_SHOT: u32 = 3;
 
 /// One view to shoot.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 struct Shot {
-    panel: PanelId,
+    view: View,
     size: [f32; 2],
     lang: Lang,
+}
+
+/// Something done before the shots, and when it is done.
+struct Prep {
+    what: &'static str,
+    start: fn(&mut App),
+    done: fn(&App) -> bool,
 }
 
 /// Where the tour is.
@@ -40,25 +57,37 @@ enum Phase {
     Connect,
     /// Connected at this instant; waiting until it has come up ([`settled`]).
     Settle(Instant),
+    /// The preparation step at this index, started at this instant.
+    Prepare(usize, Instant),
     /// Arrange the next shot.
     Next,
-    /// The shot's size is asked for; frames drawn at it so far.
+    /// The shot is arranged; frames drawn at its size so far.
     Arrange(Shot, u32),
-    /// The screenshot is asked for; its saving reports into the slot.
-    Saving,
-    /// All shot: the window is closing.
+    /// The screenshot is asked for: the frame drawn now is checked, and the shot is waited for.
+    Saving(String),
+    /// All shot: the files are being written, then the window closes.
     Done,
 }
 
+/// PNG files being written: (file, its writer).
+type Writers = Arc<Mutex<Vec<(PathBuf, JoinHandle<Result<(), String>>)>>>;
+
 /// The tour's state. Messages (a file saved, a device that did not answer, a file that could not
-/// be written) go to stderr, and the failures are counted in [`Tour::failures`].
+/// be written, a split word) go to stderr, and the failures are counted in [`Tour::failures`].
 pub struct Tour {
     dir: PathBuf,
     devices: Vec<SimKind>,
     device: usize,
     shots: Vec<Shot>,
     phase: Phase,
-    saved: Arc<Mutex<Option<Result<PathBuf, String>>>>,
+    /// The screenshots taken (the callback counts them).
+    taken: Arc<Mutex<u64>>,
+    /// The shots asked for.
+    asked: u64,
+    /// The frame of the shot asked for has been checked.
+    checked: bool,
+    writers: Writers,
+    started: Instant,
     /// What went wrong so far.
     pub failures: Vec<String>,
 }
@@ -72,59 +101,61 @@ impl Tour {
             device: 0,
             shots: Vec::new(),
             phase: Phase::Connect,
-            saved: Arc::new(Mutex::new(None)),
+            taken: Arc::new(Mutex::new(0)),
+            asked: 0,
+            checked: false,
+            writers: Arc::default(),
+            started: Instant::now(),
             failures: Vec::new(),
         }
     }
 
-    /// One frame of the tour: what to apply this frame. `panels` are the panels the connected
-    /// device has.
-    pub fn step(&mut self, ctx: &egui::Context, rt: &AppState, panels: &[PanelId]) -> Vec<Action> {
-        let mut actions = Vec::new();
+    /// One frame of the tour, before the window is drawn.
+    pub fn step(&mut self, ctx: &egui::Context, app: &mut App) {
         ctx.request_repaint();
-        match self.phase {
+        match &self.phase {
             Phase::Connect => match self.devices.get(self.device) {
-                Some(kind) => {
-                    actions.push(Action::Connect {
-                        target: Target::Demo(kind.name().to_string()),
-                        baud: 115_200,
-                        profile: kind.profile_id().to_string(),
-                        margin_ms: None,
-                    });
+                Some(&kind) => {
+                    app.connect_demo(kind);
                     self.phase = Phase::Settle(Instant::now());
                 }
-                None => {
-                    eprintln!("tour: done, {} failure(s)", self.failures.len());
-                    ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-                    self.phase = Phase::Done;
-                }
+                None => self.finish(ctx),
             },
             Phase::Settle(since) => {
-                let up = settled(rt);
-                if up || since.elapsed() >= CONNECT_PATIENCE {
+                let up = settled(&app.state);
+                if up || since.elapsed() >= PATIENCE {
                     if !up {
                         self.fail(format!(
                             "{} did not come up within {} s",
                             self.device_name(),
-                            CONNECT_PATIENCE.as_secs()
+                            PATIENCE.as_secs()
                         ));
                     }
-                    self.shots = panels
-                        .iter()
-                        .flat_map(|&panel| {
-                            SIZES.into_iter().flat_map(move |size| {
-                                [Lang::En, Lang::Zh].map(|lang| Shot { panel, size, lang })
-                            })
-                        })
-                        .rev()
-                        .collect();
-                    self.phase = Phase::Next;
+                    self.phase = Phase::Prepare(0, Instant::now());
+                    self.start_prep(app, 0);
+                }
+            }
+            Phase::Prepare(i, since) => {
+                let (i, since) = (*i, *since);
+                let preps = preparation(self.kind());
+                let done = preps.get(i).is_none_or(|p| (p.done)(app));
+                if done || since.elapsed() >= PATIENCE {
+                    if !done && let Some(p) = preps.get(i) {
+                        self.fail(format!("{}: {} not done", self.device_name(), p.what));
+                    }
+                    if i + 1 < preps.len() {
+                        self.phase = Phase::Prepare(i + 1, Instant::now());
+                        self.start_prep(app, i + 1);
+                    } else {
+                        self.shots = shots(app.views());
+                        self.phase = Phase::Next;
+                    }
                 }
             }
             Phase::Next => match self.shots.pop() {
                 Some(shot) => {
-                    actions.push(Action::ShowPanel(shot.panel));
-                    actions.push(Action::SetLanguage(shot.lang));
+                    app.show_view(&shot.view);
+                    app.settings.lang = shot.lang;
                     ctx.send_viewport_cmd(egui::ViewportCommand::InnerSize(shot.size.into()));
                     self.phase = Phase::Arrange(shot, 0);
                 }
@@ -138,36 +169,125 @@ impl Tour {
                 let at_size = (size - egui::Vec2::from(shot.size)).length() < 1.0;
                 let frames = if at_size { frames + 1 } else { 0 };
                 if frames < FRAMES_BEFORE_SHOT {
-                    self.phase = Phase::Arrange(shot, frames);
+                    self.phase = Phase::Arrange(shot.clone(), frames);
                 } else {
-                    let path = self.dir.join(self.file_name(&shot));
-                    let slot = self.saved.clone();
-                    ctx.request_screenshot(move |image| {
-                        let result = save_png(&image, &path).map(|()| path);
-                        if let Ok(mut s) = slot.lock() {
-                            *s = Some(result);
-                        }
-                    });
-                    self.phase = Phase::Saving;
+                    let name = self.file_name(shot);
+                    self.shoot(ctx, &name);
+                    self.phase = Phase::Saving(name);
                 }
             }
-            Phase::Saving => {
-                let result = self.saved.lock().ok().and_then(|mut s| s.take());
-                match result {
-                    Some(Ok(path)) => {
-                        eprintln!("tour: {}", path.display());
-                        self.phase = Phase::Next;
-                    }
-                    Some(Err(e)) => {
-                        self.fail(e);
-                        self.phase = Phase::Next;
-                    }
-                    None => {}
+            Phase::Saving(_) => {
+                let taken = self.taken.lock().map_or(0, |t| *t);
+                if taken >= self.asked {
+                    self.phase = Phase::Next;
                 }
             }
             Phase::Done => {}
         }
-        actions
+    }
+
+    /// After the window is drawn: the frame of a shot is checked for words split over two
+    /// lines.
+    pub fn after_ui(&mut self, ctx: &egui::Context) {
+        let Phase::Saving(name) = &self.phase else {
+            return;
+        };
+        if self.checked {
+            return;
+        }
+        self.checked = true;
+        // The panels draw on the background layer; windows and popups on layers of their own.
+        let mut layers = vec![egui::LayerId::background()];
+        for id in ctx.memory(|m| m.layer_ids().collect::<Vec<_>>()) {
+            if !layers.contains(&id) {
+                layers.push(id);
+            }
+        }
+        let shapes: Vec<_> = ctx.graphics(|g| {
+            layers
+                .iter()
+                .filter_map(|id| g.get(*id))
+                .flat_map(|list| list.all_entries().cloned())
+                .collect()
+        });
+        let split = super::layout::split_words(&shapes);
+        let name = name.clone();
+        if !split.is_empty() {
+            self.fail(format!("{name}: words split over two lines: {split:?}"));
+        }
+        // Over each other on the panels' own layer (a popup is drawn over them on purpose).
+        let panels = ctx.graphics(|g| {
+            g.get(egui::LayerId::background())
+                .map(|l| l.all_entries().cloned().collect::<Vec<_>>())
+                .unwrap_or_default()
+        });
+        let over = super::layout::overlapping_texts(&panels);
+        if !over.is_empty() {
+            self.fail(format!("{name}: texts drawn over texts: {over:?}"));
+        }
+    }
+
+    /// Asks for a screenshot of the frame drawn now, written to `name` on a thread of its own.
+    fn shoot(&mut self, ctx: &egui::Context, name: &str) {
+        let path = self.dir.join(name);
+        let (taken, writers) = (self.taken.clone(), self.writers.clone());
+        self.asked += 1;
+        self.checked = false;
+        ctx.request_screenshot(move |image| {
+            let to = path.clone();
+            let writer = std::thread::Builder::new()
+                .name("botbench-tour-png".into())
+                .spawn(move || save_png(&image, &to));
+            if let Ok(mut w) = writers.lock() {
+                match writer {
+                    Ok(handle) => w.push((path, handle)),
+                    Err(e) => {
+                        let failed = std::thread::spawn(move || Err(e.to_string()));
+                        w.push((path, failed));
+                    }
+                }
+            }
+            if let Ok(mut t) = taken.lock() {
+                *t += 1;
+            }
+        });
+    }
+
+    /// Waits for every file to be written, says how it went, and closes the window.
+    fn finish(&mut self, ctx: &egui::Context) {
+        let writers = self
+            .writers
+            .lock()
+            .map(|mut w| std::mem::take(&mut *w))
+            .unwrap_or_default();
+        let n = writers.len();
+        for (path, writer) in writers {
+            match writer.join() {
+                Ok(Ok(())) => eprintln!("tour: {}", path.display()),
+                Ok(Err(e)) => self.fail(e),
+                Err(_) => self.fail(format!("{}: the writer panicked", path.display())),
+            }
+        }
+        eprintln!(
+            "tour: {n} shots in {:.0} s",
+            self.started.elapsed().as_secs_f64()
+        );
+        eprintln!("tour: done, {} failure(s)", self.failures.len());
+        ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        self.phase = Phase::Done;
+    }
+
+    fn start_prep(&mut self, app: &mut App, i: usize) {
+        if let Some(p) = preparation(self.kind()).get(i) {
+            (p.start)(app);
+        }
+    }
+
+    fn kind(&self) -> SimKind {
+        self.devices
+            .get(self.device)
+            .copied()
+            .unwrap_or(SimKind::WindowCleaner)
     }
 
     fn device_name(&self) -> &'static str {
@@ -180,9 +300,9 @@ impl Tour {
             Lang::Zh => "zh",
         };
         format!(
-            "{}-{:?}-{}x{}-{lang}.png",
+            "{}-{}-{}x{}-{lang}.png",
             self.device_name(),
-            shot.panel,
+            shot.view.name,
             shot.size[0],
             shot.size[1]
         )
@@ -191,6 +311,81 @@ impl Tour {
     fn fail(&mut self, what: String) {
         eprintln!("tour: {what}");
         self.failures.push(what);
+    }
+}
+
+/// Every view at every size in each language, in the order shot (last first, for `pop`):
+/// size by size, then language by language, so that the window is resized once a size.
+fn shots(views: Vec<View>) -> Vec<Shot> {
+    let mut all = Vec::new();
+    for size in SIZES {
+        for lang in Lang::ALL {
+            for view in &views {
+                all.push(Shot {
+                    view: view.clone(),
+                    size,
+                    lang,
+                });
+            }
+        }
+    }
+    all.reverse();
+    all
+}
+
+/// What a technician would have on screen before the shots of a device of `kind`.
+fn preparation(kind: SimKind) -> Vec<Prep> {
+    match kind {
+        SimKind::WindowCleaner => vec![Prep {
+            what: "the self-test plan and the factory preset opened",
+            start: |app| {
+                let dir = super::files::shipped_dir();
+                if let Ok(p) = super::files::shipped_in(&dir, "window-cleaner-factory.ron") {
+                    app.presets.path = p.display().to_string();
+                    app.presets.open(&app.state);
+                }
+                app.selftest.open(&app.state);
+            },
+            done: |app| app.selftest.plan.is_some() && app.presets.loaded.is_some(),
+        }],
+        SimKind::ServoBus => vec![
+            Prep {
+                what: "the bus scanned and a servo selected",
+                start: |app| {
+                    if let Some(scan) = app.servo.scan.start(&app.state) {
+                        app.apply(scan);
+                    }
+                },
+                done: |app| app.state.job_progress().is_none() && app.servo.selected.is_some(),
+            },
+            Prep {
+                what: "the servo's parameters read",
+                start: |app| {
+                    let params = app.views().into_iter().find(|v| v.name.ends_with("Params"));
+                    if let Some(v) = params {
+                        app.show_view(&v);
+                    }
+                },
+                done: |app| {
+                    app.state.job_progress().is_none() && !app.servo.params.values.is_empty()
+                },
+            },
+        ],
+        SimKind::TuyaVacuum => vec![Prep {
+            what: "the MCU's own requests answered",
+            start: |app| {
+                for r in [
+                    McuRequest::LocalTime,
+                    McuRequest::WifiTest,
+                    McuRequest::NetStatus,
+                    McuRequest::Mac,
+                ] {
+                    app.apply(super::Action::DemoMcuRequest(r));
+                }
+            },
+            done: |app| app.state.device.tuya.requests.len() >= 4,
+        }],
+        SimKind::SolarCleanbot => Vec::new(),
     }
 }
 
@@ -224,7 +419,7 @@ fn save_png(image: &egui::ColorImage, path: &std::path::Path) -> Result<(), Stri
         u32::try_from(w).map_err(|e| e.to_string())?,
         u32::try_from(h).map_err(|e| e.to_string())?,
     );
-    let bytes: Vec<u8> = image.pixels.iter().flat_map(|p| p.to_array()).collect();
+    let bytes = image.as_raw().to_vec();
     let buffer = image::RgbaImage::from_raw(w, h, bytes)
         .ok_or_else(|| format!("a {w}×{h} screenshot has the wrong number of pixels"))?;
     if let Some(dir) = path.parent() {

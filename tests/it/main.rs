@@ -50,5 +50,7 @@ mod sim_msp;
 mod tuya_field;
 mod tuya_sdk_vectors;
 mod window_kinds;
+mod window_language;
+mod window_layout;
 mod window_sizes;
 mod window_truth;

@@ -256,7 +256,7 @@ fn vanish_at(when: &str) -> (Bench, Record) {
     let bus = bench.served.sim.clone();
     let mut gone = false;
     let r = bench.provision_with(&plan, &mut ProvisionState::new(), &mut |p| {
-        if !gone && p.message.starts_with(when) {
+        if !gone && p.message.en.starts_with(when) {
             gone = true;
             bus.lock().unwrap().remove(5001);
         }
@@ -312,7 +312,7 @@ fn a_servo_swapped_before_verify_is_caught_by_its_serial_number() {
     let plan = plan(&bench.profile);
     let bus = bench.served.sim.clone();
     let r = bench.provision_with(&plan, &mut ProvisionState::new(), &mut |p| {
-        if p.message == "verify" {
+        if p.message.en == "verify" {
             let mut bus = bus.lock().unwrap();
             let old = bus.remove(6001).unwrap();
             let mut twin = SimServo::fresh(6002).with_id(1).with_baud(500_000);

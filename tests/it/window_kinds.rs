@@ -2,6 +2,7 @@
 //! of its codes; a logged frame decoded with the profile it came under, after the device changed.
 
 use botbench::i18n::Lang;
+use botbench::profile::Text;
 use botbench::sim::SimOptions;
 use botbench::sim::solar_cleanbot::SolarCleanbot;
 use botbench::ui::{Action, App, Job, PanelId, Target};
@@ -77,11 +78,17 @@ fn frames_logged_before_a_device_change_keep_the_profile_they_came_under() {
         margin_ms: None,
     });
     step_until(&mut h, "the servo link", |a| a.state.connected());
-    app_mut(&mut h).apply(Action::StartJob(Job::new("ping", |client, _, _| {
-        botbench::ops::servo::ping(client, 1, 1)
-            .map(|p| format!("{p:?}"))
-            .map_err(Into::into)
-    })));
+    app_mut(&mut h).apply(Action::StartJob(Job::new(
+        Text::new("ping", "ping"),
+        |client, _, _| {
+            botbench::ops::servo::ping(client, 1, 1)
+                .map(|p| {
+                    let said = format!("{p:?}");
+                    Text::new(said.clone(), said)
+                })
+                .map_err(Into::into)
+        },
+    )));
     step_until(&mut h, "a servo frame", |a| logged(a, "servo") > 0);
     let old = logged(app(&h), "window-cleaner");
     assert!(old > 0, "the window cleaner's frames are kept");

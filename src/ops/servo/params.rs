@@ -289,7 +289,7 @@ pub fn write_params(
         progress(Progress {
             done: i as u64,
             total: values.len() as u64,
-            message: p.field.ident.clone(),
+            message: p.field.name.clone(),
         });
         checks.push((
             *pid,

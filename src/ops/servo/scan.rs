@@ -267,7 +267,10 @@ pub fn scan(
                 progress(Progress {
                     done: before + done as u64,
                     total,
-                    message: format!("id {id} at {baud} baud"),
+                    message: crate::profile::Text::new(
+                        format!("id {id} at {baud} baud"),
+                        format!("ID {id},波特率 {baud}"),
+                    ),
                 })
             })?;
             report.asked_again += at_baud.asked_again;

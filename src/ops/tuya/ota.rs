@@ -248,9 +248,9 @@ pub fn ota(
         progress(Progress {
             done,
             total,
-            message: format!(
-                "offset {done} of {size}, {:.0} B/s, {:.0} s left",
-                rate, left
+            message: crate::profile::Text::new(
+                format!("offset {done} of {size}, {rate:.0} B/s, {left:.0} s left"),
+                format!("偏移 {done}/{size},{rate:.0} B/s,剩余 {left:.0} s"),
             ),
         });
     }

@@ -23,6 +23,7 @@ use crate::link::{LinkCommand, ReplyTo, Request};
 use crate::ops::servo::provision::{ProvisionState, Record};
 use crate::ops::servo::{Location, ScanRow};
 use crate::ops::{Check, OpError};
+use crate::profile::Text;
 use eframe::egui;
 
 pub use params::ParamsState;
@@ -55,7 +56,8 @@ pub enum Tab {
 }
 
 impl Tab {
-    const ALL: [Tab; 5] = [
+    /// Every tab, in the order shown.
+    pub(crate) const ALL: [Tab; 5] = [
         Tab::Scan,
         Tab::Params,
         Tab::Setup,
@@ -318,13 +320,13 @@ impl ServoBenchPanel {
             };
             if let Some((title, fraction, msg)) = rt.job_progress() {
                 ui.separator();
-                ui.label(title);
+                ui.label(title.get(lang));
                 ui.add(
                     egui::ProgressBar::new(fraction)
                         .desired_width(180.0)
                         .show_percentage(),
                 );
-                ui.weak(msg);
+                ui.weak(msg.get(lang));
                 if ui.button(lang.tr("Cancel job", "取消任务")).clicked() {
                     actions.push(Action::CancelJob);
                 }
@@ -359,9 +361,9 @@ impl ServoBenchPanel {
             .map(|b| b.to_string())
             .collect();
         all.dedup();
-        out.push(Action::Notify(Notice::info(format!(
-            "stop all broadcast at {} baud",
-            all.join(", ")
+        out.push(Action::Notify(Notice::info(Text::new(
+            format!("stop all broadcast at {} baud", all.join(", ")),
+            format!("已在 {} 波特广播全部停止", all.join(", ")),
         ))));
         out
     }

@@ -7,7 +7,7 @@
 
 use super::selection_or_hint;
 use super::{Servo, direct, error_label, follow};
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::link::{LinkCommand, Poll};
 use crate::ops::FieldValues;
 use crate::ops::OpError;
@@ -208,7 +208,7 @@ impl MotionState {
                     actions.extend(follow(rt, servo.baud));
                     actions.push(direct(r));
                 }
-                Err(e) => actions.push(Action::Notify(Notice::error(e.to_string()))),
+                Err(e) => actions.push(Action::Notify(Notice::error(e.said()))),
             }
         };
 
@@ -216,7 +216,7 @@ impl MotionState {
         let angle = raw(rt, cmd::ROTATE, "angle", &self.angle_text);
         let interval = raw(rt, cmd::ROTATE, "interval", &self.interval);
         let power = raw(rt, cmd::ROTATE, "power", &self.power);
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let l = ui.label(lang.tr("Target angle", "目标角度"));
             let slider = ui
                 .add(
@@ -270,7 +270,7 @@ impl MotionState {
             .into_iter()
             .filter_map(|r| r.as_ref().err())
         {
-            error_label(ui, e.to_string());
+            error_label(ui, e.in_lang(lang));
         }
 
         ui.horizontal(|ui| {
@@ -319,7 +319,7 @@ impl MotionState {
         let speed = raw(rt, cmd::SPIN, "speed", &self.speed);
         let needs_value = matches!(self.wheel, WheelMode::Turns | WheelMode::Timed);
         let value = raw(rt, cmd::SPIN, "value", &self.value);
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let l = ui.label(lang.tr("Method", "方式"));
             egui::ComboBox::from_id_salt("servo-wheel")
                 .selected_text(self.wheel.name(lang))
@@ -377,7 +377,7 @@ impl MotionState {
             .chain(needs_value.then_some(&value))
             .filter_map(|r| r.as_ref().err())
         {
-            error_label(ui, e.to_string());
+            error_label(ui, e.in_lang(lang));
         }
 
         ui.heading(lang.tr("Damping", "阻尼"));
@@ -403,7 +403,7 @@ impl MotionState {
                 );
             }
             if let Err(e) = &damping {
-                error_label(ui, e.to_string());
+                error_label(ui, e.in_lang(lang));
             }
         });
     }
@@ -428,7 +428,7 @@ impl MotionState {
                         ));
                     }
                 }
-                Some(Reading::Failed(e)) if self.live => error_label(ui, e.to_string()),
+                Some(Reading::Failed(e)) if self.live => error_label(ui, e.in_lang(lang)),
                 _ => {
                     ui.weak(lang.tr("turn on Live angle", "请开启实时角度"));
                 }
@@ -442,7 +442,7 @@ impl MotionState {
                 let Some(mon) = rt.device.profile.command_by_id(cmd::MONITOR) else {
                     return;
                 };
-                ui.horizontal_wrapped(|ui| {
+                crate::ui::layout::toolbar(ui, |ui| {
                     for f in mon.reply.iter().skip(1) {
                         if let Some(v) = values.get(&f.ident) {
                             let shown = if f.ident == "status" {

@@ -22,7 +22,7 @@ impl ParamsState {
         actions: &mut Vec<Action>,
     ) {
         let profile = &rt.device.profile;
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
                 lang,

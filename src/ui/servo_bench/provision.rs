@@ -4,8 +4,9 @@
 use super::header_row;
 use super::{Output, error_label, send};
 use crate::document::DocumentError;
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::ops::servo::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
+use crate::profile::Text;
 use crate::ui::jobs::{Job, JobError, LogError};
 use crate::ui::settings::FileKind;
 use crate::ui::state::AppState;
@@ -69,7 +70,7 @@ impl ProvisionPanel {
         busy: bool,
         actions: &mut Vec<Action>,
     ) {
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
                 lang,
@@ -97,9 +98,9 @@ impl ProvisionPanel {
             }
         });
         if let Some(e) = &self.plan_error {
-            error_label(ui, e.to_string());
+            error_label(ui, e.in_lang(lang));
         }
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
                 lang,
@@ -175,7 +176,7 @@ impl ProvisionPanel {
             }
         }
         if let Some(e) = &self.log_error {
-            error_label(ui, e.to_string());
+            error_label(ui, e.in_lang(lang));
         }
         ui.add_space(6.0);
         if let Some(last) = self.history.last() {
@@ -282,37 +283,44 @@ fn history(ui: &mut egui::Ui, lang: Lang, records: &[Record]) {
 
 fn job(rt: &AppState, plan: Plan, mut state: ProvisionState, log: Option<PathBuf>) -> Action {
     let profile = rt.device.profile.clone();
-    Action::StartJob(Job::new("provision", move |client, cancel, sink| {
-        let record = prov::provision_next(client, &profile, &plan, &mut state, cancel, &mut |p| {
-            sink.progress(p)
-        });
-        let log_error = log.as_deref().and_then(|path| {
-            prov::append_csv(path, &record)
-                .err()
-                .map(|e| LogError::new(path, &e))
-        });
-        let summary = match &record.result {
-            Outcome::Pass => Ok(format!(
-                "PASS: servo {} at {} baud",
-                record.id.map_or("-".into(), |v| v.to_string()),
-                record.baud.map_or("-".into(), |v| v.to_string())
-            )),
-            Outcome::Fail { step, reason } => Err(JobError::StepFailed {
-                step: step.clone(),
-                reason: reason.clone(),
-            }),
-        };
-        send(
-            sink,
-            Output::Provisioned {
-                record,
-                state,
-                log_error: log_error.clone(),
-            },
-        );
-        match (summary, log_error) {
-            (Ok(_), Some(e)) => Err(e.into()),
-            (s, _) => s,
-        }
-    }))
+    Action::StartJob(Job::new(
+        Text::new("provision", "烧录"),
+        move |client, cancel, sink| {
+            let record =
+                prov::provision_next(client, &profile, &plan, &mut state, cancel, &mut |p| {
+                    sink.progress(p)
+                });
+            let log_error = log.as_deref().and_then(|path| {
+                prov::append_csv(path, &record)
+                    .err()
+                    .map(|e| LogError::new(path, &e))
+            });
+            let summary = match &record.result {
+                Outcome::Pass => {
+                    let id = record.id.map_or("-".into(), |v| v.to_string());
+                    let baud = record.baud.map_or("-".into(), |v| v.to_string());
+                    Ok(Text::new(
+                        format!("PASS: servo {id} at {baud} baud"),
+                        format!("合格:舵机 {id},波特率 {baud}"),
+                    ))
+                }
+                Outcome::Fail { step, reason } => Err(JobError::StepFailed {
+                    step: step.clone(),
+                    reason: reason.clone(),
+                }),
+            };
+            send(
+                sink,
+                Output::Provisioned {
+                    record,
+                    state,
+                    log_error: log_error.clone(),
+                },
+            );
+            match (summary, log_error) {
+                (Ok(_), Some(e)) => Err(e.into()),
+                (s, _) => s,
+            }
+        },
+    ))
 }

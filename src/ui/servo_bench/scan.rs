@@ -6,7 +6,7 @@ use super::{Output, Servo, error_label, ok_label, port_baud, send};
 use crate::i18n::Lang;
 use crate::ops::OpError;
 use crate::ops::servo::{self as ops, Presence, ScanPlan, ScanReport, ScanRow};
-use crate::profile::Profile;
+use crate::profile::{Profile, Text};
 use crate::ui::Action;
 use crate::ui::jobs::Job;
 use crate::ui::state::AppState;
@@ -202,6 +202,20 @@ impl ScanState {
         }
     }
 
+    /// A scan of the ids and rates chosen, as the Scan button starts it (`None`: the ids typed
+    /// do not read).
+    pub(crate) fn start(&mut self, rt: &AppState) -> Option<Action> {
+        let ids = self.ids().ok()?;
+        self.rows.clear();
+        self.outcome = None;
+        let plan = ScanPlan {
+            ids,
+            bauds: self.chosen_bauds(&rt.device.profile),
+            home_baud: port_baud(rt).unwrap_or(rt.device.profile.baud),
+        };
+        Some(scan_job(rt, plan, None))
+    }
+
     /// Draws the tab; returns a servo the technician selected.
     pub(super) fn show(
         &mut self,
@@ -228,7 +242,7 @@ impl ScanState {
                 error_label(ui, e.text(lang));
             }
         });
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             ui.label(lang.tr("Baud rates:", "波特率:"));
             for b in &all {
                 let mut on = bauds.contains(b);
@@ -271,17 +285,8 @@ impl ScanState {
                     lang.tr("choose at least one baud rate", "请至少选择一种波特率"),
                 );
             }
-            if scan.clicked()
-                && let Ok(ids) = ids.clone()
-            {
-                self.rows.clear();
-                self.outcome = None;
-                let plan = ScanPlan {
-                    ids,
-                    bauds: bauds.clone(),
-                    home_baud: port_baud(rt).unwrap_or(rt.device.profile.baud),
-                };
-                actions.push(scan_job(rt, plan, None));
+            if scan.clicked() {
+                actions.extend(self.start(rt));
             }
             match &self.outcome {
                 Some(Ok(t)) => {
@@ -413,7 +418,11 @@ impl ScanState {
 /// A scan as a job; `again` marks the rescan of one servo.
 fn scan_job(rt: &AppState, plan: ScanPlan, again: Option<Servo>) -> Action {
     let profile = rt.device.profile.clone();
-    let title = if again.is_some() { "rescan" } else { "scan" };
+    let title = if again.is_some() {
+        Text::new("rescan", "重新扫描")
+    } else {
+        Text::new("scan", "扫描")
+    };
     Action::StartJob(Job::new(title, move |client, cancel, sink| {
         let result = ops::scan(
             client,
@@ -428,11 +437,19 @@ fn scan_job(rt: &AppState, plan: ScanPlan, again: Option<Servo>) -> Action {
             },
         );
         let summary = match &result {
-            Ok(r) => Ok(format!(
-                "{} servo(s) found; {} id(s) asked again, margin {:.1} ms",
-                r.rows.len(),
-                r.asked_again,
-                r.margin_ms
+            Ok(r) => Ok(Text::new(
+                format!(
+                    "{} servo(s) found; {} id(s) asked again, margin {:.1} ms",
+                    r.rows.len(),
+                    r.asked_again,
+                    r.margin_ms
+                ),
+                format!(
+                    "找到 {} 个舵机;{} 个 ID 重问,余量 {:.1} ms",
+                    r.rows.len(),
+                    r.asked_again,
+                    r.margin_ms
+                ),
             )),
             Err(e) => Err(e.clone().into()),
         };

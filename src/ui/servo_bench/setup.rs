@@ -9,6 +9,7 @@ use super::{Output, Servo, error_label, ok_label, send};
 use crate::i18n::Lang;
 use crate::ops::OpError;
 use crate::ops::servo::{self as ops, Presence};
+use crate::profile::Text;
 use crate::ui::Action;
 use crate::ui::jobs::Job;
 use crate::ui::state::AppState;
@@ -264,47 +265,59 @@ impl SetupState {
 
 fn id_job(rt: &AppState, servo: Servo, new: u8) -> Action {
     let profile = rt.device.profile.clone();
-    Action::StartJob(Job::new("set id", move |client, cancel, sink| {
-        ops::switch(client, servo.baud)?;
-        let result = ops::set_id(client, &profile, servo.id, new, cancel);
-        send(
-            sink,
-            Output::IdSet {
-                servo,
-                new,
-                result: result.clone(),
-            },
-        );
-        result?;
-        Ok(format!("servo {} is now id {new} (verified)", servo.id))
-    }))
+    Action::StartJob(Job::new(
+        Text::new("set id", "设置 ID"),
+        move |client, cancel, sink| {
+            ops::switch(client, servo.baud)?;
+            let result = ops::set_id(client, &profile, servo.id, new, cancel);
+            send(
+                sink,
+                Output::IdSet {
+                    servo,
+                    new,
+                    result: result.clone(),
+                },
+            );
+            result?;
+            Ok(Text::new(
+                format!("servo {} is now id {new} (verified)", servo.id),
+                format!("舵机 {} 现为 ID {new}(已校验)", servo.id),
+            ))
+        },
+    ))
 }
 
 fn baud_job(rt: &AppState, servo: Servo, option: u8) -> Action {
     let profile = rt.device.profile.clone();
-    Action::StartJob(Job::new("set baud rate", move |client, _, sink| {
-        ops::switch(client, servo.baud)?;
-        let result = ops::set_baud(client, &profile, servo.id, option);
-        // Where the servo is when the change was not verified: the operation says where it
-        // found the servo after the change (and left the port there); after another failure it
-        // is looked for at every rate.
-        let found = match &result {
-            Ok(_) => None,
-            Err(OpError::NotAtNewRate { found, .. }) => *found,
-            Err(_) => ops::locate(client, &profile, servo.id).ok().flatten(),
-        };
-        if result.is_err() && found.is_none() {
-            let _ = ops::switch(client, servo.baud);
-        }
-        send(
-            sink,
-            Output::BaudSet {
-                servo,
-                result: result.clone(),
-                found,
-            },
-        );
-        let b = result?;
-        Ok(format!("servo {} now at {b} baud (verified)", servo.id))
-    }))
+    Action::StartJob(Job::new(
+        Text::new("set baud rate", "设置波特率"),
+        move |client, _, sink| {
+            ops::switch(client, servo.baud)?;
+            let result = ops::set_baud(client, &profile, servo.id, option);
+            // Where the servo is when the change was not verified: the operation says where it
+            // found the servo after the change (and left the port there); after another failure it
+            // is looked for at every rate.
+            let found = match &result {
+                Ok(_) => None,
+                Err(OpError::NotAtNewRate { found, .. }) => *found,
+                Err(_) => ops::locate(client, &profile, servo.id).ok().flatten(),
+            };
+            if result.is_err() && found.is_none() {
+                let _ = ops::switch(client, servo.baud);
+            }
+            send(
+                sink,
+                Output::BaudSet {
+                    servo,
+                    result: result.clone(),
+                    found,
+                },
+            );
+            let b = result?;
+            Ok(Text::new(
+                format!("servo {} now at {b} baud (verified)", servo.id),
+                format!("舵机 {} 现为 {b} 波特(已校验)", servo.id),
+            ))
+        },
+    ))
 }

@@ -12,7 +12,7 @@ use super::inputs::{command_inputs, range_text, readout_text};
 use super::state::{AppState, Reading};
 use super::stop::StopControl;
 use super::{Action, plot};
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Zh};
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Value};
 use eframe::egui;
 use egui_plot::Plot;
@@ -53,7 +53,7 @@ impl SolarPanel {
         stop: &mut StopControl,
     ) -> Vec<Action> {
         let mut actions = Vec::new();
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             actions.extend(stop.button(ui, lang, rt));
             stop.status(ui, lang);
             self.trip_status(ui, lang, rt);
@@ -95,7 +95,7 @@ impl SolarPanel {
     }
 
     fn deadman(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let mut on = self.control.deadman;
             if ui
                 .checkbox(&mut on, lang.tr("Dead-man", "失能保护"))
@@ -198,7 +198,7 @@ impl SolarPanel {
                             });
                         }
                         Some(Reading::Failed(e)) => {
-                            ui.colored_label(RED, e.to_string());
+                            ui.colored_label(RED, e.in_lang(lang));
                         }
                         None => {
                             ui.weak(lang.tr("no answer yet", "尚无应答"));
@@ -249,19 +249,19 @@ impl SolarPanel {
             .iter()
             .filter(|c| c.kind == CommandKind::Action && !c.request.is_empty());
         for cmd in cmds {
-            ui.horizontal_wrapped(|ui| {
+            crate::ui::layout::toolbar(ui, |ui| {
                 for f in &cmd.request {
                     self.input(ui, lang, cmd, f);
                 }
             });
             let inputs = command_inputs(cmd, &self.inputs);
-            ui.horizontal_wrapped(|ui| {
+            crate::ui::layout::toolbar(ui, |ui| {
                 let resp = ui.add_enabled(
                     rt.connected() && inputs.is_ok(),
                     egui::Button::new(lang.tr(&cmd.name.en, &cmd.name.zh)),
                 );
                 let resp = match &inputs {
-                    Err(e) => resp.on_disabled_hover_text(e.to_string()),
+                    Err(e) => resp.on_disabled_hover_text(e.in_lang(lang)),
                     Ok(_) => resp.on_hover_text(format!("{} ({})", cmd.ident, cmd.id)),
                 };
                 if resp.clicked()
@@ -304,7 +304,7 @@ impl SolarPanel {
                             );
                         }
                         Some((Outcome::Failed(e), _)) => {
-                            ui.colored_label(RED, e.to_string());
+                            ui.colored_label(RED, e.in_lang(lang));
                         }
                         None => {}
                     }

@@ -2,7 +2,9 @@
 
 use super::{AppState, Notice, OfflineCapture};
 use crate::capture::{self, Capture, CaptureInfo};
+use crate::i18n::Zh;
 use crate::link::LogEntry;
+use crate::profile::Text;
 use std::path::Path;
 use std::time::{Duration, UNIX_EPOCH};
 
@@ -11,9 +13,10 @@ impl AppState {
     /// the status line why not (not connected, the file cannot be created).
     pub fn start_capture(&mut self, path: &Path) {
         let Some(conn) = &self.link.connection else {
-            self.notify(Notice::error(
+            self.notify(Notice::error(Text::new(
                 "connect first: a capture records a port session",
-            ));
+                "请先连接:抓包记录的是一次串口会话",
+            )));
             return;
         };
         let baud = self.link.baud().unwrap_or(0);
@@ -28,9 +31,12 @@ impl AppState {
                 if let Some(old) = self.packets.tap.start(c) {
                     let _ = old.stop();
                 }
-                self.notify(Notice::info(format!("recording to {}", path.display())));
+                self.notify(Notice::info(Text::new(
+                    format!("recording to {}", path.display()),
+                    format!("正在录制到 {}", path.display()),
+                )));
             }
-            Err(e) => self.notify(Notice::error(e.to_string())),
+            Err(e) => self.notify(Notice::error(e.said())),
         }
     }
 
@@ -40,20 +46,38 @@ impl AppState {
             return;
         };
         let notice = match c.stop() {
-            Ok(s) if s.dropped > 0 => Notice::error(format!(
-                "capture {}: {} chunks, {} bytes; {} chunks lost (the disk could not keep up)",
-                c.path(),
-                s.chunks,
-                s.file_bytes,
-                s.dropped
+            Ok(s) if s.dropped > 0 => Notice::error(Text::new(
+                format!(
+                    "capture {}: {} chunks, {} bytes; {} chunks lost (the disk could not keep up)",
+                    c.path(),
+                    s.chunks,
+                    s.file_bytes,
+                    s.dropped
+                ),
+                format!(
+                    "抓包 {}:{} 块,{} 字节;丢失 {} 块(磁盘跟不上)",
+                    c.path(),
+                    s.chunks,
+                    s.file_bytes,
+                    s.dropped
+                ),
             )),
-            Ok(s) => Notice::info(format!(
-                "capture {}: {} chunks, {} bytes",
-                c.path(),
-                s.chunks,
-                s.file_bytes
+            Ok(s) => Notice::info(Text::new(
+                format!(
+                    "capture {}: {} chunks, {} bytes",
+                    c.path(),
+                    s.chunks,
+                    s.file_bytes
+                ),
+                format!("抓包 {}:{} 块,{} 字节", c.path(), s.chunks, s.file_bytes),
             )),
-            Err(e) => Notice::error(format!("capture {}: {e}", c.path())),
+            Err(e) => Notice::error(
+                Text::new(
+                    format!("capture {}", c.path()),
+                    format!("抓包 {}", c.path()),
+                )
+                .then(": ", &e.said()),
+            ),
         };
         self.notify(notice);
     }
@@ -68,7 +92,7 @@ impl AppState {
     pub fn open_capture(&mut self, path: &Path) {
         let file = match capture::read_path(path) {
             Ok(f) => f,
-            Err(e) => return self.notify(Notice::error(e.to_string())),
+            Err(e) => return self.notify(Notice::error(e.said())),
         };
         let profile = match self.registry.get(&file.info.profile) {
             Ok(p) => p,
@@ -87,10 +111,13 @@ impl AppState {
             || path.display().to_string(),
             |n| n.to_string_lossy().into(),
         );
-        self.notify(Notice::info(format!(
-            "{name}: {} chunks, profile {}",
-            file.chunks.len(),
-            profile.id
+        self.notify(Notice::info(Text::new(
+            format!(
+                "{name}: {} chunks, profile {}",
+                file.chunks.len(),
+                profile.id
+            ),
+            format!("{name}:{} 块,设备配置 {}", file.chunks.len(), profile.id),
         )));
         self.packets.offline = Some(OfflineCapture {
             name,

@@ -24,6 +24,26 @@ impl Target {
             Target::Port(p) => p.clone(),
         }
     }
+
+    /// [`Self::label`] in `lang`.
+    pub fn label_in(&self, lang: crate::i18n::Lang) -> String {
+        match (self, lang) {
+            (Target::Demo(kind), crate::i18n::Lang::Zh) => format!("内置模拟设备 {kind}"),
+            _ => self.label(),
+        }
+    }
+
+    /// What the link calls the port it opened (`LinkState::Connected`'s `port`), in both
+    /// languages: a built-in demo device's description is translated, a path is a path.
+    pub fn port_said(&self, port: &str) -> crate::profile::Text {
+        match self {
+            Target::Demo(name) => match name.parse::<crate::sim::SimKind>() {
+                Ok(kind) if kind.describe() == port => kind.described(),
+                _ => crate::profile::Text::same(port),
+            },
+            Target::Port(_) => crate::profile::Text::same(port),
+        }
+    }
 }
 
 /// Whether the device answers, as the link's counters tell it: an open port says nothing of
@@ -192,5 +212,27 @@ impl LinkStatus {
     pub fn reply_id(&self) -> u64 {
         static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
         NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Target;
+    use crate::i18n::Lang;
+    use crate::sim::SimKind;
+
+    #[test]
+    fn a_demo_devices_name_is_said_in_chinese_and_a_path_stays_a_path() {
+        for kind in SimKind::ALL {
+            let t = Target::Demo(kind.name().to_string());
+            let said = t.port_said(kind.describe());
+            assert_eq!(said.en, kind.describe());
+            assert!(said.zh.starts_with("模拟"), "{}", said.zh);
+            assert!(!said.zh.contains("simulated"));
+            assert!(t.label_in(Lang::Zh).starts_with("内置模拟设备"));
+        }
+        let port = Target::Port("/dev/ttyUSB0".into());
+        assert_eq!(port.port_said("/dev/ttyUSB0").zh, "/dev/ttyUSB0");
+        assert_eq!(port.label_in(Lang::Zh), "/dev/ttyUSB0");
     }
 }

@@ -19,8 +19,9 @@ pub use tuya::{
 };
 
 use super::jobs::{Job, JobError, JobOutput, RunningJob};
+use crate::i18n::Zh;
 use crate::link::{Link, LinkCommand, LinkEvent, LinkState, LinkStats, Opener};
-use crate::profile::{ProfileError, Registry};
+use crate::profile::{ProfileError, Registry, Text};
 use crate::sim::{Faults, SharedDevice, SimKind, SimOptions, SimTransport};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -28,13 +29,14 @@ use std::time::{Duration, Instant};
 /// The longest the UI thread spends draining link events in one frame.
 pub const EVENT_BUDGET: Duration = Duration::from_millis(4);
 
-/// A status-line message.
+/// A status-line message, in both languages (every message the window shows is said in
+/// each: see [`crate::i18n::Zh`] for errors).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Notice {
     /// The text, in English.
     pub text: String,
-    /// The text in Chinese, where it is translated (an error a library reports stays English).
-    pub zh: Option<String>,
+    /// The text in Chinese.
+    pub zh: String,
     /// An error (shown red).
     pub error: bool,
     /// When.
@@ -43,34 +45,28 @@ pub struct Notice {
 
 impl Notice {
     /// A message that something happened.
-    pub fn info(text: impl Into<String>) -> Self {
+    pub fn info(said: Text) -> Self {
         Self {
-            text: text.into(),
-            zh: None,
+            text: said.en,
+            zh: said.zh,
             error: false,
             at: Instant::now(),
         }
     }
 
     /// A message that something went wrong.
-    pub fn error(text: impl Into<String>) -> Self {
+    pub fn error(said: Text) -> Self {
         Self {
             error: true,
-            ..Self::info(text)
+            ..Self::info(said)
         }
     }
 
-    /// The message with its Chinese text.
-    pub fn zh(mut self, zh: impl Into<String>) -> Self {
-        self.zh = Some(zh.into());
-        self
-    }
-
-    /// The text in `lang` (English where there is no Chinese).
+    /// The text in `lang`.
     pub fn text_in(&self, lang: crate::i18n::Lang) -> &str {
-        match (lang, &self.zh) {
-            (crate::i18n::Lang::Zh, Some(zh)) => zh,
-            _ => &self.text,
+        match lang {
+            crate::i18n::Lang::En => &self.text,
+            crate::i18n::Lang::Zh => &self.zh,
         }
     }
 }
@@ -258,18 +254,22 @@ impl AppState {
                     _ => {}
                 }
                 match &s {
-                    LinkState::Lost { reason } => self.notify(
-                        Notice::error(format!("link lost: {reason}"))
-                            .zh(format!("连接丢失:{reason}")),
-                    ),
+                    LinkState::Lost { reason } => self.notify(Notice::error(Text::new(
+                        format!("link lost: {reason}"),
+                        format!("连接丢失:{reason}"),
+                    ))),
                     LinkState::Connected { port, baud } => {
                         if !self.link.connected() {
                             self.link.just_connected = true;
                         }
-                        self.notify(
-                            Notice::info(format!("connected to {port} at {baud} baud"))
-                                .zh(format!("已连接 {port},波特率 {baud}")),
-                        )
+                        let port = match self.link.target() {
+                            Some(t) => t.port_said(port),
+                            None => Text::same(port),
+                        };
+                        self.notify(Notice::info(Text::new(
+                            format!("connected to {} at {baud} baud", port.en),
+                            format!("已连接 {},波特率 {baud}", port.zh),
+                        )))
                     }
                     _ => {}
                 }
@@ -297,18 +297,19 @@ impl AppState {
     /// Starts `job` on the link unless one is running; says why not in the status line.
     pub fn start_job(&mut self, job: Job) {
         if self.job.as_ref().is_some_and(|j| !j.is_done()) {
-            self.notify(Notice::error(
+            self.notify(Notice::error(Text::new(
                 "wait for the running job to finish, or cancel it",
-            ));
+                "请等待正在运行的任务结束,或取消它",
+            )));
             return;
         }
         let Some(conn) = &self.link.connection else {
-            self.notify(Notice::error("not connected").zh("未连接"));
+            self.notify(Notice::error(Text::new("not connected", "未连接")));
             return;
         };
         match RunningJob::spawn(job, conn.link.client(), &self.ctx) {
             Ok(job) => self.job = Some(job),
-            Err(e) => self.notify(Notice::error(e.to_string())),
+            Err(e) => self.notify(Notice::error(e.said())),
         }
     }
 
@@ -325,24 +326,26 @@ impl AppState {
         self.job.as_mut().map(RunningJob::drain).unwrap_or_default()
     }
 
-    /// The running job's title and progress, if a job runs.
-    pub fn job_progress(&self) -> Option<(&str, f32, String)> {
+    /// The running job's title and progress (fraction done, what it is doing), if a job runs.
+    pub fn job_progress(&self) -> Option<(&Text, f32, Text)> {
         let job = self.job.as_ref().filter(|j| !j.is_done())?;
         let (f, msg) = job
             .progress
             .as_ref()
-            .map_or((0.0, String::new()), |p| (p.fraction(), p.message.clone()));
+            .map_or((0.0, Text::same("")), |p| (p.fraction(), p.message.clone()));
         Some((&job.title, f, msg))
     }
 
-    /// The status line's message for a job that ended.
-    pub fn job_done(&mut self, result: Result<String, JobError>) {
-        let title = self.job.as_ref().map_or("job", |j| j.title.as_str());
-        let title_zh = crate::i18n::job_title_zh(title);
+    /// The status line's message for a job that ended: its title, then its summary or why it
+    /// failed.
+    pub fn job_done(&mut self, result: Result<Text, JobError>) {
+        let title = self
+            .job
+            .as_ref()
+            .map_or_else(|| Text::new("job", "任务"), |j| j.title.clone());
         let notice = match result {
-            Ok(summary) => Notice::info(format!("{title}: {summary}"))
-                .zh(format!("{title_zh}:{}", crate::i18n::summary_zh(&summary))),
-            Err(e) => Notice::error(format!("{title}: {e}")).zh(format!("{title_zh}:{e}")),
+            Ok(summary) => Notice::info(title.then(": ", &summary)),
+            Err(e) => Notice::error(title.then(": ", &e.said())),
         };
         self.notify(notice);
     }

@@ -179,7 +179,7 @@ impl DpView {
             ui.ctx().request_repaint_after(Duration::from_millis(200));
         }
         let can_send = rt.connected() && !ota;
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             if ui
                 .add_enabled(
                     can_send,

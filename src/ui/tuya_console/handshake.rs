@@ -34,7 +34,7 @@ fn config_mode(mode: i64, lang: Lang) -> String {
 /// One line above the sections: the handshake's state, the last heartbeat, the product.
 pub fn summary(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
     let s = &rt.device.tuya;
-    ui.horizontal_wrapped(|ui| {
+    crate::ui::layout::toolbar(ui, |ui| {
         if !rt.connected() {
             ui.weak(lang.tr("not connected", "未连接"));
         } else if let Some(t) = &s.done_at {
@@ -47,17 +47,16 @@ pub fn summary(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
                 ),
             );
         } else if let Some((step, r)) = &s.stopped {
-            ui.colored_label(
-                egui::Color32::RED,
-                format!(
-                    "{} {}: {} ({} {})",
-                    lang.tr("Handshake stopped at", "握手停在"),
-                    step_name(*step, lang),
-                    r.detail,
-                    lang.tr("retrying, attempt", "正在重试,第"),
-                    s.attempts
-                ),
+            // The device's detail may be long: it wraps.
+            let text = format!(
+                "{} {}: {} ({} {})",
+                lang.tr("Handshake stopped at", "握手停在"),
+                step_name(*step, lang),
+                r.detail,
+                lang.tr("retrying, attempt", "正在重试,第"),
+                s.attempts
             );
+            ui.add(egui::Label::new(egui::RichText::new(text).color(egui::Color32::RED)).wrap());
         } else if s.attempts > 0 {
             ui.colored_label(ORANGE, lang.tr("Handshake running…", "正在握手…"));
         } else {
@@ -305,7 +304,7 @@ fn wifi_state(
     opts: &mut TuyaModuleOptions,
 ) -> Vec<Action> {
     let mut actions = Vec::new();
-    ui.horizontal_wrapped(|ui| {
+    crate::ui::layout::toolbar(ui, |ui| {
         let label = ui.label(lang.tr("Wi-Fi state reported to the MCU", "上报给MCU的WiFi状态"));
         let mut chosen = None;
         egui::ComboBox::from_id_salt("tuya-wifi-state")

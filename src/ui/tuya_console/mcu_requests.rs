@@ -94,7 +94,7 @@ fn demo_buttons(ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<
         "Make the built-in MCU ask the module",
         "让内置模拟MCU向模块发出请求",
     ));
-    ui.horizontal_wrapped(|ui| {
+    crate::ui::layout::toolbar(ui, |ui| {
         for r in McuRequest::ALL {
             if ui
                 .add_enabled(rt.connected(), egui::Button::new(request_name(r, lang)))

@@ -34,7 +34,8 @@ pub enum Tab {
 }
 
 impl Tab {
-    const ALL: [Tab; 4] = [Tab::Handshake, Tab::DataPoints, Tab::Requests, Tab::Ota];
+    /// Every tab, in the order shown.
+    pub(crate) const ALL: [Tab; 4] = [Tab::Handshake, Tab::DataPoints, Tab::Requests, Tab::Ota];
 
     fn name(self, lang: Lang) -> &'static str {
         match self {

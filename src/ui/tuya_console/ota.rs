@@ -7,6 +7,7 @@ use crate::i18n::Lang;
 use crate::ops::OpError;
 pub use crate::ops::tuya::FirmwareFileError;
 use crate::ops::tuya::{self as ops, OtaTiming};
+use crate::profile::Text;
 use crate::ui::files;
 use crate::ui::jobs::{Job, JobError, JobOutput};
 use crate::ui::settings::FileKind;
@@ -54,59 +55,68 @@ fn duration(secs: f64) -> String {
 }
 
 fn work(path: PathBuf, max: u32) -> Job {
-    Job::new("OTA", move |client, cancel, sink| {
-        let done = |r: Result<ops::OtaReport, JobError>| {
-            sink.send(JobOutput::Tuya(Output::OtaDone(r.clone())));
-            r.map(|rep| {
-                format!(
-                    "{} bytes sent in {} packets of {} bytes",
-                    rep.size, rep.packets, rep.packet_size
-                )
-            })
-        };
-        // Read with the profile's bound: a file that grew past it, or a device, stops there.
-        let image = match ops::read_image(&path, max) {
-            Ok(i) => i,
-            Err(e) => {
-                return done(Err(JobError::File {
-                    path: path.clone(),
-                    reason: e.to_string(),
-                }));
-            }
-        };
-        let started = Instant::now();
-        let mut packet = None;
-        let mut acked = 0u64;
-        let result = ops::ota(
-            client,
-            &image,
-            max,
-            OtaTiming::default(),
-            cancel,
-            &mut |p| {
-                if packet.is_none() && p.done < p.total {
-                    packet = Some(p.done as usize);
+    Job::new(
+        Text::new("OTA", "固件升级"),
+        move |client, cancel, sink| {
+            let done = |r: Result<ops::OtaReport, JobError>| {
+                sink.send(JobOutput::Tuya(Output::OtaDone(r.clone())));
+                r.map(|rep| {
+                    Text::new(
+                        format!(
+                            "{} bytes sent in {} packets of {} bytes",
+                            rep.size, rep.packets, rep.packet_size
+                        ),
+                        format!(
+                            "已发送 {} 字节,共 {} 包,每包 {} 字节",
+                            rep.size, rep.packets, rep.packet_size
+                        ),
+                    )
+                })
+            };
+            // Read with the profile's bound: a file that grew past it, or a device, stops there.
+            let image = match ops::read_image(&path, max) {
+                Ok(i) => i,
+                Err(e) => {
+                    return done(Err(JobError::File {
+                        path: path.clone(),
+                        reason: e.to_string(),
+                    }));
                 }
-                acked = p.done;
-                let rate = p.done as f64 / started.elapsed().as_secs_f64().max(1e-3);
-                sink.send(JobOutput::Tuya(Output::OtaProgress(OtaProgress {
-                    done: p.done,
-                    total: p.total,
-                    rate,
-                    left: p.total.saturating_sub(p.done) as f64 / rate.max(1.0),
-                    packet,
-                })));
-                sink.progress(p);
-            },
-        );
-        done(result.map_err(|e| match e {
-            OpError::Cancelled => JobError::UpdateCancelled {
-                offset: acked,
-                size: image.len(),
-            },
-            e => e.into(),
-        }))
-    })
+            };
+            let started = Instant::now();
+            let mut packet = None;
+            let mut acked = 0u64;
+            let result = ops::ota(
+                client,
+                &image,
+                max,
+                OtaTiming::default(),
+                cancel,
+                &mut |p| {
+                    if packet.is_none() && p.done < p.total {
+                        packet = Some(p.done as usize);
+                    }
+                    acked = p.done;
+                    let rate = p.done as f64 / started.elapsed().as_secs_f64().max(1e-3);
+                    sink.send(JobOutput::Tuya(Output::OtaProgress(OtaProgress {
+                        done: p.done,
+                        total: p.total,
+                        rate,
+                        left: p.total.saturating_sub(p.done) as f64 / rate.max(1.0),
+                        packet,
+                    })));
+                    sink.progress(p);
+                },
+            );
+            done(result.map_err(|e| match e {
+                OpError::Cancelled => JobError::UpdateCancelled {
+                    offset: acked,
+                    size: image.len(),
+                },
+                e => e.into(),
+            }))
+        },
+    )
 }
 
 impl OtaView {
@@ -144,7 +154,7 @@ impl OtaView {
             ),
             lang.tr("bytes.", "字节。")
         ));
-        ui.horizontal_wrapped(|ui| {
+        crate::ui::layout::toolbar(ui, |ui| {
             let before = self.path.clone();
             let event = files::row(
                 ui,
@@ -198,7 +208,7 @@ impl OtaView {
                     .text(format!("{} / {} B", p.done, p.total))
                     .desired_width(420.0),
             );
-            ui.horizontal_wrapped(|ui| {
+            crate::ui::layout::toolbar(ui, |ui| {
                 ui.label(format!(
                     "{:.0} B/s, {} {}",
                     p.rate,

@@ -50,6 +50,22 @@ pub mod step {
     pub const RECORD: &str = "record";
     /// The plan does not fit the profile.
     pub const PLAN: &str = "plan";
+
+    /// A step's name in both languages, for the window's progress line.
+    pub fn said(step: &str) -> crate::profile::Text {
+        let zh = match step {
+            DETECT => "检测新舵机",
+            SERIAL => "读取序列号",
+            ASSIGN_ID => "分配 ID",
+            SET_BAUD => "设置波特率",
+            APPLY => "写入参数",
+            VERIFY => "校验",
+            RECORD => "记录",
+            PLAN => "计划",
+            other => other,
+        };
+        crate::profile::Text::new(step, zh)
+    }
 }
 
 /// What provisioning remembers between servos.
@@ -213,10 +229,13 @@ fn run(
         progress(Progress {
             done: *done,
             total,
-            message: if detail.is_empty() {
-                step.to_string()
-            } else {
-                format!("{step}: {detail}")
+            message: {
+                let step = step::said(step);
+                if detail.is_empty() {
+                    step
+                } else {
+                    step.then(": ", &crate::profile::Text::same(detail))
+                }
             },
         });
         *done += 1;
@@ -471,7 +490,7 @@ fn run(
     progress(Progress {
         done: total,
         total,
-        message: "done".into(),
+        message: crate::profile::Text::new("done", "完成"),
     });
 }
 

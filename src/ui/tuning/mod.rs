@@ -3,11 +3,12 @@
 //! changes" shows the diff, writes only the changed commands (each with its full payload) and
 //! reads them back.
 
+mod table;
+
 use super::Action;
-use super::inputs::range_text;
 use super::jobs;
-use super::state::{AppState, Mark, Reading};
-use crate::i18n::Lang;
+use super::state::AppState;
+use crate::i18n::{Lang, Zh};
 use crate::ops::tuning::SetWrite;
 use crate::profile::{Command, CommandKind, Field, FieldError, Value};
 use eframe::egui;
@@ -71,54 +72,17 @@ pub struct TuningPanel {
     pub edits: HashMap<(u8, String), String>,
     /// The changes awaiting confirmation, and the writes they make.
     confirm: Option<(Vec<Change>, Writes)>,
+    /// A group to bring to the top of the table on the next frame (by its id).
+    pub scroll_to: Option<String>,
 }
 
-/// A panel group: its id ("" for the commands without one), its name, its Get/Set pairs.
-struct Group<'p> {
-    id: String,
-    name: String,
-    pairs: Vec<(&'p Command, &'p Command)>,
-}
-
-/// The Get/Set pairs of the profile, grouped.
-fn groups(rt: &AppState, lang: Lang) -> Vec<Group<'_>> {
-    let p = &rt.device.profile;
-    let pairs: Vec<(&Command, &Command)> = p
-        .commands
-        .iter()
-        .filter(|c| c.kind == CommandKind::Get)
-        .filter_map(|g| Some((g, p.command_by_id(g.pair?)?)))
-        .collect();
-    let mut out: Vec<Group<'_>> = p
-        .groups
-        .iter()
-        .map(|g| {
-            let members = pairs
-                .iter()
-                .filter(|(get, _)| get.group.as_deref() == Some(&g.id))
-                .copied()
-                .collect();
-            Group {
-                id: g.id.clone(),
-                name: lang.tr(&g.name.en, &g.name.zh).to_string(),
-                pairs: members,
-            }
-        })
-        .collect();
-    let other: Vec<_> = pairs
-        .iter()
-        .filter(|(get, _)| get.group.is_none())
-        .copied()
-        .collect();
-    if !other.is_empty() {
-        out.push(Group {
-            id: String::new(),
-            name: lang.tr("Other", "其他").to_string(),
-            pairs: other,
-        });
-    }
-    out.retain(|g| !g.pairs.is_empty());
-    out
+/// The ids of the profile's groups as the table shows them, in order ("" for the commands of
+/// no group).
+pub fn group_ids(rt: &AppState) -> Vec<String> {
+    table::groups(rt, Lang::En)
+        .into_iter()
+        .map(|g| g.id)
+        .collect()
 }
 
 impl TuningPanel {
@@ -261,153 +225,26 @@ impl TuningPanel {
         egui::ScrollArea::vertical()
             .auto_shrink(false)
             .show(ui, |ui| {
-                for group in groups(rt, lang) {
-                    egui::CollapsingHeader::new(egui::RichText::new(&group.name).strong())
-                        .id_salt(("group", &group.id))
-                        .default_open(true)
-                        .show(ui, |ui| self.group_grid(ui, lang, rt, &group));
+                let names = table::name_width(ui, lang, rt);
+                for group in table::groups(rt, lang) {
+                    let shown =
+                        egui::CollapsingHeader::new(egui::RichText::new(&group.name).strong())
+                            .id_salt(("group", &group.id))
+                            .default_open(true)
+                            .show(ui, |ui| self.group_grid(ui, lang, rt, &group, names));
+                    if self.scroll_to.as_ref() == Some(&group.id) {
+                        self.scroll_to = None;
+                        shown.header_response.scroll_to_me_animation(
+                            Some(egui::Align::TOP),
+                            egui::style::ScrollAnimation::none(),
+                        );
+                    }
                 }
             });
         if let Some(action) = self.confirm_dialog(ui, lang, rt) {
             actions.push(action);
         }
         actions
-    }
-
-    /// One grid per group, so that its columns line up: a header row per command, then its
-    /// fields.
-    fn group_grid(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, group: &Group<'_>) {
-        // Every group's table has the same six columns across the whole width, whatever its
-        // contents: a long text wraps or is cut in its cell instead of moving the columns.
-        let gap = ui.spacing().item_spacing.x;
-        let col = ((ui.available_width() - 5.0 * gap) / 6.0).max(60.0);
-        egui::Grid::new(("fields", &group.id))
-            .num_columns(6)
-            .striped(true)
-            .min_col_width(col)
-            .max_col_width(col)
-            .show(ui, |ui| {
-                ui.weak(lang.tr("Field", "字段"));
-                ui.weak(lang.tr("Device", "设备值"));
-                ui.weak(lang.tr("Edited", "修改值"));
-                ui.weak(lang.tr("Unit", "单位"));
-                ui.weak(lang.tr("Range", "范围"));
-                ui.weak("");
-                ui.end_row();
-                for (get, set) in &group.pairs {
-                    ui.label(egui::RichText::new(lang.tr(&get.name.en, &get.name.zh)).italics())
-                        .on_hover_text(format!(
-                            "{} {} / {} {}",
-                            get.ident, get.id, set.ident, set.id
-                        ));
-                    match rt.device.readings.get(&get.id) {
-                        Some(Reading::Failed(e)) => {
-                            let text = format!("{}: {e}", lang.tr("read failed", "读取失败"));
-                            let label = egui::RichText::new(&text).color(egui::Color32::RED);
-                            ui.add(egui::Label::new(label).truncate())
-                                .on_hover_text(text);
-                        }
-                        _ => {
-                            ui.weak(format!("{} / {}", get.id, set.id));
-                        }
-                    }
-                    ui.end_row();
-                    for f in &get.reply {
-                        self.field_row(ui, lang, rt, get.id, f);
-                        ui.end_row();
-                    }
-                }
-            });
-    }
-
-    fn field_row(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, get: u8, f: &Field) {
-        let key = (get, f.ident.clone());
-        let name = ui
-            .label(format!("   {}", lang.tr(&f.name.en, &f.name.zh)))
-            .on_hover_text(&f.ident);
-        let device = rt.device.value(get, &f.ident);
-        match device {
-            Some(v) => super::inputs::device_value(ui, f, v),
-            None => ui.weak(lang.tr("not read yet", "尚未读取")),
-        };
-        let writable =
-            profile_set(rt, get).is_none_or(|set| set.request.iter().any(|sf| sf.ident == f.ident));
-        let mut text = self
-            .edits
-            .get(&key)
-            .cloned()
-            .unwrap_or_else(|| device.map(|v| f.format(v)).unwrap_or_default());
-        let parsed = self.edits.get(&key).map(|t| f.parse(t));
-        let invalid = matches!(parsed, Some(Err(_)));
-        let changed = matches!(&parsed, Some(Ok(v)) if device != Some(v));
-        let mut edit = egui::TextEdit::singleline(&mut text).desired_width(90.0);
-        if invalid {
-            edit = edit.text_color(egui::Color32::RED);
-        }
-        let resp = ui.add_enabled(writable, edit).labelled_by(name.id);
-        let resp = if writable {
-            resp
-        } else {
-            resp.on_disabled_hover_text(lang.tr(
-                "read only: the Set command does not carry this field",
-                "只读:设置命令不含此字段",
-            ))
-        };
-        let resp = if invalid {
-            ui.painter().rect_stroke(
-                resp.rect,
-                2.0,
-                egui::Stroke::new(1.5, egui::Color32::RED),
-                egui::StrokeKind::Outside,
-            );
-            resp
-        } else {
-            resp
-        };
-        if resp.changed() {
-            self.edits.insert(key.clone(), text);
-        }
-        unit_cell(ui, lang, f);
-        ui.weak(profile_range(f, lang));
-        match (&parsed, rt.device.mark(get, &f.ident)) {
-            (Some(Err(e)), _) => {
-                ui.colored_label(
-                    egui::Color32::RED,
-                    format!("× {}", lang.tr("invalid", "无效")),
-                )
-                .on_hover_text(format!(
-                    "{}\n{}: {}",
-                    named(&e.to_string(), f, lang),
-                    lang.tr("allowed", "允许"),
-                    range_text(f)
-                ));
-            }
-            _ if changed => {
-                ui.colored_label(
-                    egui::Color32::from_rgb(220, 150, 0),
-                    format!("● {}", lang.tr("changed", "已修改")),
-                );
-            }
-            (_, Some(Mark::Verified)) => {
-                ui.colored_label(
-                    egui::Color32::from_rgb(40, 160, 60),
-                    format!("✓ {}", lang.tr("verified", "已校验")),
-                );
-            }
-            (_, Some(Mark::Mismatch(read))) => {
-                ui.colored_label(
-                    egui::Color32::RED,
-                    format!(
-                        "× {} {}",
-                        lang.tr("mismatch: device holds", "不一致:设备为"),
-                        f.format(read)
-                    ),
-                );
-            }
-            _ => {
-                ui.label("");
-            }
-        }
     }
 
     fn confirm_dialog(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Option<Action> {
@@ -475,27 +312,6 @@ fn profile_set(rt: &AppState, get: u8) -> Option<&Command> {
     p.command_by_id(p.command_by_id(get)?.pair?)
 }
 
-/// The allowed values the profile gives (a range or labels); "—" where it gives none (the
-/// type's own limits say nothing a technician can use).
-fn profile_range(f: &Field, lang: Lang) -> String {
-    if f.range.is_none() && f.labels.is_empty() {
-        return lang.tr("— (not given)", "—(未规定)").to_string();
-    }
-    range_text(f)
-}
-
-/// The field's unit; where the protocol publishes none, says so.
-fn unit_cell(ui: &mut egui::Ui, lang: Lang, f: &Field) {
-    if f.unit.is_empty() {
-        ui.weak("—").on_hover_text(lang.tr(
-            "the protocol does not publish this field's unit",
-            "协议未公布此字段的单位",
-        ));
-    } else {
-        ui.label(&f.unit);
-    }
-}
-
 /// An error about field `f` (`pwmvalueMax: 120 is out of range…`) with the field's name in
 /// `lang` in place of its wire name.
 fn named(text: &str, f: &Field, lang: Lang) -> String {
@@ -527,7 +343,7 @@ fn pending_text(e: &PendingError, rt: &AppState, lang: Lang) -> String {
             }
         }
         other => {
-            let text = other.to_string();
+            let text = other.in_lang(lang);
             fields()
                 .find(|f| text.starts_with(&format!("{}:", f.ident)))
                 .map_or(text.clone(), |f| named(&text, f, lang))

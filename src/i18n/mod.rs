@@ -17,6 +17,10 @@
 //! (`assets/fonts/`); `tests/i18n.rs` checks it, and `assets/fonts/make-subset.sh` regenerates
 //! the font when it fails.
 
+mod errors;
+
+pub use errors::Zh;
+
 use crate::link::LinkState;
 use crate::link::session::tuya::{HandshakeStep, TuyaEvent};
 use crate::profile::Text;
@@ -354,12 +358,53 @@ impl Key {
     }
 }
 
+impl From<Key> for Text {
+    fn from(key: Key) -> Self {
+        Text::new(key.en(), key.zh())
+    }
+}
+
+/// A separator as Chinese writes it: `: ` becomes `:`, `; ` becomes `;`, `, ` becomes `,`.
+fn zh_sep(sep: &str) -> &str {
+    match sep {
+        ": " => ":",
+        "; " => ";",
+        ", " => ",",
+        other => other,
+    }
+}
+
 /// The text of `key` in `lang`.
 pub fn tr(lang: Lang, key: Key) -> &'static str {
     key.get(lang)
 }
 
 impl Text {
+    /// A message in both languages.
+    pub fn new(en: impl Into<String>, zh: impl Into<String>) -> Self {
+        Self {
+            en: en.into(),
+            zh: zh.into(),
+        }
+    }
+
+    /// Words that read the same in both languages: a path, a number, a name a device gave.
+    pub fn same(text: impl Into<String>) -> Self {
+        let text = text.into();
+        Self {
+            zh: text.clone(),
+            en: text,
+        }
+    }
+
+    /// `self`, then `sep` and `then` (each language its own).
+    pub fn then(&self, sep: &str, then: &Text) -> Text {
+        Text::new(
+            format!("{}{sep}{}", self.en, then.en),
+            format!("{}{}{}", self.zh, zh_sep(sep), then.zh),
+        )
+    }
+
     /// The name in `lang`; falls back to the other language when this one is empty.
     pub fn get(&self, lang: Lang) -> &str {
         let (first, second) = match lang {
@@ -372,7 +417,7 @@ impl Text {
 
 /// The bundled subset of Noto Sans CJK SC (OpenType/CFF). Licence: SIL OFL 1.1, see
 /// `assets/fonts/LICENSE-OFL.txt`; how it was made: `assets/fonts/README.md`.
-pub const CJK_FONT: &[u8] = include_bytes!("../assets/fonts/NotoSansCJKsc-Regular-subset.otf");
+pub const CJK_FONT: &[u8] = include_bytes!("../../assets/fonts/NotoSansCJKsc-Regular-subset.otf");
 
 /// The name the bundled font goes by in egui's font definitions.
 pub const CJK_FONT_NAME: &str = "noto-sans-cjk-sc-subset";
@@ -400,40 +445,6 @@ pub fn cjk_font_definitions() -> egui::FontDefinitions {
 /// if nothing has been laid out yet.
 pub fn install_cjk_font(ctx: &egui::Context) {
     ctx.set_fonts(cjk_font_definitions());
-}
-
-/// A job's title (as the status line shows it, `read: 12 read`) in Chinese; an unknown title
-/// stays as it is.
-pub fn job_title_zh(title: &str) -> &str {
-    match title {
-        "read" => "读取",
-        "write" => "写入",
-        "send" => "发送",
-        "save preset" => "保存预设",
-        "apply preset" => "应用预设",
-        "OTA" => "固件升级",
-        "provision" => "配置",
-        "read parameters" => "读取参数",
-        "read user block" => "读取用户参数区",
-        "self-test" => "自检",
-        "scan" => "扫描",
-        "rescan" => "重新扫描",
-        other => other,
-    }
-}
-
-/// A job's summary in Chinese where it is one of the panels' own phrasings (`12 read`,
-/// `3 command(s) written and verified`); anything else stays as it is.
-pub fn summary_zh(summary: &str) -> String {
-    let (n, rest) = summary.split_once(' ').unwrap_or(("", summary));
-    if n.parse::<u64>().is_err() {
-        return summary.to_string();
-    }
-    match rest {
-        "read" => format!("已读取 {n} 项"),
-        "command(s) written and verified" => format!("{n} 条命令已写入并校验"),
-        _ => summary.to_string(),
-    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,397 @@
+//! The errors the window shows, in Chinese. Each error type's English is its `Display` (what
+//! the command line prints); [`Zh`] gives the same message in Chinese, with the same values
+//! (idents, numbers, paths) and the nested error's own Chinese. What the operating system or a
+//! parser said (a port that cannot open, a RON syntax error) is quoted as it came.
+
+use super::Text;
+use crate::capture::CaptureError;
+use crate::document::{DocumentError, ErrorKind};
+use crate::link::{ExchangeError, LinkError};
+use crate::ops::OpError;
+use crate::profile::FieldError;
+use crate::protocol::FrameError;
+use crate::protocol::tuya::dp::DpError;
+use crate::ui::jobs::{JobError, LogError};
+use crate::ui::state::ConnectError;
+
+/// An error as the window says it in Chinese; its English is its `Display`.
+pub trait Zh: std::fmt::Display {
+    /// The message in Chinese.
+    fn zh(&self) -> String;
+
+    /// The message in both languages.
+    fn said(&self) -> Text {
+        Text::new(self.to_string(), self.zh())
+    }
+
+    /// The message in `lang`.
+    fn in_lang(&self, lang: super::Lang) -> String {
+        match lang {
+            super::Lang::En => self.to_string(),
+            super::Lang::Zh => self.zh(),
+        }
+    }
+}
+
+impl Zh for crate::ui::state::ReadingError {
+    fn zh(&self) -> String {
+        match self {
+            Self::Read(e) => e.zh(),
+            Self::WriteFailed(e) => format!("写入失败:{};请重新读取", e.zh()),
+        }
+    }
+}
+
+impl Zh for crate::ui::tuning::PendingError {
+    fn zh(&self) -> String {
+        match self {
+            Self::Value(e) => e.zh(),
+            Self::NotANumber { field } => format!("{field}:不是数字"),
+            Self::BlockNotRead { field } => {
+                format!("{field} 尚未读取:请先全部读取,以便写入完整的参数区")
+            }
+            Self::NotRead { command, field } => {
+                format!("{command}:{field} 尚未读取;请先读取,以便写入完整的命令")
+            }
+        }
+    }
+}
+
+impl Zh for crate::ui::stop::SendError {
+    fn zh(&self) -> String {
+        match self {
+            Self::Refused(e) => e.zh(),
+            Self::LinkDown => "未发送:链路中断".into(),
+            Self::Exchange(e) => e.zh(),
+        }
+    }
+}
+
+impl Zh for crate::ui::inputs::InputError {
+    fn zh(&self) -> String {
+        match self {
+            Self::Missing { field, allowed } => format!("{field}:请给出数值({allowed})"),
+            Self::Value(e) => e.zh(),
+        }
+    }
+}
+
+impl Zh for JobError {
+    fn zh(&self) -> String {
+        match self {
+            JobError::Op(e) => e.zh(),
+            JobError::Document(e) => e.zh(),
+            JobError::Incomplete {
+                failed,
+                total,
+                what,
+            } => format!("{total} 项中 {failed} 项{}", incomplete_zh(what)),
+            JobError::CancelledAfter { done, total, what } => {
+                format!("已取消:{total} {} 中已完成 {done}", unit_zh(what))
+            }
+            JobError::UpdateCancelled { offset, size } => {
+                format!("已取消:{size} 字节中只写到偏移 {offset},MCU 中的固件不完整")
+            }
+            JobError::Failed(what) => format!("不合格:{what}"),
+            JobError::StepFailed { step, reason } => format!("在 {step} 步失败:{reason}"),
+            JobError::Log(e) => e.zh(),
+            JobError::File { path, reason } => format!("{}:{reason}", path.display()),
+            JobError::Thread(e) => format!("无法启动任务线程:{e}"),
+        }
+    }
+}
+
+/// The Chinese of a batch's failure (`reads failed`), by its English.
+fn incomplete_zh(what: &str) -> &str {
+    match what {
+        "reads failed" => "读取失败",
+        "command(s) not verified" => "命令未通过校验",
+        "field(s) not verified" => "字段未通过校验",
+        "parameter(s) not verified" => "参数未通过校验",
+        other => other,
+    }
+}
+
+/// The Chinese of what a batch counts (`commands`).
+fn unit_zh(what: &str) -> &str {
+    match what {
+        "commands" => "条命令",
+        "fields" => "个字段",
+        "parameters" => "个参数",
+        other => other,
+    }
+}
+
+impl Zh for ConnectError {
+    fn zh(&self) -> String {
+        match self {
+            ConnectError::Profile(e) => format!("设备配置无法加载:{e}"),
+            ConnectError::Simulator(e) => format!("没有这个内置模拟设备:{e}"),
+            ConnectError::Link(e) => e.zh(),
+        }
+    }
+}
+
+impl Zh for CaptureError {
+    fn zh(&self) -> String {
+        match self {
+            CaptureError::Open { path, reason } => format!("无法打开抓包文件 {path}:{reason}"),
+            CaptureError::Write(e) => format!("无法写入抓包文件:{e}"),
+            CaptureError::Format(e) => format!("不是 botbench 抓包文件:{e}"),
+        }
+    }
+}
+
+impl Zh for LogError {
+    fn zh(&self) -> String {
+        format!("无法追加写入 {}:{}", self.path.display(), self.reason)
+    }
+}
+
+impl Zh for OpError {
+    fn zh(&self) -> String {
+        match self {
+            OpError::Value(e) => e.zh(),
+            OpError::UnknownCommand { profile, command } => {
+                format!("设备配置 {profile} 没有命令 {command}")
+            }
+            OpError::UnknownParam { profile, param } => {
+                format!("设备配置 {profile} 没有参数 {param}")
+            }
+            OpError::WrongCommand { command, .. } => {
+                format!("{command} 的类型不适用于此操作(未发送)")
+            }
+            OpError::CannotKeep {
+                command,
+                field,
+                why,
+            } => format!("{command}:无法保留设备的 {field}:{why};请给出 {field}=数值"),
+            OpError::NothingGiven { what, .. } => format!("未给出{what}(未发送)"),
+            OpError::OutOfRange {
+                what,
+                value,
+                min,
+                max,
+                ..
+            } => format!("{what} {value} 超出范围;允许 {min} 至 {max}"),
+            OpError::ReadOnly { param } => format!("{param} 为只读"),
+            OpError::BroadcastId => "ID 255 是广播地址,不能分配".into(),
+            OpError::BroadcastAnswer { .. } => {
+                "ID 255 是广播地址:所有舵机都会执行且都不应答,请给出单个舵机的 ID".into()
+            }
+            OpError::SameId { id } => format!("舵机 {id} 已经是 ID {id}"),
+            OpError::IdInUse { id, .. } => format!("ID {id} 已在总线上应答"),
+            OpError::NotAlone { answering } => {
+                format!("新舵机(ID 0)只能在总线上只有它时分配 ID;正在应答的 ID:{answering:?}")
+            }
+            OpError::MissingValue { param, data_id } => {
+                format!("参数块缺少 {param}({data_id})的值")
+            }
+            OpError::FollowedChange { param, .. } => {
+                format!("参数块会改变 {param}:ID 与波特率请用各自的命令修改")
+            }
+            OpError::FactoryIdTaken { id, baud } => format!(
+                "已有舵机在出厂 ID {id}、波特率 {baud} 上应答:复位后两者 ID 相同,请先给它另一个 ID"
+            ),
+            OpError::EmptyImage => "固件文件为空".into(),
+            OpError::ImageTooLarge { size, max } => {
+                format!("固件为 {size} 字节,超过设备配置允许的最大值({max} 字节)")
+            }
+            OpError::Document(e) => e.zh(),
+            OpError::Port { baud, error } => {
+                format!("无法将串口切换到 {baud} 波特:{}", error.zh())
+            }
+            OpError::Exchange(e) => e.zh(),
+            OpError::Answer { command, error } => {
+                format!("{command}:应答与设备配置不符:{}", error.zh())
+            }
+            OpError::NotAtNewRate { id, baud, found } => match found {
+                Some(b) => {
+                    format!("舵机 {id} 在 {baud} 波特下无应答;它在 {b} 波特下被找到(串口现为 {b})")
+                }
+                None => format!("舵机 {id} 在 {baud} 波特及其他波特率下均无应答"),
+            },
+            OpError::Verify(what) => format!("校验不符:{what}"),
+            OpError::Cancelled => "已取消".into(),
+        }
+    }
+}
+
+impl Zh for ExchangeError {
+    fn zh(&self) -> String {
+        match self {
+            ExchangeError::Timeout {
+                command,
+                attempts,
+                waited_ms,
+            } => format!("命令 {command} 无应答(尝试 {attempts} 次,每次等待 {waited_ms} ms)"),
+            ExchangeError::Garbled { command, error } => {
+                format!("命令 {command} 的应答已损坏:{}", error.zh())
+            }
+            ExchangeError::Mismatch {
+                expected,
+                got,
+                from,
+            } => {
+                let from = from.map_or(String::new(), |id| format!("(来自舵机 {id})"));
+                format!("等待命令 {expected} 的应答,收到的是命令 {got}{from}")
+            }
+            ExchangeError::Unreadable { command, reason } => {
+                format!("命令 {command} 的应答无法解读:{reason}")
+            }
+            ExchangeError::NotInProtocol { what, protocol } => {
+                format!("{} 协议没有 {what}", protocol.name())
+            }
+            ExchangeError::Encode(e) => format!("无法发送:{e}"),
+            ExchangeError::Disconnected(e) => format!("连接丢失:{e}"),
+            ExchangeError::Cancelled => "已取消".into(),
+        }
+    }
+}
+
+impl Zh for LinkError {
+    fn zh(&self) -> String {
+        match self {
+            LinkError::Open { path, reason } => format!("无法打开 {path}:{reason}"),
+            LinkError::Disconnected(e) => format!("串口已断开:{e}"),
+            LinkError::Setting(e) => format!("串口拒绝此设置:{e}"),
+        }
+    }
+}
+
+impl Zh for FrameError {
+    fn zh(&self) -> String {
+        match self {
+            FrameError::Checksum {
+                expected, actual, ..
+            } => format!("校验和错误:应为 {expected:#04x},收到 {actual:#04x}"),
+            FrameError::TooLong { len, cap, .. } => {
+                format!("帧长度 {len} 超过上限 {cap} 字节")
+            }
+            FrameError::UnknownHeader { value, .. } => format!("帧头中有未知值 {value:#04x}"),
+            FrameError::Junk { len, .. } => format!("跳过 {len} 个无效字节"),
+            FrameError::Truncated { have, need, .. } => match need {
+                Some(n) => format!("帧不完整:{n} 字节中只有 {have}"),
+                None => format!("帧不完整:只有 {have} 字节"),
+            },
+        }
+    }
+}
+
+impl Zh for DpError {
+    fn zh(&self) -> String {
+        match self {
+            DpError::Truncated { offset, need, have } => {
+                format!("第 {offset} 字节处的数据点不完整:需要 {need} 字节,只有 {have}")
+            }
+            DpError::UnknownType { id, ty } => format!("数据点 {id} 的类型 {ty} 未知"),
+            DpError::BadLength {
+                id,
+                ty,
+                len,
+                expected,
+            } => format!("数据点 {id}(类型 {ty})长度为 {len},应为 {expected}"),
+            DpError::NotUtf8 { id } => format!("数据点 {id} 的字符串不是有效的 UTF-8"),
+            DpError::TooLong { id, len } => {
+                format!("数据点 {id} 长 {len} 字节,超过最大值 65535")
+            }
+        }
+    }
+}
+
+impl Zh for FieldError {
+    fn zh(&self) -> String {
+        match self {
+            FieldError::OutOfRange {
+                field,
+                value,
+                min,
+                max,
+                unit,
+            } => format!("{field}:{value} 超出范围;允许 {min} 至 {max}{unit}"),
+            FieldError::NotALabel {
+                field,
+                value,
+                allowed,
+            } => format!("{field}:'{value}' 不是可选值之一({allowed})"),
+            FieldError::NotANumber {
+                field,
+                input,
+                allowed,
+            } => format!("{field}:'{input}' 不是数字;允许 {allowed}"),
+            FieldError::NoValue { field, allowed } => {
+                format!("{field}:未给出数值;允许 {allowed}")
+            }
+            FieldError::NotOnStep { field, input, step } => {
+                format!("{field}:{input} 不是步长 {step} 的整数倍")
+            }
+            FieldError::WrongType { field, expected } => format!("{field}:应为 {expected}"),
+            FieldError::WrongLength {
+                field,
+                expected,
+                actual,
+            } => format!("{field}:应为 {expected} 字节,收到 {actual}"),
+            FieldError::ShortPayload { field, need, have } => {
+                format!("{field}:数据提前结束:还需 {need} 字节,只剩 {have}")
+            }
+            FieldError::NotUtf8 { field } => format!("{field}:文本不是有效的 UTF-8"),
+            FieldError::UnknownField { command, field, .. } => {
+                format!("{command} 没有字段 '{field}'")
+            }
+            FieldError::UnknownDataPoint { name, known } => {
+                format!("没有数据点 '{name}';数据点:{known}")
+            }
+            FieldError::Duplicate { command, field } => {
+                format!("{command}:'{field}' 给出了两次;只能给一次")
+            }
+            FieldError::MissingField { command, field } => {
+                format!("{command}:缺少字段 '{field}'")
+            }
+            FieldError::ReadOnly { field } => format!("{field} 为只读"),
+            FieldError::Unknown { what, id } => format!("设备配置中没有 {what} {id}"),
+            FieldError::DpType {
+                field,
+                expected,
+                actual,
+            } => format!("数据点 {field}:线上类型为 {actual},设备配置为 {expected}"),
+            FieldError::Dp(e) => e.zh(),
+            FieldError::LongPayload { extra } => {
+                format!("布局最后一个字段之后多出 {} 字节", extra.len())
+            }
+            FieldError::Misfit(m) => format!(
+                "{} 字节的数据,布局需要 {}:{}",
+                m.payload.len(),
+                m.expected_text(),
+                m.fault.zh()
+            ),
+            FieldError::Records { field, message } => format!("{field}:{message}"),
+            FieldError::Relation(b) => format!(
+                "{}({}){} 必须 {} {}({}){}",
+                b.low_name, b.low, b.low_value, b.sign, b.high_name, b.high, b.high_value
+            ),
+        }
+    }
+}
+
+impl Zh for DocumentError {
+    fn zh(&self) -> String {
+        let kind = match self.kind {
+            ErrorKind::Io => "无法读写文件",
+            ErrorKind::Syntax => "格式错误",
+            ErrorKind::Version => "版本不符",
+            ErrorKind::Profile => "不是此设备配置的文件",
+            ErrorKind::Value => "数值不被设备配置接受",
+        };
+        let (line, col) = self.at();
+        let place = if line == 0 {
+            self.file.clone()
+        } else {
+            format!("{}:{line}:{col}", self.file)
+        };
+        let more = match self.problems.len() {
+            1 => String::new(),
+            n => format!("(共 {n} 处问题)"),
+        };
+        format!("{place}:{kind}{more}:{}", self.message())
+    }
+}

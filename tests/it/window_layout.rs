@@ -1,0 +1,248 @@
+//! The window at 1024×600, as a technician reads it: in every view of the four demo devices no
+//! label parts a word over two lines (in Chinese, where any two characters may be parted, nor
+//! in English) and no text is drawn over another; the navigation and the status line stay one
+//! line each; the telemetry plots keep their height and scroll into view.
+
+use botbench::i18n::Lang;
+use botbench::sim::SimKind;
+use botbench::ui::layout::{one_line, overlapping_texts, split_words};
+use botbench::ui::state::Answering;
+use botbench::ui::{App, PanelId, Settings, Target};
+use eframe::egui;
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+
+use crate::support::gui::{H, app, app_mut, harness_sized, step_until};
+
+const SMALL: egui::Vec2 = egui::vec2(1024.0, 600.0);
+/// The window's least size (`ui::run`'s `min_inner_size`).
+const LEAST: egui::Vec2 = egui::vec2(800.0, 500.0);
+
+/// Every text the last frame drew: its text, where, and how many rows it took.
+fn texts(h: &H) -> Vec<(String, egui::Rect, usize)> {
+    fn visit(shape: &egui::Shape, out: &mut Vec<(String, egui::Rect, usize)>) {
+        match shape {
+            egui::Shape::Text(t) => out.push((
+                t.galley.text().to_string(),
+                t.galley.rect.translate(t.pos.to_vec2()),
+                t.galley.rows.len(),
+            )),
+            egui::Shape::Vec(v) => v.iter().for_each(|s| visit(s, out)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    for c in &h.output().shapes {
+        visit(&c.shape, &mut out);
+    }
+    out
+}
+
+#[test]
+fn the_check_finds_a_label_split_over_two_lines_and_a_one_line_label_passes() {
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(200.0, 200.0))
+        .build_ui(|ui| {
+            botbench::i18n::install_cjk_font(ui.ctx());
+            ui.set_max_width(50.0);
+            ui.label("光伏清扫机器人");
+            ui.label("Configuration");
+        });
+    h.run_steps(2);
+    let split = split_words(&h.output().shapes);
+    assert_eq!(split, ["光伏清扫机器人", "Configuration"], "{split:?}");
+
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(200.0, 200.0))
+        .build_ui(|ui| {
+            botbench::i18n::install_cjk_font(ui.ctx());
+            ui.set_max_width(50.0);
+            one_line(ui, "光伏清扫机器人");
+            // A sentence may wrap between any two characters.
+            ui.label("失能保护开启时,若在间隔内无人确认,发送停止。");
+        });
+    h.run_steps(2);
+    assert!(split_words(&h.output().shapes).is_empty());
+}
+
+/// The app on the built-in demo `kind` at `size` in `lang`, stepped until the device answers
+/// and is identified (so that the navigation lists its panels).
+fn demo(kind: SimKind, lang: Lang, size: egui::Vec2) -> H {
+    let mut saved = Settings {
+        target: Target::Demo(kind.name().to_string()),
+        profile: kind.profile_id().to_string(),
+        panel: PanelId::Monitor,
+        lang,
+        ..Settings::default()
+    };
+    saved.port_mut().baud = Some(kind.default_baud());
+    let mut h = harness_sized(saved, size, |_| {});
+    step_until(&mut h, "the device to answer", move |a| ready(kind, a));
+    h
+}
+
+fn ready(kind: SimKind, a: &App) -> bool {
+    match kind {
+        SimKind::ServoBus => a.state.connected(),
+        SimKind::TuyaVacuum => a.state.device.tuya.done_at.is_some(),
+        _ => a.state.link.answering() == Answering::Yes && a.state.device.info.is_some(),
+    }
+}
+
+#[test]
+fn at_1024_and_800_px_no_view_of_a_demo_device_parts_a_word_or_draws_text_over_text() {
+    let mut bad = Vec::new();
+    for kind in SimKind::ALL {
+        let mut h = demo(kind, Lang::Zh, SMALL);
+        if kind == SimKind::WindowCleaner {
+            // The self-test's plan and a preset open, as a technician has them.
+            let a = app_mut(&mut h);
+            a.selftest.open(&a.state);
+            let dir = botbench::ui::files::shipped_dir();
+            let preset = botbench::ui::files::shipped_in(&dir, "window-cleaner-factory.ron");
+            a.presets.path = preset.unwrap().display().to_string();
+            a.presets.open(&a.state);
+            assert!(a.selftest.plan.is_some() && a.presets.loaded.is_some());
+        }
+        for (size, lang) in [SMALL, LEAST]
+            .into_iter()
+            .flat_map(|s| Lang::ALL.map(|l| (s, l)))
+        {
+            h.set_size(size);
+            app_mut(&mut h).settings.lang = lang;
+            for view in app(&h).views() {
+                app_mut(&mut h).show_view(&view);
+                // egui lays a new panel out over two passes.
+                h.run_steps(3);
+                for (a, b) in overlapping_texts(&h.output().shapes) {
+                    bad.push(format!(
+                        "{} {} {}×{} {lang:?}: {a:?} over {b:?}",
+                        kind.name(),
+                        view.name,
+                        size.x,
+                        size.y
+                    ));
+                }
+                for text in split_words(&h.output().shapes) {
+                    bad.push(format!(
+                        "{} {} {}×{} {lang:?}: {text:?} split",
+                        kind.name(),
+                        view.name,
+                        size.x,
+                        size.y
+                    ));
+                }
+            }
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "words split over two lines, texts over texts:\n{}",
+        bad.join("\n")
+    );
+}
+
+#[test]
+fn at_1024_px_in_chinese_the_navigation_and_the_status_line_keep_one_line() {
+    for kind in [SimKind::TuyaVacuum, SimKind::SolarCleanbot] {
+        let mut h = demo(kind, Lang::Zh, SMALL);
+        h.run_steps(2);
+        let drawn = texts(&h);
+        let panels = app(&h).panels();
+        for panel in panels {
+            let name = panel.name(Lang::Zh);
+            let (_, rect, rows) = drawn
+                .iter()
+                .find(|(t, ..)| t == name)
+                .unwrap_or_else(|| panic!("{name} is in the navigation"));
+            assert_eq!(*rows, 1, "{}: {name} on one line ({rect:?})", kind.name());
+        }
+        // The status line: the bottom row of the window, every text on it whole and inside.
+        let line = SMALL.y - 30.0;
+        let status: Vec<_> = drawn.iter().filter(|(_, r, _)| r.top() > line).collect();
+        assert!(status.len() >= 3, "{}: {status:?}", kind.name());
+        for (text, rect, rows) in status {
+            assert_eq!(*rows, 1, "{}: {text} on one line", kind.name());
+            assert!(
+                rect.right() <= SMALL.x + 0.5,
+                "{}: {text} ends at {} past the window",
+                kind.name(),
+                rect.right()
+            );
+        }
+    }
+}
+
+#[test]
+fn at_1024_px_every_solar_plot_keeps_its_height_and_scrolls_into_view() {
+    let mut h = demo(SimKind::SolarCleanbot, Lang::Zh, SMALL);
+    app_mut(&mut h).settings.panel = PanelId::Telemetry;
+    step_until(&mut h, "every plot drawn", |a| {
+        a.telemetry.shown.len() == a.state.device.profile.plots.len()
+    });
+    h.run_steps(2);
+    let inside = |a: &App| {
+        let last = a.telemetry.shown.last().expect("a plot").rect;
+        a.telemetry.plots_view.expand(1.0).contains_rect(last)
+    };
+    let a = app(&h);
+    assert!(a.telemetry.shown.len() >= 3);
+    for s in &a.telemetry.shown {
+        assert!(
+            s.rect.height() >= botbench::ui::MIN_PLOT_HEIGHT - 1.0,
+            "{} is {} high",
+            s.id,
+            s.rect.height()
+        );
+    }
+    assert!(
+        !inside(a),
+        "at 600 points the last plot starts below the view"
+    );
+    // The mouse wheel over the plots brings the last one into view.
+    let over = a.telemetry.plots_view.center();
+    h.hover_at(over);
+    for _ in 0..4 {
+        h.event(egui::Event::MouseWheel {
+            unit: egui::MouseWheelUnit::Point,
+            delta: egui::vec2(0.0, -400.0),
+            phase: egui::TouchPhase::Move,
+            source: egui::MouseWheelSource::Unknown,
+            modifiers: egui::Modifiers::NONE,
+        });
+        h.step();
+    }
+    step_until(&mut h, "the last plot in view", inside);
+}
+
+#[test]
+fn a_panel_keeps_its_own_scroll_place_when_another_panel_was_scrolled() {
+    let mut h = demo(SimKind::WindowCleaner, Lang::En, SMALL);
+    let a = app_mut(&mut h);
+    let dir = botbench::ui::files::shipped_dir();
+    let preset = botbench::ui::files::shipped_in(&dir, "window-cleaner-factory.ron");
+    a.presets.path = preset.unwrap().display().to_string();
+    a.presets.open(&a.state);
+    // The tuning table scrolled to its last group…
+    let last = app(&h)
+        .views()
+        .into_iter()
+        .rfind(|v| v.panel == PanelId::Tuning);
+    app_mut(&mut h).show_view(&last.expect("a tuning group"));
+    h.run_steps(3);
+    let read_all = h.get_by_label("Read all").rect();
+    let first = h.query_by_label("Fan PWM");
+    assert!(
+        first.is_none_or(|n| n.rect().bottom() < read_all.bottom()),
+        "the tuning table is scrolled down"
+    );
+    // …and the presets' table starts at its top.
+    app_mut(&mut h).settings.panel = PanelId::Presets;
+    h.run_steps(3);
+    let compare = h.get_by_label("Compare with device").rect();
+    let header = h.get_by_label("Command").rect();
+    assert!(
+        header.top() > compare.bottom(),
+        "the presets' header row is in view ({header:?} under {compare:?})"
+    );
+}
