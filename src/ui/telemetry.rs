@@ -313,9 +313,13 @@ impl TelemetryPanel {
                 )));
             }
         });
-        egui::ScrollArea::vertical()
+        // Both ways, and down to one row: long readings scroll sideways instead of widening the
+        // panel past the window, and a low part keeps its heading above its rows.
+        let row_h = ui.spacing().interact_size.y + ui.spacing().item_spacing.y;
+        egui::ScrollArea::both()
             .id_salt("other")
             .auto_shrink(false)
+            .min_scrolled_height(row_h)
             .show(ui, |ui| {
                 egui::Grid::new("other-grid")
                     .striped(true)
