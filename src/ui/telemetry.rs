@@ -187,15 +187,16 @@ impl TelemetryPanel {
         let row_h = ui.spacing().interact_size.y + ui.spacing().item_spacing.y;
         let wanted = (cmds.len() as f32 + 2.0) * row_h;
         let one_plot = MIN_PLOT_HEIGHT + plot_chrome(ui);
-        let default = wanted
-            .clamp(avail * 0.25, avail * 0.45)
-            .min(avail - one_plot)
-            .max(row_h * 3.0);
+        // Its heading, two rows and the panel's margins: less and its content would be drawn
+        // over the plots (egui clips a panel's content to the size it reports).
+        let least = row_h * 3.0 + 2.0 * 8.0;
+        let most = (avail - one_plot).max(least);
+        let default = wanted.clamp(avail * 0.25, avail * 0.45).clamp(least, most);
         egui::Panel::bottom("other-telemetry")
             .resizable(true)
             .default_size(default)
             // Kept so when the window shrinks (the part keeps its size from a larger window).
-            .size_range(row_h * 3.0..=(avail - one_plot).max(row_h * 3.0))
+            .size_range(least..=most)
             .show(ui, |ui| {
                 actions.extend(self.other_telemetry(ui, lang, rt, &cmds))
             });
@@ -320,6 +321,7 @@ impl TelemetryPanel {
         });
         egui::ScrollArea::vertical()
             .id_salt("other")
+            .min_scrolled_height(ui.spacing().interact_size.y)
             .auto_shrink(false)
             .show(ui, |ui| {
                 egui::Grid::new("other-grid")

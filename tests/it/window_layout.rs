@@ -246,3 +246,46 @@ fn a_panel_keeps_its_own_scroll_place_when_another_panel_was_scrolled() {
         "the presets' header row is in view ({header:?} under {compare:?})"
     );
 }
+
+#[test]
+fn at_1024_px_every_range_hint_of_the_solar_actions_is_drawn_whole() {
+    let mut h = demo(SimKind::SolarCleanbot, Lang::En, SMALL);
+    app_mut(&mut h).settings.panel = PanelId::Actions;
+    h.run_steps(3);
+    // Each text, and what its glyphs show (an elided text shows less, ending in "…").
+    let mut drawn: Vec<(String, String)> = Vec::new();
+    for c in &h.output().shapes {
+        if let egui::Shape::Text(t) = &c.shape {
+            let shown = t
+                .galley
+                .rows
+                .iter()
+                .flat_map(|r| r.row.glyphs.iter().map(|g| g.chr));
+            drawn.push((t.galley.text().to_string(), shown.collect()));
+        }
+    }
+    let profile = app(&h).state.device.profile.clone();
+    let mut hints = 0;
+    for f in profile
+        .commands
+        .iter()
+        .filter(|c| c.kind == botbench::profile::CommandKind::Action)
+        .flat_map(|c| &c.request)
+        .filter(|f| f.labels.is_empty())
+    {
+        let Some((lo, hi)) = f.range else { continue };
+        let hint = format!(
+            "{} – {}{}",
+            f.format_number(lo),
+            f.format_number(hi),
+            f.unit_suffix()
+        );
+        let (_, shown) = drawn
+            .iter()
+            .find(|(t, _)| *t == hint)
+            .unwrap_or_else(|| panic!("{}: no hint {hint:?}", f.ident));
+        assert_eq!(*shown, hint, "{}: the hint is cut", f.ident);
+        hints += 1;
+    }
+    assert!(hints >= 4, "{hints} ranged fields");
+}

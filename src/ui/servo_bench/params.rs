@@ -10,7 +10,6 @@ use crate::ops::servo::{self as ops, Location};
 use crate::ops::{Check, OpError};
 use crate::profile::{Access, Param, Profile, Text, Value};
 use crate::ui::Action;
-use crate::ui::inputs::range_text;
 use crate::ui::jobs::{Job, JobError};
 use crate::ui::state::AppState;
 use crate::ui::tuning::PendingError;
@@ -336,7 +335,7 @@ impl ParamsState {
         let device = self.device(p.id);
         match self.values.get(&p.id) {
             Some(Ok(v)) => {
-                crate::ui::inputs::device_value(ui, f, &Value::Int(*v));
+                crate::ui::inputs::device_value(ui, f, &Value::Int(*v), lang);
             }
             Some(Err(e)) => {
                 ui.colored_label(
@@ -381,7 +380,7 @@ impl ParamsState {
             ui.weak(lang.tr("read-only", "只读"));
         }
         ui.label(&f.unit);
-        ui.weak(range_text(f));
+        ui.weak(crate::ui::inputs::allowed_in(f, lang));
         let changed = matches!(&parsed, Some(Ok(Value::Int(v))) if device != Some(*v));
         match (&parsed, self.marks.get(&p.id)) {
             (Some(Err(e)), _) => {

@@ -8,7 +8,7 @@ mod control;
 
 pub use control::{Control, Outcome, Trip};
 
-use super::inputs::{command_inputs, range_text};
+use super::inputs::{command_inputs, value_box};
 use super::state::{AppState, Reading};
 use super::stop::StopControl;
 use super::{Action, plot};
@@ -334,22 +334,12 @@ impl SolarPanel {
         let text = self.inputs.entry((cmd.id, f.ident.clone())).or_default();
         let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
         if f.labels.is_empty() || f.range.is_some() {
-            let bad = !text.is_empty() && f.parse(text).is_err();
             let width = if matches!(f.ty, FieldType::Bytes(_)) {
                 160.0
             } else {
                 70.0
             };
-            let mut edit = egui::TextEdit::singleline(text)
-                .desired_width(width)
-                .hint_text(range_text(f));
-            if bad {
-                edit = edit.text_color(RED);
-            }
-            // The hint may be cut at this width: the whole range is on hover.
-            ui.add(edit)
-                .labelled_by(name.id)
-                .on_hover_text(range_text(f));
+            value_box(ui, text, f, lang, width).labelled_by(name.id);
         } else {
             egui::ComboBox::from_id_salt(("solar", cmd.id, &f.ident))
                 .selected_text(match f.labels.iter().find(|l| l.ident == *text) {
