@@ -330,33 +330,37 @@ impl SolarPanel {
         }
     }
 
+    /// A field's name and its box (or choice), kept together on one row.
     fn input(&mut self, ui: &mut egui::Ui, lang: Lang, cmd: &Command, f: &Field) {
         let text = self.inputs.entry((cmd.id, f.ident.clone())).or_default();
-        let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
-        if f.labels.is_empty() || f.range.is_some() {
-            let width = if matches!(f.ty, FieldType::Bytes(_)) {
-                160.0
+        crate::ui::layout::group(ui, &f.ident, |ui| {
+            let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
+            if f.labels.is_empty() || f.range.is_some() {
+                let width = if matches!(f.ty, FieldType::Bytes(_)) {
+                    160.0
+                } else {
+                    70.0
+                };
+                value_box(ui, text, f, lang, width).labelled_by(name.id);
             } else {
-                70.0
-            };
-            value_box(ui, text, f, lang, width).labelled_by(name.id);
-        } else {
-            egui::ComboBox::from_id_salt(("solar", cmd.id, &f.ident))
-                .selected_text(match f.labels.iter().find(|l| l.ident == *text) {
-                    Some(l) => lang.tr(&l.name.en, &l.name.zh).to_string(),
-                    None => "—".to_string(),
-                })
-                .show_ui(ui, |ui| {
-                    for l in &f.labels {
-                        let label = format!("{} ({})", lang.tr(&l.name.en, &l.name.zh), l.value);
-                        if ui.selectable_label(*text == l.ident, label).clicked() {
-                            *text = l.ident.clone();
+                egui::ComboBox::from_id_salt(("solar", cmd.id, &f.ident))
+                    .selected_text(match f.labels.iter().find(|l| l.ident == *text) {
+                        Some(l) => lang.tr(&l.name.en, &l.name.zh).to_string(),
+                        None => "—".to_string(),
+                    })
+                    .show_ui(ui, |ui| {
+                        for l in &f.labels {
+                            let label =
+                                format!("{} ({})", lang.tr(&l.name.en, &l.name.zh), l.value);
+                            if ui.selectable_label(*text == l.ident, label).clicked() {
+                                *text = l.ident.clone();
+                            }
                         }
-                    }
-                })
-                .response
-                .labelled_by(name.id);
-        }
+                    })
+                    .response
+                    .labelled_by(name.id);
+            }
+        });
     }
 
     fn confirm_modal(
