@@ -147,15 +147,23 @@ impl ConnectionBar {
                     })
                     .response
                     .labelled_by(port_label.id);
+            });
+            // The path box is a group of its own: at 800 px it takes the next row, whole.
+            super::layout::group(ui, "path", |ui| {
+                let hint = |l: Lang| l.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3");
+                // As wide as its hint in either language: the hint is whole, and switching the
+                // language moves nothing.
+                let width = Lang::ALL
+                    .iter()
+                    .map(|&l| super::layout::box_width_for(ui, hint(l)))
+                    .fold(150.0, f32::max);
                 let typed = ui
                     .add(
                         egui::TextEdit::singleline(&mut self.typed)
-                            .hint_text(
-                                lang.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3"),
-                            )
-                            .desired_width(150.0),
+                            .hint_text(hint(lang))
+                            .desired_width(width),
                     )
-                    .labelled_by(port_label.id);
+                    .on_hover_text(hint(lang));
                 if typed.changed() && !self.typed.trim().is_empty() {
                     self.target = Target::Port(self.typed.trim().to_string());
                 }

@@ -110,10 +110,7 @@ pub fn value_box(
     } else {
         String::new()
     };
-    let font = crate::ui::layout::body_font(ui);
-    // The box's frame takes its padding, stroke and a little air on each side.
-    let frame = 2.0 * (ui.spacing().button_padding.x + 2.0) + 8.0;
-    let width = crate::ui::layout::text_width(ui, &font, [hint.as_str()]) + frame;
+    let width = crate::ui::layout::box_width_for(ui, &hint);
     let bad = !text.is_empty() && field.parse(text).is_err();
     let mut edit = egui::TextEdit::singleline(text)
         .desired_width(width.max(min_width))

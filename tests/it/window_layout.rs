@@ -40,6 +40,21 @@ fn texts(h: &H) -> Vec<(String, egui::Rect, usize)> {
     out
 }
 
+/// What the glyphs of the text `text` show in the last frame (less than `text`, ending in
+/// "…", where it was cut), if it was drawn.
+fn shown_of(h: &H, text: &str) -> Option<String> {
+    h.output().shapes.iter().find_map(|c| match &c.shape {
+        egui::Shape::Text(t) if t.galley.text() == text => Some(
+            t.galley
+                .rows
+                .iter()
+                .flat_map(|r| r.row.glyphs.iter().map(|g| g.chr))
+                .collect(),
+        ),
+        _ => None,
+    })
+}
+
 /// Labels drawn on another row than the widget they name (a label at the end of one row, its
 /// box at the start of the next): `label → widget` for each.
 fn parted_labels(h: &H) -> Vec<String> {
@@ -145,6 +160,18 @@ fn at_1024_and_800_px_every_view_keeps_words_whole_texts_apart_and_labels_by_the
                         view.name,
                         size.x,
                         size.y
+                    ));
+                }
+                // The port box's hint is whole (the box was once squeezed to "…").
+                let hint = lang.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3");
+                if shown_of(&h, hint).as_deref() != Some(hint) {
+                    bad.push(format!(
+                        "{} {} {}×{} {lang:?}: the port hint shows {:?}",
+                        kind.name(),
+                        view.name,
+                        size.x,
+                        size.y,
+                        shown_of(&h, hint)
                     ));
                 }
                 for parted in parted_labels(&h) {
@@ -285,18 +312,6 @@ fn at_1024_px_every_range_hint_of_the_solar_actions_is_drawn_whole() {
     let mut h = demo(SimKind::SolarCleanbot, Lang::En, SMALL);
     app_mut(&mut h).settings.panel = PanelId::Actions;
     h.run_steps(3);
-    // Each text, and what its glyphs show (an elided text shows less, ending in "…").
-    let mut drawn: Vec<(String, String)> = Vec::new();
-    for c in &h.output().shapes {
-        if let egui::Shape::Text(t) = &c.shape {
-            let shown = t
-                .galley
-                .rows
-                .iter()
-                .flat_map(|r| r.row.glyphs.iter().map(|g| g.chr));
-            drawn.push((t.galley.text().to_string(), shown.collect()));
-        }
-    }
     let profile = app(&h).state.device.profile.clone();
     let mut hints = 0;
     for f in profile
@@ -313,11 +328,12 @@ fn at_1024_px_every_range_hint_of_the_solar_actions_is_drawn_whole() {
             f.format_number(hi),
             f.unit_suffix()
         );
-        let (_, shown) = drawn
-            .iter()
-            .find(|(t, _)| *t == hint)
-            .unwrap_or_else(|| panic!("{}: no hint {hint:?}", f.ident));
-        assert_eq!(*shown, hint, "{}: the hint is cut", f.ident);
+        assert_eq!(
+            shown_of(&h, &hint).as_deref(),
+            Some(hint.as_str()),
+            "{}: the hint is drawn whole",
+            f.ident
+        );
         hints += 1;
     }
     assert!(hints >= 4, "{hints} ranged fields");
