@@ -10,6 +10,7 @@
 mod motion;
 mod param_preset;
 mod params;
+mod params_jobs;
 mod provision;
 mod scan;
 mod setup;
