@@ -84,8 +84,9 @@ pub fn allowed_in(field: &Field, lang: Lang) -> String {
         .collect();
     match (field.range.is_some(), names.is_empty()) {
         (false, true) => lang.tr("— (not given)", "—(未规定)").to_string(),
-        // A long list of names is more than a cell holds: the choice box lists them.
-        (false, false) if names.len() > 2 || names.join(" / ").chars().count() > 30 => match lang {
+        // A long list of names is more than a cell holds (a Chinese character is as wide as
+        // two Latin ones): the choice box lists them.
+        (false, false) if names.len() > 2 || text_columns(&names.join(" / ")) > 32 => match lang {
             Lang::En => format!("{} options", names.len()),
             Lang::Zh => format!("{} 个选项", names.len()),
         },
@@ -93,6 +94,13 @@ pub fn allowed_in(field: &Field, lang: Lang) -> String {
         (true, true) => range_text(field),
         (true, false) => format!("{} ({})", names.join(" / "), range_text(field)),
     }
+}
+
+/// How many columns `text` takes, a Chinese character two.
+fn text_columns(text: &str) -> usize {
+    text.chars()
+        .map(|c| if crate::ui::layout::is_cjk(c) { 2 } else { 1 })
+        .sum()
 }
 
 /// A text box for a value of `field`, its hint the profile's range (none where the profile

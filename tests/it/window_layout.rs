@@ -143,6 +143,30 @@ fn at_1024_and_800_px_every_view_keeps_words_whole_texts_apart_and_labels_by_the
             a.presets.open(&a.state);
             assert!(a.selftest.plan.is_some() && a.presets.loaded.is_some());
         }
+        if kind == SimKind::ServoBus {
+            // The bus scanned and the servo's parameters read, as a technician has them.
+            app_mut(&mut h).settings.panel = PanelId::ServoBench;
+            h.run_steps(2);
+            h.get_by_label("扫描").click();
+            step_until(&mut h, "the scan", |a| {
+                a.servo.selected.is_some() && a.state.job_progress().is_none()
+            });
+            let params = app(&h)
+                .views()
+                .into_iter()
+                .find(|v| v.name.ends_with("Params"));
+            app_mut(&mut h).show_view(&params.expect("a Params tab"));
+            step_until(&mut h, "the parameters read", |a| {
+                !a.servo.params.values.is_empty() && a.state.job_progress().is_none()
+            });
+            h.run_steps(2);
+            // Ranges are the profile's, named values by their names: no type limit, no ident.
+            for (text, ..) in texts(&h) {
+                for wire in ["65535", "4294967295", "limit_power", "interruptible"] {
+                    assert!(!text.contains(wire), "{text:?} shows {wire}");
+                }
+            }
+        }
         for (size, lang) in [SMALL, LEAST]
             .into_iter()
             .flat_map(|s| Lang::ALL.map(|l| (s, l)))

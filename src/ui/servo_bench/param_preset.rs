@@ -11,9 +11,11 @@ use eframe::egui;
 impl ParamsState {
     pub(super) fn preset_row(&mut self, ui: &mut egui::Ui, lang: Lang, profile: &Profile) {
         crate::ui::layout::toolbar(ui, |ui| {
-            let l = ui.label(lang.tr("Parameter preset", "参数预设"));
-            ui.add(egui::TextEdit::singleline(&mut self.preset_path).desired_width(260.0))
-                .labelled_by(l.id);
+            crate::ui::layout::group(ui, "preset", |ui| {
+                let l = ui.label(lang.tr("Parameter preset", "参数预设"));
+                ui.add(egui::TextEdit::singleline(&mut self.preset_path).desired_width(260.0))
+                    .labelled_by(l.id);
+            });
             if ui.button(lang.tr("Open…", "打开…")).clicked()
                 && let Some(p) = rfd::FileDialog::new()
                     .add_filter("RON", &["ron"])
@@ -31,9 +33,11 @@ impl ParamsState {
             {
                 self.load_preset(profile);
             }
-            let l = ui.label(lang.tr("Note", "备注"));
-            ui.add(egui::TextEdit::singleline(&mut self.note).desired_width(140.0))
-                .labelled_by(l.id);
+            crate::ui::layout::group(ui, "note", |ui| {
+                let l = ui.label(lang.tr("Note", "备注"));
+                ui.add(egui::TextEdit::singleline(&mut self.note).desired_width(140.0))
+                    .labelled_by(l.id);
+            });
             if ui
                 .button(lang.tr("Save preset as…", "预设另存为…"))
                 .clicked()
