@@ -336,12 +336,21 @@ impl TelemetryPanel {
                                     let text: Vec<String> = values
                                         .iter()
                                         .map(|(k, v)| {
-                                            let shown = cmd
-                                                .reply
-                                                .iter()
-                                                .find(|f| f.ident == k)
-                                                .map_or(format!("{v:?}"), |f| f.display(v));
-                                            format!("{k}={shown}")
+                                            // By the field's name and a named value by its
+                                            // name, in the window's language.
+                                            match cmd.reply.iter().find(|f| f.ident == k) {
+                                                Some(f) => {
+                                                    let shown = match f.range_mark(v) {
+                                                        Some(mark) => format!(
+                                                            "{} {mark}",
+                                                            super::stop::shown(f, v, lang)
+                                                        ),
+                                                        None => super::stop::shown(f, v, lang),
+                                                    };
+                                                    format!("{}: {shown}", f.name.get(lang))
+                                                }
+                                                None => format!("{k}: {v:?}"),
+                                            }
                                         })
                                         .collect();
                                     ui.monospace(text.join("  ")).on_hover_text(format!(
