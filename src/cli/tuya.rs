@@ -59,18 +59,19 @@ impl HandshakeWatch {
         match ev {
             TuyaEvent::Step { step, ok, detail } => {
                 if json && show {
-                    println!("{}", json!({"step": step, "ok": ok, "detail": detail}));
+                    println!("{}", json!({"step": step, "ok": ok, "detail": detail.en}));
                 } else if show {
                     println!(
-                        "{:<14} {}  {detail}",
+                        "{:<14} {}  {}",
                         format!("{step:?}"),
-                        if *ok { "ok  " } else { "FAIL" }
+                        if *ok { "ok  " } else { "FAIL" },
+                        detail.en
                     );
                 }
                 if *ok {
                     self.last_ok = Some(*step);
                 } else {
-                    self.last_failed = Some(format!("{step:?}: {detail}"));
+                    self.last_failed = Some(format!("{step:?}: {}", detail.en));
                 }
             }
             TuyaEvent::FrameVersion { version } => self.frame_version = Some(*version),
@@ -297,7 +298,7 @@ mod tests {
         TuyaEvent::Step {
             step,
             ok,
-            detail: "no answer".into(),
+            detail: crate::profile::Text::same("no answer"),
         }
     }
 

@@ -3,7 +3,7 @@
 //! robot move asks for confirmation first.
 
 use super::Action;
-use super::inputs::{command_inputs, range_text};
+use super::inputs::{command_inputs, value_box};
 use super::jobs;
 use super::state::AppState;
 use crate::i18n::{Lang, Zh};
@@ -47,18 +47,7 @@ impl ActionsPanel {
                                     let text = self.inputs.entry(key).or_default();
                                     if f.labels.is_empty() {
                                         let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
-                                        let bad = !text.is_empty() && f.parse(text).is_err();
-                                        let mut edit = egui::TextEdit::singleline(text)
-                                            .desired_width(70.0)
-                                            .hint_text(range_text(f));
-                                        if bad {
-                                            edit = edit.text_color(egui::Color32::RED);
-                                        }
-                                        // The hint may be cut at this width: the
-                                        // whole range is on hover.
-                                        ui.add(edit)
-                                            .labelled_by(name.id)
-                                            .on_hover_text(range_text(f));
+                                        value_box(ui, text, f, lang, 70.0).labelled_by(name.id);
                                     } else {
                                         let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
                                         egui::ComboBox::from_id_salt(("act", cmd.id, &f.ident))

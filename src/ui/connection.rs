@@ -112,104 +112,121 @@ impl ConnectionBar {
         let lang = saved.lang;
         let mut actions = Vec::new();
         {
-            let port_label = ui.label(lang.tr("Port", "端口"));
-            egui::ComboBox::from_id_salt("port")
-                .width(220.0)
-                .selected_text(self.target.label_in(lang))
-                .show_ui(ui, |ui| {
-                    for kind in SimKind::ALL {
-                        let t = Target::Demo(kind.name().to_string());
-                        let label = format!(
-                            "{} ({})",
-                            lang.tr("Demo", "演示"),
-                            kind.described().get(lang)
-                        );
-                        if ui.selectable_label(self.target == t, label).clicked() {
-                            self.take_profile(kind.profile_id(), saved, rt);
-                            if saved.port_of(kind.profile_id()).baud.is_none() {
-                                self.baud = kind.default_baud();
+            super::layout::group(ui, "port", |ui| {
+                let port_label = ui.label(lang.tr("Port", "端口"));
+                egui::ComboBox::from_id_salt("port")
+                    .width(220.0)
+                    .selected_text(self.target.label_in(lang))
+                    .show_ui(ui, |ui| {
+                        for kind in SimKind::ALL {
+                            let t = Target::Demo(kind.name().to_string());
+                            let label = format!(
+                                "{} ({})",
+                                lang.tr("Demo", "演示"),
+                                kind.described().get(lang)
+                            );
+                            if ui.selectable_label(self.target == t, label).clicked() {
+                                self.take_profile(kind.profile_id(), saved, rt);
+                                if saved.port_of(kind.profile_id()).baud.is_none() {
+                                    self.baud = kind.default_baud();
+                                }
+                                self.target = t;
                             }
-                            self.target = t;
                         }
-                    }
-                    ui.separator();
-                    if rt.link.ports.is_empty() {
-                        ui.weak(lang.tr("no serial ports found", "未找到串口"));
-                    }
-                    for p in &rt.link.ports {
-                        let t = Target::Port(p.path.clone());
-                        if ui.selectable_label(self.target == t, p.label()).clicked() {
-                            self.typed = p.path.clone();
-                            self.target = t;
+                        ui.separator();
+                        if rt.link.ports.is_empty() {
+                            ui.weak(lang.tr("no serial ports found", "未找到串口"));
                         }
-                    }
-                })
-                .response
-                .labelled_by(port_label.id);
-            let typed = ui
-                .add(
-                    egui::TextEdit::singleline(&mut self.typed)
-                        .hint_text(
-                            lang.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3"),
-                        )
-                        .desired_width(150.0),
-                )
-                .labelled_by(port_label.id);
-            if typed.changed() && !self.typed.trim().is_empty() {
-                self.target = Target::Port(self.typed.trim().to_string());
-            }
-            let baud_label = ui.label(lang.tr("Baud", "波特率"));
-            egui::ComboBox::from_id_salt("baud")
-                .selected_text(self.baud.to_string())
-                .show_ui(ui, |ui| {
-                    for b in BAUDS {
-                        ui.selectable_value(&mut self.baud, b, b.to_string());
-                    }
-                })
-                .response
-                .labelled_by(baud_label.id);
-            let profile_label = ui.label(lang.tr("Profile", "设备配置"));
-            let mut chosen = None;
-            egui::ComboBox::from_id_salt("profile")
-                .selected_text(&self.profile)
-                .show_ui(ui, |ui| {
-                    for (p, _) in rt.registry.iter() {
-                        let label = format!("{} — {}", p.id, lang.tr(&p.name.en, &p.name.zh));
-                        if ui.selectable_label(self.profile == p.id, label).clicked() {
-                            chosen = Some(p.id.clone());
+                        for p in &rt.link.ports {
+                            let t = Target::Port(p.path.clone());
+                            if ui.selectable_label(self.target == t, p.label()).clicked() {
+                                self.typed = p.path.clone();
+                                self.target = t;
+                            }
                         }
-                    }
-                })
-                .response
-                .labelled_by(profile_label.id);
+                    })
+                    .response
+                    .labelled_by(port_label.id);
+            });
+            // The path box is a group of its own: at 800 px it takes the next row, whole.
+            super::layout::group(ui, "path", |ui| {
+                let hint = |l: Lang| l.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3");
+                // As wide as its hint in either language: the hint is whole, and switching the
+                // language moves nothing.
+                let width = Lang::ALL
+                    .iter()
+                    .map(|&l| super::layout::box_width_for(ui, hint(l)))
+                    .fold(150.0, f32::max);
+                let typed = ui
+                    .add(
+                        egui::TextEdit::singleline(&mut self.typed)
+                            .hint_text(hint(lang))
+                            .desired_width(width),
+                    )
+                    .on_hover_text(hint(lang));
+                if typed.changed() && !self.typed.trim().is_empty() {
+                    self.target = Target::Port(self.typed.trim().to_string());
+                }
+            });
+            super::layout::group(ui, "baud", |ui| {
+                let baud_label = ui.label(lang.tr("Baud", "波特率"));
+                egui::ComboBox::from_id_salt("baud")
+                    .selected_text(self.baud.to_string())
+                    .show_ui(ui, |ui| {
+                        for b in BAUDS {
+                            ui.selectable_value(&mut self.baud, b, b.to_string());
+                        }
+                    })
+                    .response
+                    .labelled_by(baud_label.id);
+            });
+            let chosen = super::layout::group(ui, "profile", |ui| {
+                let profile_label = ui.label(lang.tr("Profile", "设备配置"));
+                let mut chosen = None;
+                egui::ComboBox::from_id_salt("profile")
+                    .selected_text(&self.profile)
+                    .show_ui(ui, |ui| {
+                        for (p, _) in rt.registry.iter() {
+                            let label = format!("{} — {}", p.id, lang.tr(&p.name.en, &p.name.zh));
+                            if ui.selectable_label(self.profile == p.id, label).clicked() {
+                                chosen = Some(p.id.clone());
+                            }
+                        }
+                    })
+                    .response
+                    .labelled_by(profile_label.id);
+                chosen
+            });
             if let Some(p) = chosen {
                 self.take_profile(&p, saved, rt);
             }
-            let margin_label = ui
-                .label(lang.tr("Margin", "应答余量"))
-                .on_hover_text(lang.tr(
+            super::layout::group(ui, "margin", |ui| {
+                let margin_label = ui
+                    .label(lang.tr("Margin", "应答余量"))
+                    .on_hover_text(lang.tr(
                     "How long the device may take to start answering, beyond the bytes' wire time. \
-                 Auto: the device's own (MSP 20 ms, servo 1.5 ms, Tuya 300 ms) plus the USB \
-                 adapter's latency timer where the system tells it, or the answer latency \
-                 measured on this connection, whichever is more.",
+                     Auto: the device's own (MSP 20 ms, servo 1.5 ms, Tuya 300 ms) plus the USB \
+                     adapter's latency timer where the system tells it, or the answer latency \
+                     measured on this connection, whichever is more.",
                     "设备开始应答前允许的时间(不含字节在线路上的传输时间)。自动: 设备自身的余量\
-                 (MSP 20 ms, 舵机 1.5 ms, 涂鸦 300 ms)加上系统给出的 USB 适配器延迟定时器,\
-                 或本次连接实测的应答延迟, 取较大者。",
+                     (MSP 20 ms, 舵机 1.5 ms, 涂鸦 300 ms)加上系统给出的 USB 适配器延迟定时器,\
+                     或本次连接实测的应答延迟, 取较大者。",
                 ));
-            let shown = |m: Option<u64>| match m {
-                None => lang.tr("auto", "自动").to_string(),
-                Some(ms) => format!("{ms} ms"),
-            };
-            egui::ComboBox::from_id_salt("margin")
-                .selected_text(shown(self.margin_ms))
-                .show_ui(ui, |ui| {
-                    for m in MARGINS {
-                        ui.selectable_value(&mut self.margin_ms, m, shown(m));
-                    }
-                })
-                .response
-                .labelled_by(margin_label.id);
-            self.margin_warning(ui, lang, rt);
+                let shown = |m: Option<u64>| match m {
+                    None => lang.tr("auto", "自动").to_string(),
+                    Some(ms) => format!("{ms} ms"),
+                };
+                egui::ComboBox::from_id_salt("margin")
+                    .selected_text(shown(self.margin_ms))
+                    .show_ui(ui, |ui| {
+                        for m in MARGINS {
+                            ui.selectable_value(&mut self.margin_ms, m, shown(m));
+                        }
+                    })
+                    .response
+                    .labelled_by(margin_label.id);
+                self.margin_warning(ui, lang, rt);
+            });
             let connect = || Action::Connect {
                 target: self.target.clone(),
                 baud: self.baud,

@@ -115,14 +115,17 @@ pub fn row(
     dialogs: &Dialogs,
     enabled: bool,
 ) -> FileEvent {
-    let l = ui.label(label);
-    ui.add_enabled(
-        enabled,
-        egui::TextEdit::singleline(path)
-            .hint_text(hint)
-            .desired_width(300.0),
-    )
-    .labelled_by(l.id);
+    // The label stays on the row of its box (a toolbar moves the two together).
+    crate::ui::layout::group(ui, label, |ui| {
+        let l = ui.label(label);
+        ui.add_enabled(
+            enabled,
+            egui::TextEdit::singleline(path)
+                .hint_text(hint)
+                .desired_width(300.0),
+        )
+        .labelled_by(l.id);
+    });
     let browse = ui.add_enabled(enabled, egui::Button::new(lang.tr("Browse…", "浏览…")));
     let browse = match dialogs {
         Dialogs::Available => browse,

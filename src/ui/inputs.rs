@@ -73,9 +73,73 @@ pub fn steady_button(text: &str) -> eframe::egui::Button<'_> {
     eframe::egui::Button::new(text).min_size(eframe::egui::vec2(80.0, 0.0))
 }
 
-/// A value a device sent, as a readout shows it (monospace, as [`Field::format`] writes it); a
-/// value outside the field's range in red with its mark, never as a clean value.
-pub fn device_value(ui: &mut egui::Ui, field: &Field, value: &Value) -> egui::Response {
+/// The allowed values of `field` as the window shows them in `lang`: the profile's range, its
+/// named values by name, or both; "— (not given)" where the profile gives neither (the type's
+/// own limits, 0 – 65535 °C, say nothing a technician can use).
+pub fn allowed_in(field: &Field, lang: Lang) -> String {
+    let names: Vec<&str> = field
+        .labels
+        .iter()
+        .map(|l| lang.tr(&l.name.en, &l.name.zh))
+        .collect();
+    match (field.range.is_some(), names.is_empty()) {
+        (false, true) => lang.tr("— (not given)", "—(未规定)").to_string(),
+        // A long list of names is more than a cell holds (a Chinese character is as wide as
+        // two Latin ones): the choice box lists them.
+        (false, false) if names.len() > 2 || text_columns(&names.join(" / ")) > 32 => match lang {
+            Lang::En => format!("{} options", names.len()),
+            Lang::Zh => format!("{} 个选项", names.len()),
+        },
+        (false, false) => names.join(" / "),
+        (true, true) => range_text(field),
+        (true, false) => format!("{} ({})", names.join(" / "), range_text(field)),
+    }
+}
+
+/// How many columns `text` takes, a Chinese character two.
+fn text_columns(text: &str) -> usize {
+    text.chars()
+        .map(|c| if crate::ui::layout::is_cjk(c) { 2 } else { 1 })
+        .sum()
+}
+
+/// A text box for a value of `field`, its hint the profile's range (none where the profile
+/// gives none) and as wide as that hint, so that the hint is never cut; red while what is typed
+/// is refused; the allowed values on hover. At least `min_width` points wide.
+pub fn value_box(
+    ui: &mut egui::Ui,
+    text: &mut String,
+    field: &Field,
+    lang: Lang,
+    min_width: f32,
+) -> egui::Response {
+    let hint = if field.range.is_some() {
+        range_text(field)
+    } else {
+        String::new()
+    };
+    let width = crate::ui::layout::box_width_for(ui, &hint);
+    let bad = !text.is_empty() && field.parse(text).is_err();
+    let mut edit = egui::TextEdit::singleline(text)
+        .desired_width(width.max(min_width))
+        .hint_text(hint);
+    if bad {
+        edit = edit.text_color(egui::Color32::from_rgb(210, 40, 40));
+    }
+    ui.add(edit).on_hover_text(allowed_in(field, lang))
+}
+
+/// A value a device sent, as a readout shows it (monospace, as [`Field::format`] writes it, a
+/// named value by its name in `lang`); a value outside the field's range in red with its mark,
+/// never as a clean value.
+pub fn device_value(ui: &mut egui::Ui, field: &Field, value: &Value, lang: Lang) -> egui::Response {
+    if let Value::Int(raw) = value
+        && let Some(l) = field.label(*raw)
+    {
+        return ui
+            .monospace(lang.tr(&l.name.en, &l.name.zh))
+            .on_hover_text(format!("{} ({raw})", l.ident));
+    }
     let text = field.format(value);
     match field.range_mark(value) {
         Some(mark) => ui

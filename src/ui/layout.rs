@@ -22,6 +22,34 @@ pub fn toolbar<R>(
     })
 }
 
+/// Widgets kept together on one row of a [`toolbar`] (a label and the box it names): the
+/// group starts a new row when it does not fit the rest of this one. Its width is the one it
+/// had on the last frame (egui places a widget before it is drawn), so a group finds its row
+/// on the second frame it is shown. `id_salt` tells the toolbar's groups apart.
+pub fn group<R>(ui: &mut egui::Ui, id_salt: &str, add: impl FnOnce(&mut egui::Ui) -> R) -> R {
+    let id = ui.scope_id().with(("toolbar group", id_salt));
+    let width: f32 = ui.data(|d| d.get_temp(id)).unwrap_or(0.0);
+    let at_start = ui.cursor().min.x <= ui.max_rect().min.x + 0.5;
+    if !at_start && width > ui.available_size_before_wrap().x + 0.5 {
+        ui.end_row();
+    }
+    let shown = ui.horizontal(add);
+    let drawn = shown.response.rect.width();
+    if (drawn - width).abs() > 0.5 {
+        ui.data_mut(|d| d.insert_temp(id, drawn));
+        ui.ctx()
+            .request_discard("a toolbar group changed its width");
+    }
+    shown.inner
+}
+
+/// The width, points, a text box needs to show `hint` whole: the hint in the body font, and
+/// the box's frame (its padding, stroke and a little air on each side).
+pub fn box_width_for(ui: &egui::Ui, hint: &str) -> f32 {
+    let frame = 2.0 * (ui.spacing().button_padding.x + 2.0) + 8.0;
+    text_width(ui, &body_font(ui), [hint]) + frame
+}
+
 /// Makes the labels and buttons added to `ui` from now on keep their text on one line (in a
 /// wrapping row, a widget that does not fit moves to the next row).
 pub fn keep_words_whole(ui: &mut egui::Ui) {

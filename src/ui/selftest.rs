@@ -102,8 +102,8 @@ fn unit(profile: &Profile, command: &str, fields: &[String]) -> String {
         .map_or(String::new(), |f| f.unit_suffix())
 }
 
-/// The pass/fail bounds of a step, as a person reads them (in display units).
-pub fn bounds(kind: &StepKind, profile: &Profile) -> String {
+/// The pass/fail bounds of a step, as a person reads them (in display units), in `lang`.
+pub fn bounds(kind: &StepKind, profile: &Profile, lang: Lang) -> String {
     match kind {
         StepKind::Range {
             min,
@@ -113,49 +113,89 @@ pub fn bounds(kind: &StepKind, profile: &Profile) -> String {
             ..
         } => {
             let u = unit(profile, command, fields);
-            format!("{min}{u} to {max}{u}")
+            format!("{min}{u} {} {max}{u}", lang.tr("to", "至"))
         }
         StepKind::Stable {
             max_spread,
             command,
             fields,
             ..
-        } => format!("spread ≤ {max_spread}{}", unit(profile, command, fields)),
+        } => format!(
+            "{} ≤ {max_spread}{}",
+            lang.tr("spread", "波动"),
+            unit(profile, command, fields)
+        ),
         StepKind::Rises {
             min_rise,
             command,
             fields,
             ..
-        } => format!("rise ≥ {min_rise}{}", unit(profile, command, fields)),
-        StepKind::Operator { bits, timeout, .. } => format!(
-            "bits {bits:#06b} seen clear and set within {:.0} s",
-            timeout.as_secs_f64()
+        } => format!(
+            "{} ≥ {min_rise}{}",
+            lang.tr("rise", "上升"),
+            unit(profile, command, fields)
         ),
-        StepKind::Reads { expect, .. } if expect.is_empty() => "answers".into(),
-        StepKind::Reads { expect, .. } => expect
+        StepKind::Operator { bits, timeout, .. } => {
+            let secs = timeout.as_secs_f64();
+            match lang {
+                Lang::En => format!("bits {bits:#06b} seen clear and set within {secs:.0} s"),
+                Lang::Zh => format!("位 {bits:#06b}:{secs:.0} 秒内先清零、再置位"),
+            }
+        }
+        StepKind::Reads { expect, .. } if expect.is_empty() => lang.tr("answers", "有应答").into(),
+        StepKind::Reads {
+            command, expect, ..
+        } => expect
             .iter()
-            .map(|(f, _, text)| format!("{f} = {text}"))
+            .map(|(f, _, text)| format!("{} = {text}", field_name(profile, command, f, lang)))
             .collect::<Vec<_>>()
             .join(", "),
     }
 }
 
-fn what(kind: &StepKind) -> String {
+/// A command's name in `lang` (its wire name when the profile has no such command).
+fn command_name(profile: &Profile, command: &str, lang: Lang) -> String {
+    profile
+        .command(command)
+        .map_or(command.to_string(), |c| c.name.get(lang).to_string())
+}
+
+/// A reply field's name in `lang` (as written when the command has no such field).
+fn field_name(profile: &Profile, command: &str, field: &str, lang: Lang) -> String {
+    profile
+        .command(command)
+        .and_then(|c| c.reply.iter().find(|f| f.ident.eq_ignore_ascii_case(field)))
+        .map_or(field.to_string(), |f| f.name.get(lang).to_string())
+}
+
+/// What a step reads (and does first), by the profile's names in `lang`.
+fn what(kind: &StepKind, profile: &Profile, lang: Lang) -> String {
+    let read = |command: &str, fields: &[String]| {
+        let names: Vec<String> = fields
+            .iter()
+            .map(|f| field_name(profile, command, f, lang))
+            .collect();
+        format!(
+            "{}: {}",
+            command_name(profile, command, lang),
+            names.join(", ")
+        )
+    };
     match kind {
         StepKind::Range {
             command, fields, ..
         }
         | StepKind::Stable {
             command, fields, ..
-        } => format!("{command}: {}", fields.join(", ")),
+        } => read(command, fields),
         StepKind::Rises {
             action,
             command,
             fields,
             ..
-        } => format!("{} → {command}: {}", action.text, fields.join(", ")),
-        StepKind::Operator { command, field, .. } => format!("{command}: {field}"),
-        StepKind::Reads { command, .. } => command.clone(),
+        } => format!("{} → {}", action.text, read(command, fields)),
+        StepKind::Operator { command, field, .. } => read(command, std::slice::from_ref(field)),
+        StepKind::Reads { command, .. } => command_name(profile, command, lang),
     }
 }
 
@@ -463,10 +503,13 @@ impl SelfTestPanel {
                     let done = self.results.iter().filter(|r| r.kind != "Identify").count();
                     for (i, step) in plan.steps.iter().enumerate() {
                         cell(ui, step.name.as_str().into());
-                        cell(ui, egui::RichText::new(what(&step.kind)).weak());
                         cell(
                             ui,
-                            egui::RichText::new(bounds(&step.kind, profile)).monospace(),
+                            egui::RichText::new(what(&step.kind, profile, lang)).weak(),
+                        );
+                        cell(
+                            ui,
+                            egui::RichText::new(bounds(&step.kind, profile, lang)).monospace(),
                         );
                         match self.results.iter().find(|r| r.name == step.name) {
                             Some(r) => {

@@ -182,15 +182,16 @@ impl TelemetryPanel {
         let row_h = ui.spacing().interact_size.y + ui.spacing().item_spacing.y;
         let wanted = (cmds.len() as f32 + 2.0) * row_h;
         let one_plot = MIN_PLOT_HEIGHT + plot_chrome(ui);
-        let default = wanted
-            .clamp(avail * 0.25, avail * 0.45)
-            .min(avail - one_plot)
-            .max(row_h * 3.0);
+        // Its heading, two rows and the panel's margins: less and its content would be drawn
+        // over the plots (egui clips a panel's content to the size it reports).
+        let least = row_h * 3.0 + 2.0 * 8.0;
+        let most = (avail - one_plot).max(least);
+        let default = wanted.clamp(avail * 0.25, avail * 0.45).clamp(least, most);
         egui::Panel::bottom("other-telemetry")
             .resizable(true)
             .default_size(default)
             // Kept so when the window shrinks (the part keeps its size from a larger window).
-            .size_range(row_h * 3.0..=(avail - one_plot).max(row_h * 3.0))
+            .size_range(least..=most)
             .show(ui, |ui| {
                 actions.extend(self.other_telemetry(ui, lang, rt, &cmds))
             });
@@ -318,6 +319,7 @@ impl TelemetryPanel {
         let row_h = ui.spacing().interact_size.y + ui.spacing().item_spacing.y;
         egui::ScrollArea::both()
             .id_salt("other")
+            .min_scrolled_height(ui.spacing().interact_size.y)
             .auto_shrink(false)
             .min_scrolled_height(row_h)
             .show(ui, |ui| {
@@ -333,12 +335,21 @@ impl TelemetryPanel {
                                     let text: Vec<String> = values
                                         .iter()
                                         .map(|(k, v)| {
-                                            let shown = cmd
-                                                .reply
-                                                .iter()
-                                                .find(|f| f.ident == k)
-                                                .map_or(format!("{v:?}"), |f| f.display(v));
-                                            format!("{k}={shown}")
+                                            // By the field's name and a named value by its
+                                            // name, in the window's language.
+                                            match cmd.reply.iter().find(|f| f.ident == k) {
+                                                Some(f) => {
+                                                    let shown = match f.range_mark(v) {
+                                                        Some(mark) => format!(
+                                                            "{} {mark}",
+                                                            super::stop::shown(f, v, lang)
+                                                        ),
+                                                        None => super::stop::shown(f, v, lang),
+                                                    };
+                                                    format!("{}: {shown}", f.name.get(lang))
+                                                }
+                                                None => format!("{k}: {v:?}"),
+                                            }
                                         })
                                         .collect();
                                     ui.monospace(text.join("  ")).on_hover_text(format!(

@@ -350,13 +350,22 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
         }],
         SimKind::ServoBus => vec![
             Prep {
-                what: "the bus scanned and a servo selected",
+                what: "the bus scanned, a servo selected and the provisioning plan open",
                 start: |app| {
+                    let dir = super::files::shipped_dir();
+                    if let Ok(p) = super::files::shipped_in(&dir, "servo-provision-plan.ron") {
+                        app.servo.production.plan_path = p.display().to_string();
+                        app.servo.production.load(&app.state);
+                    }
                     if let Some(scan) = app.servo.scan.start(&app.state) {
                         app.apply(scan);
                     }
                 },
-                done: |app| app.state.job_progress().is_none() && app.servo.selected.is_some(),
+                done: |app| {
+                    app.state.job_progress().is_none()
+                        && app.servo.selected.is_some()
+                        && app.servo.production.plan.is_some()
+                },
             },
             Prep {
                 what: "the servo's parameters read",

@@ -187,3 +187,42 @@ fn in_chinese_a_silent_device_and_a_servo_scan_are_said_in_chinese() {
     );
     assert!(said.0.iter().any(|s| s.contains("找到")), "{:?}", said.0);
 }
+
+#[test]
+fn in_chinese_the_other_telemetry_names_its_fields_not_their_wire_names() {
+    let mut h = demo(SimKind::SolarCleanbot, PanelId::Telemetry);
+    step_until(&mut h, "the rangefinder read", |a| {
+        a.state
+            .device
+            .profile
+            .command("CMD_RANGEFINDER")
+            .and_then(|c| a.state.device.readings.get(&c.id))
+            .is_some()
+    });
+    h.run_steps(2);
+    let app = h.state().as_ref().expect("app");
+    let cmd = app.state.device.profile.command("CMD_RANGEFINDER").unwrap();
+    let shown: Vec<String> = h
+        .output()
+        .shapes
+        .iter()
+        .filter_map(|c| match &c.shape {
+            eframe::egui::Shape::Text(t) => Some(t.galley.text().to_string()),
+            _ => None,
+        })
+        .filter(|t| t.contains(&cmd.reply[0].name.zh))
+        .collect();
+    assert!(
+        !shown.is_empty(),
+        "the rangefinder's values are shown by name"
+    );
+    for f in &cmd.reply {
+        for text in &shown {
+            assert!(
+                !text.contains(&f.ident),
+                "{text:?} holds the wire name {}",
+                f.ident
+            );
+        }
+    }
+}

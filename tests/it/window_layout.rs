@@ -1,7 +1,9 @@
-//! The window at 1024×600, as a technician reads it: in every view of the four demo devices no
-//! label parts a word over two lines (in Chinese, where any two characters may be parted, nor
-//! in English) and no text is drawn over another; the navigation and the status line stay one
-//! line each; the telemetry plots keep their height and scroll into view.
+//! The window at 1024×600 (and 800×500, its least), as a technician reads it: in every view of
+//! the four demo devices no label parts a word over two lines (in Chinese, where any two
+//! characters may be parted, nor in English), no text is drawn over another, and no label sits
+//! on another row than the box it names; the navigation and the status line stay one line
+//! each; the telemetry plots keep their height and scroll into view; range hints are whole; a
+//! panel keeps its own scroll place.
 
 use botbench::i18n::Lang;
 use botbench::sim::SimKind;
@@ -10,7 +12,7 @@ use botbench::ui::state::Answering;
 use botbench::ui::{App, PanelId, Settings, Target};
 use eframe::egui;
 use egui_kittest::Harness;
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{NodeT, Queryable};
 
 use crate::support::gui::{H, app, app_mut, harness_sized, step_until};
 
@@ -36,6 +38,43 @@ fn texts(h: &H) -> Vec<(String, egui::Rect, usize)> {
         visit(&c.shape, &mut out);
     }
     out
+}
+
+/// What the glyphs of the text `text` show in the last frame (less than `text`, ending in
+/// "…", where it was cut), if it was drawn.
+fn shown_of(h: &H, text: &str) -> Option<String> {
+    h.output().shapes.iter().find_map(|c| match &c.shape {
+        egui::Shape::Text(t) if t.galley.text() == text => Some(
+            t.galley
+                .rows
+                .iter()
+                .flat_map(|r| r.row.glyphs.iter().map(|g| g.chr))
+                .collect(),
+        ),
+        _ => None,
+    })
+}
+
+/// Labels drawn on another row than the widget they name (a label at the end of one row, its
+/// box at the start of the next): `label → widget` for each.
+fn parted_labels(h: &H) -> Vec<String> {
+    let mut parted = Vec::new();
+    for node in h.root().children_recursive() {
+        let widget = node.accesskit_node();
+        for label in widget.labelled_by() {
+            let (Some(w), Some(l)) = (widget.bounding_box(), label.bounding_box()) else {
+                continue;
+            };
+            if w.y1 <= l.y0 || l.y1 <= w.y0 {
+                parted.push(format!(
+                    "{:?} → {:?}",
+                    label.label().or_else(|| label.value()).unwrap_or_default(),
+                    widget.role()
+                ));
+            }
+        }
+    }
+    parted
 }
 
 #[test]
@@ -90,7 +129,7 @@ fn ready(kind: SimKind, a: &App) -> bool {
 }
 
 #[test]
-fn at_1024_and_800_px_no_view_of_a_demo_device_parts_a_word_or_draws_text_over_text() {
+fn at_1024_and_800_px_every_view_keeps_words_whole_texts_apart_and_labels_by_their_boxes() {
     let mut bad = Vec::new();
     for kind in SimKind::ALL {
         let mut h = demo(kind, Lang::Zh, SMALL);
@@ -103,6 +142,30 @@ fn at_1024_and_800_px_no_view_of_a_demo_device_parts_a_word_or_draws_text_over_t
             a.presets.path = preset.unwrap().display().to_string();
             a.presets.open(&a.state);
             assert!(a.selftest.plan.is_some() && a.presets.loaded.is_some());
+        }
+        if kind == SimKind::ServoBus {
+            // The bus scanned and the servo's parameters read, as a technician has them.
+            app_mut(&mut h).settings.panel = PanelId::ServoBench;
+            h.run_steps(2);
+            h.get_by_label("扫描").click();
+            step_until(&mut h, "the scan", |a| {
+                a.servo.selected.is_some() && a.state.job_progress().is_none()
+            });
+            let params = app(&h)
+                .views()
+                .into_iter()
+                .find(|v| v.name.ends_with("Params"));
+            app_mut(&mut h).show_view(&params.expect("a Params tab"));
+            step_until(&mut h, "the parameters read", |a| {
+                !a.servo.params.values.is_empty() && a.state.job_progress().is_none()
+            });
+            h.run_steps(2);
+            // Ranges are the profile's, named values by their names: no type limit, no ident.
+            for (text, ..) in texts(&h) {
+                for wire in ["65535", "4294967295", "limit_power", "interruptible"] {
+                    assert!(!text.contains(wire), "{text:?} shows {wire}");
+                }
+            }
         }
         for (size, lang) in [SMALL, LEAST]
             .into_iter()
@@ -123,6 +186,27 @@ fn at_1024_and_800_px_no_view_of_a_demo_device_parts_a_word_or_draws_text_over_t
                         size.y
                     ));
                 }
+                // The port box's hint is whole (the box was once squeezed to "…").
+                let hint = lang.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3");
+                if shown_of(&h, hint).as_deref() != Some(hint) {
+                    bad.push(format!(
+                        "{} {} {}×{} {lang:?}: the port hint shows {:?}",
+                        kind.name(),
+                        view.name,
+                        size.x,
+                        size.y,
+                        shown_of(&h, hint)
+                    ));
+                }
+                for parted in parted_labels(&h) {
+                    bad.push(format!(
+                        "{} {} {}×{} {lang:?}: {parted} on another row",
+                        kind.name(),
+                        view.name,
+                        size.x,
+                        size.y
+                    ));
+                }
                 for text in split_words(&h.output().shapes) {
                     bad.push(format!(
                         "{} {} {}×{} {lang:?}: {text:?} split",
@@ -137,7 +221,7 @@ fn at_1024_and_800_px_no_view_of_a_demo_device_parts_a_word_or_draws_text_over_t
     }
     assert!(
         bad.is_empty(),
-        "words split over two lines, texts over texts:\n{}",
+        "words split over two lines, texts over texts, labels parted from their boxes:\n{}",
         bad.join("\n")
     );
 }
@@ -245,4 +329,36 @@ fn a_panel_keeps_its_own_scroll_place_when_another_panel_was_scrolled() {
         header.top() > compare.bottom(),
         "the presets' header row is in view ({header:?} under {compare:?})"
     );
+}
+
+#[test]
+fn at_1024_px_every_range_hint_of_the_solar_actions_is_drawn_whole() {
+    let mut h = demo(SimKind::SolarCleanbot, Lang::En, SMALL);
+    app_mut(&mut h).settings.panel = PanelId::Actions;
+    h.run_steps(3);
+    let profile = app(&h).state.device.profile.clone();
+    let mut hints = 0;
+    for f in profile
+        .commands
+        .iter()
+        .filter(|c| c.kind == botbench::profile::CommandKind::Action)
+        .flat_map(|c| &c.request)
+        .filter(|f| f.labels.is_empty())
+    {
+        let Some((lo, hi)) = f.range else { continue };
+        let hint = format!(
+            "{} – {}{}",
+            f.format_number(lo),
+            f.format_number(hi),
+            f.unit_suffix()
+        );
+        assert_eq!(
+            shown_of(&h, &hint).as_deref(),
+            Some(hint.as_str()),
+            "{}: the hint is drawn whole",
+            f.ident
+        );
+        hints += 1;
+    }
+    assert!(hints >= 4, "{hints} ranged fields");
 }

@@ -11,6 +11,7 @@ mod motion;
 mod param_answers;
 mod param_preset;
 mod params;
+mod params_jobs;
 mod provision;
 mod scan;
 mod setup;

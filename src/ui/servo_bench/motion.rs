@@ -132,12 +132,15 @@ fn raw(rt: &AppState, command: u8, ident: &str, text: &str) -> Result<i64, OpErr
 
 /// A labelled text entry that turns red when `ok` is false.
 fn entry(ui: &mut egui::Ui, label: &str, text: &mut String, ok: bool) -> egui::Response {
-    let l = ui.label(label);
-    let mut edit = egui::TextEdit::singleline(text).desired_width(60.0);
-    if !ok {
-        edit = edit.text_color(egui::Color32::from_rgb(210, 40, 40));
-    }
-    ui.add(edit).labelled_by(l.id)
+    // The label and its box move to the next row together.
+    crate::ui::layout::group(ui, label, |ui| {
+        let l = ui.label(label);
+        let mut edit = egui::TextEdit::singleline(text).desired_width(60.0);
+        if !ok {
+            edit = edit.text_color(egui::Color32::from_rgb(210, 40, 40));
+        }
+        ui.add(edit).labelled_by(l.id)
+    })
 }
 
 impl MotionState {

@@ -40,9 +40,11 @@ impl ParamsState {
             if event.go(load, actions) && self.load_preset(profile) {
                 actions.push(self.remember());
             }
-            let l = ui.label(lang.tr("Note", "备注"));
-            ui.add(egui::TextEdit::singleline(&mut self.note).desired_width(140.0))
-                .labelled_by(l.id);
+            crate::ui::layout::group(ui, "note", |ui| {
+                let l = ui.label(lang.tr("Note", "备注"));
+                ui.add(egui::TextEdit::singleline(&mut self.note).desired_width(140.0))
+                    .labelled_by(l.id);
+            });
             if ui
                 .add_enabled(named, egui::Button::new(lang.tr("Save preset", "保存预设")))
                 .clicked()

@@ -3,15 +3,14 @@
 //! and read back one by one, or the whole user block in one exchange. "Reset user data" asks
 //! first. Servo parameter presets are saved from and loaded into the table.
 
-use super::{Output, Servo, error_label, ok_label, send};
+use super::params_jobs::{block_job, read_all_job, read_block_job, reset_job, write_job};
+use super::{Servo, error_label, ok_label};
 use super::{header_row, selection_or_hint};
 use crate::i18n::{Lang, Zh};
 use crate::ops::OpError;
 use crate::ops::servo as ops;
-use crate::profile::{Access, Param, Profile, Text, Value};
+use crate::profile::{Access, Param, Profile, Value};
 use crate::ui::Action;
-use crate::ui::inputs::range_text;
-use crate::ui::jobs::{Job, JobError};
 use crate::ui::state::AppState;
 use crate::ui::tuning::PendingError;
 use eframe::egui;
@@ -262,7 +261,7 @@ impl ParamsState {
         let device = self.device(p.id);
         match self.values.get(&p.id) {
             Some(Ok(v)) => {
-                crate::ui::inputs::device_value(ui, f, &Value::Int(*v));
+                crate::ui::inputs::device_value(ui, f, &Value::Int(*v), lang);
             }
             Some(Err(e)) => {
                 ui.colored_label(
@@ -307,7 +306,7 @@ impl ParamsState {
             ui.weak(lang.tr("read-only", "只读"));
         }
         ui.label(&f.unit);
-        ui.weak(range_text(f));
+        ui.weak(crate::ui::inputs::allowed_in(f, lang));
         let changed = matches!(&parsed, Some(Ok(Value::Int(v))) if device != Some(*v));
         match (&parsed, self.marks.get(&p.id)) {
             (Some(Err(e)), _) => {
@@ -433,171 +432,4 @@ fn label_choice(
         .response
         .labelled_by(name);
     chosen
-}
-
-fn read_all_job(rt: &AppState, servo: Servo) -> Action {
-    let profile = rt.device.profile.clone();
-    Action::StartJob(Job::new(
-        Text::new("read parameters", "读取参数"),
-        move |client, _, sink| {
-            ops::switch(client, servo.baud)?;
-            let values = ops::read_all(client, &profile, servo.id);
-            let failed = values.iter().filter(|(_, v)| v.is_err()).count();
-            let total = values.len();
-            send(sink, Output::Values { servo, values });
-            if failed == 0 {
-                Ok(Text::new(
-                    format!("servo {} read", servo.id),
-                    format!("已读取舵机 {}", servo.id),
-                ))
-            } else {
-                Err(JobError::Incomplete {
-                    failed,
-                    total,
-                    what: format!("parameter(s) of servo {} not read", servo.id),
-                })
-            }
-        },
-    ))
-}
-
-fn read_block_job(rt: &AppState, servo: Servo) -> Action {
-    let profile = rt.device.profile.clone();
-    Action::StartJob(Job::new(
-        Text::new("read user block", "读取用户参数区"),
-        move |client, _, sink| {
-            ops::switch(client, servo.baud)?;
-            match ops::read_block(client, &profile, servo.id) {
-                Ok(block) => {
-                    let values = block.into_iter().map(|(pid, v)| (pid, Ok(v))).collect();
-                    send(sink, Output::Values { servo, values });
-                    Ok(Text::new(
-                        format!("user block of servo {} read", servo.id),
-                        format!("已读取舵机 {} 的用户参数区", servo.id),
-                    ))
-                }
-                Err(e) => {
-                    let values = profile
-                        .block_params()
-                        .map(|p| (p.id, Err(e.clone())))
-                        .collect();
-                    send(sink, Output::Values { servo, values });
-                    Err(e.into())
-                }
-            }
-        },
-    ))
-}
-
-fn write_job(rt: &AppState, servo: Servo, values: Vec<(u8, i64)>) -> Action {
-    let profile = rt.device.profile.clone();
-    Action::StartJob(Job::new(
-        Text::new("write parameters", "写入参数"),
-        move |client, cancel, sink| {
-            ops::switch(client, servo.baud)?;
-            let checks = ops::write_params(client, &profile, servo.id, &values, cancel, &mut |p| {
-                sink.progress(p)
-            });
-            let bad = checks
-                .iter()
-                .filter(|(_, c)| !matches!(c, Ok(c) if c.ok()))
-                .count();
-            let n = checks.len();
-            send(sink, Output::Written { servo, checks });
-            if cancel.is_cancelled() {
-                Err(JobError::CancelledAfter {
-                    done: n,
-                    total: values.len(),
-                    what: "parameters",
-                })
-            } else if bad == 0 {
-                Ok(Text::new(
-                    format!("{n} parameter(s) written and verified"),
-                    format!("{n} 个参数已写入并校验"),
-                ))
-            } else {
-                Err(JobError::Incomplete {
-                    failed: bad,
-                    total: n,
-                    what: "parameter(s) not verified".into(),
-                })
-            }
-        },
-    ))
-}
-
-fn block_job(rt: &AppState, servo: Servo, values: Vec<(u8, i64)>) -> Action {
-    let profile = rt.device.profile.clone();
-    Action::StartJob(Job::new(
-        Text::new("write user block", "写入用户参数区"),
-        move |client, _, sink| {
-            ops::switch(client, servo.baud)?;
-            match ops::write_block(client, &profile, servo.id, &values) {
-                Ok(checks) => {
-                    let bad = checks.iter().filter(|c| !c.ok()).count();
-                    let total = checks.len();
-                    let checks = checks
-                        .into_iter()
-                        .filter_map(|c| Some((profile.find_param(&c.field)?.id, Ok(c))))
-                        .collect();
-                    send(sink, Output::Written { servo, checks });
-                    if bad == 0 {
-                        Ok(Text::new(
-                            "user block written and verified",
-                            "用户参数区已写入并校验",
-                        ))
-                    } else {
-                        Err(JobError::Incomplete {
-                            failed: bad,
-                            total,
-                            what: "value(s) of the block not verified".into(),
-                        })
-                    }
-                }
-                Err(e) => {
-                    let checks = values
-                        .iter()
-                        .map(|(pid, _)| (*pid, Err(e.clone())))
-                        .collect();
-                    send(sink, Output::Written { servo, checks });
-                    Err(e.into())
-                }
-            }
-        },
-    ))
-}
-
-fn reset_job(rt: &AppState, servo: Servo) -> Action {
-    let profile = rt.device.profile.clone();
-    Action::StartJob(Job::new(
-        Text::new("reset user data", "恢复出厂设置"),
-        move |client, _, sink| {
-            ops::switch(client, servo.baud)?;
-            let result = ops::reset_user_data(client, &profile, servo.id, servo.baud);
-            send(
-                sink,
-                Output::Reset {
-                    servo,
-                    result: result.clone(),
-                },
-            );
-            let at = result?;
-            let values = ops::read_all(client, &profile, at.id);
-            let now = Servo {
-                id: at.id,
-                baud: at.baud,
-            };
-            send(sink, Output::Values { servo: now, values });
-            Ok(Text::new(
-                format!(
-                    "servo {} reset: now id {} at {} baud",
-                    servo.id, at.id, at.baud
-                ),
-                format!(
-                    "舵机 {} 已恢复出厂:现为 ID {},波特率 {}",
-                    servo.id, at.id, at.baud
-                ),
-            ))
-        },
-    ))
 }

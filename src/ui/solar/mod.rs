@@ -8,7 +8,7 @@ mod control;
 
 pub use control::{Control, Outcome, Trip};
 
-use super::inputs::{command_inputs, range_text, readout_text};
+use super::inputs::{command_inputs, readout_text, value_box};
 use super::state::{AppState, Reading};
 use super::stop::StopControl;
 use super::{Action, plot};
@@ -314,43 +314,37 @@ impl SolarPanel {
         }
     }
 
+    /// A field's name and its box (or choice), kept together on one row.
     fn input(&mut self, ui: &mut egui::Ui, lang: Lang, cmd: &Command, f: &Field) {
         let text = self.inputs.entry((cmd.id, f.ident.clone())).or_default();
-        let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
-        if f.labels.is_empty() || f.range.is_some() {
-            let bad = !text.is_empty() && f.parse(text).is_err();
-            let width = if matches!(f.ty, FieldType::Bytes(_)) {
-                160.0
+        crate::ui::layout::group(ui, &f.ident, |ui| {
+            let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
+            if f.labels.is_empty() || f.range.is_some() {
+                let width = if matches!(f.ty, FieldType::Bytes(_)) {
+                    160.0
+                } else {
+                    70.0
+                };
+                value_box(ui, text, f, lang, width).labelled_by(name.id);
             } else {
-                70.0
-            };
-            let mut edit = egui::TextEdit::singleline(text)
-                .desired_width(width)
-                .hint_text(range_text(f));
-            if bad {
-                edit = edit.text_color(RED);
-            }
-            // The hint may be cut at this width: the whole range is on hover.
-            ui.add(edit)
-                .labelled_by(name.id)
-                .on_hover_text(range_text(f));
-        } else {
-            egui::ComboBox::from_id_salt(("solar", cmd.id, &f.ident))
-                .selected_text(match f.labels.iter().find(|l| l.ident == *text) {
-                    Some(l) => lang.tr(&l.name.en, &l.name.zh).to_string(),
-                    None => "—".to_string(),
-                })
-                .show_ui(ui, |ui| {
-                    for l in &f.labels {
-                        let label = format!("{} ({})", lang.tr(&l.name.en, &l.name.zh), l.value);
-                        if ui.selectable_label(*text == l.ident, label).clicked() {
-                            *text = l.ident.clone();
+                egui::ComboBox::from_id_salt(("solar", cmd.id, &f.ident))
+                    .selected_text(match f.labels.iter().find(|l| l.ident == *text) {
+                        Some(l) => lang.tr(&l.name.en, &l.name.zh).to_string(),
+                        None => "—".to_string(),
+                    })
+                    .show_ui(ui, |ui| {
+                        for l in &f.labels {
+                            let label =
+                                format!("{} ({})", lang.tr(&l.name.en, &l.name.zh), l.value);
+                            if ui.selectable_label(*text == l.ident, label).clicked() {
+                                *text = l.ident.clone();
+                            }
                         }
-                    }
-                })
-                .response
-                .labelled_by(name.id);
-        }
+                    })
+                    .response
+                    .labelled_by(name.id);
+            }
+        });
     }
 
     fn confirm_modal(

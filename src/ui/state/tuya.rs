@@ -24,8 +24,8 @@ pub const REQUESTS_CAPACITY: usize = 200;
 pub struct StepResult {
     /// It worked.
     pub ok: bool,
-    /// What came back, or why it failed.
-    pub detail: String,
+    /// What came back, or why it failed, in both languages.
+    pub detail: crate::profile::Text,
     /// When.
     pub at: DateTime<Local>,
 }
@@ -282,7 +282,7 @@ mod tests {
         TuyaEvent::Step {
             step,
             ok,
-            detail: String::new(),
+            detail: crate::profile::Text::same(""),
         }
     }
 

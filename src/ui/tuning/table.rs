@@ -136,7 +136,7 @@ impl TuningPanel {
         let key = (get, f.ident.clone());
         let device = rt.device.value(get, &f.ident);
         match device {
-            Some(v) => crate::ui::inputs::device_value(ui, f, v),
+            Some(v) => crate::ui::inputs::device_value(ui, f, v, lang),
             None => ui.weak(lang.tr("not read yet", "尚未读取")),
         };
         let writable =
@@ -177,7 +177,7 @@ impl TuningPanel {
             self.edits.insert(key.clone(), text);
         }
         unit_cell(ui, lang, f);
-        ui.weak(profile_range(f, lang));
+        ui.weak(crate::ui::inputs::allowed_in(f, lang));
         match (&parsed, rt.device.mark(get, &f.ident)) {
             (Some(Err(e)), _) => {
                 ui.colored_label(
@@ -236,24 +236,6 @@ pub(super) fn name_width(ui: &egui::Ui, lang: Lang, rt: &AppState) -> f32 {
     }
     let font = crate::ui::layout::body_font(ui);
     crate::ui::layout::text_width(ui, &font, names.iter().map(String::as_str)) + 4.0
-}
-
-/// The allowed values the profile gives (a range or labels); "—" where it gives none (the
-/// type's own limits say nothing a technician can use).
-fn profile_range(f: &Field, lang: Lang) -> String {
-    if f.range.is_none() && f.labels.is_empty() {
-        return lang.tr("— (not given)", "—(未规定)").to_string();
-    }
-    if f.range.is_some() && !f.labels.is_empty() {
-        // Named values within a wider range (a pump that is off, on, or any byte): both.
-        let names: Vec<&str> = f
-            .labels
-            .iter()
-            .map(|l| lang.tr(&l.name.en, &l.name.zh))
-            .collect();
-        return format!("{} ({})", names.join(" / "), range_text(f));
-    }
-    range_text(f)
 }
 
 /// The field's unit; where the protocol publishes none, says so.

@@ -52,7 +52,7 @@ pub fn summary(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
                 "{} {}: {} ({} {})",
                 lang.tr("Handshake stopped at", "握手停在"),
                 step_name(*step, lang),
-                r.detail,
+                r.detail.get(lang),
                 lang.tr("retrying, attempt", "正在重试,第"),
                 s.attempts
             );
@@ -146,7 +146,7 @@ pub fn show(
                 match &s.steps[i] {
                     Some(r) => {
                         ui.monospace(clock(&r.at));
-                        ui.label(&r.detail);
+                        ui.label(r.detail.get(lang));
                     }
                     None => {
                         ui.label("");
@@ -165,7 +165,7 @@ pub fn show(
                 step_name(*step, lang),
                 lang.tr("at", "于"),
                 clock(&r.at),
-                r.detail,
+                r.detail.get(lang),
                 lang.tr(
                     "The handshake is tried again every second; attempts so far:",
                     "每秒重试一次握手;已尝试次数:"

@@ -15,10 +15,11 @@ pub use product_info::{ProductInfo, parse_product_info};
 pub use reports::{command_ids, reported_ids, reports_reply};
 
 use super::Unasked;
+use crate::i18n::Zh;
 use crate::link::LinkEvent;
 use crate::link::request::{ExchangeError, Reply, ReplySpec, Request};
 use crate::packet::{Header, Packet};
-use crate::profile::Profile;
+use crate::profile::{Profile, Text};
 use crate::protocol::Direction;
 use crate::protocol::tuya::{self, VERSION_MCU, cmd};
 use serde::Serialize;
@@ -77,8 +78,8 @@ pub enum TuyaEvent {
         step: HandshakeStep,
         /// Whether it worked.
         ok: bool,
-        /// What came back, or why it failed.
-        detail: String,
+        /// What came back, or why it failed, in both languages.
+        detail: Text,
     },
     /// The version byte of the MCU's frames (its heartbeat answer's): 0x03 by the protocol
     /// document, 0x01 from MCU SDKs before v2.5, 0x00 from some firmware.
@@ -270,7 +271,7 @@ impl TuyaSession {
             Some(Ask::Step(step, wifi_state)) => match result {
                 Ok(reply) => self.step_done(step, wifi_state, &reply, now, events),
                 Err(e) => {
-                    events.push(step_event(step, false, e.to_string()));
+                    events.push(step_event(step, false, e.said()));
                     self.phase = Phase::HandshakeAt(now + HANDSHAKE_RETRY);
                     false
                 }
@@ -309,18 +310,26 @@ impl TuyaSession {
         let next = match step {
             HandshakeStep::Heartbeat => {
                 let answer = if payload == [0] {
-                    "answered 0: first since the MCU started"
+                    Text::new(
+                        "answered 0: first since the MCU started",
+                        "应答 0:MCU 启动后的第一次",
+                    )
                 } else {
-                    "answered 1"
+                    Text::new("answered 1", "应答 1")
                 };
                 let detail = match reply.packets.first().map(|p| &p.header) {
                     Some(Header::Tuya { version }) => {
                         events.push(LinkEvent::Tuya(TuyaEvent::FrameVersion {
                             version: *version,
                         }));
-                        format!("{answer}; {}", version_text(*version))
+                        let zh = if *version == VERSION_MCU {
+                            format!("MCU 帧版本 {version:#04x}")
+                        } else {
+                            format!("MCU 帧版本 {version:#04x}(协议文档为 {VERSION_MCU:#04x})")
+                        };
+                        answer.then("; ", &Text::new(version_text(*version), zh))
                     }
-                    _ => answer.to_string(),
+                    _ => answer,
                 };
                 events.push(step_event(step, true, detail));
                 HandshakeStep::ProductInfo
@@ -328,13 +337,19 @@ impl TuyaSession {
             HandshakeStep::ProductInfo => {
                 let info = parse_product_info(payload);
                 let detail = match &info.error {
-                    None => format!(
-                        "PID {}, MCU {}, mode {}",
-                        info.pid.as_deref().unwrap_or("?"),
-                        info.version.as_deref().unwrap_or("?"),
-                        info.mode.map_or("?".to_string(), |m| m.to_string())
+                    None => {
+                        let pid = info.pid.as_deref().unwrap_or("?");
+                        let version = info.version.as_deref().unwrap_or("?");
+                        let mode = info.mode.map_or("?".to_string(), |m| m.to_string());
+                        Text::new(
+                            format!("PID {pid}, MCU {version}, mode {mode}"),
+                            format!("PID {pid},MCU {version},配网模式 {mode}"),
+                        )
+                    }
+                    Some(e) => Text::new(
+                        format!("not valid JSON ({e}); shown raw: {}", info.raw),
+                        format!("不是有效的 JSON({e});按原样显示:{}", info.raw),
                     ),
-                    Some(e) => format!("not valid JSON ({e}); shown raw: {}", info.raw),
                 };
                 let ok = info.error.is_none();
                 events.push(LinkEvent::Tuya(TuyaEvent::ProductInfo(info)));
@@ -348,21 +363,30 @@ impl TuyaSession {
                 };
                 events.push(LinkEvent::Tuya(TuyaEvent::WorkMode { gpio }));
                 let detail = match gpio {
-                    None => "the MCU drives the Wi-Fi LED".to_string(),
-                    Some((l, r)) => format!("the module drives the LED (GPIO {l}, reset GPIO {r})"),
+                    None => Text::new("the MCU drives the Wi-Fi LED", "MCU 控制 WiFi 指示灯"),
+                    Some((l, r)) => Text::new(
+                        format!("the module drives the LED (GPIO {l}, reset GPIO {r})"),
+                        format!("模块控制指示灯(GPIO {l},复位 GPIO {r})"),
+                    ),
                 };
                 events.push(step_event(step, true, detail));
                 if gpio.is_none() {
                     HandshakeStep::WifiState
                 } else {
                     // The module drives the LED: the MCU needs no Wi-Fi state.
-                    let detail = "not needed: the module drives the LED".to_string();
+                    let detail = Text::new(
+                        "not needed: the module drives the LED",
+                        "不需要:模块控制指示灯",
+                    );
                     events.push(step_event(HandshakeStep::WifiState, true, detail));
                     HandshakeStep::QueryStatus
                 }
             }
             HandshakeStep::WifiState => {
-                let detail = format!("reported state {wifi_state}");
+                let detail = Text::new(
+                    format!("reported state {wifi_state}"),
+                    format!("已上报状态 {wifi_state}"),
+                );
                 events.push(step_event(step, true, detail));
                 HandshakeStep::QueryStatus
             }
@@ -376,12 +400,16 @@ impl TuyaSession {
                     .collect();
                 let total = self.data_points.len();
                 let detail = if missing.is_empty() {
-                    format!("all {total} data points reported")
+                    Text::new(
+                        format!("all {total} data points reported"),
+                        format!("{total} 个数据点全部已上报"),
+                    )
                 } else {
-                    format!(
-                        "{} of {total} data points reported; not reported: {}",
-                        total - missing.len(),
-                        missing.join(", ")
+                    let n = total - missing.len();
+                    let missing = missing.join(", ");
+                    Text::new(
+                        format!("{n} of {total} data points reported; not reported: {missing}"),
+                        format!("{total} 个数据点中 {n} 个已上报;未上报:{missing}"),
                     )
                 };
                 events.push(step_event(step, true, detail));
@@ -426,6 +454,6 @@ pub fn version_text(version: u8) -> String {
     }
 }
 
-fn step_event(step: HandshakeStep, ok: bool, detail: String) -> LinkEvent {
+fn step_event(step: HandshakeStep, ok: bool, detail: Text) -> LinkEvent {
     LinkEvent::Tuya(TuyaEvent::Step { step, ok, detail })
 }
