@@ -405,17 +405,52 @@ fn check_len(field: &Field, len: Len, actual: usize) -> Result<(), FieldError> {
     }
 }
 
-/// Digits after the decimal point for a scale: 1 → 0, 0.1 → 1, 0.01 → 2, 0.25 → 2.
+/// Digits after the decimal point for a scale: 1 → 0, 0.1 → 1, 0.01 → 2, 0.25 → 2. A scale
+/// with no short decimal form (the IMU's 1/4096 g) gets the digits of its step, enough for two
+/// neighbouring raw values to read differently: 1/4096 → 4 (`0.0095 g`, not the twelve digits
+/// of its exact value cut at nine, `0.009521484 g`).
 pub fn decimals_for(scale: f64) -> usize {
     if !(scale.is_finite() && scale > 0.0) {
         return 0;
     }
-    (0..=9)
+    (0..=EXACT_DECIMALS)
         .find(|&d| {
             let x = scale * 10f64.powi(d as i32);
             (x - x.round()).abs() < 1e-9 * x.max(1.0)
         })
-        .unwrap_or(9)
+        .unwrap_or_else(|| (-scale.log10()).ceil().clamp(0.0, 9.0) as usize)
+}
+
+/// The most digits a scale is shown with exactly (0.000001); a finer or binary scale is shown to
+/// its step.
+const EXACT_DECIMALS: usize = 6;
+
+#[cfg(test)]
+mod decimals_tests {
+    use super::decimals_for;
+
+    #[test]
+    fn a_scale_shows_its_exact_digits_or_those_of_its_step() {
+        for (scale, digits) in [
+            (1.0, 0),
+            (10.0, 0),
+            (4096.0, 0),
+            (0.1, 1),
+            (0.25, 2),
+            (0.001, 3),
+            (0.0625, 4),
+            (1.0 / 4096.0, 4),
+            (1.0 / 3.0, 1),
+            (0.0, 0),
+            (f64::NAN, 0),
+        ] {
+            assert_eq!(decimals_for(scale), digits, "scale {scale}");
+        }
+        // Neighbouring raw values of the IMU's scale read differently.
+        let s = 1.0 / 4096.0;
+        let shown = |raw: i64| format!("{:.*}", decimals_for(s), raw as f64 * s);
+        assert_ne!(shown(39), shown(40));
+    }
 }
 
 enum ScaledError {
