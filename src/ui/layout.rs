@@ -85,6 +85,37 @@ pub fn wrapped_cell(ui: &mut egui::Ui, width: f32, label: egui::Label) -> egui::
     .inner
 }
 
+/// A table cell `width` points wide holding `text` that wraps only between its words (at its
+/// spaces), never inside one: for texts made of names (`陀螺仪加速度原始值: 陀螺仪X, 陀螺仪Y`),
+/// which egui would otherwise part anywhere in Chinese. A word wider than the cell stays whole.
+/// `style` dresses each word (weak, monospace).
+pub fn words_cell(
+    ui: &mut egui::Ui,
+    width: f32,
+    text: &str,
+    style: impl Fn(egui::RichText) -> egui::RichText,
+) -> egui::Response {
+    let shown = ui
+        .vertical(|ui| {
+            ui.set_width(width);
+            let text_h = ui.text_style_height(&egui::TextStyle::Body);
+            ui.add_space(((ui.spacing().interact_size.y - text_h) / 2.0).max(0.0));
+            ui.horizontal_wrapped(|ui| {
+                keep_words_whole(ui);
+                let space = text_width(ui, &body_font(ui), [" "]);
+                ui.spacing_mut().item_spacing = egui::vec2(space, 0.0);
+                for word in text.split(' ').filter(|w| !w.is_empty()) {
+                    ui.label(style(egui::RichText::new(word)));
+                }
+            })
+            .response
+        })
+        .inner;
+    // Read as the one text it is (a screen reader, the tests), not word by word.
+    shown.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Label, true, text));
+    shown
+}
+
 /// The width, points, of the widest of `texts` on one line in `font` (the body font: the
 /// labels' own), as this window's fonts draw it (the bundled CJK font for Chinese).
 pub fn text_width<'a>(
@@ -206,4 +237,65 @@ fn breaks_a_word(galley: &egui::Galley) -> bool {
         let chinese = label && is_cjk(a) && is_cjk(b);
         english || chinese
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What a frame drew with `add` in a 1024×600 window.
+    fn drawn(add: impl Fn(&mut egui::Ui)) -> Vec<egui::epaint::ClippedShape> {
+        let ctx = egui::Context::default();
+        crate::i18n::install_cjk_font(&ctx);
+        let input = egui::RawInput {
+            screen_rect: Some(egui::Rect::from_min_size(
+                egui::Pos2::ZERO,
+                egui::vec2(1024.0, 600.0),
+            )),
+            ..Default::default()
+        };
+        let mut shapes = Vec::new();
+        // The second frame: fonts are ready and widths settled.
+        for _ in 0..2 {
+            let out = ctx.run_ui(input.clone(), |ui| add(ui));
+            shapes = out.shapes.clone();
+            out.drop_without_applying_deltas();
+        }
+        shapes
+    }
+
+    #[test]
+    fn a_words_cell_wraps_between_names_only() {
+        let text = "陀螺仪加速度原始值: 陀螺仪X, 陀螺仪Y, 陀螺仪Z";
+        let mut rows = Vec::new();
+        let shapes = drawn(|ui| {
+            words_cell(ui, 120.0, text, |t| t);
+        });
+        for clipped in &shapes {
+            visit_placed(&clipped.shape, &mut |t| {
+                rows.push((t.galley.text().to_string(), t.galley.rows.len(), t.pos.y));
+            });
+        }
+        // Each name drawn whole on one row, the text on more than one row.
+        let words: Vec<&str> = rows.iter().map(|(w, ..)| w.as_str()).collect();
+        assert_eq!(words, text.split(' ').collect::<Vec<_>>());
+        assert!(rows.iter().all(|(_, n, _)| *n == 1), "{rows:?}");
+        let lines: std::collections::BTreeSet<i64> = rows.iter().map(|(.., y)| *y as i64).collect();
+        assert!(lines.len() > 1, "wraps in 120 points: {rows:?}");
+        // A plain wrapped label of the same text in the same width parts a name.
+        let plain = drawn(|ui| {
+            wrapped_cell(ui, 120.0, egui::Label::new(text));
+        });
+        let mut parted = false;
+        for clipped in &plain {
+            visit_placed(&clipped.shape, &mut |t| {
+                parted |= t.galley.rows.windows(2).any(|p| {
+                    let a = p[0].row.glyphs.last().map(|g| g.chr);
+                    let b = p[1].row.glyphs.first().map(|g| g.chr);
+                    a.is_some_and(is_cjk) && b.is_some_and(is_cjk)
+                });
+            });
+        }
+        assert!(parted, "the case words_cell exists for");
+    }
 }

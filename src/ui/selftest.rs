@@ -474,12 +474,21 @@ impl SelfTestPanel {
     fn table(&self, ui: &mut egui::Ui, lang: Lang, profile: &Profile) {
         let Some(plan) = &self.plan else { return };
         egui::ScrollArea::both().auto_shrink(false).show(ui, |ui| {
-            // Four text columns share what the PASS/FAIL column leaves, each wrapping its text:
-            // Measured and Result stay in the window at 1024 px.
+            // Four text columns share what the PASS/FAIL column leaves, the names of what is
+            // read taking the most; names wrap between words only, and Measured and Result
+            // stay in the window at 1024 px.
             let gap = ui.spacing().item_spacing.x;
-            let w = ((ui.available_width() - 60.0 - 5.0 * gap) / 4.0).max(80.0);
+            let share = (ui.available_width() - 60.0 - 5.0 * gap).max(320.0);
+            let [w_check, w_reads, w_bounds, w_measured] =
+                [0.2, 0.34, 0.24, 0.22].map(|f| share * f);
+            let words = |ui: &mut egui::Ui,
+                         w: f32,
+                         text: &str,
+                         style: fn(egui::RichText) -> egui::RichText| {
+                crate::ui::layout::words_cell(ui, w, text, style);
+            };
             let cell = |ui: &mut egui::Ui, text: egui::RichText| {
-                crate::ui::layout::wrapped_cell(ui, w, egui::Label::new(text));
+                crate::ui::layout::wrapped_cell(ui, w_measured, egui::Label::new(text));
             };
             egui::Grid::new("selftest-results")
                 .num_columns(5)
@@ -493,24 +502,20 @@ impl SelfTestPanel {
                     ui.end_row();
                     // The identity step appears only when it failed.
                     for r in self.results.iter().filter(|r| r.kind == "Identify") {
-                        cell(ui, r.name.as_str().into());
-                        cell(ui, "CMD_VERSION".into());
-                        cell(ui, "—".into());
+                        words(ui, w_check, &r.name, |t| t);
+                        words(ui, w_reads, "CMD_VERSION", |t| t);
+                        words(ui, w_bounds, "—", |t| t);
                         cell(ui, r.detail.as_str().into());
                         ui.colored_label(egui::Color32::RED, "FAIL");
                         ui.end_row();
                     }
                     let done = self.results.iter().filter(|r| r.kind != "Identify").count();
                     for (i, step) in plan.steps.iter().enumerate() {
-                        cell(ui, step.name.as_str().into());
-                        cell(
-                            ui,
-                            egui::RichText::new(what(&step.kind, profile, lang)).weak(),
-                        );
-                        cell(
-                            ui,
-                            egui::RichText::new(bounds(&step.kind, profile, lang)).monospace(),
-                        );
+                        words(ui, w_check, &step.name, |t| t);
+                        words(ui, w_reads, &what(&step.kind, profile, lang), |t| t.weak());
+                        words(ui, w_bounds, &bounds(&step.kind, profile, lang), |t| {
+                            t.monospace()
+                        });
                         match self.results.iter().find(|r| r.name == step.name) {
                             Some(r) => {
                                 cell(ui, r.detail.as_str().into());
