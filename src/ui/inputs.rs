@@ -126,7 +126,11 @@ pub fn value_box(
     if bad {
         edit = edit.text_color(egui::Color32::from_rgb(210, 40, 40));
     }
-    ui.add(edit).on_hover_text(allowed_in(field, lang))
+    // Its own width even where a row has less room left (the last box of a long row in a
+    // grid's column): a squeezed box would hide what is typed in it.
+    let size = egui::vec2(width.max(min_width), ui.spacing().interact_size.y);
+    ui.add_sized(size, edit)
+        .on_hover_text(allowed_in(field, lang))
 }
 
 /// A value a device sent, as a readout shows it (monospace, as [`Field::format`] writes it, a
@@ -140,7 +144,7 @@ pub fn device_value(ui: &mut egui::Ui, field: &Field, value: &Value, lang: Lang)
             .monospace(lang.tr(&l.name.en, &l.name.zh))
             .on_hover_text(format!("{} ({raw})", l.ident));
     }
-    let text = field.format(value);
+    let text = said_in(field.format(value), lang);
     match field.range_mark(value) {
         Some(mark) => ui
             .colored_label(
@@ -168,8 +172,23 @@ pub fn readout_text(f: &Field, v: &Value, lang: Lang) -> String {
                 .filter(|b| b.bit < 64 && raw >> b.bit & 1 == 1)
                 .map(|b| lang.tr(&b.name.en, &b.name.zh))
                 .collect();
+            if set.is_empty() {
+                return format!("{raw:#04x} ({})", lang.tr("no bit set", "无置位"));
+            }
             return format!("{raw:#04x} [{}]", set.join(", "));
         }
     }
-    f.display(v)
+    said_in(f.display(v), lang)
+}
+
+/// A value's text as [`Field::format`] and [`Field::display`] write it (for files and the
+/// command line, in English), said in `lang` for the window: the raw value beside a converted
+/// one is `(原始值 1779)` in Chinese, an undefined conversion `无效`.
+pub fn said_in(text: String, lang: Lang) -> String {
+    match lang {
+        Lang::En => text,
+        Lang::Zh => text
+            .replace(" (raw ", " (原始值 ")
+            .replace("n/a (", "无效 ("),
+    }
 }

@@ -454,7 +454,7 @@ impl MotionState {
                                     _ => f.format(v),
                                 }
                             } else {
-                                f.display(v)
+                                crate::ui::inputs::said_in(f.display(v), lang)
                             };
                             ui.label(format!("{}: {shown}", lang.tr(&f.name.en, &f.name.zh)));
                             ui.separator();

@@ -371,7 +371,10 @@ impl ScanState {
                     ui.label(opt(row.firmware));
                     ui.label(opt(row.serial));
                     ui.label(row.voltage_mv.map_or("-".into(), |v| format!("{v} mV")));
-                    ui.label(row.temperature_text(&rt.device.profile));
+                    ui.label(crate::ui::inputs::said_in(
+                        row.temperature_text(&rt.device.profile),
+                        lang,
+                    ));
                     ui.monospace(row.status_hex());
                     ui.label(row.status.map_or("-".into(), |s| status_bits(s, lang)));
                     match &row.presence {
