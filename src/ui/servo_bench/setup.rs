@@ -189,8 +189,21 @@ impl SetupState {
         let check = self.check_id(servo, scan);
         ui.horizontal(|ui| {
             let l = ui.label(lang.tr("New id", "新ID"));
-            ui.add(egui::TextEdit::singleline(&mut self.new_id).desired_width(50.0))
-                .labelled_by(l.id);
+            // The ids the profile's ServoId parameter allows, as the box's hint.
+            let hint = rt
+                .device
+                .profile
+                .servo_id_param()
+                .filter(|p| p.field.range.is_some())
+                .map(|p| crate::ui::inputs::range_text(&p.field))
+                .unwrap_or_default();
+            let width = crate::ui::layout::box_width_for(ui, &hint).max(50.0);
+            ui.add(
+                egui::TextEdit::singleline(&mut self.new_id)
+                    .hint_text(hint)
+                    .desired_width(width),
+            )
+            .labelled_by(l.id);
             let set = ui.add_enabled(
                 can && check.is_ok(),
                 egui::Button::new(lang.tr("Set ID", "设置ID")),
