@@ -408,6 +408,12 @@ fn an_empty_or_missing_firmware_file_is_refused_with_a_clear_message() {
     let mut h = harness(b.path(), "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "Firmware update");
+    // No file named: nothing to start.
+    app_mut(&mut h).tuya.ota.path.clear();
+    h.step();
+    assert!(
+        egui_kittest::kittest::NodeT::accesskit_node(&h.get_by_label("Start update")).is_disabled()
+    );
     for (path, why) in [
         (empty.display().to_string(), "the firmware file is empty"),
         (

@@ -173,13 +173,20 @@ impl OtaView {
             if event.go(false, &mut actions) {
                 self.error = ops::check_file(&PathBuf::from(self.path.trim()), max).err();
             }
-            if ui
-                .add_enabled(
-                    rt.connected() && !busy,
-                    egui::Button::new(lang.tr("Start update", "开始升级")),
-                )
-                .clicked()
-            {
+            let named = !self.path.trim().is_empty();
+            let start = ui.add_enabled(
+                rt.connected() && !busy && named,
+                egui::Button::new(lang.tr("Start update", "开始升级")),
+            );
+            let start = if named {
+                start
+            } else {
+                start.on_disabled_hover_text(lang.tr(
+                    "Name the firmware image first (type its path or Browse…).",
+                    "请先指定固件文件(输入路径或点击浏览…)。",
+                ))
+            };
+            if start.clicked() {
                 let path = PathBuf::from(self.path.trim());
                 match ops::check_file(&path, max) {
                     Ok(size) => {
