@@ -192,3 +192,40 @@ pub fn said_in(text: String, lang: Lang) -> String {
             .replace("n/a (", "无效 ("),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::profile::Registry;
+
+    #[test]
+    fn readouts_are_said_in_the_windows_language() {
+        let reg = Registry::builtin().unwrap();
+        let servo = reg.get("servo").unwrap();
+        let temperature = &servo.param(4).unwrap().field;
+        let en = readout_text(temperature, &Value::Int(1779), Lang::En);
+        let zh = readout_text(temperature, &Value::Int(1779), Lang::Zh);
+        assert!(en.ends_with("(raw 1779)"), "{en}");
+        assert!(zh.ends_with("(原始值 1779)") && !zh.contains("raw"), "{zh}");
+        assert_eq!(en.replace("(raw ", "(原始值 "), zh, "the same value");
+
+        let wc = reg.get("window-cleaner").unwrap();
+        let corners = wc
+            .commands
+            .iter()
+            .flat_map(|c| &c.reply)
+            .find(|f| f.ident == "corners")
+            .unwrap();
+        assert_eq!(
+            readout_text(corners, &Value::Int(0), Lang::En),
+            "0x00 (no bit set)"
+        );
+        assert_eq!(
+            readout_text(corners, &Value::Int(0), Lang::Zh),
+            "0x00 (无置位)"
+        );
+        assert!(
+            readout_text(corners, &Value::Int(5), Lang::En).starts_with("0x05 [Corner switch 1")
+        );
+    }
+}
