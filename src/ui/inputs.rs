@@ -133,6 +133,50 @@ pub fn value_box(
         .on_hover_text(allowed_in(field, lang))
 }
 
+/// A ComboBox of a labelled field's values, each by its name in `lang` and its ident; sets
+/// `text` to the chosen label's ident, as [`Field::parse`] reads it. A value with no label (a
+/// device's 2 where the profile names 0 and 1) shows as it is. True when a label was chosen.
+/// Servo parameters and tuning use it for every field with labels.
+pub fn label_choice(
+    ui: &mut egui::Ui,
+    lang: Lang,
+    f: &Field,
+    salt: impl egui::AsIdSalt,
+    text: &mut String,
+    name: egui::Id,
+) -> bool {
+    let shown = f
+        .labels
+        .iter()
+        .find(|l| l.ident == text.trim())
+        .map_or_else(
+            || {
+                if text.is_empty() {
+                    "—".to_string()
+                } else {
+                    text.clone()
+                }
+            },
+            |l| lang.tr(&l.name.en, &l.name.zh).to_string(),
+        );
+    let mut chosen = false;
+    egui::ComboBox::from_id_salt(salt)
+        .selected_text(shown)
+        .width(110.0)
+        .show_ui(ui, |ui| {
+            for l in &f.labels {
+                let label = format!("{} ({})", lang.tr(&l.name.en, &l.name.zh), l.ident);
+                if ui.selectable_label(*text == l.ident, label).clicked() {
+                    *text = l.ident.clone();
+                    chosen = true;
+                }
+            }
+        })
+        .response
+        .labelled_by(name);
+    chosen
+}
+
 /// A value a device sent, as a readout shows it (monospace, as [`Field::format`] writes it, a
 /// named value by its name in `lang`); a value outside the field's range in red with its mark,
 /// never as a clean value.

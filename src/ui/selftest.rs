@@ -139,7 +139,7 @@ pub fn bounds(kind: &StepKind, profile: &Profile, lang: Lang) -> String {
             let secs = timeout.as_secs_f64();
             match lang {
                 Lang::En => format!("bits {bits:#06b} seen clear and set within {secs:.0} s"),
-                Lang::Zh => format!("位 {bits:#06b}:{secs:.0} 秒内先清零、再置位"),
+                Lang::Zh => format!("位 {bits:#06b}: {secs:.0} 秒内先清零、再置位"),
             }
         }
         StepKind::Reads { expect, .. } if expect.is_empty() => lang.tr("answers", "有应答").into(),

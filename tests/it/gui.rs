@@ -5,7 +5,8 @@ use botbench::profile::Value;
 use botbench::sim::Faults;
 use botbench::ui::state::Reading;
 use botbench::ui::{App, PanelId};
-use egui_kittest::kittest::Queryable;
+use eframe::egui::accesskit::Role;
+use egui_kittest::kittest::{By, Queryable};
 use std::time::Duration;
 
 use crate::support::gui::{
@@ -93,6 +94,43 @@ fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
     assert_eq!(b.sim().param("pwmValue"), Some(64));
     h.step();
     assert!(h.query_all_by_label_contains("verified").next().is_some());
+}
+
+/// A named value (the water pump's Off / On) is chosen by its name, in the window's language,
+/// not typed as its ident; the choice is written and verified like any edit.
+#[test]
+fn a_named_value_is_chosen_by_its_name_and_written() {
+    let b = bench();
+    b.sim().set_param("waterPump", 1).unwrap();
+    let mut h = harness(b.path(), PanelId::Tuning);
+    gui::read_all(&mut h);
+    h.step();
+    assert!(
+        h.query(By::new().role(Role::TextInput).label_contains("Water pump"))
+            .is_none(),
+        "no box to type an ident into"
+    );
+    h.get(By::new().role(Role::ComboBox).label_contains("Water pump"))
+        .click();
+    h.run_steps(2);
+    h.get_by_label("Off (off)").click();
+    h.run_steps(2);
+    assert_eq!(
+        app(&h)
+            .tuning
+            .edits
+            .get(&(135, "waterPump".to_string()))
+            .map(String::as_str),
+        Some("off")
+    );
+    h.get_by_label_contains("Write changes (1)").click();
+    h.run_steps(3);
+    h.get_by_label("Write").click();
+    step_until(&mut h, "the write to be verified", |a| {
+        a.state.device.marks.get(&(135, "waterPump".to_string()))
+            == Some(&botbench::ui::state::Mark::Verified)
+    });
+    assert_eq!(b.sim().param("waterPump"), Some(0));
 }
 
 #[test]

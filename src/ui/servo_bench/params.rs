@@ -285,7 +285,7 @@ impl ParamsState {
             // An id of the parameter's own: the field keeps its focus whatever the rows above
             // it show.
             let salt = ("servo-param", p.id);
-            let changed = if f.labels.is_empty() || f.range.is_some() {
+            let changed = if f.labels.is_empty() {
                 let invalid = matches!(parsed, Some(Err(_)));
                 let mut edit = egui::TextEdit::singleline(&mut text)
                     .id_salt(salt)
@@ -295,7 +295,7 @@ impl ParamsState {
                 }
                 ui.add(edit).labelled_by(name.id).changed()
             } else {
-                label_choice(ui, lang, f, salt, &mut text, name.id)
+                crate::ui::inputs::label_choice(ui, lang, f, salt, &mut text, name.id)
             };
             if changed {
                 self.edits.insert(p.id, text);
@@ -390,46 +390,4 @@ impl ParamsState {
             }
         }
     }
-}
-
-/// A ComboBox of an enum parameter's labels (its readable name and ident); sets `text` to the
-/// chosen label's ident, as [`crate::profile::Field::parse`] reads it. True when a label was chosen.
-fn label_choice(
-    ui: &mut egui::Ui,
-    lang: Lang,
-    f: &crate::profile::Field,
-    salt: (&str, u8),
-    text: &mut String,
-    name: egui::Id,
-) -> bool {
-    let shown = f
-        .labels
-        .iter()
-        .find(|l| l.ident == text.trim())
-        .map_or_else(
-            || {
-                if text.is_empty() {
-                    "—".to_string()
-                } else {
-                    text.clone()
-                }
-            },
-            |l| lang.tr(&l.name.en, &l.name.zh).to_string(),
-        );
-    let mut chosen = false;
-    egui::ComboBox::from_id_salt(salt)
-        .selected_text(shown)
-        .width(110.0)
-        .show_ui(ui, |ui| {
-            for l in &f.labels {
-                let label = format!("{} ({})", lang.tr(&l.name.en, &l.name.zh), l.ident);
-                if ui.selectable_label(*text == l.ident, label).clicked() {
-                    *text = l.ident.clone();
-                    chosen = true;
-                }
-            }
-        })
-        .response
-        .labelled_by(name);
-    chosen
 }

@@ -149,11 +149,32 @@ impl TuningPanel {
         let parsed = self.edits.get(&key).map(|t| f.parse(t));
         let invalid = matches!(parsed, Some(Err(_)));
         let changed = matches!(&parsed, Some(Ok(v)) if device != Some(v));
-        let mut edit = egui::TextEdit::singleline(&mut text).desired_width(90.0);
-        if invalid {
-            edit = edit.text_color(egui::Color32::RED);
-        }
-        let resp = ui.add_enabled(writable, edit).labelled_by(name);
+        let resp = if f.labels.is_empty() {
+            let mut edit = egui::TextEdit::singleline(&mut text).desired_width(90.0);
+            if invalid {
+                edit = edit.text_color(egui::Color32::RED);
+            }
+            ui.add_enabled(writable, edit).labelled_by(name)
+        } else {
+            // A named value is chosen by its name, not typed.
+            let before = text.clone();
+            let resp = ui
+                .add_enabled_ui(writable, |ui| {
+                    crate::ui::inputs::label_choice(
+                        ui,
+                        lang,
+                        f,
+                        ("tuning", get, &f.ident),
+                        &mut text,
+                        name,
+                    );
+                })
+                .response;
+            if text != before {
+                self.edits.insert(key.clone(), text.clone());
+            }
+            resp
+        };
         let resp = if writable {
             resp
         } else {
