@@ -365,7 +365,7 @@ impl SelfTestPanel {
             }
             return actions;
         };
-        let (name, steps) = (plan.name.clone(), plan.steps.len());
+        let (name, steps) = (plan.said(&plan.name, lang).to_string(), plan.steps.len());
         crate::ui::layout::toolbar(ui, |ui| {
             ui.strong(name);
             ui.weak(format!("{steps} {}", lang.tr("steps", "个步骤")));
@@ -423,7 +423,13 @@ impl SelfTestPanel {
                         .strong()
                         .color(egui::Color32::WHITE),
                 );
-                let failed: Vec<&str> = report.failed().map(|r| r.name.as_str()).collect();
+                let failed: Vec<&str> = report
+                    .failed()
+                    .map(|r| match &self.plan {
+                        Some(plan) => plan.said(&r.name, lang),
+                        None => r.name.as_str(),
+                    })
+                    .collect();
                 if !failed.is_empty() {
                     ui.label(
                         egui::RichText::new(format!(
@@ -511,7 +517,7 @@ impl SelfTestPanel {
                     }
                     let done = self.results.iter().filter(|r| r.kind != "Identify").count();
                     for (i, step) in plan.steps.iter().enumerate() {
-                        words(ui, w_check, &step.name, |t| t);
+                        words(ui, w_check, plan.said(&step.name, lang), |t| t);
                         words(ui, w_reads, &what(&step.kind, profile, lang), |t| t.weak());
                         words(ui, w_bounds, &bounds(&step.kind, profile, lang), |t| {
                             t.monospace()
@@ -546,10 +552,14 @@ impl SelfTestPanel {
 
     fn prompt_modal(&mut self, ui: &mut egui::Ui, lang: Lang) {
         let Some(prompt) = &self.prompt else { return };
+        let text = match &self.plan {
+            Some(plan) => plan.said(&prompt.text, lang),
+            None => prompt.text.as_str(),
+        };
         let mut answer = None;
         egui::Modal::new(egui::Id::unique("selftest-prompt")).show(ui.ctx(), |ui| {
             ui.heading(lang.tr("Operator action needed", "需要操作员操作"));
-            ui.label(egui::RichText::new(&prompt.text).size(18.0));
+            ui.label(egui::RichText::new(text).size(18.0));
             ui.label(lang.tr(
                 "Do it now, then press Done: the test watches for the result.",
                 "请立即操作,然后按“完成”:测试将检测结果。",

@@ -39,10 +39,12 @@ fn files(dir: &Path, ext: &str) -> Vec<PathBuf> {
     out
 }
 
-/// The files whose Chinese must render: the sources and the profiles.
+/// The files whose Chinese must render: the sources, the profiles and the shipped presets and
+/// plans (a plan's `zh` names show in the window).
 fn scanned_files() -> Vec<PathBuf> {
     let mut all = files(&root().join("src"), "rs");
     all.extend(files(&root().join("assets/profiles"), "ron"));
+    all.extend(files(&root().join("presets"), "ron"));
     assert!(all.len() > 10, "scanned too few files: {all:?}");
     all
 }

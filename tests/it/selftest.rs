@@ -1,5 +1,6 @@
 //! The production self-test against the simulated window cleaner on a pseudo-terminal.
 
+use botbench::i18n::Lang;
 use botbench::link::{Link, LinkOptions};
 use botbench::ops::Cancel;
 use botbench::ops::selftest::{self, Plan, Report};
@@ -379,6 +380,53 @@ fn refused(text: &str) -> String {
     Plan::parse("plan.ron", text, &profile())
         .unwrap_err()
         .to_string()
+}
+
+/// A plan's own words in Chinese: the shipped plan gives every step name, its name and its
+/// prompt one; a translation of something the plan does not say is refused where it is.
+#[test]
+fn a_plan_says_its_names_and_prompts_in_chinese() {
+    let p = profile();
+    let plan = example_plan(&p);
+    assert_eq!(plan.said("Gyro at rest", Lang::Zh), "静止时陀螺仪");
+    assert_eq!(plan.said("Gyro at rest", Lang::En), "Gyro at rest");
+    assert_ne!(plan.said(&plan.name, Lang::Zh), plan.name);
+    for step in &plan.steps {
+        assert!(
+            plan.zh.contains_key(&step.name),
+            "the shipped plan says '{}' in Chinese",
+            step.name
+        );
+    }
+    let prompts = plan.steps.iter().filter_map(|s| match &s.kind {
+        botbench::ops::selftest::StepKind::Operator { prompt, .. } => Some(prompt),
+        _ => None,
+    });
+    for prompt in prompts {
+        assert!(plan.zh.contains_key(prompt), "the prompt '{prompt}'");
+    }
+
+    let text = r#"(
+    version: 1,
+    profile: "window-cleaner",
+    steps: [Reads(name: "Water box", command: "MSP_WATER_BOX")],
+    zh: {
+        "Water box": "水箱",
+        "Water tank": "水箱",
+        "Water box ": " ",
+    },
+)"#;
+    let e = Plan::parse("plan.ron", text, &p).unwrap_err();
+    let all = e.to_string();
+    assert!(
+        all.contains("plan.ron:7:9: zh translates 'Water tank', which is not the plan's name, a step's name or a prompt"),
+        "{all}"
+    );
+    assert!(
+        all.contains("plan.ron:8:9: zh translates 'Water box '"),
+        "{all}"
+    );
+    assert_eq!(e.problems.len(), 2, "{all}");
 }
 
 #[test]

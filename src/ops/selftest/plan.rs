@@ -24,6 +24,10 @@ pub struct Plan {
     pub profile: String,
     /// The steps, in order.
     pub steps: Vec<Step>,
+    /// The plan's own words in Chinese, by the English text they translate (its name, a step's
+    /// name, an operator prompt): the file's `zh: { "Gyro at rest": "静止陀螺仪", ... }`.
+    /// Records and logs keep the English names; the window shows these in 中文.
+    pub zh: BTreeMap<String, String>,
 }
 
 /// One checked step.
@@ -133,6 +137,15 @@ pub struct Action {
 }
 
 impl Plan {
+    /// `text` (the plan's name, a step's name or a prompt) as the window shows it in `lang`:
+    /// its [`Plan::zh`] translation in Chinese where the plan gives one, else as written.
+    pub fn said<'a>(&'a self, text: &'a str, lang: crate::i18n::Lang) -> &'a str {
+        match lang {
+            crate::i18n::Lang::Zh => self.zh.get(text).map_or(text, String::as_str),
+            crate::i18n::Lang::En => text,
+        }
+    }
+
     /// Reads a plan file and checks it against `profile`.
     pub fn load(path: &Path, profile: &Profile) -> Result<Plan, DocumentError> {
         document::load(path, document::Limit::SELFTEST_PLAN, |name, text| {
@@ -206,6 +219,30 @@ impl Plan {
                 });
             }
         }
+        for (english, chinese) in &doc.zh {
+            let own = english == &doc.name
+                || doc.steps.iter().any(|s| {
+                    s.name() == english
+                        || matches!(s, DocStep::Operator { prompt, .. } if prompt == english)
+                });
+            let at = [At::Key("zh"), At::Entry(english.clone())];
+            if !own {
+                problems.push((
+                    ErrorKind::Value,
+                    src.problem(
+                        &at,
+                        format!(
+                            "zh translates '{english}', which is not the plan's name, a step's name or a prompt"
+                        ),
+                    ),
+                ));
+            } else if chinese.trim().is_empty() {
+                problems.push((
+                    ErrorKind::Value,
+                    src.problem(&at, format!("zh gives '{english}' an empty translation")),
+                ));
+            }
+        }
         if let Some(&(kind, _)) = problems.first() {
             return Err(DocumentError {
                 file: name.to_string(),
@@ -217,6 +254,7 @@ impl Plan {
             name: doc.name,
             profile: profile.id.clone(),
             steps,
+            zh: doc.zh,
         })
     }
 }
@@ -232,6 +270,8 @@ struct Doc {
     #[serde(default)]
     name: String,
     steps: Vec<DocStep>,
+    #[serde(default)]
+    zh: BTreeMap<String, String>,
 }
 
 fn one() -> u32 {
