@@ -114,6 +114,17 @@ impl ProvisionPanel {
             event.go(false, actions);
         });
         if let Some(plan) = &self.plan {
+            // The recorded parameters by their names in the window's language.
+            let profile = &rt.device.profile;
+            let recorded: Vec<&str> = plan
+                .record
+                .iter()
+                .map(|ident| {
+                    profile.find_param(ident).map_or(ident.as_str(), |p| {
+                        lang.tr(&p.field.name.en, &p.field.name.zh)
+                    })
+                })
+                .collect();
             let ids = match &plan.ids {
                 prov::IdSequence::Start(s) => format!("{} {s}", lang.tr("from", "起始")),
                 prov::IdSequence::List(l) => format!("{l:?}"),
@@ -127,7 +138,7 @@ impl ProvisionPanel {
                 plan.params.len(),
                 lang.tr("parameters", "个参数"),
                 lang.tr("recorded", "记录"),
-                plan.record.join(", ")
+                recorded.join(", ")
             ));
             if !self.state.assigned.is_empty() {
                 ui.weak(format!(
