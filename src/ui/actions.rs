@@ -31,6 +31,17 @@ impl ActionsPanel {
             .iter()
             .filter(|c| c.kind == CommandKind::Action)
             .collect();
+        // The fields' column wraps its label-and-box pairs within what the names' and the
+        // Send buttons' columns leave, so that Send stays in the window however many fields a
+        // command has (the solar cleanbot's grid-line data has five).
+        let layout = crate::ui::layout::ColumnsLeft::new(
+            ui,
+            cmds.iter().map(|c| lang.tr(&c.name.en, &c.name.zh)),
+            [
+                format!("⚠ {}", lang.tr("Send…", "发送…")),
+                lang.tr("Send", "发送").to_string(),
+            ],
+        );
         egui::ScrollArea::vertical()
             .auto_shrink(false)
             .show(ui, |ui| {
@@ -41,39 +52,44 @@ impl ActionsPanel {
                         for cmd in cmds {
                             ui.label(lang.tr(&cmd.name.en, &cmd.name.zh))
                                 .on_hover_text(format!("{} ({})", cmd.ident, cmd.id));
-                            ui.horizontal(|ui| {
+                            layout.wrapped(ui, |ui| {
                                 for f in &cmd.request {
                                     let key = (cmd.id, f.ident.clone());
                                     let text = self.inputs.entry(key).or_default();
-                                    if f.labels.is_empty() {
-                                        let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
-                                        value_box(ui, text, f, lang, 70.0).labelled_by(name.id);
-                                    } else {
-                                        let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
-                                        egui::ComboBox::from_id_salt(("act", cmd.id, &f.ident))
-                                            .selected_text(if text.is_empty() {
-                                                "—".to_string()
-                                            } else {
-                                                text.clone()
-                                            })
-                                            .show_ui(ui, |ui| {
-                                                for l in &f.labels {
-                                                    let label = format!(
-                                                        "{} ({})",
-                                                        lang.tr(&l.name.en, &l.name.zh),
-                                                        l.ident
-                                                    );
-                                                    if ui
-                                                        .selectable_label(*text == l.ident, label)
-                                                        .clicked()
-                                                    {
-                                                        *text = l.ident.clone();
+                                    crate::ui::layout::group(ui, &f.ident, |ui| {
+                                        if f.labels.is_empty() {
+                                            let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
+                                            value_box(ui, text, f, lang, 70.0).labelled_by(name.id);
+                                        } else {
+                                            let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
+                                            egui::ComboBox::from_id_salt(("act", cmd.id, &f.ident))
+                                                .selected_text(if text.is_empty() {
+                                                    "—".to_string()
+                                                } else {
+                                                    text.clone()
+                                                })
+                                                .show_ui(ui, |ui| {
+                                                    for l in &f.labels {
+                                                        let label = format!(
+                                                            "{} ({})",
+                                                            lang.tr(&l.name.en, &l.name.zh),
+                                                            l.ident
+                                                        );
+                                                        if ui
+                                                            .selectable_label(
+                                                                *text == l.ident,
+                                                                label,
+                                                            )
+                                                            .clicked()
+                                                        {
+                                                            *text = l.ident.clone();
+                                                        }
                                                     }
-                                                }
-                                            })
-                                            .response
-                                            .labelled_by(name.id);
-                                    }
+                                                })
+                                                .response
+                                                .labelled_by(name.id);
+                                        }
+                                    });
                                 }
                             });
                             let inputs = command_inputs(cmd, &self.inputs);

@@ -43,6 +43,43 @@ pub fn group<R>(ui: &mut egui::Ui, id_salt: &str, add: impl FnOnce(&mut egui::Ui
     shown.inner
 }
 
+/// A table of three columns (names, a middle that wraps, a button) sized so that the last
+/// column stays in the window: the names' column as wide as its widest name, the buttons' as
+/// its widest button, the middle gets the rest and wraps within it.
+pub struct ColumnsLeft {
+    /// The width, points, the middle column wraps within.
+    pub middle: f32,
+}
+
+impl ColumnsLeft {
+    /// Measures `names` and `buttons` (their texts) in the window's font against the room
+    /// `ui` has now.
+    pub fn new<'a>(
+        ui: &egui::Ui,
+        names: impl IntoIterator<Item = &'a str>,
+        buttons: impl IntoIterator<Item = String>,
+    ) -> Self {
+        let font = body_font(ui);
+        let names = text_width(ui, &font, names);
+        let buttons: Vec<String> = buttons.into_iter().collect();
+        let button = text_width(ui, &font, buttons.iter().map(String::as_str))
+            + 2.0 * ui.spacing().button_padding.x;
+        let gaps = 4.0 * ui.spacing().item_spacing.x + ui.spacing().scroll.bar_width;
+        Self {
+            middle: (ui.available_width() - names - button - gaps).max(160.0),
+        }
+    }
+
+    /// The middle cell: `add` in a row that wraps within [`ColumnsLeft::middle`].
+    pub fn wrapped<R>(&self, ui: &mut egui::Ui, add: impl FnOnce(&mut egui::Ui) -> R) -> R {
+        ui.vertical(|ui| {
+            ui.set_width(self.middle);
+            toolbar(ui, add).inner
+        })
+        .inner
+    }
+}
+
 /// The width, points, a text box needs to show `hint` whole: the hint in the body font, and
 /// the box's frame (its padding, stroke and a little air on each side).
 pub fn box_width_for(ui: &egui::Ui, hint: &str) -> f32 {

@@ -2,8 +2,8 @@
 //! the four demo devices no label parts a word over two lines (in Chinese, where any two
 //! characters may be parted, nor in English), no text is drawn over another, and no label sits
 //! on another row than the box it names; the navigation and the status line stay one line
-//! each; the telemetry plots keep their height and scroll into view; range hints are whole; a
-//! panel keeps its own scroll place.
+//! each; no button lies past the window's edge; the telemetry plots keep their height and
+//! scroll into view; range hints are whole; a panel keeps its own scroll place.
 
 use botbench::i18n::Lang;
 use botbench::sim::SimKind;
@@ -12,7 +12,7 @@ use botbench::ui::state::Answering;
 use botbench::ui::{App, PanelId, Settings, Target};
 use eframe::egui;
 use egui_kittest::Harness;
-use egui_kittest::kittest::{NodeT, Queryable};
+use egui_kittest::kittest::{By, NodeT, Queryable};
 
 use crate::support::gui::{H, app, app_mut, harness_sized, step_until};
 
@@ -197,6 +197,23 @@ fn at_1024_and_800_px_every_view_keeps_words_whole_texts_apart_and_labels_by_the
                         size.y,
                         shown_of(&h, hint)
                     ));
+                }
+                // Every button can be reached: none lies past the window's right edge (the
+                // solar actions' Send buttons once did at 1024 px, behind a wide row).
+                for button in h.query_all(By::new().role(egui::accesskit::Role::Button)) {
+                    let r = button.rect();
+                    if r.max.x > size.x + 1.0 && r.min.y < size.y {
+                        bad.push(format!(
+                            "{} {} {}×{} {lang:?}: button {:?} at x {:.0}..{:.0}, past the window",
+                            kind.name(),
+                            view.name,
+                            size.x,
+                            size.y,
+                            button.accesskit_node().label(),
+                            r.min.x,
+                            r.max.x
+                        ));
+                    }
                 }
                 for parted in parted_labels(&h) {
                     bad.push(format!(

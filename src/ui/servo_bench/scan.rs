@@ -327,92 +327,98 @@ impl ScanState {
             ui.weak(lang.tr("No servos listed yet.", "尚无舵机。"));
             return None;
         }
-        egui::Grid::new("servo-scan")
-            .striped(true)
-            .num_columns(11)
-            .min_col_width(40.0)
+        // A narrow window scrolls the details sideways; the servo and its Rescan stay first.
+        egui::ScrollArea::horizontal()
+            .id_salt("servo-scan-table")
             .show(ui, |ui| {
-                header_row(
-                    ui,
-                    &[
-                        lang.tr("Servo", "舵机"),
-                        lang.tr("Baud", "波特率"),
-                        lang.tr("Type", "型号"),
-                        lang.tr("Firmware", "固件"),
-                        lang.tr("Serial", "序列号"),
-                        lang.tr("Voltage", "电压"),
-                        lang.tr("Temperature", "温度"),
-                        lang.tr("Status (raw)", "状态(原始)"),
-                        lang.tr("Status (decoded)", "状态(解析)"),
-                        lang.tr("Presence", "应答"),
-                        "",
-                    ],
-                );
-                let opt = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
-                for row in &self.rows {
-                    let here = Servo {
-                        id: row.id,
-                        baud: row.baud,
-                    };
-                    let clean = row.presence == Presence::Present;
-                    let label = format!("{} {}", lang.tr("Servo", "舵机"), row.id);
-                    let sel = ui
-                        // Not while a job runs: the port follows the servo selected.
-                        .add_enabled(
-                            clean && !busy,
-                            egui::Button::selectable(selected == Some(here), label),
-                        )
-                        .on_hover_text(lang.tr("Work on this servo", "选择此舵机进行操作"));
-                    if sel.clicked() {
-                        picked = Some(here);
-                    }
-                    ui.label(row.baud.to_string());
-                    ui.label(opt(row.servo_type));
-                    ui.label(opt(row.firmware));
-                    ui.label(opt(row.serial));
-                    ui.label(row.voltage_mv.map_or("-".into(), |v| format!("{v} mV")));
-                    ui.label(crate::ui::inputs::said_in(
-                        row.temperature_text(&rt.device.profile),
-                        lang,
-                    ));
-                    ui.monospace(row.status_hex());
-                    ui.label(row.status.map_or("-".into(), |s| status_bits(s, lang)));
-                    match &row.presence {
-                        Presence::Present => ok_label(ui, lang.tr("ok", "正常")),
-                        Presence::PossibleDuplicate(e) => {
-                            ui.colored_label(
-                                egui::Color32::from_rgb(210, 40, 40),
-                                lang.tr("possible duplicate id", "可能存在重复ID"),
-                            )
-                            .on_hover_text(e);
+                egui::Grid::new("servo-scan")
+                    .striped(true)
+                    .num_columns(11)
+                    .min_col_width(40.0)
+                    .show(ui, |ui| {
+                        header_row(
+                            ui,
+                            &[
+                                lang.tr("Servo", "舵机"),
+                                "",
+                                lang.tr("Baud", "波特率"),
+                                lang.tr("Type", "型号"),
+                                lang.tr("Firmware", "固件"),
+                                lang.tr("Serial", "序列号"),
+                                lang.tr("Voltage", "电压"),
+                                lang.tr("Temperature", "温度"),
+                                lang.tr("Status (raw)", "状态(原始)"),
+                                lang.tr("Status (decoded)", "状态(解析)"),
+                                lang.tr("Presence", "应答"),
+                            ],
+                        );
+                        let opt = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
+                        for row in &self.rows {
+                            let here = Servo {
+                                id: row.id,
+                                baud: row.baud,
+                            };
+                            let clean = row.presence == Presence::Present;
+                            let label = format!("{} {}", lang.tr("Servo", "舵机"), row.id);
+                            let sel = ui
+                                // Not while a job runs: the port follows the servo selected.
+                                .add_enabled(
+                                    clean && !busy,
+                                    egui::Button::selectable(selected == Some(here), label),
+                                )
+                                .on_hover_text(lang.tr("Work on this servo", "选择此舵机进行操作"));
+                            if sel.clicked() {
+                                picked = Some(here);
+                            }
+                            // Beside its servo, so that it is in reach however narrow the window.
+                            let again = ui
+                                .add_enabled(
+                                    rt.connected() && !busy,
+                                    egui::Button::new(format!(
+                                        "{} {}",
+                                        lang.tr("Rescan", "重新扫描"),
+                                        row.id
+                                    )),
+                                )
+                                .on_hover_text(lang.tr(
+                                    "Ping this id again at this baud rate and read its details",
+                                    "在此波特率下重新检测此ID并读取信息",
+                                ));
+                            if again.clicked() {
+                                let plan = ScanPlan {
+                                    ids: row.id..=row.id,
+                                    bauds: vec![row.baud],
+                                    home_baud: port_baud(rt).unwrap_or(rt.device.profile.baud),
+                                };
+                                actions.push(scan_job(rt, plan, Some(here)));
+                            }
+                            ui.label(row.baud.to_string());
+                            ui.label(opt(row.servo_type));
+                            ui.label(opt(row.firmware));
+                            ui.label(opt(row.serial));
+                            ui.label(row.voltage_mv.map_or("-".into(), |v| format!("{v} mV")));
+                            ui.label(crate::ui::inputs::said_in(
+                                row.temperature_text(&rt.device.profile),
+                                lang,
+                            ));
+                            ui.monospace(row.status_hex());
+                            ui.label(row.status.map_or("-".into(), |s| status_bits(s, lang)));
+                            match &row.presence {
+                                Presence::Present => ok_label(ui, lang.tr("ok", "正常")),
+                                Presence::PossibleDuplicate(e) => {
+                                    ui.colored_label(
+                                        egui::Color32::from_rgb(210, 40, 40),
+                                        lang.tr("possible duplicate id", "可能存在重复ID"),
+                                    )
+                                    .on_hover_text(e);
+                                }
+                                Presence::Absent => {
+                                    ui.weak(lang.tr("absent", "无应答"));
+                                }
+                            }
+                            ui.end_row();
                         }
-                        Presence::Absent => {
-                            ui.weak(lang.tr("absent", "无应答"));
-                        }
-                    }
-                    let again = ui
-                        .add_enabled(
-                            rt.connected() && !busy,
-                            egui::Button::new(format!(
-                                "{} {}",
-                                lang.tr("Rescan", "重新扫描"),
-                                row.id
-                            )),
-                        )
-                        .on_hover_text(lang.tr(
-                            "Ping this id again at this baud rate and read its details",
-                            "在此波特率下重新检测此ID并读取信息",
-                        ));
-                    if again.clicked() {
-                        let plan = ScanPlan {
-                            ids: row.id..=row.id,
-                            bauds: vec![row.baud],
-                            home_baud: port_baud(rt).unwrap_or(rt.device.profile.baud),
-                        };
-                        actions.push(scan_job(rt, plan, Some(here)));
-                    }
-                    ui.end_row();
-                }
+                    });
             });
         picked
     }
