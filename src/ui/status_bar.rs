@@ -13,6 +13,25 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         // One line: every part keeps its words whole; the message last, cut to the room left
         // (whole on hover).
         super::layout::keep_words_whole(ui);
+        // A running job first, so that its Cancel is in reach however long the rest is.
+        if let Some((title, fraction, msg)) = rt.job_progress() {
+            ui.label(title.get(lang));
+            ui.add(
+                egui::ProgressBar::new(fraction)
+                    .desired_width(160.0)
+                    .show_percentage(),
+            );
+            if ui.button(lang.tr("Cancel", "取消")).clicked() {
+                actions.push(Action::CancelJob);
+            }
+            // What the job is doing, in at most a third of the room left: the message after it
+            // keeps the rest.
+            let room = egui::vec2(ui.available_width() / 3.0, ui.spacing().interact_size.y);
+            ui.allocate_ui(room, |ui| {
+                super::layout::one_line(ui, egui::RichText::new(msg.get(lang)).weak())
+            });
+            ui.separator();
+        }
         match rt.link.target() {
             Some(target) => {
                 ui.label(target.label_in(lang));
@@ -33,24 +52,6 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
             None => {
                 ui.label(lang.tr("not connected", "未连接"));
             }
-        }
-        if let Some((title, fraction, msg)) = rt.job_progress() {
-            ui.separator();
-            ui.label(title.get(lang));
-            ui.add(
-                egui::ProgressBar::new(fraction)
-                    .desired_width(160.0)
-                    .show_percentage(),
-            );
-            if ui.button(lang.tr("Cancel", "取消")).clicked() {
-                actions.push(Action::CancelJob);
-            }
-            // What the job is doing, in at most a third of the room left: the message after it
-            // keeps the rest.
-            let room = egui::vec2(ui.available_width() / 3.0, ui.spacing().interact_size.y);
-            ui.allocate_ui(room, |ui| {
-                super::layout::one_line(ui, egui::RichText::new(msg.get(lang)).weak())
-            });
         }
         if let Some(s) = &rt.notice {
             ui.separator();

@@ -2,7 +2,7 @@
 //! the four demo devices no label parts a word over two lines (in Chinese, where any two
 //! characters may be parted, nor in English), no text is drawn over another, and no label sits
 //! on another row than the box it names; the navigation and the status line stay one line
-//! each; no button lies past the window's edge; the telemetry plots keep their height and
+//! each; no control lies past the window's edge; the telemetry plots keep their height and
 //! scroll into view; range hints are whole; a panel keeps its own scroll place.
 
 use botbench::i18n::Lang;
@@ -198,13 +198,22 @@ fn at_1024_and_800_px_every_view_keeps_words_whole_texts_apart_and_labels_by_the
                         shown_of(&h, hint)
                     ));
                 }
-                // Every button can be reached: none lies past the window's right edge (the
+                // Every control can be reached: none lies past the window's right edge (the
                 // solar actions' Send buttons once did at 1024 px, behind a wide row).
-                for button in h.query_all(By::new().role(egui::accesskit::Role::Button)) {
+                use egui::accesskit::Role;
+                let controls = [
+                    Role::Button,
+                    Role::TextInput,
+                    Role::ComboBox,
+                    Role::CheckBox,
+                ]
+                .into_iter()
+                .flat_map(|role| h.query_all(By::new().role(role)).collect::<Vec<_>>());
+                for button in controls {
                     let r = button.rect();
                     if r.max.x > size.x + 1.0 && r.min.y < size.y {
                         bad.push(format!(
-                            "{} {} {}×{} {lang:?}: button {:?} at x {:.0}..{:.0}, past the window",
+                            "{} {} {}×{} {lang:?}: control {:?} at x {:.0}..{:.0}, past the window",
                             kind.name(),
                             view.name,
                             size.x,

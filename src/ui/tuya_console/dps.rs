@@ -64,6 +64,8 @@ pub struct DpView {
     log_from: u64,
     /// The connection the sends and marks belong to.
     generation: u64,
+    /// The width, points, a bitmap's bit names wrap within (this frame's share of the window).
+    bits_width: f32,
 }
 
 /// A value as shown, with its unit: labels by name, bools as on/off, raw as hex.
@@ -216,6 +218,7 @@ impl DpView {
         ));
         ui.add_space(4.0);
         let defs = rt.device.profile.data_points.clone();
+        self.bits_width = (ui.available_width() * 0.3).clamp(160.0, 420.0);
         egui::Grid::new("tuya-dps")
             .num_columns(6)
             .striped(true)
@@ -254,7 +257,9 @@ impl DpView {
         let misfit = rt.device.tuya.misfits.get(&def.id);
         match (misfit, reported) {
             (Some((m, _, _)), _) => misfit_label(ui, lang, m),
-            (None, Some(st)) if def.dp_type == DpType::Bitmap => bits(ui, lang, def, &st.value),
+            (None, Some(st)) if def.dp_type == DpType::Bitmap => {
+                bits(ui, lang, def, &st.value, self.bits_width)
+            }
             (None, Some(st)) => {
                 ui.monospace(shown(lang, def, &st.value));
             }
@@ -509,29 +514,30 @@ impl DpView {
 
 /// A bitmap: its value and each named bit, lit when set, four names a line: the row takes the
 /// height of its lines (a wrapped line in a grid cell was drawn over the next row).
-fn bits(ui: &mut egui::Ui, lang: Lang, def: &DataPointDef, v: &Value) {
+fn bits(ui: &mut egui::Ui, lang: Lang, def: &DataPointDef, v: &Value, width: f32) {
     let Value::Int(raw) = v else {
         ui.monospace(format!("{v:?}"));
         return;
     };
     ui.vertical(|ui| {
+        // The names wrap within the column's share of the window (DP 18's eight fault names
+        // pushed the Command column off an 800 px window).
+        ui.set_max_width(width);
         ui.monospace(format!("{raw:#04x}"));
-        for line in def.field.bits.chunks(4) {
-            ui.horizontal(|ui| {
-                for b in line {
-                    let name = lang.tr(&b.name.en, &b.name.zh);
-                    if b.bit < 64 && raw >> b.bit & 1 == 1 {
-                        ui.label(
-                            egui::RichText::new(name)
-                                .color(egui::Color32::WHITE)
-                                .background_color(egui::Color32::from_rgb(200, 40, 40)),
-                        );
-                    } else {
-                        ui.weak(name);
-                    }
+        crate::ui::layout::toolbar(ui, |ui| {
+            for b in &def.field.bits {
+                let name = lang.tr(&b.name.en, &b.name.zh);
+                if b.bit < 64 && raw >> b.bit & 1 == 1 {
+                    ui.label(
+                        egui::RichText::new(name)
+                            .color(egui::Color32::WHITE)
+                            .background_color(egui::Color32::from_rgb(200, 40, 40)),
+                    );
+                } else {
+                    ui.weak(name);
                 }
-            });
-        }
+            }
+        });
     });
 }
 
