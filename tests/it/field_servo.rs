@@ -371,3 +371,59 @@ fn a_servo_whose_ping_answer_comes_after_the_last_sweep_is_found_with_its_detail
     assert!(report.asked_again >= 1, "{report:?}");
     assert!(report.late_answers >= 2, "{report:?}");
 }
+
+#[test]
+fn a_scan_paced_by_the_bus_behind_a_16_ms_adapter_collides_with_no_answer_and_learns_the_latency() {
+    // A half-duplex bus whose servos take the longest the vendor allows (1 ms) to answer, behind
+    // an adapter that hands the host what it received only every 16 ms; the simulator knows when
+    // each request went out (lockstep), so a request sent while an answer is still on the wire
+    // garbles both.
+    let profile = Registry::builtin().unwrap().get("servo").unwrap();
+    let servos = [0u8, 1, 5]
+        .map(|id| SimServo::fresh(1000 + u32::from(id)).with_id(id))
+        .to_vec();
+    let bus = ServoBus::new(servos).with_latency(std::time::Duration::from_millis(1));
+    let faults = Faults {
+        line: botbench::sim::Line {
+            latency_timer: Some(std::time::Duration::from_millis(16)),
+            half_duplex: true,
+            ..botbench::sim::Line::default()
+        },
+        ..Faults::default()
+    };
+    let server = PtyServer::start_lockstep(Arc::new(Mutex::new(bus)), faults).unwrap();
+    // A default scan: the automatic margin, nothing known of the adapter.
+    let link = Link::open(
+        serial::opener(server.path(), profile.baud),
+        profile.clone(),
+        LinkOptions::default(),
+        None,
+    )
+    .unwrap();
+    let plan = ops::ScanPlan {
+        ids: 0..=254,
+        bauds: vec![profile.baud],
+        home_baud: profile.baud,
+    };
+    let report = ops::scan(
+        &link.client(),
+        &profile,
+        &plan,
+        &botbench::ops::Cancel::new(),
+        &mut |_| {},
+        &mut |_| {},
+    )
+    .unwrap();
+    let found: Vec<(u8, Option<i64>)> = report.rows.iter().map(|r| (r.id, r.serial)).collect();
+    assert_eq!(
+        found,
+        vec![(0, Some(1000)), (1, Some(1001)), (5, Some(1005))],
+        "{report:?}"
+    );
+    // Each ping left the bus to its answer: none collided, so no id had to be asked again.
+    assert_eq!(report.asked_again, 0, "{report:?}");
+    // The first answers reached the host after their 1.5 ms window, and counted all the same;
+    // the margin the scan ended with is the 16 ms it measured, not the servo's 1.5 ms.
+    assert!(report.late_answers >= 1, "{report:?}");
+    assert!(report.margin_ms >= 16.0, "{report:?}");
+}
