@@ -446,10 +446,11 @@ pub fn tuya_handshake(baud: u32, chatty: Option<Duration>) -> Result<Figure, Str
 }
 
 /// Everything; `long` adds the 8-baud scan and the 9600-baud OTA (about 80 s), `field` the
-/// field scan's 60 runs ([`field_scans`], about a minute).
+/// field scan's 60 runs ([`field_scans`], about a minute, stopped between runs by `cancel`).
 pub fn run_all(
     long: bool,
     field: bool,
+    cancel: &Cancel,
     report: &mut dyn FnMut(&Figure),
 ) -> Result<Vec<Figure>, String> {
     let mut out = Vec::new();
@@ -463,7 +464,7 @@ pub fn run_all(
         add(f, &mut out);
     }
     if field {
-        for f in field_scans()? {
+        for f in field_scans(cancel)? {
             add(f, &mut out);
         }
     }

@@ -117,9 +117,10 @@ enum Cmd {
         /// Also the 8-baud scan and the 9600-baud firmware upload (about 90 s more).
         #[arg(long)]
         long: bool,
-        /// Also the field scan: 20 default scans of servos 0, 1, 5 without adapter latency,
-        /// behind a 16 ms latency-timer adapter, and that with two CPU-bound processes
-        /// beside it (about a minute more).
+        /// Also the field scan: 20 default `servo scan`s of servos 0, 1, 5 served by
+        /// `botbench sim servo-bus`, without adapter latency, behind a 16 ms latency timer,
+        /// and that with two CPU-bound processes beside it (about a minute more; Ctrl-C stops
+        /// it between scans, every process it started killed).
         #[arg(long)]
         field: bool,
         /// One JSON document a line.
@@ -269,7 +270,12 @@ fn bench(long: bool, field: bool, json: bool) -> CliResult {
             "botbench: this is a debug build; run `cargo run --release -- bench` for real figures"
         );
     }
-    crate::bench::run_all(long, field, &mut |f| {
+    let cancel = if field {
+        port::cancel_on_ctrl_c()
+    } else {
+        crate::ops::Cancel::new()
+    };
+    crate::bench::run_all(long, field, &cancel, &mut |f| {
         if json {
             println!("{}", serde_json::to_string(f).unwrap_or_default());
         } else {
