@@ -289,6 +289,24 @@ fn pings(ids: &[u8], listen: bool) -> botbench::link::Sweep {
     sweep
 }
 
+/// A default scan of ids 0-254 at the profile's rate.
+fn scan_all(link: &Link, profile: &botbench::profile::Profile) -> ops::ScanReport {
+    let plan = ops::ScanPlan {
+        ids: 0..=254,
+        bauds: vec![profile.baud],
+        home_baud: profile.baud,
+    };
+    ops::scan(
+        &link.client(),
+        profile,
+        &plan,
+        &botbench::ops::Cancel::new(),
+        &mut |_| {},
+        &mut |_| {},
+    )
+    .unwrap()
+}
+
 #[test]
 fn a_sweep_that_listens_hands_back_the_answers_still_on_their_way() {
     let (_server, link, _) = late_bus(30, vec![SimServo::fresh(1).with_id(7)]);
@@ -348,20 +366,7 @@ fn a_servo_whose_ping_answer_comes_after_the_last_sweep_is_found_with_its_detail
             SimServo::fresh(1254).with_id(254),
         ],
     );
-    let plan = ops::ScanPlan {
-        ids: 0..=254,
-        bauds: vec![115_200],
-        home_baud: 115_200,
-    };
-    let report = ops::scan(
-        &link.client(),
-        &profile,
-        &plan,
-        &botbench::ops::Cancel::new(),
-        &mut |_| {},
-        &mut |_| {},
-    )
-    .unwrap();
+    let report = scan_all(&link, &profile);
     let found: Vec<(u8, Option<i64>)> = report.rows.iter().map(|r| (r.id, r.serial)).collect();
     assert_eq!(
         found,
@@ -400,20 +405,7 @@ fn a_scan_paced_by_the_bus_behind_a_16_ms_adapter_collides_with_no_answer_and_le
         None,
     )
     .unwrap();
-    let plan = ops::ScanPlan {
-        ids: 0..=254,
-        bauds: vec![profile.baud],
-        home_baud: profile.baud,
-    };
-    let report = ops::scan(
-        &link.client(),
-        &profile,
-        &plan,
-        &botbench::ops::Cancel::new(),
-        &mut |_| {},
-        &mut |_| {},
-    )
-    .unwrap();
+    let report = scan_all(&link, &profile);
     let found: Vec<(u8, Option<i64>)> = report.rows.iter().map(|r| (r.id, r.serial)).collect();
     assert_eq!(
         found,
