@@ -117,6 +117,12 @@ enum Cmd {
         /// Also the 8-baud scan and the 9600-baud firmware upload (about 90 s more).
         #[arg(long)]
         long: bool,
+        /// Also the field scan: 20 default `servo scan`s of servos 0, 1, 5 served by
+        /// `botbench sim servo-bus`, without adapter latency, behind a 16 ms latency timer,
+        /// and that with two CPU-bound processes beside it (about a minute more; Ctrl-C stops
+        /// it between scans, every process it started killed).
+        #[arg(long)]
+        field: bool,
         /// One JSON document a line.
         #[arg(long)]
         json: bool,
@@ -182,7 +188,7 @@ fn run(cli: Cli) -> CliResult {
         Some(Cmd::Msp(args)) => msp::run(args),
         Some(Cmd::Servo(args)) => servo::run(args),
         Some(Cmd::Tuya(args)) => tuya::run(args),
-        Some(Cmd::Bench { long, json }) => bench(long, json),
+        Some(Cmd::Bench { long, field, json }) => bench(long, field, json),
         Some(Cmd::Preset(cmd)) => preset::run(cmd),
         Some(Cmd::Sim(args)) => sim::run(args),
         Some(Cmd::Gui {
@@ -258,13 +264,18 @@ fn ports(json: bool, set_latency_timer: Option<Vec<String>>) -> CliResult {
     Ok(0)
 }
 
-fn bench(long: bool, json: bool) -> CliResult {
+fn bench(long: bool, field: bool, json: bool) -> CliResult {
     if cfg!(debug_assertions) {
         eprintln!(
             "botbench: this is a debug build; run `cargo run --release -- bench` for real figures"
         );
     }
-    crate::bench::run_all(long, &mut |f| {
+    let cancel = if field {
+        port::cancel_on_ctrl_c()
+    } else {
+        crate::ops::Cancel::new()
+    };
+    crate::bench::run_all(long, field, &cancel, &mut |f| {
         if json {
             println!("{}", serde_json::to_string(f).unwrap_or_default());
         } else {

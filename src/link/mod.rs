@@ -110,6 +110,11 @@ pub struct Sweep {
     pub answer_bytes: usize,
     /// The longest a device takes on the bus before it answers.
     pub device_latency: Duration,
+    /// Also listen for the answers earlier requests still owe: the sweep ends no sooner than
+    /// the grace an unanswered exchange is given after it began, and what comes meanwhile that
+    /// answers none of its requests is in [`SweepReply::strays`]. A sweep of no request always
+    /// listens (it is there to collect what is still on its way).
+    pub listen: bool,
 }
 
 /// An answer a sweep brought.
@@ -121,15 +126,30 @@ pub struct SweepAnswer {
     pub late: bool,
 }
 
+/// A damaged frame a sweep read, and where it can have come from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Damaged {
+    /// What is wrong with it.
+    pub error: FrameError,
+    /// The sweep's requests (indices) it can have come from or destroyed (on a half-duplex bus a
+    /// collision garbles the answer and the request it met): those still unanswered that were
+    /// sent after the last clean answer before it and before it came.
+    pub candidates: Vec<usize>,
+    /// No clean answer to the sweep came before it: it can also be a late answer to a request
+    /// sent before the sweep (the devices answer in order, so not once one of the sweep's came).
+    pub maybe_earlier: bool,
+}
+
 /// What a sweep brought.
 #[derive(Debug, Clone)]
 pub struct SweepReply {
     /// For each request, in order: its answer, if one came.
     pub answers: Vec<Option<SweepAnswer>>,
-    /// Each damaged frame, with the requests (indices) it can have come from: those sent before
-    /// it came, after the last clean answer before it and before the first clean answer after it.
-    pub garbled: Vec<(FrameError, Vec<usize>)>,
-    /// Answers to none of the sweep's requests (late answers to earlier ones).
+    /// Each damaged frame, in the order they came.
+    pub garbled: Vec<Damaged>,
+    /// Answers to none of the sweep's requests (late answers to earlier ones): the servo frames
+    /// read since the sweep before it that answered no request of their own (late answers to
+    /// earlier exchanges included; the latest 64), then those that came while it ran.
     pub strays: Vec<Packet>,
     /// The margin the sweep waited with.
     pub margin: Duration,

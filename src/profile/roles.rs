@@ -34,8 +34,20 @@ pub enum ParamRole {
         /// Option value → baud rate.
         rates: BTreeMap<u8, u32>,
     },
-    /// The servo's serial number (the seed's parameter 8): the provisioning log records it.
+    /// The servo's serial number (the seed's parameter 8): the provisioning log records it, a
+    /// scan shows it.
     SerialNumber,
+    /// The servo's model (the seed's parameter 6, 舵机型号): a scan shows it.
+    ServoType,
+    /// The servo's firmware version (the seed's parameter 7): a scan shows it.
+    FirmwareVersion,
+    /// The supply voltage in mV (the seed's parameter 1): a scan shows it.
+    Voltage,
+    /// The temperature (the seed's parameter 4), raw: a scan shows it as the parameter's field
+    /// displays it (°C, or a converted thermistor reading).
+    Temperature,
+    /// The raw status byte (the seed's parameter 5): a scan shows it in hex.
+    Status,
 }
 
 impl ParamRole {
@@ -48,6 +60,11 @@ impl ParamRole {
             ParamRole::ServoId => "ServoId",
             ParamRole::BaudOption { .. } => "BaudOption",
             ParamRole::SerialNumber => "SerialNumber",
+            ParamRole::ServoType => "ServoType",
+            ParamRole::FirmwareVersion => "FirmwareVersion",
+            ParamRole::Voltage => "Voltage",
+            ParamRole::Temperature => "Temperature",
+            ParamRole::Status => "Status",
         }
     }
 }
@@ -103,7 +120,9 @@ impl Profile {
             .map(|(o, _)| *o)
     }
 
-    fn param_with_role(&self, role: &ParamRole) -> Option<&Param> {
+    /// The servo parameter with `role` (for [`ParamRole::BaudOption`], whatever its rates),
+    /// if the profile gives one.
+    pub fn param_with_role(&self, role: &ParamRole) -> Option<&Param> {
         self.params
             .iter()
             .find(|p| p.role.as_ref().is_some_and(|r| r.same_kind(role)))
@@ -252,6 +271,16 @@ mod tests {
         assert_eq!(servo.servo_id_param().map(|p| p.id), Some(34));
         assert_eq!(servo.serial_number_param().map(|p| p.id), Some(8));
         assert_eq!(servo.baud_option_param().map(|(p, _)| p.id), Some(36));
+        // What a scan reads of each servo found: type, firmware, serial, voltage,
+        // temperature, status.
+        let scanned: Vec<Option<u8>> = crate::ops::servo::SCAN_ROLES
+            .iter()
+            .map(|r| servo.param_with_role(r).map(|p| p.id))
+            .collect();
+        assert_eq!(
+            scanned,
+            [Some(6), Some(7), Some(8), Some(1), Some(4), Some(5)]
+        );
         assert_eq!(
             servo.servo_bauds(),
             [
@@ -327,6 +356,26 @@ mod tests {
                 .contains("second parameter with role SerialNumber"),
             "{err}"
         );
+
+        // Two temperatures for a scan to show.
+        let src = edited(
+            "servo",
+            "(id: 2, access: ReadOnly, field:",
+            "(id: 2, access: ReadOnly, role: Some(Temperature), field:",
+        );
+        let err = load("servo", &src).unwrap_err();
+        assert!(
+            err.message
+                .contains("second parameter with role Temperature"),
+            "{err}"
+        );
+        // Located at the second one.
+        let at = src
+            .match_indices("role: Some(Temperature)")
+            .nth(1)
+            .expect("two")
+            .0;
+        assert_eq!(err.line, src[..at].matches('\n').count() + 1, "{err}");
 
         // An id that cannot be written.
         let src = edited(

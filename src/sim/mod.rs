@@ -8,6 +8,7 @@ mod kind;
 pub mod line;
 pub mod lockstep;
 pub mod msp_device;
+pub mod process;
 pub mod pty;
 pub mod runner;
 pub mod solar_cleanbot;

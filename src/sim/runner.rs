@@ -213,6 +213,20 @@ impl Wire {
         for chunk in self.inbound.iter_mut().filter(|c| c.at > now) {
             chunk.baud = self.baud;
         }
+        // The host's UART reads at the new rate from now on: what the device still sends at
+        // another rate arrives as garbage (what has crossed already is the adapter's).
+        let byte = wire_time(1, self.baud);
+        for d in self
+            .outbound
+            .iter_mut()
+            .filter(|d| !d.echo && d.byte != byte)
+        {
+            for (i, b) in d.bytes.iter_mut().enumerate() {
+                if d.start + d.byte * (i as u32 + 1) > now {
+                    *b = self.rng.u8(..);
+                }
+            }
+        }
     }
 
     pub(crate) fn device(&self) -> SharedDevice {

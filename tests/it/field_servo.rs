@@ -246,3 +246,176 @@ fn operations_refuse_the_broadcast_id_and_send_nothing() {
     });
     assert_eq!(first.map(|p| p.payload), Some(vec![1]));
 }
+
+/// A bus whose answers all reach the host `late_ms` late, and a link told to wait 2 ms for them
+/// (a `--margin-ms` set too short): each answer comes after its window.
+fn late_bus(
+    late_ms: u64,
+    servos: Vec<SimServo>,
+) -> (PtyServer, Link, Arc<botbench::profile::Profile>) {
+    late_bus_with(
+        Faults {
+            extra_latency: std::time::Duration::from_millis(late_ms),
+            ..Faults::default()
+        },
+        servos,
+    )
+}
+
+fn late_bus_with(
+    faults: Faults,
+    servos: Vec<SimServo>,
+) -> (PtyServer, Link, Arc<botbench::profile::Profile>) {
+    let profile = Registry::builtin().unwrap().get("servo").unwrap();
+    let bus: SharedDevice = Arc::new(Mutex::new(ServoBus::new(servos)));
+    let server = PtyServer::start_lockstep(bus, faults).unwrap();
+    let options = LinkOptions {
+        margin: Some(std::time::Duration::from_millis(2)),
+        ..LinkOptions::default()
+    };
+    let link = Link::open(
+        serial::opener(server.path(), 115_200),
+        profile.clone(),
+        options,
+        None,
+    )
+    .unwrap();
+    (server, link, profile)
+}
+
+fn pings(ids: &[u8], listen: bool) -> botbench::link::Sweep {
+    let mut sweep = ops::ping_sweep(ids);
+    sweep.listen = listen;
+    sweep
+}
+
+/// A default scan of ids 0-254 at the profile's rate.
+fn scan_all(link: &Link, profile: &botbench::profile::Profile) -> ops::ScanReport {
+    let plan = ops::ScanPlan {
+        ids: 0..=254,
+        bauds: vec![profile.baud],
+        home_baud: profile.baud,
+    };
+    ops::scan(
+        &link.client(),
+        profile,
+        &plan,
+        &botbench::ops::Cancel::new(),
+        &mut |_| {},
+        &mut |_| {},
+    )
+    .unwrap()
+}
+
+#[test]
+fn a_sweep_that_listens_hands_back_the_answers_still_on_their_way() {
+    let (_server, link, _) = late_bus(30, vec![SimServo::fresh(1).with_id(7)]);
+    let client = link.client();
+    // The sweep ends 2 ms after its window: servo 7's answer is still on its way.
+    let first = client.sweep(pings(&[7], false)).unwrap();
+    assert!(first.answers[0].is_none(), "{first:?}");
+    // A sweep that listens takes it, as an answer to none of its own requests.
+    let next = client.sweep(pings(&[9], true)).unwrap();
+    assert!(next.answers[0].is_none(), "{next:?}");
+    let late: Vec<Vec<u8>> = next.strays.iter().map(|p| p.payload.clone()).collect();
+    assert_eq!(late, vec![vec![7]], "{next:?}");
+}
+
+#[test]
+fn a_damaged_frame_before_any_clean_answer_may_be_an_earlier_sweeps_answer() {
+    // Every answer damaged, and 30 ms late.
+    let faults = Faults {
+        extra_latency: std::time::Duration::from_millis(30),
+        corrupt: 1.0,
+        ..Faults::default()
+    };
+    let (_server, link, _) = late_bus_with(faults, vec![SimServo::fresh(1).with_id(7)]);
+    let client = link.client();
+    let first = client.sweep(pings(&[7], false)).unwrap();
+    assert!(
+        first.answers[0].is_none() && first.garbled.is_empty(),
+        "{first:?}"
+    );
+    // Servo 7's damaged answer comes during the next sweep, or before it: nothing of that sweep
+    // answered before it, so it may answer an earlier request (a scan asks 7 again).
+    let next = client.sweep(pings(&[9], true)).unwrap();
+    assert_eq!(next.garbled.len(), 1, "{next:?}");
+    assert!(next.garbled[0].maybe_earlier, "{next:?}");
+}
+
+#[test]
+fn an_answer_that_comes_after_its_exchange_gave_up_is_handed_to_the_next_sweep() {
+    // 200 ms: beyond the grace a first exchange is given (150 ms).
+    let (_server, link, _) = late_bus(200, vec![SimServo::fresh(1).with_id(7)]);
+    let client = link.client();
+    assert_eq!(ops::ping(&client, 7, 1).unwrap(), ops::Presence::Absent);
+    // Read while the next sweep listens, or before it began: a stray of that sweep either way,
+    // so that a scan that asked servo 7 again still finds it.
+    let tail = client.sweep(ops::ping_sweep(&[])).unwrap();
+    let late: Vec<Vec<u8>> = tail.strays.iter().map(|p| p.payload.clone()).collect();
+    assert_eq!(late, vec![vec![7]], "{tail:?}");
+}
+
+#[test]
+fn a_servo_whose_ping_answer_comes_after_the_last_sweep_is_found_with_its_details() {
+    // 254 is pinged last: its answer comes while the details of 3 are read.
+    let (_server, link, profile) = late_bus(
+        30,
+        vec![
+            SimServo::fresh(1003).with_id(3),
+            SimServo::fresh(1254).with_id(254),
+        ],
+    );
+    let report = scan_all(&link, &profile);
+    let found: Vec<(u8, Option<i64>)> = report.rows.iter().map(|r| (r.id, r.serial)).collect();
+    assert_eq!(
+        found,
+        vec![(3, Some(1003)), (254, Some(1254))],
+        "{report:?}"
+    );
+    assert!(report.asked_again >= 1, "{report:?}");
+    assert!(report.late_answers >= 2, "{report:?}");
+}
+
+#[test]
+fn a_scan_paced_by_the_bus_behind_a_16_ms_adapter_collides_with_no_answer_and_learns_the_latency() {
+    // A half-duplex bus whose servos take the longest the vendor allows (1 ms) to answer, behind
+    // an adapter that hands the host what it received only every 16 ms; the simulator knows when
+    // each request went out (lockstep), so a request sent while an answer is still on the wire
+    // garbles both.
+    let profile = Registry::builtin().unwrap().get("servo").unwrap();
+    let servos = [0u8, 1, 5]
+        .map(|id| SimServo::fresh(1000 + u32::from(id)).with_id(id))
+        .to_vec();
+    let bus = ServoBus::new(servos).with_latency(std::time::Duration::from_millis(1));
+    let faults = Faults {
+        line: botbench::sim::Line {
+            latency_timer: Some(std::time::Duration::from_millis(16)),
+            half_duplex: true,
+            ..botbench::sim::Line::default()
+        },
+        ..Faults::default()
+    };
+    let server = PtyServer::start_lockstep(Arc::new(Mutex::new(bus)), faults).unwrap();
+    // A default scan: the automatic margin, nothing known of the adapter.
+    let link = Link::open(
+        serial::opener(server.path(), profile.baud),
+        profile.clone(),
+        LinkOptions::default(),
+        None,
+    )
+    .unwrap();
+    let report = scan_all(&link, &profile);
+    let found: Vec<(u8, Option<i64>)> = report.rows.iter().map(|r| (r.id, r.serial)).collect();
+    assert_eq!(
+        found,
+        vec![(0, Some(1000)), (1, Some(1001)), (5, Some(1005))],
+        "{report:?}"
+    );
+    // Each ping left the bus to its answer: none collided, so no id had to be asked again.
+    assert_eq!(report.asked_again, 0, "{report:?}");
+    // The first answers reached the host after their 1.5 ms window, and counted all the same;
+    // the margin the scan ended with is the 16 ms it measured, not the servo's 1.5 ms.
+    assert!(report.late_answers >= 1, "{report:?}");
+    assert!(report.margin_ms >= 16.0, "{report:?}");
+}

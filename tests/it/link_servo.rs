@@ -52,24 +52,32 @@ fn a_scan_finds_exactly_the_servos_configured_at_their_bauds() {
     );
 }
 
-#[test]
-fn a_scan_reads_each_servos_details() {
-    let bench = Bench::new(vec![SimServo::fresh(4242).with_id(9).with_type(321)]);
+/// The rows of a scan of ids 5-12 at 115200 baud.
+fn scan_5_to_12(
+    client: &botbench::link::Client,
+    profile: &botbench::profile::Profile,
+) -> Vec<ops::ScanRow> {
     let plan = ScanPlan {
         ids: 5..=12,
         bauds: vec![115_200],
         home_baud: 115_200,
     };
-    let rows = ops::scan(
-        &bench.client(),
-        &bench.profile,
+    ops::scan(
+        client,
+        profile,
         &plan,
         &Cancel::new(),
         &mut |_| {},
         &mut |_| {},
     )
     .unwrap()
-    .rows;
+    .rows
+}
+
+#[test]
+fn a_scan_reads_each_servos_details() {
+    let bench = Bench::new(vec![SimServo::fresh(4242).with_id(9).with_type(321)]);
+    let rows = scan_5_to_12(&bench.client(), &bench.profile);
     assert_eq!(rows.len(), 1);
     assert_eq!(rows[0].serial, Some(4242));
     assert_eq!(rows[0].servo_type, Some(321));
@@ -342,4 +350,52 @@ fn an_edited_baud_table_is_the_rate_the_servo_and_the_link_move_to() {
     assert_eq!(ops::set_baud(&c, &profile, 4, 4).unwrap(), 230_400);
     assert_eq!(served.servo(5).baud(), 230_400);
     assert_eq!(ops::ping(&c, 4, 2).unwrap(), Presence::Present);
+}
+
+#[test]
+fn a_scan_reads_the_parameters_the_profile_gives_the_roles_of() {
+    use botbench::link::LinkOptions;
+    use botbench::sim::servo_bus::ServoBus;
+    use std::sync::Arc;
+    // A firmware variant whose document swaps the type and firmware parameters, and that has
+    // no status byte to show.
+    let src = crate::support::builtin_src("servo");
+    let edits = [
+        ("role: Some(ServoType),", "role: Some(Swapped),"),
+        ("role: Some(FirmwareVersion),", "role: Some(ServoType),"),
+        ("role: Some(Swapped),", "role: Some(FirmwareVersion),"),
+        ("role: Some(Status),", ""),
+    ];
+    let mut src = src.to_string();
+    for (from, to) in edits {
+        assert!(src.contains(from), "test setup: {from}");
+        src = src.replacen(from, to, 1);
+    }
+    let profile = Arc::new(
+        botbench::profile::registry::parse("servo.ron", &src, None).expect("the edit loads"),
+    );
+    let served = crate::support::serve(ServoBus::with_profile(
+        profile.clone(),
+        vec![
+            SimServo::fresh_with(&profile, 4242)
+                .with_id(9)
+                .with_type(321)
+                .with_firmware(77)
+                .with_status(0x21),
+        ],
+    ));
+    let link = crate::support::open_link(
+        served.path(),
+        profile.baud,
+        profile.clone(),
+        LinkOptions::default(),
+    );
+    let rows = scan_5_to_12(&link.client(), &profile);
+    assert_eq!(rows.len(), 1, "{rows:?}");
+    // Parameter 7 (the servo's 77) is this profile's type, parameter 6 (321) its firmware.
+    assert_eq!(rows[0].servo_type, Some(77), "{rows:?}");
+    assert_eq!(rows[0].firmware, Some(321), "{rows:?}");
+    assert_eq!(rows[0].serial, Some(4242), "{rows:?}");
+    assert_eq!(rows[0].status, None, "no role, not read: {rows:?}");
+    assert_eq!(rows[0].status_hex(), "-");
 }

@@ -434,3 +434,65 @@ fn a_transport_by_kind_describes_itself_and_answers() {
     };
     assert!(SimTransport::of_kind(SimKind::WindowCleaner, &SimOptions::default(), bad).is_err());
 }
+
+#[test]
+fn an_answer_still_crossing_when_the_host_changes_rate_arrives_as_garbage() {
+    // 300 baud: the version answer takes about half a second to cross.
+    let version = Request::new(0, 2, vec![]).encode().expect("encodes");
+    let read_all = |t: &mut SimTransport, first: &mut Vec<u8>| {
+        let mut buf = [0u8; 64];
+        let deadline = Instant::now() + PATIENCE;
+        while first.is_empty() {
+            let n = t.read(&mut buf, deadline).expect("reads");
+            assert!(n > 0, "no answer at all");
+            first.extend_from_slice(&buf[..n]);
+        }
+    };
+    let rest = |t: &mut SimTransport| {
+        let mut got = Vec::new();
+        let mut buf = [0u8; 64];
+        // Until the line has been quiet for a few bytes' time.
+        while let n @ 1.. = t
+            .read(&mut buf, Instant::now() + Duration::from_millis(200))
+            .expect("reads")
+        {
+            got.extend_from_slice(&buf[..n]);
+        }
+        got
+    };
+    let (_, mut clean) = window_at(300, Faults::default());
+    clean.write(&version).expect("writes");
+    let mut whole = Vec::new();
+    read_all(&mut clean, &mut whole);
+    whole.extend(rest(&mut clean));
+    let mut dec = ReplyDecoder::new();
+    dec.push(&whole);
+    assert!(
+        matches!(dec.next(), Some(Ok(r)) if r.command == 2),
+        "{whole:02x?}"
+    );
+
+    let (_, mut cut) = window_at(300, Faults::default());
+    cut.write(&version).expect("writes");
+    let mut first = Vec::new();
+    read_all(&mut cut, &mut first);
+    cut.set_baud(115_200).expect("switches");
+    let after = rest(&mut cut);
+    assert_eq!(
+        first,
+        whole[..first.len()],
+        "what crossed before the switch"
+    );
+    assert_ne!(
+        after,
+        whole[first.len()..],
+        "read at the new rate, the rest is garbage"
+    );
+    let mut dec = ReplyDecoder::new();
+    dec.push(&first);
+    dec.push(&after);
+    assert!(
+        !matches!(dec.next(), Some(Ok(_))),
+        "{first:02x?} {after:02x?}"
+    );
+}

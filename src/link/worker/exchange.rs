@@ -127,12 +127,14 @@ impl Worker {
         }
     }
 
-    /// Takes every frame already decoded as one that answers no request.
+    /// Takes every frame already decoded as one that answers no request (a servo's is kept for
+    /// the next sweep: it may answer a request of the last one).
     pub(super) fn drain_unsolicited(&mut self) {
         while let Some(item) = self.next_frame() {
             match item {
                 Ok(p) => {
                     self.stats.received += 1;
+                    self.keep_unclaimed(Ok(&p));
                     if self.late_answer(&p) {
                         continue;
                     }
@@ -142,6 +144,7 @@ impl Worker {
                 }
                 Err(e) => {
                     self.stats.frame_errors += 1;
+                    self.keep_unclaimed(Err(&e));
                     self.log_in(Err(e), None);
                 }
             }
@@ -416,6 +419,7 @@ impl Worker {
                     Ok(p) => {
                         self.stats.received += 1;
                         if self.late_answer(&p) {
+                            self.keep_unclaimed(Ok(&p));
                             continue;
                         }
                         if each.accepts(&p) {
@@ -447,6 +451,7 @@ impl Worker {
                                 }
                             };
                         } else {
+                            self.keep_unclaimed(Ok(&p));
                             self.log_in(Ok(p.clone()), None);
                             let unasked = self.session.unasked(&p);
                             if unasked.answers_other() {
@@ -460,6 +465,7 @@ impl Worker {
                     }
                     Err(e) => {
                         self.stats.frame_errors += 1;
+                        self.keep_unclaimed(Err(&e));
                         self.log_in(Err(e.clone()), None);
                         frame_err = Some(e);
                     }
@@ -548,6 +554,21 @@ impl Worker {
             self.emit(LinkEvent::Report(p.clone()));
         }
         true
+    }
+
+    /// Keeps a servo's frame (never a request's echo), or a damaged one, read outside a sweep
+    /// that answers no request of the exchange under way (a late answer to an earlier one
+    /// included) for the next sweep: it may answer one of the last sweep's requests, or tell a
+    /// scan that a servo it asked again is there after all.
+    fn keep_unclaimed(&mut self, frame: Result<&Packet, &FrameError>) {
+        if self.session.protocol() != Protocol::Servo {
+            return;
+        }
+        match frame {
+            Ok(p) if p.direction == Direction::DeviceToHost => self.unclaimed.keep(Ok(p.clone())),
+            Ok(_) => {}
+            Err(e) => self.unclaimed.keep(Err(e.clone())),
+        }
     }
 
     /// Logs a frame (or frame error) from the device, with a note on what it was taken for.

@@ -7,16 +7,51 @@
 
 use super::Worker;
 use crate::link::request::{ExchangeError, ReplySpec};
-use crate::link::{Sweep, SweepAnswer, SweepReply, wire_time};
+use crate::link::{Damaged, Sweep, SweepAnswer, SweepReply, wire_time};
 use crate::packet::Packet;
 use crate::protocol::{Direction, FrameError};
+use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
+/// How long before a paced request is due the sweep stops sleeping and polls the port instead:
+/// waking from a sleep takes the OS 50-100 µs, which a 0-254 scan would otherwise pay 255 times
+/// over (about 20 ms measured, most of what a scan takes beyond the bus's own time). Costs at
+/// most this much CPU a request.
+const PACE_SPIN: Duration = Duration::from_micros(250);
+/// How many frames that answered nothing are kept for the next sweep, at most.
+const UNCLAIMED_CAP: usize = 64;
+
+/// Servo frames that answered no request, read between two sweeps (while the worker was idle,
+/// or during an exchange they did not answer, late answers to earlier exchanges included), and
+/// damaged ones: the next sweep hands them back with its strays and damaged frames, so that an answer that came after its sweep (or
+/// its exchange) had ended still counts for its id however soon the worker read it, and however
+/// many exchanges came in between (a scan asks ids again one by one).
+#[derive(Debug, Default)]
+pub(super) struct Unclaimed(VecDeque<Result<Packet, FrameError>>);
+
+impl Unclaimed {
+    /// Keeps a frame, or a damaged one (the latest [`UNCLAIMED_CAP`] only).
+    pub(super) fn keep(&mut self, frame: Result<Packet, FrameError>) {
+        if self.0.len() >= UNCLAIMED_CAP {
+            self.0.pop_front();
+        }
+        self.0.push_back(frame);
+    }
+
+    /// All of them, oldest first.
+    fn take(&mut self) -> Vec<Result<Packet, FrameError>> {
+        self.0.drain(..).collect()
+    }
+}
+
 /// What came, in the order it came: an answer to request `i`, or a damaged frame when request
-/// `sent` was the last one sent.
+/// `sent` was the last one sent (none: before the sweep's first).
 enum Seen {
     Answer(usize),
-    Damaged { error: FrameError, sent: usize },
+    Damaged {
+        error: FrameError,
+        sent: Option<usize>,
+    },
 }
 
 /// A sweep under way.
@@ -27,14 +62,19 @@ struct Run {
     strays: Vec<Packet>,
     on_wire: Vec<Duration>,
     margin: Duration,
+    /// Whether it listens for what earlier requests still owe (see [`Sweep::listen`]).
+    listen: bool,
 }
 
 impl Worker {
     /// Runs `sweep`: every request at the bus's pace, then the answers still on their way, until
-    /// the line has been quiet for the margin after the last request's window.
+    /// the line has been quiet for the margin after the last request's window (or every request
+    /// has its answer); one that listens, not before the grace an exchange gives has passed
+    /// since it began (the grace as its own answers leave it: they are measured too).
     pub(super) fn run_sweep(&mut self, sweep: &Sweep) -> Result<SweepReply, ExchangeError> {
         let margin = self.auto_margin();
         let n = sweep.requests.len();
+        let started = Instant::now();
         let mut run = Run {
             sent: Vec::with_capacity(n),
             answers: vec![None; n],
@@ -42,7 +82,14 @@ impl Worker {
             strays: Vec::new(),
             on_wire: Vec::with_capacity(n),
             margin,
+            listen: sweep.listen || n == 0,
         };
+        for frame in self.unclaimed.take() {
+            match frame {
+                Ok(p) => run.strays.push(p),
+                Err(error) => run.order.push(Seen::Damaged { error, sent: None }),
+            }
+        }
         let baud = self.baud;
         let answer_time = sweep.device_latency + wire_time(sweep.answer_bytes, baud);
         let mut next = Instant::now();
@@ -54,7 +101,7 @@ impl Worker {
                 )));
             }
             let (bytes, packet) = self.session.encode(req)?;
-            // The bus is free once the last answer can have ended.
+            // The bus is free once the last answer can have ended, or has been read whole.
             self.sweep_read(sweep, &mut run, next, false)?;
             self.commands_during_exchange()?;
             let t = Instant::now();
@@ -62,21 +109,29 @@ impl Worker {
             let on_wire = wire_time(bytes.len(), baud);
             run.sent.push(t);
             run.on_wire.push(on_wire);
-            next = t + on_wire + answer_time;
+            // The request's last byte leaves when the bytes written before it have (`sent_until`);
+            // the device may then take its latency, and its answer the answer's wire time.
+            next = self.sent_until.max(t + on_wire) + answer_time;
         }
         let window = match run.sent.last() {
             Some(&last) => {
                 last + run.on_wire.last().copied().unwrap_or_default() + answer_time + margin
             }
-            // A sweep of nothing collects what is still on its way: the grace an exchange gives.
-            None => Instant::now() + self.timing.grace(margin),
+            None => next,
         };
-        self.sweep_read(sweep, &mut run, window.max(next), true)?;
+        let mut until = window.max(next);
+        if run.listen {
+            until = until.max(started + self.timing.grace(margin));
+        }
+        self.sweep_read(sweep, &mut run, until, true)?;
         Ok(finish(run))
     }
 
     /// Reads and sorts what comes until `until`; when `settle`, also for as long as the line
     /// keeps talking (the frame gap after a frame's first bytes, the margin after a whole one).
+    /// Returns early when nothing more is awaited: pacing (not `settle`), once the last request
+    /// sent has its answer whole (the bus is free: its answer has ended); settling, once every
+    /// request of a sweep that does not listen has its answer.
     fn sweep_read(
         &mut self,
         sweep: &Sweep,
@@ -89,6 +144,9 @@ impl Worker {
         let mut flushed = false;
         loop {
             self.sweep_sort(sweep, run);
+            if self.decoder.buffered() == 0 && run.awaits_nothing(settle) {
+                return Ok(());
+            }
             let now = Instant::now();
             if now >= deadline {
                 let n = self.read_some(now)?;
@@ -106,7 +164,17 @@ impl Worker {
                 }
                 return Ok(());
             }
-            let slice = deadline.min(now + Duration::from_millis(50));
+            // Pacing, the last stretch before the request is due is polled, not slept.
+            let wake = if settle {
+                deadline
+            } else {
+                deadline.checked_sub(PACE_SPIN).unwrap_or(deadline)
+            };
+            let slice = if now < wake {
+                wake.min(now + Duration::from_millis(50))
+            } else {
+                now
+            };
             if self.read_some(slice)? > 0 && settle {
                 flushed = false;
                 deadline = self.settle_deadline(deadline, gap, run.margin);
@@ -153,7 +221,8 @@ impl Worker {
                             run.answers[i] = Some(SweepAnswer { packet: p, late });
                             run.order.push(Seen::Answer(i));
                         }
-                        None if self.late_answer(&p) => {}
+                        // Counted for its own earlier request; a stray all the same.
+                        None if self.late_answer(&p) => run.strays.push(p),
                         None => {
                             self.log_in(
                                 Ok(p.clone()),
@@ -168,7 +237,7 @@ impl Worker {
                     self.log_in(Err(error.clone()), None);
                     run.order.push(Seen::Damaged {
                         error,
-                        sent: run.sent.len().saturating_sub(1),
+                        sent: run.sent.len().checked_sub(1),
                     });
                 }
             }
@@ -176,9 +245,29 @@ impl Worker {
     }
 }
 
-/// The sweep's result: each damaged frame with the requests it can have come from, those after
-/// the last clean answer before it and before the first clean answer after it, sent before it
-/// came.
+impl Run {
+    /// Whether nothing more is awaited: settling, a sweep that does not listen has every
+    /// answer (one that listens settles as the line goes quiet, its answers late ones included);
+    /// pacing, the last request sent has its answer.
+    fn awaits_nothing(&self, settle: bool) -> bool {
+        if settle {
+            !self.listen && self.answers.iter().all(Option::is_some)
+        } else {
+            self.sent
+                .len()
+                .checked_sub(1)
+                .is_some_and(|last| self.answers[last].is_some())
+        }
+    }
+}
+
+/// The sweep's result: each damaged frame with the requests it can have come from or
+/// destroyed, those without an answer sent after the last clean answer before it and before it
+/// came (and, when no clean answer came before it, maybe an earlier request). The devices
+/// answer in order, so it answers one of those before the first clean answer after it; and on a
+/// half-duplex bus an answer that collides with a request garbles both: the
+/// request went out after the answer's own, before the damaged frame was read, and its device,
+/// having heard garbage, stays silent (nothing else would show it was there).
 fn finish(run: Run) -> SweepReply {
     let mut garbled = Vec::new();
     for (k, seen) in run.order.iter().enumerate() {
@@ -189,17 +278,17 @@ fn finish(run: Run) -> SweepReply {
             Seen::Answer(i) => Some(*i + 1),
             Seen::Damaged { .. } => None,
         });
-        let before = run.order[k + 1..].iter().find_map(|s| match s {
-            Seen::Answer(i) => Some(*i),
-            Seen::Damaged { .. } => None,
+        let candidates: Vec<usize> = match sent {
+            Some(sent) => (after.unwrap_or(0)..=*sent)
+                .filter(|&i| i < run.answers.len() && run.answers[i].is_none())
+                .collect(),
+            None => Vec::new(),
+        };
+        garbled.push(Damaged {
+            error: error.clone(),
+            candidates,
+            maybe_earlier: after.is_none(),
         });
-        let lo = after.unwrap_or(0);
-        // Exclusive: the first clean answer after it, or one past the last request sent.
-        let hi = before.unwrap_or(*sent + 1).min(*sent + 1);
-        let candidates: Vec<usize> = (lo..hi)
-            .filter(|&i| i < run.answers.len() && run.answers[i].is_none())
-            .collect();
-        garbled.push((error.clone(), candidates));
     }
     SweepReply {
         answers: run.answers,

@@ -9,7 +9,9 @@
 //!   adapter hands a frame over in bursts, one latency tick apart, so the gap is never less than
 //!   the margin, the adapter's latency timer, or [`FRAME_GAP_MIN`];
 //! - after the last attempt, an exchange still listens for the **grace** period for an answer
-//!   that comes late (a slow adapter not known yet, a loaded host);
+//!   that comes late: [`GRACE_MIN`] while nothing has been measured on the connection (a slow
+//!   adapter not known yet, a loaded host), then less as answers are measured, down to
+//!   [`GRACE_MARGINS`] automatic margins, at least the frame gap;
 //! - an attempt that went unanswered is **owed**: its answer may still come. An owed answer is
 //!   taken for its own request when it comes (counted, its latency learned), never for a later
 //!   request, and it is forgotten when an answer to a later request comes first (the devices
@@ -23,12 +25,21 @@ use std::time::{Duration, Instant};
 /// The least time allowed for the rest of a frame that has started: a USB adapter's default
 /// latency timer (16 ms) with slack.
 pub(crate) const FRAME_GAP_MIN: Duration = Duration::from_millis(20);
-/// The least time an exchange keeps listening after its last attempt, for a late answer: a
-/// loaded host can see an answer 100 ms or more after it came (a default 16 ms latency timer,
-/// and a scheduler that wakes the reader late, twice an exchange: measured up to 50 ms each on
-/// a loaded 2-core machine), before anything has been measured on the connection. Only an
+/// How long an exchange keeps listening after its last attempt, for a late answer, before any
+/// answer latency has been measured on the connection: a loaded host can see an answer 100 ms
+/// or more after it came (a default 16 ms latency timer, and a scheduler that wakes the reader
+/// late, twice an exchange: measured up to 50 ms each on a loaded 2-core machine). Only an
 /// exchange left unanswered pays it.
 pub(crate) const GRACE_MIN: Duration = Duration::from_millis(150);
+/// Once answers have been measured, the grace is this many automatic margins (the latest
+/// answer latencies at their worst, with headroom; a loaded host's delays are in them), at least
+/// the frame gap. A few answers show a connection only roughly (on the simulated slow host that
+/// delays each answer by up to 25 ms at random, one answer in six comes within 4 ms), so with `n`
+/// answers measured the grace stays at least [`GRACE_MIN`] × 2 / (n + 2): 100 ms after one,
+/// 50 ms after four, and the frame gap's 20 ms from about the thirteenth on. An answer later than
+/// the grace is still taken for its own request when it comes (it is owed), and widens the
+/// margin.
+pub(crate) const GRACE_MARGINS: u32 = 4;
 /// The longest automatic margin (beyond it a device is taken for silent).
 const MARGIN_CAP: Duration = Duration::from_millis(250);
 /// How long an owed answer is waited for at least.
@@ -90,9 +101,24 @@ impl AnswerTiming {
             .max(self.margin(Duration::ZERO))
     }
 
-    /// How long an exchange keeps listening after its last attempt's window.
+    /// How long an exchange keeps listening after its last attempt's window, whose margin was
+    /// `margin`: [`GRACE_MARGINS`] automatic margins, at least the frame gap, once answers have
+    /// been measured; never less than [`GRACE_MIN`] × 2 / (answers measured + 2) (all of it
+    /// before any answer), nor than half of `margin`; never more than [`GRACE_MIN`] or one
+    /// automatic margin, whichever is more (a connection whose answers once took 200 ms waits
+    /// no longer than that).
     pub(crate) fn grace(&self, margin: Duration) -> Duration {
-        GRACE_MIN.max(self.margin(Duration::ZERO)).max(margin / 2)
+        let n = self.recent.len() as u32;
+        let doubt = GRACE_MIN * 2 / (n + 2);
+        let learned = if n == 0 {
+            Duration::ZERO
+        } else {
+            let auto = self.margin(Duration::ZERO);
+            self.frame_gap()
+                .max(auto * GRACE_MARGINS)
+                .min(GRACE_MIN.max(auto))
+        };
+        doubt.max(learned).max(margin / 2)
     }
 
     /// How long an owed answer is waited for.
@@ -182,6 +208,47 @@ mod tests {
             t.observe(ms(1));
         }
         assert_eq!(t.measured(), Some(ms(1)));
+    }
+
+    #[test]
+    fn the_grace_is_long_until_answers_are_measured_then_follows_them() {
+        let servo = Duration::from_micros(1500);
+        let mut t = AnswerTiming::new(None);
+        assert_eq!(t.grace(servo), GRACE_MIN);
+        // One quick answer does not show that every answer is quick.
+        t.observe(Duration::from_micros(400));
+        assert_eq!(t.grace(servo), ms(100));
+        for _ in 0..3 {
+            t.observe(Duration::from_micros(400));
+        }
+        assert_eq!(t.grace(servo), ms(50));
+        // Many do: the frame gap is the floor.
+        for _ in 0..20 {
+            t.observe(Duration::from_micros(400));
+        }
+        assert_eq!(t.grace(servo), FRAME_GAP_MIN);
+        // A slow host's answers: a few margins.
+        t.observe(ms(20));
+        let margin = t.margin(Duration::ZERO);
+        assert!(margin > ms(20), "{margin:?}");
+        assert_eq!(t.grace(servo), margin * GRACE_MARGINS);
+        // A long margin given by hand keeps at least half of it.
+        assert_eq!(t.grace(ms(600)), ms(300));
+        // Answers that once took far longer: never longer than that, or than before any answer.
+        t.observe(ms(2000));
+        assert_eq!(t.grace(servo), MARGIN_CAP);
+        let mut slowish = AnswerTiming::new(None);
+        for _ in 0..30 {
+            slowish.observe(ms(60));
+        }
+        assert_eq!(slowish.grace(servo), GRACE_MIN);
+        // Behind a known 16 ms adapter: the margins it needs.
+        let mut adapter = AnswerTiming::new(Some(ms(16)));
+        assert_eq!(adapter.grace(servo), GRACE_MIN);
+        for _ in 0..30 {
+            adapter.observe(ms(1));
+        }
+        assert_eq!(adapter.grace(servo), ms(16) * GRACE_MARGINS);
     }
 
     #[test]

@@ -16,7 +16,7 @@ pub use motion::{
 pub use params::{
     read_all, read_block, read_param, write_block, write_param, write_param_broadcast, write_params,
 };
-pub use scan::{ScanPlan, ScanReport, ScanRow, scan};
+pub use scan::{SCAN_ROLES, ScanPlan, ScanReport, ScanRow, ping_sweep, scan};
 pub use setup::{Location, factory_location, locate, reset_user_data, set_baud, set_id};
 
 use super::OpError;
@@ -104,13 +104,6 @@ pub fn ping(client: &Client, id: u8, attempts: u8) -> Result<Presence, OpError> 
         ))),
         Err(e) => Err(e.into()),
     }
-}
-
-/// The parameter `id` of the profile, or why there is none.
-fn param_by_id(profile: &Profile, id: u8) -> Result<&Param, OpError> {
-    profile
-        .param(id)
-        .ok_or_else(|| OpError::unknown_param(profile, id))
 }
 
 /// The command `id` of the profile, or why there is none.

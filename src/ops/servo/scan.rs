@@ -3,17 +3,20 @@
 //! holds answers back for its latency timer, a 0-254 scan still takes about half a second.
 
 use super::params::{read_request, read_value};
-use super::{Presence, param_by_id, ping, read_param, switch};
+use super::{Presence, ping, read_param, switch};
 use crate::link::{Client, Match, ReplySpec, Request, Sweep, SweepReply};
 use crate::ops::{Cancel, OpError, Progress};
-use crate::profile::{Profile, Value};
+use crate::packet::Packet;
+use crate::profile::{ParamRole, Profile, Value};
+use crate::protocol::Direction;
 use crate::protocol::servo::cmd;
 use serde::Serialize;
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::ops::RangeInclusive;
 use std::time::Duration;
 
-/// One servo found by a scan.
+/// One servo found by a scan, with what it says of itself: the parameters the profile gives
+/// the roles of [`SCAN_ROLES`] (`None` where the profile has none, or the read failed).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ScanRow {
     /// Its id.
@@ -22,26 +25,40 @@ pub struct ScanRow {
     pub baud: u32,
     /// Present, or a possible duplicate.
     pub presence: Presence,
-    /// Servo type (parameter 6).
+    /// Servo type (role ServoType: the seed's parameter 6).
     pub servo_type: Option<i64>,
-    /// Firmware version (parameter 7).
+    /// Firmware version (role FirmwareVersion: parameter 7).
     pub firmware: Option<i64>,
-    /// Serial number (parameter 8).
+    /// Serial number (role SerialNumber: parameter 8).
     pub serial: Option<i64>,
-    /// Voltage in mV (parameter 1).
+    /// Voltage in mV (role Voltage: parameter 1).
     pub voltage_mv: Option<i64>,
-    /// Temperature (parameter 4), raw: °C or a thermistor reading, as the profile says
-    /// ([`ScanRow::temperature_text`] shows it).
+    /// Temperature (role Temperature: parameter 4), raw: °C or a thermistor reading, as the
+    /// profile says ([`ScanRow::temperature_text`] shows it).
     pub temperature: Option<i64>,
-    /// The raw status byte (parameter 5); its bit order is published inconsistently.
+    /// The raw status byte (role Status: parameter 5); its bit order is published
+    /// inconsistently.
     pub status: Option<i64>,
 }
 
+/// The parameter roles a scan reads for each servo found, in the order it reads them.
+pub static SCAN_ROLES: [ParamRole; 6] = [
+    ParamRole::ServoType,
+    ParamRole::FirmwareVersion,
+    ParamRole::SerialNumber,
+    ParamRole::Voltage,
+    ParamRole::Temperature,
+    ParamRole::Status,
+];
+
 impl ScanRow {
-    /// The temperature as the profile shows parameter 4: `32 °C`, or `32.0 °C (raw 1779)` for a
-    /// thermistor reading; `-` when not read.
+    /// The temperature as the profile shows its Temperature parameter: `32 °C`, or
+    /// `32.0 °C (raw 1779)` for a thermistor reading; `-` when not read.
     pub fn temperature_text(&self, profile: &Profile) -> String {
-        match (self.temperature, profile.param(4)) {
+        match (
+            self.temperature,
+            profile.param_with_role(&ParamRole::Temperature),
+        ) {
             (Some(v), Some(p)) => p.field.display(&Value::Int(v)),
             (Some(v), None) => v.to_string(),
             (None, _) => "-".into(),
@@ -52,6 +69,19 @@ impl ScanRow {
     pub fn status_hex(&self) -> String {
         self.status.map_or("-".into(), |s| format!("{s:#04x}"))
     }
+
+    /// Where the value of the parameter with `role` goes (one of [`SCAN_ROLES`]).
+    fn column(&mut self, role: &ParamRole) -> Option<&mut Option<i64>> {
+        match role {
+            ParamRole::ServoType => Some(&mut self.servo_type),
+            ParamRole::FirmwareVersion => Some(&mut self.firmware),
+            ParamRole::SerialNumber => Some(&mut self.serial),
+            ParamRole::Voltage => Some(&mut self.voltage_mv),
+            ParamRole::Temperature => Some(&mut self.temperature),
+            ParamRole::Status => Some(&mut self.status),
+            ParamRole::ServoId | ParamRole::BaudOption { .. } => None,
+        }
+    }
 }
 
 /// What a scan found, and how it met the line.
@@ -59,8 +89,8 @@ impl ScanRow {
 pub struct ScanReport {
     /// The servos found, by baud rate (in the plan's order) and id.
     pub rows: Vec<ScanRow>,
-    /// Ids pinged again one by one: the ids a damaged answer can have come from, and the ids
-    /// whose answer came after its sweep had ended.
+    /// Ids pinged again: the ids a damaged answer can have come from (or whose ping it met on
+    /// the bus, garbling both), and the ids whose answer came after its sweep had ended.
     pub asked_again: usize,
     /// Answers that came later than their window (counted for their ids all the same; each
     /// widens the automatic margin).
@@ -78,76 +108,205 @@ const READ_ANSWER_BYTES: usize = 11;
 const PING_ANSWER_BYTES: usize = 6;
 /// Ids pinged in one sweep (progress and cancel come between sweeps).
 const SWEEP_IDS: usize = 128;
+/// How many times the ids to ask again are swept again, at most, before those whose answer is
+/// still damaged are asked one by one.
+const RESWEEPS: usize = 3;
 
 /// The ids that answer a ping at the port's rate, found by sweeps ([`Sweep`]): pinged at the
-/// bus's pace, each answer counted for its id whenever it comes; the ids a damaged frame can
-/// have come from, and ids whose answer came after its sweep, are pinged again one by one (a
-/// glitch is not a duplicate: an id is a possible duplicate only when it answers garbled
-/// again). Returns each id that answered with what answered, and the report's counters.
+/// bus's pace, each answer counted for its id whenever it comes, then listened to for the grace
+/// an exchange gives, for the answers still on their way; the ids a damaged frame can have come
+/// from or destroyed, and ids whose answer came after its sweep, are pinged again, all at once
+/// and then one by one where the answer was damaged again (a glitch is not a duplicate: an id
+/// is a possible duplicate only when it answers garbled again and again). Returns each id that
+/// answered with what answered, and the report's counters.
 pub(super) fn find_ids(
     client: &Client,
     ids: &[u8],
     cancel: &Cancel,
     progress: &mut dyn FnMut(usize, u8),
 ) -> Result<(Vec<(u8, Presence)>, ScanReport), OpError> {
-    let mut report = ScanReport {
-        rows: Vec::new(),
-        asked_again: 0,
-        late_answers: 0,
-        margin_ms: 0.0,
-    };
-    let mut present: BTreeSet<u8> = BTreeSet::new();
-    let mut again: BTreeSet<u8> = BTreeSet::new();
-    let mut take = |reply: &SweepReply, chunk: &[u8], report: &mut ScanReport| {
-        report.margin_ms = reply.margin.as_secs_f64() * 1e3;
-        for (i, a) in reply.answers.iter().enumerate() {
-            if let Some(a) = a {
-                present.insert(chunk[i]);
-                report.late_answers += usize::from(a.late);
-            }
-        }
-        for (_, candidates) in &reply.garbled {
-            again.extend(candidates.iter().map(|&i| chunk[i]));
-        }
-        // A ping answer that came after its sweep: that servo is there; ask it again to be sure.
-        for p in &reply.strays {
-            if p.command == cmd::PING
-                && let Some(&id) = p.payload.first()
-                && ids.contains(&id)
-            {
-                report.late_answers += 1;
-                again.insert(id);
-            }
-        }
-    };
-    for (k, chunk) in ids.chunks(SWEEP_IDS).enumerate() {
-        if cancel.is_cancelled() {
-            return Err(OpError::Cancelled);
-        }
-        let reply = client.sweep(ping_sweep(chunk))?;
-        take(&reply, chunk, &mut report);
-        progress(k * SWEEP_IDS + chunk.len(), *chunk.last().unwrap_or(&0));
-    }
+    let mut found = Found::sweep(client, ids, cancel, progress)?;
     // Answers still on their way after the last sweep.
     let tail = client.sweep(ping_sweep(&[]))?;
-    take(&tail, &[], &mut report);
-    let mut out: Vec<(u8, Presence)> = Vec::new();
-    for &id in ids {
-        if again.contains(&id) {
+    found.take(&tail, &[]);
+    found.resolve(client, cancel)
+}
+
+/// What the ping sweeps of a scan have brought so far.
+struct Found<'a> {
+    /// The ids pinged.
+    ids: &'a [u8],
+    /// Those that answered cleanly.
+    present: BTreeSet<u8>,
+    /// Those to ask again: a damaged answer can have come from them (or met their ping), or
+    /// theirs came late.
+    again: BTreeSet<u8>,
+    /// The ids pinged so far, in order.
+    swept: Vec<u8>,
+    report: ScanReport,
+}
+
+impl<'a> Found<'a> {
+    /// Pings `ids` in sweeps of [`SWEEP_IDS`], with progress and cancel between them.
+    fn sweep(
+        client: &Client,
+        ids: &'a [u8],
+        cancel: &Cancel,
+        progress: &mut dyn FnMut(usize, u8),
+    ) -> Result<Self, OpError> {
+        let mut found = Found {
+            ids,
+            present: BTreeSet::new(),
+            again: BTreeSet::new(),
+            swept: Vec::with_capacity(ids.len()),
+            report: ScanReport {
+                rows: Vec::new(),
+                asked_again: 0,
+                late_answers: 0,
+                margin_ms: 0.0,
+            },
+        };
+        for (k, chunk) in ids.chunks(SWEEP_IDS).enumerate() {
             if cancel.is_cancelled() {
                 return Err(OpError::Cancelled);
             }
-            report.asked_again += 1;
-            match ask_again(client, id)? {
-                Presence::Absent if present.contains(&id) => out.push((id, Presence::Present)),
-                Presence::Absent => {}
-                p => out.push((id, p)),
+            let reply = client.sweep(ping_sweep(chunk))?;
+            found.take(&reply, chunk);
+            progress(k * SWEEP_IDS + chunk.len(), *chunk.last().unwrap_or(&0));
+        }
+        Ok(found)
+    }
+
+    /// Takes what the ping sweep of `chunk` brought.
+    fn take(&mut self, reply: &SweepReply, chunk: &[u8]) {
+        self.report.margin_ms = reply.margin.as_secs_f64() * 1e3;
+        for (i, a) in reply.answers.iter().enumerate() {
+            if let Some(a) = a {
+                self.present.insert(chunk[i]);
+                self.report.late_answers += usize::from(a.late);
             }
-        } else if present.contains(&id) {
-            out.push((id, Presence::Present));
+        }
+        for d in &reply.garbled {
+            self.again.extend(d.candidates.iter().map(|&i| chunk[i]));
+        }
+        self.take_late(reply);
+        self.swept.extend_from_slice(chunk);
+    }
+
+    /// What came after the pings' own sweeps, in `reply` (of another sweep): a ping answer is
+    /// that servo's, however late; ask it again to be sure. A damaged frame that can be a late
+    /// answer to a ping makes every id pinged without a clean answer one to ask again.
+    fn take_late(&mut self, reply: &SweepReply) {
+        for id in pinged(&reply.strays) {
+            if self.ids.contains(&id) {
+                self.report.late_answers += 1;
+                self.again.insert(id);
+            }
+        }
+        if reply.garbled.iter().any(|d| d.maybe_earlier) {
+            let silent = self.swept.iter().filter(|id| !self.present.contains(id));
+            self.again.extend(silent);
         }
     }
-    Ok((out, report))
+
+    /// The ids that answered cleanly and need not be asked again.
+    fn sure(&self) -> impl Iterator<Item = u8> + '_ {
+        self.present.difference(&self.again).copied()
+    }
+
+    /// Asks again the ids to ask again: all of them at once, in sweeps at the bus's pace that
+    /// listen for the answers still on their way, up to [`RESWEEPS`] times for those whose
+    /// answer was damaged again, then one by one those still damaged (two servos on one id
+    /// garble every answer; a glitch rarely does, and not every time). Returns each id found,
+    /// with what answered, in id order. An answer that comes late still counts: when an id
+    /// stayed silent, the line is listened to once more at the end.
+    fn resolve(
+        mut self,
+        client: &Client,
+        cancel: &Cancel,
+    ) -> Result<(Vec<(u8, Presence)>, ScanReport), OpError> {
+        let mut found: BTreeMap<u8, Presence> =
+            self.sure().map(|id| (id, Presence::Present)).collect();
+        self.report.asked_again += self.again.len();
+        let mut ask: Vec<u8> = self.again.iter().copied().collect();
+        for _ in 0..RESWEEPS {
+            if ask.is_empty() {
+                break;
+            }
+            if cancel.is_cancelled() {
+                return Err(OpError::Cancelled);
+            }
+            let mut sweep = ping_sweep(&ask);
+            sweep.listen = true;
+            let reply = client.sweep(sweep)?;
+            for (i, a) in reply.answers.iter().enumerate() {
+                if let Some(a) = a {
+                    found.insert(ask[i], Presence::Present);
+                    self.report.late_answers += usize::from(a.late);
+                }
+            }
+            self.found_late(&reply.strays, &mut found);
+            let mut damaged: BTreeSet<u8> = BTreeSet::new();
+            for d in &reply.garbled {
+                damaged.extend(d.candidates.iter().map(|&i| ask[i]));
+                if d.maybe_earlier {
+                    // Maybe a late answer to one asked before.
+                    damaged.extend(self.again.iter().copied());
+                }
+            }
+            ask = damaged
+                .into_iter()
+                .filter(|id| !found.contains_key(id))
+                .collect();
+        }
+        for &id in &ask {
+            if cancel.is_cancelled() {
+                return Err(OpError::Cancelled);
+            }
+            match ask_again(client, id)? {
+                Presence::Absent => {}
+                p => {
+                    found.insert(id, p);
+                }
+            }
+        }
+        // Silent however asked: its clean answer came in a sweep before, or comes late now.
+        let silent: Vec<u8> = self
+            .again
+            .iter()
+            .copied()
+            .filter(|id| !found.contains_key(id))
+            .collect();
+        for &id in &silent {
+            if self.present.contains(&id) {
+                found.insert(id, Presence::Present);
+            }
+        }
+        if silent.iter().any(|id| !found.contains_key(id)) {
+            let tail = client.sweep(ping_sweep(&[]))?;
+            self.found_late(&tail.strays, &mut found);
+        }
+        Ok((found.into_iter().collect(), self.report))
+    }
+
+    /// Counts the ping answers among `strays` that answer ids asked again and not found yet:
+    /// late, but clean, so those servos are there.
+    fn found_late(&mut self, strays: &[Packet], found: &mut BTreeMap<u8, Presence>) {
+        for id in pinged(strays) {
+            if self.again.contains(&id) && !found.contains_key(&id) {
+                self.report.late_answers += 1;
+                found.insert(id, Presence::Present);
+            }
+        }
+    }
+}
+
+/// The ids whose ping answers are among `frames`.
+fn pinged(frames: &[Packet]) -> impl Iterator<Item = u8> + '_ {
+    frames
+        .iter()
+        .filter(|p| p.command == cmd::PING && p.direction == Direction::DeviceToHost)
+        .filter_map(|p| p.payload.first().copied())
 }
 
 /// Pings `id` on its own, once at a time, up to three times: present at the first clean answer,
@@ -167,8 +326,9 @@ fn ask_again(client: &Client, id: u8) -> Result<Presence, OpError> {
     Ok(garbled.map_or(Presence::Absent, Presence::PossibleDuplicate))
 }
 
-/// A sweep of pings to `ids`.
-fn ping_sweep(ids: &[u8]) -> Sweep {
+/// A sweep of pings to `ids` at the bus's pace (each servo's answer names its id); a sweep of
+/// none listens for the answers still on their way ([`Sweep::listen`]).
+pub fn ping_sweep(ids: &[u8]) -> Sweep {
     Sweep {
         requests: ids
             .iter()
@@ -179,50 +339,103 @@ fn ping_sweep(ids: &[u8]) -> Sweep {
             .collect(),
         answer_bytes: PING_ANSWER_BYTES,
         device_latency: BUS_LATENCY,
+        listen: ids.is_empty(),
     }
 }
 
-/// Reads each present servo's details (type, firmware, serial number, voltage, temperature,
-/// status) in one sweep; a value that did not come is read again on its own.
-fn details(client: &Client, profile: &Profile, rows: &mut [ScanRow]) -> Result<(), OpError> {
-    const PARAMS: [u8; 6] = [6, 7, 8, 1, 4, 5];
-    let mut asked: Vec<(usize, &crate::profile::Param)> = Vec::new();
+/// Reads each present servo's details (the parameters with the roles of [`SCAN_ROLES`] the
+/// profile gives: type, firmware, serial number, voltage, temperature, status) in one sweep; a
+/// value that did not come is read again on its own. With `listen`, the sweep also listens for
+/// the grace an exchange gives, for the pings' answers still on their way (and goes out empty
+/// when there is nothing to read); returns the sweep's reply, if it went out.
+fn details(
+    client: &Client,
+    profile: &Profile,
+    rows: &mut [ScanRow],
+    listen: bool,
+) -> Result<Option<SweepReply>, OpError> {
+    let params: Vec<(&ParamRole, &crate::profile::Param)> = SCAN_ROLES
+        .iter()
+        .filter_map(|role| Some((role, profile.param_with_role(role)?)))
+        .collect();
+    let mut asked: Vec<(usize, &ParamRole, &crate::profile::Param)> = Vec::new();
     let mut requests = Vec::new();
     for (r, row) in rows.iter().enumerate() {
         if row.presence != Presence::Present {
             continue;
         }
-        for pid in PARAMS {
-            if let Ok(p) = param_by_id(profile, pid) {
-                requests.push(read_request(profile, row.id, p)?);
-                asked.push((r, p));
-            }
+        for &(role, p) in &params {
+            requests.push(read_request(profile, row.id, p)?);
+            asked.push((r, role, p));
         }
     }
-    if requests.is_empty() {
-        return Ok(());
+    if requests.is_empty() && !listen {
+        return Ok(None);
     }
     let reply = client.sweep(Sweep {
         requests,
         answer_bytes: READ_ANSWER_BYTES,
         device_latency: BUS_LATENCY,
+        listen,
     })?;
-    for ((r, p), answer) in asked.into_iter().zip(reply.answers) {
+    for ((r, role, p), answer) in asked.into_iter().zip(reply.answers.iter().cloned()) {
         let row = &mut rows[r];
         let value = match answer {
             Some(a) => read_value(profile, row.id, p, &a.packet.payload).ok(),
             None => read_param(client, profile, row.id, p).ok(),
         };
-        match p.id {
-            6 => row.servo_type = value,
-            7 => row.firmware = value,
-            8 => row.serial = value,
-            1 => row.voltage_mv = value,
-            4 => row.temperature = value,
-            _ => row.status = value,
+        if let Some(column) = row.column(role) {
+            *column = value;
         }
     }
-    Ok(())
+    Ok(Some(reply))
+}
+
+/// A row for servo `id` at `baud`, details not read yet.
+fn row(id: u8, baud: u32, presence: Presence) -> ScanRow {
+    ScanRow {
+        id,
+        baud,
+        presence,
+        servo_type: None,
+        firmware: None,
+        serial: None,
+        voltage_mv: None,
+        temperature: None,
+        status: None,
+    }
+}
+
+/// Finds the servos at the port's rate, `baud` ([`find_ids`]), with each one's details: the
+/// servos that answered cleanly have theirs read while the answers still on their way come in
+/// (that sweep is the scan's last listen), those asked again after it.
+fn scan_at(
+    client: &Client,
+    profile: &Profile,
+    ids: &[u8],
+    baud: u32,
+    cancel: &Cancel,
+    progress: &mut dyn FnMut(usize, u8),
+) -> Result<ScanReport, OpError> {
+    let mut found = Found::sweep(client, ids, cancel, progress)?;
+    let mut rows: Vec<ScanRow> = found
+        .sure()
+        .map(|id| row(id, baud, Presence::Present))
+        .collect();
+    if let Some(reply) = details(client, profile, &mut rows, true)? {
+        found.take_late(&reply);
+    }
+    let (answered, mut report) = found.resolve(client, cancel)?;
+    let mut more: Vec<ScanRow> = answered
+        .into_iter()
+        .filter(|(id, _)| !rows.iter().any(|r| r.id == *id))
+        .map(|(id, presence)| row(id, baud, presence))
+        .collect();
+    details(client, profile, &mut more, false)?;
+    rows.extend(more);
+    rows.sort_by_key(|r| r.id);
+    report.rows = rows;
+    Ok(report)
 }
 
 /// What a scan covers.
@@ -263,7 +476,7 @@ pub fn scan(
         for (b, &baud) in bauds.iter().enumerate() {
             switch(client, baud)?;
             let before = (b * ids.len()) as u64;
-            let (answered, at_baud) = find_ids(client, &ids, cancel, &mut |done, id| {
+            let at_baud = scan_at(client, profile, &ids, baud, cancel, &mut |done, id| {
                 progress(Progress {
                     done: before + done as u64,
                     total,
@@ -276,25 +489,10 @@ pub fn scan(
             report.asked_again += at_baud.asked_again;
             report.late_answers += at_baud.late_answers;
             report.margin_ms = at_baud.margin_ms;
-            let mut rows: Vec<ScanRow> = answered
-                .into_iter()
-                .map(|(id, presence)| ScanRow {
-                    id,
-                    baud,
-                    presence,
-                    servo_type: None,
-                    firmware: None,
-                    serial: None,
-                    voltage_mv: None,
-                    temperature: None,
-                    status: None,
-                })
-                .collect();
-            details(client, profile, &mut rows)?;
-            for row in &rows {
+            for row in &at_baud.rows {
                 found(row);
             }
-            report.rows.extend(rows);
+            report.rows.extend(at_baud.rows);
         }
         Ok(())
     })();

@@ -120,3 +120,43 @@ fn checks_fault_probabilities() {
     assert!(bad.check().is_err());
     assert!(Faults::default().check().is_ok());
 }
+
+/// Reads onto `got` until it holds `n` bytes (a test fails, not hangs, should they never come).
+fn read_until(t: &mut SimTransport, got: &mut Vec<u8>, n: usize) {
+    let mut buf = [0u8; 64];
+    while got.len() < n {
+        let read = t
+            .read(&mut buf, Instant::now() + Duration::from_secs(10))
+            .unwrap();
+        assert!(read > 0, "nothing more after {got:?}");
+        got.extend_from_slice(&buf[..read]);
+    }
+}
+
+#[test]
+fn a_request_that_meets_a_reply_on_a_half_duplex_line_garbles_both() {
+    // 300 baud: a 10-byte reply takes a third of a second on the wire, so the second request
+    // surely starts while it is still crossing.
+    let faults = Faults {
+        line: Line {
+            half_duplex: true,
+            ..Line::default()
+        },
+        ..Faults::default()
+    };
+    let mut t = SimTransport::new(Arc::new(Mutex::new(Echo(None))), 300, faults, "echo");
+    let first: Vec<u8> = (1..=10).collect();
+    let second: Vec<u8> = (11..=20).collect();
+    t.write(&first).unwrap();
+    let mut reply = Vec::new();
+    read_until(&mut t, &mut reply, 1);
+    // The reply has started on the wire: the host's next request meets it.
+    t.write(&second).unwrap();
+    read_until(&mut t, &mut reply, first.len());
+    assert_eq!(reply[0], first[0], "what crossed before the request began");
+    assert_ne!(reply[9], first[9], "what crossed with it: {reply:?}");
+    // The device heard the request garbled where it met the reply, and echoes what it heard.
+    let mut heard = Vec::new();
+    read_until(&mut t, &mut heard, second.len());
+    assert_ne!(heard[0], second[0], "{heard:?}");
+}

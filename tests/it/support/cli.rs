@@ -3,7 +3,7 @@
 
 use std::io::{BufRead, BufReader, Lines, Write};
 use std::path::PathBuf;
-use std::process::{Child, ChildStderr, Command, Stdio};
+use std::process::{ChildStderr, Command, Stdio};
 
 /// The answer margin the tests give a device across processes, as `--margin-ms`. The simulator
 /// runs in another process, which nothing keeps in lockstep with the command: on a loaded
@@ -37,41 +37,13 @@ fn as_user(mut c: Command) -> Command {
     c
 }
 
-/// Whether this process may start a program under real-time scheduling (`chrt --fifo`: root,
-/// or CAP_SYS_NICE, as CI has).
-fn may_run_realtime() -> bool {
-    static MAY: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *MAY.get_or_init(|| {
-        Command::new("chrt")
-            .args(["--fifo", SIM_PRIORITY, "true"])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .status()
-            .is_ok_and(|s| s.success())
-    })
-}
-
-/// The real-time priority a `botbench sim` process runs at where it may (1-99; low: it only
-/// has to come before the ordinary processes of a loaded machine).
-const SIM_PRIORITY: &str = "10";
-
-/// `botbench sim` with `args`. The simulator stands in for a device that has a processor of its
-/// own: where this process may, it runs under real-time scheduling, so that the load of the
-/// tests beside it (and of whatever else the machine runs) does not make it answer late, as a
-/// device never would; the command under test keeps ordinary scheduling, late as a loaded host
-/// is. Elsewhere it runs as any process, and a heavily loaded machine can then make a test of
-/// the field's timing fail.
+/// `botbench sim` with `args`, under real-time scheduling where this process may
+/// ([`botbench::sim::process::sim_command`]: the simulator stands in for a device with a
+/// processor of its own; the command under test keeps ordinary scheduling). Elsewhere it runs as
+/// any process, and a heavily loaded machine can then make a test of the field's timing fail.
 fn sim_command(args: &[&str]) -> Command {
-    let bin = env!("CARGO_BIN_EXE_botbench");
-    let mut c = if may_run_realtime() {
-        let mut c = Command::new("chrt");
-        c.args(["--fifo", SIM_PRIORITY, bin]);
-        c
-    } else {
-        Command::new(bin)
-    };
-    c.arg("sim").args(args);
-    as_user(c)
+    let bin = std::path::Path::new(env!("CARGO_BIN_EXE_botbench"));
+    as_user(botbench::sim::process::sim_command(bin, args))
 }
 
 /// How a run ended: its exit code and what it printed.
@@ -170,7 +142,7 @@ pub fn output(command: &mut Command) -> Ran {
 /// A `botbench sim` process serving a device on a pty, with its stdin to type controls into;
 /// killed on drop.
 pub struct SimProcess {
-    child: Child,
+    process: botbench::sim::process::SimProcess,
     /// The pty path it printed first.
     pub path: String,
     stderr: Lines<BufReader<ChildStderr>>,
@@ -179,21 +151,14 @@ pub struct SimProcess {
 impl SimProcess {
     /// Starts `botbench sim` with `args` (the kind first) and reads the pty path it prints.
     pub fn start(args: &[&str]) -> Self {
-        let mut child = sim_command(args)
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("starts the simulator");
-        let mut line = String::new();
-        BufReader::new(child.stdout.take().expect("piped stdout"))
-            .read_line(&mut line)
-            .expect("the pty path");
-        let path = line.trim().to_string();
-        assert!(path.starts_with("/dev/"), "first line: {line:?}");
-        let stderr = BufReader::new(child.stderr.take().expect("piped stderr")).lines();
+        let mut command = sim_command(args);
+        command.stdin(Stdio::piped()).stderr(Stdio::piped());
+        let mut process =
+            botbench::sim::process::SimProcess::start(command).expect("starts the simulator");
+        let path = process.path.clone();
+        let stderr = BufReader::new(process.child().stderr.take().expect("piped stderr")).lines();
         Self {
-            child,
+            process,
             path,
             stderr,
         }
@@ -211,7 +176,12 @@ impl SimProcess {
     pub fn wait_exit(&mut self) -> std::process::ExitStatus {
         let deadline = std::time::Instant::now() + WATCHDOG;
         loop {
-            if let Some(s) = self.child.try_wait().expect("waits on the simulator") {
+            if let Some(s) = self
+                .process
+                .child()
+                .try_wait()
+                .expect("waits on the simulator")
+            {
                 return s;
             }
             assert!(
@@ -225,7 +195,7 @@ impl SimProcess {
     /// Types a control line (`fault battery-low`, `corners 15`) and waits until the simulator
     /// confirms it.
     pub fn type_line(&mut self, control: &str) {
-        let stdin = self.child.stdin.as_mut().expect("piped stdin");
+        let stdin = self.process.child().stdin.as_mut().expect("piped stdin");
         writeln!(stdin, "{control}").expect("the simulator reads");
         stdin.flush().expect("the simulator reads");
         let want = format!("ok: {control}");
@@ -235,12 +205,5 @@ impl SimProcess {
             }
         }
         panic!("the simulator did not confirm {control}");
-    }
-}
-
-impl Drop for SimProcess {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
     }
 }

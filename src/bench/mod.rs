@@ -2,6 +2,10 @@
 //! reported against the wire limit (the time the bytes themselves take at the port's baud rate).
 //! Run it on a release build: `cargo run --release -- bench --json`.
 
+mod field;
+
+pub use field::{ScanRuns, field_scans};
+
 use crate::link::{
     Link, LinkCommand, LinkEvent, LinkOptions, Match, Poll, ReplySpec, Request, serial, wire_time,
 };
@@ -33,6 +37,9 @@ pub struct Figure {
     pub wire_ratio: f64,
     /// Other numbers (a limit the issue sets, a rate, the vendor SDK's time).
     pub notes: String,
+    /// A figure of repeated runs (the field scan): what they came to; `seconds` is their median.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub runs: Option<ScanRuns>,
 }
 
 impl Figure {
@@ -47,6 +54,7 @@ impl Figure {
                 0.0
             },
             notes,
+            runs: None,
         }
     }
 }
@@ -143,36 +151,56 @@ fn servo_scan(
         bauds: bauds.clone(),
         home_baud: 115_200,
     };
-    let started = Instant::now();
-    let rows = servo::scan(
-        &link.client(),
-        &p,
-        &plan,
-        &Cancel::new(),
-        &mut |_| {},
-        &mut |_| {},
-    )
-    .map_err(|e| e.to_string())?
-    .rows;
-    let secs = started.elapsed().as_secs_f64();
-    // Each absent id costs a 6-byte ping; each found servo a ping and 6 parameter reads
-    // (7-byte request, 8-9 byte answer) and its 6-byte reply.
-    let wire: f64 = bauds
-        .iter()
-        .map(|&b| wire_time(6, b).as_secs_f64() * 254.0)
-        .sum::<f64>()
-        + rows.len() as f64 * wire_time(6 + 6 * (7 + 9), 115_200).as_secs_f64();
+    let (report, secs) = timed_scan(&link, &p, &plan)?;
+    let rows = report.rows;
     let sdk = 0.1 * 254.0 * bauds.len() as f64;
     Ok(Figure::new(
         name,
         secs,
-        wire,
+        scan_wire(&plan, rows.len()),
         format!(
             "{} found; vendor SDK {sdk:.1} s ({:.0}× faster); {limit}",
             rows.len(),
             sdk / secs.max(1e-9)
         ),
     ))
+}
+
+/// A scan of `plan` as the command line makes it, and how long it took, seconds.
+fn timed_scan(
+    link: &Link,
+    profile: &Profile,
+    plan: &ScanPlan,
+) -> Result<(servo::ScanReport, f64), String> {
+    let started = Instant::now();
+    let report = servo::scan(
+        &link.client(),
+        profile,
+        plan,
+        &Cancel::new(),
+        &mut |_| {},
+        &mut |_| {},
+    )
+    .map_err(|e| e.to_string())?;
+    Ok((report, started.elapsed().as_secs_f64()))
+}
+
+/// The bytes' own time of a scan of `plan` that found `found` servos at the plan's home rate:
+/// a 6-byte ping for each id at each rate, and for each servo found its 6-byte answer and the
+/// reads of its details (7-byte request, about 9-byte answer each).
+fn scan_wire(plan: &ScanPlan, found: usize) -> f64 {
+    let ids = plan
+        .ids
+        .clone()
+        .filter(|&i| i != crate::protocol::servo::BROADCAST_ID)
+        .count() as f64;
+    let pings: f64 = plan
+        .bauds
+        .iter()
+        .map(|&b| wire_time(6, b).as_secs_f64() * ids)
+        .sum();
+    let details = (6 + servo::SCAN_ROLES.len() * (7 + 9)) * found;
+    pings + wire_time(details, plan.home_baud).as_secs_f64()
 }
 
 /// Scans ids 0-254 at 115200 with no servo, and with ten.
@@ -213,7 +241,7 @@ pub fn servo_provision() -> Result<Figure, String> {
     let p = profile("servo")?;
     let plan = provision::Plan::parse(
         "presets/servo-provision-plan.ron",
-        include_str!("../presets/servo-provision-plan.ron"),
+        include_str!("../../presets/servo-provision-plan.ron"),
         &p,
     )
     .map_err(|e| e.to_string())?;
@@ -417,8 +445,14 @@ pub fn tuya_handshake(baud: u32, chatty: Option<Duration>) -> Result<Figure, Str
     ))
 }
 
-/// Everything; `long` adds the 8-baud scan and the 9600-baud OTA (about 80 s).
-pub fn run_all(long: bool, report: &mut dyn FnMut(&Figure)) -> Result<Vec<Figure>, String> {
+/// Everything; `long` adds the 8-baud scan and the 9600-baud OTA (about 80 s), `field` the
+/// field scan's 60 runs ([`field_scans`], about a minute, stopped between runs by `cancel`).
+pub fn run_all(
+    long: bool,
+    field: bool,
+    cancel: &Cancel,
+    report: &mut dyn FnMut(&Figure),
+) -> Result<Vec<Figure>, String> {
     let mut out = Vec::new();
     let mut add = |f: Figure, out: &mut Vec<Figure>| {
         report(&f);
@@ -428,6 +462,11 @@ pub fn run_all(long: bool, report: &mut dyn FnMut(&Figure)) -> Result<Vec<Figure
     add(msp_polling(3.0, 1)?, &mut out);
     for f in servo_scans(long)? {
         add(f, &mut out);
+    }
+    if field {
+        for f in field_scans(cancel)? {
+            add(f, &mut out);
+        }
     }
     add(servo_provision()?, &mut out);
     add(tuya_ota(115_200, 2)?, &mut out);
