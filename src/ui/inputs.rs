@@ -246,7 +246,10 @@ mod tests {
     fn readouts_are_said_in_the_windows_language() {
         let reg = Registry::builtin().unwrap();
         let servo = reg.get("servo").unwrap();
-        let temperature = &servo.param(4).unwrap().field;
+        let temperature = &servo
+            .param_with_role(&crate::profile::ParamRole::Temperature)
+            .unwrap()
+            .field;
         let en = readout_text(temperature, &Value::Int(1779), Lang::En);
         let zh = readout_text(temperature, &Value::Int(1779), Lang::Zh);
         assert!(en.ends_with("(raw 1779)"), "{en}");
