@@ -564,6 +564,17 @@ impl eframe::App for App {
         App::ui(self, ui);
     }
 
+    fn raw_input_hook(&mut self, _ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+        // A screenshot tour shows each view as it is, not a hover text from wherever the X
+        // server's pointer happens to rest over the window.
+        if self.tour.is_some() {
+            raw_input
+                .events
+                .retain(|e| !matches!(e, egui::Event::PointerMoved(_)));
+            raw_input.events.push(egui::Event::PointerGone);
+        }
+    }
+
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
         // A screenshot tour's panels, sizes and languages are not the user's choice.
         if self.tour.is_none() {

@@ -209,20 +209,47 @@ pub fn readout_text(f: &Field, v: &Value, lang: Lang) -> String {
         if let Some(l) = f.label(*raw) {
             return format!("{} ({raw})", lang.tr(&l.name.en, &l.name.zh));
         }
-        if !f.bits.is_empty() {
-            let set: Vec<&str> = f
-                .bits
-                .iter()
-                .filter(|b| b.bit < 64 && raw >> b.bit & 1 == 1)
-                .map(|b| lang.tr(&b.name.en, &b.name.zh))
-                .collect();
-            if set.is_empty() {
-                return format!("{raw:#04x} ({})", lang.tr("no bit set", "无置位"));
-            }
-            return format!("{raw:#04x} [{}]", set.join(", "));
+        if let Some(text) = bits_text(f, *raw, lang) {
+            return text;
         }
     }
     said_in(f.display(v), lang)
+}
+
+/// A value as a line of readings shows it (other telemetry, what STOP changed): a named value by
+/// its name alone, a bit field by its set bits' names, anything else with its unit, in `lang`;
+/// [`readout_text`] also gives a name's code and the range mark.
+pub fn short_text(f: &Field, v: &Value, lang: Lang) -> String {
+    if let Value::Int(raw) = v
+        && let Some(l) = f.label(*raw)
+    {
+        return lang.tr(&l.name.en, &l.name.zh).to_string();
+    }
+    if let Value::Int(raw) = v
+        && let Some(text) = bits_text(f, *raw, lang)
+    {
+        return text;
+    }
+    said_in(format!("{}{}", f.format(v), f.unit_suffix()), lang)
+}
+
+/// A bit field's value as a person reads it: the raw value and the names of its set bits in
+/// `lang` (`0x05 [Brush, Fan]`), or that no bit is set; `None` for a field without bits.
+pub fn bits_text(f: &Field, raw: i64, lang: Lang) -> Option<String> {
+    if f.bits.is_empty() {
+        return None;
+    }
+    let set: Vec<&str> = f
+        .bits
+        .iter()
+        .filter(|b| b.bit < 64 && raw >> b.bit & 1 == 1)
+        .map(|b| lang.tr(&b.name.en, &b.name.zh))
+        .collect();
+    Some(if set.is_empty() {
+        format!("{raw:#04x} ({})", lang.tr("no bit set", "无置位"))
+    } else {
+        format!("{raw:#04x} [{}]", set.join(", "))
+    })
 }
 
 /// A value's text as [`Field::format`] and [`Field::display`] write it (for files and the

@@ -10,7 +10,6 @@ use super::state::AppState;
 use crate::i18n::Lang;
 use crate::link::{ExchangeError, LinkCommand, ReplyTo};
 use crate::ops::OpError;
-use crate::profile::Value;
 use eframe::egui;
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
@@ -262,7 +261,7 @@ pub fn running(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
             .iter()
             .filter_map(|(k, v)| {
                 let f = cmd.request.iter().find(|f| &f.ident == k)?;
-                Some(shown(f, v, lang))
+                Some(crate::ui::inputs::short_text(f, v, lang))
             })
             .collect();
         let mut text = format!(
@@ -279,16 +278,6 @@ pub fn running(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
         ui.colored_label(AMBER, text)
             .on_hover_text(format!("{} ({})", cmd.ident, cmd.id));
     }
-}
-
-/// A value as a person reads it, labels in the UI's language.
-pub fn shown(f: &crate::profile::Field, v: &Value, lang: Lang) -> String {
-    if let Value::Int(raw) = v
-        && let Some(l) = f.label(*raw)
-    {
-        return lang.tr(&l.name.en, &l.name.zh).to_string();
-    }
-    format!("{}{}", f.format(v), f.unit_suffix())
 }
 
 #[cfg(test)]

@@ -342,9 +342,11 @@ impl TelemetryPanel {
                                                     let shown = match f.range_mark(v) {
                                                         Some(mark) => format!(
                                                             "{} {mark}",
-                                                            super::stop::shown(f, v, lang)
+                                                            super::inputs::short_text(f, v, lang)
                                                         ),
-                                                        None => super::stop::shown(f, v, lang),
+                                                        None => {
+                                                            super::inputs::short_text(f, v, lang)
+                                                        }
                                                     };
                                                     format!("{}: {shown}", f.name.get(lang))
                                                 }
