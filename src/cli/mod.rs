@@ -241,11 +241,22 @@ fn ports(json: bool, set_latency_timer: Option<Vec<String>>) -> CliResult {
         let [port, ms] = args.as_slice() else {
             return Err(CliError::input("--set-latency-timer takes PORT and MS"));
         };
-        let ms: u32 = ms.trim().parse().map_err(|_| {
-            CliError::input(format!(
-                "--set-latency-timer {port} {ms}: MS is a number of ms, 1-255"
-            ))
-        })?;
+        let max = crate::link::adapter::platform::MAX_LATENCY_TIMER_MS;
+        let ms: u32 = ms
+            .trim()
+            .parse()
+            .ok()
+            .filter(|ms| (1..=max).contains(ms))
+            .ok_or_else(|| {
+                CliError::input(format!(
+                    "--set-latency-timer {port} {ms}: the latency timer is 1 to {max} ms"
+                ))
+            })?;
+        if !std::path::Path::new(port).exists() {
+            return Err(CliError::input(format!(
+                "--set-latency-timer: there is no port {port} (`botbench ports` lists them)"
+            )));
+        }
         let now = crate::link::adapter::set_latency_timer(port, ms).map_err(CliError::device)?;
         if !json {
             println!("{port}: latency timer set to {now} ms");

@@ -18,6 +18,11 @@ use std::time::{Duration, Instant};
 pub(crate) struct MspArgs {
     #[command(flatten)]
     port: PortArgs,
+    /// MSP polling at the wire's maximum (`watch --rate max`): requests in flight at once, 1 to
+    /// 4. 2 sends the next request while the device still answers; 1 waits for each answer, for
+    /// firmware that cannot take a request while it answers.
+    #[arg(long, global = true, value_name = "N", default_value_t = 2, value_parser = clap::value_parser!(u8).range(1..=4))]
+    poll_pipeline: u8,
     /// Refuse to send when the device did not identify itself (CMD_VERSION unanswered or
     /// garbled): without it, requests go to the profile's device code, with a warning.
     #[arg(long, global = true)]
@@ -269,7 +274,8 @@ fn print_fields(
     u8::from(misfit.is_some() || out_of_range)
 }
 
-pub(crate) fn run(args: MspArgs) -> CliResult {
+pub(crate) fn run(mut args: MspArgs) -> CliResult {
+    args.port.poll_pipeline = args.poll_pipeline;
     let json = args.port.json;
     // Everything given is checked before the port is opened.
     let profile = args.port.profile("window-cleaner", Protocol::Msp)?;

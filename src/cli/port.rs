@@ -8,30 +8,30 @@ use crate::profile::{Field, Profile, Protocol};
 use clap::Args;
 use std::sync::Arc;
 
-/// Port options of every device subcommand.
+/// Port options of every device subcommand, taken before or after the subcommand's name
+/// (`botbench servo --port P scan` and `botbench servo scan --port P` are the same).
 #[derive(Debug, Args)]
 pub(crate) struct PortArgs {
-    /// The serial port (e.g. /dev/ttyUSB0, or a /dev/pts path from `botbench sim`).
-    #[arg(long, short, value_parser = checks::port_path)]
-    pub port: String,
+    /// The serial port (e.g. /dev/ttyUSB0, or a /dev/pts path from `botbench sim`). Required.
+    #[arg(long, short, global = true, value_parser = checks::port_path)]
+    pub port: Option<String>,
     /// Baud rate, 300 to 4000000 (default: the profile's).
-    #[arg(long, short, value_parser = checks::baud)]
+    #[arg(long, short, global = true, value_parser = checks::baud)]
     pub baud: Option<u32>,
     /// Device profile name or .ron file.
-    #[arg(long)]
+    #[arg(long, global = true)]
     pub profile: Option<String>,
     /// How long the device may take to answer beyond the wire time, 1 to 5000 ms (default: the
     /// protocol's: MSP 20, servo 1.5, Tuya 300).
-    #[arg(long, value_name = "MS", value_parser = checks::margin_ms)]
+    #[arg(long, global = true, value_name = "MS", value_parser = checks::margin_ms)]
     pub margin_ms: Option<u64>,
-    /// MSP polling at the wire's maximum (`watch --rate max`): requests in flight at once, 1 to
-    /// 4. 2 sends the next request while the device still answers; 1 waits for each answer, for
-    /// firmware that cannot take a request while it answers.
-    #[arg(long, value_name = "N", default_value_t = 2, value_parser = clap::value_parser!(u8).range(1..=4))]
+    /// Requests in flight at once when polling at the wire's maximum: set by `msp
+    /// --poll-pipeline` (MSP only); 2 elsewhere.
+    #[arg(skip = 2)]
     pub poll_pipeline: u8,
     /// Record the session to this pcapng file (Wireshark opens it; `botbench sim replay`
     /// serves it back; `botbench frame decode --capture` prints it).
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, global = true, value_name = "FILE")]
     pub capture: Option<std::path::PathBuf>,
     /// Print JSON.
     #[arg(long, global = true)]
@@ -68,6 +68,16 @@ pub(crate) fn finish_captures() -> Result<(), CliError> {
 }
 
 impl PortArgs {
+    /// The port given with `--port`; a usage error (exit 2) when none was.
+    pub fn path(&self) -> Result<&str, CliError> {
+        self.port.as_deref().ok_or_else(|| {
+            CliError::input(
+                "no port given: add --port PORT (e.g. /dev/ttyUSB0, or the /dev/pts path \
+                 `botbench sim` prints; `botbench ports` lists this machine's ports)",
+            )
+        })
+    }
+
     /// Loads the profile (`--profile`, else `default_profile`) and checks its protocol.
     pub fn profile(
         &self,
@@ -98,9 +108,10 @@ impl PortArgs {
             poll_pipeline: usize::from(self.poll_pipeline),
             ..LinkOptions::default()
         };
-        let mut opener = serial::opener(&self.port, baud);
+        let port = self.path()?;
+        let mut opener = serial::opener(port, baud);
         if let Some(path) = &self.capture {
-            let info = CaptureInfo::new(&self.port, baud, &profile.id, options.margin);
+            let info = CaptureInfo::new(port, baud, &profile.id, options.margin);
             let capture = Capture::create(path, info).map_err(CliError::input)?;
             opener = capture.wrap(opener);
             CAPTURES

@@ -39,7 +39,7 @@ impl Adapter {
     pub fn summary(&self) -> String {
         let mut parts = Vec::new();
         if let Some(d) = &self.driver {
-            parts.push(d.clone());
+            parts.push(format!("driver {d}"));
         }
         if let Some(ms) = self.latency_timer_ms {
             parts.push(format!(
@@ -142,11 +142,11 @@ pub mod platform {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
                 let usb = std::fs::canonicalize(&device)
                     .is_ok_and(|d| d.to_string_lossy().contains("/usb"));
-                let driver = driver.as_deref().unwrap_or("this port's driver");
+                // The driver is already in the summary: the note says what the port is.
                 adapter.note = Some(if usb {
-                    format!("{driver} has no latency timer (a small fixed delay)")
+                    "USB serial adapter without a latency timer (a small fixed delay)".to_string()
                 } else {
-                    format!("{driver}: not a USB serial adapter, no latency timer")
+                    "built-in serial port (not USB): no latency timer".to_string()
                 });
             }
             Err(e) => {
@@ -267,8 +267,13 @@ mod tests {
                 .note
                 .as_deref()
                 .unwrap_or("")
-                .contains("ch341-uart has no latency timer"),
+                .contains("USB serial adapter without a latency timer"),
             "{ch340:?}"
+        );
+        assert!(
+            ch340.summary().starts_with("driver ch341-uart, "),
+            "{}",
+            ch340.summary()
         );
         let pty = read(&root, Path::new("/dev/pts/7"));
         assert_eq!(pty.latency_timer_ms, None);

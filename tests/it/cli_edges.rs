@@ -11,8 +11,8 @@ use std::path::Path;
 /// A port path that does not exist: opening it fails.
 const NO_PORT: &str = "/nonexistent/botbench-edges-tty";
 
-/// Stands for `--port NO_PORT` in a command line (the port options go before the subcommand
-/// of `msp`, `servo` and `tuya`, after that of `preset`).
+/// Stands for `--port NO_PORT` in a command line (the port options go before or after the
+/// subcommand's name).
 const P: &str = "@port";
 
 /// `args` with [`P`] replaced by `--port NO_PORT`.
@@ -310,4 +310,55 @@ fn a_set_given_some_fields_keeps_the_devices_values_for_the_rest() {
         .map(|f| f["value"].as_i64().unwrap())
         .collect();
     assert_eq!(values, [95, 70]);
+}
+
+/// The port options go before or after the subcommand's name, as a technician types them; a
+/// command without a port says how to give one.
+#[test]
+fn port_options_are_taken_after_the_subcommand_and_a_missing_port_is_named() {
+    for args in [
+        ["servo", "scan", "--port", NO_PORT],
+        ["msp", "get", "MSP_GET_PWMVALUE", "--port"],
+        ["tuya", "status", "--port", NO_PORT],
+    ] {
+        let mut args: Vec<&str> = args.to_vec();
+        if args.last() == Some(&"--port") {
+            args.push(NO_PORT);
+        }
+        let ran = run(&args);
+        assert_eq!(ran.code, 2, "{args:?}: {ran:?}");
+        assert!(
+            ran.err.contains(NO_PORT),
+            "{args:?} reached the port: {}",
+            ran.err
+        );
+    }
+    let ran = run(&["servo", "scan"]);
+    assert_eq!(ran.code, 2, "{ran:?}");
+    assert!(
+        ran.err.contains("no port given: add --port PORT"),
+        "{}",
+        ran.err
+    );
+    // --poll-pipeline is MSP's alone.
+    let ran = run(&["servo", "--help"]);
+    assert!(!ran.out.contains("--poll-pipeline"), "{}", ran.out);
+    assert!(run(&["msp", "--help"]).out.contains("--poll-pipeline"));
+}
+
+/// A latency timer out of range, or a port that does not exist, is refused as input (exit 2).
+#[test]
+fn a_latency_timer_to_set_is_checked_as_input() {
+    for (args, says) in [
+        (["/dev/null", "0"], "1 to 255 ms"),
+        (["/dev/null", "256"], "1 to 255 ms"),
+        (["/dev/null", "fast"], "1 to 255 ms"),
+        ([NO_PORT, "1"], "there is no port"),
+    ] {
+        let mut all = vec!["ports", "--set-latency-timer"];
+        all.extend(args);
+        let ran = run(&all);
+        assert_eq!(ran.code, 2, "{all:?}: {ran:?}");
+        assert!(ran.err.contains(says), "{all:?}: {}", ran.err);
+    }
 }
