@@ -255,7 +255,7 @@ fn print_fields(
             doc["payload_len"] = serde_json::json!(m.payload.len());
             doc["expected_len"] = serde_json::json!({"min": m.expected.0, "max": m.expected.1});
         }
-        println!("{doc}");
+        println!("{}", super::port::with_warnings(doc));
     } else {
         print_unsolicited(profile, frames);
         for v in &d.values {
@@ -293,7 +293,7 @@ pub(crate) fn run(mut args: MspArgs) -> CliResult {
         if args.strict {
             return Err(CliError::device(format!("{warning}: refused (--strict)")));
         }
-        eprintln!("botbench: warning: {warning}");
+        super::port::warn(&warning.to_string());
     }
     match checked {
         Checked::Version => match identified {

@@ -38,6 +38,30 @@ pub(crate) struct PortArgs {
     pub json: bool,
 }
 
+/// Warnings said in this run (also on stderr), for the JSON document a command prints.
+static WARNINGS: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+
+/// Says `message` on stderr as a warning and keeps it for [`with_warnings`]: a script reading
+/// `--json` sees it in the document as well.
+pub(crate) fn warn(message: &str) {
+    eprintln!("botbench: warning: {message}");
+    WARNINGS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push(message.to_string());
+}
+
+/// `doc` with the warnings said so far as its `warnings` member (absent when there were none).
+pub(crate) fn with_warnings(mut doc: serde_json::Value) -> serde_json::Value {
+    let warnings = WARNINGS.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    if !warnings.is_empty()
+        && let Some(map) = doc.as_object_mut()
+    {
+        map.insert("warnings".into(), serde_json::json!(warnings));
+    }
+    doc
+}
+
 /// The captures this process records, finished by [`finish_captures`].
 static CAPTURES: std::sync::Mutex<Vec<Capture>> = std::sync::Mutex::new(Vec::new());
 
@@ -171,7 +195,7 @@ pub(crate) fn print_checks_with(
         if let Some((name, value)) = extra {
             doc[name] = value;
         }
-        println!("{doc}");
+        println!("{}", with_warnings(doc));
     } else {
         for c in checks {
             let (w, r) = match field_of(&c.field) {

@@ -79,7 +79,8 @@ enum ServoCmd {
         #[arg(value_parser = checks::servo_id)]
         id: u8,
         /// The new rate (the servo profile's: 9600, 19200, 38400, 57600, 115200, 250000,
-        /// 500000 or 1000000), or its option 1 to 8.
+        /// 500000 or 1000000), or its option 1 to 8. (Its own name: `--baud` is the port's.)
+        #[arg(id = "new_baud", value_name = "BAUD")]
         baud: String,
     },
     /// Turn servo ID to DEG degrees over --ms milliseconds.
@@ -478,10 +479,20 @@ pub(crate) fn run(args: ServoArgs) -> CliResult {
 fn print_scan(profile: &Profile, report: &ops::ScanReport, seconds: f64, json: bool) {
     let rows = &report.rows;
     if json {
+        // Each row as the scan has it (raw values), with its temperature as the text view shows
+        // it (`temperature` is the raw reading: a thermistor's count on some servos).
+        let servos: Vec<serde_json::Value> = rows
+            .iter()
+            .map(|r| {
+                let mut row = serde_json::json!(r);
+                row["temperature_text"] = serde_json::json!(r.temperature_text(profile));
+                row
+            })
+            .collect();
         println!(
             "{}",
             serde_json::json!({
-                "servos": rows,
+                "servos": servos,
                 "seconds": seconds,
                 "asked_again": report.asked_again,
                 "late_answers": report.late_answers,

@@ -317,15 +317,18 @@ fn a_set_given_some_fields_keeps_the_devices_values_for_the_rest() {
 #[test]
 fn port_options_are_taken_after_the_subcommand_and_a_missing_port_is_named() {
     for args in [
-        ["servo", "scan", "--port", NO_PORT],
-        ["msp", "get", "MSP_GET_PWMVALUE", "--port"],
-        ["tuya", "status", "--port", NO_PORT],
+        &["servo", "scan", "--port", NO_PORT][..],
+        &["msp", "get", "MSP_GET_PWMVALUE", "--port", NO_PORT],
+        &["tuya", "status", "--port", NO_PORT],
+        // set-baud's own BAUD beside the port's --baud.
+        &[
+            "servo", "set-baud", "1", "57600", "--port", NO_PORT, "--baud", "9600",
+        ],
+        &[
+            "servo", "--baud", "9600", "set-baud", "1", "57600", "--port", NO_PORT,
+        ],
     ] {
-        let mut args: Vec<&str> = args.to_vec();
-        if args.last() == Some(&"--port") {
-            args.push(NO_PORT);
-        }
-        let ran = run(&args);
+        let ran = run(args);
         assert_eq!(ran.code, 2, "{args:?}: {ran:?}");
         assert!(
             ran.err.contains(NO_PORT),

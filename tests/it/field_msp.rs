@@ -204,6 +204,14 @@ fn an_unidentified_device_is_said_and_strict_refuses_to_write() {
         "the warning names the code used: {}",
         get.text()
     );
+    let warnings = get.json_docs()[0]["warnings"].clone();
+    assert!(
+        warnings[0]
+            .as_str()
+            .is_some_and(|w| w.contains("did not identify itself")),
+        "a script reading --json sees it too: {}",
+        get.text()
+    );
     let set = run_watched(&["msp", "--port", p, "set", "MSP_SET_PWMVALUE", "pwmValue=40"]);
     assert_eq!(set.code, 0, "{}", set.text());
     assert!(

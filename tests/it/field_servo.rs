@@ -93,6 +93,15 @@ fn a_default_scan_behind_a_16_ms_adapter_finds_every_servo_and_says_how() {
         // Every found servo's details were read, however late they came.
         for s in doc["servos"].as_array().unwrap() {
             assert!(s["serial"].is_u64(), "{}", scan.text());
+            // The raw reading, and the temperature as the text view shows it.
+            assert!(s["temperature"].is_u64(), "{}", scan.text());
+            assert!(
+                s["temperature_text"]
+                    .as_str()
+                    .is_some_and(|t| t.contains("°C")),
+                "{}",
+                scan.text()
+            );
         }
     }
     let text = run_watched(&["servo", "--port", p, "scan", "--ids", "0-10"]);
