@@ -216,9 +216,16 @@ impl TempInFolder {
         // A cleaner in another process may take a file made here for stale between its
         // creation and its lock, and remove it; then make another.
         for _ in 0..8 {
-            let tmp = tempfile::Builder::new()
-                .prefix(&prefix)
-                .suffix(TMP_SUFFIX)
+            let mut builder = tempfile::Builder::new();
+            builder.prefix(&prefix).suffix(TMP_SUFFIX);
+            // The mode a file the user makes gets (0666 less the umask: 0644 as a rule), not
+            // a temporary file's 0600: a preset saved on a line PC is read by other users.
+            #[cfg(unix)]
+            {
+                use std::os::unix::fs::PermissionsExt;
+                builder.permissions(std::fs::Permissions::from_mode(0o666));
+            }
+            let tmp = builder
                 .tempfile_in(dir)
                 .map_err(|e| {
                     DocumentError::io(path, "create a temporary file in its folder", &e)
@@ -297,6 +304,12 @@ pub fn write_atomic_with(
             .and_then(|()| w.flush())
             .map_err(|e| DocumentError::io(path, "write", &e))?;
     }
+    // A file saved over keeps its own permissions.
+    if let Ok(meta) = std::fs::metadata(path) {
+        tmp.as_file()
+            .set_permissions(meta.permissions())
+            .map_err(|e| DocumentError::io(path, "keep its permissions", &e))?;
+    }
     tmp.as_file()
         .sync_all()
         .map_err(|e| DocumentError::io(path, "write", &e))?;
@@ -308,6 +321,25 @@ pub fn write_atomic_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A saved file gets the mode a file the user makes gets (not a temporary file's 0600),
+    /// and one saved over keeps its own.
+    #[cfg(unix)]
+    #[test]
+    fn a_saved_file_is_readable_as_the_users_files_are_and_keeps_its_mode() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let plain = dir.path().join("plain.txt");
+        std::fs::write(&plain, b"x").unwrap();
+        let made = std::fs::metadata(&plain).unwrap().permissions().mode() & 0o777;
+        let saved = dir.path().join("saved.ron");
+        write_atomic(&saved, b"()").unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&saved), made, "as std::fs::write makes it");
+        std::fs::set_permissions(&saved, std::fs::Permissions::from_mode(0o640)).unwrap();
+        write_atomic(&saved, b"(again)").unwrap();
+        assert_eq!(mode(&saved), 0o640);
+    }
     use std::path::PathBuf;
 
     /// The names in `dir`, sorted.
