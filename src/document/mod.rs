@@ -163,7 +163,7 @@ impl<'t> Source<'t> {
                     self.name,
                     ErrorKind::Syntax,
                     (e.span.start.line, e.span.start.col),
-                    e.code.to_string(),
+                    without_type_names(&e.code.to_string()),
                 )
             })
     }
@@ -232,9 +232,44 @@ pub fn load<T>(
     parse(&name, &text)
 }
 
+/// A RON error's words without the names of botbench's own types (`in \`Doc\``), which mean
+/// nothing to the person who wrote the file: "Unexpected field named `version` in `Doc`,
+/// expected one of ..." becomes "Unexpected field named `version`, expected one of ...".
+fn without_type_names(message: &str) -> String {
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(at) = rest.find(" in `Doc") {
+        out.push_str(&rest[..at]);
+        let after = &rest[at + " in `".len()..];
+        match after.find('`') {
+            Some(end) => rest = &after[end + 1..],
+            None => {
+                rest = "";
+            }
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_ron_error_names_no_type_of_botbench() {
+        assert_eq!(
+            without_type_names(
+                "Unexpected field named `version` in `Doc`, expected one of `ids` or `record` instead"
+            ),
+            "Unexpected field named `version`, expected one of `ids` or `record` instead"
+        );
+        assert_eq!(
+            without_type_names("Unexpected field `x` in `DocStep` in `Doc`"),
+            "Unexpected field `x`"
+        );
+        assert_eq!(without_type_names("Expected closing `)`"), "Expected closing `)`");
+    }
 
     #[test]
     fn an_atomic_write_replaces_the_file_and_leaves_nothing_behind() {
