@@ -149,19 +149,30 @@ impl PortArgs {
     }
 }
 
-/// Maps an operation's error to an exit code: refused for its input 2, everything else 1.
+/// Maps an operation's error to an exit code: refused for its input 2, everything else 1. A
+/// device that never answered gets the technician's checklist beside the error.
 pub(crate) fn op_error(e: OpError) -> CliError {
     if e.is_input() {
         CliError::input(e)
+    } else if let OpError::Exchange(ExchangeError::Timeout { .. }) = e {
+        CliError::device(format!("{e}{SILENT_HINT}"))
     } else {
         CliError::device(e)
     }
 }
 
-/// Maps a failed exchange to exit code 1.
+/// Maps a failed exchange to exit code 1 (with the checklist when nothing answered).
 pub(crate) fn exchange_error(e: ExchangeError) -> CliError {
-    CliError::device(e)
+    match e {
+        ExchangeError::Timeout { .. } => CliError::device(format!("{e}{SILENT_HINT}")),
+        e => CliError::device(e),
+    }
 }
+
+/// What to check when a device never answers.
+const SILENT_HINT: &str = "; nothing answered: is the device powered, its TX wired to the \
+     adapter's RX (and RX to TX, GND to GND), at this baud rate (--baud) and with this profile \
+     (--profile)?";
 
 /// Prints read-back checks; returns exit code 1 if any mismatched.
 pub(crate) fn print_checks(
