@@ -267,14 +267,25 @@ pub fn servo_provision() -> Result<Figure, String> {
     if let provision::Outcome::Fail { step, reason } = &record.result {
         return Err(format!("servo provisioning failed at {step}: {reason}"));
     }
-    // The bytes, roughly: id 0 and the new id pinged twice at each of the 8 rates (6 bytes
-    // each way; silent rates send only); the whole-bus check before the id is written, 255 pings
+    // The bytes, roughly: id 0 pinged once at each rate the search asks before the servo
+    // answers (its hint pass), then id 0 and the new id pinged twice at each of the 8 rates
+    // (6 bytes each way; silent rates send only), and 12 pings answered where id 0 was found
+    // (its answer latency measured); the whole-bus check before the id is written, 255 pings
     // at the rate found; at the plan's rate, each write (8 out, 6 back) and its read-back
     // (7 out, 8-10 back), then the 13 reads of the verification and the 3 recorded ones.
     let ping = |b: u32| wire_time(6, b).as_secs_f64();
+    let order = provision::search_order(&p, plan.target_baud);
+    let hints: f64 = order
+        .iter()
+        .take_while(|&&b| b != found_at)
+        .map(|&b| ping(b))
+        .sum::<f64>()
+        + ping(found_at);
     let sweeps: f64 = p.servo_bauds().iter().map(|&b| 4.0 * ping(b)).sum();
     let reads = (plan.params.len() + 13 + plan.record.len()) as f64;
-    let wire = sweeps
+    let wire = hints
+        + sweeps
+        + 12.0 * 2.0 * ping(found_at)
         + 255.0 * ping(found_at)
         + plan.params.len() as f64 * wire_time(8 + 6, plan.target_baud).as_secs_f64()
         + reads * wire_time(7 + 9, plan.target_baud).as_secs_f64();
