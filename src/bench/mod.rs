@@ -594,3 +594,26 @@ pub fn run_all(
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn step_times_take_a_steps_messages_as_one_step_and_done_ends_the_last() {
+        let mut steps = StepTimes::new(Instant::now());
+        for m in [
+            "detect",
+            "apply params: a",
+            "apply params: b",
+            "verify",
+            "done",
+        ] {
+            steps.at(m);
+        }
+        steps.at("");
+        let names: Vec<&str> = steps.took.iter().map(|(s, _)| s.as_str()).collect();
+        assert_eq!(names, ["detect", "apply params", "verify"]);
+        assert!(steps.said().starts_with("detect "), "{}", steps.said());
+    }
+}

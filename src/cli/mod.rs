@@ -275,12 +275,12 @@ fn ports(json: bool, set_latency_timer: Option<Vec<String>>) -> CliResult {
 }
 
 fn bench(long: bool, field: bool, json: bool, only: Option<&str>) -> CliResult {
+    crate::bench::check_only(only, field).map_err(CliError::input)?;
     if cfg!(debug_assertions) {
         eprintln!(
             "botbench: this is a debug build; run `cargo run --release -- bench` for real figures"
         );
     }
-    crate::bench::check_only(only, field).map_err(CliError::input)?;
     let cancel = if field {
         port::cancel_on_ctrl_c()
     } else {

@@ -311,3 +311,20 @@ fn a_set_given_some_fields_keeps_the_devices_values_for_the_rest() {
         .collect();
     assert_eq!(values, [95, 70]);
 }
+
+#[test]
+fn bench_refuses_a_case_it_does_not_have_and_runs_nothing() {
+    let ran = run(&["bench", "--only", "servo-sacn"]);
+    assert_eq!(ran.code, 2, "{}{}", ran.out, ran.err);
+    assert!(
+        ran.err.contains("'servo-sacn'") && ran.err.contains("servo-provision"),
+        "{}",
+        ran.err
+    );
+    assert!(ran.out.is_empty(), "{}", ran.out);
+    // The field scan's case runs with --field only.
+    let ran = run(&["bench", "--only", "field"]);
+    assert_eq!(ran.code, 2, "{}{}", ran.out, ran.err);
+    assert!(ran.err.contains("with --field only"), "{}", ran.err);
+    assert!(ran.out.is_empty(), "{}", ran.out);
+}
