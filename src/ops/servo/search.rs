@@ -85,18 +85,23 @@ fn hinted_order(client: &Client, id: u8, bauds: &[u32]) -> Result<Vec<u32>, OpEr
     {
         heard = Some(last);
     }
+    Ok(order(bauds, heard))
+}
+
+/// `bauds` with the one at `heard` (an index) first and the one before it second.
+fn order(bauds: &[u32], heard: Option<usize>) -> Vec<u32> {
     let mut order: Vec<u32> = Vec::with_capacity(bauds.len());
     let hinted = heard
         .into_iter()
         .flat_map(|i| [Some(i), i.checked_sub(1)])
         .flatten()
-        .map(|i| bauds[i]);
+        .filter_map(|i| bauds.get(i).copied());
     for b in hinted.chain(bauds.iter().copied()) {
         if !order.contains(&b) {
             order.push(b);
         }
     }
-    Ok(order)
+    order
 }
 
 /// Whether a sweep heard `id`: its answer, a damaged frame, or a late answer to a ping of it.
@@ -104,4 +109,25 @@ fn hears(reply: &SweepReply, id: u8) -> bool {
     reply.answers.iter().any(Option::is_some)
         || !reply.garbled.is_empty()
         || pinged(&reply.strays).any(|p| p == id)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::order;
+
+    #[test]
+    fn the_rate_heard_comes_first_then_the_one_pinged_before_it_then_the_rest() {
+        let bauds = [500_000, 9600, 19_200, 38_400, 57_600, 115_200];
+        assert_eq!(
+            order(&bauds, Some(5)),
+            [115_200, 57_600, 500_000, 9600, 19_200, 38_400]
+        );
+        assert_eq!(
+            order(&bauds, Some(0)),
+            [500_000, 9600, 19_200, 38_400, 57_600, 115_200]
+        );
+        assert_eq!(order(&bauds, None), bauds);
+        assert_eq!(order(&bauds, Some(9)), bauds);
+        assert!(order(&[], Some(0)).is_empty());
+    }
 }
