@@ -15,7 +15,8 @@
 //!    that can still be on its way is that rate's own), then the rate pinged just before it
 //!    (where a late answer came from), then the others;
 //! 3. once the servo has answered, its answer latency is **measured** with a few more pings at
-//!    the bus's pace: the link's grace then fits the connection (down to the frame gap with no
+//!    the bus's pace, listened to for the grace at the end (their answers all read at this
+//!    rate): the link's grace then fits the connection (down to the frame gap with no
 //!    adapter latency; a few latency ticks behind a USB adapter), and the silent rates still to
 //!    ask, and what follows, cost that instead of the grace for an unknown connection.
 //!
@@ -58,7 +59,12 @@ pub(super) fn search(
         }
         if clean && !measured {
             measured = true;
-            client.sweep(ping_sweep(&[id; MEASURE_PINGS]))?;
+            // It listens for the answers still on their way before the port changes rate:
+            // behind an adapter's latency timer the last ones come after the last ping's window,
+            // and one of them would be read at the next rate as the answer there.
+            let mut measure = ping_sweep(&[id; MEASURE_PINGS]);
+            measure.listen = true;
+            client.sweep(measure)?;
         }
     }
     found.sort_by_key(|(b, _)| bauds.iter().position(|x| x == b));
