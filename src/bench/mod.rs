@@ -253,26 +253,39 @@ pub fn servo_provision() -> Result<Figure, String> {
     let server = PtyServer::start(shared, Faults::default()).map_err(|e| e.to_string())?;
     let link = open(&server, p.clone(), 115_200, LinkOptions::default())?;
     let started = Instant::now();
+    let mut steps = StepTimes::new(started);
     let record = provision::provision_next(
         &link.client(),
         &p,
         &plan,
         &mut provision::ProvisionState::new(),
         &Cancel::new(),
-        &mut |_| {},
+        &mut |progress| steps.at(&progress.message.en),
     );
     let secs = started.elapsed().as_secs_f64();
+    steps.at("");
     if let provision::Outcome::Fail { step, reason } = &record.result {
         return Err(format!("servo provisioning failed at {step}: {reason}"));
     }
-    // The bytes, roughly: id 0 and the new id pinged twice at each of the 8 rates (6 bytes
-    // each way; silent rates send only); the whole-bus check before the id is written, 255 pings
+    // The bytes, roughly: id 0 pinged once at each rate the search asks before the servo
+    // answers (its hint pass), then id 0 and the new id pinged twice at each of the 8 rates
+    // (6 bytes each way; silent rates send only), and 12 pings answered where id 0 was found
+    // (its answer latency measured); the whole-bus check before the id is written, 255 pings
     // at the rate found; at the plan's rate, each write (8 out, 6 back) and its read-back
     // (7 out, 8-10 back), then the 13 reads of the verification and the 3 recorded ones.
     let ping = |b: u32| wire_time(6, b).as_secs_f64();
+    let order = provision::search_order(&p, plan.target_baud);
+    let hints: f64 = order
+        .iter()
+        .take_while(|&&b| b != found_at)
+        .map(|&b| ping(b))
+        .sum::<f64>()
+        + ping(found_at);
     let sweeps: f64 = p.servo_bauds().iter().map(|&b| 4.0 * ping(b)).sum();
     let reads = (plan.params.len() + 13 + plan.record.len()) as f64;
-    let wire = sweeps
+    let wire = hints
+        + sweeps
+        + 12.0 * 2.0 * ping(found_at)
         + 255.0 * ping(found_at)
         + plan.params.len() as f64 * wire_time(8 + 6, plan.target_baud).as_secs_f64()
         + reads * wire_time(7 + 9, plan.target_baud).as_secs_f64();
@@ -280,8 +293,60 @@ pub fn servo_provision() -> Result<Figure, String> {
         "servo provision, found at 57600 → 500000, 10 params",
         secs,
         wire,
-        "target ≤ 2 s".into(),
+        format!("target ≤ 2 s; {}", steps.said()),
     ))
+}
+
+/// How long each step of an operation took, from its progress messages (`step: detail`; a
+/// step's messages with different details count as one step).
+struct StepTimes {
+    /// The step under way and when it began.
+    current: Option<(String, Instant)>,
+    /// Each step's seconds, in the order the steps began.
+    took: Vec<(String, f64)>,
+    started: Instant,
+}
+
+impl StepTimes {
+    fn new(started: Instant) -> Self {
+        Self {
+            current: None,
+            took: Vec::new(),
+            started,
+        }
+    }
+
+    /// A progress message: `message`'s step begins now (an empty one, or "done", ends the last
+    /// step).
+    fn at(&mut self, message: &str) {
+        let step = message.split(':').next().unwrap_or_default().to_string();
+        let now = Instant::now();
+        if self.current.as_ref().is_some_and(|(s, _)| *s == step) {
+            return;
+        }
+        let since = self.current.as_ref().map_or(self.started, |(_, t)| *t);
+        if let Some((s, _)) = self.current.take() {
+            let secs = now.duration_since(since).as_secs_f64();
+            match self.took.iter_mut().find(|(t, _)| *t == s) {
+                Some((_, total)) => *total += secs,
+                None => self.took.push((s, secs)),
+            }
+        }
+        // The operation's last message ("done") ends its last step.
+        if !step.is_empty() && step != "done" {
+            self.current = Some((step, now));
+        }
+    }
+
+    /// `detect 0.412 s, read serial 0.004 s, …`.
+    fn said(&self) -> String {
+        let each: Vec<String> = self
+            .took
+            .iter()
+            .map(|(s, secs)| format!("{s} {secs:.3} s"))
+            .collect();
+        each.join(", ")
+    }
 }
 
 /// A 64 KiB OTA at `baud` with `packet`-byte packets.
@@ -445,40 +510,110 @@ pub fn tuya_handshake(baud: u32, chatty: Option<Duration>) -> Result<Figure, Str
     ))
 }
 
-/// Everything; `long` adds the 8-baud scan and the 9600-baud OTA (about 80 s), `field` the
-/// field scan's 60 runs ([`field_scans`], about a minute, stopped between runs by `cancel`).
+/// The cases [`run_all`] runs, by the names `bench --only` takes.
+pub const CASES: [&str; 7] = [
+    "msp-polling",
+    "servo-scan",
+    "servo-field-scan",
+    "servo-provision",
+    "tuya-ota",
+    "tuya-dp-report",
+    "tuya-handshake",
+];
+
+/// Whether `only` (of `bench --only`) selects a case that runs (the field scan's with `field`
+/// only); the error names the cases.
+pub fn check_only(only: Option<&str>, field: bool) -> Result<(), String> {
+    let Some(only) = only else {
+        return Ok(());
+    };
+    if CASES
+        .iter()
+        .any(|c| c.contains(only) && (field || *c != "servo-field-scan"))
+    {
+        return Ok(());
+    }
+    Err(format!(
+        "no bench case to run is named like '{only}'; the cases: {} (servo-field-scan with \
+         --field only)",
+        CASES.join(", ")
+    ))
+}
+
+/// Everything, or the cases whose name (one of [`CASES`]) contains `only`; `long` adds the
+/// 8-baud scan and the 9600-baud OTA (about 80 s), `field` the field scan's 60 runs
+/// ([`field_scans`], about a minute, stopped between runs by `cancel`). Errors when `only`
+/// names no case.
 pub fn run_all(
     long: bool,
     field: bool,
+    only: Option<&str>,
     cancel: &Cancel,
     report: &mut dyn FnMut(&Figure),
 ) -> Result<Vec<Figure>, String> {
+    check_only(only, field)?;
+    let wanted = |case: &str| only.is_none_or(|o| case.contains(o));
     let mut out = Vec::new();
     let mut add = |f: Figure, out: &mut Vec<Figure>| {
         report(&f);
         out.push(f);
     };
-    add(msp_polling(3.0, 2)?, &mut out);
-    add(msp_polling(3.0, 1)?, &mut out);
-    for f in servo_scans(long)? {
-        add(f, &mut out);
+    if wanted("msp-polling") {
+        add(msp_polling(3.0, 2)?, &mut out);
+        add(msp_polling(3.0, 1)?, &mut out);
     }
-    if field {
+    if wanted("servo-scan") {
+        for f in servo_scans(long)? {
+            add(f, &mut out);
+        }
+    }
+    if field && wanted("servo-field-scan") {
         for f in field_scans(cancel)? {
             add(f, &mut out);
         }
     }
-    add(servo_provision()?, &mut out);
-    add(tuya_ota(115_200, 2)?, &mut out);
-    add(tuya_dp_report(115_200, 50)?, &mut out);
-    add(tuya_dp_report(9600, 20)?, &mut out);
-    add(tuya_handshake(9600, None)?, &mut out);
-    add(
-        tuya_handshake(9600, Some(Duration::from_millis(30)))?,
-        &mut out,
-    );
-    if long {
+    if wanted("servo-provision") {
+        add(servo_provision()?, &mut out);
+    }
+    if wanted("tuya-ota") {
+        add(tuya_ota(115_200, 2)?, &mut out);
+    }
+    if wanted("tuya-dp-report") {
+        add(tuya_dp_report(115_200, 50)?, &mut out);
+        add(tuya_dp_report(9600, 20)?, &mut out);
+    }
+    if wanted("tuya-handshake") {
+        add(tuya_handshake(9600, None)?, &mut out);
+        add(
+            tuya_handshake(9600, Some(Duration::from_millis(30)))?,
+            &mut out,
+        );
+    }
+    if long && wanted("tuya-ota") {
         add(tuya_ota(9600, 2)?, &mut out);
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn step_times_take_a_steps_messages_as_one_step_and_done_ends_the_last() {
+        let mut steps = StepTimes::new(Instant::now());
+        for m in [
+            "detect",
+            "apply params: a",
+            "apply params: b",
+            "verify",
+            "done",
+        ] {
+            steps.at(m);
+        }
+        steps.at("");
+        let names: Vec<&str> = steps.took.iter().map(|(s, _)| s.as_str()).collect();
+        assert_eq!(names, ["detect", "apply params", "verify"]);
+        assert!(steps.said().starts_with("detect "), "{}", steps.said());
+    }
 }

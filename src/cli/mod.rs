@@ -126,6 +126,11 @@ enum Cmd {
         /// One JSON document a line.
         #[arg(long)]
         json: bool,
+        /// Only the cases whose name contains this: msp-polling, servo-scan,
+        /// servo-field-scan (with --field), servo-provision, tuya-ota, tuya-dp-report,
+        /// tuya-handshake.
+        #[arg(long, value_name = "CASE")]
+        only: Option<String>,
     },
     /// Save, compare and apply presets of a device's tunable parameters.
     #[command(subcommand)]
@@ -188,7 +193,12 @@ fn run(cli: Cli) -> CliResult {
         Some(Cmd::Msp(args)) => msp::run(args),
         Some(Cmd::Servo(args)) => servo::run(args),
         Some(Cmd::Tuya(args)) => tuya::run(args),
-        Some(Cmd::Bench { long, field, json }) => bench(long, field, json),
+        Some(Cmd::Bench {
+            long,
+            field,
+            json,
+            only,
+        }) => bench(long, field, json, only.as_deref()),
         Some(Cmd::Preset(cmd)) => preset::run(cmd),
         Some(Cmd::Sim(args)) => sim::run(args),
         Some(Cmd::Gui {
@@ -275,7 +285,8 @@ fn ports(json: bool, set_latency_timer: Option<Vec<String>>) -> CliResult {
     Ok(0)
 }
 
-fn bench(long: bool, field: bool, json: bool) -> CliResult {
+fn bench(long: bool, field: bool, json: bool, only: Option<&str>) -> CliResult {
+    crate::bench::check_only(only, field).map_err(CliError::input)?;
     if cfg!(debug_assertions) {
         eprintln!(
             "botbench: this is a debug build; run `cargo run --release -- bench` for real figures"
@@ -286,7 +297,7 @@ fn bench(long: bool, field: bool, json: bool) -> CliResult {
     } else {
         crate::ops::Cancel::new()
     };
-    crate::bench::run_all(long, field, &cancel, &mut |f| {
+    crate::bench::run_all(long, field, only, &cancel, &mut |f| {
         if json {
             println!("{}", serde_json::to_string(f).unwrap_or_default());
         } else {

@@ -225,11 +225,9 @@ impl TempInFolder {
                 use std::os::unix::fs::PermissionsExt;
                 builder.permissions(std::fs::Permissions::from_mode(0o666));
             }
-            let tmp = builder
-                .tempfile_in(dir)
-                .map_err(|e| {
-                    DocumentError::io(path, "create a temporary file in its folder", &e)
-                })?;
+            let tmp = builder.tempfile_in(dir).map_err(|e| {
+                DocumentError::io(path, "create a temporary file in its folder", &e)
+            })?;
             tmp.as_file()
                 .lock()
                 .map_err(|e| DocumentError::io(path, "lock its temporary file", &e))?;

@@ -268,7 +268,10 @@ mod tests {
             without_type_names("Unexpected field `x` in `DocStep` in `Doc`"),
             "Unexpected field `x`"
         );
-        assert_eq!(without_type_names("Expected closing `)`"), "Expected closing `)`");
+        assert_eq!(
+            without_type_names("Expected closing `)`"),
+            "Expected closing `)`"
+        );
     }
 
     #[test]

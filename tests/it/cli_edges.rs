@@ -365,3 +365,20 @@ fn a_latency_timer_to_set_is_checked_as_input() {
         assert!(ran.err.contains(says), "{all:?}: {}", ran.err);
     }
 }
+
+#[test]
+fn bench_refuses_a_case_it_does_not_have_and_runs_nothing() {
+    let ran = run(&["bench", "--only", "servo-sacn"]);
+    assert_eq!(ran.code, 2, "{}{}", ran.out, ran.err);
+    assert!(
+        ran.err.contains("'servo-sacn'") && ran.err.contains("servo-provision"),
+        "{}",
+        ran.err
+    );
+    assert!(ran.out.is_empty(), "{}", ran.out);
+    // The field scan's case runs with --field only.
+    let ran = run(&["bench", "--only", "field"]);
+    assert_eq!(ran.code, 2, "{}{}", ran.out, ran.err);
+    assert!(ran.err.contains("with --field only"), "{}", ran.err);
+    assert!(ran.out.is_empty(), "{}", ran.out);
+}

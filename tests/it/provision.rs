@@ -531,3 +531,30 @@ fn the_cli_asks_for_the_next_servo_and_stops_when_told() {
     assert!(stdout.contains("at step \"detect\""), "{stdout}");
     assert!(stdout.contains("0 PASS, 1 FAIL"), "{stdout}");
 }
+
+#[test]
+fn a_fresh_servo_at_a_later_rate_behind_a_16_ms_adapter_is_found_at_its_own_rate() {
+    // The automatic margin (no --margin-ms) and an adapter whose latency timer the OS does not
+    // tell: the hint pass's ping at 57600 is answered one latency tick later, when the port is
+    // already at the next rate; the search still finds the servo at 57600, never at 115200.
+    let sim = SimProcess::start(&[
+        "servo-bus",
+        "--servos",
+        "0",
+        "--baud",
+        "57600",
+        "--latency-timer-ms",
+        "16",
+    ]);
+    let mut c = cli::botbench(["servo", "--port", &sim.path]);
+    c.args(["provision", PLAN_FILE]);
+    let out = cli::output(&mut c);
+    drop(sim);
+    assert_eq!(out.code, 0, "{}{}", out.out, out.err);
+    assert!(
+        out.out.contains("PASS") && out.out.contains("id 1"),
+        "{}",
+        out.out
+    );
+    assert!(out.err.contains("57600 → 500000"), "{}", out.err);
+}

@@ -7,6 +7,7 @@ mod params;
 pub mod preset;
 pub mod provision;
 mod scan;
+mod search;
 mod setup;
 
 pub use motion::{

@@ -302,7 +302,7 @@ impl<'a> Found<'a> {
 }
 
 /// The ids whose ping answers are among `frames`.
-fn pinged(frames: &[Packet]) -> impl Iterator<Item = u8> + '_ {
+pub(super) fn pinged(frames: &[Packet]) -> impl Iterator<Item = u8> + '_ {
     frames
         .iter()
         .filter(|p| p.command == cmd::PING && p.direction == Direction::DeviceToHost)

@@ -82,16 +82,14 @@ fn ids_on_bus(client: &Client, cancel: &Cancel) -> Result<Vec<u8>, OpError> {
     Ok(found.into_iter().map(|(id, _)| id).collect())
 }
 
-/// Where a servo was found after a baud change that could not be verified: each of the
-/// profile's baud rates in turn.
+/// Where a servo was found after a baud change that could not be verified: the profile's baud
+/// rates searched ([`super::search`]) until it answers cleanly; the port is left there.
 fn recover(client: &Client, profile: &Profile, id: u8) -> Result<Option<u32>, OpError> {
-    for b in profile.servo_bauds() {
-        switch(client, b)?;
-        if ping(client, id, 2)? == Presence::Present {
-            return Ok(Some(b));
-        }
-    }
-    Ok(None)
+    let found = super::search::search(client, id, &profile.servo_bauds(), true)?;
+    Ok(found
+        .into_iter()
+        .find(|(_, p)| *p == Presence::Present)
+        .map(|(b, _)| b))
 }
 
 /// Sets servo `id`'s baud option (the profile's baud table), switches the port to the new rate and verifies there.

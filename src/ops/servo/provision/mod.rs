@@ -145,23 +145,18 @@ fn fail(record: &mut Record, step: &str, reason: String) {
     };
 }
 
-/// Finds the fresh servos (at the factory id, [`servo::factory_location`]): pings that id at
-/// `bauds` in order and returns each rate where something answered, and how.
+/// Finds the fresh servos (at the factory id, [`servo::factory_location`]): searches `bauds`
+/// for that id (the rates that a ping each hears first, then the others; see
+/// `ops/servo/search.rs`) and returns each rate where something answered, and how, in the order
+/// of `bauds`. Once the servo has answered, its answer latency is measured: the silent rates
+/// after it cost the link's grace for that latency, not for an unknown connection.
 pub fn find_fresh(
     client: &Client,
     profile: &Profile,
     bauds: &[u32],
 ) -> Result<Vec<(u32, Presence)>, OpError> {
     let fresh = servo::factory_location(profile).id;
-    let mut out = Vec::new();
-    for &b in bauds {
-        switch(client, b)?;
-        let presence = servo::ping(client, fresh, 2)?;
-        if presence != Presence::Absent {
-            out.push((b, presence));
-        }
-    }
-    Ok(out)
+    servo::search::search(client, fresh, bauds, false)
 }
 
 /// The plan's target rate first, then the profile's other servo baud rates.
