@@ -537,24 +537,45 @@ fn a_fresh_servo_at_a_later_rate_behind_a_16_ms_adapter_is_found_at_its_own_rate
     // The automatic margin (no --margin-ms) and an adapter whose latency timer the OS does not
     // tell: the hint pass's ping at 57600 is answered one latency tick later, when the port is
     // already at the next rate; the search still finds the servo at 57600, never at 115200.
-    let sim = SimProcess::start(&[
-        "servo-bus",
-        "--servos",
-        "0",
-        "--baud",
-        "57600",
-        "--latency-timer-ms",
-        "16",
-    ]);
+    found_once_at_its_own_rate("57600", &["--latency-timer-ms", "16"]);
+}
+
+/// The same kind of late answer from other causes, as a new user met them: a shorter latency
+/// timer, whose tick falls between a ping's answer and the next rate's ping as often as not,
+/// and a servo that answers late itself (no adapter latency). Each was reported as fresh servos
+/// at its rate and the next one ("leave one on the bus"), or given id 2.
+#[test]
+fn a_late_answer_from_a_short_latency_timer_or_a_slow_servo_is_never_a_second_servo() {
+    for (baud, field) in [
+        ("115200", &["--latency-timer-ms", "8"][..]),
+        ("115200", &["--latency-timer-ms", "2"]),
+        ("57600", &["--latency-timer-ms", "4"]),
+        ("115200", &["--latency-ms", "5"]),
+        ("115200", &["--latency-ms", "30"]),
+    ] {
+        found_once_at_its_own_rate(baud, field);
+    }
+}
+
+/// Provisions the one fresh servo of a simulated bus at `baud` with the `field` options, and
+/// asserts it was found once, at `baud`, and given id 1.
+fn found_once_at_its_own_rate(baud: &str, field: &[&str]) {
+    let mut args = vec!["servo-bus", "--servos", "0", "--baud", baud];
+    args.extend(field);
+    let sim = SimProcess::start(&args);
     let mut c = cli::botbench(["servo", "--port", &sim.path]);
     c.args(["provision", PLAN_FILE]);
     let out = cli::output(&mut c);
     drop(sim);
-    assert_eq!(out.code, 0, "{}{}", out.out, out.err);
+    assert_eq!(out.code, 0, "{field:?}: {}{}", out.out, out.err);
     assert!(
-        out.out.contains("PASS") && out.out.contains("id 1"),
-        "{}",
+        out.out.contains("PASS") && out.out.contains("id 1 "),
+        "{field:?}: {}",
         out.out
     );
-    assert!(out.err.contains("57600 → 500000"), "{}", out.err);
+    assert!(
+        out.err.contains(&format!("{baud} → 500000")),
+        "{field:?}: {}",
+        out.err
+    );
 }
