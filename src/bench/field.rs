@@ -152,7 +152,11 @@ fn field_scan(bin: &Path, case: &Case, cancel: &Cancel) -> Result<Figure, String
         args.extend(["--latency-timer-ms", ms]);
     }
     let mut sim_command = process::sim_command(bin, &args);
-    builtin_profiles(&mut sim_command).stdin(Stdio::null());
+    // Its "serving a simulated servo bus on ..." line is not a figure: kept off the bench's
+    // output (a simulator that cannot start is said by SimProcess::start's error).
+    builtin_profiles(&mut sim_command)
+        .stdin(Stdio::null())
+        .stderr(Stdio::null());
     let sim = SimProcess::start(sim_command)?;
     let _busy = Busy::start(case.busy)?;
     let mut runs = Vec::with_capacity(RUNS);
