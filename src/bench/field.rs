@@ -202,6 +202,7 @@ fn field_scan(bin: &Path, case: &Case, cancel: &Cancel) -> Result<Figure, String
         scan_wire(&plan, SERVOS.len()),
         notes,
     );
+    figure.target_met = Some(runs.found_all == RUNS && runs.target_met != Some(false));
     figure.runs = Some(runs);
     Ok(figure)
 }
