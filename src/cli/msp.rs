@@ -217,7 +217,7 @@ fn unsolicited_json(profile: &Profile, frames: &[Packet]) -> serde_json::Value {
 fn print_unsolicited(profile: &Profile, frames: &[Packet]) {
     for p in frames {
         println!(
-            "~~ unsolicited frame (answers nothing): {}",
+            "~~ {}",
             p.summary(profile)
         );
     }

@@ -210,7 +210,11 @@ pub(crate) fn print_checks_with(
     } else {
         for c in checks {
             let (w, r) = match field_of(&c.field) {
-                Some(f) => (f.format(&c.written), f.format(&c.read)),
+                // With the unit, as `get` shows a value.
+                Some(f) => (
+                    format!("{}{}", f.format(&c.written), f.unit_suffix()),
+                    format!("{}{}", f.format(&c.read), f.unit_suffix()),
+                ),
                 None => (format!("{:?}", c.written), format!("{:?}", c.read)),
             };
             let how = if is_kept(&c.field) {

@@ -107,7 +107,7 @@ fn cli_preset_save_diff_and_apply_against_the_simulator() {
     let (code, out, err) = botbench(&["preset", "apply", tuned_s, "--port", port]);
     assert_eq!(code, 0, "{out}{err}");
     assert!(
-        out.contains("pwmValue") && out.contains("90  verified"),
+        out.contains("pwmValue") && out.contains("90 %  verified"),
         "{out}"
     );
     assert!(!out.contains("MISMATCH"), "{out}");
