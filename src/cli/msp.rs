@@ -216,10 +216,7 @@ fn unsolicited_json(profile: &Profile, frames: &[Packet]) -> serde_json::Value {
 /// Prints frames the device sent on its own (text mode), each as what it is.
 fn print_unsolicited(profile: &Profile, frames: &[Packet]) {
     for p in frames {
-        println!(
-            "~~ {}",
-            p.summary(profile)
-        );
+        println!("~~ {}", p.summary(profile));
     }
 }
 
