@@ -144,19 +144,13 @@ impl ActionsPanel {
                     "Make sure it is safe, then confirm.",
                     "请确认安全后再执行。",
                 ));
-                ui.horizontal(|ui| {
-                    if ui.button(lang.tr("Confirm", "确认")).clicked() {
-                        decision = Some(true);
-                    }
-                    if ui.button(lang.tr("Cancel", "取消")).clicked() {
-                        decision = Some(false);
-                    }
-                });
+                decision = super::confirm::buttons(
+                    ui,
+                    lang.tr("Confirm", "确认"),
+                    lang.tr("Cancel", "取消"),
+                );
             });
-            if modal.should_close() && decision.is_none() {
-                decision = Some(false);
-            }
-            match decision {
+            match super::confirm::decided(&modal, decision) {
                 Some(true) => {
                     if let Some((id, inputs)) = self.confirm.take() {
                         actions.push(Action::StartJob(jobs::send(profile, id, inputs)));

@@ -80,6 +80,15 @@ impl ColumnsLeft {
     }
 }
 
+/// A table's heading row: each heading in strong text, then the row ends. Every table of the
+/// window starts so.
+pub fn header_row(ui: &mut egui::Ui, headers: &[&str]) {
+    for h in headers {
+        ui.strong(*h);
+    }
+    ui.end_row();
+}
+
 /// The width, points, a text box needs to show `hint` whole: the hint in the body font, and
 /// the box's frame (its padding, stroke and a little air on each side).
 pub fn box_width_for(ui: &egui::Ui, hint: &str) -> f32 {

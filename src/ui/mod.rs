@@ -6,6 +6,7 @@
 
 mod actions;
 pub mod app;
+mod confirm;
 mod connection;
 pub mod demo_hint;
 mod device;

@@ -228,11 +228,15 @@ impl PresetsPanel {
                     .striped(true)
                     .num_columns(4)
                     .show(ui, |ui| {
-                        ui.strong(lang.tr("Command", "命令"));
-                        ui.strong(lang.tr("Field", "字段"));
-                        ui.strong(lang.tr("Preset", "预设值"));
-                        ui.strong(lang.tr("Device", "设备值"));
-                        ui.end_row();
+                        crate::ui::layout::header_row(
+                            ui,
+                            &[
+                                lang.tr("Command", "命令"),
+                                lang.tr("Field", "字段"),
+                                lang.tr("Preset", "预设值"),
+                                lang.tr("Device", "设备值"),
+                            ],
+                        );
                         for r in &rows {
                             // The profile's names, the wire names on hover.
                             let cmd = profile.command(&r.command);
@@ -301,17 +305,7 @@ fn confirm(ui: &mut egui::Ui, lang: Lang, differing: usize) -> Option<bool> {
                 "项与设备不同;预设的命令将被写入并回读校验。",
             )
         ));
-        ui.horizontal(|ui| {
-            if ui.button(lang.tr("Write", "写入")).clicked() {
-                decision = Some(true);
-            }
-            if ui.button(lang.tr("Cancel", "取消")).clicked() {
-                decision = Some(false);
-            }
-        });
+        decision = super::confirm::buttons(ui, lang.tr("Write", "写入"), lang.tr("Cancel", "取消"));
     });
-    if modal.should_close() && decision.is_none() {
-        decision = Some(false);
-    }
-    decision
+    super::confirm::decided(&modal, decision)
 }

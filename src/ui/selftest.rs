@@ -500,12 +500,16 @@ impl SelfTestPanel {
                 .num_columns(5)
                 .striped(true)
                 .show(ui, |ui| {
-                    ui.strong(lang.tr("Check", "检查项"));
-                    ui.strong(lang.tr("Reads", "读取"));
-                    ui.strong(lang.tr("Bounds", "判定范围"));
-                    ui.strong(lang.tr("Measured", "测量值"));
-                    ui.strong(lang.tr("Result", "结果"));
-                    ui.end_row();
+                    crate::ui::layout::header_row(
+                        ui,
+                        &[
+                            lang.tr("Check", "检查项"),
+                            lang.tr("Reads", "读取"),
+                            lang.tr("Bounds", "判定范围"),
+                            lang.tr("Measured", "测量值"),
+                            lang.tr("Result", "结果"),
+                        ],
+                    );
                     // The identity step appears only when it failed.
                     for r in self.results.iter().filter(|r| r.kind == "Identify") {
                         words(ui, w_check, &r.name, |t| t);

@@ -205,14 +205,6 @@ fn selection_or_hint(ui: &mut egui::Ui, lang: Lang, selected: Option<Servo>) -> 
     selected
 }
 
-/// A grid's header row.
-fn header_row(ui: &mut egui::Ui, headers: &[&str]) {
-    for h in headers {
-        ui.strong(*h);
-    }
-    ui.end_row();
-}
-
 impl ServoBenchPanel {
     /// Forgets what was found on the bus (a new connection): scan rows, the selection, the
     /// parameters read and the angle plot. What the technician typed and chose is kept.

@@ -4,13 +4,14 @@
 //! first. Servo parameter presets are saved from and loaded into the table.
 
 use super::params_jobs::{block_job, read_all_job, read_block_job, reset_job, write_job};
+use super::selection_or_hint;
 use super::{Servo, error_label, ok_label};
-use super::{header_row, selection_or_hint};
 use crate::i18n::{Lang, Zh};
 use crate::ops::OpError;
 use crate::ops::servo as ops;
 use crate::profile::{Access, Param, Profile, Value};
 use crate::ui::Action;
+use crate::ui::layout::header_row;
 use crate::ui::state::AppState;
 use crate::ui::tuning::PendingError;
 use eframe::egui;
@@ -371,19 +372,13 @@ impl ParamsState {
                 "It is refused if another servo already answers there. The parameters are read again afterwards.",
                 "若已有其他舵机在该ID应答则拒绝执行。重置后将重新读取参数。",
             ));
-            ui.horizontal(|ui| {
-                if ui.button(lang.tr("Reset", "重置")).clicked() {
-                    decision = Some(true);
-                }
-                if ui.button(lang.tr("Keep", "不重置")).clicked() {
-                    decision = Some(false);
-                }
-            });
+            decision = crate::ui::confirm::buttons(
+                ui,
+                lang.tr("Reset", "重置"),
+                lang.tr("Keep", "不重置"),
+            );
         });
-        if modal.should_close() && decision.is_none() {
-            decision = Some(false);
-        }
-        if let Some(go) = decision {
+        if let Some(go) = crate::ui::confirm::decided(&modal, decision) {
             self.confirm_reset = false;
             if go {
                 actions.push(reset_job(rt, servo));

@@ -1,13 +1,13 @@
 //! The production tab: load a plan, choose the CSV log, "Provision next" for each fresh servo,
 //! a clear PASS/FAIL banner that names the failed step, and the records of this session.
 
-use super::header_row;
 use super::{Output, error_label, send};
 use crate::document::DocumentError;
 use crate::i18n::{Lang, Zh};
 use crate::ops::servo::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
 use crate::profile::Text;
 use crate::ui::jobs::{Job, JobError, LogError};
+use crate::ui::layout::header_row;
 use crate::ui::settings::FileKind;
 use crate::ui::state::AppState;
 use crate::ui::{Action, files};

@@ -1,7 +1,6 @@
 //! The scan tab: an id range and a set of baud rates, the servos found (details, status as raw
 //! hex and decoded bits, possible duplicate ids), rescanning one id, selecting a servo.
 
-use super::header_row;
 use super::{Output, Servo, error_label, ok_label, port_baud, send};
 use crate::i18n::Lang;
 use crate::ops::OpError;
@@ -9,6 +8,7 @@ use crate::ops::servo::{self as ops, Presence, ScanPlan, ScanReport, ScanRow};
 use crate::profile::{Profile, Text};
 use crate::ui::Action;
 use crate::ui::jobs::Job;
+use crate::ui::layout::header_row;
 use crate::ui::state::AppState;
 use eframe::egui;
 use std::ops::RangeInclusive;

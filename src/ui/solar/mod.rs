@@ -383,12 +383,11 @@ impl SolarPanel {
                 "请确认安全后再执行。停止按钮始终可用。",
             ));
             ui.horizontal(|ui| {
-                if ui.button(lang.tr("Confirm", "确认")).clicked() {
-                    decision = Some(true);
-                }
-                if ui.button(lang.tr("Cancel", "取消")).clicked() {
-                    decision = Some(false);
-                }
+                decision = super::confirm::answer(
+                    ui,
+                    lang.tr("Confirm", "确认"),
+                    lang.tr("Cancel", "取消"),
+                );
                 ui.separator();
                 stop = stop_control.button(ui, lang, rt);
             });
@@ -397,10 +396,7 @@ impl SolarPanel {
             actions.extend(stop);
             decision = Some(false);
         }
-        if modal.should_close() && decision.is_none() {
-            decision = Some(false);
-        }
-        match decision {
+        match super::confirm::decided(&modal, decision) {
             Some(true) => {
                 if let Some((id, inputs)) = self.confirm.take() {
                     actions.extend(self.control.send(rt, id, &inputs));

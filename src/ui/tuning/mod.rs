@@ -6,6 +6,7 @@
 mod table;
 
 use super::Action;
+use super::confirm;
 use super::jobs;
 use super::state::AppState;
 use crate::i18n::{Lang, Zh};
@@ -256,11 +257,15 @@ impl TuningPanel {
                 .striped(true)
                 .num_columns(4)
                 .show(ui, |ui| {
-                    ui.strong(lang.tr("Command", "命令"));
-                    ui.strong(lang.tr("Field", "字段"));
-                    ui.strong(lang.tr("Device", "设备值"));
-                    ui.strong(lang.tr("New", "新值"));
-                    ui.end_row();
+                    crate::ui::layout::header_row(
+                        ui,
+                        &[
+                            lang.tr("Command", "命令"),
+                            lang.tr("Field", "字段"),
+                            lang.tr("Device", "设备值"),
+                            lang.tr("New", "新值"),
+                        ],
+                    );
                     for c in changes {
                         ui.label(lang.tr(&c.command_name.en, &c.command_name.zh))
                             .on_hover_text(&c.command);
@@ -280,19 +285,9 @@ impl TuningPanel {
                 ),
                 ""
             ));
-            ui.horizontal(|ui| {
-                if ui.button(lang.tr("Write", "写入")).clicked() {
-                    decision = Some(true);
-                }
-                if ui.button(lang.tr("Cancel", "取消")).clicked() {
-                    decision = Some(false);
-                }
-            });
+            decision = confirm::buttons(ui, lang.tr("Write", "写入"), lang.tr("Cancel", "取消"));
         });
-        if modal.should_close() && decision.is_none() {
-            decision = Some(false);
-        }
-        match decision {
+        match confirm::decided(&modal, decision) {
             Some(true) => {
                 let (_, writes) = self.confirm.take()?;
                 Some(Action::StartJob(jobs::write(&rt.device.profile, writes)))

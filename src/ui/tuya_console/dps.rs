@@ -224,13 +224,17 @@ impl DpView {
             .striped(true)
             .min_col_width(40.0)
             .show(ui, |ui| {
-                ui.strong(lang.tr("Data point", "数据点"));
-                ui.strong(lang.tr("Reported", "上报值"));
-                ui.strong(lang.tr("Last report", "最近上报"));
-                ui.strong(lang.tr("Command", "下发"));
-                ui.strong(lang.tr("Allowed", "允许值"));
-                ui.strong("");
-                ui.end_row();
+                crate::ui::layout::header_row(
+                    ui,
+                    &[
+                        lang.tr("Data point", "数据点"),
+                        lang.tr("Reported", "上报值"),
+                        lang.tr("Last report", "最近上报"),
+                        lang.tr("Command", "下发"),
+                        lang.tr("Allowed", "允许值"),
+                        "",
+                    ],
+                );
                 for def in &defs {
                     actions.extend(self.row(ui, lang, rt, def, can_send));
                     ui.end_row();

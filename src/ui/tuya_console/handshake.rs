@@ -116,11 +116,15 @@ pub fn show(
         .num_columns(4)
         .striped(true)
         .show(ui, |ui| {
-            ui.strong(lang.tr("Step", "步骤"));
-            ui.strong(lang.tr("Result", "结果"));
-            ui.strong(lang.tr("Time", "时间"));
-            ui.strong(lang.tr("Detail", "详情"));
-            ui.end_row();
+            crate::ui::layout::header_row(
+                ui,
+                &[
+                    lang.tr("Step", "步骤"),
+                    lang.tr("Result", "结果"),
+                    lang.tr("Time", "时间"),
+                    lang.tr("Detail", "详情"),
+                ],
+            );
             for (i, step) in HandshakeStep::ALL.iter().enumerate() {
                 ui.label(step_name(*step, lang));
                 match &s.steps[i] {

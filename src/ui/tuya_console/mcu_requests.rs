@@ -298,10 +298,14 @@ impl RequestsView {
             .num_columns(3)
             .striped(true)
             .show(ui, |ui| {
-                ui.strong(lang.tr("Time", "时间"));
-                ui.strong(lang.tr("Request", "请求"));
-                ui.strong(lang.tr("Answer", "应答"));
-                ui.end_row();
+                crate::ui::layout::header_row(
+                    ui,
+                    &[
+                        lang.tr("Time", "时间"),
+                        lang.tr("Request", "请求"),
+                        lang.tr("Answer", "应答"),
+                    ],
+                );
                 for r in s.requests.iter().rev() {
                     ui.monospace(clock(&r.clock));
                     let name = rt

@@ -304,19 +304,13 @@ impl OtaView {
                 "Keep the MCU powered until the update ends.",
                 "升级结束前请勿断开MCU电源。",
             ));
-            ui.horizontal(|ui| {
-                if ui.button(lang.tr("Update", "升级")).clicked() {
-                    decision = Some(true);
-                }
-                if ui.button(lang.tr("Do not update", "不升级")).clicked() {
-                    decision = Some(false);
-                }
-            });
+            decision = crate::ui::confirm::buttons(
+                ui,
+                lang.tr("Update", "升级"),
+                lang.tr("Do not update", "不升级"),
+            );
         });
-        if modal.should_close() && decision.is_none() {
-            decision = Some(false);
-        }
-        match decision? {
+        match crate::ui::confirm::decided(&modal, decision)? {
             true => {
                 self.confirm = None;
                 self.running = true;
