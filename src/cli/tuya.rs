@@ -57,21 +57,24 @@ impl HandshakeWatch {
     /// Takes an event; a step's result is printed when `show`.
     fn on_event(&mut self, ev: &TuyaEvent, show: bool, json: bool) {
         match ev {
-            TuyaEvent::Step { step, ok, detail } => {
+            TuyaEvent::Step { step, result } => {
+                let ok = result.ok();
                 if json && show {
-                    println!("{}", json!({"step": step, "ok": ok, "detail": detail.en}));
+                    println!(
+                        "{}",
+                        json!({"step": step, "ok": ok, "detail": result.to_string()})
+                    );
                 } else if show {
                     println!(
-                        "{:<14} {}  {}",
+                        "{:<14} {}  {result}",
                         format!("{step:?}"),
-                        if *ok { "ok  " } else { "FAIL" },
-                        detail.en
+                        if ok { "ok  " } else { "FAIL" },
                     );
                 }
-                if *ok {
+                if ok {
                     self.last_ok = Some(*step);
                 } else {
-                    self.last_failed = Some(format!("{step:?}: {}", detail.en));
+                    self.last_failed = Some(format!("{step:?}: {result}"));
                 }
             }
             TuyaEvent::FrameVersion { version } => self.frame_version = Some(*version),
@@ -293,13 +296,19 @@ fn link_baud(port: &PortArgs, profile: &Profile) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::link::StepResult;
 
     fn step(step: HandshakeStep, ok: bool) -> TuyaEvent {
-        TuyaEvent::Step {
-            step,
-            ok,
-            detail: crate::profile::Text::same("no answer"),
-        }
+        let result = if ok {
+            StepResult::WifiStateNotNeeded
+        } else {
+            StepResult::Failed(crate::link::ExchangeError::Timeout {
+                command: step.command(),
+                attempts: 1,
+                waited_ms: 300,
+            })
+        };
+        TuyaEvent::Step { step, result }
     }
 
     #[test]
@@ -317,7 +326,7 @@ mod tests {
         w.on_event(&step(HandshakeStep::QueryStatus, false), false, false);
         assert_eq!(
             w.stalled(wait),
-            "handshake stopped at QueryStatus: no answer"
+            "handshake stopped at QueryStatus: no answer to command 8 after 1 attempt(s) of 300 ms"
         );
     }
 }

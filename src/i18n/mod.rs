@@ -1,5 +1,10 @@
-//! The GUI's two languages: a typed table of UI strings in English and Simplified Chinese, the
-//! language choice, and the bundled CJK font that lets egui draw the Chinese.
+//! The two languages, at the bottom of the house (it uses no other module): the language
+//! choice ([`Lang`]), a typed table of the window's shared words in English and Simplified
+//! Chinese ([`Key`]), words made in both ([`Text`]: a profile's names, an operation's progress),
+//! and the bundled CJK font that lets egui draw the Chinese.
+//!
+//! What the layers above say in Chinese is said by the window (`ui::zh`: errors, link states,
+//! the Tuya handshake's results): the window is the only reader of Chinese.
 //!
 //! Strings are looked up by [`Key`], an enum, so a misspelt key fails to compile:
 //!
@@ -17,13 +22,6 @@
 //! (`assets/fonts/`); `tests/i18n.rs` checks it, and `assets/fonts/make-subset.sh` regenerates
 //! the font when it fails.
 
-mod errors;
-
-pub use errors::Zh;
-
-use crate::link::LinkState;
-use crate::link::session::tuya::{HandshakeStep, TuyaEvent};
-use crate::profile::Text;
 use eframe::egui;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -118,18 +116,6 @@ keys! {
     DemoDevice => "Demo device", "演示设备";
     /// The UI-language switch.
     Language => "Language", "语言";
-
-    // ---- Link states (LinkState) ----
-    /// `LinkState::Connected`.
-    Connected => "Connected", "已连接";
-    /// `LinkState::Reconnecting`.
-    Reconnecting => "Reconnecting", "正在重连";
-    /// `LinkState::Lost`.
-    Lost => "Lost", "连接丢失";
-    /// `LinkState::Closed`, or no port open.
-    Disconnected => "Disconnected", "未连接";
-    /// Reconnection attempts so far.
-    Attempt => "attempt", "尝试次数";
 
     // ---- The status bar (LinkStats) ----
     /// Round trip of the last exchange.
@@ -266,36 +252,6 @@ keys! {
     DataPoints => "Data points", "数据点";
     /// An OTA update.
     FirmwareUpdate => "Firmware update", "固件升级";
-    /// Handshake step 0x00.
-    StepHeartbeat => "Heartbeat", "心跳检测";
-    /// Handshake step 0x01.
-    StepProductInfo => "Product info", "查询产品信息";
-    /// Handshake step 0x02.
-    StepWorkMode => "Working mode", "查询工作模式";
-    /// Handshake step 0x03.
-    StepWifiState => "Report Wi-Fi state", "报告 Wi-Fi 状态";
-    /// Handshake step 0x08.
-    StepQueryStatus => "Query status", "查询设备状态";
-    /// Every step done.
-    HandshakeDone => "Handshake complete", "握手完成";
-    /// The MCU restarted; the handshake runs again.
-    McuRestarted => "MCU restarted", "MCU 已重启";
-    /// The MCU stopped answering heartbeats.
-    HeartbeatLost => "Heartbeat lost", "心跳丢失";
-    /// Wi-Fi state 0: SmartConfig (EZ) pairing.
-    WifiSmartConfig => "SmartConfig pairing", "SmartConfig 配网中";
-    /// Wi-Fi state 1: access-point pairing.
-    WifiApConfig => "AP pairing", "AP 配网中";
-    /// Wi-Fi state 2: configured, router not connected.
-    WifiNotConnected => "Wi-Fi set up, router not connected", "已配网，未连上路由器";
-    /// Wi-Fi state 3: connected to the router.
-    WifiRouter => "Connected to router", "已连上路由器";
-    /// Wi-Fi state 4: connected to the cloud.
-    WifiCloud => "Connected to cloud", "已连上云端";
-    /// Wi-Fi state 5: low-power mode.
-    WifiLowPower => "Low-power mode", "低功耗模式";
-    /// Wi-Fi state 6: SmartConfig and AP pairing at once.
-    WifiSmartConfigAndAp => "SmartConfig and AP pairing", "SmartConfig 与 AP 同时配网";
 }
 
 impl Key {
@@ -304,56 +260,6 @@ impl Key {
         match lang {
             Lang::En => self.en(),
             Lang::Zh => self.zh(),
-        }
-    }
-
-    /// The key naming a handshake step.
-    pub fn handshake_step(step: HandshakeStep) -> Key {
-        match step {
-            HandshakeStep::Heartbeat => Key::StepHeartbeat,
-            HandshakeStep::ProductInfo => Key::StepProductInfo,
-            HandshakeStep::WorkMode => Key::StepWorkMode,
-            HandshakeStep::WifiState => Key::StepWifiState,
-            HandshakeStep::QueryStatus => Key::StepQueryStatus,
-        }
-    }
-
-    /// The key naming a link state (its details, port or reason, are shown beside it).
-    pub fn link_state(state: &LinkState) -> Key {
-        match state {
-            LinkState::Connected { .. } => Key::Connected,
-            LinkState::Lost { .. } => Key::Lost,
-            LinkState::Reconnecting { .. } => Key::Reconnecting,
-            LinkState::Closed => Key::Disconnected,
-        }
-    }
-
-    /// The key naming a Tuya Wi-Fi state (command 0x03, 0-6); `None` outside that range.
-    pub fn wifi_state(state: u8) -> Option<Key> {
-        Some(match state {
-            0 => Key::WifiSmartConfig,
-            1 => Key::WifiApConfig,
-            2 => Key::WifiNotConnected,
-            3 => Key::WifiRouter,
-            4 => Key::WifiCloud,
-            5 => Key::WifiLowPower,
-            6 => Key::WifiSmartConfigAndAp,
-            _ => return None,
-        })
-    }
-
-    /// The key for a Tuya event that is a plain status line; `None` for events with data
-    /// (a step, product info, work mode, an MCU request), which a panel lays out itself.
-    pub fn tuya_event(event: &TuyaEvent) -> Option<Key> {
-        match event {
-            TuyaEvent::HandshakeDone => Some(Key::HandshakeDone),
-            TuyaEvent::McuRestarted => Some(Key::McuRestarted),
-            TuyaEvent::HeartbeatLost => Some(Key::HeartbeatLost),
-            TuyaEvent::Step { .. }
-            | TuyaEvent::FrameVersion { .. }
-            | TuyaEvent::ProductInfo(_)
-            | TuyaEvent::WorkMode { .. }
-            | TuyaEvent::McuRequest { .. } => None,
         }
     }
 }
@@ -377,6 +283,18 @@ fn zh_sep(sep: &str) -> &str {
 /// The text of `key` in `lang`.
 pub fn tr(lang: Lang, key: Key) -> &'static str {
     key.get(lang)
+}
+
+/// Words in English and in Chinese: a profile's names (`name: (en: "...", zh: "...")` in
+/// `assets/profiles/*.ron`), a progress message of an operation, a status line. [`Text::get`]
+/// picks one.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Text {
+    /// English.
+    pub en: String,
+    /// Simplified Chinese.
+    pub zh: String,
 }
 
 impl Text {
@@ -530,27 +448,6 @@ mod tests {
             zh: String::new(),
         };
         assert_eq!(only_en.get(Lang::Zh), "Ping");
-    }
-
-    #[test]
-    fn state_mappings() {
-        let steps: HashSet<Key> = HandshakeStep::ALL
-            .iter()
-            .map(|&s| Key::handshake_step(s))
-            .collect();
-        assert_eq!(steps.len(), HandshakeStep::ALL.len());
-        assert_eq!(Key::link_state(&LinkState::Closed), Key::Disconnected);
-        assert_eq!(
-            Key::link_state(&LinkState::Reconnecting { attempt: 2 }),
-            Key::Reconnecting
-        );
-        let wifi: HashSet<Key> = (0..=6).filter_map(Key::wifi_state).collect();
-        assert_eq!(wifi.len(), 7);
-        assert_eq!(Key::wifi_state(7), None);
-        assert_eq!(
-            Key::tuya_event(&TuyaEvent::HeartbeatLost),
-            Some(Key::HeartbeatLost)
-        );
     }
 
     #[test]

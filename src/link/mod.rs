@@ -13,7 +13,7 @@ mod worker;
 pub use worker::default_margin;
 
 pub use request::{ExchangeError, Match, Reply, ReplySpec, Request};
-pub use session::tuya::{HandshakeStep, ProductInfo, TuyaEvent, TuyaModuleOptions};
+pub use session::tuya::{HandshakeStep, ProductInfo, StepResult, TuyaEvent, TuyaModuleOptions};
 pub use session::{Capability, DeviceInfo, capabilities};
 pub use transport::{LinkError, Transport, wire_time};
 

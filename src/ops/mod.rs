@@ -60,7 +60,7 @@ pub struct Progress {
     /// Steps in all.
     pub total: u64,
     /// What is happening now, in both languages (the command line prints the English).
-    pub message: crate::profile::Text,
+    pub message: crate::i18n::Text,
 }
 
 impl Progress {

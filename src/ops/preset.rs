@@ -39,7 +39,7 @@ pub fn read_device(
         progress(Progress {
             done: i as u64 + 1,
             total,
-            message: crate::profile::Text::new(
+            message: crate::i18n::Text::new(
                 format!("read {}", get.name.en),
                 format!("已读取 {}", get.name.zh),
             ),
@@ -106,7 +106,7 @@ pub fn apply_each(
     progress(Progress {
         done: 0,
         total,
-        message: crate::profile::Text::new("checked; writing", "已检查,正在写入"),
+        message: crate::i18n::Text::new("checked; writing", "已检查,正在写入"),
     });
     for (i, w) in writes.iter().enumerate() {
         if cancel.is_cancelled() {
@@ -120,7 +120,7 @@ pub fn apply_each(
         progress(Progress {
             done: i as u64 + 1,
             total,
-            message: crate::profile::Text::new(
+            message: crate::i18n::Text::new(
                 format!("wrote {}", set.name.en),
                 format!("已写入 {}", set.name.zh),
             ),

@@ -3,18 +3,9 @@
 //! Every integer field's `range` and `default` are in raw (wire) units; `scale` turns a raw value
 //! into the displayed one (`display = raw × scale`), so `scale: 0.01` shows 275 as 2.75.
 
+use crate::i18n::Text;
 use crate::protocol::tuya::dp::DpType;
 use serde::{Deserialize, Serialize};
-
-/// A name in English and in Chinese.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Text {
-    /// English.
-    pub en: String,
-    /// Simplified Chinese.
-    pub zh: String,
-}
 
 /// The wire protocol a profile speaks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]

@@ -1,8 +1,9 @@
 //! Loading profiles: the built-in ones, a user's overrides, and files named on the command line.
 
-use super::model::{Command, DeviceCode, Profile, Relation, Text};
+use super::model::{Command, DeviceCode, Profile, Relation};
 use super::validate::validate;
 use crate::document::{Step, locate};
+use crate::i18n::Text;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -72,14 +72,14 @@ impl SimKind {
     }
 
     /// [`Self::describe`] in both languages, for the window.
-    pub fn described(self) -> crate::profile::Text {
+    pub fn described(self) -> crate::i18n::Text {
         let zh = match self {
             SimKind::WindowCleaner => "模拟擦窗机器人",
             SimKind::SolarCleanbot => "模拟光伏清扫机器人",
             SimKind::ServoBus => "模拟舵机总线",
             SimKind::TuyaVacuum => "模拟涂鸦扫地机",
         };
-        crate::profile::Text::new(self.describe(), zh)
+        crate::i18n::Text::new(self.describe(), zh)
     }
 
     /// The baud rate it runs at unless told otherwise (its profile's).

@@ -6,8 +6,9 @@ use super::Action;
 use super::inputs::{command_inputs, value_box};
 use super::jobs;
 use super::state::AppState;
-use crate::i18n::{Lang, Zh};
+use crate::i18n::Lang;
 use crate::profile::{Command, CommandKind, Input};
+use crate::ui::zh::Zh;
 use eframe::egui;
 use std::collections::HashMap;
 

@@ -11,9 +11,10 @@ use super::{
     selftest, servo_bench, solar, status_bar, stop, telemetry, tour, tuning, tuya_console,
 };
 use crate::i18n::Lang;
-use crate::i18n::Zh;
+use crate::i18n::Text;
 use crate::link::LinkCommand;
-use crate::profile::{PanelKind, ProfileError, Text};
+use crate::profile::{PanelKind, ProfileError};
+use crate::ui::zh::Zh;
 use eframe::egui;
 use serde::{Deserialize, Serialize};
 

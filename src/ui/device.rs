@@ -4,12 +4,14 @@
 use super::Action;
 use super::jobs::{Job, JobOutput};
 use super::state::AppState;
-use crate::i18n::{Lang, Zh};
+use crate::i18n::Lang;
+use crate::i18n::Text;
 use crate::link::{DeviceInfo, LinkCommand, capabilities};
 use crate::ops::OpError;
 use crate::ops::device as ops;
-use crate::profile::{Profile, Text};
+use crate::profile::Profile;
 use crate::protocol::hex;
+use crate::ui::zh::Zh;
 use eframe::egui;
 use std::time::{Duration, Instant};
 

@@ -92,8 +92,8 @@ impl FileEvent {
 
 /// The status line's message when a file dialog could not open: `why` in English (what
 /// [`FileEvent::NoDialog`] carries), the advice in Chinese.
-pub(crate) fn no_dialog(why: String) -> crate::profile::Text {
-    crate::profile::Text::new(
+pub(crate) fn no_dialog(why: String) -> crate::i18n::Text {
+    crate::i18n::Text::new(
         why,
         "文件对话框无法打开(没有可用的 xdg 桌面门户或 zenity):请在框中输入路径",
     )

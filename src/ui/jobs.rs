@@ -7,9 +7,10 @@
 
 use crate::document::DocumentError;
 use crate::i18n::Key;
+use crate::i18n::Text;
 use crate::link::Client;
 use crate::ops::{self, Cancel, Check, FieldValues, OpError, Progress};
-use crate::profile::{Input, Profile, Text};
+use crate::profile::{Input, Profile};
 use crossbeam_channel::{Receiver, Sender};
 use std::path::PathBuf;
 use std::sync::Arc;

@@ -30,6 +30,7 @@ pub mod tour;
 pub(crate) mod tuning;
 mod tuya_console;
 pub mod views;
+pub mod zh;
 
 pub use app::{App, PanelId};
 pub use jobs::Job;

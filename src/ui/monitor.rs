@@ -14,10 +14,12 @@ use super::Action;
 use super::files;
 use super::settings::FileKind;
 use super::state::{AppState, Notice};
-use crate::i18n::{Lang, Zh};
+use crate::i18n::Lang;
+use crate::i18n::Text;
 use crate::link::LogEntry;
-use crate::profile::{Profile, Text};
+use crate::profile::Profile;
 use crate::protocol::{Direction, hex};
+use crate::ui::zh::Zh;
 use eframe::egui;
 
 /// The monitor's view state.

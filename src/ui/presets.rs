@@ -6,10 +6,12 @@ use super::settings::FileKind;
 use super::state::{AppState, Reading};
 use super::{Action, files};
 use crate::document::DocumentError;
-use crate::i18n::{Lang, Zh};
+use crate::i18n::Lang;
+use crate::i18n::Text;
 use crate::ops;
 use crate::preset::{CommandValues, Loaded, Preset, preset_commands};
-use crate::profile::{Profile, Text};
+use crate::profile::Profile;
+use crate::ui::zh::Zh;
 use eframe::egui;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -246,7 +248,7 @@ impl PresetsPanel {
                                     .chain(&c.reply)
                                     .find(|f| f.ident == r.field)
                             });
-                            let named = |t: Option<&crate::profile::Text>, wire: &str| {
+                            let named = |t: Option<&crate::i18n::Text>, wire: &str| {
                                 t.map_or(wire.to_string(), |t| t.get(lang).to_string())
                             };
                             ui.label(named(cmd.map(|c| &c.name), &r.command))

@@ -8,8 +8,9 @@ use super::settings::{FileKind, Settings};
 use super::state::{AppState, Notice, Reading};
 use super::{Action, files, plot};
 use crate::i18n::Lang;
-use crate::i18n::Zh;
-use crate::profile::{CommandKind, Text};
+use crate::i18n::Text;
+use crate::profile::CommandKind;
+use crate::ui::zh::Zh;
 use eframe::egui;
 use egui_plot::{Plot, VLine};
 

@@ -66,7 +66,7 @@ fn steps(events: &[TuyaEvent]) -> Vec<(HandshakeStep, bool)> {
     events
         .iter()
         .filter_map(|e| match e {
-            TuyaEvent::Step { step, ok, .. } => Some((*step, *ok)),
+            TuyaEvent::Step { step, result } => Some((*step, result.ok())),
             _ => None,
         })
         .collect()

@@ -2,7 +2,7 @@
 //! of its codes; a logged frame decoded with the profile it came under, after the device changed.
 
 use botbench::i18n::Lang;
-use botbench::profile::Text;
+use botbench::i18n::Text;
 use botbench::sim::SimOptions;
 use botbench::sim::solar_cleanbot::SolarCleanbot;
 use botbench::ui::{Action, App, Job, PanelId, Target};

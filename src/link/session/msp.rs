@@ -2,9 +2,10 @@
 //! code, then CMD_BUILD_INFO), learns the device code later requests go to where the profile
 //! says `Auto`, and keeps the result for whoever asks ([`crate::link::Client::device_info`]).
 
+use crate::i18n::Text;
 use crate::link::LinkEvent;
 use crate::link::request::{ExchangeError, Reply, Request};
-use crate::profile::{DeviceCode, Profile, Text};
+use crate::profile::{DeviceCode, Profile};
 use crate::protocol::{Direction, msp};
 use crossbeam_channel::Sender;
 use serde::Serialize;

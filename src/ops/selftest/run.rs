@@ -101,7 +101,7 @@ pub fn run_each(
     progress(Progress {
         done: 0,
         total,
-        message: crate::profile::Text::new("identifying the device", "正在识别设备"),
+        message: crate::i18n::Text::new("identifying the device", "正在识别设备"),
     });
     match crate::ops::device::identify(client) {
         Ok(info) => {
@@ -124,7 +124,7 @@ pub fn run_each(
         progress(Progress {
             done: 0,
             total,
-            message: crate::profile::Text::new("setting the safe state", "正在设为安全状态"),
+            message: crate::i18n::Text::new("setting the safe state", "正在设为安全状态"),
         });
         report.aborted = safe_state(client, profile, plan, cancel, &mut report.safe_state);
     }
@@ -133,7 +133,7 @@ pub fn run_each(
             progress(Progress {
                 done: i as u64 + 1,
                 total,
-                message: crate::profile::Text::same(&step.name),
+                message: crate::i18n::Text::same(&step.name),
             });
             let (pass, detail, halt) = if cancel.is_cancelled() {
                 (false, "cancelled before it started".into(), true)
@@ -178,7 +178,7 @@ pub fn run_each(
     progress(Progress {
         done: total,
         total,
-        message: crate::profile::Text::new("done", "完成"),
+        message: crate::i18n::Text::new("done", "完成"),
     });
     report.pass = report.aborted.is_none()
         && report.results.len() == plan.steps.len()

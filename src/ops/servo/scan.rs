@@ -480,7 +480,7 @@ pub fn scan(
                 progress(Progress {
                     done: before + done as u64,
                     total,
-                    message: crate::profile::Text::new(
+                    message: crate::i18n::Text::new(
                         format!("id {id} at {baud} baud"),
                         format!("ID {id},波特率 {baud}"),
                     ),

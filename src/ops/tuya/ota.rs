@@ -248,7 +248,7 @@ pub fn ota(
         progress(Progress {
             done,
             total,
-            message: crate::profile::Text::new(
+            message: crate::i18n::Text::new(
                 format!("offset {done} of {size}, {rate:.0} B/s, {left:.0} s left"),
                 format!("偏移 {done}/{size},{rate:.0} B/s,剩余 {left:.0} s"),
             ),

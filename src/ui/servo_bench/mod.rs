@@ -20,11 +20,11 @@ use super::Action;
 use super::jobs::{JobOutput, JobSink, LogError};
 use super::state::{AppState, Notice};
 use crate::i18n::Lang;
+use crate::i18n::Text;
 use crate::link::{LinkCommand, ReplyTo, Request};
 use crate::ops::servo::provision::{ProvisionState, Record};
 use crate::ops::servo::{Location, ScanRow};
 use crate::ops::{Check, OpError};
-use crate::profile::Text;
 use eframe::egui;
 
 pub use params::ParamsState;

@@ -7,7 +7,7 @@
 
 use super::selection_or_hint;
 use super::{Servo, direct, error_label, follow};
-use crate::i18n::{Lang, Zh};
+use crate::i18n::Lang;
 use crate::link::{LinkCommand, Poll};
 use crate::ops::FieldValues;
 use crate::ops::OpError;
@@ -16,6 +16,7 @@ use crate::profile::{Field, Value};
 use crate::protocol::servo::cmd;
 use crate::ui::Action;
 use crate::ui::state::{AppState, Notice, Reading};
+use crate::ui::zh::Zh;
 use eframe::egui;
 use egui_plot::{Line, Plot, PlotPoints};
 use std::time::{Duration, Instant};

@@ -6,7 +6,7 @@
 use super::params_jobs::{block_job, read_all_job, read_block_job, reset_job, write_job};
 use super::selection_or_hint;
 use super::{Servo, error_label, ok_label};
-use crate::i18n::{Lang, Zh};
+use crate::i18n::Lang;
 use crate::ops::OpError;
 use crate::ops::servo as ops;
 use crate::profile::{Access, Param, Profile, Value};
@@ -14,6 +14,7 @@ use crate::ui::Action;
 use crate::ui::layout::header_row;
 use crate::ui::state::AppState;
 use crate::ui::tuning::PendingError;
+use crate::ui::zh::Zh;
 use eframe::egui;
 use std::collections::BTreeMap;
 

@@ -2,8 +2,8 @@
 //! (each read back) or the whole block, reset the user data; each reports to the panel.
 
 use super::{Output, Servo, send};
+use crate::i18n::Text;
 use crate::ops::servo as ops;
-use crate::profile::Text;
 use crate::ui::Action;
 use crate::ui::jobs::{Job, JobError};
 use crate::ui::state::AppState;

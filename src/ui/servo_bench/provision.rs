@@ -3,13 +3,14 @@
 
 use super::{Output, error_label, send};
 use crate::document::DocumentError;
-use crate::i18n::{Lang, Zh};
+use crate::i18n::Lang;
+use crate::i18n::Text;
 use crate::ops::servo::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
-use crate::profile::Text;
 use crate::ui::jobs::{Job, JobError, LogError};
 use crate::ui::layout::header_row;
 use crate::ui::settings::FileKind;
 use crate::ui::state::AppState;
+use crate::ui::zh::Zh;
 use crate::ui::{Action, files};
 use eframe::egui;
 use std::path::PathBuf;

@@ -3,9 +3,10 @@
 
 use super::{Output, Servo, error_label, ok_label, port_baud, send};
 use crate::i18n::Lang;
+use crate::i18n::Text;
 use crate::ops::OpError;
 use crate::ops::servo::{self as ops, Presence, ScanPlan, ScanReport, ScanRow};
-use crate::profile::{Profile, Text};
+use crate::profile::Profile;
 use crate::ui::Action;
 use crate::ui::jobs::Job;
 use crate::ui::layout::header_row;

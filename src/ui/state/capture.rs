@@ -2,9 +2,9 @@
 
 use super::{AppState, Notice, OfflineCapture};
 use crate::capture::{self, Capture, CaptureInfo};
-use crate::i18n::Zh;
+use crate::i18n::Text;
 use crate::link::LogEntry;
-use crate::profile::Text;
+use crate::ui::zh::Zh;
 use std::path::Path;
 use std::time::{Duration, UNIX_EPOCH};
 

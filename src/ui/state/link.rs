@@ -35,13 +35,13 @@ impl Target {
 
     /// What the link calls the port it opened (`LinkState::Connected`'s `port`), in both
     /// languages: a built-in demo device's description is translated, a path is a path.
-    pub fn port_said(&self, port: &str) -> crate::profile::Text {
+    pub fn port_said(&self, port: &str) -> crate::i18n::Text {
         match self {
             Target::Demo(name) => match name.parse::<crate::sim::SimKind>() {
                 Ok(kind) if kind.describe() == port => kind.described(),
-                _ => crate::profile::Text::same(port),
+                _ => crate::i18n::Text::same(port),
             },
-            Target::Port(_) => crate::profile::Text::same(port),
+            Target::Port(_) => crate::i18n::Text::same(port),
         }
     }
 }

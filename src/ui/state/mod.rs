@@ -19,10 +19,11 @@ pub use tuya::{
 };
 
 use super::jobs::{Job, JobError, JobOutput, RunningJob};
-use crate::i18n::Zh;
+use crate::i18n::Text;
 use crate::link::{Link, LinkCommand, LinkEvent, LinkState, LinkStats, Opener};
-use crate::profile::{ProfileError, Registry, Text};
+use crate::profile::{ProfileError, Registry};
 use crate::sim::{Faults, SharedDevice, SimKind, SimOptions, SimTransport};
+use crate::ui::zh::Zh;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -30,7 +31,7 @@ use std::time::{Duration, Instant};
 pub const EVENT_BUDGET: Duration = Duration::from_millis(4);
 
 /// A status-line message, in both languages (every message the window shows is said in
-/// each: see [`crate::i18n::Zh`] for errors).
+/// each: see [`crate::ui::zh::Zh`] for errors).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Notice {
     /// The text, in English.

@@ -10,6 +10,7 @@ use crate::packet::{Header, Packet};
 use crate::profile::{Profile, Value};
 use crate::protocol::Direction;
 use crate::protocol::tuya::cmd;
+use crate::ui::zh::Zh;
 use chrono::{DateTime, Local};
 use std::collections::{BTreeMap, VecDeque};
 use std::time::Instant;
@@ -24,8 +25,9 @@ pub const REQUESTS_CAPACITY: usize = 200;
 pub struct StepResult {
     /// It worked.
     pub ok: bool,
-    /// What came back, or why it failed, in both languages.
-    pub detail: crate::profile::Text,
+    /// What came back, or why it failed, in both languages (the link's
+    /// [`crate::link::StepResult`] said).
+    pub detail: crate::i18n::Text,
     /// When.
     pub at: DateTime<Local>,
 }
@@ -147,7 +149,8 @@ impl TuyaModel {
     pub fn on_event(&mut self, ev: TuyaEvent) {
         let now = Local::now();
         match ev {
-            TuyaEvent::Step { step, ok, detail } => {
+            TuyaEvent::Step { step, result } => {
+                let ok = result.ok();
                 if step == HandshakeStep::Heartbeat {
                     // Every attempt starts with a heartbeat: a new attempt.
                     self.steps = Default::default();
@@ -157,7 +160,7 @@ impl TuyaModel {
                 }
                 let result = StepResult {
                     ok,
-                    detail,
+                    detail: result.said(),
                     at: now,
                 };
                 // A product info that is not JSON is shown raw and the handshake goes on.
@@ -277,13 +280,15 @@ impl TuyaModel {
 mod tests {
     use super::*;
     use crate::link::session::tuya::parse_product_info;
+    use crate::link::{self};
 
     fn step(step: HandshakeStep, ok: bool) -> TuyaEvent {
-        TuyaEvent::Step {
-            step,
-            ok,
-            detail: crate::profile::Text::same(""),
-        }
+        let result = if ok {
+            link::StepResult::WifiStateNotNeeded
+        } else {
+            link::StepResult::Failed(link::ExchangeError::Cancelled)
+        };
+        TuyaEvent::Step { step, result }
     }
 
     #[test]

@@ -9,9 +9,10 @@ use super::Action;
 use super::confirm;
 use super::jobs;
 use super::state::AppState;
-use crate::i18n::{Lang, Zh};
+use crate::i18n::Lang;
 use crate::ops::tuning::SetWrite;
 use crate::profile::{Command, CommandKind, Field, FieldError, Value};
+use crate::ui::zh::Zh;
 use eframe::egui;
 use std::collections::HashMap;
 
@@ -23,9 +24,9 @@ pub struct Change {
     /// The field's ident.
     pub field: String,
     /// The Set command's name, as the window shows it.
-    pub command_name: crate::profile::Text,
+    pub command_name: crate::i18n::Text,
     /// The field's name, as the window shows it.
-    pub field_name: crate::profile::Text,
+    pub field_name: crate::i18n::Text,
     /// The device's value, as shown.
     pub device: String,
     /// The new value, as shown.

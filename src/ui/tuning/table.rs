@@ -2,10 +2,11 @@
 //! places, the names' column as wide as the longest name.
 
 use super::{TuningPanel, named, profile_set};
-use crate::i18n::{Lang, Zh};
+use crate::i18n::Lang;
 use crate::profile::{Command, CommandKind, Field};
 use crate::ui::inputs::range_text;
 use crate::ui::state::{AppState, Mark, Reading};
+use crate::ui::zh::Zh;
 use eframe::egui;
 
 /// A panel group: its id ("" for the commands without one), its name, its Get/Set pairs.

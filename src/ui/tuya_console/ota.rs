@@ -4,10 +4,10 @@
 
 use super::{Action, AppState, Output};
 use crate::i18n::Lang;
+use crate::i18n::Text;
 use crate::ops::OpError;
 pub use crate::ops::tuya::FirmwareFileError;
 use crate::ops::tuya::{self as ops, OtaTiming};
-use crate::profile::Text;
 use crate::ui::files;
 use crate::ui::jobs::{Job, JobError, JobOutput};
 use crate::ui::settings::FileKind;

@@ -15,11 +15,10 @@ pub use product_info::{ProductInfo, parse_product_info};
 pub use reports::{command_ids, reported_ids, reports_reply};
 
 use super::Unasked;
-use crate::i18n::Zh;
 use crate::link::LinkEvent;
 use crate::link::request::{ExchangeError, Reply, ReplySpec, Request};
 use crate::packet::{Header, Packet};
-use crate::profile::{Profile, Text};
+use crate::profile::Profile;
 use crate::protocol::Direction;
 use crate::protocol::tuya::{self, VERSION_MCU, cmd};
 use serde::Serialize;
@@ -68,18 +67,117 @@ impl HandshakeStep {
     }
 }
 
+/// What a handshake step found, as data: the command line says it in English (`Display`),
+/// the window in either language.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StepResult {
+    /// 0x00 answered.
+    Heartbeat {
+        /// The MCU answered 0: its first heartbeat since it started (1 afterwards).
+        first_since_start: bool,
+        /// The version byte of the answer's frame (see [`TuyaEvent::FrameVersion`]).
+        frame_version: Option<u8>,
+    },
+    /// 0x01 answered: the product info, read as JSON or, when it is not, kept raw with why
+    /// ([`ProductInfo::error`]); the handshake goes on either way.
+    ProductInfo(ProductInfo),
+    /// 0x02 answered: `None` when the MCU drives the Wi-Fi LED, else the module's GPIO numbers
+    /// (LED, reset).
+    WorkMode {
+        /// The module's GPIOs (LED, reset), when it drives the LED itself.
+        gpio: Option<(u8, u8)>,
+    },
+    /// 0x03 not sent: the module drives the LED, so the MCU needs no Wi-Fi state.
+    WifiStateNotNeeded,
+    /// 0x03 answered: the Wi-Fi state (0-6) reported to the MCU.
+    WifiStateReported {
+        /// The state reported.
+        state: u8,
+    },
+    /// 0x08 answered: of the profile's `total` data points, `missing` (ids, in the profile's
+    /// order) were not reported.
+    Status {
+        /// The profile's data points.
+        total: usize,
+        /// Those not reported.
+        missing: Vec<u8>,
+    },
+    /// The step's exchange failed (no answer, a garbled one, the port lost).
+    Failed(ExchangeError),
+}
+
+impl StepResult {
+    /// Whether the step worked: it did not fail, and a product info was valid JSON.
+    pub fn ok(&self) -> bool {
+        match self {
+            StepResult::Failed(_) => false,
+            StepResult::ProductInfo(info) => info.error.is_none(),
+            _ => true,
+        }
+    }
+}
+
+impl std::fmt::Display for StepResult {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StepResult::Heartbeat {
+                first_since_start,
+                frame_version,
+            } => {
+                let answer = if *first_since_start {
+                    "answered 0: first since the MCU started"
+                } else {
+                    "answered 1"
+                };
+                match frame_version {
+                    Some(v) => write!(f, "{answer}; {}", version_text(*v)),
+                    None => f.write_str(answer),
+                }
+            }
+            StepResult::ProductInfo(info) => match &info.error {
+                None => {
+                    let pid = info.pid.as_deref().unwrap_or("?");
+                    let version = info.version.as_deref().unwrap_or("?");
+                    let mode = info.mode.map_or("?".to_string(), |m| m.to_string());
+                    write!(f, "PID {pid}, MCU {version}, mode {mode}")
+                }
+                Some(e) => write!(f, "not valid JSON ({e}); shown raw: {}", info.raw),
+            },
+            StepResult::WorkMode { gpio: None } => f.write_str("the MCU drives the Wi-Fi LED"),
+            StepResult::WorkMode {
+                gpio: Some((led, reset)),
+            } => write!(
+                f,
+                "the module drives the LED (GPIO {led}, reset GPIO {reset})"
+            ),
+            StepResult::WifiStateNotNeeded => f.write_str("not needed: the module drives the LED"),
+            StepResult::WifiStateReported { state } => write!(f, "reported state {state}"),
+            StepResult::Status { total, missing } if missing.is_empty() => {
+                write!(f, "all {total} data points reported")
+            }
+            StepResult::Status { total, missing } => {
+                let ids: Vec<String> = missing.iter().map(u8::to_string).collect();
+                write!(
+                    f,
+                    "{} of {total} data points reported; not reported: {}",
+                    total - missing.len(),
+                    ids.join(", ")
+                )
+            }
+            StepResult::Failed(e) => e.fmt(f),
+        }
+    }
+}
+
 /// What the Tuya part of the link reports.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "event", rename_all = "snake_case")]
+#[derive(Debug, Clone, PartialEq)]
 pub enum TuyaEvent {
-    /// A handshake step finished, well or not.
+    /// A handshake step finished, well or not ([`StepResult::ok`]).
     Step {
         /// Which.
         step: HandshakeStep,
-        /// Whether it worked.
-        ok: bool,
-        /// What came back, or why it failed, in both languages.
-        detail: Text,
+        /// What it found, or why it failed.
+        result: StepResult,
     },
     /// The version byte of the MCU's frames (its heartbeat answer's): 0x03 by the protocol
     /// document, 0x01 from MCU SDKs before v2.5, 0x00 from some firmware.
@@ -271,7 +369,7 @@ impl TuyaSession {
             Some(Ask::Step(step, wifi_state)) => match result {
                 Ok(reply) => self.step_done(step, wifi_state, &reply, now, events),
                 Err(e) => {
-                    events.push(step_event(step, false, e.said()));
+                    events.push(step_event(step, StepResult::Failed(e)));
                     self.phase = Phase::HandshakeAt(now + HANDSHAKE_RETRY);
                     false
                 }
@@ -309,51 +407,24 @@ impl TuyaSession {
         let payload = reply.payload().unwrap_or_default();
         let next = match step {
             HandshakeStep::Heartbeat => {
-                let answer = if payload == [0] {
-                    Text::new(
-                        "answered 0: first since the MCU started",
-                        "应答 0:MCU 启动后的第一次",
-                    )
-                } else {
-                    Text::new("answered 1", "应答 1")
+                let frame_version = match reply.packets.first().map(|p| &p.header) {
+                    Some(Header::Tuya { version }) => Some(*version),
+                    _ => None,
                 };
-                let detail = match reply.packets.first().map(|p| &p.header) {
-                    Some(Header::Tuya { version }) => {
-                        events.push(LinkEvent::Tuya(TuyaEvent::FrameVersion {
-                            version: *version,
-                        }));
-                        let zh = if *version == VERSION_MCU {
-                            format!("MCU 帧版本 {version:#04x}")
-                        } else {
-                            format!("MCU 帧版本 {version:#04x}(协议文档为 {VERSION_MCU:#04x})")
-                        };
-                        answer.then("; ", &Text::new(version_text(*version), zh))
-                    }
-                    _ => answer,
+                if let Some(version) = frame_version {
+                    events.push(LinkEvent::Tuya(TuyaEvent::FrameVersion { version }));
+                }
+                let result = StepResult::Heartbeat {
+                    first_since_start: payload == [0],
+                    frame_version,
                 };
-                events.push(step_event(step, true, detail));
+                events.push(step_event(step, result));
                 HandshakeStep::ProductInfo
             }
             HandshakeStep::ProductInfo => {
                 let info = parse_product_info(payload);
-                let detail = match &info.error {
-                    None => {
-                        let pid = info.pid.as_deref().unwrap_or("?");
-                        let version = info.version.as_deref().unwrap_or("?");
-                        let mode = info.mode.map_or("?".to_string(), |m| m.to_string());
-                        Text::new(
-                            format!("PID {pid}, MCU {version}, mode {mode}"),
-                            format!("PID {pid},MCU {version},配网模式 {mode}"),
-                        )
-                    }
-                    Some(e) => Text::new(
-                        format!("not valid JSON ({e}); shown raw: {}", info.raw),
-                        format!("不是有效的 JSON({e});按原样显示:{}", info.raw),
-                    ),
-                };
-                let ok = info.error.is_none();
-                events.push(LinkEvent::Tuya(TuyaEvent::ProductInfo(info)));
-                events.push(step_event(step, ok, detail));
+                events.push(LinkEvent::Tuya(TuyaEvent::ProductInfo(info.clone())));
+                events.push(step_event(step, StepResult::ProductInfo(info)));
                 HandshakeStep::WorkMode
             }
             HandshakeStep::WorkMode => {
@@ -362,57 +433,31 @@ impl TuyaSession {
                     _ => None,
                 };
                 events.push(LinkEvent::Tuya(TuyaEvent::WorkMode { gpio }));
-                let detail = match gpio {
-                    None => Text::new("the MCU drives the Wi-Fi LED", "MCU 控制 WiFi 指示灯"),
-                    Some((l, r)) => Text::new(
-                        format!("the module drives the LED (GPIO {l}, reset GPIO {r})"),
-                        format!("模块控制指示灯(GPIO {l},复位 GPIO {r})"),
-                    ),
-                };
-                events.push(step_event(step, true, detail));
+                events.push(step_event(step, StepResult::WorkMode { gpio }));
                 if gpio.is_none() {
                     HandshakeStep::WifiState
                 } else {
                     // The module drives the LED: the MCU needs no Wi-Fi state.
-                    let detail = Text::new(
-                        "not needed: the module drives the LED",
-                        "不需要:模块控制指示灯",
-                    );
-                    events.push(step_event(HandshakeStep::WifiState, true, detail));
+                    let skipped = StepResult::WifiStateNotNeeded;
+                    events.push(step_event(HandshakeStep::WifiState, skipped));
                     HandshakeStep::QueryStatus
                 }
             }
             HandshakeStep::WifiState => {
-                let detail = Text::new(
-                    format!("reported state {wifi_state}"),
-                    format!("已上报状态 {wifi_state}"),
-                );
-                events.push(step_event(step, true, detail));
+                let result = StepResult::WifiStateReported { state: wifi_state };
+                events.push(step_event(step, result));
                 HandshakeStep::QueryStatus
             }
             HandshakeStep::QueryStatus => {
                 let reported = reported_ids(&reply.packets);
-                let missing: Vec<String> = self
+                let missing: Vec<u8> = self
                     .data_points
                     .iter()
+                    .copied()
                     .filter(|id| !reported.contains(id))
-                    .map(u8::to_string)
                     .collect();
                 let total = self.data_points.len();
-                let detail = if missing.is_empty() {
-                    Text::new(
-                        format!("all {total} data points reported"),
-                        format!("{total} 个数据点全部已上报"),
-                    )
-                } else {
-                    let n = total - missing.len();
-                    let missing = missing.join(", ");
-                    Text::new(
-                        format!("{n} of {total} data points reported; not reported: {missing}"),
-                        format!("{total} 个数据点中 {n} 个已上报;未上报:{missing}"),
-                    )
-                };
-                events.push(step_event(step, true, detail));
+                events.push(step_event(step, StepResult::Status { total, missing }));
                 events.push(LinkEvent::Tuya(TuyaEvent::HandshakeDone));
                 self.phase = Phase::Heartbeat(now + self.options.heartbeat);
                 return false;
@@ -454,6 +499,6 @@ pub fn version_text(version: u8) -> String {
     }
 }
 
-fn step_event(step: HandshakeStep, ok: bool, detail: Text) -> LinkEvent {
-    LinkEvent::Tuya(TuyaEvent::Step { step, ok, detail })
+fn step_event(step: HandshakeStep, result: StepResult) -> LinkEvent {
+    LinkEvent::Tuya(TuyaEvent::Step { step, result })
 }

@@ -52,7 +52,7 @@ pub mod step {
     pub const PLAN: &str = "plan";
 
     /// A step's name in both languages, for the window's progress line.
-    pub fn said(step: &str) -> crate::profile::Text {
+    pub fn said(step: &str) -> crate::i18n::Text {
         let zh = match step {
             DETECT => "检测新舵机",
             SERIAL => "读取序列号",
@@ -64,7 +64,7 @@ pub mod step {
             PLAN => "计划",
             other => other,
         };
-        crate::profile::Text::new(step, zh)
+        crate::i18n::Text::new(step, zh)
     }
 }
 
@@ -229,7 +229,7 @@ fn run(
                 if detail.is_empty() {
                     step
                 } else {
-                    step.then(": ", &crate::profile::Text::same(detail))
+                    step.then(": ", &crate::i18n::Text::same(detail))
                 }
             },
         });
@@ -485,7 +485,7 @@ fn run(
     progress(Progress {
         done: total,
         total,
-        message: crate::profile::Text::new("done", "完成"),
+        message: crate::i18n::Text::new("done", "完成"),
     });
 }
 

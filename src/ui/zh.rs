@@ -1,15 +1,19 @@
-//! The errors the window shows, in Chinese. Each error type's English is its `Display` (what
-//! the command line prints); [`Zh`] gives the same message in Chinese, with the same values
-//! (idents, numbers, paths) and the nested error's own Chinese. What the operating system or a
-//! parser said (a port that cannot open, a RON syntax error) is quoted as it came.
+//! What the window says in Chinese of the layers below it: their errors, and the Tuya
+//! handshake's step results. Each such type's English is its `Display` (what the command line
+//! prints); [`Zh`] gives the same message in Chinese, with the same values (idents, numbers,
+//! paths) and the nested error's own Chinese. What the operating system or a parser said (a port
+//! that cannot open, a RON syntax error) is quoted as it came. The window is the only reader of
+//! Chinese: the layers below carry typed values and English, never a Chinese text.
 
-use super::Text;
 use crate::capture::CaptureError;
 use crate::document::{DocumentError, ErrorKind};
+use crate::i18n::{Lang, Text};
+use crate::link::session::tuya::StepResult;
 use crate::link::{ExchangeError, LinkError};
 use crate::ops::OpError;
 use crate::profile::FieldError;
 use crate::protocol::FrameError;
+use crate::protocol::tuya::VERSION_MCU;
 use crate::protocol::tuya::dp::DpError;
 use crate::ui::jobs::{JobError, LogError};
 use crate::ui::state::ConnectError;
@@ -25,10 +29,10 @@ pub trait Zh: std::fmt::Display {
     }
 
     /// The message in `lang`.
-    fn in_lang(&self, lang: super::Lang) -> String {
+    fn in_lang(&self, lang: Lang) -> String {
         match lang {
-            super::Lang::En => self.to_string(),
-            super::Lang::Zh => self.zh(),
+            Lang::En => self.to_string(),
+            Lang::Zh => self.zh(),
         }
     }
 }
@@ -394,4 +398,57 @@ impl Zh for DocumentError {
         };
         format!("{place}:{kind}{more}:{}", self.message())
     }
+}
+
+impl Zh for StepResult {
+    fn zh(&self) -> String {
+        match self {
+            StepResult::Heartbeat {
+                first_since_start,
+                frame_version,
+            } => {
+                let answer = if *first_since_start {
+                    "应答 0:MCU 启动后的第一次"
+                } else {
+                    "应答 1"
+                };
+                match frame_version {
+                    Some(v) if *v == VERSION_MCU => format!("{answer};MCU 帧版本 {v:#04x}"),
+                    Some(v) => {
+                        format!("{answer};MCU 帧版本 {v:#04x}(协议文档为 {VERSION_MCU:#04x})")
+                    }
+                    None => answer.to_string(),
+                }
+            }
+            StepResult::ProductInfo(info) => match &info.error {
+                None => {
+                    let pid = info.pid.as_deref().unwrap_or("?");
+                    let version = info.version.as_deref().unwrap_or("?");
+                    let mode = info.mode.map_or("?".to_string(), |m| m.to_string());
+                    format!("PID {pid},MCU {version},配网模式 {mode}")
+                }
+                Some(e) => format!("不是有效的 JSON({e});按原样显示:{}", info.raw),
+            },
+            StepResult::WorkMode { gpio: None } => "MCU 控制 WiFi 指示灯".into(),
+            StepResult::WorkMode {
+                gpio: Some((led, reset)),
+            } => format!("模块控制指示灯(GPIO {led},复位 GPIO {reset})"),
+            StepResult::WifiStateNotNeeded => "不需要:模块控制指示灯".into(),
+            StepResult::WifiStateReported { state } => format!("已上报状态 {state}"),
+            StepResult::Status { total, missing } if missing.is_empty() => {
+                format!("{total} 个数据点全部已上报")
+            }
+            StepResult::Status { total, missing } => format!(
+                "{total} 个数据点中 {} 个已上报;未上报:{}",
+                total - missing.len(),
+                join_ids(missing)
+            ),
+            StepResult::Failed(e) => e.zh(),
+        }
+    }
+}
+
+/// Data point ids as a list: `3, 7, 12`.
+fn join_ids(ids: &[u8]) -> String {
+    ids.iter().map(u8::to_string).collect::<Vec<_>>().join(", ")
 }
