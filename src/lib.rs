@@ -19,7 +19,7 @@
 //!   misbehaviour.
 //! - [`ui`]: the eframe window; [`cli`]: the command line; [`bench`]: end-to-end figures.
 //! - [`system`]: what differs between operating systems (port listing, the latency timer, why
-//!   a port cannot be opened, where the shipped examples are), behind `cfg` in one file.
+//!   a port cannot be opened, where the shipped examples are), behind `cfg` in one folder.
 //!
 //! The window never touches the port: panels return actions, the app turns them into link
 //! commands and jobs, and the worker answers with events over bounded channels.

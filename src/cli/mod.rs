@@ -251,7 +251,7 @@ fn ports(json: bool, set_latency_timer: Option<Vec<String>>) -> CliResult {
         let [port, ms] = args.as_slice() else {
             return Err(CliError::input("--set-latency-timer takes PORT and MS"));
         };
-        let max = crate::link::adapter::platform::MAX_LATENCY_TIMER_MS;
+        let max = crate::system::adapter::platform::MAX_LATENCY_TIMER_MS;
         let ms: u32 = ms
             .trim()
             .parse()
@@ -267,12 +267,12 @@ fn ports(json: bool, set_latency_timer: Option<Vec<String>>) -> CliResult {
                 "--set-latency-timer: there is no port {port} (`botbench ports` lists them)"
             )));
         }
-        let now = crate::link::adapter::set_latency_timer(port, ms).map_err(CliError::device)?;
+        let now = crate::system::adapter::set_latency_timer(port, ms).map_err(CliError::device)?;
         if !json {
             println!("{port}: latency timer set to {now} ms");
         }
     }
-    let ports = crate::link::serial::list_ports();
+    let ports = crate::system::list_ports();
     if json {
         println!("{}", serde_json::json!({ "ports": ports }));
     } else if ports.is_empty() {

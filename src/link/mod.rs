@@ -3,7 +3,6 @@
 //! crossbeam channels, and a waker callback tells the UI to repaint. Threads that may block (the
 //! command line, long jobs) use a [`Client`], whose requests carry their own reply channel.
 
-pub mod adapter;
 mod decoder;
 pub mod request;
 pub mod serial;

@@ -1,11 +1,10 @@
 //! Real serial ports (and pseudo-terminals) through the serialport crate.
 
 use super::transport::{LinkError, Transport};
+use crate::system::list_ports;
 use serialport::SerialPort;
 use std::io::{ErrorKind, Read, Write};
 use std::time::{Duration, Instant};
-
-pub use crate::system::{PortInfo, list_ports};
 
 /// A serial port or pseudo-terminal.
 pub struct SerialTransport {
@@ -52,7 +51,7 @@ impl SerialTransport {
             port,
             path: path.to_string(),
             baud,
-            latency_timer: super::adapter::adapter_of(path).latency_timer(),
+            latency_timer: crate::system::adapter::adapter_of(path).latency_timer(),
         })
     }
 

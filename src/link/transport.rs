@@ -38,7 +38,7 @@ pub trait Transport: Send {
     /// A short description for the status bar: the path, or `simulated window cleaner`.
     fn describe(&self) -> String;
     /// The USB adapter's latency timer (how long it holds received bytes before handing them
-    /// over), where it is known ([`super::adapter`]).
+    /// over), where it is known ([`crate::system::adapter`]).
     fn latency_timer(&self) -> Option<Duration> {
         None
     }

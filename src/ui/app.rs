@@ -392,7 +392,7 @@ impl App {
                     .notify(Notice::info(Text::new("disconnected", "已断开")));
             }
             Action::SetLatencyTimer { port, ms } => {
-                match crate::link::adapter::set_latency_timer(&port, ms) {
+                match crate::system::adapter::set_latency_timer(&port, ms) {
                     Ok(now) => {
                         // The link reads the latency timer when it opens the port.
                         if self.state.link.target() == Some(&Target::Port(port.clone())) {

@@ -3,8 +3,8 @@
 //! USB adapter's latency timer does, why Browse cannot open a dialog.
 
 use botbench::i18n::Lang;
-use botbench::link::adapter::Adapter;
-use botbench::link::serial::PortInfo;
+use botbench::system::PortInfo;
+use botbench::system::adapter::Adapter;
 use botbench::ui::files::Dialogs;
 use botbench::ui::state::PortLister;
 use botbench::ui::{App, PanelId};

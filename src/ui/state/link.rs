@@ -1,9 +1,9 @@
 //! The link as the window sees it: what it is connected to, its state and counters as the worker
 //! last reported them, how it was opened, and the serial ports there are.
 
-use crate::link::serial::{self, PortInfo};
 use crate::link::{Link, LinkOptions, LinkState, LinkStats};
 use crate::sim::tuya_mcu::TuyaMcu;
+use crate::system::{self, PortInfo};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -108,14 +108,14 @@ pub struct LinkStatus {
     pub port_lister: PortLister,
 }
 
-/// Where the serial ports come from: the system's ([`serial::list_ports`]), unless a test lists
+/// Where the serial ports come from: the system's ([`system::list_ports`]), unless a test lists
 /// its own (an FTDI adapter with a latency timer, on a machine that has none).
 #[derive(Clone)]
 pub struct PortLister(pub Arc<dyn Fn() -> Vec<PortInfo> + Send + Sync>);
 
 impl Default for PortLister {
     fn default() -> Self {
-        Self(Arc::new(serial::list_ports))
+        Self(Arc::new(system::list_ports))
     }
 }
 
@@ -197,7 +197,7 @@ impl LinkStatus {
     }
 
     /// The USB adapter of the port the link is open on, as last listed.
-    pub fn adapter(&self) -> Option<(&str, &crate::link::adapter::Adapter)> {
+    pub fn adapter(&self) -> Option<(&str, &crate::system::adapter::Adapter)> {
         let Some(Target::Port(path)) = self.target() else {
             return None;
         };
