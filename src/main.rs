@@ -3,5 +3,6 @@
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    botbench::cli::main()
+    // The ports a user names are the system's serial ports.
+    botbench::cli::main(botbench::link::PortOpener::system())
 }

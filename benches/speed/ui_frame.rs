@@ -2,6 +2,7 @@
 //! 4 series × 10 min at 100 Hz, and the memory of an hour of 100 Hz telemetry.
 //! Prints one JSON document a line. Run: `cargo bench -- ui_frame`.
 
+use botbench::link::PortOpener;
 use botbench::series::{DEFAULT_CAPACITY, SeriesSet};
 use botbench::ui::{App, PanelId, Settings, Target};
 use eframe::egui;
@@ -28,8 +29,9 @@ pub fn run(quick: bool) {
         .with_size(egui::vec2(1280.0, 800.0))
         .build_ui_state(
             move |ui, app: &mut Option<App>| {
-                let app =
-                    app.get_or_insert_with(|| App::new(ui.ctx(), saved.clone()).expect("app"));
+                let app = app.get_or_insert_with(|| {
+                    App::new(ui.ctx(), saved.clone(), PortOpener::system()).expect("app")
+                });
                 app.logic(ui.ctx());
                 app.ui(ui);
             },

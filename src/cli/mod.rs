@@ -15,6 +15,7 @@ mod sim;
 mod sim_field;
 mod tuya;
 
+use crate::link::PortOpener;
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
@@ -137,26 +138,39 @@ enum Cmd {
     Preset(preset::PresetCmd),
 }
 
-/// Runs the command line with the process's arguments.
-pub fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+/// Runs the command line with the process's arguments; `--port` is opened with `ports` (the
+/// system's serial ports: [`PortOpener::system`]).
+pub fn main(ports: PortOpener) -> ExitCode {
+    ExitCode::from(run_args(std::env::args_os(), &ports))
+}
+
+/// Runs the command line with `args` (the program's name first), printing as the process
+/// does, and returns its exit code (0, 1 the device failed, 2 bad input). `--port` (and the
+/// window's port) is opened with `ports`: a test hands in its simulator's, served in lockstep
+/// ([`crate::sim::PtyServer::serve_in`]).
+pub fn run_args<I, T>(args: I, ports: &PortOpener) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    let cli = match Cli::try_parse_from(args) {
         Ok(c) => c,
         Err(e) => {
             let _ = e.print();
-            return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
+            return if e.use_stderr() { 2 } else { 0 };
         }
     };
-    let result = run(cli);
+    let result = run(cli, ports);
     // The links are closed by now: the capture files are complete.
     let result = match (result, port::finish_captures()) {
         (Ok(_), Err(e)) => Err(e),
         (r, _) => r,
     };
     match result {
-        Ok(code) => ExitCode::from(code),
+        Ok(code) => code,
         Err(e) => {
             eprintln!("botbench: {}", bounded(&e.message));
-            ExitCode::from(e.code)
+            e.code
         }
     }
 }
@@ -182,7 +196,7 @@ fn bounded(message: &str) -> String {
     out.join("\n")
 }
 
-fn run(cli: Cli) -> CliResult {
+fn run(cli: Cli, opener: &PortOpener) -> CliResult {
     match cli.command {
         Some(Cmd::Frame(cmd)) => frame::run(cmd),
         Some(Cmd::Profiles { json }) => profiles(json),
@@ -190,16 +204,16 @@ fn run(cli: Cli) -> CliResult {
             json,
             set_latency_timer,
         }) => ports(json, set_latency_timer),
-        Some(Cmd::Msp(args)) => msp::run(args),
-        Some(Cmd::Servo(args)) => servo::run(args),
-        Some(Cmd::Tuya(args)) => tuya::run(args),
+        Some(Cmd::Msp(args)) => msp::run(args, opener),
+        Some(Cmd::Servo(args)) => servo::run(args, opener),
+        Some(Cmd::Tuya(args)) => tuya::run(args, opener),
         Some(Cmd::Bench {
             long,
             field,
             json,
             only,
         }) => bench(long, field, json, only.as_deref()),
-        Some(Cmd::Preset(cmd)) => preset::run(cmd),
+        Some(Cmd::Preset(cmd)) => preset::run(cmd, opener),
         Some(Cmd::Sim(args)) => sim::run(args),
         Some(Cmd::Gui {
             port,
@@ -208,8 +222,8 @@ fn run(cli: Cli) -> CliResult {
             demo,
             panel,
             screenshots,
-        }) => gui(port, baud, profile, demo, panel, screenshots),
-        None => gui(None, None, None, None, None, None),
+        }) => gui(port, baud, profile, demo, panel, screenshots, opener),
+        None => gui(None, None, None, None, None, None, opener),
     }
 }
 
@@ -328,6 +342,7 @@ fn gui(
     demo: Option<String>,
     panel: Option<crate::ui::PanelId>,
     screenshots: Option<std::path::PathBuf>,
+    ports: &PortOpener,
 ) -> CliResult {
     let mut target = port.map(crate::ui::Target::Port);
     if let Some(kind) = demo {
@@ -338,7 +353,7 @@ fn gui(
     if let Some(p) = &profile {
         registry()?.get(p).map_err(CliError::input)?;
     }
-    crate::ui::run(target, baud, profile, panel, screenshots)
+    crate::ui::run(target, baud, profile, panel, screenshots, ports.clone())
         .map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
     Ok(0)
 }

@@ -3,7 +3,7 @@
 use super::checks::{self, Rate};
 use super::port::{PortArgs, exchange_error, op_error, parse_assignments, print_checks_with};
 use super::{CliError, CliResult};
-use crate::link::{Link, LinkCommand, LinkEvent, capabilities};
+use crate::link::{Link, LinkCommand, LinkEvent, PortOpener, capabilities};
 use crate::packet::Packet;
 
 use crate::ops::exchange::{self as ops, Use};
@@ -271,7 +271,8 @@ fn print_fields(
     u8::from(misfit.is_some() || out_of_range)
 }
 
-pub(crate) fn run(mut args: MspArgs) -> CliResult {
+pub(crate) fn run(mut args: MspArgs, ports: &PortOpener) -> CliResult {
+    args.port = args.port.with_ports(ports);
     args.port.poll_pipeline = args.poll_pipeline;
     let json = args.port.json;
     // Everything given is checked before the port is opened.

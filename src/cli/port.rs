@@ -2,7 +2,7 @@
 
 use super::{CliError, checks, registry};
 use crate::capture::{Capture, CaptureInfo};
-use crate::link::{ExchangeError, Link, LinkOptions, serial};
+use crate::link::{ExchangeError, Link, LinkOptions, PortOpener};
 use crate::ops::{Check, OpError};
 use crate::profile::{Field, Profile, Protocol};
 use clap::Args;
@@ -36,6 +36,10 @@ pub(crate) struct PortArgs {
     /// Print JSON.
     #[arg(long, global = true)]
     pub json: bool,
+    /// How `--port` is opened: the system's serial ports, or what the caller of
+    /// [`super::run_args`] serves (a test's simulator).
+    #[arg(skip)]
+    pub ports: PortOpener,
 }
 
 /// Warnings said in this run (also on stderr), for the JSON document a command prints.
@@ -92,6 +96,12 @@ pub(crate) fn finish_captures() -> Result<(), CliError> {
 }
 
 impl PortArgs {
+    /// `self`, opening `--port` with `ports`.
+    pub(crate) fn with_ports(mut self, ports: &PortOpener) -> Self {
+        self.ports = ports.clone();
+        self
+    }
+
     /// The port given with `--port`; a usage error (exit 2) when none was.
     pub fn path(&self) -> Result<&str, CliError> {
         self.port.as_deref().ok_or_else(|| {
@@ -133,7 +143,7 @@ impl PortArgs {
             ..LinkOptions::default()
         };
         let port = self.path()?;
-        let mut opener = serial::opener(port, baud);
+        let mut opener = self.ports.open(port, baud);
         if let Some(path) = &self.capture {
             let info = CaptureInfo::new(port, baud, &profile.id, options.margin);
             let capture = Capture::create(path, info).map_err(CliError::input)?;

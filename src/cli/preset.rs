@@ -2,7 +2,7 @@
 
 use super::port::{PortArgs, op_error, print_checks};
 use super::{CliError, CliResult};
-use crate::link::{DeviceInfo, Link};
+use crate::link::{DeviceInfo, Link, PortOpener};
 use crate::ops::{self, Cancel, Progress};
 use crate::preset::{self, Preset};
 use crate::profile::{Profile, Protocol};
@@ -41,11 +41,11 @@ pub(crate) enum PresetCmd {
     },
 }
 
-pub(crate) fn run(cmd: PresetCmd) -> CliResult {
+pub(crate) fn run(cmd: PresetCmd, ports: &PortOpener) -> CliResult {
     match cmd {
-        PresetCmd::Save { file, note, port } => save(&file, &note, &port),
-        PresetCmd::Diff { file, port } => diff(&file, &port),
-        PresetCmd::Apply { file, port } => apply(&file, &port),
+        PresetCmd::Save { file, note, port } => save(&file, &note, &port.with_ports(ports)),
+        PresetCmd::Diff { file, port } => diff(&file, &port.with_ports(ports)),
+        PresetCmd::Apply { file, port } => apply(&file, &port.with_ports(ports)),
     }
 }
 

@@ -3,6 +3,7 @@
 use super::checks;
 use super::port::{PortArgs, op_error, print_checks};
 use super::{CliError, CliResult};
+use crate::link::PortOpener;
 use crate::ops::servo::{self as ops, Presence};
 use crate::profile::{Input, Profile, Protocol, Value};
 use clap::Subcommand;
@@ -352,7 +353,8 @@ fn check_broadcast(cmd: &ServoCmd) -> Result<(), CliError> {
     }
 }
 
-pub(crate) fn run(args: ServoArgs) -> CliResult {
+pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
+    args.port = args.port.with_ports(ports);
     let json = args.port.json;
     // The broadcast id where an answer is expected is refused before the port is opened.
     check_broadcast(&args.cmd)?;

@@ -3,7 +3,7 @@
 use super::port::{PortArgs, op_error, parse_assignments};
 use super::{CliError, CliResult};
 use crate::link::session::tuya::{HandshakeStep, TuyaEvent, version_text};
-use crate::link::{LinkEvent, LinkState};
+use crate::link::{LinkEvent, LinkState, PortOpener};
 use crate::ops::tuya::{self as ops, DpCheck, ReportedDp, Status};
 use crate::profile::{Profile, Protocol, Value};
 use clap::Subcommand;
@@ -209,7 +209,8 @@ fn print_checks(profile: &Profile, checks: &[DpCheck], json: bool) -> u8 {
     u8::from(bad > 0)
 }
 
-pub(crate) fn run(args: TuyaArgs) -> CliResult {
+pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
+    args.port = args.port.with_ports(ports);
     let json = args.port.json;
     // Everything given is checked before the port is opened (and the handshake run): an image
     // is read, bounded by the profile's largest; data points are encoded against the profile.

@@ -12,6 +12,7 @@ mod worker;
 pub use worker::default_margin;
 
 pub use request::{ExchangeError, Match, Reply, ReplySpec, Request};
+pub use serial::PortOpener;
 pub use session::tuya::{HandshakeStep, ProductInfo, StepResult, TuyaEvent, TuyaModuleOptions};
 pub use session::{Capability, DeviceInfo, capabilities};
 pub use transport::{LinkError, Transport, wire_time};
@@ -427,6 +428,3 @@ impl Client {
         let _ = self.commands.send(cmd);
     }
 }
-
-#[cfg(test)]
-mod tests;

@@ -1,9 +1,11 @@
 //! Real serial ports (and pseudo-terminals) through the serialport crate.
 
+use super::Opener;
 use super::transport::{LinkError, Transport};
 use crate::system::list_ports;
 use serialport::SerialPort;
 use std::io::{ErrorKind, Read, Write};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// A serial port or pseudo-terminal.
@@ -143,11 +145,7 @@ impl Transport for SerialTransport {
 
 /// Opens `path`, and after a loss reopens it by path, or by the adapter's USB serial number when
 /// the OS gave the port a new path.
-pub fn opener(path: &str, baud: u32) -> super::Opener {
-    // A pty that a simulator in this process serves in lockstep (the tests).
-    if let Some(lockstep) = crate::sim::lockstep::opener(path, baud) {
-        return lockstep;
-    }
+pub fn opener(path: &str, baud: u32) -> Opener {
     let path = path.to_string();
     let usb_serial = SerialTransport::usb_serial_of(&path);
     Box::new(move || {
@@ -162,4 +160,55 @@ pub fn opener(path: &str, baud: u32) -> super::Opener {
         };
         Ok(Box::new(t) as Box<dyn Transport>)
     })
+}
+
+/// Makes the [`Opener`] of a port named by its path, at a baud rate.
+type OpenPort = dyn Fn(&str, u32) -> Opener + Send + Sync;
+
+/// How the window and the command line open the port a user names by its path: the system's
+/// serial ports ([`PortOpener::system`], through [`opener`]), except the paths a caller serves
+/// itself ([`PortOpener::with_port`]: a test's simulator, served in lockstep with the link on a
+/// pseudo-terminal). Handed to `ui::App::new` and `cli::main`; cheap to clone.
+#[derive(Clone)]
+pub struct PortOpener(Arc<OpenPort>);
+
+impl PortOpener {
+    /// The system's serial ports and pseudo-terminals, by path ([`opener`]).
+    pub fn system() -> Self {
+        Self(Arc::new(opener))
+    }
+
+    /// The opener of `path` at `baud` (nothing is opened until it is called).
+    pub fn open(&self, path: &str, baud: u32) -> Opener {
+        (self.0)(path, baud)
+    }
+
+    /// `self`, except that `path` is opened by `open` (given the baud rate): a port this process
+    /// serves itself.
+    pub fn with_port(
+        self,
+        path: impl Into<String>,
+        open: impl Fn(u32) -> Opener + Send + Sync + 'static,
+    ) -> Self {
+        let served = path.into();
+        Self(Arc::new(move |path: &str, baud: u32| {
+            if path == served {
+                open(baud)
+            } else {
+                self.open(path, baud)
+            }
+        }))
+    }
+}
+
+impl Default for PortOpener {
+    fn default() -> Self {
+        Self::system()
+    }
+}
+
+impl std::fmt::Debug for PortOpener {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("PortOpener")
+    }
 }

@@ -1,7 +1,7 @@
 //! Presets: a device's tunable parameters as a versioned RON document: its schema, its check
 //! against a profile, its comparison with a device's values, and its text. Capturing one from a
 //! device and applying one (with read-back verification) are operations:
-//! [`crate::ops::preset`].
+//! ops' `preset.rs`.
 //!
 //! A preset names each Set command by its canonical ident and gives every field of it as display
 //! text ("2.75", not 275; labels such as `on`), so that a technician can read and edit it. The
@@ -70,7 +70,7 @@ impl CommandValues {
     }
 }
 
-/// One Set command of a checked preset, ready for [`crate::ops::exchange::write_verified`].
+/// One Set command of a checked preset, ready for a verified write (ops' `write_verified`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SetWrite {
     /// The Set command's canonical ident.
@@ -418,8 +418,8 @@ impl Preset {
         Ok(writes)
     }
 
-    /// Compares the preset with values read from the device (e.g. by
-    /// [`crate::ops::preset::capture`] or [`crate::ops::preset::read_device`]). Values are compared as raw values, so "2.8" equals "2.80".
+    /// Compares the preset with values read from the device (e.g. by ops' `preset::capture` or
+    /// `preset::read_device`). Values are compared as raw values, so "2.8" equals "2.80".
     pub fn diff(&self, profile: &Profile, device: &[CommandValues]) -> Vec<DiffRow> {
         let mut rows = Vec::new();
         for cv in &self.values {

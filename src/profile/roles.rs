@@ -271,16 +271,6 @@ mod tests {
         assert_eq!(servo.servo_id_param().map(|p| p.id), Some(34));
         assert_eq!(servo.serial_number_param().map(|p| p.id), Some(8));
         assert_eq!(servo.baud_option_param().map(|(p, _)| p.id), Some(36));
-        // What a scan reads of each servo found: type, firmware, serial, voltage,
-        // temperature, status.
-        let scanned: Vec<Option<u8>> = crate::ops::servo::SCAN_ROLES
-            .iter()
-            .map(|r| servo.param_with_role(r).map(|p| p.id))
-            .collect();
-        assert_eq!(
-            scanned,
-            [Some(6), Some(7), Some(8), Some(1), Some(4), Some(5)]
-        );
         assert_eq!(
             servo.servo_bauds(),
             [

@@ -1,6 +1,6 @@
 //! The profile's STOP: which commands, with which values, bring the robot to rest (motors,
 //! fan, spray off). Checked at load; read by the window's STOP button, the self-test's safe
-//! state ([`crate::ops::stop`]) and the "running" indicator, which tells a command that starts
+//! state (ops' `stop.rs`) and the "running" indicator, which tells a command that starts
 //! something from the same command stopping it.
 
 use super::codec::Input;

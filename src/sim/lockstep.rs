@@ -12,9 +12,12 @@
 //! crossed the pty. The bytes still travel through the real pty and serial port code.
 //!
 //! Used by the tests: [`PtyServer::start_lockstep`](super::PtyServer::start_lockstep) serves a
-//! device this way, and [`crate::link::serial::opener`] opens its path through a
-//! [`LockstepPort`]. A client in another process sees a plain pty that never answers: the `sim`
-//! command and `botbench bench` use plain servers.
+//! device this way, and the server's own opener
+//! ([`PtyServer::opener`](super::PtyServer::opener), or the
+//! [`PortOpener`](crate::link::PortOpener) it gives the window and the command line) opens its
+//! path through a [`LockstepPort`]. A client that opens the path any other way (another
+//! process) sees a plain pty that never answers: the `sim` command and `botbench bench` use
+//! plain servers.
 
 use crate::link::serial::SerialTransport;
 use crate::link::{LinkError, Opener, Transport};
@@ -52,6 +55,8 @@ pub(crate) struct State {
     pub(crate) next_due: Option<Instant>,
     /// The simulator still serves.
     serving: bool,
+    /// The server is gone (dropped): its pty's path may be another server's now.
+    closed: bool,
 }
 
 impl Lockstep {
@@ -64,6 +69,7 @@ impl Lockstep {
                 read_total: 0,
                 next_due: None,
                 serving: true,
+                closed: false,
             }),
         })
     }
@@ -133,52 +139,35 @@ impl Drop for Serving<'_> {
     }
 }
 
-/// Pseudo-terminals served in lockstep in this process, by path.
-static SERVED: Mutex<Vec<(String, Arc<Lockstep>)>> = Mutex::new(Vec::new());
-
-fn served() -> MutexGuard<'static, Vec<(String, Arc<Lockstep>)>> {
-    SERVED.lock().unwrap_or_else(|e| e.into_inner())
+impl Lockstep {
+    /// The server is gone: its path is no longer reopened through it.
+    pub(crate) fn close(&self) {
+        self.lock().closed = true;
+    }
 }
 
-pub(crate) fn register(path: &str, lockstep: Arc<Lockstep>) {
-    served().push((path.to_string(), lockstep));
-}
-
-pub(crate) fn unregister(path: &str) {
-    served().retain(|(p, _)| p != path);
-}
-
-fn served_at(path: &str) -> Option<Arc<Lockstep>> {
-    served()
-        .iter()
-        .find(|(p, _)| p == path)
-        .map(|(_, l)| l.clone())
-}
-
-/// An opener for `path` at `baud` through a [`LockstepPort`], when a simulator in this process
-/// serves `path` in lockstep; `None` otherwise.
+/// An opener for `path` at `baud` through a [`LockstepPort`] in step with `lockstep`, the
+/// simulator serving `path`.
 ///
-/// Reopening (after a loss) fails once that simulator has stopped: the system gives a freed
+/// Reopening (after a loss) fails once that simulator's server is gone: the system gives a freed
 /// pty's path to the next one opened, and a link that outlived its simulator must not reach
 /// another test's.
-pub fn opener(path: &str, baud: u32) -> Option<Opener> {
-    let first = served_at(path)?;
-    let path = path.to_string();
-    Some(Box::new(move || {
-        let lockstep = served_at(&path)
-            .filter(|l| Arc::ptr_eq(l, &first))
-            .ok_or_else(|| LinkError::Open {
+pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener {
+    Box::new(move || {
+        if lockstep.lock().closed {
+            return Err(LinkError::Open {
                 path: path.clone(),
                 reason: "the simulator that served it has stopped".into(),
-            })?;
+            });
+        }
         let port = SerialTransport::open(&path, baud)?;
         lockstep.host(HostAction::Baud(baud), None);
         Ok(Box::new(LockstepPort {
             port,
-            lockstep,
+            lockstep: lockstep.clone(),
             last_return: Instant::now(),
         }) as Box<dyn Transport>)
-    }))
+    })
 }
 
 /// How long a read that waits for the simulator blocks before it looks again.

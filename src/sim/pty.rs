@@ -3,7 +3,7 @@
 
 use super::lockstep::{self, HostAction, Lockstep};
 use super::runner::{Faults, SharedDevice, VanishHandle, Wire, sleep_until};
-use crate::link::LinkError;
+use crate::link::{LinkError, Opener, PortOpener};
 use serialport::{SerialPort, TTYPort};
 use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
@@ -53,9 +53,9 @@ impl PtyServer {
     }
 
     /// As [`PtyServer::start`], served in lockstep with a host in this process that opens the
-    /// path with [`crate::link::serial::opener`] (see [`super::lockstep`]): for tests, whose
-    /// verdicts must not depend on how fast threads are scheduled. A client in another process
-    /// gets no answer.
+    /// path with this server's [`Self::opener`] or [`Self::port_opener`] (see
+    /// [`super::lockstep`]): for tests, whose verdicts must not depend on how fast threads are
+    /// scheduled. A client that opens the path otherwise (another process) gets no answer.
     pub fn start_lockstep(device: SharedDevice, faults: Faults) -> Result<PtyServer, LinkError> {
         Self::spawn(device, faults, Some(Lockstep::new()))
     }
@@ -92,9 +92,6 @@ impl PtyServer {
                 thread_flags.exited.store(true, Ordering::SeqCst);
             })
             .map_err(|e| open_err(format!("cannot start the server thread: {e}")))?;
-        if let Some(l) = &lockstep {
-            lockstep::register(&path, l.clone());
-        }
         Ok(PtyServer {
             path,
             device,
@@ -108,6 +105,35 @@ impl PtyServer {
     /// The path a client opens, e.g. `/dev/pts/7`.
     pub fn path(&self) -> &str {
         &self.path
+    }
+
+    /// The opener of this server's pty at `baud`: in lockstep with the simulator when it serves
+    /// in lockstep, else the system's serial port opener.
+    pub fn opener(&self, baud: u32) -> Opener {
+        match &self.lockstep {
+            Some(l) => lockstep::opener(l.clone(), self.path.clone(), baud),
+            None => crate::link::serial::opener(&self.path, baud),
+        }
+    }
+
+    /// `ports`, except that this server's path is opened by [`Self::opener`]: what a test hands
+    /// to the window or the command line, as a user's machine hands its serial ports.
+    pub fn serve_in(&self, ports: PortOpener) -> PortOpener {
+        match &self.lockstep {
+            Some(l) => {
+                let (lockstep, path) = (l.clone(), self.path.clone());
+                ports.with_port(self.path.clone(), move |baud| {
+                    lockstep::opener(lockstep.clone(), path.clone(), baud)
+                })
+            }
+            None => ports,
+        }
+    }
+
+    /// The system's ports, with this server's path opened by [`Self::opener`]
+    /// ([`Self::serve_in`]).
+    pub fn port_opener(&self) -> PortOpener {
+        self.serve_in(PortOpener::system())
     }
 
     /// The simulated device, to read or change its state.
@@ -148,8 +174,8 @@ impl PtyServer {
 impl Drop for PtyServer {
     fn drop(&mut self) {
         self.stop();
-        if self.lockstep.is_some() {
-            lockstep::unregister(&self.path);
+        if let Some(l) = &self.lockstep {
+            l.close();
         }
     }
 }

@@ -12,7 +12,7 @@ use super::{
 };
 use crate::i18n::Lang;
 use crate::i18n::Text;
-use crate::link::LinkCommand;
+use crate::link::{LinkCommand, PortOpener};
 use crate::profile::{PanelKind, ProfileError};
 use crate::ui::zh::Zh;
 use eframe::egui;
@@ -130,13 +130,20 @@ pub struct App {
 }
 
 impl App {
-    /// An app with `settings`, connected to its target.
-    pub fn new(ctx: &egui::Context, settings: Settings) -> Result<Self, ProfileError> {
+    /// An app with `settings`, connected to its target; a port named by its path is opened with
+    /// `ports` (the system's serial ports, [`PortOpener::system`], or a test's simulator).
+    /// Errors: no profile loads ([`ProfileError`]).
+    pub fn new(
+        ctx: &egui::Context,
+        settings: Settings,
+        ports: PortOpener,
+    ) -> Result<Self, ProfileError> {
         crate::i18n::install_cjk_font(ctx);
         // Scroll bars shown solid wherever a panel has more than its room (egui's floating
         // ones show only under the pointer: a technician does not see that more is below).
         ctx.all_styles_mut(|s| s.spacing.scroll = egui::style::ScrollStyle::solid());
-        let state = AppState::new(ctx, &settings.profile)?;
+        let mut state = AppState::new(ctx, &settings.profile)?;
+        state.link.port_opener = ports;
         let (baud, margin_ms) = port_for(&settings, &state, &settings.profile);
         let mut app = Self {
             connection: connection::ConnectionBar::new(&settings, baud),

@@ -158,15 +158,17 @@ fn window_icon() -> std::sync::Arc<eframe::egui::IconData> {
     std::sync::Arc::new(eframe::icon_data::from_png_bytes(png).unwrap_or_default())
 }
 
-/// Opens the window. `target`, `baud` and `profile` override the saved settings. With
-/// `screenshots`, the window tours the demo devices and saves screenshots there, then closes
-/// (see [`tour`]); it then neither reads nor keeps saved settings.
+/// Opens the window. `target`, `baud` and `profile` override the saved settings; a port named by
+/// its path is opened with `ports`. With `screenshots`, the window tours the demo devices and
+/// saves screenshots there, then closes (see [`tour`]); it then neither reads nor keeps saved
+/// settings.
 pub fn run(
     target: Option<Target>,
     baud: Option<u32>,
     profile: Option<String>,
     panel: Option<PanelId>,
     screenshots: Option<std::path::PathBuf>,
+    ports: crate::link::PortOpener,
 ) -> Result<(), UiError> {
     let touring = screenshots.is_some();
     let options = eframe::NativeOptions {
@@ -190,7 +192,7 @@ pub fn run(
                 .and_then(|s| eframe::get_value(s, eframe::APP_KEY))
                 .unwrap_or_default();
             let saved = launch_settings(saved, target, baud, profile, panel);
-            let mut app = App::new(&cc.egui_ctx, saved)
+            let mut app = App::new(&cc.egui_ctx, saved, ports)
                 .map_err(|e| -> Box<dyn std::error::Error + Send + Sync> { e.into() })?;
             app.tour = screenshots.map(tour::Tour::new);
             Ok(Box::new(app))

@@ -133,7 +133,7 @@ fn replay(name: &str, margin_ms: u64) -> (PtyServer, Link, Arc<Mutex<ReplayDevic
         margin: Some(Duration::from_millis(margin_ms)),
         ..LinkOptions::default()
     };
-    let link = open_link(server.path(), file.info.baud, profile, options);
+    let link = open_link(&server, file.info.baud, profile, options);
     (server, link, device)
 }
 

@@ -2,7 +2,7 @@
 //! unsolicited frames between a request and its reply, values outside their range, answers that
 //! come late, and a device that does not identify itself.
 
-use botbench::link::{Link, LinkEvent, LinkOptions, Request, serial};
+use botbench::link::{Link, LinkEvent, LinkOptions, Request};
 use botbench::profile::Registry;
 use botbench::sim::window_cleaner::WindowCleaner;
 use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
@@ -242,13 +242,7 @@ fn slow_window_cleaner(
         reconnect: false,
         ..LinkOptions::default()
     };
-    let link = Link::open(
-        serial::opener(server.path(), 115_200),
-        profile,
-        options,
-        None,
-    )
-    .unwrap();
+    let link = Link::open(server.opener(115_200), profile, options, None).unwrap();
     (server, link, wc)
 }
 

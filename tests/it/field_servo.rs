@@ -3,7 +3,7 @@
 //! one-wire bus that echoes every request, a servo that ignores a baud change, and the broadcast
 //! id. Verdicts only: every servo found, the right value, the right error; never how fast.
 
-use botbench::link::{Link, LinkEvent, LinkOptions, serial};
+use botbench::link::{Link, LinkEvent, LinkOptions};
 use botbench::ops::OpError;
 use botbench::ops::servo as ops;
 use botbench::profile::{Input, Registry};
@@ -227,7 +227,7 @@ fn operations_refuse_the_broadcast_id_and_send_nothing() {
     ])));
     let server = PtyServer::start_lockstep(bus, Faults::default()).unwrap();
     let link = Link::open(
-        serial::opener(server.path(), 115_200),
+        server.opener(115_200),
         profile.clone(),
         LinkOptions::default(),
         None,
@@ -282,13 +282,7 @@ fn late_bus_with(
         margin: Some(std::time::Duration::from_millis(2)),
         ..LinkOptions::default()
     };
-    let link = Link::open(
-        serial::opener(server.path(), 115_200),
-        profile.clone(),
-        options,
-        None,
-    )
-    .unwrap();
+    let link = Link::open(server.opener(115_200), profile.clone(), options, None).unwrap();
     (server, link, profile)
 }
 
@@ -408,7 +402,7 @@ fn a_scan_paced_by_the_bus_behind_a_16_ms_adapter_collides_with_no_answer_and_le
     let server = PtyServer::start_lockstep(Arc::new(Mutex::new(bus)), faults).unwrap();
     // A default scan: the automatic margin, nothing known of the adapter.
     let link = Link::open(
-        serial::opener(server.path(), profile.baud),
+        server.opener(profile.baud),
         profile.clone(),
         LinkOptions::default(),
         None,

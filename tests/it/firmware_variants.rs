@@ -169,7 +169,7 @@ fn replies_that_drift_from_the_layout_reach_the_tuning_path_as_misfits_with_thei
     let firmware = Arc::new(parse("drift.ron", DRIFT, None).unwrap());
     let wc = window_cleaner(firmware);
     let p = profile("window-cleaner");
-    let link = connect(wc.path(), &p);
+    let link = connect(&wc, &p);
     let client = link.client();
     for (get, raw, fault) in [
         ("MSP_GET_SPRAY_VALUE", "96 00 1e 03", "payload ends early"),
@@ -220,7 +220,7 @@ fn msp_get_shows_a_short_answer_as_such_with_its_raw_bytes() {
 fn the_configurator_variant_writes_and_reads_back_against_its_firmware() {
     let p = profile("window-cleaner-configurator");
     let wc = window_cleaner(p.clone());
-    let link = connect(wc.path(), &p);
+    let link = connect(&wc, &p);
     let client = link.client();
     let spray = p.command("MSP_SET_SPRAY_VALUE").unwrap();
     let checks = msp_ops::write_verified(
@@ -261,7 +261,7 @@ fn the_configurator_variant_writes_and_reads_back_against_its_firmware() {
 fn tuning_and_presets_refuse_a_broken_relation_before_anything_is_sent() {
     let p = profile("window-cleaner");
     let wc = window_cleaner(p.clone());
-    let link = connect(wc.path(), &p);
+    let link = connect(&wc, &p);
     let client = link.client();
     let set = p.command("MSP_SET_USE_FAN_OUTPUT_PID").unwrap();
     let bad = inputs(&[

@@ -12,11 +12,11 @@ use std::time::Duration;
 use crate::support::gui::{
     self, H, app, app_mut, edit_value, idle, settings, step_until, tuning_values,
 };
-use crate::support::{serve_with, served_window_cleaner as bench, temp_dir, window_cleaner};
+use crate::support::{Port, serve_with, served_window_cleaner as bench, temp_dir, window_cleaner};
 
 /// The app on the window cleaner at `path`, with the protocol's own answer margin.
-fn harness(path: &str, panel: PanelId) -> H {
-    gui::on_window_cleaner(path, panel, None)
+fn harness(port: &impl Port, panel: PanelId) -> H {
+    gui::on_window_cleaner(port, panel, None)
 }
 
 fn all_read(a: &App) -> bool {
@@ -31,7 +31,7 @@ fn read_all_brings_every_parameter_from_the_device() {
         .unwrap()
         .set_param("waterPumpDuration", 4321)
         .unwrap();
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     gui::read_all(&mut h);
     let want = b.sim().param("waterPumpDuration").unwrap();
     let got = match app(&h).state.device.readings.get(&135) {
@@ -50,7 +50,7 @@ fn read_all_brings_every_parameter_from_the_device() {
 fn an_out_of_range_edit_is_refused_for_writing() {
     let b = bench();
     b.sim().set_param("pwmValue", 33).unwrap();
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     gui::read_all(&mut h);
     h.step();
     edit_value(&mut h, "33", "101");
@@ -78,7 +78,7 @@ fn an_out_of_range_edit_is_refused_for_writing() {
 fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
     let b = bench();
     b.sim().set_param("pwmValue", 33).unwrap();
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     gui::read_all(&mut h);
     h.step();
     edit_value(&mut h, "33", "64");
@@ -102,7 +102,7 @@ fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
 fn a_named_value_is_chosen_by_its_name_and_written() {
     let b = bench();
     b.sim().set_param("waterPump", 1).unwrap();
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     gui::read_all(&mut h);
     h.step();
     assert!(
@@ -136,7 +136,7 @@ fn a_named_value_is_chosen_by_its_name_and_written() {
 #[test]
 fn the_plots_receive_points() {
     let b = bench();
-    let mut h = harness(b.path(), PanelId::Telemetry);
+    let mut h = harness(&b, PanelId::Telemetry);
     step_until(&mut h, "attitude and battery points", |a| {
         let n = |id: &str, f: &str| {
             a.state
@@ -155,7 +155,7 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
     let b = bench();
     let dir = temp_dir();
     let path = dir.path().join("preset.ron");
-    let mut h = harness(b.path(), PanelId::Presets);
+    let mut h = harness(&b, PanelId::Presets);
     step_until(&mut h, "the first read", |a| all_read(a) && idle(a));
     app_mut(&mut h).presets.path = path.display().to_string();
     h.step();
@@ -212,7 +212,7 @@ fn a_malformed_preset_is_shown_with_its_line_and_column() {
     let dir = temp_dir();
     let path = dir.path().join("bad.ron");
     std::fs::write(&path, "(\n  version: 1,\n  profile: \"window-cleaner\",\n  values: {\n    \"MSP_SET_PWMVALUE\": { \"pwmValue\": \"101\" },\n  },\n)\n").unwrap();
-    let mut h = harness(b.path(), PanelId::Presets);
+    let mut h = harness(&b, PanelId::Presets);
     step_until(&mut h, "the link", |a| a.state.connected());
     app_mut(&mut h).presets.path = path.display().to_string();
     h.step();
@@ -228,7 +228,7 @@ fn every_panel_renders_in_english_and_chinese() {
     // A glyph missing from the bundled fonts panics while drawing, so drawing every panel in both
     // languages checks the font as well as the layout.
     let b = bench();
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     step_until(&mut h, "the link", |a| a.state.connected());
     let panels = app(&h).panels();
     assert!(panels.len() >= 5, "{panels:?}");
@@ -252,7 +252,7 @@ fn nothing_is_shown_before_a_reply_and_a_failed_read_says_so_in_place() {
         ..Faults::default()
     };
     let b = serve_with(window_cleaner(), silent);
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     step_until(&mut h, "the reads to fail", |a| {
         matches!(a.state.device.readings.get(&130), Some(Reading::Failed(_)))
     });
@@ -272,7 +272,7 @@ fn nothing_is_shown_before_a_reply_and_a_failed_read_says_so_in_place() {
 #[test]
 fn the_parameters_are_read_as_soon_as_the_link_is_up() {
     let b = bench();
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     step_until(&mut h, "every parameter read without a click", all_read);
 }
 
@@ -292,6 +292,6 @@ fn a_slow_device_is_read_with_the_automatic_margin_it_learns() {
         None,
         "the automatic margin"
     );
-    let mut h = crate::support::gui::harness(saved);
+    let mut h = crate::support::gui::harness(saved, served.ports());
     step_until(&mut h, "every parameter read", all_read);
 }

@@ -8,13 +8,13 @@ use botbench::ui::{Action, PanelId};
 use egui_kittest::kittest::Queryable;
 
 use crate::support::gui::{self, H, app, app_mut, step_until};
-use crate::support::{serve_plain, temp_dir, window_cleaner};
+use crate::support::{Port, serve_plain, temp_dir, window_cleaner};
 use botbench::sim::Faults;
 
 /// The app on the window cleaner at `path`, with 100 ms for it to start answering: a plain pty
 /// keeps no lockstep with the link.
-fn harness(path: &str, panel: PanelId) -> H {
-    gui::on_window_cleaner(path, panel, Some(100))
+fn harness(port: &impl Port, panel: PanelId) -> H {
+    gui::on_window_cleaner(port, panel, Some(100))
 }
 
 #[test]
@@ -28,7 +28,7 @@ fn a_capture_recorded_from_the_window_replays_with_the_window_showing_the_same_v
         .unwrap()
         .set_param("waterPumpDuration", 4321)
         .unwrap();
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     // The app reads every value on connecting: the recording starts after that read, and holds
     // the whole of the one asked for.
     gui::read_on_connecting(&mut h);
@@ -62,7 +62,7 @@ fn a_capture_recorded_from_the_window_replays_with_the_window_showing_the_same_v
         ReplayDevice::new(&file).expect("replayable"),
         Faults::default(),
     );
-    let mut h = harness(replay.path(), PanelId::Tuning);
+    let mut h = harness(&replay, PanelId::Tuning);
     let replayed = gui::read_all(&mut h);
     assert_eq!(replayed, recorded);
     assert_eq!(

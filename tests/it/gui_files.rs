@@ -4,6 +4,7 @@
 //! checked in their panels' tests; here the packet monitor's capture row and the start-up.
 
 use botbench::i18n::Lang;
+use botbench::link::PortOpener;
 use botbench::ui::files::Dialogs;
 use botbench::ui::settings::FileKind;
 use botbench::ui::{App, PanelId, Settings, Target};
@@ -24,7 +25,7 @@ fn demo(panel: PanelId, files: &[(FileKind, &str)]) -> H {
     for (kind, path) in files {
         saved.files.insert(*kind, path.to_string());
     }
-    harness_with(saved, |a: &mut App| {
+    harness_with(saved, PortOpener::system(), |a: &mut App| {
         a.state.dialogs = Dialogs::Missing("no file dialog here (test)".into());
     })
 }

@@ -3,6 +3,7 @@
 //! gone.
 
 use botbench::i18n::Lang;
+use botbench::link::PortOpener;
 use botbench::ui::{PanelId, Settings, demo_hint};
 use egui_kittest::kittest::Queryable;
 
@@ -12,7 +13,7 @@ use crate::support::{serve, window_cleaner};
 #[test]
 fn the_demo_says_how_to_pick_a_real_port_and_the_title_names_the_version() {
     // The first launch: nothing saved, so the built-in demo window cleaner.
-    let mut h = harness(Settings::default());
+    let mut h = harness(Settings::default(), PortOpener::system());
     step_until(&mut h, "the demo device", |a| a.state.connected());
     h.run_steps(2);
     let version = format!("botbench {} — ", env!("CARGO_PKG_VERSION"));
@@ -25,12 +26,10 @@ fn the_demo_says_how_to_pick_a_real_port_and_the_title_names_the_version() {
 
     // A real port (a pty here): no hint.
     let b = serve(window_cleaner());
-    let mut h = harness(settings(
-        b.path(),
-        "window-cleaner",
-        PanelId::Tuning,
-        Lang::En,
-    ));
+    let mut h = harness(
+        settings(b.path(), "window-cleaner", PanelId::Tuning, Lang::En),
+        b.ports(),
+    );
     step_until(&mut h, "the link", |a| a.state.connected());
     h.run_steps(2);
     assert!(app(&h).title().starts_with(&version), "{}", app(&h).title());

@@ -64,7 +64,7 @@ fn hover_hints_say_the_wire_name_the_range_why_not_what_stop_sends_and_the_laten
     let mut saved = settings(&path, "window-cleaner", PanelId::Tuning, Lang::En);
     saved.port_mut().margin_ms = Some(100);
     let lister = ftdi(&path);
-    let mut h = harness_with(saved, move |a: &mut App| {
+    let mut h = harness_with(saved, b.ports(), move |a: &mut App| {
         a.state.link.port_lister = lister.clone();
         a.state.link.refresh_ports_now();
         a.state.dialogs = Dialogs::Missing("no file dialog on this system (test)".into());

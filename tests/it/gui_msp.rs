@@ -9,7 +9,7 @@ use botbench::ui::{App, PanelId, SolarTrip};
 use egui_kittest::kittest::Queryable;
 
 use crate::support::gui::{H, app, app_mut, has_label, settings, type_into};
-use crate::support::{SELFTEST_PLAN, Served, selftest_plan, serve, temp_dir};
+use crate::support::{Port, SELFTEST_PLAN, Served, selftest_plan, serve, temp_dir};
 
 type Bench<D> = Served<D>;
 
@@ -27,8 +27,8 @@ fn solar() -> Bench<SolarCleanbot> {
 }
 
 /// The app on `profile` at `path`, with the protocol's own answer margin.
-fn harness(path: &str, profile: &str, panel: PanelId, lang: Lang) -> H {
-    crate::support::gui::harness(settings(path, profile, panel, lang))
+fn harness(port: &impl Port, profile: &str, panel: PanelId, lang: Lang) -> H {
+    crate::support::gui::harness(settings(port.path(), profile, panel, lang), port.ports())
 }
 
 /// Steps the UI in real time until `done` holds; on timeout says what the panels hold.
@@ -59,7 +59,7 @@ fn nav_has(h: &H, name: &str) -> bool {
 fn a_clear_capability_bit_hides_its_panels_and_the_app_leaves_them() {
     // Bit 0 (config page) clear: the parameter pages are hidden.
     let b = window_cleaner(Some(0b1110), &[]);
-    let mut h = harness(b.path(), "window-cleaner", PanelId::Tuning, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::Tuning, Lang::En);
     step_until(&mut h, "the device identified", identified);
     h.run_steps(2);
     let a = app(&h);
@@ -81,7 +81,7 @@ fn a_clear_capability_bit_hides_its_panels_and_the_app_leaves_them() {
 
     // The same robot with the bit set shows them.
     let b = window_cleaner(Some(0b1111), &[]);
-    let mut h = harness(b.path(), "window-cleaner", PanelId::Tuning, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::Tuning, Lang::En);
     step_until(&mut h, "the device identified", identified);
     h.run_steps(2);
     assert!(app(&h).panels().contains(&PanelId::Tuning));
@@ -92,7 +92,7 @@ fn a_clear_capability_bit_hides_its_panels_and_the_app_leaves_them() {
 #[test]
 fn the_device_panel_pings_and_shows_version_build_and_flags() {
     let b = window_cleaner(Some(0b1111), &[]);
-    let mut h = harness(b.path(), "window-cleaner", PanelId::Device, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::Device, Lang::En);
     // The panel reads version and power state on its own once the link is free.
     step_until(&mut h, "the power state", |a| {
         a.device.power.is_some() && a.state.job_progress().is_none()
@@ -130,7 +130,7 @@ fn the_device_panel_pings_and_shows_version_build_and_flags() {
 }
 
 fn solar_ready(b: &Bench<SolarCleanbot>) -> H {
-    let mut h = harness(b.path(), "solar-cleanbot", PanelId::Solar, Lang::En);
+    let mut h = harness(b, "solar-cleanbot", PanelId::Solar, Lang::En);
     step_until(&mut h, "the device identified", identified);
     h.run_steps(2);
     h
@@ -304,7 +304,7 @@ fn run_selftest(
 #[test]
 fn the_self_test_passes_on_a_healthy_robot_and_logs_the_device() {
     let b = window_cleaner(Some(0x0F), &[]);
-    let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, Lang::En);
     let dir = temp_dir();
     let log = run_selftest(&mut h, &b, &dir);
     let report = app(&h).selftest.report.clone().unwrap();
@@ -330,7 +330,7 @@ fn the_self_test_passes_on_a_healthy_robot_and_logs_the_device() {
 #[test]
 fn the_self_test_fails_naming_the_faulty_check() {
     let b = window_cleaner(Some(0x0F), &[Fault::FanCurrentStuck]);
-    let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, Lang::En);
     let dir = temp_dir();
     run_selftest(&mut h, &b, &dir);
     let report = app(&h).selftest.report.clone().unwrap();
@@ -349,7 +349,7 @@ fn the_self_test_fails_naming_the_faulty_check() {
 #[test]
 fn a_malformed_plan_is_refused_with_its_line() {
     let b = window_cleaner(Some(0x0F), &[]);
-    let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, Lang::En);
     step_until(&mut h, "the link", |a| a.state.connected());
     let dir = temp_dir();
     let path = dir.path().join("bad-plan.ron");
@@ -379,7 +379,7 @@ fn a_malformed_plan_is_refused_with_its_line() {
 fn the_msp_panels_render_in_english_and_chinese() {
     let b = solar();
     for lang in [Lang::En, Lang::Zh] {
-        let mut h = harness(b.path(), "solar-cleanbot", PanelId::Solar, lang);
+        let mut h = harness(&b, "solar-cleanbot", PanelId::Solar, lang);
         step_until(&mut h, "readings", |a| a.state.device.readings.len() > 5);
         for panel in app(&h).panels() {
             app_mut(&mut h).settings.panel = panel;
@@ -389,7 +389,7 @@ fn the_msp_panels_render_in_english_and_chinese() {
     }
     let b = window_cleaner(Some(0x0F), &[]);
     for lang in [Lang::En, Lang::Zh] {
-        let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, lang);
+        let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, lang);
         step_until(&mut h, "the link", |a| a.state.connected());
         app_mut(&mut h).selftest.path = SELFTEST_PLAN.into();
         h.step();
@@ -410,7 +410,7 @@ fn the_msp_panels_render_in_english_and_chinese() {
 #[test]
 fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step() {
     let b = window_cleaner(Some(0x0F), &[]);
-    let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, Lang::En);
     let dir = temp_dir();
     let plan = plan_file(&dir);
     step_until(&mut h, "the device identified", |a| {
@@ -449,7 +449,7 @@ fn a_fan_left_on_is_shown_running_the_self_test_starts_safe_and_its_verdict_belo
     use botbench::profile::Input;
     use botbench::ui::{Action, jobs};
     let b = window_cleaner(Some(0x0F), &[]);
-    let mut h = harness(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, Lang::En);
     step_until(&mut h, "the device identified", |a| {
         identified(a) && a.state.job_progress().is_none()
     });

@@ -18,7 +18,7 @@ const BAUD: u32 = 115_200;
 const VACUUM: &str = include_str!("../../assets/profiles/tuya-vacuum.ron");
 
 use crate::support::gui::{H, app, app_mut, has_label, settings, step_until, type_into};
-use crate::support::{Served, image, serve_with, temp_dir, wait_until};
+use crate::support::{Port, Served, image, serve_with, temp_dir, wait_until};
 
 type Bench = Served<TuyaMcu>;
 
@@ -57,10 +57,10 @@ fn writable_profile(dir: &std::path::Path) -> (String, Bench) {
     )
 }
 
-pub(crate) fn harness(path: &str, profile: &str) -> H {
-    let mut saved = settings(path, profile, PanelId::TuyaConsole, Lang::En);
+pub(crate) fn harness(port: &impl Port, profile: &str) -> H {
+    let mut saved = settings(port.path(), profile, PanelId::TuyaConsole, Lang::En);
     saved.port_mut().baud = Some(BAUD);
-    crate::support::gui::harness(saved)
+    crate::support::gui::harness(saved, port.ports())
 }
 
 pub(crate) fn handshake(h: &mut H) {
@@ -83,7 +83,7 @@ pub(crate) fn reported(a: &App, id: u8) -> Option<Value> {
 #[test]
 fn the_handshake_completes_and_the_panel_shows_the_product_info() {
     let b = bench();
-    let mut h = harness(b.path(), "tuya-vacuum");
+    let mut h = harness(&b, "tuya-vacuum");
     handshake(&mut h);
     assert!(h.query_by_label("lgldgnmt4ifc.jzex").is_some(), "the PID");
     assert!(h.query_by_label("1.0.0").is_some(), "the MCU version");
@@ -134,7 +134,7 @@ fn a_malformed_product_info_is_shown_raw_and_the_handshake_goes_on() {
         }),
         Faults::default(),
     );
-    let mut h = harness(b.path(), "tuya-vacuum");
+    let mut h = harness(&b, "tuya-vacuum");
     handshake(&mut h);
     assert!(
         h.query_by_label("{\"p\":\"abc\",\"v\":").is_some(),
@@ -151,7 +151,7 @@ fn a_silent_mcu_shows_where_the_handshake_stopped_and_no_value() {
         ..Faults::default()
     };
     let b = bench_with(TuyaMcu::new(config()), silent);
-    let mut h = harness(b.path(), "tuya-vacuum");
+    let mut h = harness(&b, "tuya-vacuum");
     step_until(&mut h, "two failed attempts", |a| {
         a.state.device.tuya.stopped.is_some() && a.state.device.tuya.attempts >= 2
     });
@@ -169,7 +169,7 @@ fn a_silent_mcu_shows_where_the_handshake_stopped_and_no_value() {
 #[test]
 fn an_mcu_restart_is_shown_and_the_handshake_runs_again() {
     let b = bench();
-    let mut h = harness(b.path(), "tuya-vacuum");
+    let mut h = harness(&b, "tuya-vacuum");
     h.step();
     // A short heartbeat, sent to the worker on the next frame.
     let a = app_mut(&mut h);
@@ -192,7 +192,7 @@ fn an_mcu_restart_is_shown_and_the_handshake_runs_again() {
 #[test]
 fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_it() {
     let b = bench();
-    let mut h = harness(b.path(), "tuya-vacuum");
+    let mut h = harness(&b, "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "Data points");
     assert_eq!(reported(app(&h), 13), Some(Value::Int(0)));
@@ -243,7 +243,7 @@ fn a_value_out_of_range_is_refused_before_sending_and_typed_data_points_are_set(
     let tmp = temp_dir();
     let dir = tmp.path();
     let (profile, b) = writable_profile(dir);
-    let mut h = harness(b.path(), &profile);
+    let mut h = harness(&b, &profile);
     handshake(&mut h);
     tab(&mut h, "Data points");
     assert_eq!(reported(app(&h), 16), Some(Value::Int(35)));
@@ -315,7 +315,7 @@ fn a_value_out_of_range_is_refused_before_sending_and_typed_data_points_are_set(
 #[test]
 fn the_mcus_requests_are_answered_and_shown_with_a_chosen_time() {
     let b = bench();
-    let mut h = harness(b.path(), "tuya-vacuum");
+    let mut h = harness(&b, "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "MCU requests");
     app_mut(&mut h).tuya.requests.time_text = "2026-11-22 08:30:15".into();
@@ -357,7 +357,7 @@ fn update_asked(img: &[u8]) -> (tempfile::TempDir, Bench, H) {
     let file = tmp.path().join("firmware.bin");
     std::fs::write(&file, img).unwrap();
     let b = bench();
-    let mut h = harness(b.path(), "tuya-vacuum");
+    let mut h = harness(&b, "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "Firmware update");
     type_into(&mut h, "Firmware file", &file.display().to_string());
@@ -405,7 +405,7 @@ fn an_empty_or_missing_firmware_file_is_refused_with_a_clear_message() {
     let empty = dir.join("empty.bin");
     std::fs::write(&empty, b"").unwrap();
     let b = bench();
-    let mut h = harness(b.path(), "tuya-vacuum");
+    let mut h = harness(&b, "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "Firmware update");
     // No file named: nothing to start.
@@ -460,7 +460,7 @@ fn every_section_renders_in_english_and_chinese() {
     let tmp = temp_dir();
     let dir = tmp.path();
     let (profile, b) = writable_profile(dir);
-    let mut h = harness(b.path(), &profile);
+    let mut h = harness(&b, &profile);
     handshake(&mut h);
     {
         let mut m = b.sim();

@@ -1,7 +1,7 @@
 //! The Tuya console against MCUs as they behave in the field, and the built-in demo MCU: the
 //! real app through egui_kittest, the MCUs on pseudo-terminals (or in process, for the demo).
 
-use botbench::link::LinkState;
+use botbench::link::{LinkState, PortOpener};
 use botbench::profile::Value;
 use botbench::sim::Faults;
 use botbench::sim::tuya_mcu::{TuyaConfig, TuyaMcu, WireForm};
@@ -38,7 +38,7 @@ fn the_demo_mcu_runs_at_the_profiles_rate_and_sends_its_requests_when_asked() {
         Some(9600),
         "the profile's rate"
     );
-    let mut h = crate::support::gui::harness(saved);
+    let mut h = crate::support::gui::harness(saved, PortOpener::system());
     handshake(&mut h);
     assert!(
         matches!(
@@ -72,7 +72,7 @@ fn the_console_shows_the_mcus_frame_version_and_data_points_that_do_not_fit_raw(
         misreport: BTreeMap::from([(3, WireForm { ty: 2, len: 4 })]),
         ..TuyaConfig::default()
     });
-    let mut h = harness(b.path(), "tuya-vacuum");
+    let mut h = harness(&b, "tuya-vacuum");
     handshake(&mut h);
     assert!(has_label(
         &h,
@@ -98,7 +98,7 @@ fn after_a_command_the_console_shows_what_the_mcu_holds_though_the_report_of_a_c
         lose_rule_reports: true,
         ..TuyaConfig::default()
     });
-    let mut h = harness(b.path(), "tuya-vacuum");
+    let mut h = harness(&b, "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "Data points");
     h.get_by(|n| n.role() == Role::ComboBox && n.label().as_deref() == Some("3 Work mode"))
@@ -134,7 +134,7 @@ fn an_image_over_the_profiles_maximum_is_refused_and_one_that_fits_shows_its_exp
     let fw = dir.join("fw.bin");
     std::fs::write(&fw, vec![0xa5; 65_536]).unwrap();
     let b = mcu(TuyaConfig::default());
-    let mut h = harness(b.path(), "tuya-vacuum");
+    let mut h = harness(&b, "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "Firmware update");
     app_mut(&mut h).tuya.ota.path = big.display().to_string();

@@ -1,7 +1,7 @@
 //! The link worker against the MSP simulators through real pseudo-terminals.
 
 use botbench::link::{
-    ExchangeError, Link, LinkCommand, LinkEvent, LinkOptions, LinkState, Poll, Request, serial,
+    ExchangeError, Link, LinkCommand, LinkEvent, LinkOptions, LinkState, Poll, Request,
 };
 use botbench::ops::OpError;
 use botbench::ops::exchange as ops;
@@ -12,21 +12,21 @@ use std::cell::Cell;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use crate::support::{Served, lossy, next_event, profile, serve_with};
+use crate::support::{Port, Served, lossy, next_event, profile, serve_with};
 
 fn window_cleaner(faults: Faults) -> Served<WindowCleaner> {
     serve_with(crate::support::window_cleaner(), faults)
 }
 
-fn open(path: &str, profile: Arc<Profile>, options: LinkOptions) -> Link {
-    crate::support::open_link(path, 115_200, profile, options)
+fn open(port: &impl Port, profile: Arc<Profile>, options: LinkOptions) -> Link {
+    crate::support::open_link(port, 115_200, profile, options)
 }
 
 #[test]
 fn the_session_learns_the_device_and_reads_and_writes_parameters() {
     let p = profile("window-cleaner");
     let b = window_cleaner(Faults::default());
-    let link = open(b.path(), p.clone(), LinkOptions::default());
+    let link = open(&b, p.clone(), LinkOptions::default());
     let info = next_event(&link, "identification", |ev| match ev {
         LinkEvent::Identified(r) => Some(r),
         _ => None,
@@ -60,7 +60,7 @@ fn the_session_learns_the_device_and_reads_and_writes_parameters() {
 fn an_out_of_range_value_is_refused_before_anything_is_sent() {
     let p = profile("window-cleaner");
     let b = window_cleaner(Faults::default());
-    let link = open(b.path(), p.clone(), LinkOptions::default());
+    let link = open(&b, p.clone(), LinkOptions::default());
     let before = b.sim().param("pwmValue");
     let set = p.command("MSP_SET_PWMVALUE").unwrap();
     let err = ops::write_verified(
@@ -96,7 +96,7 @@ fn lost(e: &OpError) -> bool {
 fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_typed_errors() {
     let p = profile("window-cleaner");
     let b = window_cleaner(lossy(7));
-    let link = open(b.path(), p.clone(), LinkOptions::default());
+    let link = open(&b, p.clone(), LinkOptions::default());
     let client = link.client();
     let get = p.command("MSP_GET_PWMVALUE").unwrap();
     let set = p.command("MSP_SET_PWMVALUE").unwrap();
@@ -148,7 +148,7 @@ fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_type
 fn polled_telemetry_arrives_as_events() {
     let p = profile("window-cleaner");
     let b = window_cleaner(Faults::default());
-    let link = open(b.path(), p.clone(), LinkOptions::default());
+    let link = open(&b, p.clone(), LinkOptions::default());
     let attitude = p.command("MSP_ATTITUDE").unwrap();
     link.send(LinkCommand::SetPolls(vec![Poll {
         request: Request::for_command(&p, attitude, Vec::new()).attempts(1),
@@ -178,7 +178,7 @@ fn pipelined_polls_under_faults_never_mix_answers_with_each_other_or_with_writes
         poll_pipeline: 2,
         ..LinkOptions::default()
     };
-    let link = open(b.path(), p.clone(), options);
+    let link = open(&b, p.clone(), options);
     let attitude = p.command("MSP_ATTITUDE").unwrap();
     let get = p.command("MSP_GET_PWMVALUE").unwrap();
     let set = p.command("MSP_SET_PWMVALUE").unwrap();
@@ -237,11 +237,14 @@ fn pipelined_polls_under_faults_never_mix_answers_with_each_other_or_with_writes
 fn a_vanished_port_gives_disconnected_and_the_link_reconnects_when_it_returns() {
     let p = profile("window-cleaner");
     let mut b = window_cleaner(Faults::default());
+    // The port by its path, as the system opens it: the pty now at `path`, served in lockstep.
     let path = Arc::new(Mutex::new(b.path().to_string()));
-    let opener_path = path.clone();
+    let ports = Arc::new(Mutex::new(b.ports()));
+    let (opener_path, opener_ports) = (path.clone(), ports.clone());
     let opener: botbench::link::Opener = Box::new(move || {
         let p = opener_path.lock().unwrap().clone();
-        serial::opener(&p, 115_200)()
+        let ports = opener_ports.lock().unwrap().clone();
+        ports.open(&p, 115_200)()
     });
     let link = Link::open(opener, p.clone(), LinkOptions::default(), None).unwrap();
     let client = link.client();
@@ -259,6 +262,7 @@ fn a_vanished_port_gives_disconnected_and_the_link_reconnects_when_it_returns() 
 
     // The device comes back (a new pty stands in for the re-plugged adapter).
     let b2 = window_cleaner(Faults::default());
+    *ports.lock().unwrap() = b2.ports();
     *path.lock().unwrap() = b2.path().to_string();
     let back = next_event(&link, "the reconnection", |ev| match ev {
         LinkEvent::State(LinkState::Connected { port, .. }) => Some(port),
@@ -276,7 +280,7 @@ fn a_silent_device_gives_a_typed_timeout_after_bounded_attempts() {
         ..Faults::default()
     });
     let link = open(
-        b.path(),
+        &b,
         p,
         LinkOptions {
             start_session: false,

@@ -341,7 +341,7 @@ fn an_edited_baud_table_is_the_rate_the_servo_and_the_link_move_to() {
         vec![SimServo::fresh_with(&profile, 5).with_id(4)],
     ));
     let link = crate::support::open_link(
-        served.path(),
+        &served,
         profile.baud,
         profile.clone(),
         LinkOptions::default(),
@@ -385,7 +385,7 @@ fn a_scan_reads_the_parameters_the_profile_gives_the_roles_of() {
         ],
     ));
     let link = crate::support::open_link(
-        served.path(),
+        &served,
         profile.baud,
         profile.clone(),
         LinkOptions::default(),

@@ -37,7 +37,7 @@ impl Bench {
             tuya: module,
             ..LinkOptions::default()
         };
-        let link = open_link(mcu.path(), baud, profile.clone(), options);
+        let link = open_link(&mcu, baud, profile.clone(), options);
         Self { link, mcu, profile }
     }
 

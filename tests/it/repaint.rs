@@ -50,7 +50,7 @@ fn a_streaming_plot_redraws_at_the_live_rate_not_on_every_sample() {
     let b = serve(window_cleaner());
     let mut saved = settings(b.path(), "window-cleaner", PanelId::Telemetry, Lang::En);
     saved.poll_hz = Some(50.0);
-    let mut h = harness(saved);
+    let mut h = harness(saved, b.ports());
     step_until(&mut h, "telemetry points", streaming);
     assert_eq!(app(&h).repaint_after(), Some(LIVE));
     // The frame itself asks for exactly that (a frame that also drains a backlog of worker
@@ -85,7 +85,7 @@ fn a_streaming_plot_redraws_at_the_live_rate_not_on_every_sample() {
 fn a_disconnected_window_asks_for_no_frame() {
     let b = serve(window_cleaner());
     let saved = settings(b.path(), "window-cleaner", PanelId::Telemetry, Lang::En);
-    let mut h = harness(saved);
+    let mut h = harness(saved, b.ports());
     step_until(&mut h, "telemetry points", streaming);
     app_mut(&mut h).apply(Action::Disconnect);
     assert_eq!(app(&h).repaint_after(), None);

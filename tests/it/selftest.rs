@@ -49,7 +49,7 @@ fn bench(faults: &[Fault]) -> Bench {
         reconnect: false,
         ..LinkOptions::default()
     };
-    let link = open_link(robot.path(), 115_200, profile.clone(), options);
+    let link = open_link(&robot, 115_200, profile.clone(), options);
     // The session learns the device code from CMD_VERSION first.
     identified(&link);
     Bench {

@@ -95,12 +95,7 @@ fn on_a_line_that_echoes_the_modules_frames_a_version_0x00_mcu_is_told_apart_by_
     // The MCU's requests: a reset-Wi-Fi ack is the very bytes of the request (version 0x00);
     // its echo must not be taken for another request, or the module acks its own ack forever.
     let profile = profile("tuya-vacuum");
-    let link = open_link(
-        served.path(),
-        115_200,
-        profile.clone(),
-        LinkOptions::default(),
-    );
+    let link = open_link(&served, 115_200, profile.clone(), LinkOptions::default());
     next_event(&link, "the handshake", |e| {
         matches!(e, LinkEvent::Tuya(TuyaEvent::HandshakeDone)).then_some(())
     });

@@ -16,7 +16,7 @@ fn the_battery_state_is_named_beside_its_plot_and_is_no_line() {
     let b = serve(SolarCleanbot::new(&SimOptions::default()).unwrap());
     let mut saved = settings(b.path(), "solar-cleanbot", PanelId::Telemetry, Lang::En);
     saved.port_mut().margin_ms = Some(100);
-    let mut h = harness(saved);
+    let mut h = harness(saved, b.ports());
     let voltage = |a: &App| {
         a.state
             .device
@@ -60,7 +60,7 @@ fn frames_logged_before_a_device_change_keep_the_profile_they_came_under() {
     let b = serve(window_cleaner());
     let mut saved = settings(b.path(), "window-cleaner", PanelId::Monitor, Lang::En);
     saved.port_mut().margin_ms = Some(100);
-    let mut h = harness(saved);
+    let mut h = harness(saved, b.ports());
     let attitude = |a: &App| {
         a.state.packets.entries.iter().any(|l| {
             l.entry

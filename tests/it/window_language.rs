@@ -4,6 +4,7 @@
 //! device that never answers.
 
 use botbench::i18n::Lang;
+use botbench::link::PortOpener;
 use botbench::sim::{Faults, SimKind};
 use botbench::ui::{App, PanelId, Settings, Target};
 use egui_kittest::kittest::Queryable;
@@ -110,7 +111,7 @@ fn demo(kind: SimKind, panel: PanelId) -> H {
         ..Settings::default()
     };
     saved.port_mut().baud = Some(kind.default_baud());
-    harness_with(saved, |_| {})
+    harness_with(saved, PortOpener::system(), |_| {})
 }
 
 #[test]
@@ -163,7 +164,7 @@ fn in_chinese_a_silent_device_and_a_servo_scan_are_said_in_chinese() {
     );
     let mut saved = settings(silent.path(), "window-cleaner", PanelId::Tuning, Lang::Zh);
     saved.port_mut().margin_ms = Some(5);
-    let mut h = harness_with(saved, |_| {});
+    let mut h = harness_with(saved, silent.ports(), |_| {});
     // On connecting, the tuning panel's values are read: none answers.
     said.step_until(&mut h, "the first read to fail", |a| {
         a.state.notice.as_ref().is_some_and(|n| n.error) && a.state.job_progress().is_none()

@@ -6,6 +6,7 @@
 //! scroll into view; range hints are whole; a panel keeps its own scroll place.
 
 use botbench::i18n::Lang;
+use botbench::link::PortOpener;
 use botbench::sim::SimKind;
 use botbench::ui::layout::{one_line, overlapping_texts, split_words};
 use botbench::ui::state::Answering;
@@ -115,7 +116,7 @@ fn demo(kind: SimKind, lang: Lang, size: egui::Vec2) -> H {
         ..Settings::default()
     };
     saved.port_mut().baud = Some(kind.default_baud());
-    let mut h = harness_sized(saved, size, |_| {});
+    let mut h = harness_sized(saved, PortOpener::system(), size, |_| {});
     step_until(&mut h, "the device to answer", move |a| ready(kind, a));
     h
 }

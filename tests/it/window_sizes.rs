@@ -9,12 +9,12 @@ use eframe::egui;
 use egui_kittest::kittest::Queryable;
 
 use crate::support::gui::{H, app, app_mut, settings, step_until};
-use crate::support::{serve, served_window_cleaner as bench};
+use crate::support::{Port, serve, served_window_cleaner as bench};
 
-fn sized(path: &str, size: egui::Vec2, lang: Lang) -> H {
-    let mut saved = settings(path, "window-cleaner", PanelId::Tuning, lang);
+fn sized(port: &impl Port, size: egui::Vec2, lang: Lang) -> H {
+    let mut saved = settings(port.path(), "window-cleaner", PanelId::Tuning, lang);
     saved.port_mut().margin_ms = Some(100);
-    crate::support::gui::harness_sized(saved, size, |_| {})
+    crate::support::gui::harness_sized(saved, port.ports(), size, |_| {})
 }
 
 #[test]
@@ -25,7 +25,7 @@ fn the_top_bar_keeps_its_badge_whole_and_its_switch_in_place() {
         (1024.0, Lang::En, "● device answering", "中文"),
         (1024.0, Lang::Zh, "● 设备应答中", "English"),
     ] {
-        let mut h = sized(b.path(), egui::vec2(width, 600.0), lang);
+        let mut h = sized(&b, egui::vec2(width, 600.0), lang);
         h.run_steps(2);
         let before = h.get_by_label(switch).rect();
         step_until(&mut h, "answers", |a| {
@@ -65,7 +65,8 @@ fn the_solar_plots_take_the_whole_width() {
         serve(botbench::sim::solar_cleanbot::SolarCleanbot::new(&SimOptions::default()).unwrap());
     let mut saved = settings(b.path(), "solar-cleanbot", PanelId::Solar, Lang::En);
     saved.port_mut().margin_ms = Some(100);
-    let mut h = crate::support::gui::harness_sized(saved, egui::vec2(1280.0, 800.0), |_| {});
+    let mut h =
+        crate::support::gui::harness_sized(saved, b.ports(), egui::vec2(1280.0, 800.0), |_| {});
     step_until(&mut h, "the plots drawn", |a| a.solar.plot_width > 0.0);
     assert!(
         app(&h).solar.plot_width > 1280.0 * 0.8,
@@ -79,7 +80,8 @@ fn at_1024_px_the_self_tests_measured_and_result_columns_stay_in_the_window() {
     let b = bench();
     let mut saved = settings(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
     saved.port_mut().margin_ms = Some(100);
-    let mut h = crate::support::gui::harness_sized(saved, egui::vec2(1024.0, 600.0), |_| {});
+    let mut h =
+        crate::support::gui::harness_sized(saved, b.ports(), egui::vec2(1024.0, 600.0), |_| {});
     h.run_steps(3);
     h.get_by_label("Open plan").click();
     h.run_steps(2);
@@ -119,7 +121,8 @@ fn at_1024_px_a_bit_field_takes_its_rows_height_and_draws_over_no_other_row() {
     ));
     let mut saved = settings(b.path(), "tuya-vacuum", PanelId::TuyaConsole, Lang::En);
     saved.port_mut().baud = Some(115_200);
-    let mut h = crate::support::gui::harness_sized(saved, egui::vec2(1024.0, 600.0), |_| {});
+    let mut h =
+        crate::support::gui::harness_sized(saved, b.ports(), egui::vec2(1024.0, 600.0), |_| {});
     crate::gui_tuya::handshake(&mut h);
     crate::gui_tuya::tab(&mut h, "Data points");
     step_until(&mut h, "DP 18 reported", |a| {

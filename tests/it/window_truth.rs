@@ -11,12 +11,12 @@ use eframe::egui;
 use egui_kittest::kittest::Queryable;
 
 use crate::support::gui::{self, H, app, app_mut, settings, step_until};
-use crate::support::{serve, serve_with, served_window_cleaner as bench};
+use crate::support::{Port, serve, serve_with, served_window_cleaner as bench};
 
 /// The app on the window cleaner at `path`, with 100 ms for the device to start answering:
 /// generous for a loaded test machine.
-fn harness(path: &str, panel: PanelId) -> H {
-    gui::on_window_cleaner(path, panel, Some(100))
+fn harness(port: &impl Port, panel: PanelId) -> H {
+    gui::on_window_cleaner(port, panel, Some(100))
 }
 
 fn show(h: &mut H, panel: PanelId) {
@@ -27,7 +27,7 @@ fn show(h: &mut H, panel: PanelId) {
 #[test]
 fn the_packet_monitor_opened_late_shows_the_newest_and_holds_where_the_technician_scrolled() {
     let b = bench();
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     // A small log, so that it is full (and drops its oldest) within the test.
     app_mut(&mut h).state.packets.capacity = 400;
     step_until(&mut h, "traffic", |a| a.state.packets.entries.len() >= 400);
@@ -97,12 +97,12 @@ fn the_packet_monitor_opened_late_shows_the_newest_and_holds_where_the_technicia
     assert!(a.monitor.top.unwrap() + 60 >= newest(a));
 }
 
-fn telemetry(path: &str, lang: Lang) -> H {
-    let mut saved = settings(path, "window-cleaner", PanelId::Telemetry, lang);
+fn telemetry(port: &impl Port, lang: Lang) -> H {
+    let mut saved = settings(port.path(), "window-cleaner", PanelId::Telemetry, lang);
     saved.port_mut().margin_ms = Some(100);
     // A window far longer than the test: its left part is before any data.
     saved.window_secs = 600.0;
-    crate::support::gui::harness(saved)
+    crate::support::gui::harness(saved, port.ports())
 }
 
 /// Samples in the first plot's series.
@@ -119,7 +119,7 @@ fn samples(a: &App) -> usize {
 #[test]
 fn the_cursor_readout_is_a_sample_under_the_pointer_or_nothing_and_moves_nothing() {
     let b = bench();
-    let mut h = telemetry(b.path(), Lang::En);
+    let mut h = telemetry(&b, Lang::En);
     step_until(&mut h, "samples", |a| {
         samples(a) >= 5 && a.telemetry.shown.len() >= 2
     });
@@ -161,7 +161,7 @@ fn the_cursor_readout_is_a_sample_under_the_pointer_or_nothing_and_moves_nothing
 #[test]
 fn a_pause_keeps_the_paused_data_in_view_and_breaks_the_line() {
     let b = bench();
-    let mut h = telemetry(b.path(), Lang::En);
+    let mut h = telemetry(&b, Lang::En);
     step_until(&mut h, "samples", |a| {
         samples(a) >= 5 && !a.telemetry.shown.is_empty()
     });
@@ -209,7 +209,7 @@ fn a_silent_device_is_a_port_open_not_a_device_answering() {
             ..Default::default()
         },
     );
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     step_until(&mut h, "the port", |a| a.state.connected());
     step_until(&mut h, "unanswered requests", |a| {
         matches!(
@@ -225,7 +225,7 @@ fn a_silent_device_is_a_port_open_not_a_device_answering() {
 #[test]
 fn a_disconnect_forgets_the_units_version_values_and_marks() {
     let b = bench();
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     // Whether the device answers comes with the worker's next statistics report, which may
     // arrive after the values: wait for it, not for a number of frames.
     step_until(&mut h, "the device read and its answers counted", |a| {
@@ -254,7 +254,7 @@ fn a_disconnect_forgets_the_units_version_values_and_marks() {
 #[test]
 fn stop_is_on_every_window_cleaner_panel_and_goes_straight_to_the_robot() {
     let b = bench();
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     step_until(&mut h, "the link", |a| a.state.connected());
     for panel in [
         PanelId::Tuning,
@@ -311,7 +311,7 @@ fn input_lefts(h: &H) -> Vec<f32> {
 fn the_tuning_tables_line_up_across_the_width_and_say_only_what_the_profile_gives() {
     let b = bench();
     b.sim.lock().unwrap().set_param("pwmvalueMax", 97).unwrap();
-    let mut h = harness(b.path(), PanelId::Tuning);
+    let mut h = harness(&b, PanelId::Tuning);
     step_until(&mut h, "the device read", |a| {
         (130..=136).all(|id| a.state.device.readings.contains_key(&id))
             && a.state.job_progress().is_none()
@@ -377,7 +377,7 @@ fn the_configurator_variants_own_set_layout_is_written_and_verified() {
         Lang::En,
     );
     saved.port_mut().margin_ms = Some(100);
-    let mut h = crate::support::gui::harness(saved);
+    let mut h = crate::support::gui::harness(saved, b.ports());
     step_until(&mut h, "the spray settings read", |a| {
         a.state.device.value(135, "waterPumpDuration").is_some() && a.state.job_progress().is_none()
     });
@@ -424,7 +424,7 @@ fn the_configurator_variants_own_set_layout_is_written_and_verified() {
 #[test]
 fn in_chinese_the_status_line_and_the_plot_legends_are_chinese() {
     let b = bench();
-    let mut h = telemetry(b.path(), Lang::Zh);
+    let mut h = telemetry(&b, Lang::Zh);
     step_until(&mut h, "samples", |a| {
         samples(a) >= 2 && !a.telemetry.shown.is_empty()
     });
@@ -458,7 +458,7 @@ fn factory_defaults_leave_no_file_named_and_a_typed_preset_path_is_remembered() 
     let dir = std::env::temp_dir().join(format!("botbench-wt-preset-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("golden.ron");
-    let mut h = harness(b.path(), PanelId::Presets);
+    let mut h = harness(&b, PanelId::Presets);
     step_until(&mut h, "the device read", |a| {
         a.state.device.value(130, "pwmValue").is_some() && a.state.job_progress().is_none()
     });
@@ -490,7 +490,7 @@ fn factory_defaults_leave_no_file_named_and_a_typed_preset_path_is_remembered() 
 fn other_telemetry_lists_every_telemetry_command_in_a_box_of_many_rows() {
     use botbench::profile::CommandKind;
     let b = bench();
-    let mut h = telemetry(b.path(), Lang::En);
+    let mut h = telemetry(&b, Lang::En);
     h.run_steps(3);
     let profile = app(&h).state.device.profile.clone();
     let others: Vec<_> = profile
@@ -518,7 +518,7 @@ fn a_profiles_port_settings_are_its_own() {
     let b = bench();
     let mut saved = settings(b.path(), "window-cleaner", PanelId::Telemetry, Lang::En);
     saved.port_mut().margin_ms = Some(300);
-    let mut h = crate::support::gui::harness(saved);
+    let mut h = crate::support::gui::harness(saved, b.ports());
     h.run_steps(3);
     assert_eq!(app(&h).connection.port().1, Some(300));
     let choose = |h: &mut H, id: &str| {

@@ -502,3 +502,24 @@ pub fn scan(
         .sort_by_key(|r| (bauds.iter().position(|&b| b == r.baud), r.id));
     result.map(|()| report)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::SCAN_ROLES;
+    use crate::profile::Registry;
+
+    #[test]
+    fn a_scan_reads_type_firmware_serial_voltage_temperature_and_status_by_role() {
+        let servo = Registry::builtin()
+            .and_then(|r| r.get("servo"))
+            .expect("the built-in servo profile");
+        let scanned: Vec<Option<u8>> = SCAN_ROLES
+            .iter()
+            .map(|r| servo.param_with_role(r).map(|p| p.id))
+            .collect();
+        assert_eq!(
+            scanned,
+            [Some(6), Some(7), Some(8), Some(1), Some(4), Some(5)]
+        );
+    }
+}

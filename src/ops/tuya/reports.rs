@@ -185,7 +185,9 @@ mod tests {
 
     #[test]
     fn a_data_point_of_another_type_or_length_is_kept_raw_with_the_mismatch() {
-        let profile = crate::sim::tuya_mcu::builtin_vacuum_profile();
+        let profile = crate::profile::Registry::builtin()
+            .and_then(|r| r.get("tuya-vacuum"))
+            .expect("the built-in vacuum profile");
         let got = read_reports(
             &profile,
             &[

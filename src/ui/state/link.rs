@@ -1,7 +1,7 @@
 //! The link as the window sees it: what it is connected to, its state and counters as the worker
 //! last reported them, how it was opened, and the serial ports there are.
 
-use crate::link::{Link, LinkOptions, LinkState, LinkStats};
+use crate::link::{Link, LinkOptions, LinkState, LinkStats, PortOpener};
 use crate::sim::tuya_mcu::TuyaMcu;
 use crate::system::{self, PortInfo};
 use std::sync::{Arc, Mutex};
@@ -106,6 +106,9 @@ pub struct LinkStatus {
     ports_at: Option<Instant>,
     /// Where the ports are listed from.
     pub port_lister: PortLister,
+    /// How a port named by its path is opened: the system's serial ports, or what a test
+    /// serves ([`crate::ui::App::new`] is handed it).
+    pub port_opener: PortOpener,
 }
 
 /// Where the serial ports come from: the system's ([`system::list_ports`]), unless a test lists

@@ -176,7 +176,7 @@ impl AppState {
                     Ok(Box::new(t) as Box<dyn crate::link::Transport>)
                 })
             }
-            Target::Port(path) => crate::link::serial::opener(path, baud),
+            Target::Port(path) => self.link.port_opener.open(path, baud),
         };
         let opener = self.packets.tap.wrap(opener);
         let ctx = self.ctx.clone();

@@ -137,7 +137,7 @@ fn every_field_of_every_paired_command_round_trips_through_its_display_text() {
 fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
     let p = profile("window-cleaner");
     let wc = window_cleaner();
-    let link = connect(wc.path(), &p);
+    let link = connect(&wc, &p);
     let client = link.client();
     let cancel = Cancel::new();
     let dir = temp_dir();
@@ -229,7 +229,7 @@ fn the_factory_preset_applies_to_a_tuned_device() {
         sim.set_param("waterPump", 0).unwrap();
         sim.set_param("maxTarget", 320).unwrap();
     }
-    let link = connect(wc.path(), &p);
+    let link = connect(&wc, &p);
     let factory = Preset::load(Path::new(FACTORY), &p).unwrap().preset;
     let checks =
         ops::preset::apply(&link.client(), &p, &factory, &Cancel::new(), &mut |_| {}).unwrap();
@@ -246,7 +246,7 @@ fn a_cancel_stops_between_commands_and_returns_what_was_done() {
     let p = profile("window-cleaner");
     let wc = window_cleaner();
     wc.sim().set_param("gyroThreshold", 99).unwrap();
-    let link = connect(wc.path(), &p);
+    let link = connect(&wc, &p);
     let factory = Preset::load(Path::new(FACTORY), &p).unwrap().preset;
     let cancel = Cancel::new();
     let c2 = cancel.clone();
@@ -362,7 +362,7 @@ fn an_out_of_range_value_is_refused_before_anything_is_written() {
 
     // Applying it anyway (unchecked) writes nothing, not even the valid commands.
     let unchecked = Preset::parse_unchecked("test.ron", &text).unwrap();
-    let link = connect(wc.path(), &p);
+    let link = connect(&wc, &p);
     let err = ops::preset::apply(&link.client(), &p, &unchecked, &Cancel::new(), &mut |_| {})
         .unwrap_err();
     assert!(

@@ -1,8 +1,9 @@
 //! The real app in an egui_kittest harness, connected to a simulator served in lockstep on a
 //! pseudo-terminal ([`super::serve`]), stepped until a condition holds.
 
-use super::PATIENCE;
+use super::{PATIENCE, Port};
 use botbench::i18n::Lang;
+use botbench::link::PortOpener;
 use botbench::profile::{CommandKind, Value};
 use botbench::ui::state::Reading;
 use botbench::ui::{App, PanelId, Settings, Target};
@@ -29,30 +30,36 @@ pub fn settings(path: &str, profile: &str, panel: PanelId, lang: Lang) -> Settin
     saved
 }
 
-/// The app on the window cleaner at `path`, showing `panel`, in English, with the protocol's own
+/// The app on the window cleaner at `port`, showing `panel`, in English, with the protocol's own
 /// answer margin or `margin_ms`.
-pub fn on_window_cleaner(path: &str, panel: PanelId, margin_ms: Option<u64>) -> H {
-    let mut saved = settings(path, "window-cleaner", panel, Lang::En);
+pub fn on_window_cleaner(port: &impl Port, panel: PanelId, margin_ms: Option<u64>) -> H {
+    let mut saved = settings(port.path(), "window-cleaner", panel, Lang::En);
     saved.port_mut().margin_ms = margin_ms;
-    harness(saved)
+    harness(saved, port.ports())
 }
 
-/// The app with `saved` settings, in a 1400×1000 window: each step runs its logic and draws it.
-pub fn harness(saved: Settings) -> H {
-    harness_with(saved, |_| {})
+/// The app with `saved` settings, opening ports with `ports` (a test's simulator served in
+/// lockstep: [`Port::ports`]), in a 1400×1000 window: each step runs its logic and draws it.
+pub fn harness(saved: Settings, ports: PortOpener) -> H {
+    harness_with(saved, ports, |_| {})
 }
 
 /// As [`harness`], with `prepare` run on the app once it has started.
-pub fn harness_with(saved: Settings, prepare: impl Fn(&mut App) + 'static) -> H {
-    harness_sized(saved, egui::vec2(1400.0, 1000.0), prepare)
+pub fn harness_with(saved: Settings, ports: PortOpener, prepare: impl Fn(&mut App) + 'static) -> H {
+    harness_sized(saved, ports, egui::vec2(1400.0, 1000.0), prepare)
 }
 
 /// As [`harness_with`], in a window of `size` points.
-pub fn harness_sized(saved: Settings, size: egui::Vec2, prepare: impl Fn(&mut App) + 'static) -> H {
+pub fn harness_sized(
+    saved: Settings,
+    ports: PortOpener,
+    size: egui::Vec2,
+    prepare: impl Fn(&mut App) + 'static,
+) -> H {
     Harness::builder().with_size(size).build_ui_state(
         move |ui, app: &mut Option<App>| {
             let app = app.get_or_insert_with(|| {
-                let mut app = App::new(ui.ctx(), saved.clone()).expect("app starts");
+                let mut app = App::new(ui.ctx(), saved.clone(), ports.clone()).expect("app starts");
                 prepare(&mut app);
                 app
             });

@@ -11,7 +11,7 @@ pub mod gui;
 pub mod servo;
 pub mod servo_bench;
 
-use botbench::link::{Link, LinkEvent, LinkOptions, serial};
+use botbench::link::{Link, LinkEvent, LinkOptions, Opener, PortOpener};
 use botbench::profile::{Profile, Registry};
 use botbench::sim::window_cleaner::WindowCleaner;
 use botbench::sim::{Device, Faults, PtyServer, SharedDevice, SimOptions};
@@ -104,10 +104,55 @@ pub struct Served<D> {
     pub sim: Arc<Mutex<D>>,
 }
 
+/// A simulated device on a pseudo-terminal, as a test hands it to a link, the window or the
+/// command line: its path, and the opener that reaches it (in lockstep when it is served so).
+pub trait Port {
+    /// The pty's path.
+    fn path(&self) -> &str;
+    /// The opener of the pty at `baud`.
+    fn opener(&self, baud: u32) -> Opener;
+    /// The system's ports, with this pty opened by [`Port::opener`]: what the window and the
+    /// command line are handed.
+    fn ports(&self) -> PortOpener;
+}
+
+impl Port for PtyServer {
+    fn path(&self) -> &str {
+        PtyServer::path(self)
+    }
+
+    fn opener(&self, baud: u32) -> Opener {
+        PtyServer::opener(self, baud)
+    }
+
+    fn ports(&self) -> PortOpener {
+        self.port_opener()
+    }
+}
+
+impl<D> Port for Served<D> {
+    fn path(&self) -> &str {
+        self.server.path()
+    }
+
+    fn opener(&self, baud: u32) -> Opener {
+        self.server.opener(baud)
+    }
+
+    fn ports(&self) -> PortOpener {
+        self.server.port_opener()
+    }
+}
+
 impl<D> Served<D> {
     /// The path a client opens.
     pub fn path(&self) -> &str {
         self.server.path()
+    }
+
+    /// The system's ports, with this device's pty served in lockstep ([`Port::ports`]).
+    pub fn ports(&self) -> PortOpener {
+        self.server.port_opener()
     }
 
     /// The device, locked.
@@ -152,9 +197,9 @@ pub fn image(len: usize) -> Vec<u8> {
     (0..len).map(|_| rng.u8(..)).collect()
 }
 
-/// A link to `path` at `baud` with `profile`.
-pub fn open_link(path: &str, baud: u32, profile: Arc<Profile>, options: LinkOptions) -> Link {
-    Link::open(serial::opener(path, baud), profile, options, None).expect("opens the port")
+/// A link to `port` at `baud` with `profile`.
+pub fn open_link(port: &impl Port, baud: u32, profile: Arc<Profile>, options: LinkOptions) -> Link {
+    Link::open(port.opener(baud), profile, options, None).expect("opens the port")
 }
 
 /// Waits for the first event of `link` that `pick` accepts, dropping the others; fails naming
@@ -176,8 +221,8 @@ pub fn next_event<T>(link: &Link, what: &str, mut pick: impl FnMut(LinkEvent) ->
 
 /// A link to the MSP device at `path` at 115200 baud, once its session has learned the device
 /// code.
-pub fn connect(path: &str, profile: &Arc<Profile>) -> Link {
-    let link = open_link(path, 115_200, profile.clone(), LinkOptions::default());
+pub fn connect(port: &impl Port, profile: &Arc<Profile>) -> Link {
+    let link = open_link(port, 115_200, profile.clone(), LinkOptions::default());
     identified(&link);
     link
 }

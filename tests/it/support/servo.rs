@@ -22,12 +22,7 @@ impl Bench {
     pub fn new(servos: Vec<SimServo>) -> Self {
         let profile = profile("servo");
         let served = serve(ServoBus::new(servos));
-        let link = open_link(
-            served.path(),
-            115_200,
-            profile.clone(),
-            LinkOptions::default(),
-        );
+        let link = open_link(&served, 115_200, profile.clone(), LinkOptions::default());
         Self {
             link,
             served,

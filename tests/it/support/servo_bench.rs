@@ -18,7 +18,10 @@ pub fn bench(servos: Vec<SimServo>) -> Bench {
 
 /// The app on the servo bench panel, connected with the servo protocol's own answer margin.
 pub fn harness(b: &Bench, lang: Lang) -> H {
-    let mut h = gui::harness(settings(b.path(), "servo", PanelId::ServoBench, lang));
+    let mut h = gui::harness(
+        settings(b.path(), "servo", PanelId::ServoBench, lang),
+        b.ports(),
+    );
     step_until(&mut h, "the link", |a| a.state.connected());
     h
 }

@@ -81,7 +81,9 @@ mod tests {
 
     #[test]
     fn a_query_of_the_vacuum_waits_for_its_19_data_points() {
-        let profile = crate::sim::tuya_mcu::builtin_vacuum_profile();
+        let profile = crate::profile::Registry::builtin()
+            .and_then(|r| r.get("tuya-vacuum"))
+            .expect("the built-in vacuum profile");
         let ids: Vec<u8> = profile.data_points.iter().map(|d| d.id).collect();
         let ReplySpec::Reports {
             ids: want, bytes, ..

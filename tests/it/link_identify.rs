@@ -1,11 +1,14 @@
 //! This connection's identification through the whole link: a pseudo-terminal, the worker, and
 //! the simulators ([`Client::device_info`], [`Client::identify`]).
 
-use super::*;
-use crate::profile::{Protocol, Registry};
-use crate::protocol::msp;
-use crate::sim::{Faults, PtyServer, SimKind, SimOptions};
-use std::sync::Mutex;
+use botbench::link::{
+    ExchangeError, Link, LinkEvent, LinkOptions, LinkState, LogEntry, Opener, Request, serial,
+};
+use botbench::profile::{Protocol, Registry};
+use botbench::protocol::{Direction, msp};
+use botbench::sim::{Faults, PtyServer, SimKind, SimOptions};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 /// Long enough on a loaded machine; only a failing test waits this long.
 const PATIENCE: Duration = Duration::from_secs(10);
@@ -20,7 +23,7 @@ fn options() -> LinkOptions {
 }
 
 fn serve(kind: SimKind) -> PtyServer {
-    let device = crate::sim::build(kind, &SimOptions::default()).unwrap();
+    let device = botbench::sim::build(kind, &SimOptions::default()).unwrap();
     PtyServer::start(device, Faults::default()).unwrap()
 }
 
