@@ -32,6 +32,7 @@ mod gui_tuya_field;
 mod i18n;
 mod install;
 mod interop_fields;
+mod layers;
 mod link_identify;
 mod link_msp;
 mod link_servo;
