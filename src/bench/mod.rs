@@ -12,6 +12,7 @@ use crate::link::{Link, LinkCommand, LinkEvent, LinkOptions, Poll, Request, seri
 use crate::ops::Cancel;
 use crate::ops::servo::provision;
 use crate::ops::servo::{self, ScanPlan};
+use crate::ops::{Device, Progress, Run};
 use crate::profile::{Profile, Registry};
 use crate::sim::servo_bus::{ServoBus, SimServo};
 use crate::sim::window_cleaner::WindowCleaner;
@@ -204,11 +205,9 @@ fn timed_scan(
 ) -> Result<(servo::ScanReport, f64), String> {
     let started = Instant::now();
     let report = servo::scan(
-        &link.client(),
-        profile,
+        Device::new(&link.client(), profile),
         plan,
-        &Cancel::new(),
-        &mut |_| {},
+        &mut Run::quiet(&Cancel::new()),
         &mut |_| {},
     )
     .map_err(|e| e.to_string())?;
@@ -285,12 +284,12 @@ pub fn servo_provision() -> Result<Figure, String> {
     let started = Instant::now();
     let mut steps = StepTimes::new(started);
     let record = provision::provision_next(
-        &link.client(),
-        &p,
+        Device::new(&link.client(), &p),
         &plan,
         &mut provision::ProvisionState::new(),
-        &Cancel::new(),
-        &mut |progress| steps.at(&progress.message.en),
+        &mut Run::new(&Cancel::new(), |progress: Progress| {
+            steps.at(&progress.message.en)
+        }),
     );
     let secs = started.elapsed().as_secs_f64();
     steps.at("");

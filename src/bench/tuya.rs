@@ -5,6 +5,7 @@
 use super::{Figure, open, profile};
 use crate::link::{LinkEvent, LinkOptions, Match, ReplySpec, Request, wire_time};
 use crate::ops::Cancel;
+use crate::ops::Run;
 use crate::ops::tuya::{self as tuya_ops, OtaTiming};
 use crate::profile::{Input, Value};
 use crate::protocol::Direction;
@@ -35,8 +36,7 @@ pub fn tuya_ota(baud: u32, packet: u8) -> Result<Figure, String> {
         &image,
         u32::MAX,
         OtaTiming::default(),
-        &Cancel::new(),
-        &mut |_| {},
+        &mut Run::quiet(&Cancel::new()),
     )
     .map_err(|e| e.to_string())?;
     let secs = started.elapsed().as_secs_f64();

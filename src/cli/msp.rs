@@ -4,6 +4,7 @@ use super::checks::{self, Rate};
 use super::port::{PortArgs, exchange_error, op_error, parse_assignments, print_checks_with};
 use super::{CliError, CliResult};
 use crate::link::{Link, LinkCommand, LinkEvent, PortOpener, capabilities};
+use crate::ops::{Device, Run};
 use crate::packet::Packet;
 
 use crate::ops::exchange::{self as ops, Use};
@@ -302,7 +303,7 @@ pub(crate) fn run(mut args: MspArgs, ports: &PortOpener) -> CliResult {
             Err(e) => Err(exchange_error(e)),
         },
         Checked::Ping => {
-            let r = crate::ops::device::ping(&client, &profile).map_err(op_error)?;
+            let r = crate::ops::device::ping(Device::new(&client, &profile)).map_err(op_error)?;
             if json {
                 println!(
                     "{}",
@@ -314,7 +315,7 @@ pub(crate) fn run(mut args: MspArgs, ports: &PortOpener) -> CliResult {
             Ok(0)
         }
         Checked::Get(cmd) => {
-            let reply = ops::send(&client, &profile, cmd, &[]).map_err(op_error)?;
+            let reply = ops::send(Device::new(&client, &profile), cmd, &[]).map_err(op_error)?;
             Ok(print_fields(
                 &profile,
                 cmd,
@@ -324,7 +325,8 @@ pub(crate) fn run(mut args: MspArgs, ports: &PortOpener) -> CliResult {
             ))
         }
         Checked::Set(cmd, inputs) => {
-            let written = ops::write_keeping(&client, &profile, cmd, &inputs).map_err(op_error)?;
+            let written = ops::write_keeping(Device::new(&client, &profile), cmd, &inputs)
+                .map_err(op_error)?;
             let field_of = |ident: &str| cmd.request.iter().find(|f| f.ident == ident).cloned();
             let kept: Vec<&str> = written.kept.iter().map(|(k, _)| k).collect();
             let frames = unsolicited(&link);
@@ -490,12 +492,10 @@ fn selftest_run(
         );
     }
     let report = selftest::run_each(
-        client,
-        profile,
+        Device::new(client, profile),
         plan,
         &mut operator,
-        &cancel,
-        &mut |_| {},
+        &mut Run::quiet(&cancel),
         &mut |r| {
             if !json {
                 println!(

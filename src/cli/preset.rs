@@ -3,7 +3,8 @@
 use super::port::{PortArgs, op_error, print_checks};
 use super::{CliError, CliResult};
 use crate::link::{DeviceInfo, Link, PortOpener};
-use crate::ops::{self, Cancel, Progress};
+use crate::ops::{self, Cancel};
+use crate::ops::{Device, Run};
 use crate::preset::{self, Preset};
 use crate::profile::{Profile, Protocol};
 use clap::Subcommand;
@@ -66,8 +67,6 @@ fn connect(port: &PortArgs, profile: Arc<Profile>) -> Result<(Link, DeviceInfo),
     Ok((link, info))
 }
 
-fn no_progress(_: Progress) {}
-
 fn save(file: &std::path::Path, note: &str, port: &PortArgs) -> CliResult {
     // The profile and the destination are checked before the device is read: a file that
     // cannot be written is bad input (exit 2), found before the whole device is read for it.
@@ -80,9 +79,11 @@ fn save(file: &std::path::Path, note: &str, port: &PortArgs) -> CliResult {
     }
     crate::document::check_destination(file).map_err(CliError::input)?;
     let (link, info) = connect(port, profile.clone())?;
-    let mut captured =
-        ops::preset::capture(&link.client(), &profile, &Cancel::new(), &mut no_progress)
-            .map_err(op_error)?;
+    let mut captured = ops::preset::capture(
+        Device::new(&link.client(), &profile),
+        &mut Run::quiet(&Cancel::new()),
+    )
+    .map_err(op_error)?;
     captured.note = note.to_string();
     captured.device = Some(ops::device::short_description(&info));
     // Still the destination's fault if it fails now (a full disk): exit 2, the device is fine.
@@ -112,9 +113,11 @@ fn save(file: &std::path::Path, note: &str, port: &PortArgs) -> CliResult {
 fn diff(file: &std::path::Path, port: &PortArgs) -> CliResult {
     let (preset, profile) = load(file, port)?;
     let (link, _) = connect(port, profile.clone())?;
-    let device =
-        ops::preset::read_device(&link.client(), &profile, &Cancel::new(), &mut no_progress)
-            .map_err(op_error)?;
+    let device = ops::preset::read_device(
+        Device::new(&link.client(), &profile),
+        &mut Run::quiet(&Cancel::new()),
+    )
+    .map_err(op_error)?;
     let rows = preset.diff(&profile, &device);
     let differing = rows.iter().filter(|r| r.differs).count();
     if port.json {
@@ -152,11 +155,9 @@ fn apply(file: &std::path::Path, port: &PortArgs) -> CliResult {
     let mut results = Vec::new();
     let json = port.json;
     let outcome = ops::preset::apply_each(
-        &link.client(),
-        &profile,
+        Device::new(&link.client(), &profile),
         &preset,
-        &super::port::cancel_on_ctrl_c(),
-        &mut no_progress,
+        &mut Run::quiet(&super::port::cancel_on_ctrl_c()),
         &mut |command, checks| {
             if !json {
                 println!("{command}");

@@ -6,6 +6,7 @@ use super::{CliError, CliResult};
 use crate::link::Client;
 use crate::ops::servo::provision::{self as ops, Outcome, Plan, ProvisionState, Record};
 use crate::ops::servo::{self as servo_ops, Presence};
+use crate::ops::{Device, Progress, Run};
 use crate::profile::{Profile, Protocol};
 use std::io::BufRead;
 use std::path::Path;
@@ -48,11 +49,13 @@ pub(crate) fn run(
                 break;
             }
         }
-        let record = ops::provision_next(&client, &profile, &plan, &mut state, &cancel, &mut |p| {
+        let mut run = Run::new(&cancel, |p: Progress| {
             if !port.json {
                 eprintln!("  {}", p.message.en);
             }
         });
+        let record =
+            ops::provision_next(Device::new(&client, &profile), &plan, &mut state, &mut run);
         if record.result.is_pass() {
             passed += 1;
         } else {
@@ -101,7 +104,7 @@ fn wait_for_new(client: &Client, profile: &Profile, previous: Option<u32>, every
     let mut emptied = previous.is_some();
     loop {
         std::thread::sleep(every);
-        let Ok(found) = ops::find_fresh(client, profile, &bauds) else {
+        let Ok(found) = ops::find_fresh(Device::new(client, profile), &bauds) else {
             continue;
         };
         match found.as_slice() {
@@ -112,7 +115,7 @@ fn wait_for_new(client: &Client, profile: &Profile, previous: Option<u32>, every
                     continue;
                 }
                 let fresh = servo_ops::factory_location(profile).id;
-                match servo_ops::read_param(client, profile, fresh, param) {
+                match servo_ops::read_param(Device::new(client, profile), fresh, param) {
                     Ok(s) if previous.is_some_and(|p| i64::from(p) == s) => {}
                     Ok(_) => return,
                     Err(_) => {}

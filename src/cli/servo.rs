@@ -5,6 +5,7 @@ use super::port::{PortArgs, op_error, print_checks};
 use super::{CliError, CliResult};
 use crate::link::PortOpener;
 use crate::ops::servo::{self as ops, Presence};
+use crate::ops::{Device, Run};
 use crate::profile::{Input, Profile, Protocol, Value};
 use clap::Subcommand;
 use std::path::PathBuf;
@@ -377,8 +378,13 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
     match checked {
         Checked::Scan(plan) => {
             let started = std::time::Instant::now();
-            let report = ops::scan(&client, &profile, &plan, &cancel, &mut |_| {}, &mut |_| {})
-                .map_err(op_error)?;
+            let report = ops::scan(
+                Device::new(&client, &profile),
+                &plan,
+                &mut Run::quiet(&cancel),
+                &mut |_| {},
+            )
+            .map_err(op_error)?;
             print_scan(&profile, &report, started.elapsed().as_secs_f64(), json);
             Ok(0)
         }
@@ -395,7 +401,7 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
         Checked::Read(id, params) => {
             let mut out = Vec::new();
             for p in params {
-                let v = ops::read_param(&client, &profile, id, p).map_err(op_error)?;
+                let v = ops::read_param(Device::new(&client, &profile), id, p).map_err(op_error)?;
                 out.push((p, v));
             }
             if json {
@@ -417,8 +423,9 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
             Ok(0)
         }
         Checked::Write(id, p, value, true) => {
-            let written = ops::write_param_broadcast(&client, &profile, p, Input::Raw(value))
-                .map_err(op_error)?;
+            let written =
+                ops::write_param_broadcast(Device::new(&client, &profile), p, Input::Raw(value))
+                    .map_err(op_error)?;
             if json {
                 println!(
                     "{}",
@@ -434,13 +441,13 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
             Ok(0)
         }
         Checked::Write(id, p, value, false) => {
-            let check =
-                ops::write_param(&client, &profile, id, p, Input::Raw(value)).map_err(op_error)?;
+            let check = ops::write_param(Device::new(&client, &profile), id, p, Input::Raw(value))
+                .map_err(op_error)?;
             let field = p.field.clone();
             Ok(print_checks(&[check], |_| Some(field.clone()), json))
         }
         Checked::SetId(old, new) => {
-            ops::set_id(&client, &profile, old, new, &cancel).map_err(op_error)?;
+            ops::set_id(Device::new(&client, &profile), old, new, &cancel).map_err(op_error)?;
             if json {
                 println!(
                     "{}",
@@ -452,7 +459,8 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
             Ok(0)
         }
         Checked::SetBaud(id, option) => {
-            let rate = ops::set_baud(&client, &profile, id, option).map_err(op_error)?;
+            let rate =
+                ops::set_baud(Device::new(&client, &profile), id, option).map_err(op_error)?;
             if json {
                 println!(
                     "{}",
@@ -467,7 +475,8 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
             let rotate = profile
                 .command("ROTATE")
                 .ok_or_else(|| CliError::input("the profile has no ROTATE"))?;
-            crate::ops::exchange::send(&client, &profile, rotate, &inputs).map_err(op_error)?;
+            crate::ops::exchange::send(Device::new(&client, &profile), rotate, &inputs)
+                .map_err(op_error)?;
             if !json {
                 println!("servo {id}: turning over {ms} ms");
             }
@@ -537,7 +546,7 @@ fn print_scan(profile: &Profile, report: &ops::ScanReport, seconds: f64, json: b
 
 fn monitor(client: &crate::link::Client, profile: &Profile, ids: &[u8], json: bool) -> CliResult {
     use crate::ops::servo::monitor::{Reading, monitor_all};
-    let rows = monitor_all(client, profile, ids).map_err(op_error)?;
+    let rows = monitor_all(Device::new(client, profile), ids).map_err(op_error)?;
     let missing = rows
         .iter()
         .any(|r| !matches!(r.reading, Reading::Values(_)));

@@ -5,6 +5,7 @@ use super::{CliError, CliResult};
 use crate::link::session::tuya::{HandshakeStep, TuyaEvent, version_text};
 use crate::link::{LinkEvent, LinkState, PortOpener};
 use crate::ops::tuya::{self as ops, DpCheck, ReportedDp, Status};
+use crate::ops::{Device, Progress, Run};
 use crate::profile::{Profile, Protocol, Value};
 use clap::Subcommand;
 use serde_json::json;
@@ -247,12 +248,12 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
             Ok(0)
         }
         TuyaCmd::Status => {
-            let status = ops::query_status(&client, &profile).map_err(op_error)?;
+            let status = ops::query_status(Device::new(&client, &profile)).map_err(op_error)?;
             print_status(&profile, &status, watch.frame_version, json);
             Ok(u8::from(!status.complete()))
         }
         TuyaCmd::Dp { .. } => {
-            let checks = ops::set_dps(&client, &profile, &inputs).map_err(op_error)?;
+            let checks = ops::set_dps(Device::new(&client, &profile), &inputs).map_err(op_error)?;
             Ok(print_checks(&profile, &checks, json))
         }
         TuyaCmd::Ota { .. } => {
@@ -266,14 +267,13 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
                 &image,
                 profile.ota_max_bytes(),
                 ops::OtaTiming::default(),
-                &super::port::cancel_on_ctrl_c(),
-                &mut |p| {
+                &mut Run::new(&super::port::cancel_on_ctrl_c(), |p: Progress| {
                     let pct = (p.fraction() * 100.0) as u32;
                     if !json && pct >= last_pct + 10 {
                         last_pct = pct;
                         eprintln!("{pct:3}%  {}", p.message.en);
                     }
-                },
+                }),
             )
             .map_err(op_error)?;
             if json {

@@ -3,6 +3,7 @@
 
 use super::{OpError, exchange};
 use crate::link::{Client, DeviceInfo};
+use crate::ops::Device;
 use crate::profile::{Command, Profile};
 use crate::protocol::msp;
 use std::time::Duration;
@@ -23,9 +24,10 @@ fn core<'p>(profile: &'p Profile, id: u8, ident: &str) -> Result<&'p Command, Op
 }
 
 /// CMD_PING, with its round trip.
-pub fn ping(client: &Client, profile: &Profile) -> Result<Ping, OpError> {
+pub fn ping(dev: Device<'_>) -> Result<Ping, OpError> {
+    let profile = dev.profile;
     let cmd = core(profile, msp::CMD_PING, "CMD_PING")?;
-    let reply = exchange::send(client, profile, cmd, &[])?;
+    let reply = exchange::send(dev, cmd, &[])?;
     Ok(Ping {
         rtt: reply.rtt,
         attempts: reply.attempts,
@@ -43,9 +45,10 @@ pub fn identify(client: &Client) -> Result<DeviceInfo, OpError> {
 
 /// CMD_GET_POWER_STATE's raw answer: no layout is published for it, so its bytes are kept as
 /// sent.
-pub fn power_state(client: &Client, profile: &Profile) -> Result<Vec<u8>, OpError> {
+pub fn power_state(dev: Device<'_>) -> Result<Vec<u8>, OpError> {
+    let profile = dev.profile;
     let cmd = core(profile, msp::CMD_GET_POWER_STATE, "CMD_GET_POWER_STATE")?;
-    let reply = exchange::send(client, profile, cmd, &[])?;
+    let reply = exchange::send(dev, cmd, &[])?;
     Ok(reply.payload().unwrap_or_default().to_vec())
 }
 

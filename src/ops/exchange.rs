@@ -3,7 +3,8 @@
 //! other protocols' single commands.
 
 use super::OpError;
-use crate::link::{Client, Reply, Request};
+use crate::link::{Reply, Request};
+use crate::ops::Device;
 use crate::profile::{Command, CommandKind, Decoded, Field, FieldError, Input, Profile, Value};
 use crate::protocol::Direction;
 
@@ -229,25 +230,21 @@ pub fn request(
 }
 
 /// Sends a profile command built from named inputs and returns the answer.
-pub fn send(
-    client: &Client,
-    profile: &Profile,
-    cmd: &Command,
-    inputs: &[(String, Input)],
-) -> Result<Reply, OpError> {
+pub fn send(dev: Device<'_>, cmd: &Command, inputs: &[(String, Input)]) -> Result<Reply, OpError> {
+    let Device { client, profile } = dev;
     let payload = profile.encode(cmd, Direction::HostToDevice, inputs)?;
     Ok(client.request(Request::for_command(profile, cmd, payload))?)
 }
 
 /// Reads a command's answer as named raw values.
 pub fn read(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     cmd: &Command,
     inputs: &[(String, Input)],
 ) -> Result<FieldValues, OpError> {
+    let profile = dev.profile;
     check_kind(profile, cmd, Use::Read)?;
-    let reply = send(client, profile, cmd, inputs)?;
+    let reply = send(dev, cmd, inputs)?;
     decode_answer(profile, cmd, reply.payload().unwrap_or_default())
 }
 
@@ -268,11 +265,11 @@ pub fn decode_answer(
 /// an Action). Returns the checks (all `ok()` when the device holds what was written); a command
 /// without a Get partner is sent and acknowledged only.
 pub fn write_verified(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     set: &Command,
     inputs: &[(String, Input)],
 ) -> Result<Vec<Check>, OpError> {
+    let Device { client, profile } = dev;
     check_kind(profile, set, Use::Write)?;
     let payload = profile.encode(set, Direction::HostToDevice, inputs)?;
     let written = profile
@@ -286,7 +283,7 @@ pub fn write_verified(
     let Some(get) = get else {
         return Ok(Vec::new());
     };
-    let read = read(client, profile, get, &[])?;
+    let read = read(dev, get, &[])?;
     Ok(checks(&FieldValues::from(written), &read))
 }
 
@@ -318,24 +315,24 @@ pub struct Kept {
 /// Everything given is checked before anything is sent ([`check_write`]); a kept value the
 /// profile refuses, or one the answer lacks, is [`OpError::CannotKeep`] and nothing is written.
 pub fn write_keeping(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     set: &Command,
     inputs: &[(String, Input)],
 ) -> Result<Kept, OpError> {
+    let profile = dev.profile;
     let omitted = check_write(profile, set, inputs)?;
     let get = match (set.kind, set.pair) {
         (CommandKind::Set, Some(pair)) if !omitted.is_empty() => profile.command_by_id(pair),
         _ => None,
     };
     let Some(get) = get else {
-        let checks = write_verified(client, profile, set, inputs)?;
+        let checks = write_verified(dev, set, inputs)?;
         return Ok(Kept {
             checks,
             kept: FieldValues::new(),
         });
     };
-    let now = read(client, profile, get, &[])?;
+    let now = read(dev, get, &[])?;
     let mut all = inputs.to_vec();
     let mut kept = FieldValues::new();
     for field in omitted {
@@ -356,6 +353,6 @@ pub fn write_keeping(
         all.push((field.ident.clone(), Input::Raw(value.clone())));
         kept.push(field.ident.clone(), value.clone());
     }
-    let checks = write_verified(client, profile, set, &all)?;
+    let checks = write_verified(dev, set, &all)?;
     Ok(Kept { checks, kept })
 }

@@ -4,7 +4,8 @@
 //! client, each answer waited for).
 
 use super::{OpError, exchange};
-use crate::link::{Client, Request};
+use crate::link::Request;
+use crate::ops::Device;
 use crate::profile::Profile;
 
 /// How often each STOP request is sent before it counts as unanswered: a stop is the same
@@ -37,7 +38,8 @@ pub struct Stopped {
 
 /// Sends every STOP command in order and waits for each answer; one that fails does not keep
 /// the next from being sent. Empty when the profile names no STOP.
-pub fn stop(client: &Client, profile: &Profile) -> Vec<Stopped> {
+pub fn stop(dev: Device<'_>) -> Vec<Stopped> {
+    let Device { client, profile } = dev;
     profile
         .stop_commands()
         .into_iter()

@@ -2,9 +2,9 @@
 //! another, and a batch of Set commands written with their full payloads, each read back
 //! through its Get.
 
-use super::{Cancel, Check, FieldValues, OpError, Progress, exchange};
-use crate::link::Client;
-use crate::profile::{Input, Profile};
+use super::{Check, FieldValues, OpError, Progress, exchange};
+use crate::ops::{Device, Run};
+use crate::profile::Input;
 
 /// One Set command to write: its id and every field of its payload.
 pub type SetWrite = (u8, Vec<(String, Input)>);
@@ -26,29 +26,28 @@ pub struct Tally {
 /// are skipped. A failed read does not stop the batch; a cancel does, between commands
 /// (`Err(Cancelled)`).
 pub fn read_commands(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     ids: &[u8],
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(Progress),
+    run: &mut Run<'_>,
     each: &mut dyn FnMut(u8, Result<FieldValues, OpError>),
 ) -> Result<Tally, OpError> {
+    let profile = dev.profile;
     let mut tally = Tally {
         total: ids.len(),
         ..Tally::default()
     };
     for (i, id) in ids.iter().enumerate() {
-        if cancel.is_cancelled() {
+        if run.is_cancelled() {
             return Err(OpError::Cancelled);
         }
         let Some(cmd) = profile.command_by_id(*id) else {
             continue;
         };
-        let r = exchange::read(client, profile, cmd, &[]);
+        let r = exchange::read(dev, cmd, &[]);
         tally.done += 1;
         tally.failed += usize::from(r.is_err());
         each(*id, r);
-        progress(Progress {
+        run.report(Progress {
             done: i as u64 + 1,
             total: ids.len() as u64,
             message: cmd.name.clone(),
@@ -62,31 +61,30 @@ pub fn read_commands(
 /// come. A failed or mismatched write does not stop the batch; a cancel does, between commands
 /// (`Err(Cancelled)`, after `each` has seen what was written).
 pub fn write_commands(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     writes: &[SetWrite],
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(Progress),
+    run: &mut Run<'_>,
     each: &mut dyn FnMut(u8, Result<Vec<Check>, OpError>),
 ) -> Result<Tally, OpError> {
+    let profile = dev.profile;
     let mut tally = Tally {
         total: writes.len(),
         ..Tally::default()
     };
     for (i, (set, inputs)) in writes.iter().enumerate() {
-        if cancel.is_cancelled() {
+        if run.is_cancelled() {
             return Err(OpError::Cancelled);
         }
         let Some(cmd) = profile.command_by_id(*set) else {
             continue;
         };
-        let r = exchange::write_verified(client, profile, cmd, inputs);
+        let r = exchange::write_verified(dev, cmd, inputs);
         tally.done += 1;
         if !matches!(&r, Ok(checks) if checks.iter().all(Check::ok)) {
             tally.failed += 1;
         }
         each(*set, r);
-        progress(Progress {
+        run.report(Progress {
             done: i as u64 + 1,
             total: writes.len() as u64,
             message: cmd.name.clone(),
@@ -98,14 +96,14 @@ pub fn write_commands(
 /// Sends command `id` (an action) with `inputs`, checked against the profile first, and waits
 /// for its acknowledgement. Returns the command's ident.
 pub fn send_command(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     id: u8,
     inputs: &[(String, Input)],
 ) -> Result<String, OpError> {
+    let profile = dev.profile;
     let cmd = profile
         .command_by_id(id)
         .ok_or_else(|| OpError::unknown_command(profile, id))?;
-    exchange::send(client, profile, cmd, inputs)?;
+    exchange::send(dev, cmd, inputs)?;
     Ok(cmd.ident.clone())
 }

@@ -7,6 +7,7 @@ use super::state::AppState;
 use crate::i18n::Lang;
 use crate::i18n::Text;
 use crate::link::{DeviceInfo, LinkCommand, capabilities};
+use crate::ops::Device;
 use crate::ops::OpError;
 use crate::ops::device as ops;
 use crate::profile::Profile;
@@ -55,7 +56,7 @@ fn read_job(profile: &std::sync::Arc<Profile>) -> Action {
             if cancel.is_cancelled() {
                 return Err(OpError::Cancelled.into());
             }
-            let pw = ops::power_state(client, &p);
+            let pw = ops::power_state(Device::new(client, &p));
             sink.send(JobOutput::Device(Output::Power(pw.clone())));
             v?;
             pw?;
@@ -94,7 +95,7 @@ impl DevicePanel {
                 actions.push(Action::StartJob(Job::new(
                     Text::new("ping", "通讯检测"),
                     move |client, _cancel, sink| {
-                        let r = ops::ping(client, &p).map(|ping| ping.rtt);
+                        let r = ops::ping(Device::new(client, &p)).map(|ping| ping.rtt);
                         sink.send(JobOutput::Device(Output::Ping(r.clone())));
                         let rtt = r?;
                         let ms = rtt.as_secs_f64() * 1e3;

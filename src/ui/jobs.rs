@@ -10,6 +10,7 @@ use crate::i18n::Key;
 use crate::i18n::Text;
 use crate::link::Client;
 use crate::ops::{self, Cancel, Check, FieldValues, OpError, Progress};
+use crate::ops::{Device, Run};
 use crate::profile::{Input, Profile};
 use crossbeam_channel::{Receiver, Sender};
 use std::path::PathBuf;
@@ -236,11 +237,9 @@ pub fn read(profile: &Arc<Profile>, ids: Vec<u8>) -> Job {
     let profile = profile.clone();
     Job::new(Key::Read, move |client, cancel, sink| {
         let tally = ops::tuning::read_commands(
-            client,
-            &profile,
+            Device::new(client, &profile),
             &ids,
-            cancel,
-            &mut |p| sink.progress(p),
+            &mut Run::new(cancel, |p| sink.progress(p)),
             &mut |id, r| sink.send(JobOutput::Read(id, r)),
         )?;
         if tally.failed == 0 {
@@ -265,11 +264,9 @@ pub fn write(profile: &Arc<Profile>, writes: Vec<ops::tuning::SetWrite>) -> Job 
     Job::new(Key::Write, move |client, cancel, sink| {
         let mut done = 0;
         let tally = ops::tuning::write_commands(
-            client,
-            &profile,
+            Device::new(client, &profile),
             &writes,
-            cancel,
-            &mut |p| sink.progress(p),
+            &mut Run::new(cancel, |p| sink.progress(p)),
             &mut |id, r| {
                 done += 1;
                 sink.send(JobOutput::Wrote(id, r))
@@ -302,7 +299,7 @@ pub fn write(profile: &Arc<Profile>, writes: Vec<ops::tuning::SetWrite>) -> Job 
 pub fn send(profile: &Arc<Profile>, id: u8, inputs: Vec<(String, Input)>) -> Job {
     let profile = profile.clone();
     Job::new(Key::Send, move |client, _cancel, _sink| {
-        let ident = ops::tuning::send_command(client, &profile, id, &inputs)?;
+        let ident = ops::tuning::send_command(Device::new(client, &profile), id, &inputs)?;
         let name = profile
             .command(&ident)
             .map_or_else(|| Text::same(&ident), |c| c.name.clone());

@@ -9,6 +9,7 @@ use crate::document::DocumentError;
 use crate::i18n::Lang;
 use crate::i18n::Text;
 use crate::ops;
+use crate::ops::{Device, Run};
 use crate::preset::{CommandValues, Loaded, Preset, preset_commands};
 use crate::profile::Profile;
 use crate::ui::zh::Zh;
@@ -38,8 +39,10 @@ fn save_job(profile: &Arc<Profile>, path: PathBuf, note: String) -> Job {
     Job::new(
         Text::new("save preset", "保存预设"),
         move |client, cancel, sink| {
-            let mut preset =
-                ops::preset::capture(client, &profile, cancel, &mut |p| sink.progress(p))?;
+            let mut preset = ops::preset::capture(
+                Device::new(client, &profile),
+                &mut Run::new(cancel, |p| sink.progress(p)),
+            )?;
             preset.note = note;
             preset.save_annotated(&path, &profile)?;
             Ok(Text::new(
@@ -60,11 +63,9 @@ fn apply_job(profile: &Arc<Profile>, preset: Preset) -> Job {
             let mut total = 0;
             let mut bad = 0;
             ops::preset::apply_each(
-                client,
-                &profile,
+                Device::new(client, &profile),
                 &preset,
-                cancel,
-                &mut |p| sink.progress(p),
+                &mut Run::new(cancel, |p| sink.progress(p)),
                 &mut |command, checks| {
                     total += checks.len();
                     bad += checks.iter().filter(|c| !c.ok()).count();

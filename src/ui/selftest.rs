@@ -11,6 +11,7 @@ use crate::document::DocumentError;
 use crate::i18n::Lang;
 use crate::i18n::Text;
 use crate::ops::selftest::{self, Plan, Report, StepKind, StepResult};
+use crate::ops::{Device, Run};
 use crate::profile::Profile;
 use crate::ui::zh::Zh;
 use crossbeam_channel::Sender;
@@ -251,12 +252,10 @@ impl SelfTestPanel {
                     }
                 };
                 let report = selftest::run_each(
-                    client,
-                    &profile,
+                    Device::new(client, &profile),
                     &plan,
                     &mut operator,
-                    cancel,
-                    &mut |p| sink.progress(p),
+                    &mut Run::new(cancel, |p| sink.progress(p)),
                     &mut |r| sink.send(JobOutput::SelfTest(Output::Step(r.clone()))),
                 );
                 let logged = (!log.as_os_str().is_empty()).then(|| {

@@ -6,6 +6,7 @@
 use botbench::link::{Link, LinkEvent, LinkOptions};
 use botbench::ops::OpError;
 use botbench::ops::servo as ops;
+use botbench::ops::{Device, Run};
 use botbench::profile::{Input, Registry};
 use botbench::protocol::Direction;
 use botbench::sim::servo_bus::{ServoBus, SimServo};
@@ -237,11 +238,23 @@ fn operations_refuse_the_broadcast_id_and_send_nothing() {
     let param = profile.find_param("over_temprature").unwrap();
     let refused = [
         ops::ping(&client, 255, 1).err(),
-        ops::read_param(&client, &profile, 255, param).err(),
-        ops::write_param(&client, &profile, 255, param, Input::Text("70".into())).err(),
-        ops::read_block(&client, &profile, 255).err(),
-        ops::set_baud(&client, &profile, 255, 4).err(),
-        ops::set_id(&client, &profile, 255, 3, &botbench::ops::Cancel::new()).err(),
+        ops::read_param(Device::new(&client, &profile), 255, param).err(),
+        ops::write_param(
+            Device::new(&client, &profile),
+            255,
+            param,
+            Input::Text("70".into()),
+        )
+        .err(),
+        ops::read_block(Device::new(&client, &profile), 255).err(),
+        ops::set_baud(Device::new(&client, &profile), 255, 4).err(),
+        ops::set_id(
+            Device::new(&client, &profile),
+            255,
+            3,
+            &botbench::ops::Cancel::new(),
+        )
+        .err(),
     ];
     for e in refused {
         assert!(matches!(e, Some(OpError::BroadcastAnswer { .. })), "{e:?}");
@@ -300,11 +313,9 @@ fn scan_all(link: &Link, profile: &botbench::profile::Profile) -> ops::ScanRepor
         home_baud: profile.baud,
     };
     ops::scan(
-        &link.client(),
-        profile,
+        Device::new(&link.client(), profile),
         &plan,
-        &botbench::ops::Cancel::new(),
-        &mut |_| {},
+        &mut Run::quiet(&botbench::ops::Cancel::new()),
         &mut |_| {},
     )
     .unwrap()

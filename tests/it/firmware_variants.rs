@@ -4,6 +4,7 @@
 //! relation before anything is sent. Through the codec, the command line and the window-cleaner
 //! simulator answering as other firmware, on a pty.
 
+use botbench::ops::Device;
 use botbench::ops::{OpError, exchange as msp_ops};
 use botbench::preset::Preset;
 use botbench::profile::registry::parse;
@@ -176,7 +177,7 @@ fn replies_that_drift_from_the_layout_reach_the_tuning_path_as_misfits_with_thei
         ("MSP_GET_PWMVALUE", "55 07", "past the layout's last field"),
     ] {
         let cmd = p.command(get).unwrap();
-        let err = msp_ops::read(&client, &p, cmd, &[]).unwrap_err();
+        let err = msp_ops::read(Device::new(&client, &p), cmd, &[]).unwrap_err();
         let OpError::Answer { error, .. } = &err else {
             panic!("{get}: {err}");
         };
@@ -224,8 +225,7 @@ fn the_configurator_variant_writes_and_reads_back_against_its_firmware() {
     let client = link.client();
     let spray = p.command("MSP_SET_SPRAY_VALUE").unwrap();
     let checks = msp_ops::write_verified(
-        &client,
-        &p,
+        Device::new(&client, &p),
         spray,
         &inputs(&[
             ("waterPumpDuration", "200"),
@@ -238,8 +238,7 @@ fn the_configurator_variant_writes_and_reads_back_against_its_firmware() {
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
     let boundless = p.command("MSP_SET_BOUNDLESS").unwrap();
     let checks = msp_ops::write_verified(
-        &client,
-        &p,
+        Device::new(&client, &p),
         boundless,
         &inputs(&[
             ("fanThrdAddE", "41"),
@@ -272,7 +271,7 @@ fn tuning_and_presets_refuse_a_broken_relation_before_anything_is_sent() {
         ("maxTarget", "3.00"),
         ("minTarget", "3.50"),
     ]);
-    let err = msp_ops::write_verified(&client, &p, set, &bad).unwrap_err();
+    let err = msp_ops::write_verified(Device::new(&client, &p), set, &bad).unwrap_err();
     assert!(err.is_input(), "{err}");
     assert!(err.to_string().contains("minTarget"), "{err}");
     assert_eq!(wc.sim().param("minTarget"), Some(250), "nothing written");

@@ -3,6 +3,7 @@
 //! and before a servo parameter is written). Firmware variants and misfits are in
 //! firmware_variants.rs.
 
+use botbench::ops::Device;
 use botbench::ops::servo as servo_ops;
 use botbench::profile::registry::parse;
 use botbench::profile::{Input, Value};
@@ -197,13 +198,15 @@ fn a_servo_angle_limit_is_checked_against_the_other_one_the_servo_holds() {
     let client = bench.client();
     let p = &bench.profile;
     let low = p.find_param("angle_limit_low").unwrap();
-    let err = servo_ops::write_param(&client, p, 1, low, Input::from("45")).unwrap_err();
+    let err =
+        servo_ops::write_param(Device::new(&client, p), 1, low, Input::from("45")).unwrap_err();
     assert_eq!(
         err.to_string(),
         "Angle lower limit (angle_limit_low) 45.0 ° must be ≤ Angle upper limit (angle_limit_high) 30.0 °"
     );
     assert_eq!(bench.bus().servos()[0].param(52), Some(-300));
-    let check = servo_ops::write_param(&client, p, 1, low, Input::from("-45")).unwrap();
+    let check =
+        servo_ops::write_param(Device::new(&client, p), 1, low, Input::from("-45")).unwrap();
     assert!(check.ok());
     assert_eq!(check.read, Value::Int(-450));
 }

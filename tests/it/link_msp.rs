@@ -3,6 +3,7 @@
 use botbench::link::{
     ExchangeError, Link, LinkCommand, LinkEvent, LinkOptions, LinkState, Poll, Request,
 };
+use botbench::ops::Device;
 use botbench::ops::OpError;
 use botbench::ops::exchange as ops;
 use botbench::profile::{Input, Profile, Value};
@@ -48,7 +49,7 @@ fn the_session_learns_the_device_and_reads_and_writes_parameters() {
     .iter()
     .map(|(k, v)| (k.to_string(), Input::from(*v)))
     .collect();
-    let checks = ops::write_verified(&client, &p, set, &inputs).unwrap();
+    let checks = ops::write_verified(Device::new(&client, &p), set, &inputs).unwrap();
     assert_eq!(checks.len(), 6);
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
     let sim = b.sim();
@@ -64,8 +65,7 @@ fn an_out_of_range_value_is_refused_before_anything_is_sent() {
     let before = b.sim().param("pwmValue");
     let set = p.command("MSP_SET_PWMVALUE").unwrap();
     let err = ops::write_verified(
-        &link.client(),
-        &p,
+        Device::new(&link.client(), &p),
         set,
         &[("pwmValue".into(), Input::from("101"))],
     )
@@ -106,8 +106,7 @@ fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_type
         if i % 2 == 0 {
             let v = rng.i64(0..=100);
             match ops::write_verified(
-                &client,
-                &p,
+                Device::new(&client, &p),
                 set,
                 &[("pwmValue".into(), Input::Raw(Value::Int(v)))],
             ) {
@@ -120,7 +119,7 @@ fn with_drops_and_corruption_a_thousand_operations_give_only_true_values_or_type
                 Err(e) => panic!("op {i}: untyped failure {e}"),
             }
         } else {
-            match ops::read(&client, &p, get, &[]) {
+            match ops::read(Device::new(&client, &p), get, &[]) {
                 Ok(values) => {
                     let held = b.sim().param("pwmValue").unwrap();
                     assert_eq!(
@@ -212,8 +211,7 @@ fn pipelined_polls_under_faults_never_mix_answers_with_each_other_or_with_writes
     for i in 0..40 {
         let v = (i * 7 % 101) as i64;
         if let Ok(checks) = ops::write_verified(
-            &client,
-            &p,
+            Device::new(&client, &p),
             set,
             &[("pwmValue".into(), Input::Raw(Value::Int(v)))],
         ) {

@@ -3,6 +3,7 @@
 use botbench::ops::Cancel;
 use botbench::ops::OpError;
 use botbench::ops::servo::{self as ops, Presence, ScanPlan};
+use botbench::ops::{Device, Run};
 use botbench::profile::Input;
 use botbench::sim::servo_bus::SimServo;
 
@@ -18,11 +19,9 @@ impl Bench {
             home_baud: 115_200,
         };
         ops::scan(
-            &self.client(),
-            &self.profile,
+            Device::new(&self.client(), &self.profile),
             &plan,
-            &Cancel::new(),
-            &mut |_| {},
+            &mut Run::quiet(&Cancel::new()),
             &mut |_| {},
         )
         .unwrap()
@@ -63,11 +62,9 @@ fn scan_5_to_12(
         home_baud: 115_200,
     };
     ops::scan(
-        client,
-        profile,
+        Device::new(client, profile),
         &plan,
-        &Cancel::new(),
-        &mut |_| {},
+        &mut Run::quiet(&Cancel::new()),
         &mut |_| {},
     )
     .unwrap()
@@ -105,18 +102,18 @@ fn an_id_change_is_followed_and_verified_and_bad_ids_are_refused() {
     let c = bench.client();
     let cancel = Cancel::new();
     assert!(matches!(
-        ops::set_id(&c, &bench.profile, 0, 255, &cancel),
+        ops::set_id(Device::new(&c, &bench.profile), 0, 255, &cancel),
         Err(OpError::BroadcastId)
     ));
-    ops::set_id(&c, &bench.profile, 0, 12, &cancel).unwrap();
+    ops::set_id(Device::new(&c, &bench.profile), 0, 12, &cancel).unwrap();
     assert_eq!(bench.servo(77).id(), 12);
     // Another servo arrives fresh: id 12 is taken now.
     bench.bus().add(SimServo::fresh(78));
-    let err = ops::set_id(&c, &bench.profile, 0, 12, &cancel).unwrap_err();
+    let err = ops::set_id(Device::new(&c, &bench.profile), 0, 12, &cancel).unwrap_err();
     assert!(err.to_string().contains("already answers"), "{err}");
     // A fresh servo is only given an id when it is alone on the bus... it is alone at id 0,
     // but servo 12 is also on the bus.
-    let err = ops::set_id(&c, &bench.profile, 0, 13, &cancel).unwrap_err();
+    let err = ops::set_id(Device::new(&c, &bench.profile), 0, 13, &cancel).unwrap_err();
     assert!(err.to_string().contains("alone on the bus"), "{err}");
 }
 
@@ -124,12 +121,12 @@ fn an_id_change_is_followed_and_verified_and_bad_ids_are_refused() {
 fn a_baud_change_is_followed_and_verified() {
     let bench = Bench::new(vec![SimServo::fresh(5).with_id(4)]);
     let c = bench.client();
-    let baud = ops::set_baud(&c, &bench.profile, 4, 4).unwrap();
+    let baud = ops::set_baud(Device::new(&c, &bench.profile), 4, 4).unwrap();
     assert_eq!(baud, 57_600);
     assert_eq!(bench.servo(5).baud(), 57_600);
     // The link follows: the servo answers at the new rate.
     assert_eq!(ops::ping(&c, 4, 2).unwrap(), Presence::Present);
-    let err = ops::set_baud(&c, &bench.profile, 4, 9).unwrap_err();
+    let err = ops::set_baud(Device::new(&c, &bench.profile), 4, 9).unwrap_err();
     assert!(
         matches!(
             err,
@@ -148,7 +145,7 @@ fn a_servo_lost_after_a_baud_change_is_found_and_its_rate_named() {
     // An old servo does not take option 8 (1 Mbaud): it stays at 115200.
     let bench = Bench::new(vec![SimServo::fresh(9).with_id(2).with_extended(false)]);
     let c = bench.client();
-    let err = ops::set_baud(&c, &bench.profile, 2, 8).unwrap_err();
+    let err = ops::set_baud(Device::new(&c, &bench.profile), 2, 8).unwrap_err();
     let msg = err.to_string();
     assert!(msg.contains("found at 115200"), "{msg}");
     assert_eq!(
@@ -163,17 +160,18 @@ fn a_parameter_write_is_range_checked_and_read_back() {
     let bench = Bench::new(vec![SimServo::fresh(3).with_id(1)]);
     let c = bench.client();
     let p = bench.profile.find_param("angle_limit_high").unwrap();
-    let check = ops::write_param(&c, &bench.profile, 1, p, Input::from("90.5")).unwrap();
+    let check =
+        ops::write_param(Device::new(&c, &bench.profile), 1, p, Input::from("90.5")).unwrap();
     assert!(check.ok(), "{check:?}");
     assert_eq!(bench.servo(3).param(p.id), Some(905));
     let ro = bench.profile.find_param("voltage").unwrap();
     assert!(matches!(
-        ops::write_param(&c, &bench.profile, 1, ro, Input::from("5000")),
+        ops::write_param(Device::new(&c, &bench.profile), 1, ro, Input::from("5000")),
         Err(OpError::ReadOnly { .. })
     ));
     let baud = bench.profile.find_param("baudrate").unwrap();
     assert!(matches!(
-        ops::write_param(&c, &bench.profile, 1, baud, Input::from("9")),
+        ops::write_param(Device::new(&c, &bench.profile), 1, baud, Input::from("9")),
         Err(OpError::Value(_))
     ));
 }
@@ -182,7 +180,7 @@ fn a_parameter_write_is_range_checked_and_read_back() {
 fn the_user_block_is_read_and_written_as_a_batch_and_read_back() {
     let bench = Bench::new(vec![SimServo::fresh(21).with_id(4).with_param(41, 65)]);
     let (client, profile) = (bench.client(), bench.profile.clone());
-    let mut block = ops::read_block(&client, &profile, 4).unwrap();
+    let mut block = ops::read_block(Device::new(&client, &profile), 4).unwrap();
     assert_eq!(block.len(), 22);
     assert!(block.contains(&(41, 65)));
     assert!(block.contains(&(34, 4)));
@@ -191,7 +189,7 @@ fn the_user_block_is_read_and_written_as_a_batch_and_read_back() {
             *v = 72;
         }
     }
-    let checks = ops::write_block(&client, &profile, 4, &block).unwrap();
+    let checks = ops::write_block(Device::new(&client, &profile), 4, &block).unwrap();
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
     assert_eq!(bench.servo(21).param(41), Some(72));
     // The id is not changed through the block: the servo would be lost.
@@ -201,7 +199,7 @@ fn the_user_block_is_read_and_written_as_a_batch_and_read_back() {
             *v = 9;
         }
     }
-    let e = ops::write_block(&client, &profile, 4, &moved).unwrap_err();
+    let e = ops::write_block(Device::new(&client, &profile), 4, &moved).unwrap_err();
     assert!(matches!(e, OpError::FollowedChange { .. }), "{e}");
     assert_eq!(bench.servo(21).id(), 4);
     // Out of range values are refused before anything is sent.
@@ -209,7 +207,7 @@ fn the_user_block_is_read_and_written_as_a_batch_and_read_back() {
     bad.retain(|(id, _)| *id != 44);
     bad.push((44, 7));
     assert!(matches!(
-        ops::write_block(&client, &profile, 4, &bad),
+        ops::write_block(Device::new(&client, &profile), 4, &bad),
         Err(OpError::Value(_))
     ));
 }
@@ -224,7 +222,7 @@ fn reset_user_data_follows_the_servo_to_its_factory_id_and_rate() {
     ]);
     let (client, profile) = (bench.client(), bench.profile.clone());
     client.set_baud(57_600).unwrap();
-    let at = ops::reset_user_data(&client, &profile, 6, 57_600).unwrap();
+    let at = ops::reset_user_data(Device::new(&client, &profile), 6, 57_600).unwrap();
     assert_eq!(
         at,
         ops::Location {
@@ -241,7 +239,7 @@ fn reset_user_data_follows_the_servo_to_its_factory_id_and_rate() {
 fn reset_user_data_is_refused_when_another_servo_holds_the_factory_id() {
     let bench = Bench::new(vec![SimServo::fresh(41).with_id(6), SimServo::fresh(42)]);
     let (client, profile) = (bench.client(), bench.profile.clone());
-    let e = ops::reset_user_data(&client, &profile, 6, 115_200).unwrap_err();
+    let e = ops::reset_user_data(Device::new(&client, &profile), 6, 115_200).unwrap_err();
     assert!(matches!(e, OpError::FactoryIdTaken { .. }), "{e}");
     assert_eq!(bench.servo(41).id(), 6);
 }
@@ -259,7 +257,7 @@ fn motion_requests_move_the_servo_and_stop_all_stops_every_servo() {
     wait_until("the move to end", || {
         bench.servo(51).motion_at(Instant::now()) == Motion::Hold
     });
-    let angle = ops::read_angle(&client, &profile, 1).unwrap();
+    let angle = ops::read_angle(Device::new(&client, &profile), 1).unwrap();
     assert_eq!(angle, 450);
     assert!(ops::rotate_request(&profile, 1, 40_000, 10, 0).is_err());
     for id in [1, 2] {
@@ -347,7 +345,10 @@ fn an_edited_baud_table_is_the_rate_the_servo_and_the_link_move_to() {
         LinkOptions::default(),
     );
     let c = link.client();
-    assert_eq!(ops::set_baud(&c, &profile, 4, 4).unwrap(), 230_400);
+    assert_eq!(
+        ops::set_baud(Device::new(&c, &profile), 4, 4).unwrap(),
+        230_400
+    );
     assert_eq!(served.servo(5).baud(), 230_400);
     assert_eq!(ops::ping(&c, 4, 2).unwrap(), Presence::Present);
 }

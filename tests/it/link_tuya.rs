@@ -6,6 +6,7 @@ use botbench::link::{Link, LinkEvent, LinkOptions};
 use botbench::ops::Cancel;
 use botbench::ops::OpError;
 use botbench::ops::tuya::{self as ops, OtaTiming};
+use botbench::ops::{Device, Run};
 use botbench::profile::{Input, Profile, Value};
 use botbench::sim::tuya_mcu::{OtaPacketAnswer, OtaState, TuyaConfig, TuyaMcu};
 use std::sync::Arc;
@@ -183,7 +184,7 @@ fn every_writable_data_point_type_is_set_and_reported_back() {
     .iter()
     .map(|(k, v)| (k.to_string(), Input::from(*v)))
     .collect();
-    let checks = ops::set_dps(&c, &bench.profile, &inputs).unwrap();
+    let checks = ops::set_dps(Device::new(&c, &bench.profile), &inputs).unwrap();
     assert_eq!(checks.len(), 4);
     assert!(checks.iter().all(|c| c.verified()), "{checks:?}");
     assert_eq!(
@@ -191,7 +192,7 @@ fn every_writable_data_point_type_is_set_and_reported_back() {
         Some("Enum(5)".into())
     );
     // The status query reports all 19.
-    let status = ops::query_status(&c, &bench.profile).unwrap();
+    let status = ops::query_status(Device::new(&c, &bench.profile)).unwrap();
     assert_eq!(status.data_points.len(), 19);
     assert!(status.complete(), "{status:?}");
 }
@@ -207,13 +208,16 @@ fn a_wrong_typed_or_report_only_data_point_is_refused_before_sending() {
         ("power", "maybe"),
         ("nope", "1"),
     ] {
-        let err = ops::set_dps(&c, &bench.profile, &[(k.into(), Input::from(v))]).unwrap_err();
+        let err = ops::set_dps(
+            Device::new(&c, &bench.profile),
+            &[(k.into(), Input::from(v))],
+        )
+        .unwrap_err();
         assert!(err.is_input(), "{k}={v}: {err}");
     }
     // A raw value of the wrong kind is refused too.
     let err = ops::set_dps(
-        &c,
-        &bench.profile,
+        Device::new(&c, &bench.profile),
         &[("mode".into(), Input::Raw(Value::Text("x".into())))],
     )
     .unwrap_err();
@@ -249,8 +253,7 @@ fn a_64_kib_image_arrives_intact_at_each_packet_size() {
             &img,
             bench.profile.ota_max_bytes(),
             OtaTiming::default(),
-            &Cancel::new(),
-            &mut |_| {},
+            &mut Run::quiet(&Cancel::new()),
         )
         .unwrap();
         let want = match answer {
@@ -289,8 +292,7 @@ fn an_mcu_that_stops_acking_ends_the_upload_with_the_offset_named() {
         &image(65_536),
         bench.profile.ota_max_bytes(),
         timing,
-        &Cancel::new(),
-        &mut |_| {},
+        &mut Run::quiet(&Cancel::new()),
     )
     .unwrap_err();
     let msg = err.to_string();
@@ -308,8 +310,7 @@ fn an_empty_image_is_refused() {
         &[],
         bench.profile.ota_max_bytes(),
         OtaTiming::default(),
-        &Cancel::new(),
-        &mut |_| {},
+        &mut Run::quiet(&Cancel::new()),
     )
     .unwrap_err();
     assert!(matches!(err, OpError::EmptyImage), "{err}");

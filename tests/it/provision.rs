@@ -1,5 +1,7 @@
 //! Production provisioning against the simulated servo bus on a pseudo-terminal.
 
+use botbench::ops::Device;
+use botbench::ops::Run;
 use botbench::ops::servo::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
 use botbench::ops::{Cancel, Progress};
 use botbench::profile::Profile;
@@ -17,13 +19,12 @@ impl Bench {
         state: &mut ProvisionState,
         progress: &mut dyn FnMut(Progress),
     ) -> Record {
+        let cancel = Cancel::new();
         prov::provision_next(
-            &self.client(),
-            &self.profile,
+            Device::new(&self.client(), &self.profile),
             plan,
             state,
-            &Cancel::new(),
-            progress,
+            &mut Run::new(&cancel, progress),
         )
     }
 

@@ -4,6 +4,7 @@ use botbench::i18n::Lang;
 use botbench::link::{Link, LinkOptions};
 use botbench::ops::Cancel;
 use botbench::ops::selftest::{self, Plan, Report};
+use botbench::ops::{Device, Run};
 use botbench::profile::{Input, Profile};
 use botbench::sim::window_cleaner::{Fault, Motor, WindowCleaner};
 use std::io::{BufRead, BufReader};
@@ -72,12 +73,10 @@ fn covering_operator(sim: Arc<Mutex<WindowCleaner>>) -> impl FnMut(&str) -> bool
 
 fn run(b: &Bench, plan: &Plan, operator: &mut dyn selftest::Operator, cancel: &Cancel) -> Report {
     selftest::run(
-        &b.link.client(),
-        &b.profile,
+        Device::new(&b.link.client(), &b.profile),
         plan,
         operator,
-        cancel,
-        &mut |_| {},
+        &mut Run::quiet(cancel),
     )
 }
 
@@ -92,12 +91,10 @@ fn a_healthy_robot_passes_every_step() {
     let mut op = covering_operator(b.sim.clone());
     let mut steps_seen = Vec::new();
     let report = selftest::run_each(
-        &b.link.client(),
-        &b.profile,
+        Device::new(&b.link.client(), &b.profile),
         &plan,
         &mut op,
-        &Cancel::new(),
-        &mut |_| {},
+        &mut Run::quiet(&Cancel::new()),
         &mut |r| steps_seen.push(r.name.clone()),
     );
     assert!(report.pass, "{report:#?}");
@@ -132,7 +129,7 @@ fn a_run_starts_from_the_safe_state_whatever_was_left_running() {
     ] {
         let c = b.profile.command(cmd).unwrap();
         let inputs = [(field.to_string(), Input::Text(value.into()))];
-        botbench::ops::exchange::send(&client, &b.profile, c, &inputs).unwrap();
+        botbench::ops::exchange::send(Device::new(&client, &b.profile), c, &inputs).unwrap();
     }
     {
         let sim = b.sim.lock().unwrap();

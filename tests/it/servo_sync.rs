@@ -3,6 +3,7 @@
 //! the synchronous-MONITOR operation. Also: parameter 4 and MONITOR agree on the temperature,
 //! whichever form (°C or a thermistor reading) the profile says the firmware sends.
 
+use botbench::ops::Device as Dut;
 use botbench::ops::servo as ops;
 use botbench::ops::servo::monitor::{Reading, monitor_all, read_monitor};
 use botbench::profile::registry::parse;
@@ -203,7 +204,7 @@ fn through_a_pty_one_exchange_reads_every_servo_and_the_temperatures_agree() {
     ]);
     let client = bench.client();
     let p = &bench.profile;
-    let rows = monitor_all(&client, p, &[1, 2, 3, 5]).unwrap();
+    let rows = monitor_all(Dut::new(&client, p), &[1, 2, 3, 5]).unwrap();
     let ids: Vec<(u8, bool)> = rows
         .iter()
         .map(|r| (r.id, matches!(r.reading, Reading::Values(_))))
@@ -218,7 +219,7 @@ fn through_a_pty_one_exchange_reads_every_servo_and_the_temperatures_agree() {
             panic!("{row:?}")
         };
         let t22 = m.temperature_c.unwrap();
-        let raw4 = ops::read_param(&client, p, row.id, p.param(4).unwrap()).unwrap();
+        let raw4 = ops::read_param(Dut::new(&client, p), row.id, p.param(4).unwrap()).unwrap();
         let t4 = p.param(4).unwrap().field.display_number(raw4).unwrap();
         assert!((t22 - celsius).abs() < 0.1, "MONITOR {t22} °C");
         assert!(
@@ -241,11 +242,11 @@ fn through_a_pty_one_exchange_reads_every_servo_and_the_temperatures_agree() {
     .into_iter()
     .map(|(k, v)| (k.to_string(), Input::Raw(v)))
     .collect();
-    let reply = botbench::ops::exchange::send(&client, p, sync, &inputs).unwrap();
+    let reply = botbench::ops::exchange::send(Dut::new(&client, p), sync, &inputs).unwrap();
     assert!(reply.packets.is_empty());
     for (id, want) in [(1u8, 450), (2, -450)] {
         wait_until(&format!("servo {id} at {want}"), || {
-            ops::read_angle(&client, p, id).unwrap() == want
+            ops::read_angle(Dut::new(&client, p), id).unwrap() == want
         });
     }
     // The servo it did not name stays where it was.

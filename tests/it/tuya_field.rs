@@ -5,6 +5,7 @@
 use botbench::link::{
     Link, LinkError, LinkEvent, LinkOptions, Match, ReplySpec, Request, Transport, TuyaEvent,
 };
+use botbench::ops::Device;
 use botbench::protocol::tuya::{Frame, TuyaDecoder, cmd};
 use botbench::sim::Faults;
 use botbench::sim::tuya_mcu::{TuyaConfig, TuyaMcu};
@@ -108,7 +109,7 @@ fn on_a_line_that_echoes_the_modules_frames_a_version_0x00_mcu_is_told_apart_by_
         (asked == 2).then_some(())
     });
     // A status query after them: anything the module wrote in between has reached the MCU.
-    botbench::ops::tuya::query_status(&link.client(), &profile).unwrap();
+    botbench::ops::tuya::query_status(Device::new(&link.client(), &profile)).unwrap();
     let answers = served.sim().take_answers();
     let commands: Vec<u8> = answers.iter().map(|(c, _)| *c).collect();
     assert_eq!(

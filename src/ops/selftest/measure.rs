@@ -2,10 +2,10 @@
 
 use super::plan::Action;
 use super::run::Halt;
-use crate::link::Client;
+use crate::ops::Device;
 use crate::ops::exchange as ops;
 use crate::ops::{Cancel, OpError};
-use crate::profile::{Command, Field, Profile};
+use crate::profile::{Command, Field};
 use std::time::{Duration, Instant};
 
 pub(super) fn means(series: &[Vec<f64>]) -> Vec<f64> {
@@ -15,11 +15,8 @@ pub(super) fn means(series: &[Vec<f64>]) -> Vec<f64> {
         .collect()
 }
 
-pub(super) fn send_action(
-    client: &Client,
-    profile: &Profile,
-    action: &Action,
-) -> Result<(), OpError> {
+pub(super) fn send_action(dev: Device<'_>, action: &Action) -> Result<(), OpError> {
+    let Device { client, profile } = dev;
     let cmd = profile
         .command(&action.command)
         .ok_or_else(|| OpError::unknown_command(profile, &action.command))?;
@@ -86,20 +83,15 @@ pub(super) fn span(values: &[f64]) -> (f64, f64) {
 
 /// Reads fields of one command, in display units.
 pub(super) struct Reader<'a> {
-    client: &'a Client,
-    profile: &'a Profile,
+    dev: Device<'a>,
     cmd: &'a Command,
     /// The fields read, in the order asked.
     pub(super) fields: Vec<&'a Field>,
 }
 
 impl<'a> Reader<'a> {
-    pub(super) fn new(
-        client: &'a Client,
-        profile: &'a Profile,
-        command: &str,
-        fields: &[String],
-    ) -> Result<Self, Halt> {
+    pub(super) fn new(dev: Device<'a>, command: &str, fields: &[String]) -> Result<Self, Halt> {
+        let profile = dev.profile;
         let cmd = profile
             .command(command)
             .ok_or_else(|| Halt::Device(format!("{} has no command {command}", profile.id)))?;
@@ -112,18 +104,12 @@ impl<'a> Reader<'a> {
                     .ok_or_else(|| Halt::Device(format!("{} has no field {name}", cmd.ident)))
             })
             .collect::<Result<_, _>>()?;
-        Ok(Self {
-            client,
-            profile,
-            cmd,
-            fields,
-        })
+        Ok(Self { dev, cmd, fields })
     }
 
     /// One read: each field's raw value.
     pub(super) fn raw_once(&self) -> Result<(Vec<i64>,), (Halt, String)> {
-        let values = ops::read(self.client, self.profile, self.cmd, &[])
-            .map_err(|e| (e.into(), String::new()))?;
+        let values = ops::read(self.dev, self.cmd, &[]).map_err(|e| (e.into(), String::new()))?;
         self.fields
             .iter()
             .map(|f| {

@@ -4,10 +4,9 @@
 use super::measure::{Reader, means, send_action, show, sleep, tolerance, verdict};
 use super::plan::{Action, DEFAULT_INTERVAL, Plan, Step, StepKind};
 use super::record::{Report, StepResult};
-use crate::link::Client;
 use crate::ops::exchange as ops;
 use crate::ops::{Cancel, OpError, Progress};
-use crate::profile::Profile;
+use crate::ops::{Device, Run};
 use std::time::{Duration, Instant};
 
 /// Who stands at the station.
@@ -55,35 +54,19 @@ impl From<OpError> for Halt {
 }
 
 /// Runs the plan. Never returns PASS unless every step ran and passed.
-pub fn run(
-    client: &Client,
-    profile: &Profile,
-    plan: &Plan,
-    operator: &mut dyn Operator,
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(Progress),
-) -> Report {
-    run_each(
-        client,
-        profile,
-        plan,
-        operator,
-        cancel,
-        progress,
-        &mut |_| {},
-    )
+pub fn run(dev: Device<'_>, plan: &Plan, operator: &mut dyn Operator, run: &mut Run<'_>) -> Report {
+    run_each(dev, plan, operator, run, &mut |_| {})
 }
 
 /// [`run`], telling `each` every step's result as it comes.
 pub fn run_each(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     plan: &Plan,
     operator: &mut dyn Operator,
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(Progress),
+    run: &mut Run<'_>,
     each: &mut dyn FnMut(&StepResult),
 ) -> Report {
+    let Device { client, profile } = dev;
     let t0 = Instant::now();
     let mut report = Report {
         plan: plan.name.clone(),
@@ -98,7 +81,7 @@ pub fn run_each(
         pass: false,
     };
     let total = plan.steps.len() as u64 + 1;
-    progress(Progress {
+    run.report(Progress {
         done: 0,
         total,
         message: crate::i18n::Text::new("identifying the device", "正在识别设备"),
@@ -121,24 +104,24 @@ pub fn run_each(
         }
     }
     if report.aborted.is_none() {
-        progress(Progress {
+        run.report(Progress {
             done: 0,
             total,
             message: crate::i18n::Text::new("setting the safe state", "正在设为安全状态"),
         });
-        report.aborted = safe_state(client, profile, plan, cancel, &mut report.safe_state);
+        report.aborted = safe_state(dev, plan, run.cancel_flag(), &mut report.safe_state);
     }
     if report.aborted.is_none() {
         for (i, step) in plan.steps.iter().enumerate() {
-            progress(Progress {
+            run.report(Progress {
                 done: i as u64 + 1,
                 total,
                 message: crate::i18n::Text::same(&step.name),
             });
-            let (pass, detail, halt) = if cancel.is_cancelled() {
+            let (pass, detail, halt) = if run.is_cancelled() {
                 (false, "cancelled before it started".into(), true)
             } else {
-                match run_step(client, profile, step, operator, cancel) {
+                match run_step(dev, step, operator, run.cancel_flag()) {
                     Ok((pass, detail)) => (pass, detail, false),
                     Err((halt, detail)) => {
                         let d = if detail.is_empty() {
@@ -175,7 +158,7 @@ pub fn run_each(
             report.results.push(r);
         }
     }
-    progress(Progress {
+    run.report(Progress {
         done: total,
         total,
         message: crate::i18n::Text::new("done", "完成"),
@@ -193,13 +176,12 @@ pub fn run_each(
 /// what ran has spun down before anything is measured. Each command's outcome goes to `lines`;
 /// returns why the run cannot start, if it cannot.
 fn safe_state(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     plan: &Plan,
     cancel: &Cancel,
     lines: &mut Vec<String>,
 ) -> Option<String> {
-    let stopped = crate::ops::stop::stop(client, profile);
+    let stopped = crate::ops::stop::stop(dev);
     for s in &stopped {
         lines.push(match &s.result {
             Ok(()) => format!("{}: acknowledged", s.what),
@@ -232,12 +214,12 @@ fn safe_state(
 type StepOutcome = Result<(bool, String), (Halt, String)>;
 
 fn run_step(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     step: &Step,
     operator: &mut dyn Operator,
     cancel: &Cancel,
 ) -> StepOutcome {
+    let profile = dev.profile;
     let halt = |h: Halt| (h, String::new());
     match &step.kind {
         StepKind::Range {
@@ -248,7 +230,7 @@ fn run_step(
             samples,
             interval,
         } => {
-            let r = Reader::new(client, profile, command, fields).map_err(halt)?;
+            let r = Reader::new(dev, command, fields).map_err(halt)?;
             r.judge(*samples, *interval, cancel, |f, values, (lo, hi)| {
                 let tol = tolerance(f);
                 let outside = values
@@ -282,7 +264,7 @@ fn run_step(
             samples,
             interval,
         } => {
-            let r = Reader::new(client, profile, command, fields).map_err(halt)?;
+            let r = Reader::new(dev, command, fields).map_err(halt)?;
             r.judge(*samples, *interval, cancel, |f, _, (lo, hi)| {
                 let spread = hi - lo;
                 let ok = spread <= max_spread + tolerance(f);
@@ -308,10 +290,10 @@ fn run_step(
             samples,
             then,
         } => {
-            let r = Reader::new(client, profile, command, fields).map_err(halt)?;
-            let measured = rises(&r, client, profile, action, *settle, *samples, cancel);
+            let r = Reader::new(dev, command, fields).map_err(halt)?;
+            let measured = rises(&r, dev, action, *settle, *samples, cancel);
             // Whatever happened, turn it off.
-            let stopped = send_action(client, profile, then);
+            let stopped = send_action(dev, then);
             let (pass, mut detail, halted) = match measured {
                 Ok((before, after)) => {
                     let (pass, detail) =
@@ -370,8 +352,7 @@ fn run_step(
             bits,
             timeout,
         } => {
-            let r =
-                Reader::new(client, profile, command, std::slice::from_ref(field)).map_err(halt)?;
+            let r = Reader::new(dev, command, std::slice::from_ref(field)).map_err(halt)?;
             let f = r.fields[0];
             let (mut seen_set, mut seen_clear) = (0u64, 0u64);
             let raw = r.raw_once()?.0[0] as u64;
@@ -438,7 +419,7 @@ fn run_step(
             let cmd = profile
                 .command(command)
                 .ok_or_else(|| halt(Halt::Device(format!("no command {command}"))))?;
-            let values = ops::read(client, profile, cmd, &[]).map_err(|e| halt(e.into()))?;
+            let values = ops::read(dev, cmd, &[]).map_err(|e| halt(e.into()))?;
             let mut pass = true;
             let mut parts = Vec::new();
             for (k, v) in &values {
@@ -470,15 +451,14 @@ fn run_step(
 /// Measures before and after turning `action` on: the means of `samples` reads each.
 fn rises(
     r: &Reader,
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     action: &Action,
     settle: Duration,
     samples: u32,
     cancel: &Cancel,
 ) -> Result<(Vec<f64>, Vec<f64>), Halt> {
     let before = r.samples(samples, DEFAULT_INTERVAL, cancel)?;
-    send_action(client, profile, action)
+    send_action(dev, action)
         .map_err(|e| Halt::Device(format!("{}: {}", action.text, Halt::from(e).message())))?;
     if !sleep(settle, cancel) {
         return Err(Halt::Cancelled);

@@ -4,6 +4,7 @@
 //! (older firmware) stay silent.
 
 use crate::link::{ExchangeError, Request, request::SYNC_QUIET};
+use crate::ops::Device;
 use crate::ops::OpError;
 use crate::profile::{Input, Profile, Value};
 use crate::protocol::Direction;
@@ -98,11 +99,8 @@ pub fn sync_monitor_request(profile: &Profile, ids: &[u8]) -> Result<Request, Op
 /// Reads the live values of every servo in `ids` in one exchange (in frames of up to
 /// [`MAX_SERVOS`]). A servo that does not answer has no reading; none answering is not an
 /// error (older servos do not know command 25).
-pub fn monitor_all(
-    client: &crate::link::Client,
-    profile: &Profile,
-    ids: &[u8],
-) -> Result<Vec<MonitorRow>, OpError> {
+pub fn monitor_all(dev: Device<'_>, ids: &[u8]) -> Result<Vec<MonitorRow>, OpError> {
+    let Device { client, profile } = dev;
     let mut rows: Vec<MonitorRow> = ids
         .iter()
         .map(|&id| MonitorRow {

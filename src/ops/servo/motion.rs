@@ -1,7 +1,8 @@
 //! Motion: the requests that move, spin, damp and stop servos (sent straight to the worker, so
 //! that they never wait behind a job), and the angle read.
 
-use crate::link::{Client, Match, ReplySpec, Request};
+use crate::link::{Match, ReplySpec, Request};
+use crate::ops::Device;
 use crate::ops::OpError;
 use crate::profile::{Input, Profile, Value};
 use crate::protocol::Direction;
@@ -128,7 +129,8 @@ pub fn monitor_request(id: u8) -> Request {
 }
 
 /// Reads servo `id`'s angle, 0.1°.
-pub fn read_angle(client: &Client, profile: &Profile, id: u8) -> Result<i64, OpError> {
+pub fn read_angle(dev: Device<'_>, id: u8) -> Result<i64, OpError> {
+    let Device { client, profile } = dev;
     super::addressed(id, "read an angle")?;
     let c = super::command(profile, cmd::READ_ANGLE)?;
     let reply = client.request(read_angle_request(id).attempts(2))?;

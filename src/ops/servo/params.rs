@@ -2,20 +2,17 @@
 //! block in one exchange.
 
 use super::{baud_param, command, id_param};
-use crate::link::{Client, Match, ReplySpec, Request};
-use crate::ops::{Cancel, Check, OpError, Progress};
+use crate::link::{Match, ReplySpec, Request};
+use crate::ops::{Check, OpError, Progress};
+use crate::ops::{Device, Run};
 use crate::profile::model::Access;
 use crate::profile::{Input, Param, Profile, Value};
 use crate::protocol::Direction;
 use crate::protocol::servo::cmd;
 
 /// Reads one parameter of servo `id`.
-pub fn read_param(
-    client: &Client,
-    profile: &Profile,
-    id: u8,
-    param: &Param,
-) -> Result<i64, OpError> {
+pub fn read_param(dev: Device<'_>, id: u8, param: &Param) -> Result<i64, OpError> {
+    let Device { client, profile } = dev;
     let reply = client.request(read_request(profile, id, param)?)?;
     read_value(profile, id, param, reply.payload().unwrap_or_default())
 }
@@ -59,13 +56,8 @@ pub(super) fn read_value(
 }
 
 /// Writes one user parameter of servo `id` and reads it back.
-pub fn write_param(
-    client: &Client,
-    profile: &Profile,
-    id: u8,
-    param: &Param,
-    input: Input,
-) -> Result<Check, OpError> {
+pub fn write_param(dev: Device<'_>, id: u8, param: &Param, input: Input) -> Result<Check, OpError> {
+    let Device { client, profile } = dev;
     super::addressed(id, "write a parameter and read it back")?;
     let (write, payload, written) = write_payload(profile, id, param, input)?;
     // A relation with other parameters (angle limits low ≤ high) is checked against what the
@@ -73,7 +65,7 @@ pub fn write_param(
     if let Value::Int(raw) = written {
         let mut values = vec![(param.id, raw)];
         for other in profile.related_params(param.id) {
-            values.push((other.id, read_param(client, profile, id, other)?));
+            values.push((other.id, read_param(dev, id, other)?));
         }
         profile.check_param_relations(&values)?;
     }
@@ -87,7 +79,7 @@ pub fn write_param(
             param.field.format(&written)
         )));
     }
-    let read = read_param(client, profile, id, param)?;
+    let read = read_param(dev, id, param)?;
     Ok(Check {
         field: param.field.ident.clone(),
         written,
@@ -99,11 +91,11 @@ pub fn write_param(
 /// asked for on purpose: nobody answers a broadcast, so nothing is read back. The value is
 /// checked against the profile first. Returns the raw value written.
 pub fn write_param_broadcast(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     param: &Param,
     input: Input,
 ) -> Result<Value, OpError> {
+    let Device { client, profile } = dev;
     let id = crate::protocol::servo::BROADCAST_ID;
     let (write, payload, written) = write_payload(profile, id, param, input)?;
     client.request(Request::for_command(profile, write, payload).reply(ReplySpec::None))?;
@@ -148,7 +140,8 @@ fn block_params(profile: &Profile) -> Vec<&Param> {
 
 /// Reads the 32-byte user block (parameters 32-53) in one exchange: raw values by `data_id`, in
 /// block order.
-pub fn read_block(client: &Client, profile: &Profile, id: u8) -> Result<Vec<(u8, i64)>, OpError> {
+pub fn read_block(dev: Device<'_>, id: u8) -> Result<Vec<(u8, i64)>, OpError> {
+    let Device { client, profile } = dev;
     super::addressed(id, "read the user block")?;
     let read = command(profile, cmd::READ_BATCH_DATA)?;
     let req = Request::for_command(profile, read, vec![id])
@@ -191,12 +184,8 @@ pub fn read_block(client: &Client, profile: &Profile, id: u8) -> Result<Vec<(u8,
 /// `values` must give every user parameter (raw, by `data_id`); each is checked against the
 /// profile first. The block also holds the id and the baud option (the parameters with those
 /// roles): they must be what the servo holds now (they are changed with [`set_id`] and [`set_baud`], which follow the servo).
-pub fn write_block(
-    client: &Client,
-    profile: &Profile,
-    id: u8,
-    values: &[(u8, i64)],
-) -> Result<Vec<Check>, OpError> {
+pub fn write_block(dev: Device<'_>, id: u8, values: &[(u8, i64)]) -> Result<Vec<Check>, OpError> {
+    let Device { client, profile } = dev;
     super::addressed(id, "write the user block and read it back")?;
     let write = command(profile, cmd::WRITE_BATCH_DATA)?;
     let params = block_params(profile);
@@ -211,7 +200,7 @@ pub fn write_block(
         p.field.check(&Value::Int(raw))?;
         inputs.push((p.field.ident.clone(), Input::Raw(Value::Int(raw))));
     }
-    let before = read_block(client, profile, id)?;
+    let before = read_block(dev, id)?;
     for followed in [id_param(profile)?, baud_param(profile)?.0] {
         let pid = followed.id;
         let now = before.iter().find(|(p, _)| *p == pid).map(|(_, v)| *v);
@@ -234,7 +223,7 @@ pub fn write_block(
             "servo {id} refused the user block"
         )));
     }
-    let after = read_block(client, profile, id)?;
+    let after = read_block(dev, id)?;
     Ok(params
         .iter()
         .map(|p| {
@@ -251,16 +240,17 @@ pub fn write_block(
 
 /// Every parameter of servo `id`: the read-only ones one by one, the user block in one
 /// exchange. Raw values by `data_id`, each with why it could not be read.
-pub fn read_all(client: &Client, profile: &Profile, id: u8) -> Vec<(u8, Result<i64, OpError>)> {
+pub fn read_all(dev: Device<'_>, id: u8) -> Vec<(u8, Result<i64, OpError>)> {
+    let profile = dev.profile;
     let mut out = Vec::new();
     for p in profile
         .params
         .iter()
         .filter(|p| p.access == Access::ReadOnly)
     {
-        out.push((p.id, read_param(client, profile, id, p)));
+        out.push((p.id, read_param(dev, id, p)));
     }
-    match read_block(client, profile, id) {
+    match read_block(dev, id) {
         Ok(block) => out.extend(block.into_iter().map(|(pid, v)| (pid, Ok(v)))),
         Err(e) => out.extend(profile.block_params().map(|p| (p.id, Err(e.clone())))),
     }
@@ -271,30 +261,26 @@ pub fn read_all(client: &Client, profile: &Profile, id: u8) -> Vec<(u8, Result<i
 /// back. A failed or mismatched write does not stop the others; a cancel stops between
 /// parameters. Returns each parameter's check, or why it failed, in order.
 pub fn write_params(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     id: u8,
     values: &[(u8, i64)],
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(Progress),
+    run: &mut Run<'_>,
 ) -> Vec<(u8, Result<Check, OpError>)> {
+    let profile = dev.profile;
     let mut checks = Vec::new();
     for (i, (pid, raw)) in values.iter().enumerate() {
-        if cancel.is_cancelled() {
+        if run.is_cancelled() {
             break;
         }
         let Some(p) = profile.param(*pid) else {
             continue;
         };
-        progress(Progress {
+        run.report(Progress {
             done: i as u64,
             total: values.len() as u64,
             message: p.field.name.clone(),
         });
-        checks.push((
-            *pid,
-            write_param(client, profile, id, p, Input::Raw(Value::Int(*raw))),
-        ));
+        checks.push((*pid, write_param(dev, id, p, Input::Raw(Value::Int(*raw)))));
     }
     checks
 }

@@ -6,6 +6,7 @@ use super::params::{read_request, read_value};
 use super::{Presence, ping, read_param, switch};
 use crate::link::{Client, Match, ReplySpec, Request, Sweep, SweepReply};
 use crate::ops::{Cancel, OpError, Progress};
+use crate::ops::{Device, Run};
 use crate::packet::Packet;
 use crate::profile::{ParamRole, Profile, Value};
 use crate::protocol::Direction;
@@ -122,14 +123,13 @@ const RESWEEPS: usize = 3;
 pub(super) fn find_ids(
     client: &Client,
     ids: &[u8],
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(usize, u8),
+    run: &mut Run<'_, (usize, u8)>,
 ) -> Result<(Vec<(u8, Presence)>, ScanReport), OpError> {
-    let mut found = Found::sweep(client, ids, cancel, progress)?;
+    let mut found = Found::sweep(client, ids, run)?;
     // Answers still on their way after the last sweep.
     let tail = client.sweep(ping_sweep(&[]))?;
     found.take(&tail, &[]);
-    found.resolve(client, cancel)
+    found.resolve(client, run.cancel_flag())
 }
 
 /// What the ping sweeps of a scan have brought so far.
@@ -151,8 +151,7 @@ impl<'a> Found<'a> {
     fn sweep(
         client: &Client,
         ids: &'a [u8],
-        cancel: &Cancel,
-        progress: &mut dyn FnMut(usize, u8),
+        run: &mut Run<'_, (usize, u8)>,
     ) -> Result<Self, OpError> {
         let mut found = Found {
             ids,
@@ -167,12 +166,12 @@ impl<'a> Found<'a> {
             },
         };
         for (k, chunk) in ids.chunks(SWEEP_IDS).enumerate() {
-            if cancel.is_cancelled() {
+            if run.is_cancelled() {
                 return Err(OpError::Cancelled);
             }
             let reply = client.sweep(ping_sweep(chunk))?;
             found.take(&reply, chunk);
-            progress(k * SWEEP_IDS + chunk.len(), *chunk.last().unwrap_or(&0));
+            run.report((k * SWEEP_IDS + chunk.len(), *chunk.last().unwrap_or(&0)));
         }
         Ok(found)
     }
@@ -349,11 +348,11 @@ pub fn ping_sweep(ids: &[u8]) -> Sweep {
 /// the grace an exchange gives, for the pings' answers still on their way (and goes out empty
 /// when there is nothing to read); returns the sweep's reply, if it went out.
 fn details(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     rows: &mut [ScanRow],
     listen: bool,
 ) -> Result<Option<SweepReply>, OpError> {
+    let Device { client, profile } = dev;
     let params: Vec<(&ParamRole, &crate::profile::Param)> = SCAN_ROLES
         .iter()
         .filter_map(|role| Some((role, profile.param_with_role(role)?)))
@@ -382,7 +381,7 @@ fn details(
         let row = &mut rows[r];
         let value = match answer {
             Some(a) => read_value(profile, row.id, p, &a.packet.payload).ok(),
-            None => read_param(client, profile, row.id, p).ok(),
+            None => read_param(dev, row.id, p).ok(),
         };
         if let Some(column) = row.column(role) {
             *column = value;
@@ -410,28 +409,27 @@ fn row(id: u8, baud: u32, presence: Presence) -> ScanRow {
 /// servos that answered cleanly have theirs read while the answers still on their way come in
 /// (that sweep is the scan's last listen), those asked again after it.
 fn scan_at(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     ids: &[u8],
     baud: u32,
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(usize, u8),
+    run: &mut Run<'_, (usize, u8)>,
 ) -> Result<ScanReport, OpError> {
-    let mut found = Found::sweep(client, ids, cancel, progress)?;
+    let client = dev.client;
+    let mut found = Found::sweep(client, ids, run)?;
     let mut rows: Vec<ScanRow> = found
         .sure()
         .map(|id| row(id, baud, Presence::Present))
         .collect();
-    if let Some(reply) = details(client, profile, &mut rows, true)? {
+    if let Some(reply) = details(dev, &mut rows, true)? {
         found.take_late(&reply);
     }
-    let (answered, mut report) = found.resolve(client, cancel)?;
+    let (answered, mut report) = found.resolve(client, run.cancel_flag())?;
     let mut more: Vec<ScanRow> = answered
         .into_iter()
         .filter(|(id, _)| !rows.iter().any(|r| r.id == *id))
         .map(|(id, presence)| row(id, baud, presence))
         .collect();
-    details(client, profile, &mut more, false)?;
+    details(dev, &mut more, false)?;
     rows.extend(more);
     rows.sort_by_key(|r| r.id);
     report.rows = rows;
@@ -452,13 +450,12 @@ pub struct ScanPlan {
 /// Scans the plan's ids at each of its bauds ([`find_ids`]), reading each found servo's
 /// details, then returns the port to the plan's home rate. `found` sees each row as it is found.
 pub fn scan(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     plan: &ScanPlan,
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(Progress),
+    run: &mut Run<'_>,
     found: &mut dyn FnMut(&ScanRow),
 ) -> Result<ScanReport, OpError> {
+    let client = dev.client;
     let (bauds, home_baud) = (&plan.bauds, plan.home_baud);
     let ids: Vec<u8> = plan
         .ids
@@ -476,8 +473,9 @@ pub fn scan(
         for (b, &baud) in bauds.iter().enumerate() {
             switch(client, baud)?;
             let before = (b * ids.len()) as u64;
-            let at_baud = scan_at(client, profile, &ids, baud, cancel, &mut |done, id| {
-                progress(Progress {
+            let cancel = run.cancel_flag();
+            let mut at = Run::new(cancel, |(done, id): (usize, u8)| {
+                run.report(Progress {
                     done: before + done as u64,
                     total,
                     message: crate::i18n::Text::new(
@@ -485,7 +483,8 @@ pub fn scan(
                         format!("ID {id},波特率 {baud}"),
                     ),
                 })
-            })?;
+            });
+            let at_baud = scan_at(dev, &ids, baud, &mut at)?;
             report.asked_again += at_baud.asked_again;
             report.late_answers += at_baud.late_answers;
             report.margin_ms = at_baud.margin_ms;

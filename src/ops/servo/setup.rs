@@ -4,18 +4,14 @@
 use super::{Presence, baud_param, command, id_param, ping, read_param, switch};
 use crate::link::{Client, ExchangeError, Match, ReplySpec, Request};
 use crate::ops::{Cancel, OpError};
+use crate::ops::{Device, Run};
 use crate::profile::{Profile, Value};
 use crate::protocol::servo::cmd;
 
 /// Gives servo `old` the id `new`, refusing 255 and any id that already answers; a fresh servo
 /// (id 0) must be alone on the bus. Verified at the new id afterwards.
-pub fn set_id(
-    client: &Client,
-    profile: &Profile,
-    old: u8,
-    new: u8,
-    cancel: &Cancel,
-) -> Result<(), OpError> {
+pub fn set_id(dev: Device<'_>, old: u8, new: u8, cancel: &Cancel) -> Result<(), OpError> {
+    let Device { client, profile } = dev;
     if new == crate::protocol::servo::BROADCAST_ID {
         return Err(OpError::BroadcastId);
     }
@@ -61,7 +57,7 @@ pub fn set_id(
     if reply.payload().and_then(|p| p.get(2)) != Some(&1) {
         return Err(OpError::Verify(format!("servo {old} refused the id {new}")));
     }
-    let now = read_param(client, profile, new, id_param)
+    let now = read_param(dev, new, id_param)
         .map_err(|e| OpError::Verify(format!("no answer at the new id {new}: {e}")))?;
     if now != i64::from(new) {
         return Err(OpError::Verify(format!("servo at {new} reports id {now}")));
@@ -78,13 +74,14 @@ pub fn set_id(
 /// The ids that answer at the current baud rate (a garbled answer counts).
 fn ids_on_bus(client: &Client, cancel: &Cancel) -> Result<Vec<u8>, OpError> {
     let ids: Vec<u8> = (0..crate::protocol::servo::BROADCAST_ID).collect();
-    let (found, _) = super::scan::find_ids(client, &ids, cancel, &mut |_, _| {})?;
+    let (found, _) = super::scan::find_ids(client, &ids, &mut Run::quiet(cancel))?;
     Ok(found.into_iter().map(|(id, _)| id).collect())
 }
 
 /// Where a servo was found after a baud change that could not be verified: the profile's baud
 /// rates searched ([`super::search`]) until it answers cleanly; the port is left there.
-fn recover(client: &Client, profile: &Profile, id: u8) -> Result<Option<u32>, OpError> {
+fn recover(dev: Device<'_>, id: u8) -> Result<Option<u32>, OpError> {
+    let Device { client, profile } = dev;
     let found = super::search::search(client, id, &profile.servo_bauds(), true)?;
     Ok(found
         .into_iter()
@@ -95,7 +92,8 @@ fn recover(client: &Client, profile: &Profile, id: u8) -> Result<Option<u32>, Op
 /// Sets servo `id`'s baud option (the profile's baud table), switches the port to the new rate and verifies there.
 /// If the servo is not found at the new rate, every rate is scanned for it: the error says where
 /// it is, and the port is left at that rate.
-pub fn set_baud(client: &Client, profile: &Profile, id: u8, option: u8) -> Result<u32, OpError> {
+pub fn set_baud(dev: Device<'_>, id: u8, option: u8) -> Result<u32, OpError> {
+    let Device { client, profile } = dev;
     super::addressed(id, "change a servo's baud rate and follow it")?;
     let (baud_param, rates) = baud_param(profile)?;
     let Some(&baud) = rates.get(&option) else {
@@ -129,14 +127,14 @@ pub fn set_baud(client: &Client, profile: &Profile, id: u8, option: u8) -> Resul
     }
     switch(client, baud)?;
     let verified = ping(client, id, 3)? == Presence::Present
-        && read_param(client, profile, id, baud_param).ok() == Some(i64::from(option));
+        && read_param(dev, id, baud_param).ok() == Some(i64::from(option));
     if verified {
         return Ok(baud);
     }
     Err(OpError::NotAtNewRate {
         id,
         baud,
-        found: recover(client, profile, id)?,
+        found: recover(dev, id)?,
     })
 }
 
@@ -171,12 +169,8 @@ pub fn factory_location(profile: &Profile) -> Location {
 /// would then share an id). The servo is then looked for at its factory id and rate, and the port
 /// is left there; if it is not found, the error says so. `baud` is the rate the servo talks at
 /// now.
-pub fn reset_user_data(
-    client: &Client,
-    profile: &Profile,
-    id: u8,
-    baud: u32,
-) -> Result<Location, OpError> {
+pub fn reset_user_data(dev: Device<'_>, id: u8, baud: u32) -> Result<Location, OpError> {
+    let Device { client, profile } = dev;
     super::addressed(id, "reset a servo's user data and find it again")?;
     let reset = command(profile, cmd::RESET_USER_DATA)?;
     let home = factory_location(profile);
@@ -218,7 +212,7 @@ pub fn reset_user_data(
     if ping(client, home.id, 3)? == Presence::Present {
         return Ok(home);
     }
-    match recover(client, profile, home.id)? {
+    match recover(dev, home.id)? {
         Some(b) => Err(OpError::Verify(format!(
             "after the reset servo {} answers at {b} baud, not at {} (the port is now at {b})",
             home.id, home.baud
@@ -233,8 +227,8 @@ pub fn reset_user_data(
     }
 }
 
-/// Looks for servo `id` at every baud rate of `profile`; the port is left where it answered.
-/// Returns that rate.
-pub fn locate(client: &Client, profile: &Profile, id: u8) -> Result<Option<u32>, OpError> {
-    recover(client, profile, id)
+/// Looks for servo `id` at every baud rate of the device's profile; the port is left where it
+/// answered. Returns that rate.
+pub fn locate(dev: Device<'_>, id: u8) -> Result<Option<u32>, OpError> {
+    recover(dev, id)
 }

@@ -17,7 +17,8 @@ pub use verify::{DpCheck, set_dps, set_dps_request};
 
 use super::OpError;
 use crate::link::session::tuya::{reported_ids, reports_reply};
-use crate::link::{Client, ExchangeError, Request};
+use crate::link::{ExchangeError, Request};
+use crate::ops::Device;
 use crate::packet::Packet;
 use crate::profile::{Command, DataPointDef, Input, Profile, Value};
 use crate::protocol::Direction;
@@ -81,12 +82,8 @@ pub struct Gathered {
 /// Sends status queries (0x08), at most `queries`, until each of `ids` has been reported: a
 /// query whose answer lost some reports is asked again for them. Errors: the first query got no
 /// answer at all, or the link failed.
-pub fn gather(
-    client: &Client,
-    profile: &Profile,
-    ids: &[u8],
-    queries: u8,
-) -> Result<Gathered, OpError> {
+pub fn gather(dev: Device<'_>, ids: &[u8], queries: u8) -> Result<Gathered, OpError> {
+    let Device { client, profile } = dev;
     let mut out = Gathered {
         reports: Vec::new(),
         queries: 0,
@@ -129,9 +126,10 @@ impl Status {
 
 /// Every data point, as the MCU reports them to status queries (0x08): a data point whose
 /// report was lost is asked again, up to [`QUERIES`] queries; those still missing are named.
-pub fn query_status(client: &Client, profile: &Profile) -> Result<Status, OpError> {
+pub fn query_status(dev: Device<'_>) -> Result<Status, OpError> {
+    let profile = dev.profile;
     let ids: Vec<u8> = profile.data_points.iter().map(|d| d.id).collect();
-    let gathered = gather(client, profile, &ids, QUERIES)?;
+    let gathered = gather(dev, &ids, QUERIES)?;
     let mut last: Vec<ReportedDp> = Vec::new();
     for dp in read_reports(profile, &gathered.reports) {
         last.retain(|d| d.id != dp.id);

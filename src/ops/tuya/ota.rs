@@ -1,9 +1,10 @@
 //! The MCU firmware update (OTA, PROTOCOL_NOTES §3): the image read from its file with a size
 //! bound, the expected transfer time at the port's rate, and the upload itself.
 
-use super::super::{Cancel, OpError, Progress};
+use super::super::{OpError, Progress};
 use crate::document::{Limit, read_bytes};
 use crate::link::{Client, ExchangeError, Match, ReplySpec, Request, wire_time};
+use crate::ops::Run;
 use crate::protocol::tuya::cmd;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -198,8 +199,7 @@ pub fn ota(
     image: &[u8],
     max: u32,
     timing: OtaTiming,
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(Progress),
+    run: &mut Run<'_>,
 ) -> Result<OtaReport, OpError> {
     let attempts = timing.retries.saturating_add(1);
     if image.is_empty() {
@@ -224,7 +224,7 @@ pub fn ota(
     let mut packets = 0usize;
     let total = image.len() as u64;
     for (i, data) in image.chunks(chunk).enumerate() {
-        if cancel.is_cancelled() {
+        if run.is_cancelled() {
             return Err(OpError::Cancelled);
         }
         let offset = (i * chunk) as u32;
@@ -245,7 +245,7 @@ pub fn ota(
         let secs = started.elapsed().as_secs_f64().max(1e-6);
         let rate = done as f64 / secs;
         let left = (total - done) as f64 / rate.max(1.0);
-        progress(Progress {
+        run.report(Progress {
             done,
             total,
             message: crate::i18n::Text::new(

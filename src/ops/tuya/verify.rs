@@ -6,7 +6,8 @@
 use super::reports::{ReportedDp, read_reports};
 use super::{QUERIES, dp_command, gather};
 use crate::link::session::tuya::command_ids;
-use crate::link::{Client, ExchangeError, Request};
+use crate::link::{ExchangeError, Request};
+use crate::ops::Device;
 use crate::ops::OpError;
 use crate::profile::{Input, Profile, Value};
 use crate::protocol::Direction;
@@ -54,11 +55,8 @@ pub fn set_dps_request(profile: &Profile, inputs: &[(String, Input)]) -> Result<
 /// writable), waits for the MCU's report of each (bounded), then reads them back with status
 /// queries (asked again for reports that were lost, up to [`QUERIES`]), and checks each data
 /// point by its last report in that window.
-pub fn set_dps(
-    client: &Client,
-    profile: &Profile,
-    inputs: &[(String, Input)],
-) -> Result<Vec<DpCheck>, OpError> {
+pub fn set_dps(dev: Device<'_>, inputs: &[(String, Input)]) -> Result<Vec<DpCheck>, OpError> {
+    let Device { client, profile } = dev;
     let command = dp_command(profile)?;
     let payload = set_dps_request(profile, inputs)?;
     let written = profile
@@ -72,7 +70,7 @@ pub fn set_dps(
         Err(ExchangeError::Timeout { .. } | ExchangeError::Garbled { .. }) => Vec::new(),
         Err(e) => return Err(e.into()),
     };
-    window.extend(gather(client, profile, &ids, QUERIES)?.reports);
+    window.extend(gather(dev, &ids, QUERIES)?.reports);
     let reported = read_reports(profile, &window);
     Ok(written
         .values

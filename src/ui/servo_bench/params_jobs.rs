@@ -4,6 +4,7 @@
 use super::{Output, Servo, send};
 use crate::i18n::Text;
 use crate::ops::servo as ops;
+use crate::ops::{Device, Run};
 use crate::ui::Action;
 use crate::ui::jobs::{Job, JobError};
 use crate::ui::state::AppState;
@@ -14,7 +15,7 @@ pub(super) fn read_all_job(rt: &AppState, servo: Servo) -> Action {
         Text::new("read parameters", "读取参数"),
         move |client, _, sink| {
             ops::switch(client, servo.baud)?;
-            let values = ops::read_all(client, &profile, servo.id);
+            let values = ops::read_all(Device::new(client, &profile), servo.id);
             let failed = values.iter().filter(|(_, v)| v.is_err()).count();
             let total = values.len();
             send(sink, Output::Values { servo, values });
@@ -40,7 +41,7 @@ pub(super) fn read_block_job(rt: &AppState, servo: Servo) -> Action {
         Text::new("read user block", "读取用户参数区"),
         move |client, _, sink| {
             ops::switch(client, servo.baud)?;
-            match ops::read_block(client, &profile, servo.id) {
+            match ops::read_block(Device::new(client, &profile), servo.id) {
                 Ok(block) => {
                     let values = block.into_iter().map(|(pid, v)| (pid, Ok(v))).collect();
                     send(sink, Output::Values { servo, values });
@@ -68,9 +69,9 @@ pub(super) fn write_job(rt: &AppState, servo: Servo, values: Vec<(u8, i64)>) -> 
         Text::new("write parameters", "写入参数"),
         move |client, cancel, sink| {
             ops::switch(client, servo.baud)?;
-            let checks = ops::write_params(client, &profile, servo.id, &values, cancel, &mut |p| {
-                sink.progress(p)
-            });
+            let mut run = Run::new(cancel, |p| sink.progress(p));
+            let checks =
+                ops::write_params(Device::new(client, &profile), servo.id, &values, &mut run);
             let bad = checks
                 .iter()
                 .filter(|(_, c)| !matches!(c, Ok(c) if c.ok()))
@@ -105,7 +106,7 @@ pub(super) fn block_job(rt: &AppState, servo: Servo, values: Vec<(u8, i64)>) -> 
         Text::new("write user block", "写入用户参数区"),
         move |client, _, sink| {
             ops::switch(client, servo.baud)?;
-            match ops::write_block(client, &profile, servo.id, &values) {
+            match ops::write_block(Device::new(client, &profile), servo.id, &values) {
                 Ok(checks) => {
                     let bad = checks.iter().filter(|c| !c.ok()).count();
                     let total = checks.len();
@@ -146,7 +147,7 @@ pub(super) fn reset_job(rt: &AppState, servo: Servo) -> Action {
         Text::new("reset user data", "恢复出厂设置"),
         move |client, _, sink| {
             ops::switch(client, servo.baud)?;
-            let result = ops::reset_user_data(client, &profile, servo.id, servo.baud);
+            let result = ops::reset_user_data(Device::new(client, &profile), servo.id, servo.baud);
             send(
                 sink,
                 Output::Reset {
@@ -155,7 +156,7 @@ pub(super) fn reset_job(rt: &AppState, servo: Servo) -> Action {
                 },
             );
             let at = result?;
-            let values = ops::read_all(client, &profile, at.id);
+            let values = ops::read_all(Device::new(client, &profile), at.id);
             let now = Servo {
                 id: at.id,
                 baud: at.baud,

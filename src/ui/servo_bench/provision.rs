@@ -6,6 +6,7 @@ use crate::document::DocumentError;
 use crate::i18n::Lang;
 use crate::i18n::Text;
 use crate::ops::servo::provision::{self as prov, Outcome, Plan, ProvisionState, Record};
+use crate::ops::{Device, Run};
 use crate::ui::jobs::{Job, JobError, LogError};
 use crate::ui::layout::header_row;
 use crate::ui::settings::FileKind;
@@ -298,10 +299,9 @@ fn job(rt: &AppState, plan: Plan, mut state: ProvisionState, log: Option<PathBuf
     Action::StartJob(Job::new(
         Text::new("provision", "烧录"),
         move |client, cancel, sink| {
+            let mut run = Run::new(cancel, |p| sink.progress(p));
             let record =
-                prov::provision_next(client, &profile, &plan, &mut state, cancel, &mut |p| {
-                    sink.progress(p)
-                });
+                prov::provision_next(Device::new(client, &profile), &plan, &mut state, &mut run);
             let log_error = log.as_deref().and_then(|path| {
                 prov::append_csv(path, &record)
                     .err()

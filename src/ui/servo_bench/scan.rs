@@ -6,6 +6,7 @@ use crate::i18n::Lang;
 use crate::i18n::Text;
 use crate::ops::OpError;
 use crate::ops::servo::{self as ops, Presence, ScanPlan, ScanReport, ScanRow};
+use crate::ops::{Device, Run};
 use crate::profile::Profile;
 use crate::ui::Action;
 use crate::ui::jobs::Job;
@@ -435,11 +436,9 @@ fn scan_job(rt: &AppState, plan: ScanPlan, again: Option<Servo>) -> Action {
     };
     Action::StartJob(Job::new(title, move |client, cancel, sink| {
         let result = ops::scan(
-            client,
-            &profile,
+            Device::new(client, &profile),
             &plan,
-            cancel,
-            &mut |p| sink.progress(p),
+            &mut Run::new(cancel, |p| sink.progress(p)),
             &mut |row| {
                 if again.is_none() {
                     send(sink, Output::Found(row.clone()));

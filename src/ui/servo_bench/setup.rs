@@ -8,6 +8,7 @@ use super::selection_or_hint;
 use super::{Output, Servo, error_label, ok_label, send};
 use crate::i18n::Lang;
 use crate::i18n::Text;
+use crate::ops::Device;
 use crate::ops::OpError;
 use crate::ops::servo::{self as ops, Presence};
 use crate::ui::Action;
@@ -282,7 +283,7 @@ fn id_job(rt: &AppState, servo: Servo, new: u8) -> Action {
         Text::new("set id", "设置 ID"),
         move |client, cancel, sink| {
             ops::switch(client, servo.baud)?;
-            let result = ops::set_id(client, &profile, servo.id, new, cancel);
+            let result = ops::set_id(Device::new(client, &profile), servo.id, new, cancel);
             send(
                 sink,
                 Output::IdSet {
@@ -306,14 +307,16 @@ fn baud_job(rt: &AppState, servo: Servo, option: u8) -> Action {
         Text::new("set baud rate", "设置波特率"),
         move |client, _, sink| {
             ops::switch(client, servo.baud)?;
-            let result = ops::set_baud(client, &profile, servo.id, option);
+            let result = ops::set_baud(Device::new(client, &profile), servo.id, option);
             // Where the servo is when the change was not verified: the operation says where it
             // found the servo after the change (and left the port there); after another failure it
             // is looked for at every rate.
             let found = match &result {
                 Ok(_) => None,
                 Err(OpError::NotAtNewRate { found, .. }) => *found,
-                Err(_) => ops::locate(client, &profile, servo.id).ok().flatten(),
+                Err(_) => ops::locate(Device::new(client, &profile), servo.id)
+                    .ok()
+                    .flatten(),
             };
             if result.is_err() && found.is_none() {
                 let _ = ops::switch(client, servo.baud);

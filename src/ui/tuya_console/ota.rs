@@ -8,6 +8,7 @@ use crate::i18n::Text;
 use crate::ops::OpError;
 pub use crate::ops::tuya::FirmwareFileError;
 use crate::ops::tuya::{self as ops, OtaTiming};
+use crate::ops::{Progress, Run};
 use crate::ui::files;
 use crate::ui::jobs::{Job, JobError, JobOutput};
 use crate::ui::settings::FileKind;
@@ -91,8 +92,7 @@ fn work(path: PathBuf, max: u32) -> Job {
                 &image,
                 max,
                 OtaTiming::default(),
-                cancel,
-                &mut |p| {
+                &mut Run::new(cancel, |p: Progress| {
                     if packet.is_none() && p.done < p.total {
                         packet = Some(p.done as usize);
                     }
@@ -106,7 +106,7 @@ fn work(path: PathBuf, max: u32) -> Job {
                         packet,
                     })));
                     sink.progress(p);
-                },
+                }),
             );
             done(result.map_err(|e| match e {
                 OpError::Cancelled => JobError::UpdateCancelled {

@@ -2,6 +2,7 @@
 //! against the simulated window cleaner, and refusals of bad presets.
 
 use super::*;
+use botbench::ops::{Device, Run};
 
 #[test]
 fn the_factory_preset_validates_and_holds_the_profile_defaults() {
@@ -145,7 +146,11 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
 
     // Save what the device holds.
     let mut seen: Vec<Progress> = Vec::new();
-    let captured = ops::preset::capture(&client, &p, &cancel, &mut |pr| seen.push(pr)).unwrap();
+    let captured = ops::preset::capture(
+        Device::new(&client, &p),
+        &mut Run::new(&cancel, |pr| seen.push(pr)),
+    )
+    .unwrap();
     assert_eq!(captured.device.as_deref(), Some("hw 0x03 fw 1.4.2"));
     assert_eq!(captured.values.len(), preset::preset_commands(&p).len());
     // The tunable commands only: the auto-test result (147/148) is the unit's own.
@@ -173,7 +178,8 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
         sim.set_param("pwmValue", 60).unwrap();
         sim.set_param("defaultTarget", 290).unwrap();
     }
-    let device = ops::preset::read_device(&client, &p, &cancel, &mut |_| {}).unwrap();
+    let device =
+        ops::preset::read_device(Device::new(&client, &p), &mut Run::quiet(&cancel)).unwrap();
     let rows = saved.preset.diff(&p, &device);
     assert_eq!(rows.len(), 25);
     let differing: Vec<(&str, &str, &str, Option<&str>)> = rows
@@ -203,10 +209,9 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
 
     // Apply: every field is written and read back.
     let mut steps = Vec::new();
-    let checks = ops::preset::apply(&client, &p, &saved.preset, &cancel, &mut |pr| {
-        steps.push(pr.done)
-    })
-    .unwrap();
+    let mut run = Run::new(&cancel, |pr: Progress| steps.push(pr.done));
+    let checks = ops::preset::apply(Device::new(&client, &p), &saved.preset, &mut run).unwrap();
+    drop(run);
     assert_eq!(steps, (0..=8).collect::<Vec<u64>>());
     assert_eq!(checks.len(), 25);
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
@@ -215,7 +220,8 @@ fn save_change_diff_apply_brings_the_device_back_to_the_preset() {
         assert_eq!(sim.param("pwmValue"), Some(85));
         assert_eq!(sim.param("defaultTarget"), Some(275));
     }
-    let after = ops::preset::read_device(&client, &p, &cancel, &mut |_| {}).unwrap();
+    let after =
+        ops::preset::read_device(Device::new(&client, &p), &mut Run::quiet(&cancel)).unwrap();
     assert!(saved.preset.diff(&p, &after).iter().all(|r| !r.differs));
 }
 
@@ -231,8 +237,12 @@ fn the_factory_preset_applies_to_a_tuned_device() {
     }
     let link = connect(&wc, &p);
     let factory = Preset::load(Path::new(FACTORY), &p).unwrap().preset;
-    let checks =
-        ops::preset::apply(&link.client(), &p, &factory, &Cancel::new(), &mut |_| {}).unwrap();
+    let checks = ops::preset::apply(
+        Device::new(&link.client(), &p),
+        &factory,
+        &mut Run::quiet(&Cancel::new()),
+    )
+    .unwrap();
     assert_eq!(checks.len(), 22);
     assert!(checks.iter().all(|c| c.ok()), "{checks:?}");
     let sim = wc.sim();
@@ -250,12 +260,12 @@ fn a_cancel_stops_between_commands_and_returns_what_was_done() {
     let factory = Preset::load(Path::new(FACTORY), &p).unwrap().preset;
     let cancel = Cancel::new();
     let c2 = cancel.clone();
-    let checks = ops::preset::apply(&link.client(), &p, &factory, &cancel, &mut |pr| {
+    let mut run = Run::new(&cancel, |pr: Progress| {
         if pr.done == 1 {
             c2.cancel();
         }
-    })
-    .unwrap();
+    });
+    let checks = ops::preset::apply(Device::new(&link.client(), &p), &factory, &mut run).unwrap();
     // Only MSP_SET_PWMVALUE was written.
     assert_eq!(checks.len(), 1);
     assert_eq!(checks[0].field, "pwmValue");
@@ -363,8 +373,12 @@ fn an_out_of_range_value_is_refused_before_anything_is_written() {
     // Applying it anyway (unchecked) writes nothing, not even the valid commands.
     let unchecked = Preset::parse_unchecked("test.ron", &text).unwrap();
     let link = connect(&wc, &p);
-    let err = ops::preset::apply(&link.client(), &p, &unchecked, &Cancel::new(), &mut |_| {})
-        .unwrap_err();
+    let err = ops::preset::apply(
+        Device::new(&link.client(), &p),
+        &unchecked,
+        &mut Run::quiet(&Cancel::new()),
+    )
+    .unwrap_err();
     assert!(
         matches!(err, OpError::Document(ref e) if e.to_string().contains("out of range")),
         "{err}"

@@ -28,7 +28,8 @@ pub use plan::{IdSequence, Issue, Plan, Resolved};
 
 use crate::link::{Client, ExchangeError};
 use crate::ops::servo::{self, Presence, switch};
-use crate::ops::{Cancel, OpError, Progress};
+use crate::ops::{Device, Run};
+use crate::ops::{OpError, Progress};
 use crate::profile::{Input, Param, Profile, Value};
 use serde::Serialize;
 
@@ -150,11 +151,8 @@ fn fail(record: &mut Record, step: &str, reason: String) {
 /// `ops/servo/search.rs`) and returns each rate where something answered, and how, in the order
 /// of `bauds`. Once the servo has answered, its answer latency is measured: the silent rates
 /// after it cost the link's grace for that latency, not for an unknown connection.
-pub fn find_fresh(
-    client: &Client,
-    profile: &Profile,
-    bauds: &[u32],
-) -> Result<Vec<(u32, Presence)>, OpError> {
+pub fn find_fresh(dev: Device<'_>, bauds: &[u32]) -> Result<Vec<(u32, Presence)>, OpError> {
+    let Device { client, profile } = dev;
     let fresh = servo::factory_location(profile).id;
     servo::search::search(client, fresh, bauds, false)
 }
@@ -173,12 +171,10 @@ pub fn search_order(profile: &Profile, target: u32) -> Vec<u32> {
 /// parameters. Stops at the first step that fails; the record names it. `state` carries the ids
 /// given out from one servo to the next.
 pub fn provision_next(
-    client: &Client,
-    profile: &Profile,
+    dev: Device<'_>,
     plan: &Plan,
     state: &mut ProvisionState,
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(Progress),
+    run: &mut Run<'_>,
 ) -> Record {
     let mut record = Record {
         time: String::new(),
@@ -189,17 +185,8 @@ pub fn provision_next(
         mismatches: Vec::new(),
         recorded: plan.record.iter().map(|r| (r.clone(), None)).collect(),
     };
-    match plan.resolve(profile) {
-        Ok(resolved) => run(
-            client,
-            profile,
-            plan,
-            &resolved,
-            state,
-            cancel,
-            progress,
-            &mut record,
-        ),
+    match plan.resolve(dev.profile) {
+        Ok(resolved) => steps(dev, plan, &resolved, state, run, &mut record),
         Err(issue) => fail(&mut record, step::PLAN, issue.message),
     }
     record.time = chrono::Local::now().to_rfc3339_opts(chrono::SecondsFormat::Secs, false);
@@ -207,21 +194,20 @@ pub fn provision_next(
 }
 
 /// The steps; on failure, sets the record's result and returns.
-#[allow(clippy::too_many_arguments)]
-fn run(
-    client: &Client,
-    profile: &Profile,
+fn steps(
+    dev: Device<'_>,
     plan: &Plan,
     resolved: &Resolved<'_>,
     state: &mut ProvisionState,
-    cancel: &Cancel,
-    progress: &mut dyn FnMut(Progress),
+    run: &mut Run<'_>,
     record: &mut Record,
 ) {
+    let Device { client, profile } = dev;
+    let cancel = run.cancel_flag();
     let total = 6 + resolved.writes.len() as u64;
     let mut done = 0u64;
     let mut at = |step: &str, detail: String, done: &mut u64| {
-        progress(Progress {
+        run.report(Progress {
             done: *done,
             total,
             message: {
@@ -248,7 +234,7 @@ fn run(
     at(step::DETECT, String::new(), &mut done);
     check_cancel!(step::DETECT);
     let fresh = servo::factory_location(profile).id;
-    let found = match find_fresh(client, profile, &search_order(profile, target)) {
+    let found = match find_fresh(dev, &search_order(profile, target)) {
         Ok(f) => f,
         Err(e) => return fail(record, step::DETECT, e.to_string()),
     };
@@ -290,8 +276,7 @@ fn run(
     // Its serial number, so that even a failure names the servo.
     at(step::SERIAL, String::new(), &mut done);
     check_cancel!(step::SERIAL);
-    let serial = match servo::serial_param(profile).and_then(|p| read(client, profile, fresh, p.id))
-    {
+    let serial = match servo::serial_param(profile).and_then(|p| read(dev, fresh, p.id)) {
         Ok(v) => v,
         Err(e) => return fail(record, step::SERIAL, reason(&e, fresh, baud)),
     };
@@ -338,7 +323,7 @@ fn run(
             "no free id left in the plan's ids".into(),
         );
     };
-    if let Err(e) = servo::set_id(client, profile, fresh, id, cancel) {
+    if let Err(e) = servo::set_id(dev, fresh, id, cancel) {
         return fail(record, step::ASSIGN_ID, reason(&e, fresh, baud));
     }
     state.next = index + 1;
@@ -363,7 +348,7 @@ fn run(
             Err(e) => return fail(record, step::SET_BAUD, reason(&e, id, baud)),
         }
         record.baud = None;
-        match servo::set_baud(client, profile, id, resolved.option) {
+        match servo::set_baud(dev, id, resolved.option) {
             Ok(now) => record.baud = Some(now),
             Err(e) => return fail(record, step::SET_BAUD, reason(&e, id, target)),
         }
@@ -375,7 +360,7 @@ fn run(
         let ident = &param.field.ident;
         at(step::APPLY, ident.clone(), &mut done);
         check_cancel!(step::APPLY);
-        match servo::write_param(client, profile, id, param, Input::Raw(Value::Int(raw))) {
+        match servo::write_param(dev, id, param, Input::Raw(Value::Int(raw))) {
             Ok(check) if check.ok() => {}
             Ok(check) => {
                 apply_mismatch = true;
@@ -432,7 +417,7 @@ fn run(
                 format!("the profile has no parameter {pid}"),
             );
         };
-        let got = match read(client, profile, id, pid) {
+        let got = match read(dev, id, pid) {
             Ok(v) => v,
             Err(e) => {
                 return fail(
@@ -467,7 +452,7 @@ fn run(
     at(step::RECORD, String::new(), &mut done);
     check_cancel!(step::RECORD);
     for (i, param) in resolved.record.iter().enumerate() {
-        match servo::read_param(client, profile, id, param) {
+        match servo::read_param(dev, id, param) {
             Ok(v) => {
                 if let Some(slot) = record.recorded.get_mut(i) {
                     slot.1 = Some(param.field.format(&Value::Int(v)));
@@ -482,18 +467,19 @@ fn run(
             }
         }
     }
-    progress(Progress {
+    run.report(Progress {
         done: total,
         total,
         message: crate::i18n::Text::new("done", "完成"),
     });
 }
 
-fn read(client: &Client, profile: &Profile, id: u8, pid: u8) -> Result<i64, OpError> {
+fn read(dev: Device<'_>, id: u8, pid: u8) -> Result<i64, OpError> {
+    let profile = dev.profile;
     let param = profile
         .param(pid)
         .ok_or_else(|| OpError::unknown_param(profile, pid))?;
-    servo::read_param(client, profile, id, param)
+    servo::read_param(dev, id, param)
 }
 
 /// Whether `id` is silent at every one of `bauds`.
