@@ -124,7 +124,8 @@ pub fn axes<'a>(plot: Plot<'a>, lang: Lang, t0: SystemTime, legend: &Legend) -> 
 }
 
 /// The fields' names in their colours, on a line above the plot (a legend inside it would
-/// cover the newest data), then the plot's states as they read now (see [`states`]).
+/// cover the newest data), then the plot's states as they read now (see [`states`]); then the
+/// air before the plot ([`key_air`]).
 pub fn key(ui: &mut egui::Ui, legend: &Legend, states: &[String]) {
     crate::ui::layout::toolbar(ui, |ui| {
         for (i, name) in legend.names.iter().enumerate() {
@@ -135,6 +136,13 @@ pub fn key(ui: &mut egui::Ui, legend: &Legend, states: &[String]) {
             ui.strong(s);
         }
     });
+    ui.add_space(key_air(ui));
+}
+
+/// The space between a plot's key and its data area, points: half a line, so that a y tick
+/// label on the data area's top edge (drawn centred on it, half above) never reaches the key.
+pub fn key_air(ui: &egui::Ui) -> f32 {
+    ui.text_style_height(&egui::TextStyle::Body) / 2.0
 }
 
 /// A reading older than this is shown with its age.

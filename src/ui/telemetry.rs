@@ -49,9 +49,10 @@ pub struct TelemetryPanel {
 pub const MIN_PLOT_HEIGHT: f32 = 100.0;
 
 /// The height a plot takes beside its data area: its title, key and readout line above and
-/// below it, and its x axis (tick labels and the axis' label).
+/// below it, the air under the key ([`plot::key_air`]), and its x axis (tick labels and the
+/// axis' label).
 fn plot_chrome(ui: &egui::Ui) -> f32 {
-    3.0 * line_height(ui) + x_axis_height(ui)
+    3.0 * line_height(ui) + plot::key_air(ui) + x_axis_height(ui)
 }
 
 /// A line of body text with the space after it.
