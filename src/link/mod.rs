@@ -222,6 +222,29 @@ pub struct LinkStats {
     pub latency_timer: Option<Duration>,
 }
 
+/// Requests in a row without an answer after which the device counts as silent (and, when it
+/// answers again, as possibly another unit on the same port).
+pub const SILENT_AFTER: u64 = 3;
+
+/// What the link finds of the device behind the port: an open port says nothing of it, the
+/// device's frames and its silence do. Sent as [`LinkEvent::Device`] when it is news.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DeviceEvent {
+    /// A frame came from the device: the first on this connection, or the first after it had
+    /// been silent (`after_silence`: possibly another unit on the same port, a robot swapped on
+    /// the fixture).
+    Answered {
+        /// At least [`SILENT_AFTER`] requests in a row had gone unanswered before it.
+        after_silence: bool,
+    },
+    /// This many attempts in a row went unanswered (at least [`SILENT_AFTER`]; sent again at each
+    /// one more, until a frame comes).
+    Silent {
+        /// Unanswered attempts in a row.
+        unanswered: u64,
+    },
+}
+
 /// What the worker reports.
 #[derive(Debug, Clone)]
 pub enum LinkEvent {
@@ -251,8 +274,12 @@ pub enum LinkEvent {
     /// MSP: the device identified itself (CMD_VERSION, then CMD_BUILD_INFO), once per
     /// connection and again on [`LinkCommand::Identify`], or why it could not.
     Identified(Result<DeviceInfo, ExchangeError>),
-    /// Tuya: handshake steps, MCU requests answered, restarts.
+    /// Tuya: handshake steps, heartbeats, the Wi-Fi state reported, status queries, MCU requests
+    /// answered, restarts.
     Tuya(TuyaEvent),
+    /// Whether the device answers: the first frame of a connection, silence, an answer after
+    /// silence. Each new connection starts with nothing known.
+    Device(DeviceEvent),
     /// Counters, sent when they change (at most a few times a second).
     Stats(LinkStats),
 }

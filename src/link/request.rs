@@ -171,6 +171,17 @@ pub enum ReplySpec {
     },
 }
 
+impl ReplySpec {
+    /// What each answering frame matches; `None` when no answer is awaited.
+    pub fn each(&self) -> Option<&Match> {
+        match self {
+            ReplySpec::None => None,
+            ReplySpec::Required(m) | ReplySpec::Optional(m) => Some(m),
+            ReplySpec::Burst { each, .. } | ReplySpec::Reports { each, .. } => Some(each),
+        }
+    }
+}
+
 /// A successful exchange.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Reply {

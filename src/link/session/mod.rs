@@ -131,19 +131,25 @@ impl ProtocolSession {
         })
     }
 
-    /// The frame `sent` was written (a Tuya line that echoes gives it back).
-    pub(crate) fn wrote(&mut self, sent: &Packet) {
-        if let Self::Tuya(s) = self {
-            s.wrote(sent);
+    /// The frame `sent` was written (a Tuya line that echoes gives it back): what the session
+    /// reports of it (Tuya: a Wi-Fi state reported, a status query).
+    pub(crate) fn wrote(&mut self, sent: &Packet) -> Option<LinkEvent> {
+        match self {
+            Self::Tuya(s) => s.wrote(sent).map(LinkEvent::Tuya),
+            _ => None,
         }
     }
 
     /// A frame read from the line, sorted: on a Tuya line, the module's own frames echoed
-    /// back are marked as sent by the host.
-    pub(crate) fn received(&mut self, p: Packet) -> Packet {
+    /// back are marked as sent by the host. With what the session reports of it (Tuya: a
+    /// heartbeat answered, a Wi-Fi state acknowledged).
+    pub(crate) fn received(&mut self, p: Packet) -> (Packet, Option<LinkEvent>) {
         match self {
-            Self::Tuya(s) => s.received(p),
-            _ => p,
+            Self::Tuya(s) => {
+                let (p, event) = s.received(p);
+                (p, event.map(LinkEvent::Tuya))
+            }
+            _ => (p, None),
         }
     }
 

@@ -315,3 +315,43 @@ fn frames_are_sorted_by_their_own_protocol_only() {
     assert!(matches!(s.unasked(&echo), Unasked::Echo));
     assert!(!s.unasked(&echo).answers_other());
 }
+
+#[test]
+fn the_tuya_session_reports_heartbeats_wifi_states_and_queries_from_the_frames_themselves() {
+    let mut d = Driver::new("tuya-vacuum", &LinkOptions::default());
+    let sent =
+        |command: u8, data: &[u8]| Packet::tuya(tuya::Frame::from_module(command, data.to_vec()));
+    let from_mcu = |command: u8, data: &[u8]| {
+        Packet::tuya_received(tuya::Frame::from_mcu(command, data.to_vec()))
+    };
+    let tuya_event = |ev: Option<LinkEvent>| match ev {
+        Some(LinkEvent::Tuya(t)) => Some(t),
+        _ => None,
+    };
+    assert_eq!(
+        tuya_event(d.s.wrote(&sent(WIFI_STATE, &[3]))),
+        Some(TuyaEvent::WifiStateSent { state: 3 })
+    );
+    assert_eq!(
+        tuya_event(d.s.wrote(&sent(QUERY_STATUS, &[]))),
+        Some(TuyaEvent::StatusQueried)
+    );
+    assert_eq!(tuya_event(d.s.wrote(&sent(HEARTBEAT, &[]))), None);
+    let (_, ev) = d.s.received(from_mcu(HEARTBEAT, &[1]));
+    assert_eq!(
+        tuya_event(ev),
+        Some(TuyaEvent::Heartbeat { answer: Some(1) })
+    );
+    let (_, ev) = d.s.received(from_mcu(WIFI_STATE, &[]));
+    assert_eq!(tuya_event(ev), Some(TuyaEvent::WifiStateAcked));
+    let (_, ev) =
+        d.s.received(from_mcu(tuya::cmd::DP_REPORT, &[1, 1, 0, 1, 1]));
+    assert_eq!(tuya_event(ev), None);
+    // On a line that echoes, the module's own heartbeat read back is no answer from the MCU.
+    let mut d = Driver::new("tuya-vacuum", &LinkOptions::default());
+    d.s.wrote(&sent(HEARTBEAT, &[]));
+    let echo = Packet::tuya_received(tuya::Frame::from_module(HEARTBEAT, Vec::new()));
+    let (p, ev) = d.s.received(echo);
+    assert_eq!(p.direction, crate::protocol::Direction::HostToDevice);
+    assert_eq!(tuya_event(ev), None);
+}

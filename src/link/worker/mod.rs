@@ -1,31 +1,45 @@
-//! The worker thread: owns the transport and the protocol session, takes commands in order,
-//! and reports events. The loop is here; exchanges, polling and the port have a file each, and
-//! the protocol sessions it drives live in [`crate::link::session`].
+//! The worker thread: owns the port and the protocol session, takes commands in order, and
+//! reports events. Its state is split by what it is:
+//!
+//! - [`wire::Wire`]: the port, the decoder, the rate, the bytes sent and the counters;
+//! - [`timing::Timing`]: the answer timing (margins, what was measured, answers still owed);
+//! - [`queue::Queue`] (callers' work in order), [`polls::Polls`] (telemetry polling) and the
+//!   protocol session ([`crate::link::session`]);
+//! - [`liveness::Liveness`]: whether the device answers, reported as
+//!   [`crate::link::DeviceEvent`];
+//! - [`events::Events`]: what goes out (events, the packet tap, the UI's waker).
+//!
+//! The loop is here; exchanges ([`exchange`], [`wait`]), polling, bus-paced sweeps ([`sweep`])
+//! and the port's loss and reconnect ([`port`]) have a file each.
 
+mod events;
 mod exchange;
+mod liveness;
 mod polls;
 mod port;
+mod queue;
 mod sweep;
 mod timing;
+mod wait;
+mod wire;
 
 pub use exchange::default_margin;
-use polls::InFlight;
-use timing::{AnswerTiming, OwedAnswers};
 
-use super::decoder::AnyDecoder;
-use super::request::{ExchangeError, Reply, Request};
+use super::request::{ExchangeError, Reply};
 use super::session::{Precedence, ProtocolSession};
 use super::{
-    LinkCommand, LinkError, LinkEvent, LinkOptions, LinkState, LinkStats, LogEntry, Opener, Poll,
-    ReplyTo, Sweep, SweepReply, Transport, Waker,
+    LinkCommand, LinkError, LinkEvent, LinkOptions, LinkState, LinkStats, Opener, ReplyTo,
+    Transport, Waker,
 };
-use crate::packet::Packet;
 use crate::profile::Profile;
-use crate::protocol::{Direction, FrameError};
-use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TrySendError};
-use std::collections::VecDeque;
+use crossbeam_channel::{Receiver, RecvTimeoutError, Sender};
+use events::Events;
+use polls::Polls;
+use queue::{Queue, Queued};
 use std::sync::Arc;
-use std::time::{Duration, Instant, SystemTime};
+use std::time::{Duration, Instant};
+use timing::Timing;
+use wire::Wire;
 
 /// How long the idle loop waits for a command before looking at the port again.
 const IDLE_SLICE: Duration = Duration::from_millis(5);
@@ -34,45 +48,27 @@ const STATS_EVERY: Duration = Duration::from_millis(250);
 
 /// The worker of one link (one per open port, on the thread `botbench-link`).
 pub(super) struct Worker {
-    /// The port; `None` while it is lost.
-    transport: Option<Box<dyn Transport>>,
-    /// Reopens the port after a loss.
-    opener: Opener,
-    opts: LinkOptions,
-    cmds: Receiver<LinkCommand>,
-    events: Sender<LinkEvent>,
-    waker: Option<Waker>,
-    decoder: AnyDecoder,
+    /// The port and its bytes.
+    wire: Wire,
+    /// How long answers may take, and those still owed.
+    timing: Timing,
     /// What the protocol does beyond callers' exchanges (MSP identify, the Tuya module side).
     session: ProtocolSession,
-    /// Callers' exchanges and baud changes, in order.
-    queue: VecDeque<Queued>,
-    /// Commands that came during an exchange, taken after it.
-    deferred: VecDeque<LinkCommand>,
-    /// The polled commands and when each is due.
-    polls: Vec<(Poll, Instant)>,
-    /// The poll to look at first (polls take turns).
-    poll_cursor: usize,
-    /// Polls sent ahead of their answers (MSP polls at the wire's maximum), oldest first.
-    in_flight: VecDeque<InFlight>,
-    /// The port's rate, in baud.
-    baud: u32,
-    /// When the bytes written so far have crossed the wire (at the rate they were sent at).
-    sent_until: Instant,
-    /// How late answers come on this connection (the automatic margin).
-    timing: AnswerTiming,
-    /// Answers still owed to attempts that went unanswered.
-    owed: OwedAnswers,
+    /// Callers' exchanges, baud changes and sweeps, in order.
+    queue: Queue,
+    /// The polled commands.
+    polls: Polls,
     /// Servo frames read between sweeps that answered nothing: the next sweep's strays.
     unclaimed: sweep::Unclaimed,
-    stats: LinkStats,
-    stats_reported: LinkStats,
-    stats_at: Instant,
-    /// When the idle loop last checked that the port is there.
-    checked_at: Instant,
+    /// Whether the device answers.
+    liveness: liveness::Liveness,
+    /// What goes out.
+    events: Events,
+    cmds: Receiver<LinkCommand>,
+    opts: LinkOptions,
+    /// The counters last reported, and when.
+    stats_reported: (LinkStats, Instant),
     shutdown: bool,
-    /// Events were sent since the UI was last woken.
-    wake: bool,
 }
 
 /// Asks the OS to wake this thread on time (Linux: a timer slack of 1 ns instead of the default
@@ -81,13 +77,6 @@ pub(super) struct Worker {
 fn precise_timers() {
     #[cfg(target_os = "linux")]
     let _ = nix::sys::prctl::set_timerslack(1);
-}
-
-/// Work done in order.
-enum Queued {
-    Exchange(Request, ReplyTo),
-    Baud(u32, Option<Sender<Result<(), LinkError>>>),
-    Sweep(Sweep, Sender<Result<SweepReply, ExchangeError>>),
 }
 
 impl Worker {
@@ -101,33 +90,25 @@ impl Worker {
         waker: Option<Waker>,
     ) -> Self {
         let now = Instant::now();
-        let baud = transport.baud();
-        let timing = AnswerTiming::new(transport.latency_timer());
+        let protocol = profile.protocol;
+        let timing = Timing::new(
+            opts.margin,
+            default_margin(protocol),
+            transport.latency_timer(),
+        );
         Self {
-            decoder: AnyDecoder::new(profile.protocol),
-            session: ProtocolSession::new(profile, &opts, now),
-            transport: Some(transport),
-            opener,
-            opts,
-            cmds,
-            events,
-            waker,
-            queue: VecDeque::new(),
-            deferred: VecDeque::new(),
-            polls: Vec::new(),
-            poll_cursor: 0,
-            in_flight: VecDeque::new(),
-            sent_until: now,
+            wire: Wire::new(transport, opener, protocol),
             timing,
-            owed: OwedAnswers::default(),
+            session: ProtocolSession::new(profile, &opts, now),
+            queue: Queue::default(),
+            polls: Polls::default(),
             unclaimed: sweep::Unclaimed::default(),
-            baud,
-            stats: LinkStats::default(),
-            stats_reported: LinkStats::default(),
-            stats_at: now,
-            checked_at: now,
+            liveness: liveness::Liveness::default(),
+            events: Events::new(events, waker),
+            cmds,
+            opts,
+            stats_reported: (LinkStats::default(), now),
             shutdown: false,
-            wake: false,
         }
     }
 
@@ -139,7 +120,7 @@ impl Worker {
         precise_timers();
         self.emit_connected();
         while !self.shutdown {
-            if self.transport.is_none() {
+            if !self.wire.is_open() {
                 self.reconnect();
                 continue;
             }
@@ -147,42 +128,48 @@ impl Worker {
             if self.shutdown {
                 break;
             }
-            if self.session.due(Instant::now()) == Some(Precedence::BeforeRequests) {
-                self.run_session();
-            } else if let Some(item) = self.queue.pop_front() {
-                // Polls in flight are answered first: no answer can be taken for another's.
-                self.settle_polls();
-                match item {
-                    Queued::Exchange(req, to) => {
-                        let result = self.exchange(&req);
-                        self.deliver(to, result);
-                    }
-                    Queued::Baud(baud, ack) => self.switch_baud(baud, ack),
-                    Queued::Sweep(sweep, reply) => {
-                        let result = self.run_sweep(&sweep);
-                        let _ = reply.send(result);
-                    }
-                }
-            } else if self.session.due(Instant::now()).is_some() {
-                self.run_session();
-            } else if let Some(i) = self.due_poll() {
-                if self.pipelined(i) {
-                    self.send_poll_ahead(i);
-                } else {
-                    self.settle_polls();
-                    self.run_poll(i);
-                }
-            } else if !self.in_flight.is_empty() {
-                self.settle_polls();
-            } else {
-                self.idle();
-            }
+            self.step();
             self.housekeeping();
         }
         self.fail_queue(|| ExchangeError::Cancelled);
         self.session.closed();
-        self.emit(LinkEvent::State(LinkState::Closed));
-        self.flush_wake();
+        self.events.emit(LinkEvent::State(LinkState::Closed));
+        self.events.flush_wake();
+    }
+
+    /// One turn of the loop: the work that comes first now.
+    fn step(&mut self) {
+        let now = Instant::now();
+        if self.session.due(now) == Some(Precedence::BeforeRequests) {
+            self.run_session();
+        } else if let Some(item) = self.queue.pop() {
+            // Polls in flight are answered first: no answer can be taken for another's.
+            self.settle_polls();
+            self.run_queued(item);
+        } else if self.session.due(now).is_some() {
+            self.run_session();
+        } else if let Some(i) = self.polls.due(now) {
+            self.poll(i);
+        } else if self.polls.in_flight() {
+            self.settle_polls();
+        } else {
+            self.idle();
+        }
+    }
+
+    /// Does one item of callers' work.
+    fn run_queued(&mut self, item: Queued) {
+        match item {
+            Queued::Exchange(req, to) => {
+                let result = self.exchange(&req);
+                self.deliver(to, result);
+            }
+            Queued::Baud(baud, ack) => self.switch_baud(baud, ack),
+            Queued::Sweep(sweep, reply) => {
+                let result = self.run_sweep(&sweep);
+                let _ = reply.send(result);
+            }
+        }
     }
 
     /// Runs the session's requests due now: one, or a whole sequence (an identification, a
@@ -194,9 +181,9 @@ impl Worker {
             let result = self.exchange(&request);
             let more = self.session.on_answer(result, Instant::now(), &mut events);
             for ev in events.drain(..) {
-                self.emit(ev);
+                self.events.emit(ev);
             }
-            self.flush_wake();
+            self.events.flush_wake();
             if !more {
                 break;
             }
@@ -206,7 +193,7 @@ impl Worker {
     // ---- commands -------------------------------------------------------------------------
 
     fn take_commands(&mut self) {
-        while let Some(c) = self.deferred.pop_front() {
+        while let Some(c) = self.queue.next_deferred() {
             self.handle(c);
         }
         while let Ok(c) = self.cmds.try_recv() {
@@ -215,47 +202,36 @@ impl Worker {
     }
 
     fn handle(&mut self, cmd: LinkCommand) {
+        let open = self.wire.is_open();
+        let lost = || "port lost".to_string();
         match cmd {
-            LinkCommand::Request { request, reply_to } => {
-                if self.transport.is_none() {
-                    self.deliver(
-                        reply_to,
-                        Err(ExchangeError::Disconnected("port lost".into())),
-                    );
-                } else {
-                    self.queue.push_back(Queued::Exchange(request, reply_to));
+            LinkCommand::Request { request, reply_to } if open => {
+                self.queue.push(Queued::Exchange(request, reply_to));
+            }
+            LinkCommand::Request { reply_to, .. } => {
+                self.deliver(reply_to, Err(ExchangeError::Disconnected(lost())));
+            }
+            LinkCommand::SetBaud { baud, ack } if open => {
+                self.queue.push(Queued::Baud(baud, ack));
+            }
+            // A lost port: nobody would ever take this from the queue.
+            LinkCommand::SetBaud { ack, .. } => {
+                if let Some(ack) = ack {
+                    let _ = ack.send(Err(LinkError::Disconnected(lost())));
                 }
             }
-            LinkCommand::SetPolls(polls) => {
-                let now = Instant::now();
-                self.polls = polls.into_iter().map(|p| (p, now)).collect();
-                self.poll_cursor = 0;
+            LinkCommand::Sweep { sweep, reply } if open => {
+                self.queue.push(Queued::Sweep(sweep, reply));
             }
-            LinkCommand::SetBaud { baud, ack } => {
-                if self.transport.is_none() {
-                    // A lost port: nobody would ever take this from the queue.
-                    if let Some(ack) = ack {
-                        let _ = ack.send(Err(LinkError::Disconnected("port lost".into())));
-                    }
-                } else {
-                    self.queue.push_back(Queued::Baud(baud, ack));
-                }
+            LinkCommand::Sweep { reply, .. } => {
+                let _ = reply.send(Err(ExchangeError::Disconnected(lost())));
             }
-            LinkCommand::Sweep { sweep, reply } => {
-                if self.transport.is_none() {
-                    let _ = reply.send(Err(ExchangeError::Disconnected("port lost".into())));
-                } else {
-                    self.queue.push_back(Queued::Sweep(sweep, reply));
-                }
-            }
-            LinkCommand::Identify => self.session.identify_again(),
+            LinkCommand::DeviceInfo { reply } if open => self.session.want_device_info(reply),
             LinkCommand::DeviceInfo { reply } => {
-                if self.transport.is_none() {
-                    let _ = reply.send(Err(ExchangeError::Disconnected("port lost".into())));
-                } else {
-                    self.session.want_device_info(reply);
-                }
+                let _ = reply.send(Err(ExchangeError::Disconnected(lost())));
             }
+            LinkCommand::SetPolls(polls) => self.polls.set(polls),
+            LinkCommand::Identify => self.session.identify_again(),
             LinkCommand::Handshake => self.session.handshake_again(Instant::now()),
             LinkCommand::TuyaOptions(o) => self.session.set_tuya_options(o),
             LinkCommand::Shutdown => self.shutdown = true,
@@ -263,7 +239,7 @@ impl Worker {
     }
 
     fn fail_queue(&mut self, err: impl Fn() -> ExchangeError) {
-        for item in std::mem::take(&mut self.queue) {
+        for item in self.queue.take_all() {
             match item {
                 Queued::Exchange(_, to) => self.deliver(to, Err(err())),
                 Queued::Baud(_, Some(tx)) => {
@@ -288,7 +264,7 @@ impl Worker {
                 // What the module answers the MCU takes effect at once: the MCU may ask while
                 // an exchange is under way.
                 LinkCommand::TuyaOptions(o) => self.session.set_tuya_options(o),
-                other => self.deferred.push_back(other),
+                other => self.queue.defer(other),
             }
         }
         Ok(())
@@ -296,7 +272,7 @@ impl Worker {
 
     fn deliver(&mut self, to: ReplyTo, result: Result<Reply, ExchangeError>) {
         match to {
-            ReplyTo::Event(id) => self.emit(LinkEvent::Reply { id, result }),
+            ReplyTo::Event(id) => self.events.emit(LinkEvent::Reply { id, result }),
             ReplyTo::Channel(tx) => {
                 let _ = tx.send(result);
             }
@@ -305,57 +281,26 @@ impl Worker {
 
     // ---- events ---------------------------------------------------------------------------
 
-    fn emit(&mut self, ev: LinkEvent) {
-        match self.events.try_send(ev) {
-            Ok(()) => self.wake = true,
-            Err(TrySendError::Full(_)) => self.stats.dropped_events += 1,
-            Err(TrySendError::Disconnected(_)) => {}
-        }
-    }
-
-    fn flush_wake(&mut self) {
-        if std::mem::take(&mut self.wake)
-            && let Some(w) = &self.waker
-        {
-            w();
-        }
-    }
-
     fn emit_connected(&mut self) {
-        if let Some(t) = &self.transport {
-            let state = LinkState::Connected {
-                port: t.describe(),
-                baud: t.baud(),
-            };
-            self.emit(LinkEvent::State(state));
+        if let Some(state) = self.wire.connected_state() {
+            self.events.emit(LinkEvent::State(state));
         }
     }
 
+    /// Reports the counters when they changed, at most every [`STATS_EVERY`], and wakes the UI.
     fn housekeeping(&mut self) {
         let now = Instant::now();
-        self.stats.margin = Some(self.auto_margin());
-        self.stats.answer_latency = self.timing.measured();
-        self.stats.latency_timer = self.timing.latency_timer;
-        if now.duration_since(self.stats_at) >= STATS_EVERY && self.stats != self.stats_reported {
-            self.stats_at = now;
-            self.stats_reported = self.stats.clone();
-            self.emit(LinkEvent::Stats(self.stats.clone()));
+        let stats = &mut self.wire.stats;
+        stats.margin = Some(self.timing.auto_margin());
+        stats.answer_latency = self.timing.learned.measured();
+        stats.latency_timer = self.timing.learned.latency_timer;
+        stats.dropped_events = self.events.dropped();
+        let (reported, at) = &self.stats_reported;
+        if now.duration_since(*at) >= STATS_EVERY && stats != reported {
+            self.stats_reported = (stats.clone(), now);
+            self.events.emit(LinkEvent::Stats(stats.clone()));
         }
-        self.flush_wake();
-    }
-
-    fn log(
-        &mut self,
-        direction: Direction,
-        frame: Result<Packet, FrameError>,
-        note: Option<String>,
-    ) {
-        self.emit(LinkEvent::Frame(LogEntry {
-            at: SystemTime::now(),
-            direction,
-            frame,
-            note,
-        }));
+        self.events.flush_wake();
     }
 
     // ---- idle ---------------------------------------------------------------------------------
@@ -365,7 +310,7 @@ impl Worker {
     fn idle(&mut self) {
         let now = Instant::now();
         let mut wait = IDLE_SLICE;
-        if let Some(due) = self.polls.iter().map(|(_, d)| *d).min() {
+        if let Some(due) = self.polls.next_due() {
             wait = wait.min(due.saturating_duration_since(now));
         }
         match self.cmds.recv_timeout(wait) {
@@ -377,14 +322,14 @@ impl Worker {
             Err(RecvTimeoutError::Timeout) => {}
             Err(RecvTimeoutError::Disconnected) => self.shutdown = true,
         }
-        if self.transport.is_none() || self.shutdown {
+        if !self.wire.is_open() || self.shutdown {
             return;
         }
-        let before = self.decoder.buffered();
+        let before = self.wire.buffered();
         match self.read_some(Instant::now()) {
             Ok(0) if before > 0 => {
                 // The line is quiet with a partial frame held: it will not complete.
-                self.decoder.flush();
+                self.wire.flush();
                 self.drain_unsolicited();
             }
             Ok(_) => self.drain_unsolicited(),

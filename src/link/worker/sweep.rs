@@ -72,7 +72,7 @@ impl Worker {
     /// has its answer); one that listens, not before the grace an exchange gives has passed
     /// since it began (the grace as its own answers leave it: they are measured too).
     pub(super) fn run_sweep(&mut self, sweep: &Sweep) -> Result<SweepReply, ExchangeError> {
-        let margin = self.auto_margin();
+        let margin = self.timing.auto_margin();
         let n = sweep.requests.len();
         let started = Instant::now();
         let mut run = Run {
@@ -90,7 +90,7 @@ impl Worker {
                 Err(error) => run.order.push(Seen::Damaged { error, sent: None }),
             }
         }
-        let baud = self.baud;
+        let baud = self.wire.baud();
         let answer_time = sweep.device_latency + wire_time(sweep.answer_bytes, baud);
         let mut next = Instant::now();
         for (i, req) in sweep.requests.iter().enumerate() {
@@ -111,7 +111,7 @@ impl Worker {
             run.on_wire.push(on_wire);
             // The request's last byte leaves when the bytes written before it have (`sent_until`);
             // the device may then take its latency, and its answer the answer's wire time.
-            next = self.sent_until.max(t + on_wire) + answer_time;
+            next = self.wire.sent_until().max(t + on_wire) + answer_time;
         }
         let window = match run.sent.last() {
             Some(&last) => {
@@ -121,7 +121,7 @@ impl Worker {
         };
         let mut until = window.max(next);
         if run.listen {
-            until = until.max(started + self.timing.grace(margin));
+            until = until.max(started + self.timing.learned.grace(margin));
         }
         self.sweep_read(sweep, &mut run, until, true)?;
         Ok(finish(run))
@@ -140,11 +140,11 @@ impl Worker {
         settle: bool,
     ) -> Result<(), ExchangeError> {
         let mut deadline = until;
-        let gap = self.timing.frame_gap();
+        let gap = self.timing.learned.frame_gap();
         let mut flushed = false;
         loop {
             self.sweep_sort(sweep, run);
-            if self.decoder.buffered() == 0 && run.awaits_nothing(settle) {
+            if self.wire.buffered() == 0 && run.awaits_nothing(settle) {
                 return Ok(());
             }
             let now = Instant::now();
@@ -157,8 +157,8 @@ impl Worker {
                     }
                     continue;
                 }
-                if settle && self.decoder.buffered() > 0 && !flushed {
-                    self.decoder.flush();
+                if settle && self.wire.buffered() > 0 && !flushed {
+                    self.wire.flush();
                     flushed = true;
                     continue;
                 }
@@ -183,24 +183,24 @@ impl Worker {
     }
 
     fn settle_deadline(&self, deadline: Instant, gap: Duration, margin: Duration) -> Instant {
-        let rest = if self.decoder.buffered() > 0 {
+        let rest = if self.wire.buffered() > 0 {
             gap
         } else {
             margin
         };
-        deadline.max(Instant::now() + wire_time(8, self.baud) + rest)
+        deadline.max(Instant::now() + wire_time(8, self.wire.baud()) + rest)
     }
 
     /// Sorts the decoded frames: an answer to the earliest request sent that it answers and that
     /// has none yet, a late answer owed to an earlier exchange, an echo, or a stray.
     fn sweep_sort(&mut self, sweep: &Sweep, run: &mut Run) {
-        while let Some(item) = self.decoder.next_packet() {
+        while let Some(item) = self.wire.next_frame() {
             let now = Instant::now();
+            self.count(&item);
             match item {
                 Ok(p) => {
-                    self.stats.received += 1;
                     if p.direction != Direction::DeviceToHost {
-                        self.log_in(Ok(p), None);
+                        self.events.tap_in(Ok(p), None);
                         continue;
                     }
                     let found = (0..run.sent.len()).find(|&i| {
@@ -211,20 +211,20 @@ impl Worker {
                         Some(i) => {
                             let latency = now
                                 .saturating_duration_since(run.sent[i] + run.on_wire[i])
-                                .saturating_sub(wire_time(p.wire.len(), self.baud));
+                                .saturating_sub(wire_time(p.wire.len(), self.wire.baud()));
                             self.timing.observe(latency);
                             let late = latency > run.margin;
                             if late {
-                                self.stats.late_answers += 1;
+                                self.wire.stats.late_answers += 1;
                             }
-                            self.log_in(Ok(p.clone()), None);
+                            self.events.tap_in(Ok(p.clone()), None);
                             run.answers[i] = Some(SweepAnswer { packet: p, late });
                             run.order.push(Seen::Answer(i));
                         }
                         // Counted for its own earlier request; a stray all the same.
                         None if self.late_answer(&p) => run.strays.push(p),
                         None => {
-                            self.log_in(
+                            self.events.tap_in(
                                 Ok(p.clone()),
                                 Some("answers no request of this sweep".into()),
                             );
@@ -233,8 +233,7 @@ impl Worker {
                     }
                 }
                 Err(error) => {
-                    self.stats.frame_errors += 1;
-                    self.log_in(Err(error.clone()), None);
+                    self.events.tap_in(Err(error.clone()), None);
                     run.order.push(Seen::Damaged {
                         error,
                         sent: run.sent.len().checked_sub(1),

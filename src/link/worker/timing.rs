@@ -17,8 +17,10 @@
 //!   request, and it is forgotten when an answer to a later request comes first (the devices
 //!   answer in order) or after [`LATE_LIMIT_MIN`] (or ten margins).
 
-use crate::link::request::Match;
+use crate::link::request::{Match, Request};
+use crate::link::wire_time;
 use crate::packet::Packet;
+use log::debug;
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
@@ -48,6 +50,95 @@ pub(crate) const LATE_LIMIT_MIN: Duration = Duration::from_millis(500);
 const RECENT: usize = 32;
 /// How many owed answers are kept at most.
 const OWED_CAP: usize = 64;
+
+/// The answer timing of one link: the margin given (`--margin-ms`) or the device's own, what has
+/// been measured on this connection, and the answers still owed to unanswered attempts.
+#[derive(Debug)]
+pub(super) struct Timing {
+    /// `--margin-ms`: the margin of every request that names none, instead of the automatic one.
+    fixed: Option<Duration>,
+    /// The protocol's own margin (see [`crate::link::default_margin`]).
+    device: Duration,
+    /// What has been measured on this connection.
+    pub(super) learned: AnswerTiming,
+    /// Answers still owed to attempts that went unanswered.
+    pub(super) owed: OwedAnswers,
+}
+
+impl Timing {
+    /// The timing of a new link: `fixed` (`--margin-ms`) or the automatic margin from `device`
+    /// (the protocol's own) and the adapter's `latency_timer`.
+    pub(super) fn new(
+        fixed: Option<Duration>,
+        device: Duration,
+        latency_timer: Option<Duration>,
+    ) -> Self {
+        Self {
+            fixed,
+            device,
+            learned: AnswerTiming::new(latency_timer),
+            owed: OwedAnswers::default(),
+        }
+    }
+
+    /// A new connection (a reconnect): nothing measured, nothing owed.
+    pub(super) fn connected(&mut self, latency_timer: Option<Duration>) {
+        self.learned = AnswerTiming::new(latency_timer);
+        self.owed.clear();
+    }
+
+    /// How long the device may take to start answering `req`, beyond the wire time: the
+    /// request's own margin, else the link's ([`Self::auto_margin`]).
+    pub(super) fn margin(&self, req: &Request) -> Duration {
+        req.margin.unwrap_or_else(|| self.auto_margin())
+    }
+
+    /// The link's margin: `--margin-ms`, else the automatic one (the protocol's own, the
+    /// adapter's latency timer, the answer latency measured on this connection).
+    pub(super) fn auto_margin(&self) -> Duration {
+        self.fixed
+            .unwrap_or_else(|| self.learned.margin(self.device))
+    }
+
+    /// Takes one answer latency; a change of the automatic margin is logged.
+    pub(super) fn observe(&mut self, latency: Duration) {
+        let before = self.auto_margin();
+        self.learned.observe(latency);
+        let after = self.auto_margin();
+        if after != before {
+            debug!(
+                "margin {:.1} ms -> {:.1} ms (answer latency {:.1} ms)",
+                ms(before),
+                ms(after),
+                ms(latency)
+            );
+        }
+    }
+
+    /// The latency of an answer read now to a request whose last byte was on the wire at
+    /// `sent`: the time between, less the answer's own wire time (`answer_bytes` at `baud`).
+    pub(super) fn latency_of(sent: Instant, answer_bytes: usize, baud: u32) -> Duration {
+        Instant::now()
+            .saturating_duration_since(sent)
+            .saturating_sub(wire_time(answer_bytes, baud))
+    }
+
+    /// Owes `answer` to an attempt whose last byte was on the wire at `sent`, for as long as
+    /// the late limit of `margin` from now.
+    pub(super) fn owe(&mut self, answer: &Match, sent: Instant, margin: Duration) {
+        let expires = Instant::now() + self.learned.late_limit(margin);
+        self.owed.push(Owed {
+            answer: answer.clone(),
+            sent,
+            expires,
+        });
+    }
+}
+
+/// `d` in milliseconds, for the log.
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
 
 /// What the link has measured of how late answers come on this connection: the device's own
 /// latency, the adapter's bursts and the host's scheduling all in one figure.

@@ -1,7 +1,7 @@
 //! The link as the window sees it: what it is connected to, its state and counters as the worker
 //! last reported them, how it was opened, and the serial ports there are.
 
-use crate::link::{Link, LinkOptions, LinkState, LinkStats, PortOpener};
+use crate::link::{DeviceEvent, Link, LinkOptions, LinkState, LinkStats, PortOpener};
 use crate::sim::tuya_mcu::TuyaMcu;
 use crate::system::{self, PortInfo};
 use std::sync::{Arc, Mutex};
@@ -46,7 +46,7 @@ impl Target {
     }
 }
 
-/// Whether the device answers, as the link's counters tell it: an open port says nothing of
+/// Whether the device answers, as the link reports it ([`DeviceEvent`]): an open port says nothing of
 /// the device behind it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Answering {
@@ -60,9 +60,7 @@ pub enum Answering {
     No(u64),
 }
 
-/// Requests in a row without an answer after which the device counts as silent (and, when it
-/// answers again, as possibly another unit).
-pub const SILENT_AFTER: u64 = 3;
+pub use crate::link::SILENT_AFTER;
 
 /// An open link and what it talks to.
 pub struct Connection {
@@ -97,10 +95,8 @@ pub struct LinkStatus {
     /// silence): possibly another unit on the same port. The app forgets what the last unit
     /// showed, identifies and reads the device again.
     pub device_back: bool,
-    /// Whether an answer came since the port opened.
-    answered: bool,
-    /// Requests unanswered since the last answer.
-    unanswered: u64,
+    /// Whether the device answers, as the link last reported it on this connection.
+    answering: Answering,
     /// Serial ports, refreshed every second.
     pub ports: Vec<PortInfo>,
     ports_at: Option<Instant>,
@@ -143,37 +139,24 @@ impl LinkStatus {
 
     /// Whether the device answers (see [`Answering`]).
     pub fn answering(&self) -> Answering {
-        if self.unanswered >= SILENT_AFTER {
-            Answering::No(self.unanswered)
-        } else if self.answered {
-            Answering::Yes
-        } else {
-            Answering::NotYet
-        }
+        self.answering
     }
 
-    /// Takes the worker's counters: answers and unanswered requests since the last report
-    /// tell whether the device answers. An answer after [`SILENT_AFTER`] unanswered requests
-    /// raises [`Self::device_back`].
-    pub fn on_stats(&mut self, stats: crate::link::LinkStats) {
-        let received = stats.received.saturating_sub(self.stats.received);
-        let timeouts = stats.timeouts.saturating_sub(self.stats.timeouts);
-        if received > 0 {
-            if self.unanswered >= SILENT_AFTER {
-                self.device_back = true;
+    /// Takes what the link reports of the device: it answers (after silence: raises
+    /// [`Self::device_back`]), or it has been silent for this many attempts.
+    pub fn on_device(&mut self, event: DeviceEvent) {
+        match event {
+            DeviceEvent::Answered { after_silence } => {
+                self.device_back |= after_silence;
+                self.answering = Answering::Yes;
             }
-            self.answered = true;
-            self.unanswered = 0;
-        } else {
-            self.unanswered += timeouts;
+            DeviceEvent::Silent { unanswered } => self.answering = Answering::No(unanswered),
         }
-        self.stats = stats;
     }
 
     /// The port closed or was lost: nothing is known of the device until it answers.
     pub fn forget_answers(&mut self) {
-        self.answered = false;
-        self.unanswered = 0;
+        self.answering = Answering::NotYet;
         self.device_back = false;
     }
 

@@ -276,10 +276,9 @@ impl AppState {
                 }
                 self.link.state = Some(s);
             }
-            LinkEvent::Stats(s) => self.link.on_stats(s),
+            LinkEvent::Stats(s) => self.link.stats = s,
             LinkEvent::Identified(r) => self.device.info = Some(r.map_err(Into::into)),
             LinkEvent::Frame(entry) => {
-                self.device.tuya.on_frame(&entry);
                 let profile = self.device.profile.clone();
                 self.device.running.on_frame(&profile, &entry);
                 self.packets.push(entry, &profile)
@@ -292,6 +291,7 @@ impl AppState {
             } => self.device.on_telemetry(command, at, result),
             LinkEvent::Reply { id, result } => self.device.on_reply(id, result),
             LinkEvent::Tuya(ev) => self.device.tuya.on_event(ev),
+            LinkEvent::Device(ev) => self.link.on_device(ev),
         }
     }
 

@@ -3,7 +3,6 @@
 //! steps, heartbeats, each data point's last report, the report log, and the MCU's own requests
 //! with the module's answers.
 
-use crate::link::LogEntry;
 use crate::link::session::tuya::{HandshakeStep, ProductInfo, TuyaEvent};
 use crate::ops::tuya::{ReportedDp, read_reports};
 use crate::packet::{Header, Packet};
@@ -184,6 +183,13 @@ impl TuyaModel {
                 self.restarts.1 = Some(now);
             }
             TuyaEvent::HeartbeatLost => self.heartbeat_lost = Some(now),
+            TuyaEvent::Heartbeat { answer } => self.last_heartbeat = Some((now, answer)),
+            TuyaEvent::WifiStateSent { state } => self.wifi_sent = Some((state, now)),
+            TuyaEvent::WifiStateAcked => self.wifi_acked = Some(now),
+            TuyaEvent::StatusQueried => {
+                self.last_query = Some(now);
+                self.queries += 1;
+            }
             TuyaEvent::McuRequest {
                 command,
                 name,
@@ -204,31 +210,6 @@ impl TuyaModel {
                 }
                 self.requests.push_back(line);
             }
-        }
-    }
-
-    /// Takes a frame of the packet log: heartbeats, Wi-Fi state reports and queries.
-    pub fn on_frame(&mut self, entry: &LogEntry) {
-        let Ok(p) = &entry.frame else { return };
-        if !matches!(p.header, Header::Tuya { .. }) {
-            return;
-        }
-        let at: DateTime<Local> = entry.at.into();
-        match (p.direction, p.command) {
-            (Direction::DeviceToHost, cmd::HEARTBEAT) => {
-                self.last_heartbeat = Some((at, p.payload.first().copied()));
-            }
-            (Direction::HostToDevice, cmd::WIFI_STATE) => {
-                if let Some(s) = p.payload.first() {
-                    self.wifi_sent = Some((*s, at));
-                }
-            }
-            (Direction::DeviceToHost, cmd::WIFI_STATE) => self.wifi_acked = Some(at),
-            (Direction::HostToDevice, cmd::QUERY_STATUS) => {
-                self.last_query = Some(at);
-                self.queries += 1;
-            }
-            _ => {}
         }
     }
 

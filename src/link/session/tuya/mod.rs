@@ -198,6 +198,20 @@ pub enum TuyaEvent {
     McuRestarted,
     /// The MCU stopped answering heartbeats.
     HeartbeatLost,
+    /// The MCU answered a heartbeat (0x00): its byte, 0 the first since it started, 1 later.
+    Heartbeat {
+        /// The answer's byte, if it had one.
+        answer: Option<u8>,
+    },
+    /// The module reported a Wi-Fi state (0x03, 0-6) to the MCU.
+    WifiStateSent {
+        /// The state reported.
+        state: u8,
+    },
+    /// The MCU acknowledged a Wi-Fi state (its 0x03 answer).
+    WifiStateAcked,
+    /// The module asked for every data point's status (0x08).
+    StatusQueried,
     /// The MCU asked something and the module answered.
     McuRequest {
         /// The MCU's command word.
@@ -314,18 +328,36 @@ impl TuyaSession {
         }
     }
 
-    /// The module wrote the frame `sent`.
-    pub(crate) fn wrote(&mut self, sent: &Packet) {
+    /// The module wrote the frame `sent`: what it reports, when it is a Wi-Fi state or a status
+    /// query.
+    pub(crate) fn wrote(&mut self, sent: &Packet) -> Option<TuyaEvent> {
         self.echo.wrote(&sent.wire);
+        match sent.command {
+            cmd::WIFI_STATE => sent
+                .payload
+                .first()
+                .map(|&state| TuyaEvent::WifiStateSent { state }),
+            cmd::QUERY_STATUS => Some(TuyaEvent::StatusQueried),
+            _ => None,
+        }
     }
 
     /// A frame read from the line, as the MCU's or, when it repeats what the module sent, as
-    /// the module's own echo (direction host to device).
-    pub(crate) fn received(&mut self, mut p: Packet) -> Packet {
+    /// the module's own echo (direction host to device); and what it reports, when it is the
+    /// MCU's answer to a heartbeat or to a Wi-Fi state.
+    pub(crate) fn received(&mut self, mut p: Packet) -> (Packet, Option<TuyaEvent>) {
         if self.echo.is_echo(&p) {
             p.direction = Direction::HostToDevice;
+            return (p, None);
         }
-        p
+        let event = match p.command {
+            cmd::HEARTBEAT => Some(TuyaEvent::Heartbeat {
+                answer: p.payload.first().copied(),
+            }),
+            cmd::WIFI_STATE => Some(TuyaEvent::WifiStateAcked),
+            _ => None,
+        };
+        (p, event)
     }
 
     /// The request due at `now`, if any; its answer is then awaited.
@@ -406,58 +438,21 @@ impl TuyaSession {
     ) -> bool {
         let payload = reply.payload().unwrap_or_default();
         let next = match step {
-            HandshakeStep::Heartbeat => {
-                let frame_version = match reply.packets.first().map(|p| &p.header) {
-                    Some(Header::Tuya { version }) => Some(*version),
-                    _ => None,
-                };
-                if let Some(version) = frame_version {
-                    events.push(LinkEvent::Tuya(TuyaEvent::FrameVersion { version }));
-                }
-                let result = StepResult::Heartbeat {
-                    first_since_start: payload == [0],
-                    frame_version,
-                };
-                events.push(step_event(step, result));
-                HandshakeStep::ProductInfo
-            }
+            HandshakeStep::Heartbeat => heartbeat_answered(reply, events),
             HandshakeStep::ProductInfo => {
                 let info = parse_product_info(payload);
                 events.push(LinkEvent::Tuya(TuyaEvent::ProductInfo(info.clone())));
                 events.push(step_event(step, StepResult::ProductInfo(info)));
                 HandshakeStep::WorkMode
             }
-            HandshakeStep::WorkMode => {
-                let gpio = match payload {
-                    [led, reset, ..] => Some((*led, *reset)),
-                    _ => None,
-                };
-                events.push(LinkEvent::Tuya(TuyaEvent::WorkMode { gpio }));
-                events.push(step_event(step, StepResult::WorkMode { gpio }));
-                if gpio.is_none() {
-                    HandshakeStep::WifiState
-                } else {
-                    // The module drives the LED: the MCU needs no Wi-Fi state.
-                    let skipped = StepResult::WifiStateNotNeeded;
-                    events.push(step_event(HandshakeStep::WifiState, skipped));
-                    HandshakeStep::QueryStatus
-                }
-            }
+            HandshakeStep::WorkMode => work_mode_answered(payload, events),
             HandshakeStep::WifiState => {
                 let result = StepResult::WifiStateReported { state: wifi_state };
                 events.push(step_event(step, result));
                 HandshakeStep::QueryStatus
             }
             HandshakeStep::QueryStatus => {
-                let reported = reported_ids(&reply.packets);
-                let missing: Vec<u8> = self
-                    .data_points
-                    .iter()
-                    .copied()
-                    .filter(|id| !reported.contains(id))
-                    .collect();
-                let total = self.data_points.len();
-                events.push(step_event(step, StepResult::Status { total, missing }));
+                events.push(step_event(step, self.status_of(reply)));
                 events.push(LinkEvent::Tuya(TuyaEvent::HandshakeDone));
                 self.phase = Phase::Heartbeat(now + self.options.heartbeat);
                 return false;
@@ -465,6 +460,21 @@ impl TuyaSession {
         };
         self.phase = Phase::Handshake(next);
         true
+    }
+
+    /// The status query's result: which of the profile's data points its reports left out.
+    fn status_of(&self, reply: &Reply) -> StepResult {
+        let reported = reported_ids(&reply.packets);
+        let missing: Vec<u8> = self
+            .data_points
+            .iter()
+            .copied()
+            .filter(|id| !reported.contains(id))
+            .collect();
+        StepResult::Status {
+            total: self.data_points.len(),
+            missing,
+        }
     }
 
     /// A frame from the MCU that is not the awaited answer: one of its own requests (answered
@@ -497,6 +507,44 @@ pub fn version_text(version: u8) -> String {
             "MCU frames carry version {version:#04x} (the protocol document says {VERSION_MCU:#04x})"
         )
     }
+}
+
+/// The heartbeat step answered: its answer (0 first since the MCU started) and the version
+/// byte of the MCU's frames are reported; product info is next.
+fn heartbeat_answered(reply: &Reply, events: &mut Vec<LinkEvent>) -> HandshakeStep {
+    let frame_version = match reply.packets.first().map(|p| &p.header) {
+        Some(Header::Tuya { version }) => Some(*version),
+        _ => None,
+    };
+    if let Some(version) = frame_version {
+        events.push(LinkEvent::Tuya(TuyaEvent::FrameVersion { version }));
+    }
+    let result = StepResult::Heartbeat {
+        first_since_start: reply.payload() == Some(&[0][..]),
+        frame_version,
+    };
+    events.push(step_event(HandshakeStep::Heartbeat, result));
+    HandshakeStep::ProductInfo
+}
+
+/// The working mode answered: who drives the Wi-Fi LED. When the module does, the MCU needs no
+/// Wi-Fi state (that step is reported as not needed) and the status query is next.
+fn work_mode_answered(payload: &[u8], events: &mut Vec<LinkEvent>) -> HandshakeStep {
+    let gpio = match payload {
+        [led, reset, ..] => Some((*led, *reset)),
+        _ => None,
+    };
+    events.push(LinkEvent::Tuya(TuyaEvent::WorkMode { gpio }));
+    events.push(step_event(
+        HandshakeStep::WorkMode,
+        StepResult::WorkMode { gpio },
+    ));
+    if gpio.is_none() {
+        return HandshakeStep::WifiState;
+    }
+    let skipped = StepResult::WifiStateNotNeeded;
+    events.push(step_event(HandshakeStep::WifiState, skipped));
+    HandshakeStep::QueryStatus
 }
 
 fn step_event(step: HandshakeStep, result: StepResult) -> LinkEvent {

@@ -1,0 +1,102 @@
+//! What the worker reports: events into a bounded channel (one dropped, and counted, when nobody
+//! reads them), the packet tap (every frame sent and received, for the packet monitor), and the
+//! waker that tells the UI to look.
+
+use crate::link::{LinkEvent, LogEntry, Waker};
+use crate::packet::Packet;
+use crate::protocol::{Direction, FrameError};
+use crossbeam_channel::{Sender, TrySendError};
+use log::debug;
+use std::time::SystemTime;
+
+/// The worker's side of the event channel.
+pub(super) struct Events {
+    tx: Sender<LinkEvent>,
+    waker: Option<Waker>,
+    /// Events were sent since the UI was last woken.
+    wake: bool,
+    /// Events dropped because the channel was full.
+    dropped: u64,
+}
+
+impl Events {
+    /// Events into `tx`; `waker` wakes whoever reads them.
+    pub(super) fn new(tx: Sender<LinkEvent>, waker: Option<Waker>) -> Self {
+        Self {
+            tx,
+            waker,
+            wake: false,
+            dropped: 0,
+        }
+    }
+
+    /// Sends `ev`, or drops and counts it when the channel is full (nobody reads it).
+    pub(super) fn emit(&mut self, ev: LinkEvent) {
+        match self.tx.try_send(ev) {
+            Ok(()) => self.wake = true,
+            Err(TrySendError::Full(ev)) => {
+                self.dropped += 1;
+                // The first of a run of drops, then every thousandth: a reader that stopped
+                // would otherwise fill the log.
+                if self.dropped % 1000 == 1 {
+                    debug!(
+                        "event dropped, the channel is full ({} so far): {}",
+                        self.dropped,
+                        kind(&ev)
+                    );
+                }
+            }
+            Err(TrySendError::Disconnected(_)) => {}
+        }
+    }
+
+    /// The packet tap: a frame (or a frame error) that crossed the line in `direction`, with a
+    /// note on what the link took it for when that is not plain.
+    pub(super) fn tap(
+        &mut self,
+        direction: Direction,
+        frame: Result<Packet, FrameError>,
+        note: Option<String>,
+    ) {
+        self.emit(LinkEvent::Frame(LogEntry {
+            at: SystemTime::now(),
+            direction,
+            frame,
+            note,
+        }));
+    }
+
+    /// The packet tap of a frame (or frame error) from the device.
+    pub(super) fn tap_in(&mut self, frame: Result<Packet, FrameError>, note: Option<String>) {
+        self.tap(Direction::DeviceToHost, frame, note);
+    }
+
+    /// Wakes the reader if events were sent since the last wake.
+    pub(super) fn flush_wake(&mut self) {
+        if std::mem::take(&mut self.wake)
+            && let Some(w) = &self.waker
+        {
+            w();
+        }
+    }
+
+    /// Events dropped so far.
+    pub(super) fn dropped(&self) -> u64 {
+        self.dropped
+    }
+}
+
+/// What kind of event `ev` is, for the log.
+fn kind(ev: &LinkEvent) -> &'static str {
+    match ev {
+        LinkEvent::State(_) => "state",
+        LinkEvent::Reply { .. } => "reply",
+        LinkEvent::Telemetry { .. } => "telemetry",
+        LinkEvent::Report(_) => "report",
+        LinkEvent::Frame(_) => "frame",
+        LinkEvent::Identified(_) => "identified",
+        LinkEvent::Tuya(_) => "tuya",
+        LinkEvent::Device(_) => "device",
+        LinkEvent::Stats(_) => "stats",
+    }
+}

@@ -1,0 +1,166 @@
+//! The wire: the port (and how to reopen it after a loss), the decoder of what the device sends,
+//! the port's rate, when the bytes written so far have crossed the line, and the counters of
+//! what crossed it. Nothing here decides what a frame means: that is the exchange's and the
+//! session's.
+
+use crate::link::decoder::AnyDecoder;
+use crate::link::{LinkError, LinkState, LinkStats, Opener, Transport, wire_time};
+use crate::packet::Packet;
+use crate::profile::Protocol;
+use crate::protocol::FrameError;
+use std::time::{Duration, Instant};
+
+/// How often an idle worker checks that the port is still there.
+const PORT_CHECK: Duration = Duration::from_millis(500);
+/// The most bytes one read takes.
+const READ_CHUNK: usize = 4096;
+
+/// The port of one link and the bytes on it.
+pub(super) struct Wire {
+    /// The port; `None` while it is lost.
+    transport: Option<Box<dyn Transport>>,
+    /// Reopens the port after a loss.
+    opener: Opener,
+    decoder: AnyDecoder,
+    /// The port's rate, in baud.
+    baud: u32,
+    /// When the bytes written so far have crossed the wire (at the rate they were sent at).
+    sent_until: Instant,
+    /// When the idle worker last checked that the port is there.
+    checked_at: Instant,
+    /// Frames sent and received, errors, timeouts, margins: what the status bar shows.
+    pub(super) stats: LinkStats,
+}
+
+impl Wire {
+    /// The wire over `transport`, opened by `opener`, carrying `protocol`.
+    pub(super) fn new(transport: Box<dyn Transport>, opener: Opener, protocol: Protocol) -> Self {
+        let now = Instant::now();
+        Self {
+            baud: transport.baud(),
+            transport: Some(transport),
+            opener,
+            decoder: AnyDecoder::new(protocol),
+            sent_until: now,
+            checked_at: now,
+            stats: LinkStats::default(),
+        }
+    }
+
+    /// Whether the port is open (not lost).
+    pub(super) fn is_open(&self) -> bool {
+        self.transport.is_some()
+    }
+
+    /// The port's rate, in baud.
+    pub(super) fn baud(&self) -> u32 {
+        self.baud
+    }
+
+    /// When the bytes written so far have crossed the wire.
+    pub(super) fn sent_until(&self) -> Instant {
+        self.sent_until
+    }
+
+    /// The USB adapter's latency timer, where the port knows it.
+    pub(super) fn latency_timer(&self) -> Option<Duration> {
+        self.transport.as_ref().and_then(|t| t.latency_timer())
+    }
+
+    /// [`LinkState::Connected`] with the port's description and rate, while it is open.
+    pub(super) fn connected_state(&self) -> Option<LinkState> {
+        self.transport.as_ref().map(|t| LinkState::Connected {
+            port: t.describe(),
+            baud: t.baud(),
+        })
+    }
+
+    /// Writes `bytes` whole; counts a frame sent. An error means the port is gone: the caller
+    /// loses it ([`Self::lose`]).
+    pub(super) fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        let Some(t) = self.transport.as_mut() else {
+            return Err(LinkError::Disconnected("port lost".into()));
+        };
+        t.write(bytes)?;
+        let now = Instant::now();
+        self.sent_until = self.sent_until.max(now) + wire_time(bytes.len(), self.baud);
+        self.stats.sent += 1;
+        Ok(())
+    }
+
+    /// Reads what arrives before `deadline` into the decoder; returns how many bytes. An error
+    /// means the port is gone: the caller loses it.
+    pub(super) fn read_some(&mut self, deadline: Instant) -> Result<usize, LinkError> {
+        let Some(t) = self.transport.as_mut() else {
+            return Err(LinkError::Disconnected("port lost".into()));
+        };
+        let mut buf = [0u8; READ_CHUNK];
+        let n = t.read(&mut buf, deadline)?;
+        self.decoder.push(&buf[..n]);
+        Ok(n)
+    }
+
+    /// The next frame (or frame error) decoded, as the decoder read it.
+    pub(super) fn next_frame(&mut self) -> Option<Result<Packet, FrameError>> {
+        self.decoder.next_packet()
+    }
+
+    /// Bytes held that are not a frame yet.
+    pub(super) fn buffered(&self) -> usize {
+        self.decoder.buffered()
+    }
+
+    /// The line went quiet: a partial frame held will not complete.
+    pub(super) fn flush(&mut self) {
+        self.decoder.flush();
+    }
+
+    /// Switches the port to `baud` once the bytes written have crossed the wire at the old rate
+    /// (a frame still crossing would be cut); what was received is dropped. An error means the
+    /// port refused or is gone.
+    pub(super) fn set_baud(&mut self, baud: u32) -> Result<(), LinkError> {
+        let now = Instant::now();
+        if self.sent_until > now {
+            std::thread::sleep(self.sent_until - now);
+        }
+        self.baud = baud;
+        let t = self
+            .transport
+            .as_mut()
+            .ok_or_else(|| LinkError::Disconnected("port lost".into()))?;
+        t.set_baud(baud)?;
+        let _ = t.clear_input();
+        self.decoder.clear();
+        Ok(())
+    }
+
+    /// The port went away: closed, and what was half decoded dropped.
+    pub(super) fn lose(&mut self) {
+        self.transport = None;
+        self.decoder.clear();
+    }
+
+    /// Reopens a lost port at the rate it had.
+    pub(super) fn reopen(&mut self) -> Result<(), LinkError> {
+        let mut t = (self.opener)()?;
+        if t.baud() != self.baud {
+            let _ = t.set_baud(self.baud);
+        }
+        self.transport = Some(t);
+        self.decoder.clear();
+        Ok(())
+    }
+
+    /// While idle, every [`PORT_CHECK`]: whether the port is still there (a USB adapter
+    /// unplugged). An error means it is gone.
+    pub(super) fn check(&mut self, now: Instant) -> Result<(), LinkError> {
+        if now.duration_since(self.checked_at) < PORT_CHECK {
+            return Ok(());
+        }
+        self.checked_at = now;
+        match self.transport.as_mut() {
+            Some(t) => t.check(),
+            None => Ok(()),
+        }
+    }
+}
