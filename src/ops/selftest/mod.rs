@@ -40,6 +40,7 @@ mod measure;
 mod plan;
 mod record;
 mod run;
+mod steps;
 
 pub use plan::{Action, Plan, Step, StepKind, VERSION};
 pub use record::{Report, StepResult, append_log};

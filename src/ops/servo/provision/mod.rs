@@ -22,15 +22,15 @@
 
 mod log;
 mod plan;
+mod steps;
 
 pub use log::{append_csv, check_log, log_columns, log_row};
 pub use plan::{IdSequence, Issue, Plan, Resolved};
 
 use crate::link::{Client, ExchangeError};
 use crate::ops::servo::{self, Presence, switch};
-use crate::ops::{Device, Run};
-use crate::ops::{OpError, Progress};
-use crate::profile::{Input, Param, Profile, Value};
+use crate::ops::{Device, OpError, Run};
+use crate::profile::{Param, Profile, Value};
 use serde::Serialize;
 
 /// The names of the steps, as records and progress messages give them.
@@ -193,7 +193,7 @@ pub fn provision_next(
     record
 }
 
-/// The steps; on failure, sets the record's result and returns.
+/// The steps ([`steps::Provisioning`]); on failure, sets the record's result.
 fn steps(
     dev: Device<'_>,
     plan: &Plan,
@@ -202,276 +202,20 @@ fn steps(
     run: &mut Run<'_>,
     record: &mut Record,
 ) {
-    let Device { client, profile } = dev;
     let cancel = run.cancel_flag();
-    let total = 6 + resolved.writes.len() as u64;
-    let mut done = 0u64;
-    let mut at = |step: &str, detail: String, done: &mut u64| {
-        run.report(Progress {
-            done: *done,
-            total,
-            message: {
-                let step = step::said(step);
-                if detail.is_empty() {
-                    step
-                } else {
-                    step.then(": ", &crate::i18n::Text::same(detail))
-                }
-            },
-        });
-        *done += 1;
+    let mut p = steps::Provisioning {
+        dev,
+        resolved,
+        target: plan.target_baud,
+        candidates: plan.ids.candidates(),
+        cancel,
+        run,
+        done: 0,
+        total: 6 + resolved.writes.len() as u64,
     };
-    macro_rules! check_cancel {
-        ($step:expr) => {
-            if cancel.is_cancelled() {
-                return fail(record, $step, "cancelled by the operator".into());
-            }
-        };
+    if let Err((step, why)) = p.steps(state, record) {
+        fail(record, step, why);
     }
-    let target = plan.target_baud;
-
-    // Detect: exactly one fresh servo, at one baud rate.
-    at(step::DETECT, String::new(), &mut done);
-    check_cancel!(step::DETECT);
-    let fresh = servo::factory_location(profile).id;
-    let found = match find_fresh(dev, &search_order(profile, target)) {
-        Ok(f) => f,
-        Err(e) => return fail(record, step::DETECT, e.to_string()),
-    };
-    let baud = match found.as_slice() {
-        [] => {
-            return fail(
-                record,
-                step::DETECT,
-                format!("no fresh servo (id {fresh}) answers at any baud rate"),
-            );
-        }
-        [(b, Presence::Present)] => *b,
-        [(b, Presence::PossibleDuplicate(e))] => {
-            return fail(
-                record,
-                step::DETECT,
-                format!(
-                    "more than one servo answers at id {fresh} at {b} baud (garbled answers: {e}); leave one fresh servo on the bus"
-                ),
-            );
-        }
-        many => {
-            let rates: Vec<String> = many.iter().map(|(b, _)| b.to_string()).collect();
-            return fail(
-                record,
-                step::DETECT,
-                format!(
-                    "more than one servo: fresh servos (id {fresh}) answer at {} baud; leave one on the bus",
-                    rates.join(" and ")
-                ),
-            );
-        }
-    };
-    if let Err(e) = switch(client, baud) {
-        return fail(record, step::DETECT, e.to_string());
-    }
-    record.baud = Some(baud);
-
-    // Its serial number, so that even a failure names the servo.
-    at(step::SERIAL, String::new(), &mut done);
-    check_cancel!(step::SERIAL);
-    let serial = match servo::serial_param(profile).and_then(|p| read(dev, fresh, p.id)) {
-        Ok(v) => v,
-        Err(e) => return fail(record, step::SERIAL, reason(&e, fresh, baud)),
-    };
-    let Ok(serial) = u32::try_from(serial) else {
-        return fail(
-            record,
-            step::SERIAL,
-            format!("the servo reports serial number {serial}, which does not fit 32 bits"),
-        );
-    };
-    record.serial = Some(serial);
-
-    // The next free id: not given out before, and silent at every rate (a servo at another
-    // rate is still on the bus, and would share the id once moved).
-    at(step::ASSIGN_ID, String::new(), &mut done);
-    check_cancel!(step::ASSIGN_ID);
-    let candidates = plan.ids.candidates();
-    let mut chosen = None;
-    for (i, &id) in candidates.iter().enumerate().skip(state.next) {
-        if cancel.is_cancelled() {
-            return fail(record, step::ASSIGN_ID, "cancelled by the operator".into());
-        }
-        if state.assigned.contains(&id) {
-            state.next = i + 1;
-            continue;
-        }
-        match id_is_free(client, id, &search_order(profile, target)) {
-            Ok(true) => {
-                chosen = Some((i, id));
-                break;
-            }
-            // In use: never offered again.
-            Ok(false) => state.next = i + 1,
-            Err(e) => return fail(record, step::ASSIGN_ID, e.to_string()),
-        }
-    }
-    if let Err(e) = switch(client, baud) {
-        return fail(record, step::ASSIGN_ID, e.to_string());
-    }
-    let Some((index, id)) = chosen else {
-        return fail(
-            record,
-            step::ASSIGN_ID,
-            "no free id left in the plan's ids".into(),
-        );
-    };
-    if let Err(e) = servo::set_id(dev, fresh, id, cancel) {
-        return fail(record, step::ASSIGN_ID, reason(&e, fresh, baud));
-    }
-    state.next = index + 1;
-    state.assigned.push(id);
-    record.id = Some(id);
-
-    // The target rate.
-    at(step::SET_BAUD, format!("{baud} → {target}"), &mut done);
-    check_cancel!(step::SET_BAUD);
-    if baud != target {
-        match servo::ping(client, id, 3) {
-            Ok(Presence::Present) => {}
-            Ok(other) => {
-                return fail(
-                    record,
-                    step::SET_BAUD,
-                    format!(
-                        "servo {id} did not answer at {baud} baud before the change ({other:?})"
-                    ),
-                );
-            }
-            Err(e) => return fail(record, step::SET_BAUD, reason(&e, id, baud)),
-        }
-        record.baud = None;
-        match servo::set_baud(dev, id, resolved.option) {
-            Ok(now) => record.baud = Some(now),
-            Err(e) => return fail(record, step::SET_BAUD, reason(&e, id, target)),
-        }
-    }
-
-    // The plan's parameters, each read back.
-    let mut apply_mismatch = false;
-    for &(param, raw) in &resolved.writes {
-        let ident = &param.field.ident;
-        at(step::APPLY, ident.clone(), &mut done);
-        check_cancel!(step::APPLY);
-        match servo::write_param(dev, id, param, Input::Raw(Value::Int(raw))) {
-            Ok(check) if check.ok() => {}
-            Ok(check) => {
-                apply_mismatch = true;
-                record
-                    .mismatches
-                    .push(mismatch(param, &check.written, &check.read));
-            }
-            Err(e) => {
-                return fail(
-                    record,
-                    step::APPLY,
-                    format!("{ident}: {}", reason(&e, id, target)),
-                );
-            }
-        }
-    }
-
-    // Everything again, at the new id and rate.
-    at(step::VERIFY, String::new(), &mut done);
-    check_cancel!(step::VERIFY);
-    match servo::ping(client, id, 3) {
-        Ok(Presence::Present) => {}
-        Ok(other) => {
-            return fail(
-                record,
-                step::VERIFY,
-                format!("servo {id} did not answer cleanly at {target} baud ({other:?})"),
-            );
-        }
-        Err(e) => return fail(record, step::VERIFY, reason(&e, id, target)),
-    }
-    let roles = servo::serial_param(profile).and_then(|s| {
-        Ok((
-            s.id,
-            servo::id_param(profile)?.id,
-            servo::baud_param(profile)?.0.id,
-        ))
-    });
-    let (serial_pid, id_pid, baud_pid) = match roles {
-        Ok(ids) => ids,
-        Err(e) => return fail(record, step::VERIFY, e.to_string()),
-    };
-    let mut expected: Vec<(u8, i64)> = vec![
-        (serial_pid, i64::from(serial)),
-        (id_pid, i64::from(id)),
-        (baud_pid, i64::from(resolved.option)),
-    ];
-    expected.extend(resolved.writes.iter().map(|(p, raw)| (p.id, *raw)));
-    for (pid, want) in expected {
-        let Some(param) = profile.param(pid) else {
-            return fail(
-                record,
-                step::VERIFY,
-                format!("the profile has no parameter {pid}"),
-            );
-        };
-        let got = match read(dev, id, pid) {
-            Ok(v) => v,
-            Err(e) => {
-                return fail(
-                    record,
-                    step::VERIFY,
-                    format!("{}: {}", param.field.ident, reason(&e, id, target)),
-                );
-            }
-        };
-        if got != want {
-            let line = mismatch(param, &Value::Int(want), &Value::Int(got));
-            if !record.mismatches.contains(&line) {
-                record.mismatches.push(line);
-            }
-        }
-    }
-    if !record.mismatches.is_empty() {
-        let step = if apply_mismatch {
-            step::APPLY
-        } else {
-            step::VERIFY
-        };
-        let n = record.mismatches.len();
-        return fail(
-            record,
-            step,
-            format!("{n} value(s) do not read back as written"),
-        );
-    }
-
-    // What the plan records.
-    at(step::RECORD, String::new(), &mut done);
-    check_cancel!(step::RECORD);
-    for (i, param) in resolved.record.iter().enumerate() {
-        match servo::read_param(dev, id, param) {
-            Ok(v) => {
-                if let Some(slot) = record.recorded.get_mut(i) {
-                    slot.1 = Some(param.field.format(&Value::Int(v)));
-                }
-            }
-            Err(e) => {
-                return fail(
-                    record,
-                    step::RECORD,
-                    format!("{}: {}", param.field.ident, reason(&e, id, target)),
-                );
-            }
-        }
-    }
-    run.report(Progress {
-        done: total,
-        total,
-        message: crate::i18n::Text::new("done", "完成"),
-    });
 }
 
 fn read(dev: Device<'_>, id: u8, pid: u8) -> Result<i64, OpError> {
