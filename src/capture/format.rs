@@ -275,74 +275,12 @@ pub fn read(source: impl Read) -> Result<CaptureFile, CaptureError> {
         };
         match block {
             Block::InterfaceDescription(idb) => {
-                let code = u32::from(idb.linktype);
-                if code != LINK_TYPE {
-                    return Err(CaptureError::Format(format!(
-                        "interface {} has link type {code}, not LINKTYPE_USER0 ({LINK_TYPE})",
-                        interfaces.len()
-                    )));
-                }
-                let mut iface = Interface {
-                    baud: 0,
-                    tsresol: 6,
-                };
-                let mut info = file.info.clone();
-                for o in &idb.options {
-                    match o {
-                        InterfaceDescriptionOption::IfSpeed(s) => {
-                            iface.baud = u32::try_from(*s).unwrap_or(u32::MAX);
-                        }
-                        InterfaceDescriptionOption::IfTsResol(r) => iface.tsresol = *r,
-                        InterfaceDescriptionOption::IfName(n) => info.port = n.to_string(),
-                        InterfaceDescriptionOption::Comment(c) => {
-                            info.apply_comment(c);
-                        }
-                        _ => {}
-                    }
-                }
-                if interfaces.is_empty() {
-                    info.baud = iface.baud;
-                    file.info = info;
-                }
+                let iface = interface(&idb, interfaces.len(), &mut file)?;
                 interfaces.push(iface);
             }
             Block::EnhancedPacket(epb) => {
-                let Some(iface) = interfaces.get(epb.interface_id as usize) else {
-                    return Err(CaptureError::Format(format!(
-                        "packet {} refers to interface {}, which the file does not describe",
-                        file.chunks.len() + 1,
-                        epb.interface_id
-                    )));
-                };
-                let mut direction = None;
-                let mut dropped_before = 0;
-                for o in &epb.options {
-                    match o {
-                        EnhancedPacketOption::Flags(f) => {
-                            direction = match f & 0b11 {
-                                FLAG_INBOUND => Some(Direction::DeviceToHost),
-                                FLAG_OUTBOUND => Some(Direction::HostToDevice),
-                                _ => None,
-                            }
-                        }
-                        EnhancedPacketOption::DropCount(n) => dropped_before = *n,
-                        _ => {}
-                    }
-                }
-                let Some(direction) = direction else {
-                    return Err(CaptureError::Format(format!(
-                        "packet {} has no direction (epb_flags bits 0-1 are neither 01 nor 10)",
-                        file.chunks.len() + 1
-                    )));
-                };
-                let raw = u64::try_from(epb.timestamp.as_nanos()).unwrap_or(u64::MAX);
-                file.chunks.push(Chunk {
-                    at_us: units_to_micros(raw, iface.tsresol),
-                    direction,
-                    bytes: epb.data.into_owned(),
-                    baud: iface.baud,
-                    dropped_before,
-                });
+                let chunk = chunk(&epb, &interfaces, file.chunks.len() + 1)?;
+                file.chunks.push(chunk);
             }
             _ => {}
         }
@@ -353,6 +291,87 @@ pub fn read(source: impl Read) -> Result<CaptureFile, CaptureError> {
         ));
     }
     Ok(file)
+}
+
+/// An interface description (the `n`th): its baud rate and timestamp resolution; the first
+/// one's port, rate and comments (profile, margin) are the capture's.
+fn interface(
+    idb: &InterfaceDescriptionBlock<'_>,
+    n: usize,
+    file: &mut CaptureFile,
+) -> Result<Interface, CaptureError> {
+    let code = u32::from(idb.linktype);
+    if code != LINK_TYPE {
+        return Err(CaptureError::Format(format!(
+            "interface {n} has link type {code}, not LINKTYPE_USER0 ({LINK_TYPE})"
+        )));
+    }
+    let mut iface = Interface {
+        baud: 0,
+        tsresol: 6,
+    };
+    let mut info = file.info.clone();
+    for o in &idb.options {
+        match o {
+            InterfaceDescriptionOption::IfSpeed(s) => {
+                iface.baud = u32::try_from(*s).unwrap_or(u32::MAX);
+            }
+            InterfaceDescriptionOption::IfTsResol(r) => iface.tsresol = *r,
+            InterfaceDescriptionOption::IfName(n) => info.port = n.to_string(),
+            InterfaceDescriptionOption::Comment(c) => {
+                info.apply_comment(c);
+            }
+            _ => {}
+        }
+    }
+    if n == 0 {
+        info.baud = iface.baud;
+        file.info = info;
+    }
+    Ok(iface)
+}
+
+/// Packet `n` (counting from 1): its bytes, direction (from its flags: refused without one),
+/// time and the rate of its interface.
+fn chunk(
+    epb: &EnhancedPacketBlock<'_>,
+    interfaces: &[Interface],
+    n: usize,
+) -> Result<Chunk, CaptureError> {
+    let Some(iface) = interfaces.get(epb.interface_id as usize) else {
+        return Err(CaptureError::Format(format!(
+            "packet {n} refers to interface {}, which the file does not describe",
+            epb.interface_id
+        )));
+    };
+    let mut direction = None;
+    let mut dropped_before = 0;
+    for o in &epb.options {
+        match o {
+            EnhancedPacketOption::Flags(f) => {
+                direction = match f & 0b11 {
+                    FLAG_INBOUND => Some(Direction::DeviceToHost),
+                    FLAG_OUTBOUND => Some(Direction::HostToDevice),
+                    _ => None,
+                }
+            }
+            EnhancedPacketOption::DropCount(n) => dropped_before = *n,
+            _ => {}
+        }
+    }
+    let Some(direction) = direction else {
+        return Err(CaptureError::Format(format!(
+            "packet {n} has no direction (epb_flags bits 0-1 are neither 01 nor 10)"
+        )));
+    };
+    let raw = u64::try_from(epb.timestamp.as_nanos()).unwrap_or(u64::MAX);
+    Ok(Chunk {
+        at_us: units_to_micros(raw, iface.tsresol),
+        direction,
+        bytes: epb.data.to_vec(),
+        baud: iface.baud,
+        dropped_before,
+    })
 }
 
 /// Reads the capture at `path`.

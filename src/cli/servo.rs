@@ -6,7 +6,7 @@ use super::{CliError, CliResult};
 use crate::link::PortOpener;
 use crate::ops::servo::{self as ops, Presence};
 use crate::ops::{Device, Run};
-use crate::profile::{Input, Profile, Protocol, Value};
+use crate::profile::{Input, Param, Profile, Protocol, Value};
 use clap::Subcommand;
 use std::path::PathBuf;
 
@@ -375,16 +375,12 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
     let link = args.port.open_with(profile.clone(), false)?;
     let client = link.client();
     let cancel = super::port::cancel_on_ctrl_c();
+    let dev = Device::new(&client, &profile);
     match checked {
         Checked::Scan(plan) => {
             let started = std::time::Instant::now();
-            let report = ops::scan(
-                Device::new(&client, &profile),
-                &plan,
-                &mut Run::quiet(&cancel),
-                &mut |_| {},
-            )
-            .map_err(op_error)?;
+            let report =
+                ops::scan(dev, &plan, &mut Run::quiet(&cancel), &mut |_| {}).map_err(op_error)?;
             print_scan(&profile, &report, started.elapsed().as_secs_f64(), json);
             Ok(0)
         }
@@ -398,91 +394,98 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
             }
             Ok(u8::from(p != Presence::Present))
         }
-        Checked::Read(id, params) => {
-            let mut out = Vec::new();
-            for p in params {
-                let v = ops::read_param(Device::new(&client, &profile), id, p).map_err(op_error)?;
-                out.push((p, v));
-            }
-            if json {
-                let doc: Vec<_> = out.iter().map(|(p, v)| serde_json::json!({
-                    "param": p.field.ident, "id": p.id, "value": v, "display": p.field.display(&Value::Int(*v)), "unit": p.field.unit,
-                    "converted": p.field.convert.and_then(|c| c.apply(*v)),
-                })).collect();
-                println!("{}", serde_json::json!({"servo": id, "params": doc}));
-            } else {
-                for (p, v) in out {
-                    println!(
-                        "{:>3} {:<22} {}",
-                        p.id,
-                        p.field.ident,
-                        p.field.display(&Value::Int(v))
-                    );
-                }
-            }
-            Ok(0)
-        }
-        Checked::Write(id, p, value, true) => {
-            let written =
-                ops::write_param_broadcast(Device::new(&client, &profile), p, Input::Raw(value))
-                    .map_err(op_error)?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::json!({"servo": id, "param": p.field.ident, "written": written, "broadcast": true, "verified": false})
-                );
-            } else {
-                println!(
-                    "{:<24} {:>12}  broadcast to every servo at this rate; none answers a broadcast, nothing read back",
-                    p.field.ident,
-                    p.field.format(&written)
-                );
-            }
-            Ok(0)
-        }
+        Checked::Read(id, params) => read(dev, id, &params, json),
+        Checked::Write(id, p, value, true) => write_broadcast(dev, id, p, value, json),
         Checked::Write(id, p, value, false) => {
-            let check = ops::write_param(Device::new(&client, &profile), id, p, Input::Raw(value))
-                .map_err(op_error)?;
+            let check = ops::write_param(dev, id, p, Input::Raw(value)).map_err(op_error)?;
             let field = p.field.clone();
             Ok(print_checks(&[check], |_| Some(field.clone()), json))
         }
         Checked::SetId(old, new) => {
-            ops::set_id(Device::new(&client, &profile), old, new, &cancel).map_err(op_error)?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::json!({"old": old, "new": new, "verified": true})
-                );
-            } else {
-                println!("servo {old} is now {new}: verified at the new id");
-            }
-            Ok(0)
+            ops::set_id(dev, old, new, &cancel).map_err(op_error)?;
+            let said = format!("servo {old} is now {new}: verified at the new id");
+            said_or_json(
+                json,
+                serde_json::json!({"old": old, "new": new, "verified": true}),
+                &said,
+            )
         }
         Checked::SetBaud(id, option) => {
-            let rate =
-                ops::set_baud(Device::new(&client, &profile), id, option).map_err(op_error)?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::json!({"id": id, "baud": rate, "verified": true})
-                );
-            } else {
-                println!("servo {id} now talks at {rate} baud: verified");
-            }
-            Ok(0)
+            let rate = ops::set_baud(dev, id, option).map_err(op_error)?;
+            let said = format!("servo {id} now talks at {rate} baud: verified");
+            said_or_json(
+                json,
+                serde_json::json!({"id": id, "baud": rate, "verified": true}),
+                &said,
+            )
         }
         Checked::Angle(id, inputs, ms) => {
             let rotate = profile
                 .command("ROTATE")
                 .ok_or_else(|| CliError::input("the profile has no ROTATE"))?;
-            crate::ops::exchange::send(Device::new(&client, &profile), rotate, &inputs)
-                .map_err(op_error)?;
+            crate::ops::exchange::send(dev, rotate, &inputs).map_err(op_error)?;
             if !json {
                 println!("servo {id}: turning over {ms} ms");
             }
             Ok(0)
         }
     }
+}
+
+/// Prints `doc` with `--json`, else `said`; exit code 0.
+fn said_or_json(json: bool, doc: serde_json::Value, said: &str) -> CliResult {
+    if json {
+        println!("{doc}");
+    } else {
+        println!("{said}");
+    }
+    Ok(0)
+}
+
+/// `servo read`: each of `params` of servo `id`, with its display value (and unit, conversion
+/// in JSON).
+fn read(dev: Device<'_>, id: u8, params: &[&Param], json: bool) -> CliResult {
+    let mut out = Vec::new();
+    for p in params {
+        let v = ops::read_param(dev, id, p).map_err(op_error)?;
+        out.push((p, v));
+    }
+    if json {
+        let doc: Vec<_> = out.iter().map(|(p, v)| serde_json::json!({
+            "param": p.field.ident, "id": p.id, "value": v, "display": p.field.display(&Value::Int(*v)), "unit": p.field.unit,
+            "converted": p.field.convert.and_then(|c| c.apply(*v)),
+        })).collect();
+        println!("{}", serde_json::json!({"servo": id, "params": doc}));
+    } else {
+        for (p, v) in out {
+            println!(
+                "{:>3} {:<22} {}",
+                p.id,
+                p.field.ident,
+                p.field.display(&Value::Int(v))
+            );
+        }
+    }
+    Ok(0)
+}
+
+/// `servo write 255 ...`: `value` broadcast to every servo at this rate; none answers, so
+/// nothing is read back.
+fn write_broadcast(dev: Device<'_>, id: u8, p: &Param, value: Value, json: bool) -> CliResult {
+    let written = ops::write_param_broadcast(dev, p, Input::Raw(value)).map_err(op_error)?;
+    if json {
+        println!(
+            "{}",
+            serde_json::json!({"servo": id, "param": p.field.ident, "written": written, "broadcast": true, "verified": false})
+        );
+    } else {
+        println!(
+            "{:<24} {:>12}  broadcast to every servo at this rate; none answers a broadcast, nothing read back",
+            p.field.ident,
+            p.field.format(&written)
+        );
+    }
+    Ok(0)
 }
 
 /// The scan's table (or JSON), with how it adapted: ids asked again, late answers and the

@@ -4,6 +4,7 @@
 //! port: `port=$(botbench sim window-cleaner | head -1)`.
 
 use super::{CliError, CliResult};
+use crate::profile::Profile;
 use crate::sim::msp_device::MspCore;
 use crate::sim::tuya_mcu::{McuRequest, TuyaMcu};
 use crate::sim::window_cleaner::WindowCleaner;
@@ -136,47 +137,58 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         baud: args.baud,
         latency: None,
         seed: args.seed,
-        servos: args.servos,
+        servos: args.servos.clone(),
         msp: args.field.msp(kind)?,
         ignore_baud_change: args.field.ignore_baud_change(kind)?,
     };
-    let firmware = match &args.profile {
-        None => None,
-        Some(name) => {
-            let p = super::registry()?.get(name).map_err(CliError::input)?;
-            if p.protocol != kind.profile_protocol() {
-                return Err(CliError::input(format!(
-                    "profile '{}' speaks {}, a {} speaks {}",
-                    p.id,
-                    p.protocol.name(),
-                    kind.name(),
-                    kind.profile_protocol().name()
-                )));
-            }
-            Some(p)
-        }
+    let firmware = firmware(&args, kind)?;
+    let (device, control) = device(&args, kind, firmware, &opts)?;
+    serve(kind, device, control, faults, &opts)
+}
+
+/// The profile `--profile` names, checked to be of the simulator's protocol.
+fn firmware(args: &SimArgs, kind: SimKind) -> Result<Option<Arc<Profile>>, CliError> {
+    let Some(name) = &args.profile else {
+        return Ok(None);
     };
-    // The Tuya MCU and the window cleaner take commands on stdin (see `control`), so keep a
-    // typed handle to them.
-    let (device, control): (SharedDevice, Option<Control>) = match (kind, firmware) {
+    let p = super::registry()?.get(name).map_err(CliError::input)?;
+    if p.protocol != kind.profile_protocol() {
+        return Err(CliError::input(format!(
+            "profile '{}' speaks {}, a {} speaks {}",
+            p.id,
+            p.protocol.name(),
+            kind.name(),
+            kind.profile_protocol().name()
+        )));
+    }
+    Ok(Some(p))
+}
+
+/// The simulated device, with `firmware` when given. The Tuya MCU and the window cleaner take
+/// commands on stdin (see `control`), so a typed handle to them is kept.
+fn device(
+    args: &SimArgs,
+    kind: SimKind,
+    firmware: Option<Arc<Profile>>,
+    opts: &SimOptions,
+) -> Result<(SharedDevice, Option<Control>), CliError> {
+    Ok(match (kind, firmware) {
         (SimKind::WindowCleaner, Some(p)) => {
-            let core = MspCore::with_options(p, crate::sim::window_cleaner::DEVICE_CODE, &opts);
+            let core = MspCore::with_options(p, crate::sim::window_cleaner::DEVICE_CODE, opts);
             let wc = Arc::new(Mutex::new(WindowCleaner::with_core(core, opts.seed)));
             (wc.clone(), Some(Control::WindowCleaner(wc)))
         }
         (SimKind::ServoBus, Some(p)) => {
-            let bus = crate::sim::servo_bus::ServoBus::with_profile_ids(
-                p,
-                if opts.servos.is_empty() {
-                    &[1]
-                } else {
-                    &opts.servos
-                },
-                opts.baud.unwrap_or_else(|| kind.default_baud()),
-            )
-            .map_err(CliError::input)?
-            .with_seed(opts.seed)
-            .with_baud_change_ignored(opts.ignore_baud_change);
+            let ids: &[u8] = if opts.servos.is_empty() {
+                &[1]
+            } else {
+                &opts.servos
+            };
+            let baud = opts.baud.unwrap_or_else(|| kind.default_baud());
+            let bus = crate::sim::servo_bus::ServoBus::with_profile_ids(p, ids, baud)
+                .map_err(CliError::input)?
+                .with_seed(opts.seed)
+                .with_baud_change_ignored(opts.ignore_baud_change);
             (Arc::new(Mutex::new(bus)), None)
         }
         (_, Some(_)) => {
@@ -184,30 +196,45 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
                 "--profile is for the window-cleaner and servo-bus simulators",
             ));
         }
-        (kind, None) => match kind {
-            SimKind::TuyaVacuum => {
-                let mut mcu = crate::sim::tuya_mcu(&opts);
-                let profile = crate::sim::tuya_mcu::builtin_vacuum_profile();
-                if let Some(id) = args.tuya.report_every.and(Some(args.tuya.report_dp))
-                    && profile.data_point(id).is_none()
-                {
-                    return Err(CliError::input(format!(
-                        "--report-dp {id}: the vacuum has no data point {id}"
-                    )));
-                }
-                args.tuya.apply(mcu.config_mut());
-                let mcu = Arc::new(Mutex::new(mcu));
-                (mcu.clone(), Some(Control::Tuya(mcu)))
-            }
-            SimKind::WindowCleaner => {
-                let wc = Arc::new(Mutex::new(
-                    WindowCleaner::new(&opts).map_err(CliError::input)?,
-                ));
-                (wc.clone(), Some(Control::WindowCleaner(wc)))
-            }
-            _ => (build(kind, &opts).map_err(CliError::input)?, None),
-        },
-    };
+        (SimKind::TuyaVacuum, None) => {
+            let mcu = tuya_vacuum(args, opts)?;
+            (mcu.clone(), Some(Control::Tuya(mcu)))
+        }
+        (SimKind::WindowCleaner, None) => {
+            let wc = Arc::new(Mutex::new(
+                WindowCleaner::new(opts).map_err(CliError::input)?,
+            ));
+            (wc.clone(), Some(Control::WindowCleaner(wc)))
+        }
+        (kind, None) => (build(kind, opts).map_err(CliError::input)?, None),
+    })
+}
+
+/// The simulated Tuya vacuum MCU, with the options of `sim tuya-vacuum` (a data point reported
+/// on its own must be one of the vacuum's).
+fn tuya_vacuum(args: &SimArgs, opts: &SimOptions) -> Result<Arc<Mutex<TuyaMcu>>, CliError> {
+    let mut mcu = crate::sim::tuya_mcu(opts);
+    let profile = crate::sim::tuya_mcu::builtin_vacuum_profile();
+    if let Some(id) = args.tuya.report_every.and(Some(args.tuya.report_dp))
+        && profile.data_point(id).is_none()
+    {
+        return Err(CliError::input(format!(
+            "--report-dp {id}: the vacuum has no data point {id}"
+        )));
+    }
+    args.tuya.apply(mcu.config_mut());
+    Ok(Arc::new(Mutex::new(mcu)))
+}
+
+/// Serves `device` on a pty until the port vanishes (as asked) or the pty fails: the path on
+/// stdout's first line, the control commands on stdin.
+fn serve(
+    kind: SimKind,
+    device: SharedDevice,
+    control: Option<Control>,
+    faults: Faults,
+    opts: &SimOptions,
+) -> CliResult {
     let vanish_after = faults.line.vanish_after_bytes;
     let server = PtyServer::start(device, faults).map_err(CliError::device)?;
     print_path(server.path())?;

@@ -248,16 +248,16 @@ impl Preset {
     /// [`Preset::validate`], placing each problem in `src`, the text the preset was read from.
     fn check(&self, profile: &Profile, src: &Source) -> Result<Vec<SetWrite>, DocumentError> {
         if self.profile != profile.id {
+            let preset = if self.profile.is_empty() {
+                "no profile (`profile` is empty)"
+            } else {
+                &self.profile
+            };
             return Err(src.error(
                 ErrorKind::Profile,
                 &[Step::Key("profile")],
                 format!(
-                    "this preset is for {}; the connected device uses {}",
-                    if self.profile.is_empty() {
-                        "no profile (`profile` is empty)"
-                    } else {
-                        &self.profile
-                    },
+                    "this preset is for {preset}; the connected device uses {}",
                     profile.id
                 ),
             ));
@@ -268,141 +268,21 @@ impl Preset {
         let mut seen: Vec<&str> = Vec::new();
         for cv in &self.values {
             let at_cmd = src.locate(&[Step::Key("values"), Step::Entry(cv.command.clone())]);
-            let mut problem =
-                |at: (usize, usize), message: String| problems.push(Problem::at(at, message));
-            let Some(cmd) = profile
-                .commands
-                .iter()
-                .find(|c| c.ident.eq_ignore_ascii_case(&cv.command))
-            else {
-                problem(
-                    at_cmd,
-                    format!(
-                        "{} has no command '{}'; a preset can hold {}",
-                        profile.id,
-                        cv.command,
-                        list(allowed.iter().map(|(s, _)| s.ident.as_str()))
-                    ),
-                );
-                continue;
-            };
-            let Some(&(set, _)) = allowed.iter().find(|(s, _)| s.id == cmd.id) else {
-                let get = match cmd.kind {
-                    CommandKind::Set => cmd.pair.and_then(|p| profile.command_by_id(p)),
-                    _ => Some(cmd),
-                };
-                if get.is_some_and(|g| g.kind == CommandKind::Get && !g.tunable) {
-                    problem(
-                        at_cmd,
-                        format!(
-                            "{} is not tunable: it holds the unit's own state, which a preset \
-                             never copies from one unit to the next; delete this entry",
-                            cmd.ident
-                        ),
-                    );
+            let set = match presettable(profile, &allowed, &cv.command) {
+                Ok(set) => set,
+                Err(message) => {
+                    problems.push(Problem::at(at_cmd, message));
                     continue;
                 }
-                let partner = cmd
-                    .pair
-                    .and_then(|p| profile.command_by_id(p))
-                    .filter(|p| p.kind == CommandKind::Set && cmd.kind == CommandKind::Get);
-                let hint = match partner {
-                    Some(set) => format!("; name its Set, {}", set.ident),
-                    None => String::new(),
-                };
-                problem(
-                    at_cmd,
-                    format!(
-                        "{} is not a Set command with a Get to read it back, so a preset cannot hold it{hint}",
-                        cmd.ident
-                    ),
-                );
-                continue;
             };
             if seen.contains(&set.ident.as_str()) {
-                problem(at_cmd, format!("{} is given twice", set.ident));
+                problems.push(Problem::at(at_cmd, format!("{} is given twice", set.ident)));
                 continue;
             }
             seen.push(&set.ident);
-            let mut inputs = Vec::new();
-            let mut ok = true;
-            for (key, text_value) in &cv.fields {
-                let at = src.locate(&[
-                    Step::Key("values"),
-                    Step::Entry(cv.command.clone()),
-                    Step::Entry(key.clone()),
-                ]);
-                let Some(field) = set
-                    .request
-                    .iter()
-                    .find(|f| f.ident.eq_ignore_ascii_case(key))
-                else {
-                    ok = false;
-                    problem(
-                        at,
-                        format!(
-                            "{} has no field '{key}'; its fields: {}",
-                            set.ident,
-                            list(set.request.iter().map(|f| f.ident.as_str()))
-                        ),
-                    );
-                    continue;
-                };
-                if inputs
-                    .iter()
-                    .any(|(k, _): &(String, Input)| k == &field.ident)
-                {
-                    ok = false;
-                    problem(
-                        at,
-                        format!("{}: field '{}' is given twice", set.ident, field.ident),
-                    );
-                    continue;
-                }
-                // FieldError's messages name the field, the value and what is allowed.
-                match field.parse(text_value) {
-                    Ok(v) => inputs.push((field.ident.clone(), Input::Raw(v))),
-                    Err(e) => {
-                        ok = false;
-                        problem(at, format!("{}: {e}", set.ident));
-                    }
-                }
-            }
-            let missing: Vec<&str> = set
-                .request
-                .iter()
-                .filter(|f| {
-                    !f.optional
-                        && !cv
-                            .fields
-                            .iter()
-                            .any(|(k, _)| k.eq_ignore_ascii_case(&f.ident))
-                })
-                .map(|f| f.ident.as_str())
-                .collect();
-            if !missing.is_empty() {
-                ok = false;
-                problem(
-                    at_cmd,
-                    format!(
-                        "{}: missing {}; a preset gives every field of a command, since its Set sends them all",
-                        set.ident,
-                        list(missing.iter().copied())
-                    ),
-                );
-            }
-            if ok {
-                // In wire order, whatever the file's order.
-                inputs.sort_by_key(|(k, _)| set.request.iter().position(|f| &f.ident == k));
-                // The profile's relations (a minimum above its maximum), named at load.
-                if let Err(e) = profile.encode(set, Direction::HostToDevice, &inputs) {
-                    problem(at_cmd, format!("{}: {e}", set.ident));
-                    continue;
-                }
-                writes.push(SetWrite {
-                    command: set.ident.clone(),
-                    inputs,
-                });
+            match set_write(profile, set, cv, src) {
+                Ok(write) => writes.push(write),
+                Err(found) => problems.extend(found),
             }
         }
         if self.values.is_empty() {
@@ -564,4 +444,137 @@ fn newer(src: &Source, v: u32) -> DocumentError {
             "preset version {v} is newer than this botbench reads (version {VERSION}); update botbench"
         ),
     )
+}
+
+/// The Set command named `name` (any case) when a preset can hold it: one of `allowed` (a Set
+/// with a Get to read it back); else what is wrong, said as a person would fix it.
+fn presettable<'p>(
+    profile: &'p Profile,
+    allowed: &[(&'p Command, &'p Command)],
+    name: &str,
+) -> Result<&'p Command, String> {
+    let Some(cmd) = profile
+        .commands
+        .iter()
+        .find(|c| c.ident.eq_ignore_ascii_case(name))
+    else {
+        return Err(format!(
+            "{} has no command '{name}'; a preset can hold {}",
+            profile.id,
+            list(allowed.iter().map(|(s, _)| s.ident.as_str()))
+        ));
+    };
+    if let Some(&(set, _)) = allowed.iter().find(|(s, _)| s.id == cmd.id) {
+        return Ok(set);
+    }
+    let get = match cmd.kind {
+        CommandKind::Set => cmd.pair.and_then(|p| profile.command_by_id(p)),
+        _ => Some(cmd),
+    };
+    if get.is_some_and(|g| g.kind == CommandKind::Get && !g.tunable) {
+        return Err(format!(
+            "{} is not tunable: it holds the unit's own state, which a preset \
+             never copies from one unit to the next; delete this entry",
+            cmd.ident
+        ));
+    }
+    let partner = cmd
+        .pair
+        .and_then(|p| profile.command_by_id(p))
+        .filter(|p| p.kind == CommandKind::Set && cmd.kind == CommandKind::Get);
+    let hint = match partner {
+        Some(set) => format!("; name its Set, {}", set.ident),
+        None => String::new(),
+    };
+    Err(format!(
+        "{} is not a Set command with a Get to read it back, so a preset cannot hold it{hint}",
+        cmd.ident
+    ))
+}
+
+/// What applying `cv` writes with `set`: every field given once, each value parsed by its field,
+/// none missing, in wire order, and the whole within the profile's relations; else every
+/// problem found, placed in `src`.
+fn set_write(
+    profile: &Profile,
+    set: &Command,
+    cv: &CommandValues,
+    src: &Source,
+) -> Result<SetWrite, Vec<Problem>> {
+    let at_cmd = src.locate(&[Step::Key("values"), Step::Entry(cv.command.clone())]);
+    let (mut inputs, mut problems) = field_inputs(set, cv, src);
+    let missing: Vec<&str> = set
+        .request
+        .iter()
+        .filter(|f| {
+            !f.optional
+                && !cv
+                    .fields
+                    .iter()
+                    .any(|(k, _)| k.eq_ignore_ascii_case(&f.ident))
+        })
+        .map(|f| f.ident.as_str())
+        .collect();
+    if !missing.is_empty() {
+        problems.push(Problem::at(
+            at_cmd,
+            format!(
+                "{}: missing {}; a preset gives every field of a command, since its Set sends them all",
+                set.ident,
+                list(missing.iter().copied())
+            ),
+        ));
+    }
+    if !problems.is_empty() {
+        return Err(problems);
+    }
+    // In wire order, whatever the file's order.
+    inputs.sort_by_key(|(k, _)| set.request.iter().position(|f| &f.ident == k));
+    // The profile's relations (a minimum above its maximum), named at load.
+    if let Err(e) = profile.encode(set, Direction::HostToDevice, &inputs) {
+        return Err(vec![Problem::at(at_cmd, format!("{}: {e}", set.ident))]);
+    }
+    Ok(SetWrite {
+        command: set.ident.clone(),
+        inputs,
+    })
+}
+
+/// The fields of `cv` parsed by `set`'s request fields, and a problem for each one unknown,
+/// given twice or out of its range.
+fn field_inputs(
+    set: &Command,
+    cv: &CommandValues,
+    src: &Source,
+) -> (Vec<(String, Input)>, Vec<Problem>) {
+    let mut inputs: Vec<(String, Input)> = Vec::new();
+    let mut problems = Vec::new();
+    for (key, text_value) in &cv.fields {
+        let at = src.locate(&[
+            Step::Key("values"),
+            Step::Entry(cv.command.clone()),
+            Step::Entry(key.clone()),
+        ]);
+        let Some(field) = set
+            .request
+            .iter()
+            .find(|f| f.ident.eq_ignore_ascii_case(key))
+        else {
+            let fields = list(set.request.iter().map(|f| f.ident.as_str()));
+            let message = format!("{} has no field '{key}'; its fields: {fields}", set.ident);
+            problems.push(Problem::at(at, message));
+            continue;
+        };
+        if inputs.iter().any(|(k, _)| k == &field.ident) {
+            let message = format!("{}: field '{}' is given twice", set.ident, field.ident);
+            problems.push(Problem::at(at, message));
+            continue;
+        }
+        // FieldError's messages name the field, the value and what is allowed.
+        match field.parse(text_value) {
+            Ok(v) => inputs.push((field.ident.clone(), Input::Raw(v))),
+            Err(e) => problems.push(Problem::at(at, format!("{}: {e}", set.ident))),
+        }
+    }
+    (inputs, problems)
 }

@@ -177,20 +177,7 @@ impl Profile {
                         note_missing(&field.ident);
                         continue;
                     };
-                    let p = match input {
-                        Input::Text(t) => self.find_param(t),
-                        Input::Raw(Value::Int(i)) => {
-                            u8::try_from(*i).ok().and_then(|i| self.param(i))
-                        }
-                        Input::Raw(_) => None,
-                    }
-                    .ok_or_else(|| FieldError::Unknown {
-                        what: "parameter",
-                        id: match input {
-                            Input::Text(t) => t.clone(),
-                            Input::Raw(v) => format!("{v:?}"),
-                        },
-                    })?;
+                    let p = self.param_named(input)?;
                     param = Some(p);
                     out.push(p.id);
                 }
@@ -240,29 +227,7 @@ impl Profile {
                 }
                 FieldType::Records => {
                     let records = self.encode_records(field, sub, count_at.as_ref(), ins)?;
-                    if let Some((at, given, len_field)) = &len_at {
-                        let want = Value::Int(records.len as i64);
-                        if given.as_ref().is_some_and(|g| *g != want) {
-                            return Err(FieldError::Records {
-                                field: len_field.ident.clone(),
-                                message: format!(
-                                    "{given:?} given, but each record takes {} byte(s)",
-                                    records.len
-                                ),
-                            });
-                        }
-                        out[*at] = u8::try_from(records.len).map_err(|_| FieldError::Records {
-                            field: len_field.ident.clone(),
-                            message: format!("records of {} bytes", records.len),
-                        })?;
-                    }
-                    if let Some((at, _)) = count_at {
-                        out[at] = u8::try_from(records.count).map_err(|_| FieldError::Records {
-                            field: field.ident.clone(),
-                            message: format!("{} records; at most 255", records.count),
-                        })?;
-                    }
-                    out.extend(records.bytes);
+                    put_records(&mut out, field, records, len_at.as_ref(), count_at.as_ref())?;
                 }
                 _ => {
                     let value = match ins.take(&field.ident) {
@@ -290,6 +255,22 @@ impl Profile {
             out.extend(self.encode_dps(to_device, ins)?);
         }
         Ok(out)
+    }
+
+    /// The parameter an input names: by name, or by its number.
+    fn param_named(&self, input: &Input) -> Result<&Param, FieldError> {
+        match input {
+            Input::Text(t) => self.find_param(t),
+            Input::Raw(Value::Int(i)) => u8::try_from(*i).ok().and_then(|i| self.param(i)),
+            Input::Raw(_) => None,
+        }
+        .ok_or_else(|| FieldError::Unknown {
+            what: "parameter",
+            id: match input {
+                Input::Text(t) => t.clone(),
+                Input::Raw(v) => format!("{v:?}"),
+            },
+        })
     }
 
     /// The records of a synchronous command: each the request of command `sub`, from the
@@ -376,4 +357,40 @@ struct Records {
     len: usize,
     count: usize,
     bytes: Vec<u8>,
+}
+
+/// Appends the records of a synchronous command (`field`) to `out`, and fills in the record
+/// length at `len_at` (checked against the one given, if any) and the record count at
+/// `count_at`: each one byte.
+fn put_records(
+    out: &mut Vec<u8>,
+    field: &Field,
+    records: Records,
+    len_at: Option<&(usize, Option<Value>, &Field)>,
+    count_at: Option<&(usize, Option<Value>)>,
+) -> Result<(), FieldError> {
+    if let Some((at, given, len_field)) = len_at {
+        let want = Value::Int(records.len as i64);
+        if given.as_ref().is_some_and(|g| *g != want) {
+            return Err(FieldError::Records {
+                field: len_field.ident.clone(),
+                message: format!(
+                    "{given:?} given, but each record takes {} byte(s)",
+                    records.len
+                ),
+            });
+        }
+        out[*at] = u8::try_from(records.len).map_err(|_| FieldError::Records {
+            field: len_field.ident.clone(),
+            message: format!("records of {} bytes", records.len),
+        })?;
+    }
+    if let Some((at, _)) = count_at {
+        out[*at] = u8::try_from(records.count).map_err(|_| FieldError::Records {
+            field: field.ident.clone(),
+            message: format!("{} records; at most 255", records.count),
+        })?;
+    }
+    out.extend(records.bytes);
+    Ok(())
 }

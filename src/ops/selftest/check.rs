@@ -6,6 +6,7 @@ use crate::document::{Problem, Source, Step as At};
 use crate::profile::value::Typed as Text;
 use crate::profile::{Command, CommandKind, Field, Input, Profile};
 use crate::protocol::Direction;
+use std::collections::BTreeMap;
 use std::time::Duration;
 
 /// Checks one step of the document, collecting problems with their place.
@@ -228,7 +229,6 @@ impl<'a> StepCheck<'a> {
 
     pub(super) fn step(&mut self, s: &DocStep) -> Option<StepKind> {
         let before = self.problems.len();
-        let idents = |fs: &[&Field]| fs.iter().map(|f| f.ident.clone()).collect::<Vec<_>>();
         let kind = match s {
             DocStep::Range {
                 command,
@@ -239,25 +239,11 @@ impl<'a> StepCheck<'a> {
                 samples,
                 interval_ms,
                 ..
-            } => {
-                let cmd = self.readable(command);
-                let fs = self.fields(cmd, field, fields);
-                let min = self.number("min", min, &fs);
-                let max = self.number("max", max, &fs);
-                if let (Some(a), Some(b)) = (min, max)
-                    && a > b
-                {
-                    self.at(&[At::Key("min")], format!("min {a} is above max {b}"));
-                }
-                StepKind::Range {
-                    command: cmd?.ident.clone(),
-                    fields: idents(&fs),
-                    min: min?,
-                    max: max?,
-                    samples: self.samples(*samples, 1),
-                    interval: self.interval(*interval_ms),
-                }
-            }
+            } => self.range(
+                (command, field, fields),
+                (min, max),
+                (*samples, *interval_ms),
+            ),
             DocStep::Stable {
                 command,
                 field,
@@ -266,18 +252,11 @@ impl<'a> StepCheck<'a> {
                 samples,
                 interval_ms,
                 ..
-            } => {
-                let cmd = self.readable(command);
-                let fs = self.fields(cmd, field, fields);
-                let spread = self.number("max_spread", max_spread, &fs);
-                StepKind::Stable {
-                    command: cmd?.ident.clone(),
-                    fields: idents(&fs),
-                    max_spread: spread?,
-                    samples: self.samples(*samples, 2),
-                    interval: self.interval(*interval_ms),
-                }
-            }
+            } => self.stable(
+                (command, field, fields),
+                max_spread,
+                (*samples, *interval_ms),
+            ),
             DocStep::Rises {
                 action,
                 command,
@@ -288,28 +267,12 @@ impl<'a> StepCheck<'a> {
                 samples,
                 then,
                 ..
-            } => {
-                let action = self.action("action", action);
-                let then = self.action("then", then);
-                let cmd = self.readable(command);
-                let fs = self.fields(cmd, field, fields);
-                let rise = self.number("min_rise", min_rise, &fs);
-                if rise == Some(0.0) {
-                    self.at(
-                        &[At::Key("min_rise")],
-                        "min_rise: 0 passes whatever happens; give a rise above 0".into(),
-                    );
-                }
-                StepKind::Rises {
-                    action: action?,
-                    command: cmd?.ident.clone(),
-                    fields: idents(&fs),
-                    min_rise: rise?,
-                    settle: self.ms("settle_ms", *settle_ms, 0),
-                    samples: self.samples(*samples, 1),
-                    then: then?,
-                }
-            }
+            } => self.rises(
+                (action, then),
+                (command, field, fields),
+                min_rise,
+                (*samples, *settle_ms),
+            ),
             DocStep::Operator {
                 prompt,
                 command,
@@ -317,67 +280,174 @@ impl<'a> StepCheck<'a> {
                 expect_bits_seen,
                 timeout_ms,
                 ..
-            } => {
-                let cmd = self.readable(command);
-                let f = cmd.and_then(|c| self.field(c, field, &[At::Key("field")]));
-                if let Some(f) = f {
-                    let width = f.ty.width().unwrap_or(8) * 8;
-                    let allowed: u64 = if f.bits.is_empty() {
-                        if width >= 64 {
-                            u64::MAX
-                        } else {
-                            (1u64 << width) - 1
-                        }
-                    } else {
-                        f.bits
-                            .iter()
-                            .filter(|b| b.bit < 64)
-                            .fold(0, |m, b| m | 1u64 << b.bit)
-                    };
-                    if *expect_bits_seen == 0 || expect_bits_seen & !allowed != 0 {
-                        self.at(
-                            &[At::Key("expect_bits_seen")],
-                            format!(
-                                "expect_bits_seen: {expect_bits_seen:#x}; {} has bits {allowed:#x}",
-                                f.ident
-                            ),
-                        );
-                    }
-                }
-                if prompt.trim().is_empty() {
-                    self.at(&[At::Key("prompt")], "the prompt is empty".into());
-                }
-                StepKind::Operator {
-                    prompt: prompt.clone(),
-                    command: cmd?.ident.clone(),
-                    field: f?.ident.clone(),
-                    bits: *expect_bits_seen,
-                    timeout: self.ms("timeout_ms", *timeout_ms, 1),
-                }
-            }
+            } => self.operator(prompt, (command, field), *expect_bits_seen, *timeout_ms),
             DocStep::Reads {
                 command, expect, ..
-            } => {
-                let cmd = self.readable(command);
-                let mut out = Vec::new();
-                if let Some(cmd) = cmd {
-                    for (k, v) in expect {
-                        let path = [At::Key("expect")];
-                        let Some(f) = self.field(cmd, k, &path) else {
-                            continue;
-                        };
-                        match f.parse(&v.0) {
-                            Ok(raw) => out.push((f.ident.clone(), raw, v.0.clone())),
-                            Err(e) => self.at(&path, format!("expect: {e}")),
-                        }
-                    }
-                }
-                StepKind::Reads {
-                    command: cmd?.ident.clone(),
-                    expect: out,
+            } => self.reads(command, expect),
+        };
+        (self.problems.len() == before).then_some(kind?)
+    }
+
+    /// The command a measuring step reads and its fields (`field`, or `fields`).
+    fn measured(
+        &mut self,
+        (command, field, fields): Measured<'_>,
+    ) -> (Option<&'a Command>, Vec<&'a Field>) {
+        let cmd = self.readable(command);
+        let fs = self.fields(cmd, field, fields);
+        (cmd, fs)
+    }
+
+    /// A range step: `min` no higher than `max`.
+    fn range(
+        &mut self,
+        what: Measured<'_>,
+        (min, max): (&Text, &Text),
+        (samples, interval_ms): (u32, Option<u64>),
+    ) -> Option<StepKind> {
+        let (cmd, fs) = self.measured(what);
+        let min = self.number("min", min, &fs);
+        let max = self.number("max", max, &fs);
+        if let (Some(a), Some(b)) = (min, max)
+            && a > b
+        {
+            self.at(&[At::Key("min")], format!("min {a} is above max {b}"));
+        }
+        Some(StepKind::Range {
+            command: cmd?.ident.clone(),
+            fields: idents(&fs),
+            min: min?,
+            max: max?,
+            samples: self.samples(samples, 1),
+            interval: self.interval(interval_ms),
+        })
+    }
+
+    /// A stability step: at least two samples.
+    fn stable(
+        &mut self,
+        what: Measured<'_>,
+        max_spread: &Text,
+        (samples, interval_ms): (u32, Option<u64>),
+    ) -> Option<StepKind> {
+        let (cmd, fs) = self.measured(what);
+        let spread = self.number("max_spread", max_spread, &fs);
+        Some(StepKind::Stable {
+            command: cmd?.ident.clone(),
+            fields: idents(&fs),
+            max_spread: spread?,
+            samples: self.samples(samples, 2),
+            interval: self.interval(interval_ms),
+        })
+    }
+
+    /// A rise step: its two actions, and a rise above 0.
+    fn rises(
+        &mut self,
+        (action, then): (&DocAction, &DocAction),
+        what: Measured<'_>,
+        min_rise: &Text,
+        (samples, settle_ms): (u32, u64),
+    ) -> Option<StepKind> {
+        let action = self.action("action", action);
+        let then = self.action("then", then);
+        let (cmd, fs) = self.measured(what);
+        let rise = self.number("min_rise", min_rise, &fs);
+        if rise == Some(0.0) {
+            self.at(
+                &[At::Key("min_rise")],
+                "min_rise: 0 passes whatever happens; give a rise above 0".into(),
+            );
+        }
+        Some(StepKind::Rises {
+            action: action?,
+            command: cmd?.ident.clone(),
+            fields: idents(&fs),
+            min_rise: rise?,
+            settle: self.ms("settle_ms", settle_ms, 0),
+            samples: self.samples(samples, 1),
+            then: then?,
+        })
+    }
+
+    /// An operator step: a prompt, and bits the field has.
+    fn operator(
+        &mut self,
+        prompt: &str,
+        (command, field): (&str, &str),
+        bits: u64,
+        timeout_ms: u64,
+    ) -> Option<StepKind> {
+        let cmd = self.readable(command);
+        let f = cmd.and_then(|c| self.field(c, field, &[At::Key("field")]));
+        if let Some(f) = f {
+            self.bits_of(f, bits);
+        }
+        if prompt.trim().is_empty() {
+            self.at(&[At::Key("prompt")], "the prompt is empty".into());
+        }
+        Some(StepKind::Operator {
+            prompt: prompt.to_string(),
+            command: cmd?.ident.clone(),
+            field: f?.ident.clone(),
+            bits,
+            timeout: self.ms("timeout_ms", timeout_ms, 1),
+        })
+    }
+
+    /// `expect_bits_seen`: not 0, and only bits `f` has (its named bits, else its width).
+    fn bits_of(&mut self, f: &Field, expect_bits_seen: u64) {
+        let width = f.ty.width().unwrap_or(8) * 8;
+        let allowed: u64 = if f.bits.is_empty() {
+            if width >= 64 {
+                u64::MAX
+            } else {
+                (1u64 << width) - 1
+            }
+        } else {
+            f.bits
+                .iter()
+                .filter(|b| b.bit < 64)
+                .fold(0, |m, b| m | 1u64 << b.bit)
+        };
+        if expect_bits_seen == 0 || expect_bits_seen & !allowed != 0 {
+            self.at(
+                &[At::Key("expect_bits_seen")],
+                format!(
+                    "expect_bits_seen: {expect_bits_seen:#x}; {} has bits {allowed:#x}",
+                    f.ident
+                ),
+            );
+        }
+    }
+
+    /// A reads step: each expected value parsed by its field.
+    fn reads(&mut self, command: &str, expect: &BTreeMap<String, Text>) -> Option<StepKind> {
+        let cmd = self.readable(command);
+        let mut out = Vec::new();
+        if let Some(cmd) = cmd {
+            for (k, v) in expect {
+                let path = [At::Key("expect")];
+                let Some(f) = self.field(cmd, k, &path) else {
+                    continue;
+                };
+                match f.parse(&v.0) {
+                    Ok(raw) => out.push((f.ident.clone(), raw, v.0.clone())),
+                    Err(e) => self.at(&path, format!("expect: {e}")),
                 }
             }
-        };
-        (self.problems.len() == before).then_some(kind)
+        }
+        Some(StepKind::Reads {
+            command: cmd?.ident.clone(),
+            expect: out,
+        })
     }
+}
+
+/// What a measuring step reads: the command, and its `field` or `fields`.
+type Measured<'s> = (&'s str, &'s Option<String>, &'s [String]);
+
+/// The fields' idents, in order.
+fn idents(fs: &[&Field]) -> Vec<String> {
+    fs.iter().map(|f| f.ident.clone()).collect()
 }

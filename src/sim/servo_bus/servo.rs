@@ -373,37 +373,41 @@ impl SimServo {
 
     /// Handles a request this servo heard. `Some` is what it sends back, if anything, and when.
     pub(super) fn handle(&mut self, frame: &Frame, bus: &mut BusCtx<'_>) -> Option<Reply> {
-        let c = frame.content.as_slice();
-        let id = self.id();
-        let baud = self.baud;
-        let now = bus.now;
-        let latency = bus.latency;
-        let immediate = |content: Vec<u8>, s: &Self| Reply {
-            content,
-            command: frame.command,
-            after: latency,
-            baud: s.baud,
-        };
         if !self.extended && frame.command > cmd::READ_ANGLE {
             return None;
         }
         // A motion command answers only with the response switch on, once it has finished;
         // between BEGIN_ASYNC and END_ASYNC it is held instead, and not answered.
-        if let Some(m) = MotionCmd::from_request(frame.command, c) {
+        if let Some(m) = MotionCmd::from_request(frame.command, &frame.content) {
             if self.holding {
                 self.held = Some(m);
                 return None;
             }
-            let done = self.command_motion(m, now)?;
+            let done = self.command_motion(m, bus.now)?;
             return (self.p(param::RESPONSE_SWITCH) == 1).then(|| Reply {
                 content: vec![self.id(), 1],
                 command: frame.command,
-                after: done + latency,
-                baud,
+                after: done + bus.latency,
+                baud: self.baud,
             });
         }
+        let content = self.answer(frame, bus)?;
+        // At the rate the servo is at once it has handled the request (a reset changes it).
+        Some(Reply {
+            content,
+            command: frame.command,
+            after: bus.latency,
+            baud: self.baud,
+        })
+    }
+
+    /// What the servo answers at once to a request that is no motion command: its parameters,
+    /// read and written, and a ping; the rest is [`Self::live_answer`].
+    fn answer(&mut self, frame: &Frame, bus: &mut BusCtx<'_>) -> Option<Vec<u8>> {
+        let c = frame.content.as_slice();
+        let id = self.id();
         match (frame.command, c.len()) {
-            (cmd::PING, 1) => Some(immediate(vec![id], self)),
+            (cmd::PING, 1) => Some(vec![id]),
             (cmd::RESET_USER_DATA, 1) => {
                 self.params = self.defaults.clone();
                 if let Some(b) = self
@@ -413,32 +417,43 @@ impl SimServo {
                 {
                     self.baud = b;
                 }
-                Some(immediate(vec![self.id(), 1], self))
+                Some(vec![self.id(), 1])
             }
             (cmd::READ_DATA, 2) => {
                 let mut out = vec![id, c[1]];
-                out.extend(self.read_param(bus.profile, c[1], now, bus.rng)?);
-                Some(immediate(out, self))
+                out.extend(self.read_param(bus.profile, c[1], bus.now, bus.rng)?);
+                Some(out)
             }
             (cmd::WRITE_DATA, n) if n >= 2 => {
                 let ok = self.write_param(bus.profile, c[1], &c[2..]);
-                Some(immediate(vec![self.id(), c[1], u8::from(ok)], self))
+                Some(vec![self.id(), c[1], u8::from(ok)])
             }
             (cmd::READ_BATCH_DATA, 1) => {
                 let mut out = vec![id];
                 out.extend(self.block(bus.profile));
-                Some(immediate(out, self))
+                Some(out)
             }
             (cmd::WRITE_BATCH_DATA, _) => {
                 let ok = self.write_block(bus.profile, c.get(1..).unwrap_or_default());
-                Some(immediate(vec![self.id(), u8::from(ok)], self))
+                Some(vec![self.id(), u8::from(ok)])
             }
+            _ => self.live_answer(frame, bus),
+        }
+    }
+
+    /// What the servo answers to a request about where it is and what it does: its angle, its
+    /// readings (MONITOR), a new origin, the asynchronous hold, a stop. Some answer nothing.
+    fn live_answer(&mut self, frame: &Frame, bus: &mut BusCtx<'_>) -> Option<Vec<u8>> {
+        let c = frame.content.as_slice();
+        let now = bus.now;
+        let id = self.id();
+        match (frame.command, c.len()) {
             (cmd::READ_ANGLE, 1) => {
                 self.advance(now);
                 let a = wrap(self.current_angle(now)).round() as i16;
                 let mut out = vec![id];
                 out.extend(a.to_le_bytes());
-                Some(immediate(out, self))
+                Some(out)
             }
             (cmd::READ_ANGLE_MTURN, 1) => {
                 self.advance(now);
@@ -446,32 +461,20 @@ impl SimServo {
                 let mut out = vec![id];
                 out.extend(angle.to_le_bytes());
                 out.extend(turns.to_le_bytes());
-                Some(immediate(out, self))
+                Some(out)
             }
+            (cmd::MONITOR, 1) => Some(self.monitor(bus)),
             (cmd::RESET_MTURN, 1) => {
                 self.advance(now);
                 let a = self.current_angle(now);
-                let shift = a - wrap(a);
-                self.rebase(shift);
+                self.rebase(a - wrap(a));
                 None
             }
-            (cmd::MONITOR, 1) => {
+            (cmd::SET_ORIGIN, 2) => {
                 self.advance(now);
-                let live = self.live(now, bus.rng);
-                let (angle, turns) = mturn(self.current_angle(now));
-                let mut out = vec![id];
-                out.extend(live.voltage.to_le_bytes());
-                out.extend(live.current.to_le_bytes());
-                out.extend(live.power.to_le_bytes());
-                let field = bus
-                    .profile
-                    .command_by_id(cmd::MONITOR)
-                    .and_then(|m| m.reply.iter().find(|f| f.ident == "temperature"));
-                out.extend((self.temperature_raw(field) as u16).to_le_bytes());
-                out.push(self.status);
-                out.extend(angle.to_le_bytes());
-                out.extend(turns.to_le_bytes());
-                Some(immediate(out, self))
+                let a = self.current_angle(now);
+                self.rebase(a);
+                None
             }
             (cmd::BEGIN_ASYNC, 0) => {
                 self.holding = true;
@@ -486,24 +489,38 @@ impl SimServo {
                 self.held = None;
                 None
             }
-            (cmd::SET_ORIGIN, 2) => {
-                self.advance(now);
-                let a = self.current_angle(now);
-                self.rebase(a);
-                None
-            }
             (cmd::STOP, 4) if (0x10..=0x12).contains(&c[1]) => {
-                let _ = self.command_motion(
-                    MotionCmd::Stop {
-                        mode: c[1],
-                        power: u16_at(c, 2),
-                    },
-                    now,
-                );
+                let stop = MotionCmd::Stop {
+                    mode: c[1],
+                    power: u16_at(c, 2),
+                };
+                let _ = self.command_motion(stop, now);
                 None
             }
             _ => None,
         }
+    }
+
+    /// The MONITOR answer: voltage, current, power, temperature (as the profile's field reads
+    /// it), status, angle and turns.
+    fn monitor(&mut self, bus: &mut BusCtx<'_>) -> Vec<u8> {
+        let now = bus.now;
+        self.advance(now);
+        let live = self.live(now, bus.rng);
+        let (angle, turns) = mturn(self.current_angle(now));
+        let mut out = vec![self.id()];
+        out.extend(live.voltage.to_le_bytes());
+        out.extend(live.current.to_le_bytes());
+        out.extend(live.power.to_le_bytes());
+        let field = bus
+            .profile
+            .command_by_id(cmd::MONITOR)
+            .and_then(|m| m.reply.iter().find(|f| f.ident == "temperature"));
+        out.extend((self.temperature_raw(field) as u16).to_le_bytes());
+        out.push(self.status);
+        out.extend(angle.to_le_bytes());
+        out.extend(turns.to_le_bytes());
+        out
     }
 }
 

@@ -59,19 +59,18 @@ impl WindowCleaner {
     }
 
     pub(super) fn telemetry(&mut self, command: u8, now: Instant) -> Answer {
+        match command {
+            102 | 104 | 106 | 108 | 120 => self.attitude(command, now),
+            103 | 107 | 110 | 111 | 117 | 118 | 123 | 146 => self.power(command),
+            _ => self.sensors(command, now),
+        }
+    }
+
+    /// The gyro, the accelerometer, the attitude and the loop: what a noisy gyro disturbs.
+    fn attitude(&mut self, command: u8, now: Instant) -> Answer {
         let t = now.saturating_duration_since(self.start).as_secs_f64();
         let gyro_noise = if self.has(Fault::GyroNoisy) { 400 } else { 3 };
-        let wheel = [
-            self.wheel_adc[0].round() as i64,
-            self.wheel_adc[1].round() as i64,
-        ];
-        let battery = if self.has(Fault::BatteryLow) {
-            10.8
-        } else {
-            self.battery
-        };
         match command {
-            3 => Answer::bytes("powerState", vec![1]),
             102 => {
                 let turning = if self.motor == Motor::Stop { 0 } else { 120 };
                 let a = [
@@ -84,19 +83,10 @@ impl WindowCleaner {
                 ];
                 Answer::ints(a)
             }
-            103 => Answer::ints([
-                ("value1", self.fan_adc.round() as i64),
-                ("value2", (wheel[0] + wheel[1]) / 2),
-                ("value3", (battery * 10.0).round() as i64),
-            ]),
             104 => {
                 let diff = self.noise(gyro_noise * 2);
                 let period = 20 + self.noise(1);
                 Answer::ints([("gyroDiff", diff), ("loopPeriod", period)])
-            }
-            105 => {
-                let v = [self.noise(4), self.pressure.round() as i64, self.noise(2)];
-                Answer::ints([("value1", v[0]), ("value2", v[1]), ("value3", v[2])])
             }
             106 => {
                 let a = [
@@ -107,12 +97,6 @@ impl WindowCleaner {
                 ];
                 Answer::ints(a)
             }
-            107 => Answer::ints([
-                ("wheelAdcAvg", (wheel[0] + wheel[1]) / 2),
-                ("belowCnt", 0),
-                ("aboveCnt", clamp_i(self.above_count, 0, 65535)),
-                ("pressure", self.pressure.round() as i64),
-            ]),
             108 => {
                 let jitter = if self.has(Fault::GyroNoisy) { 60 } else { 2 };
                 let x = 150.0 * (t * std::f64::consts::TAU / 4.0).sin();
@@ -124,6 +108,37 @@ impl WindowCleaner {
                 ];
                 Answer::ints(a)
             }
+            120 => {
+                let period = 20 + self.noise(1);
+                Answer::ints([("loopPeriod", period)])
+            }
+            _ => Answer::Nothing,
+        }
+    }
+
+    /// The wheels, the fan, the motors and the battery: the ADCs and the power.
+    fn power(&mut self, command: u8) -> Answer {
+        let wheel = [
+            self.wheel_adc[0].round() as i64,
+            self.wheel_adc[1].round() as i64,
+        ];
+        let battery = if self.has(Fault::BatteryLow) {
+            10.8
+        } else {
+            self.battery
+        };
+        match command {
+            103 => Answer::ints([
+                ("value1", self.fan_adc.round() as i64),
+                ("value2", (wheel[0] + wheel[1]) / 2),
+                ("value3", (battery * 10.0).round() as i64),
+            ]),
+            107 => Answer::ints([
+                ("wheelAdcAvg", (wheel[0] + wheel[1]) / 2),
+                ("belowCnt", 0),
+                ("aboveCnt", clamp_i(self.above_count, 0, 65535)),
+                ("pressure", self.pressure.round() as i64),
+            ]),
             110 => {
                 let fan = self.fan_adc.round() as i64 + self.noise(3);
                 let a = [
@@ -137,6 +152,32 @@ impl WindowCleaner {
                 ("adapterVoltage", 240),
                 ("batteryVoltage", clamp_i(battery * 10.0, 0, 65535)),
             ]),
+            117 => Answer::ints([("count", 0), ("diff", wheel[0] - wheel[1])]),
+            118 => Answer::ints([("current", (wheel[0] + wheel[1]) / 2)]),
+            123 => {
+                let l = clamp_i(self.motor_amps[0] * 100.0, 0, 65535);
+                let r = clamp_i(self.motor_amps[1] * 100.0, 0, 65535);
+                Answer::ints([("left", l), ("right", r)])
+            }
+            146 => Answer::ints([
+                ("state", 0),
+                ("voltage", clamp_i(battery * 10.0, 0, 255)),
+                ("current", 0),
+                ("cells", 4),
+            ]),
+            _ => Answer::Nothing,
+        }
+    }
+
+    /// The power state, the edge sensors, the corners, the air pressure, the water box, the
+    /// Wi-Fi test and the pressure target.
+    fn sensors(&mut self, command: u8, now: Instant) -> Answer {
+        match command {
+            105 => {
+                let v = [self.noise(4), self.pressure.round() as i64, self.noise(2)];
+                Answer::ints([("value1", v[0]), ("value2", v[1]), ("value3", v[2])])
+            }
+            3 => Answer::bytes("powerState", vec![1]),
             112 => {
                 let mut bits = self.corners;
                 if self.has(Fault::CornerStuck) {
@@ -175,18 +216,7 @@ impl WindowCleaner {
                 };
                 Answer::ints([("rssi", rssi)])
             }
-            117 => Answer::ints([("count", 0), ("diff", wheel[0] - wheel[1])]),
-            118 => Answer::ints([("current", (wheel[0] + wheel[1]) / 2)]),
-            120 => {
-                let period = 20 + self.noise(1);
-                Answer::ints([("loopPeriod", period)])
-            }
             121 => Answer::ints([("arg1", 1200), ("arg2", 800), ("arg3", 300), ("arg4", 50)]),
-            123 => {
-                let l = clamp_i(self.motor_amps[0] * 100.0, 0, 65535);
-                let r = clamp_i(self.motor_amps[1] * 100.0, 0, 65535);
-                Answer::ints([("left", l), ("right", r)])
-            }
             142 => {
                 let target = if self.fan_pwm > 0 {
                     self.param("defaultTarget").unwrap_or(275)
@@ -198,12 +228,6 @@ impl WindowCleaner {
                     ("live", clamp_i(self.pressure, 0, i64::from(u32::MAX))),
                 ])
             }
-            146 => Answer::ints([
-                ("state", 0),
-                ("voltage", clamp_i(battery * 10.0, 0, 255)),
-                ("current", 0),
-                ("cells", 4),
-            ]),
             _ => Answer::Nothing,
         }
     }

@@ -99,104 +99,114 @@ impl Plan {
     /// Checks the plan against the servo `profile`: the baud rate, the ids, every parameter
     /// (known, writable, not the id or baud rate, its value in range) and every recorded one.
     pub fn resolve<'p>(&self, profile: &'p Profile) -> Result<Resolved<'p>, Issue> {
-        let issue = |path: Vec<Step>, message: String| Issue { path, message };
-        let role_issue = |e: OpError| issue(vec![Step::Key("target_baud")], e.to_string());
-        let id_pid = servo::id_param(profile).map_err(role_issue)?.id;
+        let option = self.baud_option(profile)?;
+        self.check_ids(profile)?;
+        Ok(Resolved {
+            option,
+            writes: self.writes(profile)?,
+            record: self.recorded(profile)?,
+        })
+    }
+
+    /// The baud option of the plan's rate, which the servo's baud parameter takes (the profile
+    /// names its id and baud parameters).
+    fn baud_option(&self, profile: &Profile) -> Result<u8, Issue> {
+        let at = || vec![Step::Key("target_baud")];
+        let role_issue = |e: OpError| issue(at(), e.to_string());
+        servo::id_param(profile).map_err(role_issue)?;
         let (baud, _) = servo::baud_param(profile).map_err(role_issue)?;
         let Some(option) = profile.option_of_baud(self.target_baud) else {
+            let allowed: Vec<String> = profile
+                .servo_bauds()
+                .iter()
+                .map(|b| b.to_string())
+                .collect();
             return Err(issue(
-                vec![Step::Key("target_baud")],
+                at(),
                 format!(
                     "{} is not a servo baud rate; allowed: {}",
                     self.target_baud,
-                    profile
-                        .servo_bauds()
-                        .iter()
-                        .map(|b| b.to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    allowed.join(", ")
                 ),
             ));
         };
         baud.field
             .check(&Value::Int(option.into()))
-            .map_err(|e| issue(vec![Step::Key("target_baud")], e.to_string()))?;
-        let ids_at = vec![Step::Key("ids")];
+            .map_err(|e| issue(at(), e.to_string()))?;
+        Ok(option)
+    }
+
+    /// The ids given out: never the factory id of a fresh servo or the broadcast address, a
+    /// list neither empty nor with an id twice.
+    fn check_ids(&self, profile: &Profile) -> Result<(), Issue> {
+        let at = || vec![Step::Key("ids")];
         let fresh = servo::factory_location(profile).id;
         let broadcast = crate::protocol::servo::BROADCAST_ID;
         match &self.ids {
-            IdSequence::Start(first) if *first == fresh => {
-                return Err(issue(
-                    ids_at,
-                    format!(
-                        "ids cannot start at {fresh}: {fresh} is the factory id of a fresh servo"
-                    ),
-                ));
+            IdSequence::Start(first) if *first == fresh => Err(issue(
+                at(),
+                format!("ids cannot start at {fresh}: {fresh} is the factory id of a fresh servo"),
+            )),
+            IdSequence::Start(first) if *first == broadcast => Err(issue(
+                at(),
+                format!("id {broadcast} is the broadcast address and cannot be assigned"),
+            )),
+            IdSequence::Start(_) => Ok(()),
+            IdSequence::List(ids) if ids.is_empty() => {
+                Err(issue(at(), "the id list is empty".into()))
             }
-            IdSequence::Start(first) if *first == broadcast => {
-                return Err(issue(
-                    ids_at,
-                    format!("id {broadcast} is the broadcast address and cannot be assigned"),
-                ));
-            }
-            IdSequence::Start(_) => {}
             IdSequence::List(ids) => {
-                if ids.is_empty() {
-                    return Err(issue(ids_at, "the id list is empty".into()));
-                }
                 for (i, &id) in ids.iter().enumerate() {
                     if id == fresh || id == broadcast {
                         return Err(issue(
-                            ids_at,
+                            at(),
                             format!(
                                 "id {id} cannot be assigned: {fresh} is the factory id and {broadcast} the broadcast address"
                             ),
                         ));
                     }
                     if ids[..i].contains(&id) {
-                        return Err(issue(ids_at, format!("id {id} is listed twice")));
+                        return Err(issue(at(), format!("id {id} is listed twice")));
                     }
                 }
+                Ok(())
             }
         }
-        let known = || {
-            profile
-                .params
-                .iter()
-                .map(|p| p.field.ident.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
+    }
+
+    /// The plan's parameters with their raw values, in order: each known, writable, not the id
+    /// or the baud rate (the plan sets those), given once, in range, and the values so far
+    /// within the profile's relations (voltage low ≤ high).
+    fn writes<'p>(&self, profile: &'p Profile) -> Result<Vec<(&'p Param, i64)>, Issue> {
+        let role_issue = |e: OpError| issue(vec![Step::Key("target_baud")], e.to_string());
+        let id_pid = servo::id_param(profile).map_err(role_issue)?.id;
+        let baud_pid = servo::baud_param(profile).map_err(role_issue)?.0.id;
         let mut writes: Vec<(&Param, i64)> = Vec::new();
         for (i, (name, value)) in self.params.iter().enumerate() {
             let at = vec![Step::Key("params"), Step::Index(i)];
             let Some(param) = profile.find_param(name) else {
-                return Err(issue(
-                    at,
-                    format!("no servo parameter '{name}'; known: {}", known()),
-                ));
+                let known = known_params(profile);
+                let message = format!("no servo parameter '{name}'; known: {known}");
+                return Err(issue(at, message));
             };
             let ident = &param.field.ident;
-            if param.access == Access::ReadOnly {
-                return Err(issue(
-                    at,
-                    format!("{ident} is read-only and cannot be written"),
-                ));
-            }
-            if param.id == id_pid || param.id == baud.id {
-                return Err(issue(
-                    at,
-                    format!("{ident} is set by the plan's `ids` and `target_baud`, not by params"),
-                ));
-            }
-            if writes.iter().any(|(p, _)| p.id == param.id) {
-                return Err(issue(at, format!("{ident} is given twice")));
+            let refused = if param.access == Access::ReadOnly {
+                Some(format!("{ident} is read-only and cannot be written"))
+            } else if param.id == id_pid || param.id == baud_pid {
+                Some(format!(
+                    "{ident} is set by the plan's `ids` and `target_baud`, not by params"
+                ))
+            } else if writes.iter().any(|(p, _)| p.id == param.id) {
+                Some(format!("{ident} is given twice"))
+            } else {
+                None
+            };
+            if let Some(message) = refused {
+                return Err(issue(at, message));
             }
             let raw = match param.field.parse(value) {
                 Ok(Value::Int(raw)) => raw,
-                Ok(_) => {
-                    return Err(issue(at, format!("{ident}: '{value}' is not a number")));
-                }
+                Ok(_) => return Err(issue(at, format!("{ident}: '{value}' is not a number"))),
                 Err(e) => return Err(issue(at, e.to_string())),
             };
             writes.push((param, raw));
@@ -206,27 +216,40 @@ impl Plan {
                 return Err(issue(at, e.to_string()));
             }
         }
+        Ok(writes)
+    }
+
+    /// The parameters the plan records, in order: each known, and recorded once.
+    fn recorded<'p>(&self, profile: &'p Profile) -> Result<Vec<&'p Param>, Issue> {
         let mut record: Vec<&Param> = Vec::new();
         for (i, name) in self.record.iter().enumerate() {
             let at = vec![Step::Key("record"), Step::Index(i)];
             let Some(param) = profile.find_param(name) else {
-                return Err(issue(
-                    at,
-                    format!("no servo parameter '{name}' to record; known: {}", known()),
-                ));
+                let known = known_params(profile);
+                let message = format!("no servo parameter '{name}' to record; known: {known}");
+                return Err(issue(at, message));
             };
             if record.iter().any(|p| p.id == param.id) {
-                return Err(issue(
-                    at,
-                    format!("{} is recorded twice", param.field.ident),
-                ));
+                let message = format!("{} is recorded twice", param.field.ident);
+                return Err(issue(at, message));
             }
             record.push(param);
         }
-        Ok(Resolved {
-            option,
-            writes,
-            record,
-        })
+        Ok(record)
     }
+}
+
+/// A problem at `path` of the plan.
+fn issue(path: Vec<Step>, message: String) -> Issue {
+    Issue { path, message }
+}
+
+/// The profile's servo parameters, by name, for a message.
+fn known_params(profile: &Profile) -> String {
+    profile
+        .params
+        .iter()
+        .map(|p| p.field.ident.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
