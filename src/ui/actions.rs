@@ -53,114 +53,130 @@ impl ActionsPanel {
                         for cmd in cmds {
                             ui.label(lang.tr(&cmd.name.en, &cmd.name.zh))
                                 .on_hover_text(format!("{} ({})", cmd.ident, cmd.id));
-                            layout.wrapped(ui, |ui| {
-                                for f in &cmd.request {
-                                    let key = (cmd.id, f.ident.clone());
-                                    let text = self.inputs.entry(key).or_default();
-                                    crate::ui::layout::group(ui, &f.ident, |ui| {
-                                        if f.labels.is_empty() {
-                                            let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
-                                            value_box(ui, text, f, lang, 70.0).labelled_by(name.id);
-                                        } else {
-                                            let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
-                                            egui::ComboBox::from_id_salt(("act", cmd.id, &f.ident))
-                                                .selected_text(if text.is_empty() {
-                                                    "—".to_string()
-                                                } else {
-                                                    text.clone()
-                                                })
-                                                .show_ui(ui, |ui| {
-                                                    for l in &f.labels {
-                                                        let label = format!(
-                                                            "{} ({})",
-                                                            lang.tr(&l.name.en, &l.name.zh),
-                                                            l.ident
-                                                        );
-                                                        if ui
-                                                            .selectable_label(
-                                                                *text == l.ident,
-                                                                label,
-                                                            )
-                                                            .clicked()
-                                                        {
-                                                            *text = l.ident.clone();
-                                                        }
-                                                    }
-                                                })
-                                                .response
-                                                .labelled_by(name.id);
-                                        }
-                                    });
-                                }
-                            });
-                            let inputs = command_inputs(cmd, &self.inputs);
-                            let stopping =
-                                inputs.as_ref().is_ok_and(|i| profile.is_stop(cmd.id, i));
-                            let label = if cmd.confirm && !stopping {
-                                format!("⚠ {}", lang.tr("Send…", "发送…"))
-                            } else {
-                                lang.tr("Send", "发送").to_string()
-                            };
-                            let resp =
-                                ui.add_enabled(ready && inputs.is_ok(), egui::Button::new(label));
-                            let resp = match &inputs {
-                                Err(e) => resp.on_disabled_hover_text(e.in_lang(lang)),
-                                Ok(_) => resp,
-                            };
-                            if resp.clicked()
-                                && let Ok(inputs) = inputs
-                            {
-                                // Stopping (motor stop, fan 0) moves nothing: no warning.
-                                if cmd.confirm && !stopping {
-                                    self.confirm = Some((cmd.id, inputs));
-                                } else {
-                                    actions.push(Action::StartJob(jobs::send(
-                                        profile, cmd.id, inputs,
-                                    )));
-                                }
-                            }
+                            layout.wrapped(ui, |ui| fields(ui, &mut self.inputs, cmd, lang));
+                            let send = self.send_button(ui, lang, rt, cmd, ready);
+                            actions.extend(send);
                             ui.end_row();
                         }
                     });
             });
-        if let Some((id, inputs)) = &self.confirm {
-            let name = profile.command_by_id(*id).map_or(String::new(), |c| {
-                lang.tr(&c.name.en, &c.name.zh).to_string()
-            });
-            let mut decision = None;
-            let modal = egui::Modal::new(egui::Id::unique("confirm-action")).show(ui.ctx(), |ui| {
-                ui.heading(lang.tr("The robot will move", "机器人将会动作"));
-                ui.label(format!(
-                    "{name}: {}",
-                    inputs
-                        .iter()
-                        .map(|(k, v)| match v {
-                            Input::Text(t) => format!("{k}={t}"),
-                            Input::Raw(r) => format!("{k}={r:?}"),
-                        })
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ));
-                ui.label(lang.tr(
-                    "Make sure it is safe, then confirm.",
-                    "请确认安全后再执行。",
-                ));
-                decision = super::confirm::buttons(
-                    ui,
-                    lang.tr("Confirm", "确认"),
-                    lang.tr("Cancel", "取消"),
-                );
-            });
-            match super::confirm::decided(&modal, decision) {
-                Some(true) => {
-                    if let Some((id, inputs)) = self.confirm.take() {
-                        actions.push(Action::StartJob(jobs::send(profile, id, inputs)));
-                    }
-                }
-                Some(false) => self.confirm = None,
-                None => {}
-            }
-        }
+        actions.extend(self.confirmation(ui, lang, rt));
         actions
+    }
+
+    /// A command's Send button (Send… with a warning when the command moves the robot): off
+    /// while not `ready` or while a field's value is refused, which its hover says.
+    fn send_button(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        cmd: &Command,
+        ready: bool,
+    ) -> Option<Action> {
+        let profile = &rt.device.profile;
+        let inputs = command_inputs(cmd, &self.inputs);
+        let stopping = inputs.as_ref().is_ok_and(|i| profile.is_stop(cmd.id, i));
+        let label = if cmd.confirm && !stopping {
+            format!("⚠ {}", lang.tr("Send…", "发送…"))
+        } else {
+            lang.tr("Send", "发送").to_string()
+        };
+        let resp = ui.add_enabled(ready && inputs.is_ok(), egui::Button::new(label));
+        let resp = match &inputs {
+            Err(e) => resp.on_disabled_hover_text(e.in_lang(lang)),
+            Ok(_) => resp,
+        };
+        if !resp.clicked() {
+            return None;
+        }
+        let Ok(inputs) = inputs else {
+            return None;
+        };
+        // Stopping (motor stop, fan 0) moves nothing: no warning.
+        if cmd.confirm && !stopping {
+            self.confirm = Some((cmd.id, inputs));
+            None
+        } else {
+            Some(Action::StartJob(jobs::send(profile, cmd.id, inputs)))
+        }
+    }
+
+    /// The confirmation of a command that moves the robot, while one waits: what it sends, and
+    /// the operator's yes or no.
+    fn confirmation(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Option<Action> {
+        let profile = &rt.device.profile;
+        let (id, inputs) = self.confirm.as_ref()?;
+        let name = profile.command_by_id(*id).map_or(String::new(), |c| {
+            lang.tr(&c.name.en, &c.name.zh).to_string()
+        });
+        let mut decision = None;
+        let modal = egui::Modal::new(egui::Id::unique("confirm-action")).show(ui.ctx(), |ui| {
+            ui.heading(lang.tr("The robot will move", "机器人将会动作"));
+            ui.label(format!(
+                "{name}: {}",
+                inputs
+                    .iter()
+                    .map(|(k, v)| match v {
+                        Input::Text(t) => format!("{k}={t}"),
+                        Input::Raw(r) => format!("{k}={r:?}"),
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+            ui.label(lang.tr(
+                "Make sure it is safe, then confirm.",
+                "请确认安全后再执行。",
+            ));
+            decision =
+                super::confirm::buttons(ui, lang.tr("Confirm", "确认"), lang.tr("Cancel", "取消"));
+        });
+        match super::confirm::decided(&modal, decision) {
+            Some(true) => {
+                let (id, inputs) = self.confirm.take()?;
+                Some(Action::StartJob(jobs::send(profile, id, inputs)))
+            }
+            Some(false) => {
+                self.confirm = None;
+                None
+            }
+            None => None,
+        }
+    }
+}
+
+/// A command's fields: each a box for its value (checked as typed), or a list of its labels.
+fn fields(
+    ui: &mut egui::Ui,
+    inputs: &mut HashMap<(u8, String), String>,
+    cmd: &Command,
+    lang: Lang,
+) {
+    for f in &cmd.request {
+        let key = (cmd.id, f.ident.clone());
+        let text = inputs.entry(key).or_default();
+        crate::ui::layout::group(ui, &f.ident, |ui| {
+            let name = ui.label(lang.tr(&f.name.en, &f.name.zh));
+            if f.labels.is_empty() {
+                value_box(ui, text, f, lang, 70.0).labelled_by(name.id);
+                return;
+            }
+            egui::ComboBox::from_id_salt(("act", cmd.id, &f.ident))
+                .selected_text(if text.is_empty() {
+                    "—".to_string()
+                } else {
+                    text.clone()
+                })
+                .show_ui(ui, |ui| {
+                    for l in &f.labels {
+                        let label = format!("{} ({})", lang.tr(&l.name.en, &l.name.zh), l.ident);
+                        if ui.selectable_label(*text == l.ident, label).clicked() {
+                            *text = l.ident.clone();
+                        }
+                    }
+                })
+                .response
+                .labelled_by(name.id);
+        });
     }
 }

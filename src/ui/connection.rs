@@ -110,154 +110,185 @@ impl ConnectionBar {
     /// The port, baud, profile and margin, and Connect / Disconnect / Reconnect.
     fn settings_row(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
         let lang = saved.lang;
-        let mut actions = Vec::new();
-        {
-            super::layout::group(ui, "port", |ui| {
-                let port_label = ui.label(lang.tr("Port", "端口"));
-                egui::ComboBox::from_id_salt("port")
-                    .width(220.0)
-                    .selected_text(self.target.label_in(lang))
-                    .show_ui(ui, |ui| {
-                        for kind in SimKind::ALL {
-                            let t = Target::Demo(kind.name().to_string());
-                            let label = format!(
-                                "{} ({})",
-                                lang.tr("Demo", "演示"),
-                                kind.described().get(lang)
-                            );
-                            if ui.selectable_label(self.target == t, label).clicked() {
-                                self.take_profile(kind.profile_id(), saved, rt);
-                                if saved.port_of(kind.profile_id()).baud.is_none() {
-                                    self.baud = kind.default_baud();
-                                }
-                                self.target = t;
+        self.port_choice(ui, saved, rt);
+        self.path_box(ui, lang);
+        self.baud_choice(ui, lang);
+        self.profile_choice(ui, saved, rt);
+        self.margin_choice(ui, lang, rt);
+        self.connect_buttons(ui, saved, rt)
+    }
+
+    /// The port picker: the demo devices, then the serial ports listed.
+    fn port_choice(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) {
+        let lang = saved.lang;
+        super::layout::group(ui, "port", |ui| {
+            let port_label = ui.label(lang.tr("Port", "端口"));
+            egui::ComboBox::from_id_salt("port")
+                .width(220.0)
+                .selected_text(self.target.label_in(lang))
+                .show_ui(ui, |ui| {
+                    for kind in SimKind::ALL {
+                        let t = Target::Demo(kind.name().to_string());
+                        let label = format!(
+                            "{} ({})",
+                            lang.tr("Demo", "演示"),
+                            kind.described().get(lang)
+                        );
+                        if ui.selectable_label(self.target == t, label).clicked() {
+                            self.take_profile(kind.profile_id(), saved, rt);
+                            if saved.port_of(kind.profile_id()).baud.is_none() {
+                                self.baud = kind.default_baud();
                             }
+                            self.target = t;
                         }
-                        ui.separator();
-                        if rt.link.ports.is_empty() {
-                            ui.weak(lang.tr("no serial ports found", "未找到串口"));
+                    }
+                    ui.separator();
+                    if rt.link.ports.is_empty() {
+                        ui.weak(lang.tr("no serial ports found", "未找到串口"));
+                    }
+                    for p in &rt.link.ports {
+                        let t = Target::Port(p.path.clone());
+                        if ui.selectable_label(self.target == t, p.label()).clicked() {
+                            self.typed = p.path.clone();
+                            self.target = t;
                         }
-                        for p in &rt.link.ports {
-                            let t = Target::Port(p.path.clone());
-                            if ui.selectable_label(self.target == t, p.label()).clicked() {
-                                self.typed = p.path.clone();
-                                self.target = t;
-                            }
-                        }
-                    })
-                    .response
-                    .labelled_by(port_label.id);
-            });
-            // The path box is a group of its own: at 800 px it takes the next row, whole.
-            super::layout::group(ui, "path", |ui| {
-                let hint = |l: Lang| l.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3");
-                // As wide as its hint in either language: the hint is whole, and switching the
-                // language moves nothing.
-                let width = Lang::ALL
-                    .iter()
-                    .map(|&l| super::layout::box_width_for(ui, hint(l)))
-                    .fold(150.0, f32::max);
-                let typed = ui
-                    .add(
-                        egui::TextEdit::singleline(&mut self.typed)
-                            .hint_text(hint(lang))
-                            .desired_width(width),
-                    )
-                    .on_hover_text(hint(lang));
-                if typed.changed() && !self.typed.trim().is_empty() {
-                    self.target = Target::Port(self.typed.trim().to_string());
-                }
-            });
-            super::layout::group(ui, "baud", |ui| {
-                let baud_label = ui.label(lang.tr("Baud", "波特率"));
-                egui::ComboBox::from_id_salt("baud")
-                    .selected_text(self.baud.to_string())
-                    .show_ui(ui, |ui| {
-                        for b in BAUDS {
-                            ui.selectable_value(&mut self.baud, b, b.to_string());
-                        }
-                    })
-                    .response
-                    .labelled_by(baud_label.id);
-            });
-            let chosen = super::layout::group(ui, "profile", |ui| {
-                let profile_label = ui.label(lang.tr("Profile", "设备配置"));
-                let mut chosen = None;
-                egui::ComboBox::from_id_salt("profile")
-                    .selected_text(&self.profile)
-                    .show_ui(ui, |ui| {
-                        for (p, _) in rt.registry.iter() {
-                            let label = format!("{} — {}", p.id, lang.tr(&p.name.en, &p.name.zh));
-                            if ui.selectable_label(self.profile == p.id, label).clicked() {
-                                chosen = Some(p.id.clone());
-                            }
-                        }
-                    })
-                    .response
-                    .labelled_by(profile_label.id);
-                chosen
-            });
-            if let Some(p) = chosen {
-                self.take_profile(&p, saved, rt);
+                    }
+                })
+                .response
+                .labelled_by(port_label.id);
+        });
+    }
+
+    /// A port typed by its path (a pty, a port not listed).
+    fn path_box(&mut self, ui: &mut egui::Ui, lang: Lang) {
+        // The path box is a group of its own: at 800 px it takes the next row, whole.
+        super::layout::group(ui, "path", |ui| {
+            let hint = |l: Lang| l.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3");
+            // As wide as its hint in either language: the hint is whole, and switching the
+            // language moves nothing.
+            let width = Lang::ALL
+                .iter()
+                .map(|&l| super::layout::box_width_for(ui, hint(l)))
+                .fold(150.0, f32::max);
+            let typed = ui
+                .add(
+                    egui::TextEdit::singleline(&mut self.typed)
+                        .hint_text(hint(lang))
+                        .desired_width(width),
+                )
+                .on_hover_text(hint(lang));
+            if typed.changed() && !self.typed.trim().is_empty() {
+                self.target = Target::Port(self.typed.trim().to_string());
             }
-            super::layout::group(ui, "margin", |ui| {
-                let margin_label = ui
-                    .label(lang.tr("Margin", "应答余量"))
-                    .on_hover_text(lang.tr(
+        });
+    }
+
+    /// The baud rate.
+    fn baud_choice(&mut self, ui: &mut egui::Ui, lang: Lang) {
+        super::layout::group(ui, "baud", |ui| {
+            let baud_label = ui.label(lang.tr("Baud", "波特率"));
+            egui::ComboBox::from_id_salt("baud")
+                .selected_text(self.baud.to_string())
+                .show_ui(ui, |ui| {
+                    for b in BAUDS {
+                        ui.selectable_value(&mut self.baud, b, b.to_string());
+                    }
+                })
+                .response
+                .labelled_by(baud_label.id);
+        });
+    }
+
+    /// The device profile, with its own port settings.
+    fn profile_choice(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) {
+        let lang = saved.lang;
+        let chosen = super::layout::group(ui, "profile", |ui| {
+            let profile_label = ui.label(lang.tr("Profile", "设备配置"));
+            let mut chosen = None;
+            egui::ComboBox::from_id_salt("profile")
+                .selected_text(&self.profile)
+                .show_ui(ui, |ui| {
+                    for (p, _) in rt.registry.iter() {
+                        let label = format!("{} — {}", p.id, lang.tr(&p.name.en, &p.name.zh));
+                        if ui.selectable_label(self.profile == p.id, label).clicked() {
+                            chosen = Some(p.id.clone());
+                        }
+                    }
+                })
+                .response
+                .labelled_by(profile_label.id);
+            chosen
+        });
+        if let Some(p) = chosen {
+            self.take_profile(&p, saved, rt);
+        }
+    }
+
+    /// The answer margin: auto, or one chosen, with a warning when far above the protocol's.
+    fn margin_choice(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+        super::layout::group(ui, "margin", |ui| {
+            let margin_label = ui
+                .label(lang.tr("Margin", "应答余量"))
+                .on_hover_text(lang.tr(
                     "How long the device may take to start answering, beyond the bytes' wire time. \
-                     Auto: the device's own (MSP 20 ms, servo 1.5 ms, Tuya 300 ms) plus the USB \
-                     adapter's latency timer where the system tells it, or the answer latency \
-                     measured on this connection, whichever is more.",
+                 Auto: the device's own (MSP 20 ms, servo 1.5 ms, Tuya 300 ms) plus the USB \
+                 adapter's latency timer where the system tells it, or the answer latency \
+                 measured on this connection, whichever is more.",
                     "设备开始应答前允许的时间(不含字节在线路上的传输时间)。自动: 设备自身的余量\
-                     (MSP 20 ms, 舵机 1.5 ms, 涂鸦 300 ms)加上系统给出的 USB 适配器延迟定时器,\
-                     或本次连接实测的应答延迟, 取较大者。",
+                 (MSP 20 ms, 舵机 1.5 ms, 涂鸦 300 ms)加上系统给出的 USB 适配器延迟定时器,\
+                 或本次连接实测的应答延迟, 取较大者。",
                 ));
-                let shown = |m: Option<u64>| match m {
-                    None => lang.tr("auto", "自动").to_string(),
-                    Some(ms) => format!("{ms} ms"),
-                };
-                egui::ComboBox::from_id_salt("margin")
-                    .selected_text(shown(self.margin_ms))
-                    .show_ui(ui, |ui| {
-                        for m in MARGINS {
-                            ui.selectable_value(&mut self.margin_ms, m, shown(m));
-                        }
-                    })
-                    .response
-                    .labelled_by(margin_label.id);
-                self.margin_warning(ui, lang, rt);
-            });
-            let connect = || Action::Connect {
-                target: self.target.clone(),
-                baud: self.baud,
-                profile: self.profile.clone(),
-                margin_ms: self.margin_ms,
+            let shown = |m: Option<u64>| match m {
+                None => lang.tr("auto", "自动").to_string(),
+                Some(ms) => format!("{ms} ms"),
             };
-            let open = rt.link.connection.is_some();
-            if open {
-                if ui.button(lang.tr("Disconnect", "断开")).clicked() {
-                    actions.push(Action::Disconnect);
-                }
-            } else if ui.button(lang.tr("Connect", "连接")).clicked() {
-                actions.push(connect());
+            egui::ComboBox::from_id_salt("margin")
+                .selected_text(shown(self.margin_ms))
+                .show_ui(ui, |ui| {
+                    for m in MARGINS {
+                        ui.selectable_value(&mut self.margin_ms, m, shown(m));
+                    }
+                })
+                .response
+                .labelled_by(margin_label.id);
+            self.margin_warning(ui, lang, rt);
+        });
+    }
+
+    /// Connect, or Disconnect and Reconnect (enabled once a setting differs).
+    fn connect_buttons(&self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
+        let lang = saved.lang;
+        let mut actions = Vec::new();
+        let connect = || Action::Connect {
+            target: self.target.clone(),
+            baud: self.baud,
+            profile: self.profile.clone(),
+            margin_ms: self.margin_ms,
+        };
+        let open = rt.link.connection.is_some();
+        if open {
+            if ui.button(lang.tr("Disconnect", "断开")).clicked() {
+                actions.push(Action::Disconnect);
             }
-            let port = saved.port_of(&saved.profile);
-            let changed = self.target != saved.target
-                || Some(self.baud) != port.baud
-                || self.profile != saved.profile
-                || self.margin_ms != port.margin_ms;
-            // There while connected (enabled once a setting differs), so that nothing moves.
-            if open
-                && ui
-                    .add_enabled(changed, egui::Button::new(lang.tr("Reconnect", "重新连接")))
-                    .on_disabled_hover_text(lang.tr(
-                        "change the port, baud, profile or margin first",
-                        "请先修改端口、波特率、设备配置或应答余量",
-                    ))
-                    .clicked()
-            {
-                actions.push(connect());
-            }
+        } else if ui.button(lang.tr("Connect", "连接")).clicked() {
+            actions.push(connect());
+        }
+        let port = saved.port_of(&saved.profile);
+        let changed = self.target != saved.target
+            || Some(self.baud) != port.baud
+            || self.profile != saved.profile
+            || self.margin_ms != port.margin_ms;
+        // There while connected (enabled once a setting differs), so that nothing moves.
+        if open
+            && ui
+                .add_enabled(changed, egui::Button::new(lang.tr("Reconnect", "重新连接")))
+                .on_disabled_hover_text(lang.tr(
+                    "change the port, baud, profile or margin first",
+                    "请先修改端口、波特率、设备配置或应答余量",
+                ))
+                .clicked()
+        {
+            actions.push(connect());
         }
         actions
     }

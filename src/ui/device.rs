@@ -69,6 +69,48 @@ fn read_job(profile: &std::sync::Arc<Profile>) -> Action {
 }
 
 impl DevicePanel {
+    /// The ping's round trip and the raw power state, as last read.
+    fn readings(&self, ui: &mut egui::Ui, lang: Lang) {
+        egui::Grid::new("device-core")
+            .num_columns(2)
+            .striped(true)
+            .show(ui, |ui| {
+                ui.label(lang.tr("Ping round trip", "通讯往返时间"));
+                match &self.ping {
+                    Some(Ok(d)) => {
+                        ui.monospace(format!("{:.1} ms", d.as_secs_f64() * 1e3));
+                    }
+                    Some(Err(e)) => {
+                        ui.colored_label(egui::Color32::RED, e.in_lang(lang));
+                    }
+                    None => {
+                        ui.weak(lang.tr("not pinged yet", "尚未检测"));
+                    }
+                }
+                ui.end_row();
+                ui.label(lang.tr("Power state (raw)", "电源状态(原始数据)"))
+                    .on_hover_text(lang.tr(
+                        "No layout is published for this answer: its bytes are shown as sent.",
+                        "此应答的格式未公开:按原始字节显示。",
+                    ));
+                match &self.power {
+                    Some(Ok(b)) if b.is_empty() => {
+                        ui.monospace(lang.tr("(empty answer)", "(空应答)"));
+                    }
+                    Some(Ok(b)) => {
+                        ui.monospace(hex::format(b));
+                    }
+                    Some(Err(e)) => {
+                        ui.colored_label(egui::Color32::RED, e.in_lang(lang));
+                    }
+                    None => {
+                        ui.weak(lang.tr("not read yet", "尚未读取"));
+                    }
+                }
+                ui.end_row();
+            });
+    }
+
     /// Draws the panel.
     pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
         let mut actions = Vec::new();
@@ -86,86 +128,13 @@ impl DevicePanel {
             self.asked = true;
             actions.push(read_job(&profile));
         }
-        crate::ui::layout::toolbar(ui, |ui| {
-            if ui
-                .add_enabled(ready, egui::Button::new(lang.tr("Ping", "通讯检测")))
-                .clicked()
-            {
-                let p = profile.clone();
-                actions.push(Action::StartJob(Job::new(
-                    Text::new("ping", "通讯检测"),
-                    move |client, _cancel, sink| {
-                        let r = ops::ping(Device::new(client, &p)).map(|ping| ping.rtt);
-                        sink.send(JobOutput::Device(Output::Ping(r.clone())));
-                        let rtt = r?;
-                        let ms = rtt.as_secs_f64() * 1e3;
-                        Ok(Text::new(
-                            format!("answered in {ms:.1} ms"),
-                            format!("{ms:.1} ms 内应答"),
-                        ))
-                    },
-                )));
-            }
-            if ui
-                .add_enabled(
-                    ready,
-                    egui::Button::new(
-                        lang.tr("Read version and power state", "读取版本与电源状态"),
-                    ),
-                )
-                .clicked()
-            {
-                // The session's own record (which panels are shown) is refreshed too.
-                actions.push(Action::Link(LinkCommand::Identify));
-                actions.push(read_job(&profile));
-            }
-            if !rt.connected() {
-                ui.weak(lang.tr("not connected", "未连接"));
-            }
-        });
+        actions.extend(buttons(ui, lang, rt, ready));
         ui.separator();
         // Scrolls where the window is too low for it (800×500).
         egui::ScrollArea::vertical()
             .auto_shrink(false)
             .show(ui, |ui| {
-                egui::Grid::new("device-core")
-                    .num_columns(2)
-                    .striped(true)
-                    .show(ui, |ui| {
-                        ui.label(lang.tr("Ping round trip", "通讯往返时间"));
-                        match &self.ping {
-                            Some(Ok(d)) => {
-                                ui.monospace(format!("{:.1} ms", d.as_secs_f64() * 1e3));
-                            }
-                            Some(Err(e)) => {
-                                ui.colored_label(egui::Color32::RED, e.in_lang(lang));
-                            }
-                            None => {
-                                ui.weak(lang.tr("not pinged yet", "尚未检测"));
-                            }
-                        }
-                        ui.end_row();
-                        ui.label(lang.tr("Power state (raw)", "电源状态(原始数据)"))
-                    .on_hover_text(lang.tr(
-                        "No layout is published for this answer: its bytes are shown as sent.",
-                        "此应答的格式未公开:按原始字节显示。",
-                    ));
-                        match &self.power {
-                            Some(Ok(b)) if b.is_empty() => {
-                                ui.monospace(lang.tr("(empty answer)", "(空应答)"));
-                            }
-                            Some(Ok(b)) => {
-                                ui.monospace(hex::format(b));
-                            }
-                            Some(Err(e)) => {
-                                ui.colored_label(egui::Color32::RED, e.in_lang(lang));
-                            }
-                            None => {
-                                ui.weak(lang.tr("not read yet", "尚未读取"));
-                            }
-                        }
-                        ui.end_row();
-                    });
+                self.readings(ui, lang);
                 ui.separator();
                 ui.strong(lang.tr("Version", "版本信息"));
                 // This panel's own read wins; until then, what the session learned on connect.
@@ -286,4 +255,46 @@ impl DevicePanel {
             Output::Power(r) => self.power = Some(r),
         }
     }
+}
+
+/// Ping, and Read version and power state.
+fn buttons(ui: &mut egui::Ui, lang: Lang, rt: &AppState, ready: bool) -> Vec<Action> {
+    let mut actions = Vec::new();
+    let profile = rt.device.profile.clone();
+    crate::ui::layout::toolbar(ui, |ui| {
+        if ui
+            .add_enabled(ready, egui::Button::new(lang.tr("Ping", "通讯检测")))
+            .clicked()
+        {
+            let p = profile.clone();
+            actions.push(Action::StartJob(Job::new(
+                Text::new("ping", "通讯检测"),
+                move |client, _cancel, sink| {
+                    let r = ops::ping(Device::new(client, &p)).map(|ping| ping.rtt);
+                    sink.send(JobOutput::Device(Output::Ping(r.clone())));
+                    let rtt = r?;
+                    let ms = rtt.as_secs_f64() * 1e3;
+                    Ok(Text::new(
+                        format!("answered in {ms:.1} ms"),
+                        format!("{ms:.1} ms 内应答"),
+                    ))
+                },
+            )));
+        }
+        if ui
+            .add_enabled(
+                ready,
+                egui::Button::new(lang.tr("Read version and power state", "读取版本与电源状态")),
+            )
+            .clicked()
+        {
+            // The session's own record (which panels are shown) is refreshed too.
+            actions.push(Action::Link(LinkCommand::Identify));
+            actions.push(read_job(&profile));
+        }
+        if !rt.connected() {
+            ui.weak(lang.tr("not connected", "未连接"));
+        }
+    });
+    actions
 }

@@ -102,19 +102,35 @@ pub(crate) fn no_dialog(why: String) -> crate::i18n::Text {
 /// A dialog that returns nothing sooner than this did not show (a person takes longer).
 const TOO_QUICK: Duration = Duration::from_millis(150);
 
-/// A labelled file row: the path box (typed paths work whatever the system) and Browse….
-/// `hint` shows in the empty box; `enabled` greys both out.
-#[allow(clippy::too_many_arguments)]
+/// What a file row shows: its label, the hint in the empty box, what Browse… picks, and
+/// whether both are enabled.
+#[derive(Debug, Clone, Copy)]
+pub struct Row<'a> {
+    /// The label before the box.
+    pub label: &'a str,
+    /// Shown in the empty box.
+    pub hint: &'a str,
+    /// What Browse… asks for.
+    pub pick: Pick<'a>,
+    /// Off greys the box and Browse… out.
+    pub enabled: bool,
+}
+
+/// A labelled file row: the path box (typed paths work whatever the system) and Browse…, as
+/// `row` says, editing `path`.
 pub fn row(
     ui: &mut egui::Ui,
     lang: Lang,
-    label: &str,
+    row: Row<'_>,
     path: &mut String,
-    hint: &str,
-    pick: Pick<'_>,
     dialogs: &Dialogs,
-    enabled: bool,
 ) -> FileEvent {
+    let Row {
+        label,
+        hint,
+        pick,
+        enabled,
+    } = row;
     // The label stays on the row of its box (a toolbar moves the two together).
     crate::ui::layout::group(ui, label, |ui| {
         let l = ui.label(label);

@@ -105,12 +105,14 @@ impl MonitorPanel {
         let event = files::row(
             ui,
             lang,
-            lang.tr("Capture", "抓包文件"),
+            files::Row {
+                label: lang.tr("Capture", "抓包文件"),
+                hint: "capture.pcapng",
+                pick: files::Pick::Open(&["pcapng"]),
+                enabled: recording.is_none(),
+            },
             &mut self.capture_path,
-            "capture.pcapng",
-            files::Pick::Open(&["pcapng"]),
             &rt.dialogs,
-            recording.is_none(),
         );
         let path = self.capture_path.trim().to_string();
         match recording {
@@ -279,12 +281,14 @@ impl MonitorPanel {
             let event = files::row(
                 ui,
                 lang,
-                lang.tr("File", "文件"),
+                files::Row {
+                    label: lang.tr("File", "文件"),
+                    hint: "packets.txt",
+                    pick: files::Pick::Save("packets.txt"),
+                    enabled: true,
+                },
                 &mut self.save_path,
-                "packets.txt",
-                files::Pick::Save("packets.txt"),
                 &rt.dialogs,
-                true,
             );
             let save = ui.button(lang.tr("Save", "保存")).clicked();
             if event.go(save, &mut actions) {

@@ -10,7 +10,7 @@ use crate::i18n::Lang;
 use crate::i18n::Text;
 use crate::ops;
 use crate::ops::{Device, Run};
-use crate::preset::{CommandValues, Loaded, Preset, preset_commands};
+use crate::preset::{CommandValues, DiffRow, Loaded, Preset, preset_commands};
 use crate::profile::Profile;
 use crate::ui::zh::Zh;
 use eframe::egui;
@@ -124,60 +124,7 @@ impl PresetsPanel {
         let profile = &rt.device.profile;
         let busy = rt.job_progress().is_some();
         let ready = rt.connected() && !busy;
-        crate::ui::layout::toolbar(ui, |ui| {
-            let event = files::row(
-                ui,
-                lang,
-                lang.tr("File", "文件"),
-                &mut self.path,
-                "window-cleaner.ron",
-                files::Pick::Open(&["ron"]),
-                &rt.dialogs,
-                true,
-            );
-            let open = ui.button(lang.tr("Open", "打开")).clicked();
-            if event.go(open, &mut actions) {
-                actions.extend(self.open_and_remember(rt));
-            }
-        });
-        crate::ui::layout::toolbar(ui, |ui| {
-            let label = ui.label(lang.tr("Note", "备注"));
-            ui.add(egui::TextEdit::singleline(&mut self.note).desired_width(240.0))
-                .labelled_by(label.id);
-            let can_save = ready && !self.path.trim().is_empty();
-            if ui
-                .add_enabled(
-                    can_save,
-                    egui::Button::new(lang.tr("Save device to file", "保存设备参数到文件")),
-                )
-                .clicked()
-            {
-                actions.push(Action::RememberFile(
-                    FileKind::Preset,
-                    self.path.trim().to_string(),
-                ));
-                actions.push(Action::StartJob(save_job(
-                    profile,
-                    PathBuf::from(self.path.trim()),
-                    self.note.clone(),
-                )));
-            }
-            if ui
-                .button(lang.tr("Factory defaults", "出厂默认值"))
-                .clicked()
-            {
-                let preset = Preset::defaults(profile, "factory defaults from the profile");
-                match preset.validate(profile) {
-                    Ok(writes) => {
-                        self.loaded = Some(Loaded { preset, writes });
-                        self.error = None;
-                        // The defaults come from the profile, not from the file named.
-                        self.path.clear();
-                    }
-                    Err(e) => self.error = Some(e),
-                }
-            }
-        });
+        actions.extend(self.file_rows(ui, lang, rt, ready));
         if let Some(e) = &self.error {
             ui.colored_label(egui::Color32::RED, e.in_lang(lang));
         }
@@ -227,47 +174,7 @@ impl PresetsPanel {
         egui::ScrollArea::vertical()
             .auto_shrink(false)
             .show(ui, |ui| {
-                egui::Grid::new("preset-diff")
-                    .striped(true)
-                    .num_columns(4)
-                    .show(ui, |ui| {
-                        crate::ui::layout::header_row(
-                            ui,
-                            &[
-                                lang.tr("Command", "命令"),
-                                lang.tr("Field", "字段"),
-                                lang.tr("Preset", "预设值"),
-                                lang.tr("Device", "设备值"),
-                            ],
-                        );
-                        for r in &rows {
-                            // The profile's names, the wire names on hover.
-                            let cmd = profile.command(&r.command);
-                            let field = cmd.and_then(|c| {
-                                c.request
-                                    .iter()
-                                    .chain(&c.reply)
-                                    .find(|f| f.ident == r.field)
-                            });
-                            let named = |t: Option<&crate::i18n::Text>, wire: &str| {
-                                t.map_or(wire.to_string(), |t| t.get(lang).to_string())
-                            };
-                            ui.label(named(cmd.map(|c| &c.name), &r.command))
-                                .on_hover_text(&r.command);
-                            ui.label(named(field.map(|f| &f.name), &r.field))
-                                .on_hover_text(&r.field);
-                            if r.differs {
-                                ui.colored_label(egui::Color32::from_rgb(220, 150, 0), &r.preset);
-                            } else {
-                                ui.label(&r.preset);
-                            }
-                            match &r.device {
-                                Some(d) => ui.label(d),
-                                None => ui.weak(lang.tr("not read yet", "尚未读取")),
-                            };
-                            ui.end_row();
-                        }
-                    });
+                diff_table(ui, lang, profile, &rows);
             });
         if self.confirm_apply {
             let preset = p.clone();
@@ -280,6 +187,75 @@ impl PresetsPanel {
                 None => {}
             }
         }
+        actions
+    }
+
+    /// The file row (a preset to open), and the note, Save device to file and Factory defaults.
+    fn file_rows(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        ready: bool,
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
+        let profile = &rt.device.profile;
+        crate::ui::layout::toolbar(ui, |ui| {
+            let event = files::row(
+                ui,
+                lang,
+                files::Row {
+                    label: lang.tr("File", "文件"),
+                    hint: "window-cleaner.ron",
+                    pick: files::Pick::Open(&["ron"]),
+                    enabled: true,
+                },
+                &mut self.path,
+                &rt.dialogs,
+            );
+            let open = ui.button(lang.tr("Open", "打开")).clicked();
+            if event.go(open, &mut actions) {
+                actions.extend(self.open_and_remember(rt));
+            }
+        });
+        crate::ui::layout::toolbar(ui, |ui| {
+            let label = ui.label(lang.tr("Note", "备注"));
+            ui.add(egui::TextEdit::singleline(&mut self.note).desired_width(240.0))
+                .labelled_by(label.id);
+            let can_save = ready && !self.path.trim().is_empty();
+            if ui
+                .add_enabled(
+                    can_save,
+                    egui::Button::new(lang.tr("Save device to file", "保存设备参数到文件")),
+                )
+                .clicked()
+            {
+                actions.push(Action::RememberFile(
+                    FileKind::Preset,
+                    self.path.trim().to_string(),
+                ));
+                actions.push(Action::StartJob(save_job(
+                    profile,
+                    PathBuf::from(self.path.trim()),
+                    self.note.clone(),
+                )));
+            }
+            if ui
+                .button(lang.tr("Factory defaults", "出厂默认值"))
+                .clicked()
+            {
+                let preset = Preset::defaults(profile, "factory defaults from the profile");
+                match preset.validate(profile) {
+                    Ok(writes) => {
+                        self.loaded = Some(Loaded { preset, writes });
+                        self.error = None;
+                        // The defaults come from the profile, not from the file named.
+                        self.path.clear();
+                    }
+                    Err(e) => self.error = Some(e),
+                }
+            }
+        });
         actions
     }
 
@@ -311,4 +287,50 @@ fn confirm(ui: &mut egui::Ui, lang: Lang, differing: usize) -> Option<bool> {
         decision = super::confirm::buttons(ui, lang.tr("Write", "写入"), lang.tr("Cancel", "取消"));
     });
     super::confirm::decided(&modal, decision)
+}
+
+/// The preset beside the device, field by field, by the profile's names (the wire names on
+/// hover); a preset value that differs is marked.
+fn diff_table(ui: &mut egui::Ui, lang: Lang, profile: &Profile, rows: &[DiffRow]) {
+    egui::Grid::new("preset-diff")
+        .striped(true)
+        .num_columns(4)
+        .show(ui, |ui| {
+            crate::ui::layout::header_row(
+                ui,
+                &[
+                    lang.tr("Command", "命令"),
+                    lang.tr("Field", "字段"),
+                    lang.tr("Preset", "预设值"),
+                    lang.tr("Device", "设备值"),
+                ],
+            );
+            for r in rows {
+                // The profile's names, the wire names on hover.
+                let cmd = profile.command(&r.command);
+                let field = cmd.and_then(|c| {
+                    c.request
+                        .iter()
+                        .chain(&c.reply)
+                        .find(|f| f.ident == r.field)
+                });
+                let named = |t: Option<&crate::i18n::Text>, wire: &str| {
+                    t.map_or(wire.to_string(), |t| t.get(lang).to_string())
+                };
+                ui.label(named(cmd.map(|c| &c.name), &r.command))
+                    .on_hover_text(&r.command);
+                ui.label(named(field.map(|f| &f.name), &r.field))
+                    .on_hover_text(&r.field);
+                if r.differs {
+                    ui.colored_label(egui::Color32::from_rgb(220, 150, 0), &r.preset);
+                } else {
+                    ui.label(&r.preset);
+                }
+                match &r.device {
+                    Some(d) => ui.label(d),
+                    None => ui.weak(lang.tr("not read yet", "尚未读取")),
+                };
+                ui.end_row();
+            }
+        });
 }

@@ -321,12 +321,14 @@ impl SelfTestPanel {
             let event = files::row(
                 ui,
                 lang,
-                lang.tr("Test plan", "测试方案"),
+                files::Row {
+                    label: lang.tr("Test plan", "测试方案"),
+                    hint: "window-cleaner-selftest.ron",
+                    pick: files::Pick::Open(&["ron"]),
+                    enabled: !self.running,
+                },
                 &mut self.path,
-                "window-cleaner-selftest.ron",
-                files::Pick::Open(&["ron"]),
                 &rt.dialogs,
-                !self.running,
             );
             let open = ui
                 .add_enabled(
@@ -342,12 +344,14 @@ impl SelfTestPanel {
             let event = files::row(
                 ui,
                 lang,
-                lang.tr("Log file (JSON lines)", "日志文件(JSON 行)"),
+                files::Row {
+                    label: lang.tr("Log file (JSON lines)", "日志文件(JSON 行)"),
+                    hint: lang.tr("empty: no log", "留空:不记录"),
+                    pick: files::Pick::Save(DEFAULT_LOG),
+                    enabled: !self.running,
+                },
                 &mut self.log_path,
-                lang.tr("empty: no log", "留空:不记录"),
-                files::Pick::Save(DEFAULT_LOG),
                 &rt.dialogs,
-                !self.running,
             );
             event.go(false, &mut actions);
         });

@@ -163,12 +163,14 @@ impl TelemetryPanel {
             let event = files::row(
                 ui,
                 lang,
-                lang.tr("CSV file", "CSV 文件"),
+                files::Row {
+                    label: lang.tr("CSV file", "CSV 文件"),
+                    hint: "telemetry.csv",
+                    pick: files::Pick::Save("telemetry.csv"),
+                    enabled: true,
+                },
                 &mut self.csv_path,
-                "telemetry.csv",
-                files::Pick::Save("telemetry.csv"),
                 &rt.dialogs,
-                true,
             );
             let export = ui.button(lang.tr("Export CSV", "导出 CSV")).clicked();
             if event.go(export, &mut actions) {

@@ -46,6 +46,88 @@ fn valid_value(f: &Field) -> BoxedStrategy<Value> {
     }
 }
 
+/// A parameter id (field `i` of `fields`) and, when `has_value`, its value: any parameter the
+/// frame may name (only writable ones sent to the device, unless it is the frame's last field).
+fn param_inputs(
+    p: &Profile,
+    fields: &[Field],
+    i: usize,
+    to_device: bool,
+    has_value: bool,
+) -> BoxedStrategy<Vec<(String, Value)>> {
+    let params: Vec<_> = p
+        .params
+        .iter()
+        .filter(|x| !to_device || x.access == Access::ReadWrite || fields.len() == i + 1)
+        .cloned()
+        .collect();
+    let id_ident = fields[i].ident.clone();
+    proptest::sample::select(params)
+        .prop_flat_map(move |prm| {
+            let id = (id_ident.clone(), Value::Int(prm.id as i64));
+            let ident = prm.field.ident.clone();
+            valid_value(&prm.field).prop_map(move |v| {
+                let mut out = vec![id.clone()];
+                if has_value {
+                    out.push((ident.clone(), v));
+                }
+                out
+            })
+        })
+        .boxed()
+}
+
+/// A synchronous command (its sub-command field `f`): a sub-command and 0-3 records of its
+/// request, each value named `ident[i]`; the record length and count follow from them.
+fn sync_inputs(p: &Profile, f: &Field) -> BoxedStrategy<Vec<(String, Value)>> {
+    let ident = f.ident.clone();
+    let subs: Vec<BoxedStrategy<Vec<(String, Value)>>> = f
+        .labels
+        .iter()
+        .filter_map(|l| p.command_by_id(l.value as u8))
+        .map(|sub| {
+            let width: usize = sub.request.iter().filter_map(|x| x.ty.width()).sum();
+            let (id, ident) = (sub.id, ident.clone());
+            proptest::collection::vec(frame_inputs(p, &sub.request, true), 0..=3)
+                .prop_map(move |records| {
+                    let mut out = vec![
+                        (ident.clone(), Value::Int(id.into())),
+                        ("record_len".to_string(), Value::Int(width as i64)),
+                        ("count".to_string(), Value::Int(records.len() as i64)),
+                    ];
+                    for (i, r) in records.into_iter().enumerate() {
+                        out.extend(r.into_iter().map(|(k, v)| (format!("{k}[{i}]"), v)));
+                    }
+                    out
+                })
+                .boxed()
+        })
+        .collect();
+    proptest::strategy::Union::new(subs).boxed()
+}
+
+/// Some of the profile's data points (only writable ones sent to the device), each a value.
+fn data_point_inputs(p: &Profile, to_device: bool) -> BoxedStrategy<Vec<(String, Value)>> {
+    let dps: Vec<_> = p
+        .data_points
+        .iter()
+        .filter(|d| !to_device || d.access == Access::ReadWrite)
+        .cloned()
+        .collect();
+    let n = dps.len();
+    proptest::sample::subsequence(dps, 1..=n)
+        .prop_flat_map(|chosen| {
+            chosen
+                .into_iter()
+                .map(|d| {
+                    let ident = d.field.ident.clone();
+                    valid_value(&d.field).prop_map(move |v| (ident.clone(), v))
+                })
+                .collect::<Vec<_>>()
+        })
+        .boxed()
+}
+
 /// Named inputs for every field of a frame, chosen at random, and the values expected back.
 fn frame_inputs(
     p: &Profile,
@@ -58,67 +140,17 @@ fn frame_inputs(
         let f = &fields[i];
         match f.ty {
             FieldType::ParamId => {
-                let params: Vec<_> = p
-                    .params
-                    .iter()
-                    .filter(|x| {
-                        !to_device || x.access == Access::ReadWrite || fields.len() == i + 1
-                    })
-                    .cloned()
-                    .collect();
-                let id_ident = f.ident.clone();
                 let has_value = fields
                     .get(i + 1)
                     .is_some_and(|n| n.ty == FieldType::ParamValue);
-                parts.push(
-                    proptest::sample::select(params)
-                        .prop_flat_map(move |prm| {
-                            let id = (id_ident.clone(), Value::Int(prm.id as i64));
-                            let ident = prm.field.ident.clone();
-                            valid_value(&prm.field).prop_map(move |v| {
-                                let mut out = vec![id.clone()];
-                                if has_value {
-                                    out.push((ident.clone(), v));
-                                }
-                                out
-                            })
-                        })
-                        .boxed(),
-                );
+                parts.push(param_inputs(p, fields, i, to_device, has_value));
                 if has_value {
                     i += 1;
                 }
             }
             FieldType::CommandId => {
-                // A synchronous command: a sub-command and 0-3 records of its request, each
-                // value named `ident[i]`; the record length and count follow from them.
-                let ident = f.ident.clone();
-                let subs: Vec<BoxedStrategy<Vec<(String, Value)>>> = f
-                    .labels
-                    .iter()
-                    .filter_map(|l| p.command_by_id(l.value as u8))
-                    .map(|sub| {
-                        let width: usize = sub.request.iter().filter_map(|x| x.ty.width()).sum();
-                        let (id, ident) = (sub.id, ident.clone());
-                        proptest::collection::vec(frame_inputs(p, &sub.request, true), 0..=3)
-                            .prop_map(move |records| {
-                                let mut out = vec![
-                                    (ident.clone(), Value::Int(id.into())),
-                                    ("record_len".to_string(), Value::Int(width as i64)),
-                                    ("count".to_string(), Value::Int(records.len() as i64)),
-                                ];
-                                for (i, r) in records.into_iter().enumerate() {
-                                    out.extend(
-                                        r.into_iter().map(|(k, v)| (format!("{k}[{i}]"), v)),
-                                    );
-                                }
-                                out
-                            })
-                            .boxed()
-                    })
-                    .collect();
-                parts.push(proptest::strategy::Union::new(subs).boxed());
-                // The record length, count and records are made above.
+                parts.push(sync_inputs(p, f));
+                // The record length, count and records are made there.
                 i += 3;
             }
             FieldType::ParamBlock => {
@@ -131,28 +163,7 @@ fn frame_inputs(
                     );
                 }
             }
-            FieldType::DataPoints => {
-                let dps: Vec<_> = p
-                    .data_points
-                    .iter()
-                    .filter(|d| !to_device || d.access == Access::ReadWrite)
-                    .cloned()
-                    .collect();
-                let n = dps.len();
-                parts.push(
-                    proptest::sample::subsequence(dps, 1..=n)
-                        .prop_flat_map(|chosen| {
-                            chosen
-                                .into_iter()
-                                .map(|d| {
-                                    let ident = d.field.ident.clone();
-                                    valid_value(&d.field).prop_map(move |v| (ident.clone(), v))
-                                })
-                                .collect::<Vec<_>>()
-                        })
-                        .boxed(),
-                );
-            }
+            FieldType::DataPoints => parts.push(data_point_inputs(p, to_device)),
             _ => {
                 let ident = f.ident.clone();
                 parts.push(

@@ -129,45 +129,124 @@ fn ready(kind: SimKind, a: &App) -> bool {
     }
 }
 
+/// The app on `kind` as a technician has it before the views are walked: the window
+/// cleaner's self-test plan and a preset open; the servo bus scanned and a servo's parameters
+/// read (its ranges the profile's, named values by their names).
+fn prepare(h: &mut H, kind: SimKind) {
+    if kind == SimKind::WindowCleaner {
+        // The self-test's plan and a preset open, as a technician has them.
+        let a = app_mut(h);
+        a.selftest.open(&a.state);
+        let dir = botbench::ui::files::shipped_dir();
+        let preset = botbench::ui::files::shipped_in(&dir, "window-cleaner-factory.ron");
+        a.presets.path = preset.unwrap().display().to_string();
+        a.presets.open(&a.state);
+        assert!(a.selftest.plan.is_some() && a.presets.loaded.is_some());
+    }
+    if kind == SimKind::ServoBus {
+        // The bus scanned and the servo's parameters read, as a technician has them.
+        app_mut(h).settings.panel = PanelId::ServoBench;
+        h.run_steps(2);
+        h.get_by_label("扫描").click();
+        step_until(h, "the scan", |a| {
+            a.servo.selected.is_some() && a.state.job_progress().is_none()
+        });
+        let params = app(h)
+            .views()
+            .into_iter()
+            .find(|v| v.name.ends_with("Params"));
+        app_mut(h).show_view(&params.expect("a Params tab"));
+        step_until(h, "the parameters read", |a| {
+            !a.servo.params.values.is_empty() && a.state.job_progress().is_none()
+        });
+        h.run_steps(2);
+        // Ranges are the profile's, named values by their names: no type limit, no ident.
+        for (text, ..) in texts(h) {
+            for wire in ["65535", "4294967295", "limit_power", "interruptible"] {
+                assert!(!text.contains(wire), "{text:?} shows {wire}");
+            }
+        }
+    }
+}
+
+/// What is wrong with the view drawn now: texts over texts, the port box's hint cut, a control
+/// past the window's right edge, a label parted from its box, a word split over two lines.
+fn problems(h: &H, kind: SimKind, view: &str, size: egui::Vec2, lang: Lang) -> Vec<String> {
+    let mut bad = Vec::new();
+    for (a, b) in overlapping_texts(&h.output().shapes) {
+        bad.push(format!(
+            "{} {} {}×{} {lang:?}: {a:?} over {b:?}",
+            kind.name(),
+            view,
+            size.x,
+            size.y
+        ));
+    }
+    // The port box's hint is whole (the box was once squeezed to "…").
+    let hint = lang.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3");
+    if shown_of(h, hint).as_deref() != Some(hint) {
+        bad.push(format!(
+            "{} {} {}×{} {lang:?}: the port hint shows {:?}",
+            kind.name(),
+            view,
+            size.x,
+            size.y,
+            shown_of(h, hint)
+        ));
+    }
+    // Every control can be reached: none lies past the window's right edge (the
+    // solar actions' Send buttons once did at 1024 px, behind a wide row).
+    use egui::accesskit::Role;
+    let controls = [
+        Role::Button,
+        Role::TextInput,
+        Role::ComboBox,
+        Role::CheckBox,
+    ]
+    .into_iter()
+    .flat_map(|role| h.query_all(By::new().role(role)).collect::<Vec<_>>());
+    for button in controls {
+        let r = button.rect();
+        if r.max.x > size.x + 1.0 && r.min.y < size.y {
+            bad.push(format!(
+                "{} {} {}×{} {lang:?}: control {:?} at x {:.0}..{:.0}, past the window",
+                kind.name(),
+                view,
+                size.x,
+                size.y,
+                button.accesskit_node().label(),
+                r.min.x,
+                r.max.x
+            ));
+        }
+    }
+    for parted in parted_labels(h) {
+        bad.push(format!(
+            "{} {} {}×{} {lang:?}: {parted} on another row",
+            kind.name(),
+            view,
+            size.x,
+            size.y
+        ));
+    }
+    for text in split_words(&h.output().shapes) {
+        bad.push(format!(
+            "{} {} {}×{} {lang:?}: {text:?} split",
+            kind.name(),
+            view,
+            size.x,
+            size.y
+        ));
+    }
+    bad
+}
+
 #[test]
 fn at_1024_and_800_px_every_view_keeps_words_whole_texts_apart_and_labels_by_their_boxes() {
     let mut bad = Vec::new();
     for kind in SimKind::ALL {
         let mut h = demo(kind, Lang::Zh, SMALL);
-        if kind == SimKind::WindowCleaner {
-            // The self-test's plan and a preset open, as a technician has them.
-            let a = app_mut(&mut h);
-            a.selftest.open(&a.state);
-            let dir = botbench::ui::files::shipped_dir();
-            let preset = botbench::ui::files::shipped_in(&dir, "window-cleaner-factory.ron");
-            a.presets.path = preset.unwrap().display().to_string();
-            a.presets.open(&a.state);
-            assert!(a.selftest.plan.is_some() && a.presets.loaded.is_some());
-        }
-        if kind == SimKind::ServoBus {
-            // The bus scanned and the servo's parameters read, as a technician has them.
-            app_mut(&mut h).settings.panel = PanelId::ServoBench;
-            h.run_steps(2);
-            h.get_by_label("扫描").click();
-            step_until(&mut h, "the scan", |a| {
-                a.servo.selected.is_some() && a.state.job_progress().is_none()
-            });
-            let params = app(&h)
-                .views()
-                .into_iter()
-                .find(|v| v.name.ends_with("Params"));
-            app_mut(&mut h).show_view(&params.expect("a Params tab"));
-            step_until(&mut h, "the parameters read", |a| {
-                !a.servo.params.values.is_empty() && a.state.job_progress().is_none()
-            });
-            h.run_steps(2);
-            // Ranges are the profile's, named values by their names: no type limit, no ident.
-            for (text, ..) in texts(&h) {
-                for wire in ["65535", "4294967295", "limit_power", "interruptible"] {
-                    assert!(!text.contains(wire), "{text:?} shows {wire}");
-                }
-            }
-        }
+        prepare(&mut h, kind);
         for (size, lang) in [SMALL, LEAST]
             .into_iter()
             .flat_map(|s| Lang::ALL.map(|l| (s, l)))
@@ -178,71 +257,7 @@ fn at_1024_and_800_px_every_view_keeps_words_whole_texts_apart_and_labels_by_the
                 app_mut(&mut h).show_view(&view);
                 // egui lays a new panel out over two passes.
                 h.run_steps(3);
-                for (a, b) in overlapping_texts(&h.output().shapes) {
-                    bad.push(format!(
-                        "{} {} {}×{} {lang:?}: {a:?} over {b:?}",
-                        kind.name(),
-                        view.name,
-                        size.x,
-                        size.y
-                    ));
-                }
-                // The port box's hint is whole (the box was once squeezed to "…").
-                let hint = lang.tr("or a path, e.g. /dev/pts/3", "或输入路径,如 /dev/pts/3");
-                if shown_of(&h, hint).as_deref() != Some(hint) {
-                    bad.push(format!(
-                        "{} {} {}×{} {lang:?}: the port hint shows {:?}",
-                        kind.name(),
-                        view.name,
-                        size.x,
-                        size.y,
-                        shown_of(&h, hint)
-                    ));
-                }
-                // Every control can be reached: none lies past the window's right edge (the
-                // solar actions' Send buttons once did at 1024 px, behind a wide row).
-                use egui::accesskit::Role;
-                let controls = [
-                    Role::Button,
-                    Role::TextInput,
-                    Role::ComboBox,
-                    Role::CheckBox,
-                ]
-                .into_iter()
-                .flat_map(|role| h.query_all(By::new().role(role)).collect::<Vec<_>>());
-                for button in controls {
-                    let r = button.rect();
-                    if r.max.x > size.x + 1.0 && r.min.y < size.y {
-                        bad.push(format!(
-                            "{} {} {}×{} {lang:?}: control {:?} at x {:.0}..{:.0}, past the window",
-                            kind.name(),
-                            view.name,
-                            size.x,
-                            size.y,
-                            button.accesskit_node().label(),
-                            r.min.x,
-                            r.max.x
-                        ));
-                    }
-                }
-                for parted in parted_labels(&h) {
-                    bad.push(format!(
-                        "{} {} {}×{} {lang:?}: {parted} on another row",
-                        kind.name(),
-                        view.name,
-                        size.x,
-                        size.y
-                    ));
-                }
-                for text in split_words(&h.output().shapes) {
-                    bad.push(format!(
-                        "{} {} {}×{} {lang:?}: {text:?} split",
-                        kind.name(),
-                        view.name,
-                        size.x,
-                        size.y
-                    ));
-                }
+                bad.extend(problems(&h, kind, &view.name, size, lang));
             }
         }
     }

@@ -251,8 +251,10 @@ impl ServoBenchPanel {
                     .params
                     .show(ui, lang, rt, busy, self.selected, &mut actions),
                 Tab::Setup => {
-                    self.setup
-                        .show(ui, lang, rt, busy, self.selected, &self.scan, &mut actions)
+                    actions.extend(
+                        self.setup
+                            .show(ui, lang, rt, busy, self.selected, &self.scan),
+                    )
                 }
                 Tab::Motion => self
                     .motion

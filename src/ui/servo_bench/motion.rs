@@ -206,16 +206,22 @@ impl MotionState {
                 "有任务在运行: 运动指令需等待任务结束。全部停止始终可用。",
             ));
         }
-        let send = |actions: &mut Vec<Action>, request: Result<crate::link::Request, OpError>| {
-            match request {
-                Ok(r) => {
-                    actions.extend(follow(rt, servo.baud));
-                    actions.push(direct(r));
-                }
-                Err(e) => actions.push(Action::Notify(Notice::error(e.said()))),
-            }
-        };
+        actions.extend(self.angle_section(ui, lang, rt, servo, can));
+        actions.extend(self.live_section(ui, lang, rt, servo, can));
+        actions.extend(self.wheel_section(ui, lang, rt, servo, can));
+        actions.extend(self.damping_section(ui, lang, rt, servo, can));
+    }
 
+    /// Go to an angle: typed or on the slider, with its interval and power.
+    fn angle_section(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        servo: Servo,
+        can: bool,
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
         ui.heading(lang.tr("Angle", "角度"));
         let angle = raw(rt, cmd::ROTATE, "angle", &self.angle_text);
         let interval = raw(rt, cmd::ROTATE, "interval", &self.interval);
@@ -265,7 +271,9 @@ impl MotionState {
                 && let (Ok(a), Ok(i), Ok(p)) = (&angle, &interval, &power)
             {
                 send(
-                    actions,
+                    &mut actions,
+                    rt,
+                    servo,
                     ops::rotate_request(&rt.device.profile, servo.id, *a, *i, *p),
                 );
             }
@@ -277,6 +285,19 @@ impl MotionState {
             error_label(ui, e.in_lang(lang));
         }
 
+        actions
+    }
+
+    /// The live angle (and monitor) polled, its readout and plot.
+    fn live_section(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        servo: Servo,
+        can: bool,
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
         ui.horizontal(|ui| {
             // Not while a job runs: polling takes the port to the servo's rate.
             let live = ui.add_enabled(
@@ -319,6 +340,19 @@ impl MotionState {
                 ));
             });
 
+        actions
+    }
+
+    /// Wheel mode: stop, continuous, a number of turns or a time, at a speed and direction.
+    fn wheel_section(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        servo: Servo,
+        can: bool,
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
         ui.heading(lang.tr("Wheel mode", "轮式模式"));
         let speed = raw(rt, cmd::SPIN, "speed", &self.speed);
         let needs_value = matches!(self.wheel, WheelMode::Turns | WheelMode::Timed);
@@ -365,7 +399,9 @@ impl MotionState {
                     WheelMode::Timed => Wheel::Timed(v),
                 };
                 send(
-                    actions,
+                    &mut actions,
+                    rt,
+                    servo,
                     ops::spin_request(
                         &rt.device.profile,
                         servo.id,
@@ -384,6 +420,19 @@ impl MotionState {
             error_label(ui, e.in_lang(lang));
         }
 
+        actions
+    }
+
+    /// Damping mode, with its holding power.
+    fn damping_section(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        servo: Servo,
+        can: bool,
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
         ui.heading(lang.tr("Damping", "阻尼"));
         let damping = raw(rt, cmd::DAMPING, "power", &self.damping);
         ui.horizontal(|ui| {
@@ -402,7 +451,9 @@ impl MotionState {
                 && let Ok(p) = &damping
             {
                 send(
-                    actions,
+                    &mut actions,
+                    rt,
+                    servo,
                     ops::damping_request(&rt.device.profile, servo.id, *p),
                 );
             }
@@ -410,6 +461,7 @@ impl MotionState {
                 error_label(ui, e.in_lang(lang));
             }
         });
+        actions
     }
 
     /// The latest angle and monitor values of the selected servo, nothing before they arrive.
@@ -475,5 +527,22 @@ impl MotionState {
             ),
             _ => {}
         }
+    }
+}
+
+/// Sends `request` to the selected servo (the port following its rate first), or says why it
+/// was refused.
+fn send(
+    actions: &mut Vec<Action>,
+    rt: &AppState,
+    servo: Servo,
+    request: Result<crate::link::Request, OpError>,
+) {
+    match request {
+        Ok(r) => {
+            actions.extend(follow(rt, servo.baud));
+            actions.push(direct(r));
+        }
+        Err(e) => actions.push(Action::Notify(Notice::error(e.said()))),
     }
 }

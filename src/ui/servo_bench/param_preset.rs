@@ -26,12 +26,14 @@ impl ParamsState {
             let event = files::row(
                 ui,
                 lang,
-                lang.tr("Parameter preset", "参数预设"),
+                files::Row {
+                    label: lang.tr("Parameter preset", "参数预设"),
+                    hint: "servo-params.ron",
+                    pick: files::Pick::Open(&["ron"]),
+                    enabled: true,
+                },
                 &mut self.preset_path,
-                "servo-params.ron",
-                files::Pick::Open(&["ron"]),
                 &rt.dialogs,
-                true,
             );
             let named = !self.preset_path.trim().is_empty();
             let load = ui

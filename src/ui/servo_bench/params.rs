@@ -116,29 +116,18 @@ impl ParamsState {
             .collect()
     }
 
-    /// Draws the tab.
-    pub(super) fn show(
+    /// Read all, Read block, Write changes, Write block, Revert and Reset user data…
+    fn buttons(
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
         rt: &AppState,
-        busy: bool,
-        selected: Option<Servo>,
-        actions: &mut Vec<Action>,
-    ) {
-        let Some(servo) = selection_or_hint(ui, lang, selected) else {
-            return;
-        };
-        self.lang = lang;
+        servo: Servo,
+        can: bool,
+        pending: &Result<Vec<(u8, i64)>, PendingError>,
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
         let profile = rt.device.profile.clone();
-        self.prune(&profile);
-        let pending = self.pending(&profile);
-        let can = rt.connected() && !busy;
-        // What the servo holds is shown as soon as the tab shows it: nothing is shown unread.
-        if can && self.values.is_empty() && self.read_on_show != Some(servo) {
-            self.read_on_show = Some(servo);
-            actions.push(read_all_job(rt, servo));
-        }
         crate::ui::layout::toolbar(ui, |ui| {
             if ui
                 .add_enabled(can, egui::Button::new(lang.tr("Read all", "全部读取")))
@@ -169,7 +158,7 @@ impl ParamsState {
                 egui::Button::new(format!("{} ({n})", lang.tr("Write changes", "写入修改"))),
             );
             if write.clicked()
-                && let Ok(values) = &pending
+                && let Ok(values) = pending
             {
                 actions.push(write_job(rt, servo, values.clone()));
             }
@@ -212,6 +201,33 @@ impl ParamsState {
                 self.confirm_reset = true;
             }
         });
+        actions
+    }
+
+    /// Draws the tab.
+    pub(super) fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        busy: bool,
+        selected: Option<Servo>,
+        actions: &mut Vec<Action>,
+    ) {
+        let Some(servo) = selection_or_hint(ui, lang, selected) else {
+            return;
+        };
+        self.lang = lang;
+        let profile = rt.device.profile.clone();
+        self.prune(&profile);
+        let pending = self.pending(&profile);
+        let can = rt.connected() && !busy;
+        // What the servo holds is shown as soon as the tab shows it: nothing is shown unread.
+        if can && self.values.is_empty() && self.read_on_show != Some(servo) {
+            self.read_on_show = Some(servo);
+            actions.push(read_all_job(rt, servo));
+        }
+        actions.extend(self.buttons(ui, lang, rt, servo, can, &pending));
         // The first reason the edits cannot be written, on a line that is always there: an
         // invalid keystroke never moves the table under the pointer.
         match &pending {

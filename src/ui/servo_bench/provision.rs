@@ -63,6 +63,79 @@ impl ProvisionPanel {
         self.history.push(record);
     }
 
+    /// The plan loaded: its rate, ids, parameters and what it records, and the ids given out in
+    /// this session.
+    fn plan_summary(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+        let Some(plan) = &self.plan else {
+            return;
+        };
+        // The recorded parameters by their names in the window's language.
+        let profile = &rt.device.profile;
+        let recorded: Vec<&str> = plan
+            .record
+            .iter()
+            .map(|ident| {
+                profile.find_param(ident).map_or(ident.as_str(), |p| {
+                    lang.tr(&p.field.name.en, &p.field.name.zh)
+                })
+            })
+            .collect();
+        let ids = match &plan.ids {
+            prov::IdSequence::Start(s) => format!("{} {s}", lang.tr("from", "起始")),
+            prov::IdSequence::List(l) => format!("{l:?}"),
+        };
+        ui.label(format!(
+            "{}: {} {} · {}: {ids} · {} {} · {}: {}",
+            lang.tr("Target", "目标"),
+            plan.target_baud,
+            lang.tr("baud", "波特"),
+            lang.tr("ids", "ID"),
+            plan.params.len(),
+            lang.tr("parameters", "个参数"),
+            lang.tr("recorded", "记录"),
+            recorded.join(", ")
+        ));
+        if !self.state.assigned.is_empty() {
+            ui.weak(format!(
+                "{}: {:?}",
+                lang.tr("Ids given this session", "本次已分配ID"),
+                self.state.assigned
+            ));
+        }
+    }
+
+    /// Provision next: the CSV log checked against the plan first (a log that does not fit is
+    /// said, and nothing starts), then the job.
+    fn start(&mut self, rt: &AppState) -> Vec<Action> {
+        let mut actions = Vec::new();
+        let Some(plan) = self.plan.clone() else {
+            return actions;
+        };
+        let log = Some(PathBuf::from(self.log_path.trim())).filter(|p| !p.as_os_str().is_empty());
+        match log
+            .as_deref()
+            .map(|path| (path, prov::check_log(path, &plan.record)))
+        {
+            Some((path, Err(e))) => {
+                self.log_error = Some(LogError {
+                    path: path.to_path_buf(),
+                    reason: e.message().to_string(),
+                });
+            }
+            _ => {
+                self.log_error = None;
+                if let Some(path) = &log {
+                    actions.push(Action::RememberFile(
+                        FileKind::ProvisionLog,
+                        path.display().to_string(),
+                    ));
+                }
+                actions.push(job(rt, plan, self.state.clone(), log));
+            }
+        }
+        actions
+    }
+
     /// Draws the tab.
     pub(super) fn show(
         &mut self,
@@ -76,12 +149,14 @@ impl ProvisionPanel {
             let event = files::row(
                 ui,
                 lang,
-                lang.tr("Plan", "计划文件"),
+                files::Row {
+                    label: lang.tr("Plan", "计划文件"),
+                    hint: "servo-provision-plan.ron",
+                    pick: files::Pick::Open(&["ron"]),
+                    enabled: true,
+                },
                 &mut self.plan_path,
-                "servo-provision-plan.ron",
-                files::Pick::Open(&["ron"]),
                 &rt.dialogs,
-                true,
             );
             let load = ui
                 .add_enabled(
@@ -106,50 +181,18 @@ impl ProvisionPanel {
             let event = files::row(
                 ui,
                 lang,
-                lang.tr("CSV log", "CSV日志"),
+                files::Row {
+                    label: lang.tr("CSV log", "CSV日志"),
+                    hint: lang.tr("empty: no log", "留空:不记录日志"),
+                    pick: files::Pick::Save("servo-provision.csv"),
+                    enabled: true,
+                },
                 &mut self.log_path,
-                lang.tr("empty: no log", "留空:不记录日志"),
-                files::Pick::Save("servo-provision.csv"),
                 &rt.dialogs,
-                true,
             );
             event.go(false, actions);
         });
-        if let Some(plan) = &self.plan {
-            // The recorded parameters by their names in the window's language.
-            let profile = &rt.device.profile;
-            let recorded: Vec<&str> = plan
-                .record
-                .iter()
-                .map(|ident| {
-                    profile.find_param(ident).map_or(ident.as_str(), |p| {
-                        lang.tr(&p.field.name.en, &p.field.name.zh)
-                    })
-                })
-                .collect();
-            let ids = match &plan.ids {
-                prov::IdSequence::Start(s) => format!("{} {s}", lang.tr("from", "起始")),
-                prov::IdSequence::List(l) => format!("{l:?}"),
-            };
-            ui.label(format!(
-                "{}: {} {} · {}: {ids} · {} {} · {}: {}",
-                lang.tr("Target", "目标"),
-                plan.target_baud,
-                lang.tr("baud", "波特"),
-                lang.tr("ids", "ID"),
-                plan.params.len(),
-                lang.tr("parameters", "个参数"),
-                lang.tr("recorded", "记录"),
-                recorded.join(", ")
-            ));
-            if !self.state.assigned.is_empty() {
-                ui.weak(format!(
-                    "{}: {:?}",
-                    lang.tr("Ids given this session", "本次已分配ID"),
-                    self.state.assigned
-                ));
-            }
-        }
+        self.plan_summary(ui, lang, rt);
         ui.add_space(6.0);
         let can = rt.connected() && !busy && self.plan.is_some();
         let next = ui.add_enabled(
@@ -161,32 +204,8 @@ impl ProvisionPanel {
             )
             .min_size(egui::vec2(260.0, 56.0)),
         );
-        if next.clicked()
-            && let Some(plan) = self.plan.clone()
-        {
-            let log =
-                Some(PathBuf::from(self.log_path.trim())).filter(|p| !p.as_os_str().is_empty());
-            match log
-                .as_deref()
-                .map(|path| (path, prov::check_log(path, &plan.record)))
-            {
-                Some((path, Err(e))) => {
-                    self.log_error = Some(LogError {
-                        path: path.to_path_buf(),
-                        reason: e.message().to_string(),
-                    });
-                }
-                _ => {
-                    self.log_error = None;
-                    if let Some(path) = &log {
-                        actions.push(Action::RememberFile(
-                            FileKind::ProvisionLog,
-                            path.display().to_string(),
-                        ));
-                    }
-                    actions.push(job(rt, plan, self.state.clone(), log));
-                }
-            }
+        if next.clicked() {
+            actions.extend(self.start(rt));
         }
         if let Some(e) = &self.log_error {
             error_label(ui, e.in_lang(lang));

@@ -218,32 +218,11 @@ impl ScanState {
         Some(scan_job(rt, plan, None))
     }
 
-    /// Draws the tab; returns a servo the technician selected.
-    pub(super) fn show(
-        &mut self,
-        ui: &mut egui::Ui,
-        lang: Lang,
-        rt: &AppState,
-        busy: bool,
-        selected: Option<Servo>,
-        actions: &mut Vec<Action>,
-    ) -> Option<Servo> {
-        let mut picked = None;
-        let ids = self.ids();
+    /// The baud rates to scan: each a checkbox, All and Only the profile's own.
+    fn baud_choice(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
         let profile = &rt.device.profile;
         let all = profile.servo_bauds();
         let bauds = self.chosen_bauds(profile);
-        ui.horizontal(|ui| {
-            let l = ui.label(lang.tr("First id", "起始ID"));
-            ui.add(egui::TextEdit::singleline(&mut self.first).desired_width(40.0))
-                .labelled_by(l.id);
-            let l = ui.label(lang.tr("Last id", "结束ID"));
-            ui.add(egui::TextEdit::singleline(&mut self.last).desired_width(40.0))
-                .labelled_by(l.id);
-            if let Err(e) = &ids {
-                error_label(ui, e.text(lang));
-            }
-        });
         crate::ui::layout::toolbar(ui, |ui| {
             ui.label(lang.tr("Baud rates:", "波特率:"));
             for b in &all {
@@ -274,61 +253,57 @@ impl ScanState {
                 self.bauds = Some(vec![home]);
             }
         });
-        ui.horizontal(|ui| {
-            let can = rt.connected() && !busy && ids.is_ok() && !bauds.is_empty();
-            let scan = ui.add_enabled(
-                can,
-                egui::Button::new(egui::RichText::new(lang.tr("Scan", "扫描")).strong())
-                    .min_size(egui::vec2(90.0, 26.0)),
-            );
-            if bauds.is_empty() {
+    }
+
+    /// How the last scan ended: the servos found and what it took, or why it stopped.
+    fn said_outcome(&self, ui: &mut egui::Ui, lang: Lang) {
+        match &self.outcome {
+            Some(Ok(t)) => {
+                ok_label(
+                    ui,
+                    format!("{} {}", t.found, lang.tr("servo(s) found", "个舵机已找到")),
+                );
+                ui.weak(format!(
+                    "{} {}, {} {}, {} {:.1} ms",
+                    t.asked_again,
+                    lang.tr("id(s) asked again", "个ID重新询问"),
+                    t.late_answers,
+                    lang.tr("late answer(s)", "个迟到应答"),
+                    lang.tr("margin", "余量"),
+                    t.margin_ms
+                ))
+                .on_hover_text(lang.tr(
+                    "Ids pinged again one by one (a damaged answer, an answer after its sweep), answers that came after their window, and the answer margin the scan waited with",
+                    "逐个重新询问的ID(应答损坏或扫描结束后才到),超出等待窗口的应答,以及扫描使用的应答余量",
+                ));
+            }
+            Some(Err(e)) => {
                 error_label(
                     ui,
-                    lang.tr("choose at least one baud rate", "请至少选择一种波特率"),
+                    format!(
+                        "{}: {e} ({} {})",
+                        lang.tr("scan stopped", "扫描中止"),
+                        self.rows.len(),
+                        lang.tr("found before it stopped", "个在中止前找到")
+                    ),
                 );
             }
-            if scan.clicked() {
-                actions.extend(self.start(rt));
-            }
-            match &self.outcome {
-                Some(Ok(t)) => {
-                    ok_label(
-                        ui,
-                        format!("{} {}", t.found, lang.tr("servo(s) found", "个舵机已找到")),
-                    );
-                    ui.weak(format!(
-                        "{} {}, {} {}, {} {:.1} ms",
-                        t.asked_again,
-                        lang.tr("id(s) asked again", "个ID重新询问"),
-                        t.late_answers,
-                        lang.tr("late answer(s)", "个迟到应答"),
-                        lang.tr("margin", "余量"),
-                        t.margin_ms
-                    ))
-                    .on_hover_text(lang.tr(
-                        "Ids pinged again one by one (a damaged answer, an answer after its sweep), answers that came after their window, and the answer margin the scan waited with",
-                        "逐个重新询问的ID(应答损坏或扫描结束后才到),超出等待窗口的应答,以及扫描使用的应答余量",
-                    ));
-                }
-                Some(Err(e)) => {
-                    error_label(
-                        ui,
-                        format!(
-                            "{}: {e} ({} {})",
-                            lang.tr("scan stopped", "扫描中止"),
-                            self.rows.len(),
-                            lang.tr("found before it stopped", "个在中止前找到")
-                        ),
-                    );
-                }
-                None => {}
-            }
-        });
-        ui.separator();
-        if self.rows.is_empty() {
-            ui.weak(lang.tr("No servos listed yet.", "尚无舵机。"));
-            return None;
+            None => {}
         }
+    }
+
+    /// The servos found, one row each: select one to work on, rescan it, its details. Returns
+    /// the servo selected and the rescans asked for.
+    fn table(
+        &self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        busy: bool,
+        selected: Option<Servo>,
+    ) -> (Option<Servo>, Vec<Action>) {
+        let mut picked = None;
+        let mut actions = Vec::new();
         // A narrow window scrolls the details sideways; the servo and its Rescan stay first.
         egui::ScrollArea::horizontal()
             .id_salt("servo-scan-table")
@@ -354,7 +329,6 @@ impl ScanState {
                                 lang.tr("Presence", "应答"),
                             ],
                         );
-                        let opt = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
                         for row in &self.rows {
                             let here = Servo {
                                 id: row.id,
@@ -394,34 +368,64 @@ impl ScanState {
                                 };
                                 actions.push(scan_job(rt, plan, Some(here)));
                             }
-                            ui.label(row.baud.to_string());
-                            ui.label(opt(row.servo_type));
-                            ui.label(opt(row.firmware));
-                            ui.label(opt(row.serial));
-                            ui.label(row.voltage_mv.map_or("-".into(), |v| format!("{v} mV")));
-                            ui.label(crate::ui::inputs::said_in(
-                                row.temperature_text(&rt.device.profile),
-                                lang,
-                            ));
-                            ui.monospace(row.status_hex());
-                            ui.label(row.status.map_or("-".into(), |s| status_bits(s, lang)));
-                            match &row.presence {
-                                Presence::Present => ok_label(ui, lang.tr("ok", "正常")),
-                                Presence::PossibleDuplicate(e) => {
-                                    ui.colored_label(
-                                        egui::Color32::from_rgb(210, 40, 40),
-                                        lang.tr("possible duplicate id", "可能存在重复ID"),
-                                    )
-                                    .on_hover_text(e);
-                                }
-                                Presence::Absent => {
-                                    ui.weak(lang.tr("absent", "无应答"));
-                                }
-                            }
+                            details(ui, lang, rt, row);
                             ui.end_row();
                         }
                     });
             });
+        (picked, actions)
+    }
+
+    /// Draws the tab; returns a servo the technician selected.
+    pub(super) fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        busy: bool,
+        selected: Option<Servo>,
+        actions: &mut Vec<Action>,
+    ) -> Option<Servo> {
+        let ids = self.ids();
+        let profile = &rt.device.profile;
+        let bauds = self.chosen_bauds(profile);
+        ui.horizontal(|ui| {
+            let l = ui.label(lang.tr("First id", "起始ID"));
+            ui.add(egui::TextEdit::singleline(&mut self.first).desired_width(40.0))
+                .labelled_by(l.id);
+            let l = ui.label(lang.tr("Last id", "结束ID"));
+            ui.add(egui::TextEdit::singleline(&mut self.last).desired_width(40.0))
+                .labelled_by(l.id);
+            if let Err(e) = &ids {
+                error_label(ui, e.text(lang));
+            }
+        });
+        self.baud_choice(ui, lang, rt);
+        ui.horizontal(|ui| {
+            let can = rt.connected() && !busy && ids.is_ok() && !bauds.is_empty();
+            let scan = ui.add_enabled(
+                can,
+                egui::Button::new(egui::RichText::new(lang.tr("Scan", "扫描")).strong())
+                    .min_size(egui::vec2(90.0, 26.0)),
+            );
+            if bauds.is_empty() {
+                error_label(
+                    ui,
+                    lang.tr("choose at least one baud rate", "请至少选择一种波特率"),
+                );
+            }
+            if scan.clicked() {
+                actions.extend(self.start(rt));
+            }
+            self.said_outcome(ui, lang);
+        });
+        ui.separator();
+        if self.rows.is_empty() {
+            ui.weak(lang.tr("No servos listed yet.", "尚无舵机。"));
+            return None;
+        }
+        let (picked, rescans) = self.table(ui, lang, rt, busy, selected);
+        actions.extend(rescans);
         picked
     }
 }
@@ -468,4 +472,34 @@ fn scan_job(rt: &AppState, plan: ScanPlan, again: Option<Servo>) -> Action {
         }
         summary
     }))
+}
+
+/// A servo's details in the scan table: its rate, type, firmware, serial number, voltage,
+/// temperature, status (raw and decoded) and how it answered.
+fn details(ui: &mut egui::Ui, lang: Lang, rt: &AppState, row: &ScanRow) {
+    let opt = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
+    ui.label(row.baud.to_string());
+    ui.label(opt(row.servo_type));
+    ui.label(opt(row.firmware));
+    ui.label(opt(row.serial));
+    ui.label(row.voltage_mv.map_or("-".into(), |v| format!("{v} mV")));
+    ui.label(crate::ui::inputs::said_in(
+        row.temperature_text(&rt.device.profile),
+        lang,
+    ));
+    ui.monospace(row.status_hex());
+    ui.label(row.status.map_or("-".into(), |s| status_bits(s, lang)));
+    match &row.presence {
+        Presence::Present => ok_label(ui, lang.tr("ok", "正常")),
+        Presence::PossibleDuplicate(e) => {
+            ui.colored_label(
+                egui::Color32::from_rgb(210, 40, 40),
+                lang.tr("possible duplicate id", "可能存在重复ID"),
+            )
+            .on_hover_text(e);
+        }
+        Presence::Absent => {
+            ui.weak(lang.tr("absent", "无应答"));
+        }
+    }
 }

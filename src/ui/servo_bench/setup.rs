@@ -158,8 +158,7 @@ impl SetupState {
         });
     }
 
-    /// Draws the tab.
-    #[allow(clippy::too_many_arguments)]
+    /// Draws the tab; returns what the technician asked for.
     pub(super) fn show(
         &mut self,
         ui: &mut egui::Ui,
@@ -168,11 +167,11 @@ impl SetupState {
         busy: bool,
         selected: Option<Servo>,
         scan: &ScanState,
-        actions: &mut Vec<Action>,
-    ) {
+    ) -> Vec<Action> {
         self.lang = lang;
+        let mut actions = Vec::new();
         let Some(servo) = selection_or_hint(ui, lang, selected) else {
-            return;
+            return actions;
         };
         let can = rt.connected() && !busy;
         ui.heading(lang.tr("Servo ID", "舵机ID"));
@@ -222,6 +221,31 @@ impl SetupState {
             }
         });
         ui.add_space(8.0);
+        actions.extend(self.baud_section(ui, lang, rt, servo, can));
+        ui.weak(lang.tr(
+            "The servo switches at once; the port follows it and verifies. If it does not answer there, all 8 rates are searched.",
+            "舵机立即切换; 端口随之切换并校验。若新波特率下无应答, 将搜索全部8种波特率。",
+        ));
+        ui.add_space(8.0);
+        match &self.message {
+            Some((true, m)) => ok_label(ui, m),
+            Some((false, m)) => error_label(ui, m),
+            None => {}
+        }
+        actions
+    }
+
+    /// The baud rate: one of the profile's options (its label's name where that says more), and
+    /// Set baud rate.
+    fn baud_section(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        servo: Servo,
+        can: bool,
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
         ui.heading(lang.tr("Baud rate", "波特率"));
         ui.horizontal(|ui| {
             let l = ui.label(lang.tr("New baud rate", "新波特率"));
@@ -264,16 +288,7 @@ impl SetupState {
                 actions.push(baud_job(rt, servo, self.option));
             }
         });
-        ui.weak(lang.tr(
-            "The servo switches at once; the port follows it and verifies. If it does not answer there, all 8 rates are searched.",
-            "舵机立即切换; 端口随之切换并校验。若新波特率下无应答, 将搜索全部8种波特率。",
-        ));
-        ui.add_space(8.0);
-        match &self.message {
-            Some((true, m)) => ok_label(ui, m),
-            Some((false, m)) => error_label(ui, m),
-            None => {}
-        }
+        actions
     }
 }
 

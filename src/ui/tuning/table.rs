@@ -3,7 +3,7 @@
 
 use super::{TuningPanel, named, profile_set};
 use crate::i18n::Lang;
-use crate::profile::{Command, CommandKind, Field};
+use crate::profile::{Command, CommandKind, Field, FieldError, Value};
 use crate::ui::inputs::range_text;
 use crate::ui::state::{AppState, Mark, Reading};
 use crate::ui::zh::Zh;
@@ -200,45 +200,7 @@ impl TuningPanel {
         }
         unit_cell(ui, lang, f);
         ui.weak(crate::ui::inputs::allowed_in(f, lang));
-        match (&parsed, rt.device.mark(get, &f.ident)) {
-            (Some(Err(e)), _) => {
-                ui.colored_label(
-                    egui::Color32::RED,
-                    format!("× {}", lang.tr("invalid", "无效")),
-                )
-                .on_hover_text(format!(
-                    "{}\n{}: {}",
-                    named(&e.in_lang(lang), f, lang),
-                    lang.tr("allowed", "允许"),
-                    range_text(f)
-                ));
-            }
-            _ if changed => {
-                ui.colored_label(
-                    egui::Color32::from_rgb(220, 150, 0),
-                    format!("● {}", lang.tr("changed", "已修改")),
-                );
-            }
-            (_, Some(Mark::Verified)) => {
-                ui.colored_label(
-                    egui::Color32::from_rgb(40, 160, 60),
-                    format!("✓ {}", lang.tr("verified", "已校验")),
-                );
-            }
-            (_, Some(Mark::Mismatch(read))) => {
-                ui.colored_label(
-                    egui::Color32::RED,
-                    format!(
-                        "× {} {}",
-                        lang.tr("mismatch: device holds", "不一致:设备为"),
-                        f.format(read)
-                    ),
-                );
-            }
-            _ => {
-                ui.label("");
-            }
-        }
+        mark_cell(ui, lang, f, &parsed, changed, rt.device.mark(get, &f.ident));
     }
 }
 
@@ -269,5 +231,56 @@ fn unit_cell(ui: &mut egui::Ui, lang: Lang, f: &Field) {
         ));
     } else {
         ui.label(&f.unit);
+    }
+}
+
+/// A field's mark: its edit refused (why, on hover), changed, verified after a write, or read
+/// back otherwise than written.
+fn mark_cell(
+    ui: &mut egui::Ui,
+    lang: Lang,
+    f: &Field,
+    parsed: &Option<Result<Value, FieldError>>,
+    changed: bool,
+    mark: Option<&Mark>,
+) {
+    match (parsed, mark) {
+        (Some(Err(e)), _) => {
+            ui.colored_label(
+                egui::Color32::RED,
+                format!("× {}", lang.tr("invalid", "无效")),
+            )
+            .on_hover_text(format!(
+                "{}\n{}: {}",
+                named(&e.in_lang(lang), f, lang),
+                lang.tr("allowed", "允许"),
+                range_text(f)
+            ));
+        }
+        _ if changed => {
+            ui.colored_label(
+                egui::Color32::from_rgb(220, 150, 0),
+                format!("● {}", lang.tr("changed", "已修改")),
+            );
+        }
+        (_, Some(Mark::Verified)) => {
+            ui.colored_label(
+                egui::Color32::from_rgb(40, 160, 60),
+                format!("✓ {}", lang.tr("verified", "已校验")),
+            );
+        }
+        (_, Some(Mark::Mismatch(read))) => {
+            ui.colored_label(
+                egui::Color32::RED,
+                format!(
+                    "× {} {}",
+                    lang.tr("mismatch: device holds", "不一致:设备为"),
+                    f.format(read)
+                ),
+            );
+        }
+        _ => {
+            ui.label("");
+        }
     }
 }

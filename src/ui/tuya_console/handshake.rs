@@ -103,6 +103,36 @@ pub fn show(
         ));
     });
     ui.add_space(4.0);
+    steps_table(ui, lang, rt);
+    if let Some((step, r)) = &s.stopped {
+        ui.colored_label(
+            egui::Color32::RED,
+            format!(
+                "{} {} {} {}: {}. {} {}.",
+                lang.tr("The last attempt stopped at", "上次尝试停在"),
+                step_name(*step, lang),
+                lang.tr("at", "于"),
+                clock(&r.at),
+                r.detail.get(lang),
+                lang.tr(
+                    "The handshake is tried again every second; attempts so far:",
+                    "每秒重试一次握手;已尝试次数:"
+                ),
+                s.attempts
+            ),
+        );
+    }
+    ui.separator();
+    facts(ui, lang, rt);
+    ui.separator();
+    actions.extend(wifi_state(ui, lang, rt, opts));
+    actions
+}
+
+/// The handshake's steps in a table: each one's result, when, and what came back; the step the
+/// current attempt waits at.
+fn steps_table(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    let s = &rt.device.tuya;
     // Where the current attempt is: the first step without a result, unless one failed.
     let failed = s.done_at.is_none()
         && HandshakeStep::ALL
@@ -160,25 +190,11 @@ pub fn show(
                 ui.end_row();
             }
         });
-    if let Some((step, r)) = &s.stopped {
-        ui.colored_label(
-            egui::Color32::RED,
-            format!(
-                "{} {} {} {}: {}. {} {}.",
-                lang.tr("The last attempt stopped at", "上次尝试停在"),
-                step_name(*step, lang),
-                lang.tr("at", "于"),
-                clock(&r.at),
-                r.detail.get(lang),
-                lang.tr(
-                    "The handshake is tried again every second; attempts so far:",
-                    "每秒重试一次握手;已尝试次数:"
-                ),
-                s.attempts
-            ),
-        );
-    }
-    ui.separator();
+}
+
+/// What the handshake learned of the MCU: product, versions, modes, heartbeats, restarts.
+fn facts(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    let s = &rt.device.tuya;
     egui::Grid::new("tuya-facts")
         .num_columns(2)
         .striped(true)
@@ -246,57 +262,60 @@ pub fn show(
                 None => ui.weak(lang.tr("not received yet", "尚未收到")),
             };
             ui.end_row();
-            ui.label(lang.tr("Last heartbeat", "最近心跳"));
-            match &s.last_heartbeat {
-                Some((t, answer)) => ui.monospace(format!(
-                    "{} ({} {})",
-                    clock(t),
-                    lang.tr("answer", "应答"),
-                    answer.map_or("?".into(), |a| a.to_string())
-                )),
-                None => ui.weak(lang.tr("none yet", "暂无")),
-            };
-            ui.end_row();
-            if let Some(lost) = &s.heartbeat_lost
-                && s.last_heartbeat.as_ref().is_none_or(|(t, _)| t < lost)
-            {
-                ui.label("");
-                ui.colored_label(
-                    egui::Color32::RED,
-                    format!(
-                        "{} {}; {}",
-                        lang.tr(
-                            "The MCU stopped answering heartbeats at",
-                            "MCU停止应答心跳于"
-                        ),
-                        clock(lost),
-                        lang.tr("retrying every 3 s", "每3秒重试")
-                    ),
-                );
-                ui.end_row();
-            }
-            ui.label(lang.tr("MCU restarts detected", "检测到MCU重启"));
-            match &s.restarts {
-                (0, _) => ui.label("0"),
-                (n, Some(t)) => ui.colored_label(
-                    ORANGE,
-                    format!(
-                        "{n}, {} {}: {}",
-                        lang.tr("last at", "最近一次于"),
-                        clock(t),
-                        lang.tr(
-                            "the heartbeat answered 0, so the handshake ran again",
-                            "心跳应答为0,已重新握手"
-                        )
-                    ),
-                ),
-                (n, None) => ui.label(n.to_string()),
-            };
-            ui.end_row();
+            heartbeat_rows(ui, lang, rt);
         });
-    ui.separator();
-    actions.extend(wifi_state(ui, lang, rt, opts));
-    actions
+}
+
+/// The last heartbeat answered, a heartbeat lost since, and the MCU restarts detected.
+fn heartbeat_rows(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    let s = &rt.device.tuya;
+    ui.label(lang.tr("Last heartbeat", "最近心跳"));
+    match &s.last_heartbeat {
+        Some((t, answer)) => ui.monospace(format!(
+            "{} ({} {})",
+            clock(t),
+            lang.tr("answer", "应答"),
+            answer.map_or("?".into(), |a| a.to_string())
+        )),
+        None => ui.weak(lang.tr("none yet", "暂无")),
+    };
+    ui.end_row();
+    if let Some(lost) = &s.heartbeat_lost
+        && s.last_heartbeat.as_ref().is_none_or(|(t, _)| t < lost)
+    {
+        ui.label("");
+        ui.colored_label(
+            egui::Color32::RED,
+            format!(
+                "{} {}; {}",
+                lang.tr(
+                    "The MCU stopped answering heartbeats at",
+                    "MCU停止应答心跳于"
+                ),
+                clock(lost),
+                lang.tr("retrying every 3 s", "每3秒重试")
+            ),
+        );
+        ui.end_row();
+    }
+    ui.label(lang.tr("MCU restarts detected", "检测到MCU重启"));
+    match &s.restarts {
+        (0, _) => ui.label("0"),
+        (n, Some(t)) => ui.colored_label(
+            ORANGE,
+            format!(
+                "{n}, {} {}: {}",
+                lang.tr("last at", "最近一次于"),
+                clock(t),
+                lang.tr(
+                    "the heartbeat answered 0, so the handshake ran again",
+                    "心跳应答为0,已重新握手"
+                )
+            ),
+        ),
+        (n, None) => ui.label(n.to_string()),
+    };
+    ui.end_row();
 }
 
 /// The Wi-Fi state selector: a choice is reported to the MCU at once (0x03) and used by later

@@ -172,6 +172,30 @@ fn answer_text(rt: &AppState, lang: Lang, command: u8, answer: &[u8]) -> String 
 }
 
 impl RequestsView {
+    /// The module's MAC (0x2d): typed as hex, used once it parses.
+    fn mac_row(&mut self, ui: &mut egui::Ui, lang: Lang, opts: &mut TuyaModuleOptions) {
+        let label = ui.label(lang.tr("Module MAC (0x2d)", "模块MAC (0x2d)"));
+        ui.horizontal(|ui| {
+            let text = self.mac_text.get_or_insert_with(|| mac_text(&opts.mac));
+            let parsed = parse_mac(text);
+            let mut edit = egui::TextEdit::singleline(text).desired_width(160.0);
+            if parsed.is_err() {
+                edit = edit.text_color(egui::Color32::RED);
+            }
+            ui.add(edit).labelled_by(label.id);
+            match parse_mac(text) {
+                Ok(mac) => opts.mac = mac,
+                Err(e) => {
+                    ui.colored_label(
+                        egui::Color32::RED,
+                        format!("× {}: {e}", lang.tr("not used", "未采用")),
+                    );
+                }
+            }
+        });
+        ui.end_row();
+    }
+
     /// Draws the section; changes to what the module answers go into `opts`. With the
     /// built-in simulated MCU, buttons ask it to send its requests.
     pub fn show(
@@ -193,70 +217,9 @@ impl RequestsView {
             .show(ui, |ui| {
                 self.time_row(ui, lang, opts);
                 ui.end_row();
-                let label =
-                    ui.label(lang.tr("Wi-Fi production test (0x0e)", "WiFi功能产测 (0x0e)"));
-                ui.horizontal(|ui| {
-                    ui.checkbox(&mut opts.wifi_test_ok, lang.tr("passes", "通过"))
-                        .labelled_by(label.id);
-                    if opts.wifi_test_ok {
-                        let l = ui.label(lang.tr("signal strength %", "信号强度 %"));
-                        ui.add(egui::Slider::new(&mut opts.wifi_test_rssi, 0..=100))
-                            .labelled_by(l.id);
-                    } else {
-                        let l = ui.label(lang.tr("failure", "失败原因"));
-                        opts.wifi_test_rssi = opts.wifi_test_rssi.min(1);
-                        egui::ComboBox::from_id_salt("tuya-test-failure")
-                            .selected_text(test_failure(opts.wifi_test_rssi, lang))
-                            .show_ui(ui, |ui| {
-                                for r in 0..=1 {
-                                    ui.selectable_value(
-                                        &mut opts.wifi_test_rssi,
-                                        r,
-                                        test_failure(r, lang),
-                                    );
-                                }
-                            })
-                            .response
-                            .labelled_by(l.id);
-                    }
-                });
-                ui.end_row();
-                let label = ui.label(lang.tr("Network status (0x2b)", "联网状态 (0x2b)"));
-                egui::ComboBox::from_id_salt("tuya-net-status")
-                    .selected_text(wifi_state_name(rt, lang, opts.net_status))
-                    .width(300.0)
-                    .show_ui(ui, |ui| {
-                        for s in 0..=6u8 {
-                            ui.selectable_value(
-                                &mut opts.net_status,
-                                s,
-                                wifi_state_name(rt, lang, s),
-                            );
-                        }
-                    })
-                    .response
-                    .labelled_by(label.id);
-                ui.end_row();
-                let label = ui.label(lang.tr("Module MAC (0x2d)", "模块MAC (0x2d)"));
-                ui.horizontal(|ui| {
-                    let text = self.mac_text.get_or_insert_with(|| mac_text(&opts.mac));
-                    let parsed = parse_mac(text);
-                    let mut edit = egui::TextEdit::singleline(text).desired_width(160.0);
-                    if parsed.is_err() {
-                        edit = edit.text_color(egui::Color32::RED);
-                    }
-                    ui.add(edit).labelled_by(label.id);
-                    match parse_mac(text) {
-                        Ok(mac) => opts.mac = mac,
-                        Err(e) => {
-                            ui.colored_label(
-                                egui::Color32::RED,
-                                format!("× {}: {e}", lang.tr("not used", "未采用")),
-                            );
-                        }
-                    }
-                });
-                ui.end_row();
+                wifi_test_row(ui, lang, opts);
+                net_status_row(ui, lang, rt, opts);
+                self.mac_row(ui, lang, opts);
             });
         ui.separator();
         let s = &rt.device.tuya;
@@ -362,6 +325,50 @@ impl RequestsView {
             }
         });
     }
+}
+
+/// The Wi-Fi production test's answer (0x0e): it passes with a signal strength, or fails with
+/// a reason.
+fn wifi_test_row(ui: &mut egui::Ui, lang: Lang, opts: &mut TuyaModuleOptions) {
+    let label = ui.label(lang.tr("Wi-Fi production test (0x0e)", "WiFi功能产测 (0x0e)"));
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut opts.wifi_test_ok, lang.tr("passes", "通过"))
+            .labelled_by(label.id);
+        if opts.wifi_test_ok {
+            let l = ui.label(lang.tr("signal strength %", "信号强度 %"));
+            ui.add(egui::Slider::new(&mut opts.wifi_test_rssi, 0..=100))
+                .labelled_by(l.id);
+        } else {
+            let l = ui.label(lang.tr("failure", "失败原因"));
+            opts.wifi_test_rssi = opts.wifi_test_rssi.min(1);
+            egui::ComboBox::from_id_salt("tuya-test-failure")
+                .selected_text(test_failure(opts.wifi_test_rssi, lang))
+                .show_ui(ui, |ui| {
+                    for r in 0..=1 {
+                        ui.selectable_value(&mut opts.wifi_test_rssi, r, test_failure(r, lang));
+                    }
+                })
+                .response
+                .labelled_by(l.id);
+        }
+    });
+    ui.end_row();
+}
+
+/// The network status the module reports (0x2b).
+fn net_status_row(ui: &mut egui::Ui, lang: Lang, rt: &AppState, opts: &mut TuyaModuleOptions) {
+    let label = ui.label(lang.tr("Network status (0x2b)", "联网状态 (0x2b)"));
+    egui::ComboBox::from_id_salt("tuya-net-status")
+        .selected_text(wifi_state_name(rt, lang, opts.net_status))
+        .width(300.0)
+        .show_ui(ui, |ui| {
+            for s in 0..=6u8 {
+                ui.selectable_value(&mut opts.net_status, s, wifi_state_name(rt, lang, s));
+            }
+        })
+        .response
+        .labelled_by(label.id);
+    ui.end_row();
 }
 
 #[cfg(test)]

@@ -154,17 +154,45 @@ impl OtaView {
             ),
             lang.tr("bytes.", "字节。")
         ));
+        actions.extend(self.file_row(ui, lang, rt, busy, active));
+        if let Some(e) = &self.error {
+            ui.colored_label(
+                egui::Color32::RED,
+                format!("× {}: {e}", lang.tr("cannot update", "无法升级")),
+            );
+        }
+        actions.extend(self.progress_and_result(ui, lang, active));
+        if let Some(a) = self.confirm_dialog(ui, lang, rt) {
+            actions.push(a);
+        }
+        actions
+    }
+
+    /// The firmware file (checked as soon as it is chosen) and Start update, which asks for
+    /// confirmation.
+    fn file_row(
+        &mut self,
+        ui: &mut egui::Ui,
+        lang: Lang,
+        rt: &AppState,
+        busy: bool,
+        active: bool,
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
+        let max = rt.device.profile.ota_max_bytes();
         crate::ui::layout::toolbar(ui, |ui| {
             let before = self.path.clone();
             let event = files::row(
                 ui,
                 lang,
-                lang.tr("Firmware file", "固件文件"),
+                files::Row {
+                    label: lang.tr("Firmware file", "固件文件"),
+                    hint: "firmware.bin",
+                    pick: files::Pick::Open(&[]),
+                    enabled: !active,
+                },
                 &mut self.path,
-                "firmware.bin",
-                files::Pick::Open(&[]),
                 &rt.dialogs,
-                !active,
             );
             if self.path != before {
                 self.error = None;
@@ -201,12 +229,12 @@ impl OtaView {
                 }
             }
         });
-        if let Some(e) = &self.error {
-            ui.colored_label(
-                egui::Color32::RED,
-                format!("× {}: {e}", lang.tr("cannot update", "无法升级")),
-            );
-        }
+        actions
+    }
+
+    /// The update's progress (with Cancel update) while it runs, then how it ended.
+    fn progress_and_result(&mut self, ui: &mut egui::Ui, lang: Lang, active: bool) -> Vec<Action> {
+        let mut actions = Vec::new();
         if let Some(p) = &self.progress
             && (active || self.result.is_none())
         {
@@ -260,9 +288,6 @@ impl OtaView {
                 );
             }
             _ => {}
-        }
-        if let Some(a) = self.confirm_dialog(ui, lang, rt) {
-            actions.push(a);
         }
         actions
     }
