@@ -27,9 +27,7 @@ pub fn read_device(dev: Device<'_>, run: &mut Run<'_>) -> Result<Vec<CommandValu
     let total = pairs.len() as u64;
     let mut values = Vec::new();
     for (i, (set, get)) in pairs.iter().enumerate() {
-        if run.is_cancelled() {
-            return Err(OpError::Cancelled);
-        }
+        run.go_on()?;
         let answer = exchange::read(dev, get, &[])?;
         values.push(command_values(set, &answer));
         run.report(Progress {

@@ -37,9 +37,7 @@ pub fn read_commands(
         ..Tally::default()
     };
     for (i, id) in ids.iter().enumerate() {
-        if run.is_cancelled() {
-            return Err(OpError::Cancelled);
-        }
+        run.go_on()?;
         let Some(cmd) = profile.command_by_id(*id) else {
             continue;
         };
@@ -72,9 +70,7 @@ pub fn write_commands(
         ..Tally::default()
     };
     for (i, (set, inputs)) in writes.iter().enumerate() {
-        if run.is_cancelled() {
-            return Err(OpError::Cancelled);
-        }
+        run.go_on()?;
         let Some(cmd) = profile.command_by_id(*set) else {
             continue;
         };

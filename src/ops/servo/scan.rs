@@ -166,9 +166,7 @@ impl<'a> Found<'a> {
             },
         };
         for (k, chunk) in ids.chunks(SWEEP_IDS).enumerate() {
-            if run.is_cancelled() {
-                return Err(OpError::Cancelled);
-            }
+            run.go_on()?;
             let reply = client.sweep(ping_sweep(chunk))?;
             found.take(&reply, chunk);
             run.report((k * SWEEP_IDS + chunk.len(), *chunk.last().unwrap_or(&0)));

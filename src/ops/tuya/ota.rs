@@ -224,9 +224,7 @@ pub fn ota(
     let mut packets = 0usize;
     let total = image.len() as u64;
     for (i, data) in image.chunks(chunk).enumerate() {
-        if run.is_cancelled() {
-            return Err(OpError::Cancelled);
-        }
+        run.go_on()?;
         let offset = (i * chunk) as u32;
         let mut payload = offset.to_be_bytes().to_vec();
         payload.extend_from_slice(data);

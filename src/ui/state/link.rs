@@ -46,8 +46,8 @@ impl Target {
     }
 }
 
-/// Whether the device answers, as the link reports it ([`DeviceEvent`]): an open port says nothing of
-/// the device behind it.
+/// Whether the device answers, as the link reports it ([`DeviceEvent`]): an open port says
+/// nothing of the device behind it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Answering {
     /// Nothing answered yet on this connection, and fewer than [`SILENT_AFTER`] requests went
