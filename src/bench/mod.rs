@@ -3,6 +3,7 @@
 //! Run it on a release build: `cargo run --release -- bench --json`.
 
 mod field;
+mod records;
 mod tuya;
 
 pub use field::{ScanRuns, field_scans};
@@ -380,7 +381,7 @@ impl StepTimes {
 }
 
 /// The cases [`run_all`] runs, by the names `bench --only` takes.
-pub const CASES: [&str; 7] = [
+pub const CASES: [&str; 8] = [
     "msp-polling",
     "servo-scan",
     "servo-field-scan",
@@ -388,6 +389,7 @@ pub const CASES: [&str; 7] = [
     "tuya-ota",
     "tuya-dp-report",
     "tuya-handshake",
+    "records-report",
 ];
 
 /// Whether `only` (of `bench --only`) selects a case that runs (the field scan's with `field`
@@ -457,6 +459,11 @@ pub fn run_all(
             tuya_handshake(9600, Some(Duration::from_millis(30)))?,
             &mut out,
         );
+    }
+    if wanted("records-report") {
+        for f in records::records_report()? {
+            add(f, &mut out);
+        }
     }
     if long && wanted("tuya-ota") {
         add(tuya_ota(9600, 2)?, &mut out);

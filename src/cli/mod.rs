@@ -9,7 +9,9 @@ mod msp;
 mod port;
 mod preset;
 mod provision;
+mod records;
 mod replay;
+mod report;
 mod servo;
 mod sim;
 mod sim_field;
@@ -129,13 +131,19 @@ enum Cmd {
         json: bool,
         /// Only the cases whose name contains this: msp-polling, servo-scan,
         /// servo-field-scan (with --field), servo-provision, tuya-ota, tuya-dp-report,
-        /// tuya-handshake.
+        /// tuya-handshake, records-report (SQLite; and PostgreSQL when
+        /// BOTBENCH_BENCH_POSTGRES=postgres://... names a server).
         #[arg(long, value_name = "CASE")]
         only: Option<String>,
     },
     /// Save, compare and apply presets of a device's tunable parameters.
     #[command(subcommand)]
     Preset(preset::PresetCmd),
+    /// The production records: list, show a unit's runs, export as CSV or JSON lines.
+    Records(records::RecordsCmdArgs),
+    /// Yield per shift, station, slot and plan; failing steps; each measurement's histogram,
+    /// Cpk and drift (--html FILE for one self-contained page).
+    Report(report::ReportArgs),
 }
 
 /// Runs the command line with the process's arguments; `--port` is opened with `ports` (the
@@ -214,6 +222,8 @@ fn run(cli: Cli, opener: &PortOpener) -> CliResult {
             only,
         }) => bench(long, field, json, only.as_deref()),
         Some(Cmd::Preset(cmd)) => preset::run(cmd, opener),
+        Some(Cmd::Records(args)) => records::run(args),
+        Some(Cmd::Report(args)) => report::run(args),
         Some(Cmd::Sim(args)) => sim::run(args),
         Some(Cmd::Gui {
             port,

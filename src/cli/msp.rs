@@ -8,7 +8,7 @@ use crate::ops::{Device, Run};
 use crate::packet::Packet;
 
 use crate::ops::exchange::{self as ops, Use};
-use crate::ops::selftest::{self, Operator, Plan};
+use crate::ops::selftest::{Operator, Plan};
 use crate::profile::{Command, Input, Profile, Protocol};
 use crate::protocol::Direction;
 use clap::Subcommand;
@@ -78,6 +78,8 @@ enum MspCmd {
         /// presses the switches).
         #[arg(long)]
         yes: bool,
+        #[command(flatten)]
+        rec: super::records::RecordArgs,
     },
 }
 
@@ -107,6 +109,8 @@ enum Checked<'p> {
         plan: Box<Plan>,
         log: Option<PathBuf>,
         yes: bool,
+        recorder: Box<crate::ops::records::Recorder>,
+        given: crate::ops::records::runs::Given,
     },
 }
 
@@ -161,8 +165,13 @@ fn check<'p>(cmd: &MspCmd, profile: &'p Profile) -> Result<Checked<'p>, CliError
                 count: *count,
             }
         }
-        MspCmd::Selftest { plan, log, yes } => {
-            let plan = Plan::load(plan, profile).map_err(CliError::input)?;
+        MspCmd::Selftest {
+            plan: path,
+            log,
+            yes,
+            rec,
+        } => {
+            let plan = Plan::load(path, profile).map_err(CliError::input)?;
             if let Some(log) = log {
                 crate::document::check_append(log).map_err(CliError::input)?;
             }
@@ -170,6 +179,8 @@ fn check<'p>(cmd: &MspCmd, profile: &'p Profile) -> Result<Checked<'p>, CliError
                 plan: Box::new(plan),
                 log: log.clone(),
                 yes: *yes,
+                recorder: Box::new(rec.open(false)?),
+                given: rec.given(Some(path)),
             }
         }
     })
@@ -348,9 +359,22 @@ pub(crate) fn run(mut args: MspArgs, ports: &PortOpener) -> CliResult {
             interval,
             count,
         } => watch(&link, &profile, &commands, interval, count, json),
-        Checked::Selftest { plan, log, yes } => {
-            selftest_run(&client, &profile, &plan, log.as_deref(), yes, json)
-        }
+        Checked::Selftest {
+            plan,
+            log,
+            yes,
+            mut recorder,
+            given,
+        } => selftest_run(
+            &client,
+            &profile,
+            &plan,
+            log.as_deref(),
+            yes,
+            json,
+            &mut recorder,
+            &given,
+        ),
     }
 }
 
@@ -470,6 +494,7 @@ impl Operator for Console {
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn selftest_run(
     client: &crate::link::Client,
     profile: &Profile,
@@ -477,8 +502,13 @@ fn selftest_run(
     log: Option<&std::path::Path>,
     yes: bool,
     json: bool,
+    recorder: &mut crate::ops::records::Recorder,
+    given: &crate::ops::records::runs::Given,
 ) -> CliResult {
     let cancel = super::port::cancel_on_ctrl_c();
+    if let Some((serial, _)) = &given.serial {
+        super::records::say_history(recorder, &profile.id, serial, json);
+    }
     let mut operator = Console { yes };
     if !json {
         println!(
@@ -491,9 +521,10 @@ fn selftest_run(
             plan.steps.len()
         );
     }
-    let report = selftest::run_each(
+    let recorded = crate::ops::records::runs::selftest(
         Device::new(client, profile),
         plan,
+        given,
         &mut operator,
         &mut Run::quiet(&cancel),
         &mut |r| {
@@ -506,11 +537,19 @@ fn selftest_run(
                 );
             }
         },
+        recorder,
+        log,
     );
-    let logged = log.map(|path| {
-        selftest::append_log(path, &report)
-            .map_err(|e| format!("cannot append to {}: {e}", path.display()))
+    let report = &recorded.outcome;
+    let logged = recorded.export.map(|r| {
+        r.map_err(|e| {
+            format!(
+                "cannot append to {}: {e}",
+                log.map(|p| p.display().to_string()).unwrap_or_default()
+            )
+        })
     });
+    let kept = super::records::say_kept(&recorded.kept, json);
     if json {
         println!("{}", serde_json::to_string(&report).unwrap_or_default());
     } else {
@@ -543,6 +582,7 @@ fn selftest_run(
             CliError::device(e)
         });
     }
+    kept?;
     Ok(u8::from(!report.pass))
 }
 

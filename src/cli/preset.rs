@@ -39,6 +39,8 @@ pub(crate) enum PresetCmd {
         file: PathBuf,
         #[command(flatten)]
         port: PortArgs,
+        #[command(flatten)]
+        rec: super::records::RecordArgs,
     },
 }
 
@@ -46,7 +48,7 @@ pub(crate) fn run(cmd: PresetCmd, ports: &PortOpener) -> CliResult {
     match cmd {
         PresetCmd::Save { file, note, port } => save(&file, &note, &port.with_ports(ports)),
         PresetCmd::Diff { file, port } => diff(&file, &port.with_ports(ports)),
-        PresetCmd::Apply { file, port } => apply(&file, &port.with_ports(ports)),
+        PresetCmd::Apply { file, port, rec } => apply(&file, &port.with_ports(ports), &rec),
     }
 }
 
@@ -149,14 +151,20 @@ fn diff(file: &std::path::Path, port: &PortArgs) -> CliResult {
     Ok(u8::from(differing > 0))
 }
 
-fn apply(file: &std::path::Path, port: &PortArgs) -> CliResult {
+fn apply(file: &std::path::Path, port: &PortArgs, rec: &super::records::RecordArgs) -> CliResult {
     let (preset, profile) = load(file, port)?;
+    let mut recorder = rec.open(port.json)?;
+    let given = rec.given(Some(file));
     let (link, _) = connect(port, profile.clone())?;
+    if let Some((serial, _)) = &given.serial {
+        super::records::say_history(&mut recorder, &profile.id, serial, port.json);
+    }
     let mut results = Vec::new();
     let json = port.json;
-    let outcome = ops::preset::apply_each(
+    let recorded = crate::ops::records::runs::preset_apply(
         Device::new(&link.client(), &profile),
         &preset,
+        &given,
         &mut Run::quiet(&super::port::cancel_on_ctrl_c()),
         &mut |command, checks| {
             if !json {
@@ -170,7 +178,9 @@ fn apply(file: &std::path::Path, port: &PortArgs) -> CliResult {
             }
             results.push((command.to_string(), checks.to_vec()));
         },
+        &mut recorder,
     );
+    let outcome = recorded.outcome.map(|_| ());
     let bad = results
         .iter()
         .flat_map(|(_, c)| c)
@@ -188,6 +198,7 @@ fn apply(file: &std::path::Path, port: &PortArgs) -> CliResult {
         });
         println!("{doc}");
     }
+    let kept = super::records::say_kept(&recorded.kept, json);
     outcome.map_err(op_error)?;
     if !json {
         if bad == 0 {
@@ -196,5 +207,6 @@ fn apply(file: &std::path::Path, port: &PortArgs) -> CliResult {
             println!("{bad} field(s) MISMATCH: the device does not hold the preset");
         }
     }
+    kept?;
     Ok(u8::from(bad > 0))
 }

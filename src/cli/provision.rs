@@ -18,6 +18,7 @@ pub(crate) fn run(
     log: Option<&Path>,
     count: u32,
     wait_ms: Option<u64>,
+    rec: &super::records::RecordArgs,
 ) -> CliResult {
     // Everything that can be checked is checked before the port is opened (--count and
     // --wait-ms by their parsers).
@@ -26,6 +27,8 @@ pub(crate) fn run(
     if let Some(log) = log {
         ops::check_log(log, &plan.record).map_err(CliError::input)?;
     }
+    let mut recorder = rec.open(port.json)?;
+    let given = rec.given(Some(plan_path));
     let link = port.open_with(profile.clone(), false)?;
     let client = link.client();
     let cancel = super::port::cancel_on_ctrl_c();
@@ -54,20 +57,30 @@ pub(crate) fn run(
                 eprintln!("  {}", p.message.en);
             }
         });
-        let record =
-            ops::provision_next(Device::new(&client, &profile), &plan, &mut state, &mut run);
+        let recorded = crate::ops::records::runs::provision(
+            Device::new(&client, &profile),
+            &plan,
+            &mut state,
+            &given,
+            &mut run,
+            &mut recorder,
+            log,
+        );
+        let record = recorded.outcome;
         if record.result.is_pass() {
             passed += 1;
         } else {
             failed += 1;
         }
+        if let Some(serial) = &recorded.record.unit.serial {
+            say_earlier(&mut recorder, &profile.id, serial, &recorded.record.uuid);
+        }
         print_record(&record, n, count, plan.params.len(), port.json);
-        if let Some(log) = log
-            && let Err(e) = ops::append_csv(log, &record)
-        {
+        let kept = super::records::say_kept(&recorded.kept, port.json);
+        if let Some(Err(e)) = recorded.export {
             let e = format!(
                 "the servo was not logged: cannot append to {}: {e}",
-                log.display()
+                log.map(|p| p.display().to_string()).unwrap_or_default()
             );
             // The exit code names who failed: a failed servo first, else the log.
             return Err(if failed > 0 {
@@ -76,12 +89,47 @@ pub(crate) fn run(
                 CliError::input(e)
             });
         }
+        kept?;
         last = Some(record);
     }
     if !port.json && count > 1 {
         println!("{passed} PASS, {failed} FAIL");
     }
     Ok(u8::from(failed > 0))
+}
+
+/// Says what the records held of this servo before this run (its serial is read during the
+/// run, so this comes with its verdict): `servo serial 1234: already tested 2 times, last: ...`.
+fn say_earlier(
+    recorder: &mut crate::ops::records::Recorder,
+    profile: &str,
+    serial: &str,
+    this: &str,
+) {
+    let mut found = None;
+    let _ = recorder.store().read(&mut |db| {
+        let filter = crate::ops::records::Filter {
+            serial: Some(serial.to_string()),
+            ..Default::default()
+        };
+        let (cond, mut params) = filter.sql("");
+        params.push(crate::ops::records::sql::Val::text_of(this));
+        params.push(crate::ops::records::sql::Val::text_of(profile));
+        let n = params.len();
+        let rows = db.rows(
+            &format!(
+                "SELECT COUNT(*) FROM runs WHERE {cond} AND uuid <> ?{} AND profile = ?{n}",
+                n - 1
+            ),
+            &params,
+        )?;
+        found = rows.first().and_then(|r| r.first()).and_then(|v| v.int());
+        Ok(())
+    });
+    if let Some(earlier) = found.filter(|n| *n > 0) {
+        // On stderr: stdout keeps one verdict line per servo for the scripts that read it.
+        eprintln!("botbench: servo serial {serial}: provisioned {earlier} time(s) before this run");
+    }
 }
 
 /// Asks the operator to swap the servo; false when they stop (q, or end of input).

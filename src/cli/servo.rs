@@ -120,6 +120,8 @@ enum ServoCmd {
         /// 1 to 600000.
         #[arg(long, value_name = "MS", value_parser = checks::wait_ms)]
         wait_ms: Option<u64>,
+        #[command(flatten)]
+        rec: super::records::RecordArgs,
     },
 }
 
@@ -364,9 +366,10 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
         log,
         count,
         wait_ms,
+        rec,
     } = &args.cmd
     {
-        return super::provision::run(&args.port, plan, log.as_deref(), *count, *wait_ms);
+        return super::provision::run(&args.port, plan, log.as_deref(), *count, *wait_ms, rec);
     }
     // Everything given is checked before the port is opened.
     let profile = args.port.profile("servo", Protocol::Servo)?;

@@ -21,6 +21,7 @@ pub mod device;
 pub mod error;
 pub mod exchange;
 pub mod preset;
+pub mod records;
 pub mod selftest;
 pub mod servo;
 pub mod stop;

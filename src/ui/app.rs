@@ -44,11 +44,13 @@ pub enum PanelId {
     ServoBench,
     /// Tuya: the module side, data points, OTA.
     TuyaConsole,
+    /// Production records: yield, failing steps, measurements.
+    Yield,
 }
 
 impl PanelId {
     /// Every panel.
-    pub const ALL: [PanelId; 10] = [
+    pub const ALL: [PanelId; 11] = [
         PanelId::Device,
         PanelId::Tuning,
         PanelId::Telemetry,
@@ -59,6 +61,7 @@ impl PanelId {
         PanelId::ServoBench,
         PanelId::TuyaConsole,
         PanelId::Monitor,
+        PanelId::Yield,
     ];
 
     /// The panel a profile names.
@@ -89,6 +92,7 @@ impl PanelId {
             PanelId::SelfTest => lang.tr("Self-test", "产线自检"),
             PanelId::ServoBench => lang.tr("Servo bench", "舵机调试"),
             PanelId::TuyaConsole => lang.tr("Tuya console", "涂鸦控制台"),
+            PanelId::Yield => lang.tr("Yield", "良率"),
         }
     }
 }
@@ -121,6 +125,8 @@ pub struct App {
     pub servo: servo_bench::ServoBenchPanel,
     /// The Tuya console.
     pub tuya: tuya_console::TuyaConsolePanel,
+    /// The Yield view.
+    pub yield_view: super::yield_view::YieldPanel,
     /// The screenshot tour, when the window was opened for one.
     pub tour: Option<tour::Tour>,
     /// STOP: on screen for every profile that names one.
@@ -159,6 +165,7 @@ impl App {
             selftest: selftest::SelfTestPanel::default(),
             servo: servo_bench::ServoBenchPanel::default(),
             tuya: tuya_console::TuyaConsolePanel::default(),
+            yield_view: super::yield_view::YieldPanel::default(),
             tour: None,
             stop: stop::StopControl::default(),
             title: String::new(),
@@ -333,6 +340,7 @@ impl App {
                 PanelId::SelfTest => actions.extend(self.selftest.show(ui, lang, state)),
                 PanelId::ServoBench => actions.extend(self.servo.show(ui, lang, state)),
                 PanelId::TuyaConsole => actions.extend(self.tuya.show(ui, lang, state)),
+                PanelId::Yield => actions.extend(self.yield_view.show(ui, lang, state)),
             })
         });
         for a in actions {
@@ -381,6 +389,7 @@ impl App {
             .map(|r| PanelId::of(r.panel))
             .collect();
         v.push(PanelId::Monitor);
+        v.push(PanelId::Yield);
         v
     }
 
@@ -490,6 +499,7 @@ impl App {
         if let Some(p) = file(FileKind::Capture) {
             self.monitor.capture_path = p;
         }
+        self.state.records.configure(file(FileKind::Records));
         let shipped = |name| {
             files::shipped_in(&files::shipped_dir(), name)
                 .ok()

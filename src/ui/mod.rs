@@ -17,6 +17,7 @@ pub mod layout;
 mod monitor;
 mod plot;
 mod presets;
+pub mod records;
 pub mod repaint;
 mod selftest;
 mod servo_bench;
@@ -30,6 +31,7 @@ pub mod tour;
 pub(crate) mod tuning;
 mod tuya_console;
 pub mod views;
+pub mod yield_view;
 pub mod zh;
 
 pub use app::{App, PanelId};

@@ -55,16 +55,25 @@ fn save_job(profile: &Arc<Profile>, path: PathBuf, note: String) -> Job {
 
 /// Writes a (checked) preset, each command read back ([`ops::preset::apply_each`]); each
 /// command's checks go to the device model.
-fn apply_job(profile: &Arc<Profile>, preset: Preset) -> Job {
-    let profile = profile.clone();
+fn apply_job(rt: &AppState, preset: Preset, file: &str) -> Job {
+    let profile = rt.device.profile.clone();
+    let mut records = rt.records.clone();
+    let path = std::path::Path::new(file.trim());
+    let given = crate::ops::records::runs::Given {
+        plan_sha256: crate::ops::records::record::file_sha256(path),
+        plan_name: Some(crate::ops::records::runs::plan_name(path)),
+        ..Default::default()
+    };
     Job::new(
         Text::new("apply preset", "应用预设"),
         move |client, cancel, sink| {
             let mut total = 0;
             let mut bad = 0;
-            ops::preset::apply_each(
+            // Run, then record (before the verdict is shown).
+            let recorded = crate::ops::records::runs::preset_apply(
                 Device::new(client, &profile),
                 &preset,
+                &given,
                 &mut Run::new(cancel, |p| sink.progress(p)),
                 &mut |command, checks| {
                     total += checks.len();
@@ -73,17 +82,23 @@ fn apply_job(profile: &Arc<Profile>, preset: Preset) -> Job {
                         sink.send(JobOutput::Wrote(cmd.id, Ok(checks.to_vec())));
                     }
                 },
-            )?;
+                &mut records,
+            );
+            let note = crate::ui::records::note_en(&recorded.kept);
+            recorded.outcome?;
             if bad == 0 {
-                Ok(Text::new(
-                    format!("{total} field(s) written and verified"),
-                    format!("{total} 个字段已写入并校验"),
+                Ok(crate::ui::records::with_note(
+                    Text::new(
+                        format!("{total} field(s) written and verified"),
+                        format!("{total} 个字段已写入并校验"),
+                    ),
+                    &recorded.kept,
                 ))
             } else {
                 Err(JobError::Incomplete {
                     failed: bad,
                     total,
-                    what: "field(s) do not hold the preset's value".into(),
+                    what: format!("field(s) do not hold the preset's value{note}"),
                 })
             }
         },
@@ -181,7 +196,7 @@ impl PresetsPanel {
             match confirm(ui, lang, differing) {
                 Some(true) => {
                     self.confirm_apply = false;
-                    actions.push(Action::StartJob(apply_job(profile, preset)));
+                    actions.push(Action::StartJob(apply_job(rt, preset, &self.path)));
                 }
                 Some(false) => self.confirm_apply = false,
                 None => {}

@@ -10,7 +10,7 @@ use super::{Action, files};
 use crate::document::DocumentError;
 use crate::i18n::Lang;
 use crate::i18n::Text;
-use crate::ops::selftest::{self, Plan, Report, StepKind, StepResult};
+use crate::ops::selftest::{Plan, Report, StepKind, StepResult};
 use crate::ops::{Device, Run};
 use crate::profile::Profile;
 use crate::ui::zh::Zh;
@@ -224,6 +224,13 @@ impl SelfTestPanel {
         let plan = self.plan.clone()?;
         let profile = rt.device.profile.clone();
         let log = PathBuf::from(self.log_path.trim());
+        let mut records = rt.records.clone();
+        let given = crate::ops::records::runs::Given {
+            plan_sha256: crate::ops::records::record::file_sha256(std::path::Path::new(
+                self.path.trim(),
+            )),
+            ..Default::default()
+        };
         self.results.clear();
         self.report = None;
         self.logged = None;
@@ -251,18 +258,21 @@ impl SelfTestPanel {
                         }
                     }
                 };
-                let report = selftest::run_each(
+                // Run, then record (before the verdict is shown), then the JSON-lines export.
+                let recorded = crate::ops::records::runs::selftest(
                     Device::new(client, &profile),
                     &plan,
+                    &given,
                     &mut operator,
                     &mut Run::new(cancel, |p| sink.progress(p)),
                     &mut |r| sink.send(JobOutput::SelfTest(Output::Step(r.clone()))),
+                    &mut records,
+                    (!log.as_os_str().is_empty()).then_some(log.as_path()),
                 );
-                let logged = (!log.as_os_str().is_empty()).then(|| {
-                    selftest::append_log(&log, &report)
-                        .map(|()| log.clone())
-                        .map_err(|e| LogError::new(&log, &e))
-                });
+                let (report, kept) = (recorded.outcome, recorded.kept);
+                let logged = recorded
+                    .export
+                    .map(|r| r.map(|()| log.clone()).map_err(|e| LogError::new(&log, &e)));
                 let pass = report.pass;
                 let failed: Vec<String> = report.failed().map(|r| r.name.clone()).collect();
                 let aborted = report.aborted.clone();
@@ -273,10 +283,14 @@ impl SelfTestPanel {
                 if let Some(Err(e)) = logged {
                     return Err(e.into());
                 }
+                let note = crate::ui::records::note_en(&kept);
                 match (pass, aborted) {
-                    (true, _) => Ok(Text::new("PASS", "合格")),
-                    (false, Some(a)) => Err(JobError::Failed(a)),
-                    (false, None) => Err(JobError::Failed(failed.join(", "))),
+                    (true, _) => Ok(crate::ui::records::with_note(
+                        Text::new("PASS", "合格"),
+                        &kept,
+                    )),
+                    (false, Some(a)) => Err(JobError::Failed(a + &note)),
+                    (false, None) => Err(JobError::Failed(failed.join(", ") + &note)),
                 }
             },
         )))

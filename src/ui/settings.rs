@@ -66,6 +66,8 @@ pub enum FileKind {
     Firmware,
     /// A capture file (pcapng) recorded or opened in the packet monitor.
     Capture,
+    /// Where production records go: a SQLite file or a `postgres://` URL (the Yield view).
+    Records,
 }
 
 impl Default for Settings {

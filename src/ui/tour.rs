@@ -90,6 +90,26 @@ pub struct Tour {
     started: Instant,
     /// What went wrong so far.
     pub failures: Vec<String>,
+    /// The generated records the Yield view shows (never the user's), while the tour runs.
+    records: Option<Option<tempfile::TempDir>>,
+}
+
+/// Generated records of a plausible line (three days, 2,000 units) in a temporary file, which
+/// the window's records then point to; `None` (and the view shows why) if it cannot be made.
+fn demo_records(app: &mut App) -> Option<tempfile::TempDir> {
+    let dir = tempfile::tempdir().ok()?;
+    let path = dir.path().join("tour-records.sqlite");
+    let mut store = crate::ops::records::SqliteStore::open(&path).ok()?;
+    let tx = store.connection().transaction().ok()?;
+    let end = crate::ops::records::record::now_ms();
+    crate::ops::records::demo::generate(2000, end - 3 * 86_400_000, end, 28, &mut |r| {
+        let _ = crate::ops::records::write::insert(&mut crate::ops::records::sql::Lite(&tx), &r);
+    });
+    tx.commit().ok()?;
+    app.state
+        .records
+        .configure(Some(path.display().to_string()));
+    Some(dir)
 }
 
 impl Tour {
@@ -107,6 +127,7 @@ impl Tour {
             writers: Arc::default(),
             started: Instant::now(),
             failures: Vec::new(),
+            records: None,
         }
     }
 
@@ -116,6 +137,9 @@ impl Tour {
         match &self.phase {
             Phase::Connect => match self.devices.get(self.device) {
                 Some(&kind) => {
+                    if self.records.is_none() {
+                        self.records = Some(demo_records(app));
+                    }
                     app.connect_demo(kind);
                     self.phase = Phase::Settle(Instant::now());
                 }
@@ -147,7 +171,14 @@ impl Tour {
                         self.phase = Phase::Prepare(i + 1, Instant::now());
                         self.start_prep(app, i + 1);
                     } else {
-                        self.shots = shots(app.views());
+                        // The Yield view is the same on every device: shot once, on the first.
+                        let first = self.device == 0;
+                        self.shots = shots(
+                            app.views()
+                                .into_iter()
+                                .filter(|v| first || v.panel != super::PanelId::Yield)
+                                .collect(),
+                        );
                         self.phase = Phase::Next;
                     }
                 }
@@ -336,18 +367,37 @@ fn shots(views: Vec<View>) -> Vec<Shot> {
 /// What a technician would have on screen before the shots of a device of `kind`.
 fn preparation(kind: SimKind) -> Vec<Prep> {
     match kind {
-        SimKind::WindowCleaner => vec![Prep {
-            what: "the self-test plan and the factory preset opened",
-            start: |app| {
-                let dir = super::files::shipped_dir();
-                if let Ok(p) = super::files::shipped_in(&dir, "window-cleaner-factory.ron") {
-                    app.presets.path = p.display().to_string();
-                    app.presets.open(&app.state);
-                }
-                app.selftest.open(&app.state);
+        SimKind::WindowCleaner => vec![
+            Prep {
+                what: "the self-test plan and the factory preset opened",
+                start: |app| {
+                    let dir = super::files::shipped_dir();
+                    if let Ok(p) = super::files::shipped_in(&dir, "window-cleaner-factory.ron") {
+                        app.presets.path = p.display().to_string();
+                        app.presets.open(&app.state);
+                    }
+                    app.selftest.open(&app.state);
+                },
+                done: |app| app.selftest.plan.is_some() && app.presets.loaded.is_some(),
             },
-            done: |app| app.selftest.plan.is_some() && app.presets.loaded.is_some(),
-        }],
+            Prep {
+                what: "the Yield view's report of the tour's generated records computed",
+                start: |app| {
+                    let query = crate::ops::records::report::Query {
+                        filter: crate::ops::records::Filter {
+                            since_ms: Some(crate::ops::records::record::now_ms() - 7 * 86_400_000),
+                            ..Default::default()
+                        },
+                        ..Default::default()
+                    };
+                    let ctx = app.state.ctx.clone();
+                    app.state.records.refresh(query, &ctx);
+                },
+                done: |app| {
+                    !app.state.records.computing() && app.state.records.report().0.is_some()
+                },
+            },
+        ],
         SimKind::ServoBus => vec![
             Prep {
                 what: "the bus scanned, a servo selected and the provisioning plan open",

@@ -430,6 +430,8 @@ fn a_log_for_other_recorded_params_is_not_mixed() {
         },
         mismatches: vec!["a: wrote 1, servo holds 2".into(), "b, c".into()],
         recorded: vec![("voltage".into(), Some("7400".into()))],
+        timeline: Vec::new(),
+        writes: Vec::new(),
     };
     prov::append_csv(&log, &r).unwrap();
     let rows = parse_csv(&std::fs::read_to_string(&log).unwrap());

@@ -98,6 +98,9 @@ fn at_1024_px_the_self_tests_measured_and_result_columns_stay_in_the_window() {
             pass: false,
             detail: "batteryVoltage 10.2 V below 11.5 V; current 0.00 A within 0.00 A to 2.50 A"
                 .into(),
+            measurements: Vec::new(),
+            started_ms: 0,
+            duration_ms: 0,
         })
         .collect();
     h.run_steps(3);

@@ -154,7 +154,7 @@ impl<'a> Reader<'a> {
         n: u32,
         interval: Duration,
         cancel: &Cancel,
-        judge: impl Fn(&Field, &[f64], (f64, f64)) -> (bool, String),
+        mut judge: impl FnMut(&Field, &[f64], (f64, f64)) -> (bool, String),
     ) -> Result<(bool, String), Halt> {
         let series = self.samples(n, interval, cancel)?;
         Ok(verdict(

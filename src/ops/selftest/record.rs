@@ -17,6 +17,13 @@ pub struct StepResult {
     pub pass: bool,
     /// Measured values against thresholds, or what went wrong.
     pub detail: String,
+    /// Each value measured with its unit and limits (Range: a field's mean of its samples;
+    /// Stable: its spread; Rises: its rise), for the records.
+    pub measurements: Vec<crate::ops::records::Measurement>,
+    /// When the step started, ms since 1970 UTC.
+    pub started_ms: i64,
+    /// How long it took, ms.
+    pub duration_ms: i64,
 }
 
 /// The result of a run.

@@ -115,6 +115,9 @@ fn identify(dev: Device<'_>, report: &mut Report, each: &mut dyn FnMut(&StepResu
                 kind: "Identify".into(),
                 pass: false,
                 detail: format!("CMD_VERSION: {e}"),
+                measurements: Vec::new(),
+                started_ms: crate::ops::records::record::now_ms(),
+                duration_ms: 0,
             };
             each(&r);
             report.aborted = Some(format!("step 'Device identity': {}", r.detail));
@@ -140,20 +143,26 @@ fn run_steps(
             total,
             message: crate::i18n::Text::same(&step.name),
         });
+        let clock = crate::ops::records::StepClock::start();
+        let mut measured = Vec::new();
         let (pass, detail, halt) = if run.is_cancelled() {
             (false, "cancelled before it started".into(), true)
         } else {
-            match run_step(dev, step, operator, run.cancel_flag()) {
+            match run_step(dev, step, operator, run.cancel_flag(), &mut measured) {
                 Ok((pass, detail)) => (pass, detail, false),
                 Err((halt, detail)) if detail.is_empty() => (false, halt.message(), true),
                 Err((halt, detail)) => (false, format!("{}; {detail}", halt.message()), true),
             }
         };
+        let timed = clock.end(&step.name, step.kind.name(), None, String::new());
         let r = StepResult {
             name: step.name.clone(),
             kind: step.kind.name().into(),
             pass,
             detail,
+            measurements: measured,
+            started_ms: timed.started_ms,
+            duration_ms: timed.duration_ms,
         };
         each(&r);
         if halt {

@@ -6,6 +6,7 @@ use super::measure::{Reader, means, send_action, show, sleep, tolerance, verdict
 use super::plan::{Action, DEFAULT_INTERVAL, Step, StepKind};
 use super::run::{Halt, Operator};
 use crate::ops::exchange as ops;
+use crate::ops::records::Measurement;
 use crate::ops::{Cancel, Device};
 use crate::profile::{Field, Value};
 use std::time::{Duration, Instant};
@@ -18,12 +19,14 @@ fn halt(h: Halt) -> (Halt, String) {
     (h, String::new())
 }
 
-/// Runs `step` on the device; `operator` is asked when the step needs a hand.
+/// Runs `step` on the device; `operator` is asked when the step needs a hand. The values
+/// measured, with their limits, go to `measured` (for the records).
 pub(super) fn run_step(
     dev: Device<'_>,
     step: &Step,
     operator: &mut dyn Operator,
     cancel: &Cancel,
+    measured: &mut Vec<Measurement>,
 ) -> StepOutcome {
     match &step.kind {
         StepKind::Range {
@@ -35,7 +38,7 @@ pub(super) fn run_step(
             interval,
         } => {
             let r = Reader::new(dev, command, fields).map_err(halt)?;
-            range(&r, (*samples, *interval), (*min, *max), cancel)
+            range(&r, (*samples, *interval), (*min, *max), cancel, measured)
         }
         StepKind::Stable {
             command,
@@ -45,7 +48,7 @@ pub(super) fn run_step(
             interval,
         } => {
             let r = Reader::new(dev, command, fields).map_err(halt)?;
-            stable(&r, (*samples, *interval), *max_spread, cancel)
+            stable(&r, (*samples, *interval), *max_spread, cancel, measured)
         }
         StepKind::Rises {
             action,
@@ -64,7 +67,7 @@ pub(super) fn run_step(
                 samples: *samples,
                 then,
             };
-            rises_step(dev, &r, &rise, cancel)
+            rises_step(dev, &r, &rise, cancel, measured)
         }
         StepKind::Operator {
             prompt,
@@ -86,6 +89,7 @@ fn range(
     (samples, interval): (u32, Duration),
     (min, max): (f64, f64),
     cancel: &Cancel,
+    measured: &mut Vec<Measurement>,
 ) -> StepOutcome {
     r.judge(samples, interval, cancel, |f, values, (lo, hi)| {
         let tol = tolerance(f);
@@ -109,6 +113,14 @@ fn range(
             show(f, min),
             show(f, max)
         );
+        measured.push(Measurement {
+            name: f.ident.clone(),
+            unit: f.unit.clone(),
+            low: Some(min),
+            high: Some(max),
+            value: values.iter().sum::<f64>() / values.len().max(1) as f64,
+            pass: outside == 0,
+        });
         (outside == 0, text)
     })
     .map_err(halt)
@@ -120,6 +132,7 @@ fn stable(
     (samples, interval): (u32, Duration),
     max_spread: f64,
     cancel: &Cancel,
+    measured: &mut Vec<Measurement>,
 ) -> StepOutcome {
     r.judge(samples, interval, cancel, |f, _, (lo, hi)| {
         let spread = hi - lo;
@@ -133,6 +146,14 @@ fn stable(
             show(f, max_spread),
             if ok { "" } else { " TOO NOISY" }
         );
+        measured.push(Measurement {
+            name: format!("{} spread", f.ident),
+            unit: f.unit.clone(),
+            low: None,
+            high: Some(max_spread),
+            value: spread,
+            pass: ok,
+        });
         (ok, text)
     })
     .map_err(halt)
@@ -150,13 +171,19 @@ struct Rise<'a> {
 
 /// Each field rises by at least `min_rise` when the action is on; whatever happened, the `then`
 /// action turns it off again, and its failure halts the run.
-fn rises_step(dev: Device<'_>, r: &Reader, rise: &Rise<'_>, cancel: &Cancel) -> StepOutcome {
-    let measured = rises(r, dev, rise.action, rise.settle, rise.samples, cancel);
+fn rises_step(
+    dev: Device<'_>,
+    r: &Reader,
+    rise: &Rise<'_>,
+    cancel: &Cancel,
+    measured: &mut Vec<Measurement>,
+) -> StepOutcome {
+    let rose = rises(r, dev, rise.action, rise.settle, rise.samples, cancel);
     // Whatever happened, turn it off.
     let stopped = send_action(dev, rise.then);
-    let (pass, detail, halted) = match measured {
+    let (pass, detail, halted) = match rose {
         Ok((before, after)) => {
-            let (pass, detail) = rise_verdict(r, &before, &after, rise.min_rise);
+            let (pass, detail) = rise_verdict(r, &before, &after, rise.min_rise, measured);
             (pass, detail, None)
         }
         Err(h) => (false, String::new(), Some(h)),
@@ -191,7 +218,13 @@ fn rises_step(dev: Device<'_>, r: &Reader, rise: &Rise<'_>, cancel: &Cancel) -> 
 }
 
 /// Each field's rise from its mean `before` to its mean `after`, against `min_rise`.
-fn rise_verdict(r: &Reader, before: &[f64], after: &[f64], min_rise: f64) -> (bool, String) {
+fn rise_verdict(
+    r: &Reader,
+    before: &[f64],
+    after: &[f64],
+    min_rise: f64,
+    measured: &mut Vec<Measurement>,
+) -> (bool, String) {
     verdict(r.fields.iter().zip(before).zip(after).map(|((f, b), a)| {
         let rise = a - b;
         let ok = rise >= min_rise - tolerance(f);
@@ -204,6 +237,14 @@ fn rise_verdict(r: &Reader, before: &[f64], after: &[f64], min_rise: f64) -> (bo
             show(f, min_rise),
             if ok { "" } else { " NO RISE" }
         );
+        measured.push(Measurement {
+            name: format!("{} rise", f.ident),
+            unit: f.unit.clone(),
+            low: Some(min_rise),
+            high: None,
+            value: rise,
+            pass: ok,
+        });
         (ok, text)
     }))
 }

@@ -130,7 +130,8 @@ impl ProvisionPanel {
                         path.display().to_string(),
                     ));
                 }
-                actions.push(job(rt, plan, self.state.clone(), log));
+                let plan_file = Some(PathBuf::from(self.plan_path.trim()));
+                actions.push(job(rt, plan, self.state.clone(), log, plan_file));
             }
         }
         actions
@@ -313,31 +314,57 @@ fn history(ui: &mut egui::Ui, lang: Lang, records: &[Record]) {
         });
 }
 
-fn job(rt: &AppState, plan: Plan, mut state: ProvisionState, log: Option<PathBuf>) -> Action {
+fn job(
+    rt: &AppState,
+    plan: Plan,
+    mut state: ProvisionState,
+    log: Option<PathBuf>,
+    plan_file: Option<PathBuf>,
+) -> Action {
     let profile = rt.device.profile.clone();
+    let mut records = rt.records.clone();
+    let given = crate::ops::records::runs::Given {
+        plan_sha256: plan_file
+            .as_deref()
+            .and_then(crate::ops::records::record::file_sha256),
+        plan_name: plan_file
+            .as_deref()
+            .map(crate::ops::records::runs::plan_name),
+        ..Default::default()
+    };
     Action::StartJob(Job::new(
         Text::new("provision", "烧录"),
         move |client, cancel, sink| {
-            let mut run = Run::new(cancel, |p| sink.progress(p));
-            let record =
-                prov::provision_next(Device::new(client, &profile), &plan, &mut state, &mut run);
-            let log_error = log.as_deref().and_then(|path| {
-                prov::append_csv(path, &record)
-                    .err()
-                    .map(|e| LogError::new(path, &e))
-            });
+            // Run, then record (before the verdict is shown), then the CSV export.
+            let recorded = crate::ops::records::runs::provision(
+                Device::new(client, &profile),
+                &plan,
+                &mut state,
+                &given,
+                &mut Run::new(cancel, |p| sink.progress(p)),
+                &mut records,
+                log.as_deref(),
+            );
+            let (record, kept) = (recorded.outcome, recorded.kept);
+            let log_error = match (recorded.export, log.as_deref()) {
+                (Some(Err(e)), Some(path)) => Some(LogError::new(path, &e)),
+                _ => None,
+            };
             let summary = match &record.result {
                 Outcome::Pass => {
                     let id = record.id.map_or("-".into(), |v| v.to_string());
                     let baud = record.baud.map_or("-".into(), |v| v.to_string());
-                    Ok(Text::new(
-                        format!("PASS: servo {id} at {baud} baud"),
-                        format!("合格:舵机 {id},波特率 {baud}"),
+                    Ok(crate::ui::records::with_note(
+                        Text::new(
+                            format!("PASS: servo {id} at {baud} baud"),
+                            format!("合格:舵机 {id},波特率 {baud}"),
+                        ),
+                        &kept,
                     ))
                 }
                 Outcome::Fail { step, reason } => Err(JobError::StepFailed {
                     step: step.clone(),
-                    reason: reason.clone(),
+                    reason: reason.clone() + &crate::ui::records::note_en(&kept),
                 }),
             };
             send(

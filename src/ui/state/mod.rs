@@ -104,6 +104,8 @@ pub struct AppState {
     pub ctx: eframe::egui::Context,
     /// Whether the system can show a file dialog (looked up once).
     pub dialogs: super::files::Dialogs,
+    /// The production records: where they go, the recorder jobs save through, the report.
+    pub records: super::records::RecordsHandle,
 }
 
 impl AppState {
@@ -123,6 +125,7 @@ impl AppState {
             notice: None,
             ctx: ctx.clone(),
             dialogs: super::files::Dialogs::detect(),
+            records: super::records::RecordsHandle::default(),
         })
     }
 

@@ -32,7 +32,12 @@ where
 
 /// `c` with no user profiles and nothing on standard input.
 fn as_user(mut c: Command) -> Command {
+    // Runs are recorded in the tests' own file and spool, never in the user's (a test that
+    // looks at its records names its own with --records or these variables).
+    let tmp = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
     c.env(botbench::profile::registry::DIR_ENV, no_user_profiles())
+        .env("BOTBENCH_RECORDS", tmp.join("cli-records.sqlite"))
+        .env("BOTBENCH_SPOOL", tmp.join("cli-spool.sqlite"))
         .stdin(Stdio::null());
     c
 }

@@ -27,7 +27,17 @@ pub fn settings(path: &str, profile: &str, panel: PanelId, lang: Lang) -> Settin
         ..Settings::default()
     };
     saved.port_mut().baud = Some(115_200);
+    // Runs are recorded in the tests' own file, never in the user's.
+    saved.files.insert(
+        botbench::ui::settings::FileKind::Records,
+        records_file().display().to_string(),
+    );
     saved
+}
+
+/// The records file the window's tests record their runs in.
+pub fn records_file() -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-records.sqlite")
 }
 
 /// The app on the window cleaner at `port`, showing `panel`, in English, with the protocol's own

@@ -124,6 +124,12 @@ pub struct Record {
     pub mismatches: Vec<String>,
     /// The plan's recorded parameters, in display units (`None` when not read).
     pub recorded: Vec<(String, Option<String>)>,
+    /// Each step begun, with when (ms since 1970 UTC), in order: the records' step times.
+    #[serde(skip)]
+    pub timeline: Vec<(String, i64)>,
+    /// Each parameter written, in the step that wrote it, with its value before and after.
+    #[serde(skip)]
+    pub writes: Vec<(String, crate::ops::records::ParamWrite)>,
 }
 
 /// Why a step failed: its reason, with the servo's id and baud rate when it went silent.
@@ -184,6 +190,8 @@ pub fn provision_next(
         result: Outcome::Pass,
         mismatches: Vec::new(),
         recorded: plan.record.iter().map(|r| (r.clone(), None)).collect(),
+        timeline: Vec::new(),
+        writes: Vec::new(),
     };
     match plan.resolve(dev.profile) {
         Ok(resolved) => steps(dev, plan, &resolved, state, run, &mut record),
@@ -212,8 +220,11 @@ fn steps(
         run,
         done: 0,
         total: 6 + resolved.writes.len() as u64,
+        timeline: Vec::new(),
     };
-    if let Err((step, why)) = p.steps(state, record) {
+    let outcome = p.steps(state, record);
+    record.timeline = std::mem::take(&mut p.timeline);
+    if let Err((step, why)) = outcome {
         fail(record, step, why);
     }
 }

@@ -4,6 +4,7 @@
 //! its first failure, which names the step ([`Failure`]).
 
 use super::{ProvisionState, Record, Resolved, find_fresh, reason, search_order, step};
+use crate::ops::records::ParamWrite;
 use crate::ops::servo::{self, Presence, switch};
 use crate::ops::{Cancel, Device, OpError, Progress, Run};
 use crate::profile::{Input, Param, Value};
@@ -25,11 +26,15 @@ pub(super) struct Provisioning<'a, 'r> {
     /// Steps reported so far, of `total`.
     pub(super) done: u64,
     pub(super) total: u64,
+    /// Each step begun, with when (ms since 1970 UTC): the records' step times.
+    pub(super) timeline: Vec<(String, i64)>,
 }
 
 impl Provisioning<'_, '_> {
     /// Reports `step` (with `detail`) as under way; refuses to go on once cancelled.
     fn at(&mut self, step: &'static str, detail: String) -> Result<(), Failure> {
+        self.timeline
+            .push((step.to_string(), crate::ops::records::record::now_ms()));
         let said = step::said(step);
         let message = if detail.is_empty() {
             said
@@ -67,6 +72,16 @@ impl Provisioning<'_, '_> {
         record.serial = Some(serial);
         let id = self.assign_id(state, fresh, baud)?;
         record.id = Some(id);
+        record.writes.push((
+            step::ASSIGN_ID.into(),
+            ParamWrite {
+                name: "id".into(),
+                unit: String::new(),
+                value: id.to_string(),
+                before: Some(fresh.to_string()),
+                after: Some(id.to_string()),
+            },
+        ));
         self.set_baud(id, baud, record)?;
         let apply_mismatch = self.apply(id, record)?;
         self.verify(id, serial, record, apply_mismatch)?;
@@ -189,6 +204,16 @@ impl Provisioning<'_, '_> {
         let now = servo::set_baud(self.dev, id, self.resolved.option)
             .map_err(|e| fail(reason(&e, id, target)))?;
         record.baud = Some(now);
+        record.writes.push((
+            step::SET_BAUD.into(),
+            ParamWrite {
+                name: "baud".into(),
+                unit: "baud".into(),
+                value: target.to_string(),
+                before: Some(baud.to_string()),
+                after: Some(now.to_string()),
+            },
+        ));
         Ok(())
     }
 
@@ -199,9 +224,22 @@ impl Provisioning<'_, '_> {
         for &(param, raw) in &self.resolved.writes {
             let ident = &param.field.ident;
             self.at(step::APPLY, ident.clone())?;
+            let before = servo::read_param(self.dev, id, param)
+                .ok()
+                .map(|v| param.field.format(&Value::Int(v)));
+            let written = |check: &crate::ops::Check| ParamWrite {
+                name: ident.clone(),
+                unit: param.field.unit.clone(),
+                value: param.field.format(&check.written),
+                before: before.clone(),
+                after: Some(param.field.format(&check.read)),
+            };
             match servo::write_param(self.dev, id, param, Input::Raw(Value::Int(raw))) {
-                Ok(check) if check.ok() => {}
+                Ok(check) if check.ok() => {
+                    record.writes.push((step::APPLY.into(), written(&check)));
+                }
                 Ok(check) => {
+                    record.writes.push((step::APPLY.into(), written(&check)));
                     apply_mismatch = true;
                     record
                         .mismatches

@@ -1,0 +1,381 @@
+//! Run, then record: the self-test, the servo provisioning and preset apply, each run, turned
+//! into a [`Record`], saved by the [`Recorder`] and exported to its log (the self-test's JSON
+//! lines, the provisioning CSV), in that order, before the caller shows the verdict. The
+//! command line and the window both call these.
+
+use super::record::{ParamWrite, Record, RunKind, SerialSource, StepClock, StepRecord, Verdict};
+use super::recorder::{Keeper, Kept};
+use crate::ops::selftest::{self, Operator, Report, StepResult};
+use crate::ops::servo::provision::{self, Outcome, ProvisionState};
+use crate::ops::{Check, Device, OpError, Run};
+use crate::preset::Preset;
+use std::path::Path;
+
+/// What is known of a run before it starts.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Given {
+    /// The unit's serial number and how it was obtained (typed with `--serial`, scanned at
+    /// the station); `None` when the device tells it or nobody knows it.
+    pub serial: Option<(String, SerialSource)>,
+    /// SHA-256 of the plan or preset file (lower-case hex), see
+    /// [`super::record::file_sha256`].
+    pub plan_sha256: Option<String>,
+    /// The plan's or preset's name in the record, where the plan has none of its own (a
+    /// provisioning plan, a preset): its file's name, see [`plan_name`].
+    pub plan_name: Option<String>,
+}
+
+/// A run's outcome with its record and where the record went.
+#[derive(Debug)]
+pub struct Recorded<T> {
+    /// What the operation returned.
+    pub outcome: T,
+    /// The record saved.
+    pub record: Record,
+    /// Where it was kept.
+    pub kept: Kept,
+    /// The export log's result, when one was asked: `Err` says why the line was not appended.
+    pub export: Option<std::io::Result<()>>,
+}
+
+impl<T> Recorded<T> {
+    /// Whether the run passed.
+    pub fn pass(&self) -> bool {
+        self.record.verdict == Verdict::Pass
+    }
+}
+
+fn with_serial(record: &mut Record, given: &Given) {
+    if let Some((serial, source)) = &given.serial {
+        record.unit.serial = Some(serial.clone());
+        record.unit.serial_source = Some(*source);
+    }
+}
+
+/// Runs the self-test `plan` ([`selftest::run_each`]), records it and appends it to the JSON
+/// lines `log` when given.
+#[allow(clippy::too_many_arguments)]
+pub fn selftest(
+    dev: Device<'_>,
+    plan: &selftest::Plan,
+    given: &Given,
+    operator: &mut dyn Operator,
+    run: &mut Run<'_>,
+    each: &mut dyn FnMut(&StepResult),
+    recorder: &mut dyn Keeper,
+    log: Option<&Path>,
+) -> Recorded<Report> {
+    let report = selftest::run_each(dev, plan, operator, run, each);
+    let mut record = selftest_record(&report, given);
+    let kept = recorder.keep(&mut record);
+    let export = log.map(|path| selftest::append_log(path, &report));
+    Recorded {
+        outcome: report,
+        record,
+        kept,
+        export,
+    }
+}
+
+/// A self-test report as a record.
+pub fn selftest_record(report: &Report, given: &Given) -> Record {
+    let mut r = Record::start(
+        RunKind::Selftest,
+        &report.plan,
+        given.plan_sha256.clone(),
+        &report.profile,
+    );
+    r.started_ms = chrono::DateTime::parse_from_rfc3339(&report.started)
+        .map(|t| t.timestamp_millis())
+        .unwrap_or(r.started_ms);
+    with_serial(&mut r, given);
+    if let Some(info) = &report.device_info {
+        r.unit.hardware = Some(format!("{:#04x}", info.hw));
+        r.unit.firmware = Some(info.firmware.clone());
+        r.unit.build = Some(match &info.build_date {
+            Some(d) => format!("{} ({d})", info.build),
+            None => info.build.to_string(),
+        });
+    }
+    r.steps = report
+        .results
+        .iter()
+        .map(|s| StepRecord {
+            name: s.name.clone(),
+            kind: s.kind.clone(),
+            started_ms: s.started_ms,
+            duration_ms: s.duration_ms,
+            verdict: Verdict::of(s.pass),
+            reason: (!s.pass).then(|| selftest_reason(s)),
+            detail: s.detail.clone(),
+            measurements: s.measurements.clone(),
+            writes: Vec::new(),
+        })
+        .collect();
+    let aborted = report.aborted.as_ref().map(|a| {
+        let step = r
+            .steps
+            .last()
+            .map_or_else(|| "safe state".to_string(), |s| s.name.clone());
+        (step, a.clone())
+    });
+    r.finish(aborted);
+    r.ended_ms = r.started_ms + report.duration_ms as i64;
+    r
+}
+
+/// A failed self-test step's reason, the same words for the same cause on every unit (the
+/// values are in its measurements and detail): `out of limits: batteryVoltage`, `link lost`.
+fn selftest_reason(s: &StepResult) -> String {
+    let failed: Vec<&str> = s
+        .measurements
+        .iter()
+        .filter(|m| !m.pass)
+        .map(|m| m.name.as_str())
+        .collect();
+    if !failed.is_empty() {
+        return format!("out of limits: {}", failed.join(", "));
+    }
+    let head = |d: &str| d.split([';', '(']).next().unwrap_or(d).trim().to_string();
+    match s.kind.as_str() {
+        "Reads" if s.detail.contains("WRONG") || s.detail.contains("missing") => {
+            let wrong: Vec<&str> = s
+                .detail
+                .split(", ")
+                .filter(|p| p.contains("WRONG") || p.contains("missing"))
+                .filter_map(|p| p.split(' ').next())
+                .collect();
+            format!("unexpected value: {}", wrong.join(", "))
+        }
+        "Operator" if s.detail.contains("never") => format!(
+            "not toggled: {}",
+            s.detail.split_whitespace().next().unwrap_or_default()
+        ),
+        _ => {
+            let d = s.detail.split(": ").next().unwrap_or(&s.detail);
+            if s.detail.starts_with("link lost") || s.detail.starts_with("cancel") {
+                head(d)
+            } else {
+                head(&s.detail)
+            }
+        }
+    }
+}
+
+/// Provisions the next fresh servo ([`provision::provision_next`]), records it (the serial
+/// read from the servo) and appends it to the CSV `log` when given.
+pub fn provision(
+    dev: Device<'_>,
+    plan: &provision::Plan,
+    state: &mut ProvisionState,
+    given: &Given,
+    run: &mut Run<'_>,
+    recorder: &mut dyn Keeper,
+    log: Option<&Path>,
+) -> Recorded<provision::Record> {
+    let started = StepClock::start();
+    let mut record = Record::start(
+        RunKind::Provision,
+        given.plan_name.as_deref().unwrap_or("servo provisioning"),
+        given.plan_sha256.clone(),
+        &dev.profile.id,
+    );
+    let outcome = provision::provision_next(dev, plan, state, run);
+    provision_into(&mut record, &outcome, given, &started);
+    let kept = recorder.keep(&mut record);
+    let export = log.map(|path| provision::append_csv(path, &outcome));
+    Recorded {
+        outcome,
+        record,
+        kept,
+        export,
+    }
+}
+
+/// The provisioning plan's name in records: its file's name.
+pub fn plan_name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.display().to_string())
+}
+
+/// Fills `r` from a provisioning outcome: the servo's serial (read from it), its recorded
+/// firmware version and type, each step with its time, and the writes.
+pub fn provision_into(r: &mut Record, p: &provision::Record, given: &Given, started: &StepClock) {
+    with_serial(r, given);
+    if let Some(serial) = p.serial {
+        r.unit.serial = Some(serial.to_string());
+        r.unit.serial_source = Some(SerialSource::Device);
+    }
+    for (name, value) in &p.recorded {
+        match name.as_str() {
+            "firmware_version" => r.unit.firmware.clone_from(value),
+            "servo_type" => r.unit.hardware.clone_from(value),
+            _ => {}
+        }
+    }
+    let end = super::record::now_ms();
+    let failed = match &p.result {
+        Outcome::Pass => None,
+        Outcome::Fail { step, reason } => Some((step.clone(), reason.clone())),
+    };
+    let timeline: Vec<(String, i64)> = if p.timeline.is_empty() {
+        // Refused before any step (the plan): one step, the plan.
+        vec![(
+            provision::step::PLAN.to_string(),
+            started.end("", "", None, String::new()).started_ms,
+        )]
+    } else {
+        p.timeline.clone()
+    };
+    // A step named twice (apply params, once per parameter) is one step from its first start.
+    let mut steps: Vec<(String, i64)> = Vec::new();
+    for (name, at) in timeline {
+        if steps.last().is_none_or(|(n, _)| *n != name) {
+            steps.push((name, at));
+        }
+    }
+    let mut out = Vec::new();
+    for (i, (name, at)) in steps.iter().enumerate() {
+        let next = steps.get(i + 1).map_or(end, |(_, t)| *t);
+        let reason = failed
+            .as_ref()
+            .filter(|(step, _)| step == name)
+            .map(|(_, reason)| reason.clone());
+        let detail = reason.clone().unwrap_or_default();
+        out.push(StepRecord {
+            name: name.clone(),
+            kind: "Provision".into(),
+            started_ms: *at,
+            duration_ms: (next - at).max(0),
+            verdict: Verdict::of(reason.is_none()),
+            reason,
+            detail,
+            measurements: Vec::new(),
+            writes: p
+                .writes
+                .iter()
+                .filter(|(s, _)| s == name)
+                .map(|(_, w)| w.clone())
+                .collect(),
+        });
+    }
+    if let Some((step, reason)) = &failed
+        && !out.iter().any(|s| &s.name == step)
+    {
+        out.push(StepRecord {
+            name: step.clone(),
+            kind: "Provision".into(),
+            started_ms: end,
+            duration_ms: 0,
+            verdict: Verdict::Fail,
+            reason: Some(reason.clone()),
+            detail: reason.clone(),
+            measurements: Vec::new(),
+            writes: Vec::new(),
+        });
+    }
+    if !p.mismatches.is_empty()
+        && let Some(s) = out.iter_mut().find(|s| s.verdict == Verdict::Fail)
+    {
+        s.detail = format!("{}: {}", s.detail, p.mismatches.join("; "));
+    }
+    r.steps = out;
+    r.finish(None);
+}
+
+/// Applies `preset` with read-back ([`crate::ops::preset::apply_each`]) after reading what the
+/// device held, and records each command written as a step with its fields before and after.
+/// The run fails on an error (the record too) or a field that does not read back as written.
+pub fn preset_apply(
+    dev: Device<'_>,
+    preset: &Preset,
+    given: &Given,
+    run: &mut Run<'_>,
+    written: &mut dyn FnMut(&str, &[Check]),
+    recorder: &mut dyn Keeper,
+) -> Recorded<Result<Vec<Check>, OpError>> {
+    let profile = dev.profile;
+    let mut record = Record::start(
+        RunKind::PresetApply,
+        given.plan_name.as_deref().unwrap_or("preset"),
+        given.plan_sha256.clone(),
+        &profile.id,
+    );
+    with_serial(&mut record, given);
+    if profile.protocol == crate::profile::Protocol::Msp
+        && let Ok(info) = crate::ops::device::identify(dev.client)
+    {
+        record.unit.hardware = Some(format!("{:#04x}", info.hw));
+        record.unit.firmware = Some(info.firmware.clone());
+        record.unit.build = Some(info.build.to_string());
+    }
+    let mut clock = StepClock::start();
+    let before = crate::ops::preset::read_device(dev, &mut Run::quiet(run.cancel_flag()));
+    let before = match before {
+        Ok(b) => {
+            record
+                .steps
+                .push(clock.end("read before", "Read", None, String::new()));
+            b
+        }
+        Err(e) => {
+            record
+                .steps
+                .push(clock.end("read before", "Read", Some(e.to_string()), e.to_string()));
+            record.finish(None);
+            let kept = recorder.keep(&mut record);
+            return Recorded {
+                outcome: Err(e),
+                record,
+                kept,
+                export: None,
+            };
+        }
+    };
+    let mut all = Vec::new();
+    clock = StepClock::start();
+    let outcome = crate::ops::preset::apply_each(dev, preset, run, &mut |command, checks| {
+        written(command, checks);
+        all.extend_from_slice(checks);
+        let set = profile.command(command);
+        let field = |ident: &str| set.and_then(|s| s.request.iter().find(|f| f.ident == ident));
+        let held = before.iter().find(|v| v.command == command);
+        let writes: Vec<ParamWrite> = checks
+            .iter()
+            .map(|c| {
+                let show = |v| field(&c.field).map_or_else(|| format!("{v:?}"), |f| f.format(v));
+                ParamWrite {
+                    name: format!("{command}.{}", c.field),
+                    unit: field(&c.field).map(|f| f.unit.clone()).unwrap_or_default(),
+                    value: show(&c.written),
+                    before: held.and_then(|h| h.get(&c.field).map(str::to_string)),
+                    after: Some(show(&c.read)),
+                }
+            })
+            .collect();
+        let bad: Vec<&str> = checks
+            .iter()
+            .filter(|c| !c.ok())
+            .map(|c| c.field.as_str())
+            .collect();
+        let reason = (!bad.is_empty()).then(|| format!("read back differs: {}", bad.join(", ")));
+        let mut step = clock.end(command, "Write", reason.clone(), reason.unwrap_or_default());
+        step.writes = writes;
+        record.steps.push(step);
+        clock = StepClock::start();
+    });
+    let aborted = match &outcome {
+        Ok(()) if run.is_cancelled() => Some(("apply".to_string(), "cancelled".to_string())),
+        Ok(()) => None,
+        Err(e) => Some(("apply".to_string(), e.to_string())),
+    };
+    record.finish(aborted);
+    let kept = recorder.keep(&mut record);
+    Recorded {
+        outcome: outcome.map(|()| all),
+        record,
+        kept,
+        export: None,
+    }
+}

@@ -1,0 +1,58 @@
+//! The Yield view (issue 28): the window shows the records' report as `botbench report` gives
+//! it, in both languages, and takes the records' location from its setting.
+
+use crate::records::hand_set;
+use crate::support::gui::{app, harness, settings, step_until};
+use botbench::i18n::Lang;
+use botbench::ops::records::SqliteStore;
+use botbench::ui::PanelId;
+use botbench::ui::settings::FileKind;
+use egui_kittest::kittest::Queryable;
+
+fn hand_records(dir: &std::path::Path) -> String {
+    let path = dir.join("yield.sqlite");
+    let mut store = SqliteStore::open(&path).unwrap();
+    for r in hand_set() {
+        store.insert(&r).unwrap();
+    }
+    path.display().to_string()
+}
+
+#[test]
+fn the_yield_view_shows_the_hand_sets_yields_in_both_languages() {
+    let dir = crate::support::temp_dir();
+    let records = hand_records(dir.path());
+    for (lang, fpy, units) in [
+        (Lang::En, "first-pass yield", "units"),
+        (Lang::Zh, "直通率", "台数"),
+    ] {
+        let mut saved = settings(
+            "/dev/botbench-no-port",
+            "window-cleaner",
+            PanelId::Yield,
+            lang,
+        );
+        saved.files.insert(FileKind::Records, records.clone());
+        let mut h = harness(saved, botbench::link::PortOpener::system());
+        // The view covers the last 7 days by default: the hand set is older, so all records.
+        step_until(&mut h, "the view drawn", |a| {
+            a.settings.panel == PanelId::Yield
+        });
+        crate::support::gui::app_mut(&mut h).yield_view.period =
+            botbench::ui::yield_view::Period::All;
+        step_until(
+            &mut h,
+            "the report of every record",
+            |a| matches!(a.state.records.report(), (Some(Ok(r)), false) if r.overall.units == 5),
+        );
+        h.run_steps(3);
+        // Five units: 40 % first-pass, 60 % final (worked out by hand in records.rs).
+        for text in ["40.0 %", "60.0 %", fpy, units, "A", "B"] {
+            assert!(
+                h.query_all_by_label(text).next().is_some(),
+                "{lang:?}: no '{text}' on the Yield view"
+            );
+        }
+        assert!(app(&h).state.records.error().is_none());
+    }
+}
