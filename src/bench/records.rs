@@ -9,7 +9,7 @@ use super::Figure;
 use crate::ops::records::demo;
 use crate::ops::records::report::{self, Query};
 use crate::ops::records::sql::{Lite, Pg};
-use crate::ops::records::{Record, SqliteStore, Store, schema, write};
+use crate::ops::records::{Record, SqliteStore, schema, write};
 use std::io::Write;
 use std::time::Instant;
 
@@ -64,19 +64,35 @@ pub(super) fn records_report() -> Result<Vec<Figure>, String> {
     Ok(out)
 }
 
+/// Where the SQLite case keeps its generated file between runs when set (generated there once);
+/// otherwise a temporary file.
+pub const SQLITE_FILE_ENV: &str = "BOTBENCH_BENCH_RECORDS_FILE";
+
 fn sqlite() -> Result<Figure, String> {
     let dir = tempfile::tempdir().map_err(|e| e.to_string())?;
-    let mut store =
-        SqliteStore::open(&dir.path().join("bench.sqlite")).map_err(|e| e.to_string())?;
+    let path = match std::env::var(SQLITE_FILE_ENV) {
+        Ok(p) if !p.trim().is_empty() => std::path::PathBuf::from(p),
+        _ => dir.path().join("bench.sqlite"),
+    };
+    let mut store = SqliteStore::open(&path).map_err(|e| e.to_string())?;
     let loaded = Instant::now();
-    let steps = generate(&mut |batch| {
-        let conn = store.connection();
-        let tx = conn.transaction().map_err(|e| e.to_string())?;
-        for r in batch {
-            write::insert(&mut Lite(&tx), r).map_err(|e| e.to_string())?;
-        }
-        tx.commit().map_err(|e| e.to_string())
-    })?;
+    let kept = store.count().map_err(|e| e.to_string())? > 0;
+    let steps = if kept {
+        let n: i64 = store
+            .connection()
+            .query_row("SELECT COUNT(*) FROM steps", [], |r| r.get(0))
+            .map_err(|e| e.to_string())?;
+        n as u64
+    } else {
+        generate(&mut |batch| {
+            let conn = store.connection();
+            let tx = conn.transaction().map_err(|e| e.to_string())?;
+            for r in batch {
+                write::insert(&mut Lite(&tx), r).map_err(|e| e.to_string())?;
+            }
+            tx.commit().map_err(|e| e.to_string())
+        })?
+    };
     store
         .connection()
         .execute_batch("ANALYZE")
@@ -86,17 +102,9 @@ fn sqlite() -> Result<Figure, String> {
     let mut summary = String::new();
     for _ in 0..RUNS {
         let t = Instant::now();
-        let mut r = None;
-        store
-            .read(&mut |db| {
-                r = Some(report::compute(db, &Query::default(), "bench")?);
-                Ok(())
-            })
-            .map_err(|e| e.to_string())?;
+        let r = report::of_store(&mut store, &Query::default()).map_err(|e| e.to_string())?;
         times.push(t.elapsed().as_secs_f64());
-        if let Some(r) = r {
-            summary = said(&r);
-        }
+        summary = said(&r);
     }
     let size = std::fs::metadata(store.path())
         .map(|m| m.len())
@@ -115,13 +123,19 @@ fn sqlite() -> Result<Figure, String> {
 }
 
 fn said(r: &report::Report) -> String {
+    let phases: Vec<String> = r
+        .phases
+        .iter()
+        .map(|(name, s)| format!("{name} {s:.3}"))
+        .collect();
     format!(
-        "{} units, first-pass {:.1} %, final {:.1} %, {} measurements, {} drifting",
+        "{} units, first-pass {:.1} %, final {:.1} %, {} measurements, {} drifting; last report's parts (s): {}",
         r.overall.units,
         100.0 * r.overall.fpy(),
         100.0 * r.overall.final_yield(),
         r.measurements.len(),
-        r.measurements.iter().filter(|m| m.drift.is_some()).count()
+        r.measurements.iter().filter(|m| m.drift.is_some()).count(),
+        phases.join(", ")
     )
 }
 
@@ -285,8 +299,21 @@ fn postgres(url: &str) -> Result<Figure, String> {
         let mut summary = String::new();
         for _ in 0..RUNS {
             let t = Instant::now();
-            let r = report::compute(&mut Pg(&mut client), &Query::default(), "bench")
-                .map_err(|e| e.to_string())?;
+            // The yields on a second connection, in the same schema, as `of_store` does.
+            let (url, schema_name) = (url.to_string(), schema_name.clone());
+            let second: crate::ops::records::sql::Opener = Box::new(move || {
+                let mut c = postgres::Client::connect(&url, postgres::NoTls)?;
+                c.batch_execute(&format!("SET search_path TO {schema_name}"))?;
+                Ok(Box::new(crate::ops::records::sql::OwnedPg(c))
+                    as Box<dyn crate::ops::records::sql::Db + Send>)
+            });
+            let r = report::compute_with(
+                &mut Pg(&mut client),
+                Some(second),
+                &Query::default(),
+                "bench",
+            )
+            .map_err(|e| e.to_string())?;
             times.push(t.elapsed().as_secs_f64());
             summary = said(&r);
         }

@@ -43,18 +43,7 @@ pub(crate) fn run(args: ReportArgs) -> CliResult {
         drift_window: args.drift_window as usize,
         bins: 20,
     };
-    let source = recorder.place();
-    let mut out = None;
-    recorder
-        .store()
-        .read(&mut |db| {
-            out = Some(report::compute(db, &q, &source)?);
-            Ok(())
-        })
-        .map_err(read_error)?;
-    let Some(mut r) = out else {
-        return Err(CliError::device("the report was not computed"));
-    };
+    let mut r = report::of_store(recorder.store(), &q).map_err(read_error)?;
     r.waiting = recorder.waiting();
     if args.json {
         println!("{}", serde_json::to_string(&r).unwrap_or_default());

@@ -199,17 +199,7 @@ fn compute(setting: Option<&str>, query: &Query) -> Result<Report, String> {
         return Err(format!("no records yet in {}", p.display()));
     }
     let mut store = records::store::open(&location).map_err(|e| e.to_string())?;
-    let place = store.place();
-    let mut out = None;
-    store
-        .read(&mut |db| {
-            out = Some(report::compute(db, query, &place)?);
-            Ok(())
-        })
-        .map_err(|e| e.to_string())?;
-    let mut r = out.ok_or_else(|| "the report was not computed".to_string())?;
-    r.waiting = store.waiting();
-    Ok(r)
+    report::of_store(store.as_mut(), query).map_err(|e| e.to_string())
 }
 
 /// A job's summary with what became of its record: unchanged when it was stored, else with

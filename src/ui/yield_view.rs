@@ -429,7 +429,17 @@ fn pareto_plot(ui: &mut egui::Ui, lang: Lang, steps: &[ParetoStep]) {
         .include_y(-0.5)
         .include_y(n as f64 - 0.5)
         .y_axis_min_width(name_width)
-        .y_grid_spacer(move |_| integer_marks(n, 1))
+        // Every step named: marks one apart, each given the weight of the whole axis so that
+        // egui_plot does not fade its label as it does a fine grid's.
+        .y_grid_spacer(move |_| {
+            integer_marks(n, 1)
+                .into_iter()
+                .map(|m| GridMark {
+                    step_size: n.max(1) as f64,
+                    ..m
+                })
+                .collect()
+        })
         .y_axis_formatter(move |mark, _| {
             let i = mark.value.round();
             if (mark.value - i).abs() < 1e-6 && i >= 0.0 {

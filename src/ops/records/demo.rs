@@ -219,6 +219,10 @@ fn unit_run(
         if *m == "fanCurrent" {
             value += fan_drift;
         }
+        if m.ends_with("spread") {
+            // A spread is never below zero.
+            value = value.abs();
+        }
         if bad == Some(i) {
             value = match (low, high) {
                 (_, Some(h)) => h + sigma.max(0.05) * (1.0 + rng.unit()),

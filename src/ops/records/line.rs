@@ -196,6 +196,17 @@ impl Store for LineStore {
         self.last_error.clone()
     }
 
+    fn reader(&self) -> Option<super::sql::Opener> {
+        let url = self.url.clone();
+        Some(Box::new(move || {
+            let mut config: postgres::Config = url.parse()?;
+            config.connect_timeout(CONNECT_TIMEOUT);
+            config.application_name("botbench report");
+            let client = config.connect(postgres::NoTls)?;
+            Ok(Box::new(super::sql::OwnedPg(client)) as Box<dyn Db + Send>)
+        }))
+    }
+
     fn read(
         &mut self,
         f: &mut dyn FnMut(&mut dyn Db) -> Result<(), DbError>,

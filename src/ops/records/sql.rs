@@ -301,6 +301,56 @@ impl<C: postgres::GenericClient> Db for Pg<'_, C> {
     }
 }
 
+/// A SQLite connection of its own, as a [`Db`] another thread can take.
+pub struct OwnedLite(pub rusqlite::Connection);
+
+impl Db for OwnedLite {
+    fn dialect(&self) -> Dialect {
+        Dialect::Sqlite
+    }
+    fn exec(&mut self, sql: &str, params: &[Val]) -> Result<u64, DbError> {
+        Lite(&self.0).exec(sql, params)
+    }
+    fn rows(&mut self, sql: &str, params: &[Val]) -> Result<Vec<Vec<Val>>, DbError> {
+        Lite(&self.0).rows(sql, params)
+    }
+    fn each_row(
+        &mut self,
+        sql: &str,
+        params: &[Val],
+        each: &mut dyn FnMut(Vec<Val>) -> Result<(), DbError>,
+    ) -> Result<(), DbError> {
+        Lite(&self.0).each_row(sql, params, each)
+    }
+}
+
+/// A PostgreSQL client of its own, as a [`Db`] another thread can take.
+pub struct OwnedPg(pub postgres::Client);
+
+impl Db for OwnedPg {
+    fn dialect(&self) -> Dialect {
+        Dialect::Postgres
+    }
+    fn exec(&mut self, sql: &str, params: &[Val]) -> Result<u64, DbError> {
+        Pg(&mut self.0).exec(sql, params)
+    }
+    fn rows(&mut self, sql: &str, params: &[Val]) -> Result<Vec<Vec<Val>>, DbError> {
+        Pg(&mut self.0).rows(sql, params)
+    }
+    fn each_row(
+        &mut self,
+        sql: &str,
+        params: &[Val],
+        each: &mut dyn FnMut(Vec<Val>) -> Result<(), DbError>,
+    ) -> Result<(), DbError> {
+        Pg(&mut self.0).each_row(sql, params, each)
+    }
+}
+
+/// Opens a second connection to the same records, on the thread that uses it: the report
+/// computes its yields there beside the rest.
+pub type Opener = Box<dyn FnOnce() -> Result<Box<dyn Db + Send>, DbError> + Send>;
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -320,6 +320,11 @@ pub trait Store: Send {
     fn last_error(&self) -> Option<RecordsError> {
         None
     }
+    /// A second connection for reading beside [`Store::read`] (the report's yields), if the
+    /// store can open one.
+    fn reader(&self) -> Option<super::sql::Opener> {
+        None
+    }
     /// Forwards what waits in the spool now (the server tried even if it failed lately); the
     /// number still waiting.
     fn forward(&mut self) -> Result<u64, RecordsError>;
@@ -474,6 +479,19 @@ impl Store for SqliteStore {
 
     fn forward(&mut self) -> Result<u64, RecordsError> {
         Ok(0)
+    }
+
+    fn reader(&self) -> Option<super::sql::Opener> {
+        let path = self.path.clone();
+        Some(Box::new(move || {
+            let conn = rusqlite::Connection::open_with_flags(
+                &path,
+                rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY,
+            )?;
+            conn.busy_timeout(Duration::from_secs(10))?;
+            conn.execute_batch("PRAGMA temp_store = MEMORY; PRAGMA cache_size = -65536;")?;
+            Ok(Box::new(super::sql::OwnedLite(conn)) as Box<dyn Db + Send>)
+        }))
     }
 
     fn read(

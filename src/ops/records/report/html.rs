@@ -256,6 +256,7 @@ fn yield_plot(rows: &[Yield]) -> String {
                 }
             })
             .y_desc("%")
+            .y_label_formatter(&|y| format!("{y:.0}"))
             .disable_x_mesh()
             .draw()
             .map_err(|e| e.to_string())?;
@@ -314,12 +315,14 @@ fn pareto_plot(steps: &[ParetoStep]) -> String {
                 }
             })
             .y_desc("failures")
+            .y_label_formatter(&|y| format!("{y:.0}"))
             .disable_x_mesh()
             .draw()
             .map_err(|e| e.to_string())?;
         chart
             .configure_secondary_axes()
             .y_desc("cumulative %")
+            .y_label_formatter(&|y| format!("{y:.0}"))
             .draw()
             .map_err(|e| e.to_string())?;
         chart

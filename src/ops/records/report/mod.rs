@@ -177,6 +177,9 @@ pub struct Report {
     pub measurements: Vec<MeasurementStats>,
     /// Records waiting in this PC's spool, not in the report.
     pub waiting: u64,
+    /// How long each part took to compute, seconds (for the benchmark).
+    #[serde(skip)]
+    pub phases: Vec<(&'static str, f64)>,
 }
 
 fn int(row: &[Val], i: usize) -> i64 {
@@ -193,9 +196,70 @@ fn text(row: &[Val], i: usize) -> String {
 
 /// Computes the report over `db`.
 pub fn compute(db: &mut dyn Db, q: &Query, source: &str) -> Result<Report, DbError> {
-    let (yields, overall) = yields(db, q)?;
-    let (pareto, causes) = pareto(db, &q.filter)?;
-    let measurements = measurements(db, q)?;
+    compute_with(db, None, q, source)
+}
+
+/// The report of `store` (its yields on a second connection beside the rest, where the store
+/// can open one), with the records waiting in its spool. Errors name the file or server.
+pub fn of_store(store: &mut dyn super::Store, q: &Query) -> Result<Report, super::RecordsError> {
+    let source = store.place();
+    let mut second = store.reader();
+    let mut out = None;
+    store.read(&mut |db| {
+        out = Some(compute_with(db, second.take(), q, &source)?);
+        Ok(())
+    })?;
+    let mut r = out.ok_or_else(|| super::RecordsError::Database {
+        place: source.clone(),
+        why: "the report was not computed".into(),
+    })?;
+    r.waiting = store.waiting();
+    Ok(r)
+}
+
+/// [`compute`], the yields computed on `second`'s connection (a thread of its own,
+/// `report-yields`) while `db` computes the rest: on two cores the report takes as long as the
+/// longer part, not both.
+pub fn compute_with(
+    db: &mut dyn Db,
+    second: Option<super::sql::Opener>,
+    q: &Query,
+    source: &str,
+) -> Result<Report, DbError> {
+    let mut phases = Vec::new();
+    let mut clock = std::time::Instant::now();
+    let mut lap = |name: &'static str, phases: &mut Vec<(&'static str, f64)>| {
+        phases.push((name, clock.elapsed().as_secs_f64()));
+        clock = std::time::Instant::now();
+    };
+    let (yields, overall, pareto, causes, measurements) = std::thread::scope(|scope| {
+        let beside = second.and_then(|open| {
+            let q = q.clone();
+            std::thread::Builder::new()
+                .name("report-yields".into())
+                .spawn_scoped(scope, move || {
+                    let started = std::time::Instant::now();
+                    let mut db = open()?;
+                    yields(db.as_mut(), &q).map(|y| (y, started.elapsed().as_secs_f64()))
+                })
+                .ok()
+        });
+        let (pareto, causes) = pareto(db, &q.filter)?;
+        lap("pareto", &mut phases);
+        let measurements = measurements(db, q, &mut phases)?;
+        lap("measurements", &mut phases);
+        let ((yields, overall), took) = match beside {
+            Some(h) => h
+                .join()
+                .map_err(|_| DbError::Shape("the report's yield thread failed".into()))??,
+            None => {
+                let t = std::time::Instant::now();
+                (yields(db, q)?, t.elapsed().as_secs_f64())
+            }
+        };
+        phases.push(("yields", took));
+        Ok::<_, DbError>((yields, overall, pareto, causes, measurements))
+    })?;
     let pick = |dim: &str| -> Vec<Yield> {
         yields
             .iter()
@@ -227,44 +291,105 @@ pub fn compute(db: &mut dyn Db, q: &Query, source: &str) -> Result<Report, DbErr
         causes,
         measurements,
         waiting: 0,
+        phases,
     })
 }
 
-/// The yields by every dimension, in one statement over the filtered runs.
+/// A combination of the groups a run belongs to: shift key, station, host, slot, plan, plan
+/// hash (as stored; labelled when the dimensions are made).
+type Groups = (
+    i64,
+    Option<String>,
+    String,
+    Option<String>,
+    String,
+    Option<String>,
+);
+
+/// Units (first runs), runs, first passes and final passes of one combination of groups.
+#[derive(Default, Clone, Copy)]
+struct Counts {
+    units: u64,
+    runs: u64,
+    first_pass: u64,
+    final_pass: u64,
+}
+
+fn groups_of(row: &[Val], at: usize) -> Groups {
+    (
+        int(row, at),
+        row.get(at + 1).and_then(Val::text),
+        text(row, at + 2),
+        row.get(at + 3).and_then(Val::text),
+        text(row, at + 4),
+        row.get(at + 5).and_then(Val::text),
+    )
+}
+
+/// The unit being read: its key, its first run's groups and verdict, its last verdict.
+type Reading = ((String, String), Groups, bool, bool);
+
+fn count_unit(u: Option<Reading>, combos: &mut std::collections::HashMap<Groups, Counts>) {
+    if let Some((_, groups, first, last)) = u {
+        let c = combos.entry(groups).or_default();
+        c.units += 1;
+        c.first_pass += u64::from(first);
+        c.final_pass += u64::from(last);
+    }
+}
+
+/// The yields by every dimension. The runs with a serial come in each unit's order (the
+/// `runs_unit` index: no sort) with their groups; a unit's first run gives its groups and
+/// first pass, its last run its final verdict, and each run counts in its own groups. Runs
+/// without a serial are units of their own, counted by one GROUP BY. Then each dimension's
+/// figures are the sums over the combinations (a few hundred).
 #[allow(clippy::type_complexity)]
 fn yields(db: &mut dyn Db, q: &Query) -> Result<(Vec<(String, Yield)>, Yield), DbError> {
     let (cond, params) = q.filter.sql("r");
-    let shift = q.shifts.sql_key();
-    let plan = "r.plan || ' ' || COALESCE(substr(r.plan_sha256, 1, 8), '-')";
-    let dims = [
-        ("shift", format!("CAST({shift} AS TEXT)")),
-        ("station", "COALESCE(r.station, r.host)".to_string()),
-        ("slot", "COALESCE(r.slot, '-')".to_string()),
-        ("plan", plan.to_string()),
-        ("all", "'all'".to_string()),
-    ];
-    let cols: Vec<String> = dims.iter().map(|(d, e)| format!("{e} AS g_{d}")).collect();
-    let mut parts = Vec::new();
-    for (d, _) in &dims {
-        parts.push(format!(
-            "SELECT '{d}', g_{d}, SUM(CASE WHEN n = 1 THEN 1 ELSE 0 END), COUNT(*), \
-             SUM(CASE WHEN n = 1 AND verdict = 'PASS' THEN 1 ELSE 0 END), \
-             SUM(CASE WHEN n = 1 AND last_verdict = 'PASS' THEN 1 ELSE 0 END) \
-             FROM o GROUP BY g_{d}"
-        ));
-    }
-    let sql = format!(
-        "WITH o AS MATERIALIZED (SELECT r.verdict, {cols}, \
-           ROW_NUMBER() OVER (PARTITION BY u ORDER BY r.started_ms, r.id) AS n, \
-           FIRST_VALUE(r.verdict) OVER (PARTITION BY u ORDER BY r.started_ms DESC, r.id DESC) AS last_verdict \
-         FROM (SELECT r.*, CASE WHEN r.serial IS NULL THEN r.uuid ELSE r.profile || ':' || r.serial END AS u \
-               FROM runs r WHERE {cond}) r) \
-         {}",
-        parts.join(" UNION ALL "),
-        cols = cols.join(", "),
+    let cols = format!(
+        "{}, r.station, r.host, r.slot, r.plan, r.plan_sha256",
+        q.shifts.sql_key()
     );
-    let rows = db.rows(&sql, &params)?;
-    let mut out = Vec::new();
+    let mut combos: std::collections::HashMap<Groups, Counts> = Default::default();
+    let mut unit: Option<Reading> = None;
+    db.each_row(
+        &format!(
+            "SELECT r.profile, r.serial, r.verdict, {cols} FROM runs r \
+             WHERE {cond} AND r.serial IS NOT NULL ORDER BY r.profile, r.serial, r.started_ms, r.id"
+        ),
+        &params,
+        &mut |row| {
+            let key = (text(&row, 0), text(&row, 1));
+            let pass = text(&row, 2) == "PASS";
+            let groups = groups_of(&row, 3);
+            combos.entry(groups.clone()).or_default().runs += 1;
+            match &mut unit {
+                Some((k, _, _, last)) if *k == key => *last = pass,
+                _ => {
+                    let done = unit.replace((key, groups, pass, pass));
+                    count_unit(done, &mut combos);
+                }
+            }
+            Ok(())
+        },
+    )?;
+    count_unit(unit.take(), &mut combos);
+    for row in db.rows(
+        &format!(
+            "SELECT {cols}, COUNT(*), CAST(SUM(CASE WHEN r.verdict = 'PASS' THEN 1 ELSE 0 END) AS BIGINT) \
+             FROM runs r WHERE {cond} AND r.serial IS NULL \
+             GROUP BY 1, r.station, r.host, r.slot, r.plan, r.plan_sha256"
+        ),
+        &params,
+    )? {
+        let c = combos.entry(groups_of(&row, 0)).or_default();
+        let (n, pass) = (int(&row, 6).max(0) as u64, int(&row, 7).max(0) as u64);
+        c.units += n;
+        c.runs += n;
+        c.first_pass += pass;
+        c.final_pass += pass;
+    }
+    let mut dims: std::collections::BTreeMap<(String, String), Yield> = Default::default();
     let mut overall = Yield {
         group: "all".into(),
         units: 0,
@@ -273,25 +398,44 @@ fn yields(db: &mut dyn Db, q: &Query) -> Result<(Vec<(String, Yield)>, Yield), D
         final_pass: 0,
         so_far: false,
     };
-    for row in rows {
-        let y = Yield {
-            group: text(&row, 1),
-            units: int(&row, 2).max(0) as u64,
-            runs: int(&row, 3).max(0) as u64,
-            first_pass: int(&row, 4).max(0) as u64,
-            final_pass: int(&row, 5).max(0) as u64,
-            so_far: false,
-        };
-        let dim = text(&row, 0);
-        if dim == "all" {
-            overall = y;
-        } else if y.units > 0 {
-            // A group where only retests ran has no unit of its own: its runs are in the
-            // first run's group.
-            out.push((dim, y));
+    let add = |y: &mut Yield, c: &Counts| {
+        y.units += c.units;
+        y.runs += c.runs;
+        y.first_pass += c.first_pass;
+        y.final_pass += c.final_pass;
+    };
+    for ((shift, station, host, slot, plan, sha), c) in &combos {
+        add(&mut overall, c);
+        let plan = format!(
+            "{plan} {}",
+            sha.as_deref().map_or("-", |h| h.get(..8).unwrap_or(h))
+        );
+        for (dim, group) in [
+            ("shift", shift.to_string()),
+            ("station", station.clone().unwrap_or_else(|| host.clone())),
+            ("slot", slot.clone().unwrap_or_else(|| "-".into())),
+            ("plan", plan),
+        ] {
+            let y = dims
+                .entry((dim.to_string(), group.clone()))
+                .or_insert_with(|| Yield {
+                    group,
+                    units: 0,
+                    runs: 0,
+                    first_pass: 0,
+                    final_pass: 0,
+                    so_far: false,
+                });
+            add(y, c);
         }
     }
-    out.sort_by(|a, b| (&a.0, &a.1.group).cmp(&(&b.0, &b.1.group)));
+    // A group where only retests ran has no unit of its own: its runs are in the first run's
+    // group.
+    let mut out: Vec<(String, Yield)> = dims
+        .into_iter()
+        .map(|((dim, _), y)| (dim, y))
+        .filter(|(_, y)| y.units > 0)
+        .collect();
     // Shifts sort by their key, as numbers.
     out.sort_by_key(|(d, y)| {
         if d == "shift" {
@@ -365,7 +509,12 @@ fn same(d: Dialect, col: &str, n: usize) -> String {
 
 /// Every measurement's figures: one aggregate scan for the sums, then per measurement its
 /// histogram (one scan of its index range) and its last values for the drift rule.
-fn measurements(db: &mut dyn Db, q: &Query) -> Result<Vec<MeasurementStats>, DbError> {
+fn measurements(
+    db: &mut dyn Db,
+    q: &Query,
+    phases: &mut Vec<(&'static str, f64)>,
+) -> Result<Vec<MeasurementStats>, DbError> {
+    let started = std::time::Instant::now();
     let (cond, params) = q.filter.sql("r");
     let filtered = cond != "1 = 1";
     let from = if filtered {
@@ -381,6 +530,8 @@ fn measurements(db: &mut dyn Db, q: &Query) -> Result<Vec<MeasurementStats>, DbE
         ),
         &params,
     )?;
+    phases.push(("measurement sums", started.elapsed().as_secs_f64()));
+    let mut in_histograms = 0.0;
     let d = db.dialect();
     let mut out = Vec::new();
     for row in rows {
@@ -426,16 +577,11 @@ fn measurements(db: &mut dyn Db, q: &Query) -> Result<Vec<MeasurementStats>, DbE
             same(d, "m.low", k + 3),
             same(d, "m.high", k + 4)
         );
+        let t = std::time::Instant::now();
         histogram(db, q, &from, &key, &p, &mut m)?;
+        in_histograms += t.elapsed().as_secs_f64();
         let window = q.drift_window;
-        let last = db.rows(
-            &format!(
-                "SELECT m.value FROM {from} AND {key} ORDER BY m.run DESC, m.step DESC, m.idx DESC LIMIT {}",
-                3 * window
-            ),
-            &p,
-        )?;
-        let mut values: Vec<f64> = last.iter().filter_map(|r| real(r, 0)).collect();
+        let mut values = last_values(db, &from, &p, k, 3 * window, filtered)?;
         values.reverse();
         if values.len() >= 3 * window && window > 0 {
             let mean_of = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
@@ -448,7 +594,59 @@ fn measurements(db: &mut dyn Db, q: &Query) -> Result<Vec<MeasurementStats>, DbE
         m.drift = stats::drift(&values, window, sigma, low, high);
         out.push(m);
     }
+    phases.push(("histograms", in_histograms));
     Ok(out)
+}
+
+/// The last `n` values of the measurement keyed by `p[k..k + 4]` (name, unit, low, high), in
+/// the order recorded, newest first: read backwards along the runs (the primary key) from the
+/// newest, over a span of runs that doubles until it holds `n` values or every run, so that
+/// the measurement's index (ordered by value) is not walked whole.
+fn last_values(
+    db: &mut dyn Db,
+    from: &str,
+    p: &[Val],
+    k: usize,
+    n: usize,
+    filtered: bool,
+) -> Result<Vec<f64>, DbError> {
+    let d = db.dialect();
+    // On SQLite `+` keeps the key off the measurement's index: the runs' order is wanted.
+    let plus = if d == Dialect::Sqlite { "+" } else { "" };
+    let key = format!(
+        "{plus}m.name = ?{} AND {plus}m.unit = ?{} AND {} AND {}",
+        k + 1,
+        k + 2,
+        same(d, &format!("{plus}m.low"), k + 3),
+        same(d, &format!("{plus}m.high"), k + 4)
+    );
+    let newest = db
+        .rows("SELECT MAX(run) FROM measurements", &[])?
+        .first()
+        .and_then(|r| r.first())
+        .and_then(Val::int)
+        .unwrap_or(0);
+    let mut span = (2 * n as i64).max(64);
+    loop {
+        let whole = span > newest || filtered;
+        let mut q = p.to_vec();
+        let bound = if whole {
+            String::new()
+        } else {
+            q.push(Val::Int(Some(newest - span)));
+            format!(" AND m.run > ?{}", q.len())
+        };
+        let rows = db.rows(
+            &format!(
+                "SELECT m.value FROM {from} AND {key}{bound} ORDER BY m.run DESC, m.step DESC, m.idx DESC LIMIT {n}"
+            ),
+            &q,
+        )?;
+        if rows.len() >= n || whole {
+            return Ok(rows.iter().filter_map(|r| real(r, 0)).collect());
+        }
+        span *= 4;
+    }
 }
 
 /// The histogram's bins: `q.bins` equal bins over the values and the limits together, so
@@ -477,19 +675,47 @@ fn histogram(
     m.bin_start = start;
     m.bin_width = width;
     m.bins = vec![0; bins];
-    let d = db.dialect();
-    // A value on a bin's edge counts in the bin above it, whatever the rounding of the
-    // division (a millionth of a bin).
-    let bin = d.floor(&format!(
-        "(CASE WHEN m.value < {start:e} THEN 0 ELSE (m.value - {start:e}) / {width:e} + 1e-6 END)"
-    ));
-    let rows = db.rows(
-        &format!("SELECT {bin} AS b, COUNT(*) FROM {from} AND {key} GROUP BY b"),
-        params,
-    )?;
-    for row in rows {
-        let b = (int(&row, 0).max(0) as usize).min(bins - 1);
-        m.bins[b] += int(&row, 1).max(0) as u64;
+    if db.dialect() == Dialect::Postgres {
+        // PostgreSQL: one pass, the bins hashed (its counts of index ranges cost a heap visit
+        // each until the table is vacuumed). A value on an edge counts in the bin above it,
+        // whatever the rounding of the division (a millionth of a bin).
+        let bin = Dialect::Postgres.floor(&format!(
+            "(CASE WHEN m.value < {start:e} THEN 0 ELSE (m.value - {start:e}) / {width:e} + 1e-6 END)"
+        ));
+        let rows = db.rows(
+            &format!("SELECT {bin} AS b, COUNT(*) FROM {from} AND {key} GROUP BY b"),
+            params,
+        )?;
+        for row in rows {
+            let b = (int(&row, 0).max(0) as usize).min(bins - 1);
+            m.bins[b] += int(&row, 1).max(0) as u64;
+        }
+        return Ok(());
+    }
+    // SQLite: a count per bin, each a range of the value-ordered index (no pass over every
+    // value, no sort): the first bin takes everything below its upper edge, the last
+    // everything from its lower edge. A value on an edge counts in the bin above it, whatever
+    // the rounding of the edge (a millionth of a bin).
+    let edge = |i: usize| start + width * i as f64 - width * 1e-6;
+    let k = params.len();
+    let sql = format!(
+        "SELECT COUNT(*) FROM {from} AND {key} AND m.value >= ?{} AND m.value < ?{}",
+        k + 1,
+        k + 2
+    );
+    for i in 0..bins {
+        let lo = if i == 0 { f64::MIN } else { edge(i) };
+        let hi = if i + 1 == bins {
+            f64::INFINITY
+        } else {
+            edge(i + 1)
+        };
+        let mut p = params.to_vec();
+        p.extend([Val::Real(Some(lo)), Val::Real(Some(hi))]);
+        m.bins[i] = db
+            .rows(&sql, &p)?
+            .first()
+            .map_or(0, |row| int(row, 0).max(0) as u64);
     }
     Ok(())
 }
