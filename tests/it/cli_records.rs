@@ -66,6 +66,11 @@ fn a_self_test_is_recorded_with_its_serial_and_read_back_listed_shown_exported_a
         second.out
     );
 
+    read_back(db, &dir.path().join("report.html"));
+}
+
+/// The two runs of WC-0042 in `db` listed, shown, exported and reported (HTML to `html`).
+fn read_back(db: &str, html: &std::path::Path) {
     let list = run(&["records", "--records", db, "list"]);
     assert_eq!(list.code, 0, "{}", list.text());
     assert_eq!(list.out.lines().count(), 2, "{}", list.out);
@@ -128,7 +133,6 @@ fn a_self_test_is_recorded_with_its_serial_and_read_back_listed_shown_exported_a
     ]);
     assert_eq!(none.out, "");
 
-    let html = dir.path().join("report.html");
     let rep = run(&["report", "--records", db, "--html", html.to_str().unwrap()]);
     assert_eq!(rep.code, 0, "{}", rep.text());
     assert!(
@@ -137,7 +141,7 @@ fn a_self_test_is_recorded_with_its_serial_and_read_back_listed_shown_exported_a
         "{}",
         rep.out
     );
-    let page = std::fs::read_to_string(&html).unwrap();
+    let page = std::fs::read_to_string(html).unwrap();
     assert!(
         page.contains("<svg") && page.contains("batteryVoltage"),
         "no plot"

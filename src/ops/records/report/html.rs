@@ -77,29 +77,7 @@ pub fn page(report: &Report, period: &str) -> String {
             report.waiting
         ));
     }
-    let drifting: Vec<&MeasurementStats> = report
-        .measurements
-        .iter()
-        .filter(|m| m.drift.is_some())
-        .collect();
-    for m in &drifting {
-        if let Some(d) = &m.drift {
-            h.push_str(&format!(
-                "<p class=\"warn\"><b>Drift: {}</b> walks toward its {} limit {} {}: the means of the last 3 × {} units \
-                 {} → {} → {} (moved {:.1} σ; {:.1} σ left)</p>\n",
-                esc(&m.name),
-                d.toward,
-                num(d.limit),
-                esc(&m.unit),
-                d.window,
-                num(d.means[0]),
-                num(d.means[1]),
-                num(d.means[2]),
-                d.moved_sigma,
-                d.left_sigma
-            ));
-        }
-    }
+    h.push_str(&drift_warnings(report));
     let o = &report.overall;
     h.push_str(&format!(
         "<h2 id=\"yield\">Yield</h2><p><b>{}</b> units, <b>{}</b> runs: first-pass yield <b>{}</b>, final yield <b>{}</b>.</p>\n",
@@ -149,6 +127,35 @@ pub fn page(report: &Report, period: &str) -> String {
         h.push_str(&format!("<div class=\"card\">{}</div>", histogram_plot(m)));
     }
     h.push_str("</div>\n</body></html>\n");
+    h
+}
+
+/// A warning line for each measurement that drifts toward a limit.
+fn drift_warnings(report: &Report) -> String {
+    let mut h = String::new();
+    let drifting: Vec<&MeasurementStats> = report
+        .measurements
+        .iter()
+        .filter(|m| m.drift.is_some())
+        .collect();
+    for m in &drifting {
+        if let Some(d) = &m.drift {
+            h.push_str(&format!(
+                "<p class=\"warn\"><b>Drift: {}</b> walks toward its {} limit {} {}: the means of the last 3 × {} units \
+                 {} → {} → {} (moved {:.1} σ; {:.1} σ left)</p>\n",
+                esc(&m.name),
+                d.toward,
+                num(d.limit),
+                esc(&m.unit),
+                d.window,
+                num(d.means[0]),
+                num(d.means[1]),
+                num(d.means[2]),
+                d.moved_sigma,
+                d.left_sigma
+            ));
+        }
+    }
     h
 }
 
