@@ -39,7 +39,7 @@ pub fn run(quick: bool) {
         );
     {
         let app = h.state_mut().as_mut().expect("app");
-        let now = app.state.device.t0.elapsed().as_secs_f64();
+        let now = app.station().device.t0.elapsed().as_secs_f64();
         let n = DEFAULT_CAPACITY; // 10 min at 100 Hz
         let mut attitude = SeriesSet::new(DEFAULT_CAPACITY);
         let mut battery = SeriesSet::new(DEFAULT_CAPACITY);
@@ -50,8 +50,14 @@ pub fn run(quick: bool) {
             let _ = attitude.push("eulerZ", t, t * 0.5 % 360.0);
             let _ = battery.push("batteryVoltage", t, 14.8 - t * 1e-4);
         }
-        app.state.device.plots.insert("attitude".into(), attitude);
-        app.state.device.plots.insert("battery".into(), battery);
+        app.station_mut()
+            .device
+            .plots
+            .insert("attitude".into(), attitude);
+        app.station_mut()
+            .device
+            .plots
+            .insert("battery".into(), battery);
     }
     h.run_steps(3);
     let mut times = Vec::with_capacity(frames);

@@ -5,7 +5,7 @@
 use super::Action;
 use super::inputs::{command_inputs, value_box};
 use super::jobs;
-use super::state::AppState;
+use super::station::Station;
 use crate::i18n::Lang;
 use crate::profile::{Command, CommandKind, Input};
 use crate::ui::zh::Zh;
@@ -23,7 +23,7 @@ pub struct ActionsPanel {
 
 impl ActionsPanel {
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         let ready = rt.connected() && rt.job_progress().is_none();
         let profile = &rt.device.profile;
@@ -70,7 +70,7 @@ impl ActionsPanel {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         cmd: &Command,
         ready: bool,
     ) -> Option<Action> {
@@ -104,7 +104,7 @@ impl ActionsPanel {
 
     /// The confirmation of a command that moves the robot, while one waits: what it sends, and
     /// the operator's yes or no.
-    fn confirmation(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Option<Action> {
+    fn confirmation(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Option<Action> {
         let profile = &rt.device.profile;
         let (id, inputs) = self.confirm.as_ref()?;
         let name = profile.command_by_id(*id).map_or(String::new(), |c| {

@@ -3,7 +3,7 @@
 
 use super::Action;
 use super::settings::Settings;
-use super::state::{Answering, AppState, Target};
+use super::station::{Answering, Station, Target};
 use crate::i18n::Lang;
 use crate::link::LinkState;
 use crate::sim::SimKind;
@@ -66,7 +66,7 @@ impl ConnectionBar {
     }
 
     /// Another profile chosen: its own saved port settings (or its usual rate, auto margin).
-    fn take_profile(&mut self, profile: &str, saved: &Settings, rt: &AppState) {
+    fn take_profile(&mut self, profile: &str, saved: &Settings, rt: &Station) {
         if self.profile == profile {
             return;
         }
@@ -78,7 +78,7 @@ impl ConnectionBar {
     }
 
     /// Draws the bar.
-    pub fn show(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &Station) -> Vec<Action> {
         let lang = saved.lang;
         let mut actions = Vec::new();
         // The language switch and the link's badge hold the right end at a fixed width, never
@@ -108,7 +108,7 @@ impl ConnectionBar {
     }
 
     /// The port, baud, profile and margin, and Connect / Disconnect / Reconnect.
-    fn settings_row(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
+    fn settings_row(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &Station) -> Vec<Action> {
         let lang = saved.lang;
         self.port_choice(ui, saved, rt);
         self.path_box(ui, lang);
@@ -119,7 +119,7 @@ impl ConnectionBar {
     }
 
     /// The port picker: the demo devices, then the serial ports listed.
-    fn port_choice(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) {
+    fn port_choice(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &Station) {
         let lang = saved.lang;
         super::layout::group(ui, "port", |ui| {
             let port_label = ui.label(lang.tr("Port", "端口"));
@@ -200,7 +200,7 @@ impl ConnectionBar {
     }
 
     /// The device profile, with its own port settings.
-    fn profile_choice(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) {
+    fn profile_choice(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &Station) {
         let lang = saved.lang;
         let chosen = super::layout::group(ui, "profile", |ui| {
             let profile_label = ui.label(lang.tr("Profile", "设备配置"));
@@ -225,7 +225,7 @@ impl ConnectionBar {
     }
 
     /// The answer margin: auto, or one chosen, with a warning when far above the protocol's.
-    fn margin_choice(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    fn margin_choice(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
         super::layout::group(ui, "margin", |ui| {
             let margin_label = ui
                 .label(lang.tr("Margin", "应答余量"))
@@ -256,7 +256,7 @@ impl ConnectionBar {
     }
 
     /// Connect, or Disconnect and Reconnect (enabled once a setting differs).
-    fn connect_buttons(&self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
+    fn connect_buttons(&self, ui: &mut egui::Ui, saved: &Settings, rt: &Station) -> Vec<Action> {
         let lang = saved.lang;
         let mut actions = Vec::new();
         let connect = || Action::Connect {
@@ -296,7 +296,7 @@ impl ConnectionBar {
 
 impl ConnectionBar {
     /// A warning beside a margin far above the protocol's own.
-    fn margin_warning(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    fn margin_warning(&self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
         let Some(ms) = self.margin_ms else { return };
         let Ok(profile) = rt.registry.get(&self.profile) else {
             return;
@@ -322,7 +322,7 @@ impl ConnectionBar {
     }
 }
 
-fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     let (text, color) = match (&rt.link.connection, &rt.link.state) {
         (None, _) => (
             lang.tr("not connected", "未连接").to_string(),
@@ -389,7 +389,7 @@ pub const BADGE_WIDTH: f32 = 290.0;
 /// The margin in use, the answer latency measured, and the USB adapter's latency timer with a
 /// button to set it to 1 ms where the system lets us.
 /// Shown in the status bar, beside the round trip, so that the connection bar keeps one line.
-pub(super) fn timing(ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
+pub(super) fn timing(ui: &mut egui::Ui, lang: Lang, rt: &Station, actions: &mut Vec<Action>) {
     let stats = &rt.link.stats;
     let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
     if let Some(m) = stats.margin {

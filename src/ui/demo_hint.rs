@@ -1,7 +1,7 @@
 //! The one line shown while the window is on a built-in demo device (as it is at the first
 //! launch): it is simulated, and how to pick a real port instead.
 
-use super::state::{AppState, Target};
+use super::station::{Station, Target};
 use crate::i18n::Lang;
 use eframe::egui;
 
@@ -16,7 +16,7 @@ pub fn text(lang: Lang) -> &'static str {
 }
 
 /// Draws the line when the link is on a demo device; nothing otherwise.
-pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     if matches!(rt.link.target(), Some(Target::Demo(_))) {
         ui.label(egui::RichText::new(text(lang)).weak());
     }

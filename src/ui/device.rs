@@ -3,7 +3,7 @@
 
 use super::Action;
 use super::jobs::{Job, JobOutput};
-use super::state::AppState;
+use super::station::Station;
 use crate::i18n::Lang;
 use crate::i18n::Text;
 use crate::link::{DeviceInfo, LinkCommand, capabilities};
@@ -112,7 +112,7 @@ impl DevicePanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         if self.unit != Some(rt.device.unit) {
             // Values of another connection (maybe another device) are never shown.
@@ -258,7 +258,7 @@ impl DevicePanel {
 }
 
 /// Ping, and Read version and power state.
-fn buttons(ui: &mut egui::Ui, lang: Lang, rt: &AppState, ready: bool) -> Vec<Action> {
+fn buttons(ui: &mut egui::Ui, lang: Lang, rt: &Station, ready: bool) -> Vec<Action> {
     let mut actions = Vec::new();
     let profile = rt.device.profile.clone();
     crate::ui::layout::toolbar(ui, |ui| {

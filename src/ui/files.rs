@@ -4,7 +4,7 @@
 //! starts, and a Browse that cannot open a dialog says so instead of doing nothing.
 
 use super::Action;
-use super::state::Notice;
+use super::station::Notice;
 use crate::i18n::Lang;
 use eframe::egui;
 use std::path::{Path, PathBuf};

@@ -1,6 +1,6 @@
 //! The desktop window (eframe/egui): one file (or folder) per panel. Panels draw from the
-//! run-time state ([`AppState`]: link status, device model, packet log, job, status line) and
-//! the saved [`Settings`], both read-only, and return [`Action`]s; the app applies them once per
+//! station they show ([`Station`]: one connected device's link status, device model, packet log,
+//! job, status line) and the saved [`Settings`], both read-only, and return [`Action`]s; the app applies them once per
 //! frame. Panels never build a link request: they ask [`crate::ops`] for one, or start a
 //! [`Job`] that runs an operation. The UI never touches the port.
 
@@ -23,7 +23,7 @@ mod selftest;
 mod servo_bench;
 pub mod settings;
 mod solar;
-pub mod state;
+pub mod station;
 mod status_bar;
 pub mod stop;
 mod telemetry;
@@ -34,11 +34,11 @@ pub mod views;
 pub mod yield_view;
 pub mod zh;
 
-pub use app::{App, PanelId};
+pub use app::{App, AppState, PanelId};
 pub use jobs::Job;
 pub use settings::Settings;
 pub use solar::{Outcome as SolarOutcome, Trip as SolarTrip};
-pub use state::{AppState, Notice, Target};
+pub use station::{Notice, Station, Target};
 pub use telemetry::MIN_PLOT_HEIGHT;
 pub use tuya_console::FirmwareFileError;
 pub use views::View;

@@ -13,7 +13,7 @@
 use super::Action;
 use super::files;
 use super::settings::FileKind;
-use super::state::{AppState, Notice};
+use super::station::{Notice, Station};
 use crate::i18n::Lang;
 use crate::i18n::Text;
 use crate::link::LogEntry;
@@ -99,7 +99,7 @@ pub fn line(current: &Profile, profile: &Profile, e: &LogEntry) -> String {
 impl MonitorPanel {
     /// The capture file row: its path (typed, or chosen with Browse…: opened at once), Record /
     /// Stop recording with the file's size growing, Open capture / Back to live.
-    fn capture_bar(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    fn capture_bar(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         let recording = rt.recording();
         let event = files::row(
@@ -207,7 +207,7 @@ impl MonitorPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         let log = &rt.packets;
         // A capture opened offline is shown in place of the live log, decoded with its profile;

@@ -6,7 +6,7 @@
 //! where it covers no data.
 
 use super::inputs::readout_text;
-use super::state::{AppState, Reading};
+use super::station::{Reading, Station};
 use crate::i18n::Lang;
 use crate::profile::{Command, Field, Value};
 use crate::series::SeriesSet;
@@ -152,7 +152,7 @@ pub const STALE: Duration = Duration::from_secs(3);
 /// of its command has them, names in `lang`: `Battery state: Warning (1)`, with its age when it
 /// is older than [`STALE`] (`… (12 s ago)`); `Battery state: —` while no reading has one (before
 /// the first, after a failed poll, after the link was lost).
-pub fn states(rt: &AppState, plot: &crate::profile::Plot, lang: Lang) -> Vec<String> {
+pub fn states(rt: &Station, plot: &crate::profile::Plot, lang: Lang) -> Vec<String> {
     let Some(cmd) = rt.device.profile.command(&plot.command) else {
         return Vec::new();
     };

@@ -3,7 +3,7 @@
 
 use super::jobs::{self, Job, JobError, JobOutput};
 use super::settings::FileKind;
-use super::state::{AppState, Reading};
+use super::station::{Reading, Station};
 use super::{Action, files};
 use crate::document::DocumentError;
 use crate::i18n::Lang;
@@ -55,7 +55,7 @@ fn save_job(profile: &Arc<Profile>, path: PathBuf, note: String) -> Job {
 
 /// Writes a (checked) preset, each command read back ([`ops::preset::apply_each`]); each
 /// command's checks go to the device model.
-fn apply_job(rt: &AppState, preset: Preset, file: &str) -> Job {
+fn apply_job(rt: &Station, preset: Preset, file: &str) -> Job {
     let profile = rt.device.profile.clone();
     let mut records = rt.records.clone();
     let path = std::path::Path::new(file.trim());
@@ -106,7 +106,7 @@ fn apply_job(rt: &AppState, preset: Preset, file: &str) -> Job {
 }
 
 /// The device's values of the preset commands, from the readings replies brought.
-fn device_values(rt: &AppState) -> Vec<CommandValues> {
+fn device_values(rt: &Station) -> Vec<CommandValues> {
     preset_commands(&rt.device.profile)
         .into_iter()
         .filter_map(|(set, get)| {
@@ -120,7 +120,7 @@ fn device_values(rt: &AppState) -> Vec<CommandValues> {
 
 impl PresetsPanel {
     /// Opens the preset at `path`, checking it against the profile.
-    pub fn open(&mut self, rt: &AppState) {
+    pub fn open(&mut self, rt: &Station) {
         match Preset::load(&PathBuf::from(self.path.trim()), &rt.device.profile) {
             Ok(l) => {
                 self.loaded = Some(l);
@@ -134,7 +134,7 @@ impl PresetsPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         let profile = &rt.device.profile;
         let busy = rt.job_progress().is_some();
@@ -210,7 +210,7 @@ impl PresetsPanel {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         ready: bool,
     ) -> Vec<Action> {
         let mut actions = Vec::new();
@@ -275,7 +275,7 @@ impl PresetsPanel {
     }
 
     /// Opens the preset at the path typed or chosen, and remembers the path.
-    fn open_and_remember(&mut self, rt: &AppState) -> Vec<Action> {
+    fn open_and_remember(&mut self, rt: &Station) -> Vec<Action> {
         self.open(rt);
         if self.error.is_some() {
             return Vec::new();

@@ -5,7 +5,7 @@
 
 use super::jobs::{Job, JobError, JobOutput, LogError};
 use super::settings::FileKind;
-use super::state::AppState;
+use super::station::Station;
 use super::{Action, files};
 use crate::document::DocumentError;
 use crate::i18n::Lang;
@@ -204,7 +204,7 @@ fn what(kind: &StepKind, profile: &Profile, lang: Lang) -> String {
 
 impl SelfTestPanel {
     /// Opens the plan at `path`, checking it against the profile.
-    pub fn open(&mut self, rt: &AppState) {
+    pub fn open(&mut self, rt: &Station) {
         match Plan::load(&PathBuf::from(self.path.trim()), &rt.device.profile) {
             Ok(p) => {
                 self.plan = Some(p);
@@ -220,7 +220,7 @@ impl SelfTestPanel {
         self.logged = None;
     }
 
-    fn start(&mut self, rt: &AppState) -> Option<Action> {
+    fn start(&mut self, rt: &Station) -> Option<Action> {
         let plan = self.plan.clone()?;
         let profile = rt.device.profile.clone();
         let log = PathBuf::from(self.log_path.trim());
@@ -297,7 +297,7 @@ impl SelfTestPanel {
     }
 
     /// Opens the plan at the path typed or chosen, and remembers the path if it opens.
-    fn open_and_remember(&mut self, rt: &AppState) -> Vec<Action> {
+    fn open_and_remember(&mut self, rt: &Station) -> Vec<Action> {
         self.open(rt);
         if self.plan.is_none() {
             return Vec::new();
@@ -320,7 +320,7 @@ impl SelfTestPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         let busy = rt.job_progress().is_some();
         if self.running

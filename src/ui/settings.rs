@@ -3,7 +3,7 @@
 //! Changed only by the app, as panels ask ([`super::Action`]).
 
 use super::app::PanelId;
-use super::state::Target;
+use super::station::Target;
 use crate::i18n::Lang;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;

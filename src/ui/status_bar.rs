@@ -2,12 +2,12 @@
 //! progress.
 
 use super::Action;
-use super::state::AppState;
+use super::station::Station;
 use crate::i18n::Lang;
 use eframe::egui;
 
 /// Draws the status line.
-pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
     let mut actions = Vec::new();
     ui.horizontal(|ui| {
         // One line: every part keeps its words whole; the message last, cut to the room left
@@ -67,7 +67,7 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
 }
 
 /// The link's round trip and counters.
-fn link_stats(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+fn link_stats(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     if let Some(rtt) = rt.link.stats.rtt {
         ui.label(format!(
             "{} {:.1} ms",

@@ -3,10 +3,10 @@
 //! (`Action::Link`, ahead of a running job's next request), with the requests
 //! [`crate::ops::stop`] builds from the profile. A STOP pressed while the link is down, or lost
 //! with it, is sent as soon as the link is back. Beside it, what the robot may be doing because
-//! this window told it to ([`super::state::RunningSet`]).
+//! this window told it to ([`super::station::RunningSet`]).
 
 use super::Action;
-use super::state::AppState;
+use super::station::Station;
 use crate::i18n::Lang;
 use crate::link::{ExchangeError, LinkCommand, ReplyTo};
 use crate::ops::OpError;
@@ -78,7 +78,7 @@ pub struct StopControl {
 impl StopControl {
     /// STOP, now: every command of the profile's STOP, each retried (a stop is the same
     /// however often it arrives). While the link is down it waits for the link.
-    pub fn stop(&mut self, rt: &AppState) -> Vec<Action> {
+    pub fn stop(&mut self, rt: &Station) -> Vec<Action> {
         if !rt.connected() {
             self.pending = true;
             return Vec::new();
@@ -110,7 +110,7 @@ impl StopControl {
     /// Called every frame: takes the answers, and sends a pending STOP once the link is back.
     /// A STOP lost with the link is sent again when it is back; one the robot did not answer
     /// on a working link is shown, and the operator presses again.
-    pub fn tick(&mut self, rt: &AppState) -> Vec<Action> {
+    pub fn tick(&mut self, rt: &Station) -> Vec<Action> {
         for (ident, reply) in rt.device.take_answered(&mut self.sent) {
             let outcome = match reply {
                 Ok(_) => Outcome::Acked(ident.clone()),
@@ -163,7 +163,7 @@ impl StopControl {
     }
 
     /// The STOP button: big, red, one click.
-    pub fn button(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    pub fn button(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let b = egui::Button::new(
             egui::RichText::new(lang.tr("STOP", "停止"))
                 .strong()
@@ -243,7 +243,7 @@ impl StopControl {
 
 /// What the robot may be doing because this window told it to: "Running: Fan 60 %", one line
 /// each; nothing when all is at rest.
-pub fn running(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+pub fn running(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     let profile = &rt.device.profile;
     if rt.device.running.is_empty() {
         return;
@@ -286,13 +286,18 @@ mod tests {
     use crate::link::LinkState;
 
     /// The id of the profile's command with role Drive (the solar cleanbot's speed).
-    fn drive(rt: &AppState) -> u8 {
+    fn drive(rt: &Station) -> u8 {
         let role = crate::profile::CommandRole::Drive;
         rt.device.profile.command_with_role(role).expect("drive").id
     }
 
-    fn runtime(profile: &str) -> AppState {
-        let mut rt = AppState::new(&eframe::egui::Context::default(), profile).unwrap();
+    fn runtime(profile: &str) -> Station {
+        let mut rt = Station::new(
+            &eframe::egui::Context::default(),
+            std::sync::Arc::new(crate::profile::Registry::load().unwrap()),
+            profile,
+        )
+        .unwrap();
         rt.link.state = Some(LinkState::Connected {
             port: "test".into(),
             baud: 115_200,

@@ -5,7 +5,7 @@
 
 use super::jobs;
 use super::settings::{FileKind, Settings};
-use super::state::{AppState, Notice, Reading};
+use super::station::{Notice, Reading, Station};
 use super::{Action, files, plot};
 use crate::i18n::Lang;
 use crate::i18n::Text;
@@ -102,7 +102,7 @@ fn rate_label(rate: Option<f64>, lang: Lang) -> String {
 
 /// The telemetry commands listed under the plots: every one with a reply, but the core ones
 /// (version, power state, build info), which the device panel reads and shows.
-fn other_commands(rt: &AppState) -> Vec<&crate::profile::Command> {
+fn other_commands(rt: &Station) -> Vec<&crate::profile::Command> {
     let profile = &rt.device.profile;
     profile
         .commands
@@ -114,7 +114,7 @@ fn other_commands(rt: &AppState) -> Vec<&crate::profile::Command> {
 
 impl TelemetryPanel {
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &Station) -> Vec<Action> {
         let lang = saved.lang;
         let mut actions = Vec::new();
         crate::ui::layout::toolbar(ui, |ui| {
@@ -206,7 +206,7 @@ impl TelemetryPanel {
     /// The profile's plots, sharing the height left, each at least [`MIN_PLOT_HEIGHT`] (below
     /// that they scroll, with their scroll bar shown); each with its cursor readout below it,
     /// on a line kept whether or not there is one, so that nothing below moves.
-    fn plots(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &AppState) {
+    fn plots(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &Station) {
         let lang = saved.lang;
         let plots = &rt.device.profile.plots;
         let text_h = ui.text_style_height(&egui::TextStyle::Body);
@@ -298,7 +298,7 @@ impl TelemetryPanel {
         &self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         cmds: &[&crate::profile::Command],
     ) -> Vec<Action> {
         let mut actions = Vec::new();
@@ -383,7 +383,7 @@ impl TelemetryPanel {
 fn readout_line(
     ui: &mut egui::Ui,
     lang: Lang,
-    rt: &AppState,
+    rt: &Station,
     p: &crate::profile::Plot,
     readout: Option<&plot::Readout>,
     text_h: f32,
@@ -418,7 +418,7 @@ fn readout_line(
 }
 
 /// Writes every plot's series as CSV to the typed (or chosen) `path`; says what happened.
-fn export_csv(rt: &AppState, path: &str) -> Vec<Action> {
+fn export_csv(rt: &Station, path: &str) -> Vec<Action> {
     let path = path.trim();
     if path.is_empty() {
         return vec![Action::Notify(Notice::error(Text::new(
@@ -442,7 +442,7 @@ fn export_csv(rt: &AppState, path: &str) -> Vec<Action> {
 /// Writes every plotted series to `path` as one CSV (a column per `plot.field`, a row per time),
 /// atomically. Returns the number of plots written.
 pub fn write_csv(
-    rt: &AppState,
+    rt: &Station,
     path: &std::path::Path,
 ) -> Result<usize, crate::document::DocumentError> {
     let mut all = crate::series::SeriesSet::new(crate::series::DEFAULT_CAPACITY);

@@ -13,7 +13,7 @@
 //! checked: a label it parts over two lines ([`super::layout::split_words`]) or a text drawn
 //! over another ([`super::layout::overlapping_texts`]) is a failure.
 
-use super::state::AppState;
+use super::station::Station;
 use super::{App, View};
 use crate::i18n::Lang;
 use crate::profile::Protocol;
@@ -106,7 +106,7 @@ fn demo_records(app: &mut App) -> Option<tempfile::TempDir> {
         let _ = crate::ops::records::write::insert(&mut crate::ops::records::sql::Lite(&tx), &r);
     });
     tx.commit().ok()?;
-    app.state
+    app.station()
         .records
         .configure(Some(path.display().to_string()));
     Some(dir)
@@ -146,7 +146,7 @@ impl Tour {
                 None => self.finish(ctx),
             },
             Phase::Settle(since) => {
-                let up = settled(&app.state);
+                let up = settled(app.station());
                 if up || since.elapsed() >= PATIENCE {
                     if !up {
                         self.fail(format!(
@@ -374,9 +374,9 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
                     let dir = super::files::shipped_dir();
                     if let Ok(p) = super::files::shipped_in(&dir, "window-cleaner-factory.ron") {
                         app.presets.path = p.display().to_string();
-                        app.presets.open(&app.state);
+                        app.presets.open(app.state.station());
                     }
-                    app.selftest.open(&app.state);
+                    app.selftest.open(app.state.station());
                 },
                 done: |app| app.selftest.plan.is_some() && app.presets.loaded.is_some(),
             },
@@ -390,11 +390,11 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
                         },
                         ..Default::default()
                     };
-                    let ctx = app.state.ctx.clone();
-                    app.state.records.refresh(query, &ctx);
+                    let ctx = app.station().ctx.clone();
+                    app.station().records.refresh(query, &ctx);
                 },
                 done: |app| {
-                    !app.state.records.computing() && app.state.records.report().0.is_some()
+                    !app.station().records.computing() && app.station().records.report().0.is_some()
                 },
             },
         ],
@@ -405,14 +405,14 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
                     let dir = super::files::shipped_dir();
                     if let Ok(p) = super::files::shipped_in(&dir, "servo-provision-plan.ron") {
                         app.servo.production.plan_path = p.display().to_string();
-                        app.servo.production.load(&app.state);
+                        app.servo.production.load(app.state.station());
                     }
-                    if let Some(scan) = app.servo.scan.start(&app.state) {
+                    if let Some(scan) = app.servo.scan.start(app.state.station()) {
                         app.apply(scan);
                     }
                 },
                 done: |app| {
-                    app.state.job_progress().is_none()
+                    app.station().job_progress().is_none()
                         && app.servo.selected.is_some()
                         && app.servo.production.plan.is_some()
                 },
@@ -426,7 +426,7 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
                     }
                 },
                 done: |app| {
-                    app.state.job_progress().is_none() && !app.servo.params.values.is_empty()
+                    app.station().job_progress().is_none() && !app.servo.params.values.is_empty()
                 },
             },
         ],
@@ -442,7 +442,7 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
                     app.apply(super::Action::DemoMcuRequest(r));
                 }
             },
-            done: |app| app.state.device.tuya.requests.len() >= 4,
+            done: |app| app.station().device.tuya.requests.len() >= 4,
         }],
         SimKind::SolarCleanbot => Vec::new(),
     }
@@ -453,7 +453,7 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
 /// holding [`PLOTTED_SECS`] of samples (they are polled from the connection on:
 /// [`crate::ops::telemetry::polls`]); Tuya shaken hands with; a servo bus at once (nothing is
 /// polled until the servo bench asks).
-fn settled(rt: &AppState) -> bool {
+fn settled(rt: &Station) -> bool {
     let d = &rt.device;
     let plotted = || {
         d.profile.plots.iter().all(|p| {

@@ -49,7 +49,7 @@ impl App {
                 .iter()
                 .map(|t| format!("{t:?}"))
                 .collect(),
-            PanelId::Tuning => tuning::group_ids(&self.state)
+            PanelId::Tuning => tuning::group_ids(self.station())
                 .into_iter()
                 .map(|id| if id.is_empty() { "other".into() } else { id })
                 .collect(),
@@ -72,7 +72,8 @@ impl App {
                 }
             }
             PanelId::Tuning => {
-                self.tuning.scroll_to = tuning::group_ids(&self.state).into_iter().nth(view.part);
+                self.tuning.scroll_to =
+                    tuning::group_ids(self.station()).into_iter().nth(view.part);
             }
             _ => {}
         }

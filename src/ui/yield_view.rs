@@ -6,7 +6,7 @@
 
 use super::records::RecordsHandle;
 use super::settings::FileKind;
-use super::state::AppState;
+use super::station::Station;
 use super::{Action, layout};
 use crate::i18n::Lang;
 use crate::ops::records::report::{MeasurementStats, ParetoStep, Query, Report, Yield};
@@ -78,7 +78,7 @@ impl Default for YieldPanel {
 
 impl YieldPanel {
     /// Draws the view; returns the setting to remember when applied.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, state: &AppState) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, state: &Station) -> Vec<Action> {
         let records = &state.records;
         if !self.loaded {
             self.setting = records.setting();

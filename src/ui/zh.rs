@@ -16,7 +16,7 @@ use crate::protocol::FrameError;
 use crate::protocol::tuya::VERSION_MCU;
 use crate::protocol::tuya::dp::DpError;
 use crate::ui::jobs::{JobError, LogError};
-use crate::ui::state::ConnectError;
+use crate::ui::station::ConnectError;
 
 /// An error as the window says it in Chinese; its English is its `Display`.
 pub trait Zh: std::fmt::Display {
@@ -37,7 +37,7 @@ pub trait Zh: std::fmt::Display {
     }
 }
 
-impl Zh for crate::ui::state::ReadingError {
+impl Zh for crate::ui::station::ReadingError {
     fn zh(&self) -> String {
         match self {
             Self::Read(e) => e.zh(),

@@ -3,7 +3,7 @@
 use botbench::i18n::Lang;
 use botbench::profile::Value;
 use botbench::sim::Faults;
-use botbench::ui::state::Reading;
+use botbench::ui::station::Reading;
 use botbench::ui::{App, PanelId};
 use eframe::egui::accesskit::Role;
 use egui_kittest::kittest::{By, Queryable};
@@ -34,7 +34,7 @@ fn read_all_brings_every_parameter_from_the_device() {
     let mut h = harness(&b, PanelId::Tuning);
     gui::read_all(&mut h);
     let want = b.sim().param("waterPumpDuration").unwrap();
-    let got = match app(&h).state.device.readings.get(&135) {
+    let got = match app(&h).station().device.readings.get(&135) {
         Some(Reading::Values(v, _)) => v.get("waterPumpDuration").cloned(),
         _ => None,
     };
@@ -60,7 +60,7 @@ fn an_out_of_range_edit_is_refused_for_writing() {
         vec!["101".to_string()]
     );
     assert!(
-        a.tuning.pending(&a.state).is_err(),
+        a.tuning.pending(a.station()).is_err(),
         "an invalid edit blocks writing"
     );
     assert!(
@@ -88,8 +88,8 @@ fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
     assert!(h.query_by_label("Write these changes?").is_some());
     h.get_by_label("Write").click();
     step_until(&mut h, "the write to be verified", |a| {
-        a.state.device.marks.get(&(130, "pwmValue".to_string()))
-            == Some(&botbench::ui::state::Mark::Verified)
+        a.station().device.marks.get(&(130, "pwmValue".to_string()))
+            == Some(&botbench::ui::station::Mark::Verified)
     });
     assert_eq!(b.sim().param("pwmValue"), Some(64));
     h.step();
@@ -127,8 +127,11 @@ fn a_named_value_is_chosen_by_its_name_and_written() {
     h.run_steps(3);
     h.get_by_label("Write").click();
     step_until(&mut h, "the write to be verified", |a| {
-        a.state.device.marks.get(&(135, "waterPump".to_string()))
-            == Some(&botbench::ui::state::Mark::Verified)
+        a.station()
+            .device
+            .marks
+            .get(&(135, "waterPump".to_string()))
+            == Some(&botbench::ui::station::Mark::Verified)
     });
     assert_eq!(b.sim().param("waterPump"), Some(0));
 }
@@ -139,7 +142,7 @@ fn the_plots_receive_points() {
     let mut h = harness(&b, PanelId::Telemetry);
     step_until(&mut h, "attitude and battery points", |a| {
         let n = |id: &str, f: &str| {
-            a.state
+            a.station()
                 .device
                 .plots
                 .get(id)
@@ -162,7 +165,7 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
     h.get_by_label("Save device to file").click();
     step_until(&mut h, "the preset saved", |_| path.exists());
     step_until(&mut h, "the job to end", |a| {
-        a.state.job_progress().is_none()
+        a.station().job_progress().is_none()
     });
     let saved_pwm = b.sim().param("pwmValue").unwrap();
     let saved_target = b.sim().param("defaultTarget").unwrap();
@@ -181,8 +184,11 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
     h.run_steps(2);
     h.get_by_label("Compare with device").click();
     step_until(&mut h, "the device read", |a| {
-        a.state.job_progress().is_none()
-            && matches!(a.state.device.readings.get(&130), Some(Reading::Values(..)))
+        a.station().job_progress().is_none()
+            && matches!(
+                a.station().device.readings.get(&130),
+                Some(Reading::Values(..))
+            )
     });
     h.step();
     assert!(
@@ -196,8 +202,8 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
     assert_ne!(b.sim.lock().unwrap().param("pwmValue"), Some(saved_pwm));
     h.get_by_label("Write").click();
     step_until(&mut h, "the preset applied", |a| {
-        a.state.job_progress().is_none()
-            && a.state
+        a.station().job_progress().is_none()
+            && a.station()
                 .device
                 .marks
                 .contains_key(&(130, "pwmValue".to_string()))
@@ -213,7 +219,7 @@ fn a_malformed_preset_is_shown_with_its_line_and_column() {
     let path = dir.path().join("bad.ron");
     std::fs::write(&path, "(\n  version: 1,\n  profile: \"window-cleaner\",\n  values: {\n    \"MSP_SET_PWMVALUE\": { \"pwmValue\": \"101\" },\n  },\n)\n").unwrap();
     let mut h = harness(&b, PanelId::Presets);
-    step_until(&mut h, "the link", |a| a.state.connected());
+    step_until(&mut h, "the link", |a| a.station().connected());
     app_mut(&mut h).presets.path = path.display().to_string();
     h.step();
     h.get_by_label("Open").click();
@@ -229,7 +235,7 @@ fn every_panel_renders_in_english_and_chinese() {
     // languages checks the font as well as the layout.
     let b = bench();
     let mut h = harness(&b, PanelId::Tuning);
-    step_until(&mut h, "the link", |a| a.state.connected());
+    step_until(&mut h, "the link", |a| a.station().connected());
     let panels = app(&h).panels();
     assert!(panels.len() >= 5, "{panels:?}");
     for lang in [Lang::En, Lang::Zh] {
@@ -254,7 +260,10 @@ fn nothing_is_shown_before_a_reply_and_a_failed_read_says_so_in_place() {
     let b = serve_with(window_cleaner(), silent);
     let mut h = harness(&b, PanelId::Tuning);
     step_until(&mut h, "the reads to fail", |a| {
-        matches!(a.state.device.readings.get(&130), Some(Reading::Failed(_)))
+        matches!(
+            a.station().device.readings.get(&130),
+            Some(Reading::Failed(_))
+        )
     });
     h.step();
     assert!(h.query_all_by_label("not read yet").next().is_some());

@@ -38,7 +38,7 @@ fn a_capture_recorded_from_the_window_replays_with_the_window_showing_the_same_v
     // The monitor shows the recording and its size; Stop there ends it.
     app_mut(&mut h).apply(Action::ShowPanel(PanelId::Monitor));
     step_until(&mut h, "the file to hold the replies", |a| {
-        a.state
+        a.station()
             .recording()
             .is_some_and(|c| c.summary().chunks >= 14)
     });
@@ -46,7 +46,7 @@ fn a_capture_recorded_from_the_window_replays_with_the_window_showing_the_same_v
     assert!(h.query_all_by_label_contains("KiB").next().is_some());
     h.get_by_label("Stop recording").click();
     step_until(&mut h, "recording to stop", |a| {
-        a.state.recording().is_none()
+        a.station().recording().is_none()
     });
     drop(h);
 
@@ -74,7 +74,7 @@ fn a_capture_recorded_from_the_window_replays_with_the_window_showing_the_same_v
     app_mut(&mut h).apply(Action::OpenCapture(path.clone()));
     app_mut(&mut h).apply(Action::ShowPanel(PanelId::Monitor));
     h.step();
-    let offline = app(&h).state.packets.offline.as_ref().expect("opened");
+    let offline = app(&h).station().packets.offline.as_ref().expect("opened");
     assert_eq!(offline.profile.id, "window-cleaner");
     // Recording starts and stops while the link runs: a frame cut at either end of a
     // direction's stream shows as junk, truncated, or a false header whose checksum fails once

@@ -26,13 +26,13 @@ fn demo(panel: PanelId, files: &[(FileKind, &str)]) -> H {
         saved.files.insert(*kind, path.to_string());
     }
     harness_with(saved, PortOpener::system(), |a: &mut App| {
-        a.state.dialogs = Dialogs::Missing("no file dialog here (test)".into());
+        a.station_mut().dialogs = Dialogs::Missing("no file dialog here (test)".into());
     })
 }
 
 fn notice(h: &H) -> String {
     app(h)
-        .state
+        .station()
         .notice
         .as_ref()
         .map_or(String::new(), |n| n.text.clone())
@@ -44,7 +44,7 @@ fn a_capture_is_recorded_to_and_opened_from_a_typed_path_and_browse_says_it_has_
     let path = dir.path().join("unit-1.pcapng");
     let path_text = path.display().to_string();
     let mut h = demo(PanelId::Monitor, &[]);
-    step_until(&mut h, "the link", |a| a.state.connected());
+    step_until(&mut h, "the link", |a| a.station().connected());
     h.step();
 
     // The capture row's Browse comes first.
@@ -54,7 +54,7 @@ fn a_capture_is_recorded_to_and_opened_from_a_typed_path_and_browse_says_it_has_
 
     type_into(&mut h, "Capture", &path_text);
     h.get_by_label("Record").click();
-    step_until(&mut h, "recording", |a| a.state.recording().is_some());
+    step_until(&mut h, "recording", |a| a.station().recording().is_some());
     assert_eq!(
         app(&h).settings.file(FileKind::Capture),
         Some(path_text.as_str())
@@ -62,7 +62,7 @@ fn a_capture_is_recorded_to_and_opened_from_a_typed_path_and_browse_says_it_has_
     h.step();
     h.get_by_label("Stop recording").click();
     step_until(&mut h, "recording to stop", |a| {
-        a.state.recording().is_none()
+        a.station().recording().is_none()
     });
     let size = std::fs::metadata(&path).unwrap().len();
     assert!(size > 0);
@@ -71,13 +71,13 @@ fn a_capture_is_recorded_to_and_opened_from_a_typed_path_and_browse_says_it_has_
     h.step();
     h.get_by_label("Record").click();
     h.step();
-    assert!(app(&h).state.recording().is_none());
+    assert!(app(&h).station().recording().is_none());
     assert!(notice(&h).contains("exists"), "{}", notice(&h));
     assert_eq!(std::fs::metadata(&path).unwrap().len(), size);
 
     h.get_by_label("Open capture").click();
     h.step();
-    let offline = app(&h).state.packets.offline.as_ref().expect("opened");
+    let offline = app(&h).station().packets.offline.as_ref().expect("opened");
     assert_eq!(offline.name, "unit-1.pcapng");
 }
 

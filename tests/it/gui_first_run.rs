@@ -14,7 +14,7 @@ use crate::support::{serve, window_cleaner};
 fn the_demo_says_how_to_pick_a_real_port_and_the_title_names_the_version() {
     // The first launch: nothing saved, so the built-in demo window cleaner.
     let mut h = harness(Settings::default(), PortOpener::system());
-    step_until(&mut h, "the demo device", |a| a.state.connected());
+    step_until(&mut h, "the demo device", |a| a.station().connected());
     h.run_steps(2);
     let version = format!("botbench {} — ", env!("CARGO_PKG_VERSION"));
     assert!(app(&h).title().starts_with(&version), "{}", app(&h).title());
@@ -30,7 +30,7 @@ fn the_demo_says_how_to_pick_a_real_port_and_the_title_names_the_version() {
         settings(b.path(), "window-cleaner", PanelId::Tuning, Lang::En),
         b.ports(),
     );
-    step_until(&mut h, "the link", |a| a.state.connected());
+    step_until(&mut h, "the link", |a| a.station().connected());
     h.run_steps(2);
     assert!(app(&h).title().starts_with(&version), "{}", app(&h).title());
     assert!(h.query_by_label(demo_hint::text(Lang::En)).is_none());

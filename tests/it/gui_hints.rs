@@ -6,7 +6,7 @@ use botbench::i18n::Lang;
 use botbench::system::PortInfo;
 use botbench::system::adapter::Adapter;
 use botbench::ui::files::Dialogs;
-use botbench::ui::state::PortLister;
+use botbench::ui::station::PortLister;
 use botbench::ui::{App, PanelId};
 use eframe::egui::accesskit::Role;
 use egui_kittest::kittest::Queryable;
@@ -65,11 +65,11 @@ fn hover_hints_say_the_wire_name_the_range_why_not_what_stop_sends_and_the_laten
     saved.port_mut().margin_ms = Some(100);
     let lister = ftdi(&path);
     let mut h = harness_with(saved, b.ports(), move |a: &mut App| {
-        a.state.link.port_lister = lister.clone();
-        a.state.link.refresh_ports_now();
-        a.state.dialogs = Dialogs::Missing("no file dialog on this system (test)".into());
+        a.station_mut().link.port_lister = lister.clone();
+        a.station_mut().link.refresh_ports_now();
+        a.station_mut().dialogs = Dialogs::Missing("no file dialog on this system (test)".into());
     });
-    step_until(&mut h, "the link", |a| a.state.connected());
+    step_until(&mut h, "the link", |a| a.station().connected());
     h.run_steps(2);
 
     // Tuning: a field's name tells its wire name.

@@ -37,7 +37,7 @@ fn step_until(h: &mut H, what: &str, done: impl Fn(&App) -> bool) {
         format!(
             "info {:?}, solar inputs {:?}, outcomes {:?}, self-test running {} results {:?} \
              error {:?}",
-            a.state.device.info,
+            a.station().device.info,
             a.solar.inputs,
             a.solar.control.outcomes,
             a.selftest.running,
@@ -48,7 +48,7 @@ fn step_until(h: &mut H, what: &str, done: impl Fn(&App) -> bool) {
 }
 
 fn identified(a: &App) -> bool {
-    a.state.connected() && matches!(a.state.device.info, Some(Ok(_)))
+    a.station().connected() && matches!(a.station().device.info, Some(Ok(_)))
 }
 
 fn nav_has(h: &H, name: &str) -> bool {
@@ -95,20 +95,20 @@ fn the_device_panel_pings_and_shows_version_build_and_flags() {
     let mut h = harness(&b, "window-cleaner", PanelId::Device, Lang::En);
     // The panel reads version and power state on its own once the link is free.
     step_until(&mut h, "the power state", |a| {
-        a.device.power.is_some() && a.state.job_progress().is_none()
+        a.device.power.is_some() && a.station().job_progress().is_none()
     });
     assert!(matches!(app(&h).device.power, Some(Ok(_))));
     h.get_by_label("Ping").click();
     step_until(&mut h, "the ping", |a| a.device.ping.is_some());
     assert!(matches!(app(&h).device.ping, Some(Ok(_))));
     step_until(&mut h, "the ping job to end", |a| {
-        a.state.job_progress().is_none()
+        a.station().job_progress().is_none()
     });
     b.sim().set_flags(Some(0b0101));
     h.get_by_label("Read version and power state").click();
     step_until(&mut h, "the new flags", |a| {
         matches!(&a.device.version, Some(Ok(v)) if v.flags == Some(0b0101))
-            && matches!(&a.state.device.info, Some(Ok(v)) if v.flags == Some(0b0101))
+            && matches!(&a.station().device.info, Some(Ok(v)) if v.flags == Some(0b0101))
     });
     h.run_steps(2);
     assert_eq!(
@@ -156,7 +156,7 @@ fn speed_rotate_and_stop_from_the_solar_panel_drive_the_simulated_robot() {
     drive(&mut h, &b, 300);
     step_until(&mut h, "the robot to move", |_| b.sim().speed() > 100.0);
     step_until(&mut h, "the readouts", |a| {
-        a.state
+        a.station()
             .device
             .plots
             .get("motor_speed")
@@ -257,10 +257,12 @@ fn plan_file(dir: &tempfile::TempDir) -> std::path::PathBuf {
 
 /// Clicks Run once nothing else runs, and waits for the job to start.
 fn start_selftest(h: &mut H) {
-    step_until(h, "no job running", |a| a.state.job_progress().is_none());
+    step_until(h, "no job running", |a| {
+        a.station().job_progress().is_none()
+    });
     h.get_by_label("Run self-test").click();
     step_until(h, "the self-test job", |a| {
-        a.selftest.running && a.state.job.as_ref().is_some_and(|j| !j.is_done())
+        a.selftest.running && a.station().job.as_ref().is_some_and(|j| !j.is_done())
     });
 }
 
@@ -274,7 +276,7 @@ fn run_selftest(
     let plan = plan_file(dir);
     let log = dir.path().join("selftest.jsonl");
     step_until(h, "the device identified", |a| {
-        identified(a) && a.state.job_progress().is_none()
+        identified(a) && a.station().job_progress().is_none()
     });
     {
         let a = app_mut(h);
@@ -350,7 +352,7 @@ fn the_self_test_fails_naming_the_faulty_check() {
 fn a_malformed_plan_is_refused_with_its_line() {
     let b = window_cleaner(Some(0x0F), &[]);
     let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, Lang::En);
-    step_until(&mut h, "the link", |a| a.state.connected());
+    step_until(&mut h, "the link", |a| a.station().connected());
     let dir = temp_dir();
     let path = dir.path().join("bad-plan.ron");
     std::fs::write(
@@ -380,7 +382,9 @@ fn the_msp_panels_render_in_english_and_chinese() {
     let b = solar();
     for lang in [Lang::En, Lang::Zh] {
         let mut h = harness(&b, "solar-cleanbot", PanelId::Solar, lang);
-        step_until(&mut h, "readings", |a| a.state.device.readings.len() > 5);
+        step_until(&mut h, "readings", |a| {
+            a.station().device.readings.len() > 5
+        });
         for panel in app(&h).panels() {
             app_mut(&mut h).settings.panel = panel;
             h.run_steps(2);
@@ -390,7 +394,7 @@ fn the_msp_panels_render_in_english_and_chinese() {
     let b = window_cleaner(Some(0x0F), &[]);
     for lang in [Lang::En, Lang::Zh] {
         let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, lang);
-        step_until(&mut h, "the link", |a| a.state.connected());
+        step_until(&mut h, "the link", |a| a.station().connected());
         app_mut(&mut h).selftest.path = SELFTEST_PLAN.into();
         h.step();
         let open = lang.tr("Open plan", "打开方案");
@@ -414,7 +418,7 @@ fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step
     let dir = temp_dir();
     let plan = plan_file(&dir);
     step_until(&mut h, "the device identified", |a| {
-        identified(a) && a.state.job_progress().is_none()
+        identified(a) && a.station().job_progress().is_none()
     });
     {
         let a = app_mut(&mut h);
@@ -451,10 +455,10 @@ fn a_fan_left_on_is_shown_running_the_self_test_starts_safe_and_its_verdict_belo
     let b = window_cleaner(Some(0x0F), &[]);
     let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, Lang::En);
     step_until(&mut h, "the device identified", |a| {
-        identified(a) && a.state.job_progress().is_none()
+        identified(a) && a.station().job_progress().is_none()
     });
     // The fan left on from Actions: the window says so on every panel.
-    let profile = app(&h).state.device.profile.clone();
+    let profile = app(&h).station().device.profile.clone();
     let fan = profile.command("MSP_SET_FAN").expect("the fan command").id;
     app_mut(&mut h).apply(Action::StartJob(jobs::send(
         &profile,
@@ -462,7 +466,7 @@ fn a_fan_left_on_is_shown_running_the_self_test_starts_safe_and_its_verdict_belo
         vec![("pwm".into(), Input::Text("60".into()))],
     )));
     step_until(&mut h, "the fan running", |a| {
-        !a.state.device.running.is_empty() && a.state.job_progress().is_none()
+        !a.station().device.running.is_empty() && a.station().job_progress().is_none()
     });
     h.run_steps(2);
     assert!(h.query_by_label("Running:").is_some());

@@ -103,7 +103,7 @@ fn a_parameter_out_of_range_is_refused_and_one_in_range_is_written_and_verified(
         app(&h)
             .servo
             .params
-            .pending(&app(&h).state.device.profile)
+            .pending(&app(&h).station().device.profile)
             .is_err()
     );
     assert!(
@@ -140,15 +140,15 @@ fn provision_next_on_a_fresh_servo_shows_pass_and_the_servo_has_the_plans_id_and
         "/presets/servo-provision-plan.ron"
     );
     // Without a file dialog, Browse says so; typed paths work.
-    app_mut(&mut h).state.dialogs = Dialogs::Missing("no file dialog here (test)".into());
+    app_mut(&mut h).station_mut().dialogs = Dialogs::Missing("no file dialog here (test)".into());
     for i in 0..2 {
-        app_mut(&mut h).state.notice = None;
+        app_mut(&mut h).station_mut().notice = None;
         h.query_all_by_label("Browse…")
             .nth(i)
             .expect("Browse")
             .click();
         h.step();
-        let notice = app(&h).state.notice.clone().expect("said");
+        let notice = app(&h).station().notice.clone().expect("said");
         assert!(notice.error && notice.text == "no file dialog here (test)");
     }
     type_into(&mut h, "Plan", plan);
@@ -233,7 +233,7 @@ fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
     );
     step_until(&mut h, "the port back at 57600", |a| {
         matches!(
-            &a.state.link.state,
+            &a.station().link.state,
             Some(botbench::link::LinkState::Connected { baud: 57_600, .. })
         )
     });
@@ -377,7 +377,7 @@ fn a_new_connection_forgets_the_servos_found_on_the_last_one() {
         profile: "servo".into(),
         margin_ms: None,
     });
-    step_until(&mut h, "the new link", |a| a.state.connected());
+    step_until(&mut h, "the new link", |a| a.station().connected());
     let a = app(&h);
     assert!(a.servo.scan.rows.is_empty(), "{:?}", a.servo.scan.rows);
     assert!(a.servo.selected.is_none());

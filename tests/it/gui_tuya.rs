@@ -65,7 +65,7 @@ pub(crate) fn harness(port: &impl Port, profile: &str) -> H {
 
 pub(crate) fn handshake(h: &mut H) {
     step_until(h, "the handshake", |a| {
-        a.state.device.tuya.done_at.is_some()
+        a.station().device.tuya.done_at.is_some()
     });
     h.run_steps(2);
 }
@@ -77,7 +77,12 @@ pub(crate) fn tab(h: &mut H, name: &str) {
 }
 
 pub(crate) fn reported(a: &App, id: u8) -> Option<Value> {
-    a.state.device.tuya.dps.get(&id).map(|s| s.value.clone())
+    a.station()
+        .device
+        .tuya
+        .dps
+        .get(&id)
+        .map(|s| s.value.clone())
 }
 
 #[test]
@@ -111,8 +116,8 @@ fn the_handshake_completes_and_the_panel_shows_the_product_info() {
         b.sim().wifi_state() == Some(2)
     });
     step_until(&mut h, "the ack", |a| {
-        a.state.device.tuya.wifi_acked.is_some_and(|t| {
-            a.state
+        a.station().device.tuya.wifi_acked.is_some_and(|t| {
+            a.station()
                 .device
                 .tuya
                 .wifi_sent
@@ -153,7 +158,7 @@ fn a_silent_mcu_shows_where_the_handshake_stopped_and_no_value() {
     let b = bench_with(TuyaMcu::new(config()), silent);
     let mut h = harness(&b, "tuya-vacuum");
     step_until(&mut h, "two failed attempts", |a| {
-        a.state.device.tuya.stopped.is_some() && a.state.device.tuya.attempts >= 2
+        a.station().device.tuya.stopped.is_some() && a.station().device.tuya.attempts >= 2
     });
     h.run_steps(2);
     assert!(has_label(&h, "Handshake stopped at Heartbeat (0x00)"));
@@ -178,9 +183,9 @@ fn an_mcu_restart_is_shown_and_the_handshake_runs_again() {
     handshake(&mut h);
     b.sim().restart();
     step_until(&mut h, "the restart and a new handshake", |a| {
-        a.state.device.tuya.restarts.0 == 1
-            && a.state.device.tuya.done_at.is_some()
-            && a.state.device.tuya.attempts >= 2
+        a.station().device.tuya.restarts.0 == 1
+            && a.station().device.tuya.done_at.is_some()
+            && a.station().device.tuya.attempts >= 2
     });
     h.run_steps(2);
     assert!(has_label(
@@ -217,16 +222,16 @@ fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_
     assert!(has_label(&h, "3 mode = Spot clean"));
     assert!(has_label(&h, "✓ reported back"));
     // Query status (0x08): every data point is reported again.
-    let before = app(&h).state.device.tuya.log_seq;
+    let before = app(&h).station().device.tuya.log_seq;
     h.get_by_label("Query status").click();
     step_until(&mut h, "19 reports", |a| {
-        a.state.device.tuya.log_seq >= before + 19
+        a.station().device.tuya.log_seq >= before + 19
     });
-    assert!(app(&h).state.device.tuya.last_query.is_some());
+    assert!(app(&h).station().device.tuya.last_query.is_some());
 }
 
 fn sent_dp_commands(a: &App) -> usize {
-    a.state
+    a.station()
         .packets
         .entries
         .iter()
@@ -332,7 +337,7 @@ fn the_mcus_requests_are_answered_and_shown_with_a_chosen_time() {
         m.request_mac();
     }
     step_until(&mut h, "four requests answered", |a| {
-        a.state.device.tuya.requests.len() == 4
+        a.station().device.tuya.requests.len() == 4
     });
     h.run_steps(2);
     assert!(has_label(&h, "time 2026-11-22 08:30:15, Sunday"));
@@ -430,7 +435,7 @@ fn an_empty_or_missing_firmware_file_is_refused_with_a_clear_message() {
         assert!(err.contains(&path) && err.contains(why), "{err}");
         assert!(has_label(&h, why));
         assert!(h.query_by_label("Update the MCU firmware?").is_none());
-        assert!(app(&h).state.job.is_none(), "no update started");
+        assert!(app(&h).station().job.is_none(), "no update started");
     }
     assert_eq!(*b.sim().ota_state(), OtaState::Idle);
 }
@@ -478,7 +483,7 @@ fn every_section_renders_in_english_and_chinese() {
         m.request_mac();
     }
     step_until(&mut h, "the requests", |a| {
-        a.state.device.tuya.requests.len() == 5
+        a.station().device.tuya.requests.len() == 5
     });
     tab(&mut h, "Data points");
     type_into(&mut h, "16 Clean area", "-5");

@@ -42,11 +42,11 @@ fn the_demo_mcu_runs_at_the_profiles_rate_and_sends_its_requests_when_asked() {
     handshake(&mut h);
     assert!(
         matches!(
-            app(&h).state.link.state,
+            app(&h).station().link.state,
             Some(LinkState::Connected { baud: 9600, .. })
         ),
         "{:?}",
-        app(&h).state.link.state
+        app(&h).station().link.state
     );
     tab(&mut h, "MCU requests");
     for button in [
@@ -58,7 +58,7 @@ fn the_demo_mcu_runs_at_the_profiles_rate_and_sends_its_requests_when_asked() {
         h.run_steps(1);
     }
     step_until(&mut h, "three requests answered", |a| {
-        a.state.device.tuya.requests.len() == 3
+        a.station().device.tuya.requests.len() == 3
     });
     h.run_steps(2);
     assert!(has_label(&h, "The MCU asked to reset the Wi-Fi, times: 1"));
@@ -158,5 +158,5 @@ fn an_image_over_the_profiles_maximum_is_refused_and_one_that_fits_shows_its_exp
     );
     h.get_by_label("Do not update").click();
     h.run_steps(2);
-    assert!(app(&h).state.job.is_none(), "nothing started");
+    assert!(app(&h).station().job.is_none(), "nothing started");
 }

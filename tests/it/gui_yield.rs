@@ -43,7 +43,7 @@ fn the_yield_view_shows_the_hand_sets_yields_in_both_languages() {
         step_until(
             &mut h,
             "the report of every record",
-            |a| matches!(a.state.records.report(), (Some(Ok(r)), false) if r.overall.units == 5),
+            |a| matches!(a.station().records.report(), (Some(Ok(r)), false) if r.overall.units == 5),
         );
         h.run_steps(3);
         // Five units: 40 % first-pass, 60 % final (worked out by hand in records.rs).
@@ -53,6 +53,6 @@ fn the_yield_view_shows_the_hand_sets_yields_in_both_languages() {
                 "{lang:?}: no '{text}' on the Yield view"
             );
         }
-        assert!(app(&h).state.records.error().is_none());
+        assert!(app(&h).station().records.error().is_none());
     }
 }

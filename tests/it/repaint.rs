@@ -34,8 +34,8 @@ fn step_until_asked(h: &mut H, what: &str, done: impl Fn(Duration) -> bool) {
 }
 
 fn streaming(a: &App) -> bool {
-    a.state.connected()
-        && a.state
+    a.station().connected()
+        && a.station()
             .device
             .plots
             .get("attitude")

@@ -18,7 +18,7 @@ fn the_battery_state_is_named_beside_its_plot_and_is_no_line() {
     saved.port_mut().margin_ms = Some(100);
     let mut h = harness(saved, b.ports());
     let voltage = |a: &App| {
-        a.state
+        a.station()
             .device
             .plots
             .get("battery")
@@ -26,7 +26,7 @@ fn the_battery_state_is_named_beside_its_plot_and_is_no_line() {
     };
     step_until(&mut h, "the battery plotted", voltage);
     h.step();
-    let series: Vec<String> = app(&h).state.device.plots["battery"]
+    let series: Vec<String> = app(&h).station().device.plots["battery"]
         .iter()
         .map(|(name, _)| name.to_string())
         .collect();
@@ -38,7 +38,7 @@ fn the_battery_state_is_named_beside_its_plot_and_is_no_line() {
     // The state follows the battery: a low one names its new state.
     b.sim().set_battery(21.5);
     step_until(&mut h, "the warning read", |a| {
-        a.state.device.value(130, "state") == Some(&botbench::profile::Value::Int(1))
+        a.station().device.value(130, "state") == Some(&botbench::profile::Value::Int(1))
     });
     h.step();
     assert!(h.query_by_label("Battery state: Warning (1)").is_some());
@@ -47,7 +47,7 @@ fn the_battery_state_is_named_beside_its_plot_and_is_no_line() {
 
 /// The log's frames of `profile`.
 fn logged(a: &App, profile: &str) -> usize {
-    a.state
+    a.station()
         .packets
         .entries
         .iter()
@@ -62,7 +62,7 @@ fn frames_logged_before_a_device_change_keep_the_profile_they_came_under() {
     saved.port_mut().margin_ms = Some(100);
     let mut h = harness(saved, b.ports());
     let attitude = |a: &App| {
-        a.state.packets.entries.iter().any(|l| {
+        a.station().packets.entries.iter().any(|l| {
             l.entry
                 .frame
                 .as_ref()
@@ -77,7 +77,7 @@ fn frames_logged_before_a_device_change_keep_the_profile_they_came_under() {
         profile: "servo".into(),
         margin_ms: None,
     });
-    step_until(&mut h, "the servo link", |a| a.state.connected());
+    step_until(&mut h, "the servo link", |a| a.station().connected());
     app_mut(&mut h).apply(Action::StartJob(Job::new(
         Text::new("ping", "ping"),
         |client, _, _| {

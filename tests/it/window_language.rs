@@ -61,10 +61,10 @@ fn the_english_sentence_check_finds_a_sentence_and_passes_names_and_units() {
 /// `seen`, once each.
 fn take(seen: &mut Vec<String>, a: &App) {
     let mut now = Vec::new();
-    if let Some(n) = &a.state.notice {
+    if let Some(n) = &a.station().notice {
         now.push(n.text_in(Lang::Zh).to_string());
     }
-    if let Some((title, _, msg)) = a.state.job_progress() {
+    if let Some((title, _, msg)) = a.station().job_progress() {
         now.push(title.zh.clone());
         now.push(msg.zh.clone());
     }
@@ -99,7 +99,10 @@ impl Said {
 }
 
 fn notice_has(a: &App, zh: &str) -> bool {
-    a.state.notice.as_ref().is_some_and(|n| n.zh.contains(zh))
+    a.station()
+        .notice
+        .as_ref()
+        .is_some_and(|n| n.zh.contains(zh))
 }
 
 fn demo(kind: SimKind, panel: PanelId) -> H {
@@ -119,20 +122,20 @@ fn in_chinese_a_technicians_day_on_the_window_cleaner_is_said_in_chinese() {
     let mut said = Said::default();
     let mut h = demo(SimKind::WindowCleaner, PanelId::Device);
     said.step_until(&mut h, "the first read", |a| {
-        a.state.device.info.is_some() && a.state.job_progress().is_none()
+        a.station().device.info.is_some() && a.station().job_progress().is_none()
     });
     for (button, done) in [("通讯检测", "通讯检测:"), ("读取版本与电源状态", "版本:")]
     {
         h.get_by_label(button).click();
         said.step_until(&mut h, button, |a| {
-            notice_has(a, done) && a.state.job_progress().is_none()
+            notice_has(a, done) && a.station().job_progress().is_none()
         });
     }
     app_mut(&mut h).settings.panel = PanelId::Tuning;
     h.run_steps(2);
     h.get_by_label("全部读取").click();
     said.step_until(&mut h, "every parameter read", |a| {
-        notice_has(a, "读取:") && a.state.job_progress().is_none()
+        notice_has(a, "读取:") && a.station().job_progress().is_none()
     });
     app_mut(&mut h).settings.panel = PanelId::Telemetry;
     h.run_steps(2);
@@ -167,7 +170,7 @@ fn in_chinese_a_silent_device_and_a_servo_scan_are_said_in_chinese() {
     let mut h = harness_with(saved, silent.ports(), |_| {});
     // On connecting, the tuning panel's values are read: none answers.
     said.step_until(&mut h, "the first read to fail", |a| {
-        a.state.notice.as_ref().is_some_and(|n| n.error) && a.state.job_progress().is_none()
+        a.station().notice.as_ref().is_some_and(|n| n.error) && a.station().job_progress().is_none()
     });
     assert!(
         said.english().is_empty(),
@@ -176,10 +179,10 @@ fn in_chinese_a_silent_device_and_a_servo_scan_are_said_in_chinese() {
     );
 
     let mut h = demo(SimKind::ServoBus, PanelId::ServoBench);
-    said.step_until(&mut h, "connected", |a| a.state.connected());
+    said.step_until(&mut h, "connected", |a| a.station().connected());
     h.get_by_label("扫描").click();
     said.step_until(&mut h, "the scan", |a| {
-        notice_has(a, "扫描:") && a.state.job_progress().is_none()
+        notice_has(a, "扫描:") && a.station().job_progress().is_none()
     });
     assert!(
         said.english().is_empty(),
@@ -193,16 +196,21 @@ fn in_chinese_a_silent_device_and_a_servo_scan_are_said_in_chinese() {
 fn in_chinese_the_other_telemetry_names_its_fields_not_their_wire_names() {
     let mut h = demo(SimKind::SolarCleanbot, PanelId::Telemetry);
     step_until(&mut h, "the rangefinder read", |a| {
-        a.state
+        a.station()
             .device
             .profile
             .command("CMD_RANGEFINDER")
-            .and_then(|c| a.state.device.readings.get(&c.id))
+            .and_then(|c| a.station().device.readings.get(&c.id))
             .is_some()
     });
     h.run_steps(2);
     let app = h.state().as_ref().expect("app");
-    let cmd = app.state.device.profile.command("CMD_RANGEFINDER").unwrap();
+    let cmd = app
+        .station()
+        .device
+        .profile
+        .command("CMD_RANGEFINDER")
+        .unwrap();
     let shown: Vec<String> = h
         .output()
         .shapes

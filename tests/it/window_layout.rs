@@ -9,7 +9,7 @@ use botbench::i18n::Lang;
 use botbench::link::PortOpener;
 use botbench::sim::SimKind;
 use botbench::ui::layout::{one_line, overlapping_texts, split_words};
-use botbench::ui::state::Answering;
+use botbench::ui::station::Answering;
 use botbench::ui::{App, PanelId, Settings, Target};
 use eframe::egui;
 use egui_kittest::Harness;
@@ -123,9 +123,9 @@ fn demo(kind: SimKind, lang: Lang, size: egui::Vec2) -> H {
 
 fn ready(kind: SimKind, a: &App) -> bool {
     match kind {
-        SimKind::ServoBus => a.state.connected(),
-        SimKind::TuyaVacuum => a.state.device.tuya.done_at.is_some(),
-        _ => a.state.link.answering() == Answering::Yes && a.state.device.info.is_some(),
+        SimKind::ServoBus => a.station().connected(),
+        SimKind::TuyaVacuum => a.station().device.tuya.done_at.is_some(),
+        _ => a.station().link.answering() == Answering::Yes && a.station().device.info.is_some(),
     }
 }
 
@@ -136,11 +136,11 @@ fn prepare(h: &mut H, kind: SimKind) {
     if kind == SimKind::WindowCleaner {
         // The self-test's plan and a preset open, as a technician has them.
         let a = app_mut(h);
-        a.selftest.open(&a.state);
+        a.selftest.open(a.state.station());
         let dir = botbench::ui::files::shipped_dir();
         let preset = botbench::ui::files::shipped_in(&dir, "window-cleaner-factory.ron");
         a.presets.path = preset.unwrap().display().to_string();
-        a.presets.open(&a.state);
+        a.presets.open(a.state.station());
         assert!(a.selftest.plan.is_some() && a.presets.loaded.is_some());
     }
     if kind == SimKind::ServoBus {
@@ -149,7 +149,7 @@ fn prepare(h: &mut H, kind: SimKind) {
         h.run_steps(2);
         h.get_by_label("扫描").click();
         step_until(h, "the scan", |a| {
-            a.servo.selected.is_some() && a.state.job_progress().is_none()
+            a.servo.selected.is_some() && a.station().job_progress().is_none()
         });
         let params = app(h)
             .views()
@@ -157,7 +157,7 @@ fn prepare(h: &mut H, kind: SimKind) {
             .find(|v| v.name.ends_with("Params"));
         app_mut(h).show_view(&params.expect("a Params tab"));
         step_until(h, "the parameters read", |a| {
-            !a.servo.params.values.is_empty() && a.state.job_progress().is_none()
+            !a.servo.params.values.is_empty() && a.station().job_progress().is_none()
         });
         h.run_steps(2);
         // Ranges are the profile's, named values by their names: no type limit, no ident.
@@ -304,7 +304,7 @@ fn at_1024_px_every_solar_plot_keeps_its_height_and_scrolls_into_view() {
     let mut h = demo(SimKind::SolarCleanbot, Lang::Zh, SMALL);
     app_mut(&mut h).settings.panel = PanelId::Telemetry;
     step_until(&mut h, "every plot drawn", |a| {
-        a.telemetry.shown.len() == a.state.device.profile.plots.len()
+        a.telemetry.shown.len() == a.station().device.profile.plots.len()
     });
     h.run_steps(2);
     let inside = |a: &App| {
@@ -348,7 +348,7 @@ fn a_panel_keeps_its_own_scroll_place_when_another_panel_was_scrolled() {
     let dir = botbench::ui::files::shipped_dir();
     let preset = botbench::ui::files::shipped_in(&dir, "window-cleaner-factory.ron");
     a.presets.path = preset.unwrap().display().to_string();
-    a.presets.open(&a.state);
+    a.presets.open(a.state.station());
     // The tuning table scrolled to its last group…
     let last = app(&h)
         .views()
@@ -378,7 +378,7 @@ fn at_1024_px_every_range_hint_of_the_solar_actions_is_drawn_whole() {
     let mut h = demo(SimKind::SolarCleanbot, Lang::En, SMALL);
     app_mut(&mut h).settings.panel = PanelId::Actions;
     h.run_steps(3);
-    let profile = app(&h).state.device.profile.clone();
+    let profile = app(&h).station().device.profile.clone();
     let mut hints = 0;
     for f in profile
         .commands

@@ -29,7 +29,7 @@ fn the_top_bar_keeps_its_badge_whole_and_its_switch_in_place() {
         h.run_steps(2);
         let before = h.get_by_label(switch).rect();
         step_until(&mut h, "answers", |a| {
-            a.state.link.answering() == botbench::ui::state::Answering::Yes
+            a.station().link.answering() == botbench::ui::station::Answering::Yes
         });
         h.run_steps(2);
         let badge = h.get_by_label(answering).rect();
@@ -137,7 +137,7 @@ fn at_1024_px_a_bit_field_takes_its_rows_height_and_draws_over_no_other_row() {
             .rect()
     };
     let next_row = label(&h, "19 Map parameters").top();
-    let profile = app(&h).state.device.profile.clone();
+    let profile = app(&h).station().device.profile.clone();
     let fault = profile.data_points.iter().find(|d| d.id == 18).unwrap();
     assert!(!fault.field.bits.is_empty());
     for bit in &fault.field.bits {

@@ -29,10 +29,13 @@ fn the_packet_monitor_opened_late_shows_the_newest_and_holds_where_the_technicia
     let b = bench();
     let mut h = harness(&b, PanelId::Tuning);
     // A small log, so that it is full (and drops its oldest) within the test.
-    app_mut(&mut h).state.packets.capacity = 400;
-    step_until(&mut h, "traffic", |a| a.state.packets.entries.len() >= 400);
+    app_mut(&mut h).station_mut().packets.capacity = 400;
+    step_until(&mut h, "traffic", |a| {
+        a.station().packets.entries.len() >= 400
+    });
     show(&mut h, PanelId::Monitor);
-    let newest = |a: &App| a.state.packets.first_seq() + a.state.packets.entries.len() as u64;
+    let newest =
+        |a: &App| a.station().packets.first_seq() + a.station().packets.entries.len() as u64;
     {
         let a = app(&h);
         assert!(a.monitor.follow, "it follows by default");
@@ -80,7 +83,7 @@ fn the_packet_monitor_opened_late_shows_the_newest_and_holds_where_the_technicia
     // dropped leaves the view on the oldest one kept.
     assert_eq!(
         a.monitor.top,
-        Some(held.max(a.state.packets.first_seq())),
+        Some(held.max(a.station().packets.first_seq())),
         "the view stays on the frames it was on"
     );
     let (below, secs) = a.monitor.behind.expect("says how far behind");
@@ -107,8 +110,8 @@ fn telemetry(port: &impl Port, lang: Lang) -> H {
 
 /// Samples in the first plot's series.
 fn samples(a: &App) -> usize {
-    let id = &a.state.device.profile.plots[0].id;
-    a.state
+    let id = &a.station().device.profile.plots[0].id;
+    a.station()
         .device
         .plots
         .get(id)
@@ -131,8 +134,8 @@ fn the_cursor_readout_is_a_sample_under_the_pointer_or_nothing_and_moves_nothing
     {
         let a = app(&h);
         let r = a.telemetry.shown[0].readout.clone().expect("a readout");
-        let id = &a.state.device.profile.plots[0].id;
-        let set = a.state.device.plots.get(id).unwrap();
+        let id = &a.station().device.profile.plots[0].id;
+        let set = a.station().device.plots.get(id).unwrap();
         let (field, series) = set.iter().next().unwrap();
         assert!(
             series.iter().any(|s| s.t == r.t),
@@ -174,9 +177,9 @@ fn a_pause_keeps_the_paused_data_in_view_and_breaks_the_line() {
         "Pause/Resume moves nothing"
     );
     let end = app(&h).telemetry.shown[0].x.1;
-    let t0 = app(&h).state.device.t0;
+    let t0 = app(&h).station().device.t0;
     step_until(&mut h, "time to pass", |a| {
-        a.state.device.t0.elapsed().as_secs_f64() > end + 0.5 && t0 == a.state.device.t0
+        a.station().device.t0.elapsed().as_secs_f64() > end + 0.5 && t0 == a.station().device.t0
     });
     h.run_steps(2);
     assert!(app(&h).telemetry.follow);
@@ -189,11 +192,18 @@ fn a_pause_keeps_the_paused_data_in_view_and_breaks_the_line() {
     h.get_by_label("Resume").click();
     step_until(&mut h, "new samples", |a| samples(a) >= n + 3);
     let a = app(&h);
-    let id = &a.state.device.profile.plots[0].id;
-    let set = a.state.device.plots.get(id).unwrap();
+    let id = &a.station().device.profile.plots[0].id;
+    let set = a.station().device.plots.get(id).unwrap();
     let (field, _) = set.iter().next().unwrap();
     let (mut pts, mut starts) = (Vec::new(), Vec::new());
-    set.decimate_segments(field, 0.0, a.state.plot_end(), 1000, &mut pts, &mut starts);
+    set.decimate_segments(
+        field,
+        0.0,
+        a.station().plot_end(),
+        1000,
+        &mut pts,
+        &mut starts,
+    );
     assert!(
         starts.len() >= 2,
         "the line is broken where polling paused: {starts:?}"
@@ -210,11 +220,11 @@ fn a_silent_device_is_a_port_open_not_a_device_answering() {
         },
     );
     let mut h = harness(&b, PanelId::Tuning);
-    step_until(&mut h, "the port", |a| a.state.connected());
+    step_until(&mut h, "the port", |a| a.station().connected());
     step_until(&mut h, "unanswered requests", |a| {
         matches!(
-            a.state.link.answering(),
-            botbench::ui::state::Answering::No(_)
+            a.station().link.answering(),
+            botbench::ui::station::Answering::No(_)
         )
     });
     h.run_steps(2);
@@ -229,9 +239,9 @@ fn a_disconnect_forgets_the_units_version_values_and_marks() {
     // Whether the device answers comes with the worker's next statistics report, which may
     // arrive after the values: wait for it, not for a number of frames.
     step_until(&mut h, "the device read and its answers counted", |a| {
-        a.state.device.info.is_some()
-            && a.state.device.value(130, "pwmValue").is_some()
-            && a.state.link.answering() == botbench::ui::state::Answering::Yes
+        a.station().device.info.is_some()
+            && a.station().device.value(130, "pwmValue").is_some()
+            && a.station().link.answering() == botbench::ui::station::Answering::Yes
     });
     h.run_steps(2);
     assert!(h.query_by_label_contains("device answering").is_some());
@@ -242,8 +252,8 @@ fn a_disconnect_forgets_the_units_version_values_and_marks() {
     h.get_by_label("Disconnect").click();
     h.run_steps(3);
     let a = app(&h);
-    assert!(a.state.device.info.is_none());
-    assert!(a.state.device.value(130, "pwmValue").is_none());
+    assert!(a.station().device.info.is_none());
+    assert!(a.station().device.value(130, "pwmValue").is_none());
     assert!(
         h.query_by_label_contains(" fw ").is_none(),
         "no version of a gone unit"
@@ -255,7 +265,7 @@ fn a_disconnect_forgets_the_units_version_values_and_marks() {
 fn stop_is_on_every_window_cleaner_panel_and_goes_straight_to_the_robot() {
     let b = bench();
     let mut h = harness(&b, PanelId::Tuning);
-    step_until(&mut h, "the link", |a| a.state.connected());
+    step_until(&mut h, "the link", |a| a.station().connected());
     for panel in [
         PanelId::Tuning,
         PanelId::Telemetry,
@@ -274,7 +284,7 @@ fn stop_is_on_every_window_cleaner_panel_and_goes_straight_to_the_robot() {
     show(&mut h, PanelId::Tuning);
     h.get_all_by_label("STOP").next().unwrap().click();
     let ids: Vec<u8> = {
-        let p = &app(&h).state.device.profile;
+        let p = &app(&h).station().device.profile;
         p.stop
             .iter()
             .map(|s| p.command(&s.command).expect("a STOP command").id)
@@ -283,7 +293,7 @@ fn stop_is_on_every_window_cleaner_panel_and_goes_straight_to_the_robot() {
     assert!(!ids.is_empty());
     step_until(&mut h, "every STOP command answered", |a| {
         ids.iter().all(|id| {
-            a.state.packets.entries.iter().any(|l| {
+            a.station().packets.entries.iter().any(|l| {
                 l.entry.direction == botbench::protocol::Direction::DeviceToHost
                     && l.entry.frame.as_ref().is_ok_and(|p| p.command == *id)
             })
@@ -313,8 +323,8 @@ fn the_tuning_tables_line_up_across_the_width_and_say_only_what_the_profile_give
     b.sim.lock().unwrap().set_param("pwmvalueMax", 97).unwrap();
     let mut h = harness(&b, PanelId::Tuning);
     step_until(&mut h, "the device read", |a| {
-        (130..=136).all(|id| a.state.device.readings.contains_key(&id))
-            && a.state.job_progress().is_none()
+        (130..=136).all(|id| a.station().device.readings.contains_key(&id))
+            && a.station().job_progress().is_none()
     });
     h.run_steps(2);
     let lefts = input_lefts(&h);
@@ -379,7 +389,8 @@ fn the_configurator_variants_own_set_layout_is_written_and_verified() {
     saved.port_mut().margin_ms = Some(100);
     let mut h = crate::support::gui::harness(saved, b.ports());
     step_until(&mut h, "the spray settings read", |a| {
-        a.state.device.value(135, "waterPumpDuration").is_some() && a.state.job_progress().is_none()
+        a.station().device.value(135, "waterPumpDuration").is_some()
+            && a.station().job_progress().is_none()
     });
     h.run_steps(2);
     let is_151 = |n: &egui_kittest::kittest::AccessKitNode<'_>| {
@@ -392,7 +403,10 @@ fn the_configurator_variants_own_set_layout_is_written_and_verified() {
     h.get_by(is_151).type_text("200");
     h.run_steps(2);
     let a = app(&h);
-    let (_, writes) = a.tuning.pending(&a.state).expect("the write is possible");
+    let (_, writes) = a
+        .tuning
+        .pending(a.station())
+        .expect("the write is possible");
     let set = writes.iter().find(|(id, _)| *id == 225).expect("SET 225");
     let fields: Vec<&str> = set.1.iter().map(|(f, _)| f.as_str()).collect();
     assert_eq!(
@@ -405,17 +419,17 @@ fn the_configurator_variants_own_set_layout_is_written_and_verified() {
         "the Set's own fields"
     );
     step_until(&mut h, "no job running", |a| {
-        a.state.job_progress().is_none()
+        a.station().job_progress().is_none()
     });
     h.get_by_label_contains("Write changes (1)").click();
     h.run_steps(3);
     h.get_by_label("Write").click();
     step_until(&mut h, "the write verified", |a| {
-        a.state
+        a.station()
             .device
             .marks
             .get(&(135, "waterPumpDuration".to_string()))
-            == Some(&botbench::ui::state::Mark::Verified)
+            == Some(&botbench::ui::station::Mark::Verified)
     });
     assert_eq!(b.sim.lock().unwrap().param("waterPumpDuration"), Some(200));
 }
@@ -430,7 +444,7 @@ fn in_chinese_the_status_line_and_the_plot_legends_are_chinese() {
     });
     h.run_steps(2);
     let a = app(&h);
-    let profile = &a.state.device.profile;
+    let profile = &a.station().device.profile;
     for s in &a.telemetry.shown {
         let p = profile.plots.iter().find(|p| p.id == s.id).unwrap();
         for (ident, name) in p.fields.iter().zip(&s.legend.names) {
@@ -460,13 +474,13 @@ fn factory_defaults_leave_no_file_named_and_a_typed_preset_path_is_remembered() 
     let path = dir.join("golden.ron");
     let mut h = harness(&b, PanelId::Presets);
     step_until(&mut h, "the device read", |a| {
-        a.state.device.value(130, "pwmValue").is_some() && a.state.job_progress().is_none()
+        a.station().device.value(130, "pwmValue").is_some() && a.station().job_progress().is_none()
     });
     app_mut(&mut h).presets.path = path.display().to_string();
     h.step();
     h.get_by_label("Save device to file").click();
     step_until(&mut h, "the preset saved", |a| {
-        path.exists() && a.state.job_progress().is_none()
+        path.exists() && a.station().job_progress().is_none()
     });
     assert_eq!(
         app(&h)
@@ -492,7 +506,7 @@ fn other_telemetry_lists_every_telemetry_command_in_a_box_of_many_rows() {
     let b = bench();
     let mut h = telemetry(&b, Lang::En);
     h.run_steps(3);
-    let profile = app(&h).state.device.profile.clone();
+    let profile = app(&h).station().device.profile.clone();
     let others: Vec<_> = profile
         .commands
         .iter()

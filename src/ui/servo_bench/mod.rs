@@ -18,7 +18,7 @@ mod setup;
 
 use super::Action;
 use super::jobs::{JobOutput, JobSink, LogError};
-use super::state::{AppState, Notice};
+use super::station::{Notice, Station};
 use crate::i18n::Lang;
 use crate::i18n::Text;
 use crate::link::{LinkCommand, ReplyTo, Request};
@@ -166,7 +166,7 @@ pub(crate) fn send(sink: &JobSink, out: Output) {
 }
 
 /// The rate the port is at now.
-pub(crate) fn port_baud(rt: &AppState) -> Option<u32> {
+pub(crate) fn port_baud(rt: &Station) -> Option<u32> {
     rt.link.baud()
 }
 
@@ -180,7 +180,7 @@ pub(crate) fn direct(request: Request) -> Action {
 }
 
 /// Switches the port to `baud` unless it is there already.
-pub(crate) fn follow(rt: &AppState, baud: u32) -> Option<Action> {
+pub(crate) fn follow(rt: &Station, baud: u32) -> Option<Action> {
     (port_baud(rt) != Some(baud)).then_some(Action::Link(LinkCommand::SetBaud { baud, ack: None }))
 }
 
@@ -220,7 +220,7 @@ impl ServoBenchPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         self.header(ui, lang, rt, &mut actions);
         ui.separator();
@@ -270,7 +270,7 @@ impl ServoBenchPanel {
     }
 
     /// Stop all, the selected servo, the port's rate and the running job.
-    fn header(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
+    fn header(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station, actions: &mut Vec<Action>) {
         ui.horizontal(|ui| {
             let stop = egui::Button::new(
                 egui::RichText::new(lang.tr("STOP ALL", "全部停止"))
@@ -331,7 +331,7 @@ impl ServoBenchPanel {
 
     /// The broadcasts of "Stop all": at the port's rate at once; with no job running, also at
     /// every other rate where the scan found servos, and the port then returns to its rate.
-    fn stop_all(&self, rt: &AppState) -> Vec<Action> {
+    fn stop_all(&self, rt: &Station) -> Vec<Action> {
         let requests = crate::ops::servo::stop_all_requests(&rt.device.profile);
         let mut out: Vec<Action> = requests.iter().cloned().map(direct).collect();
         let here = port_baud(rt);
@@ -364,7 +364,7 @@ impl ServoBenchPanel {
     }
 
     /// Works on `servo` from now on: the port follows it; what was read of another servo goes.
-    fn select(&mut self, servo: Option<Servo>, rt: &AppState, actions: &mut Vec<Action>) {
+    fn select(&mut self, servo: Option<Servo>, rt: &Station, actions: &mut Vec<Action>) {
         if self.selected != servo {
             self.params = ParamsState {
                 preset_path: std::mem::take(&mut self.params.preset_path),

@@ -15,7 +15,7 @@ use crate::ops::servo::{self as ops, Wheel};
 use crate::profile::{Field, Value};
 use crate::protocol::servo::cmd;
 use crate::ui::Action;
-use crate::ui::state::{AppState, Notice, Reading};
+use crate::ui::station::{Notice, Reading, Station};
 use crate::ui::zh::Zh;
 use eframe::egui;
 use egui_plot::{Line, Plot, PlotPoints};
@@ -108,7 +108,7 @@ impl Default for MotionState {
 }
 
 /// A command's request field by ident.
-fn field<'p>(rt: &'p AppState, command: u8, ident: &str) -> Option<&'p Field> {
+fn field<'p>(rt: &'p Station, command: u8, ident: &str) -> Option<&'p Field> {
     rt.device
         .profile
         .command_by_id(command)?
@@ -118,7 +118,7 @@ fn field<'p>(rt: &'p AppState, command: u8, ident: &str) -> Option<&'p Field> {
 }
 
 /// What a person typed for a command's field, as a raw value, or why it does not fit.
-fn raw(rt: &AppState, command: u8, ident: &str, text: &str) -> Result<i64, OpError> {
+fn raw(rt: &Station, command: u8, ident: &str, text: &str) -> Result<i64, OpError> {
     let f = field(rt, command, ident)
         .ok_or_else(|| OpError::unknown_param(&rt.device.profile, ident))?;
     match f.parse(text)? {
@@ -167,7 +167,7 @@ impl MotionState {
     }
 
     /// Takes a new READ_ANGLE answer of `id` into the plot.
-    fn collect(&mut self, rt: &AppState, id: u8) {
+    fn collect(&mut self, rt: &Station, id: u8) {
         let Some(Reading::Values(values, at)) = rt.device.readings.get(&cmd::READ_ANGLE) else {
             return;
         };
@@ -191,7 +191,7 @@ impl MotionState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         busy: bool,
         selected: Option<Servo>,
         actions: &mut Vec<Action>,
@@ -217,7 +217,7 @@ impl MotionState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         servo: Servo,
         can: bool,
     ) -> Vec<Action> {
@@ -293,7 +293,7 @@ impl MotionState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         servo: Servo,
         can: bool,
     ) -> Vec<Action> {
@@ -348,7 +348,7 @@ impl MotionState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         servo: Servo,
         can: bool,
     ) -> Vec<Action> {
@@ -428,7 +428,7 @@ impl MotionState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         servo: Servo,
         can: bool,
     ) -> Vec<Action> {
@@ -465,7 +465,7 @@ impl MotionState {
     }
 
     /// The latest angle and monitor values of the selected servo, nothing before they arrive.
-    fn readout(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, servo: Servo) {
+    fn readout(&self, ui: &mut egui::Ui, lang: Lang, rt: &Station, servo: Servo) {
         let of_servo = |values: &FieldValues| values.int("servo_id") == Some(servo.id.into());
         ui.horizontal(|ui| {
             ui.label(lang.tr("Angle now:", "当前角度:"));
@@ -534,7 +534,7 @@ impl MotionState {
 /// was refused.
 fn send(
     actions: &mut Vec<Action>,
-    rt: &AppState,
+    rt: &Station,
     servo: Servo,
     request: Result<crate::link::Request, OpError>,
 ) {

@@ -7,7 +7,7 @@ use crate::i18n::Lang;
 use crate::ops::servo::preset::ParamPreset;
 use crate::profile::{Profile, Value};
 use crate::ui::settings::FileKind;
-use crate::ui::state::AppState;
+use crate::ui::station::Station;
 use crate::ui::{Action, files};
 use eframe::egui;
 
@@ -18,7 +18,7 @@ impl ParamsState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         actions: &mut Vec<Action>,
     ) {
         let profile = &rt.device.profile;

@@ -12,7 +12,7 @@ use crate::ops::servo as ops;
 use crate::profile::{Access, Param, Profile, Value};
 use crate::ui::Action;
 use crate::ui::layout::header_row;
-use crate::ui::state::AppState;
+use crate::ui::station::Station;
 use crate::ui::tuning::PendingError;
 use crate::ui::zh::Zh;
 use eframe::egui;
@@ -121,7 +121,7 @@ impl ParamsState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         servo: Servo,
         can: bool,
         pending: &Result<Vec<(u8, i64)>, PendingError>,
@@ -209,7 +209,7 @@ impl ParamsState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         busy: bool,
         selected: Option<Servo>,
         actions: &mut Vec<Action>,
@@ -362,7 +362,7 @@ impl ParamsState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         servo: Servo,
         actions: &mut Vec<Action>,
     ) {

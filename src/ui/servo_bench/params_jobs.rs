@@ -7,9 +7,9 @@ use crate::ops::servo as ops;
 use crate::ops::{Device, Run};
 use crate::ui::Action;
 use crate::ui::jobs::{Job, JobError};
-use crate::ui::state::AppState;
+use crate::ui::station::Station;
 
-pub(super) fn read_all_job(rt: &AppState, servo: Servo) -> Action {
+pub(super) fn read_all_job(rt: &Station, servo: Servo) -> Action {
     let profile = rt.device.profile.clone();
     Action::StartJob(Job::new(
         Text::new("read parameters", "读取参数"),
@@ -35,7 +35,7 @@ pub(super) fn read_all_job(rt: &AppState, servo: Servo) -> Action {
     ))
 }
 
-pub(super) fn read_block_job(rt: &AppState, servo: Servo) -> Action {
+pub(super) fn read_block_job(rt: &Station, servo: Servo) -> Action {
     let profile = rt.device.profile.clone();
     Action::StartJob(Job::new(
         Text::new("read user block", "读取用户参数区"),
@@ -63,7 +63,7 @@ pub(super) fn read_block_job(rt: &AppState, servo: Servo) -> Action {
     ))
 }
 
-pub(super) fn write_job(rt: &AppState, servo: Servo, values: Vec<(u8, i64)>) -> Action {
+pub(super) fn write_job(rt: &Station, servo: Servo, values: Vec<(u8, i64)>) -> Action {
     let profile = rt.device.profile.clone();
     Action::StartJob(Job::new(
         Text::new("write parameters", "写入参数"),
@@ -100,7 +100,7 @@ pub(super) fn write_job(rt: &AppState, servo: Servo, values: Vec<(u8, i64)>) -> 
     ))
 }
 
-pub(super) fn block_job(rt: &AppState, servo: Servo, values: Vec<(u8, i64)>) -> Action {
+pub(super) fn block_job(rt: &Station, servo: Servo, values: Vec<(u8, i64)>) -> Action {
     let profile = rt.device.profile.clone();
     Action::StartJob(Job::new(
         Text::new("write user block", "写入用户参数区"),
@@ -141,7 +141,7 @@ pub(super) fn block_job(rt: &AppState, servo: Servo, values: Vec<(u8, i64)>) -> 
     ))
 }
 
-pub(super) fn reset_job(rt: &AppState, servo: Servo) -> Action {
+pub(super) fn reset_job(rt: &Station, servo: Servo) -> Action {
     let profile = rt.device.profile.clone();
     Action::StartJob(Job::new(
         Text::new("reset user data", "恢复出厂设置"),

@@ -10,7 +10,7 @@ use crate::ops::{Device, Run};
 use crate::ui::jobs::{Job, JobError, LogError};
 use crate::ui::layout::header_row;
 use crate::ui::settings::FileKind;
-use crate::ui::state::AppState;
+use crate::ui::station::Station;
 use crate::ui::zh::Zh;
 use crate::ui::{Action, files};
 use eframe::egui;
@@ -37,7 +37,7 @@ pub struct ProvisionPanel {
 
 impl ProvisionPanel {
     /// Loads the plan at the path.
-    pub fn load(&mut self, rt: &AppState) {
+    pub fn load(&mut self, rt: &Station) {
         let path = PathBuf::from(self.plan_path.trim());
         match Plan::load(&path, &rt.device.profile) {
             Ok(plan) => {
@@ -65,7 +65,7 @@ impl ProvisionPanel {
 
     /// The plan loaded: its rate, ids, parameters and what it records, and the ids given out in
     /// this session.
-    fn plan_summary(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    fn plan_summary(&self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
         let Some(plan) = &self.plan else {
             return;
         };
@@ -106,7 +106,7 @@ impl ProvisionPanel {
 
     /// Provision next: the CSV log checked against the plan first (a log that does not fit is
     /// said, and nothing starts), then the job.
-    fn start(&mut self, rt: &AppState) -> Vec<Action> {
+    fn start(&mut self, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         let Some(plan) = self.plan.clone() else {
             return actions;
@@ -142,7 +142,7 @@ impl ProvisionPanel {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         busy: bool,
         actions: &mut Vec<Action>,
     ) {
@@ -315,7 +315,7 @@ fn history(ui: &mut egui::Ui, lang: Lang, records: &[Record]) {
 }
 
 fn job(
-    rt: &AppState,
+    rt: &Station,
     plan: Plan,
     mut state: ProvisionState,
     log: Option<PathBuf>,

@@ -11,7 +11,7 @@ use crate::profile::Profile;
 use crate::ui::Action;
 use crate::ui::jobs::Job;
 use crate::ui::layout::header_row;
-use crate::ui::state::AppState;
+use crate::ui::station::Station;
 use eframe::egui;
 use std::ops::RangeInclusive;
 
@@ -206,7 +206,7 @@ impl ScanState {
 
     /// A scan of the ids and rates chosen, as the Scan button starts it (`None`: the ids typed
     /// do not read).
-    pub(crate) fn start(&mut self, rt: &AppState) -> Option<Action> {
+    pub(crate) fn start(&mut self, rt: &Station) -> Option<Action> {
         let ids = self.ids().ok()?;
         self.rows.clear();
         self.outcome = None;
@@ -219,7 +219,7 @@ impl ScanState {
     }
 
     /// The baud rates to scan: each a checkbox, All and Only the profile's own.
-    fn baud_choice(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    fn baud_choice(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
         let profile = &rt.device.profile;
         let all = profile.servo_bauds();
         let bauds = self.chosen_bauds(profile);
@@ -298,7 +298,7 @@ impl ScanState {
         &self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         busy: bool,
         selected: Option<Servo>,
     ) -> (Option<Servo>, Vec<Action>) {
@@ -381,7 +381,7 @@ impl ScanState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         busy: bool,
         selected: Option<Servo>,
         actions: &mut Vec<Action>,
@@ -431,7 +431,7 @@ impl ScanState {
 }
 
 /// A scan as a job; `again` marks the rescan of one servo.
-fn scan_job(rt: &AppState, plan: ScanPlan, again: Option<Servo>) -> Action {
+fn scan_job(rt: &Station, plan: ScanPlan, again: Option<Servo>) -> Action {
     let profile = rt.device.profile.clone();
     let title = if again.is_some() {
         Text::new("rescan", "重新扫描")
@@ -476,7 +476,7 @@ fn scan_job(rt: &AppState, plan: ScanPlan, again: Option<Servo>) -> Action {
 
 /// A servo's details in the scan table: its rate, type, firmware, serial number, voltage,
 /// temperature, status (raw and decoded) and how it answered.
-fn details(ui: &mut egui::Ui, lang: Lang, rt: &AppState, row: &ScanRow) {
+fn details(ui: &mut egui::Ui, lang: Lang, rt: &Station, row: &ScanRow) {
     let opt = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
     ui.label(row.baud.to_string());
     ui.label(opt(row.servo_type));

@@ -13,7 +13,7 @@ use crate::ops::OpError;
 use crate::ops::servo::{self as ops, Presence};
 use crate::ui::Action;
 use crate::ui::jobs::Job;
-use crate::ui::state::AppState;
+use crate::ui::station::Station;
 use eframe::egui;
 
 /// The tab's state.
@@ -163,7 +163,7 @@ impl SetupState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         busy: bool,
         selected: Option<Servo>,
         scan: &ScanState,
@@ -241,7 +241,7 @@ impl SetupState {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         servo: Servo,
         can: bool,
     ) -> Vec<Action> {
@@ -292,7 +292,7 @@ impl SetupState {
     }
 }
 
-fn id_job(rt: &AppState, servo: Servo, new: u8) -> Action {
+fn id_job(rt: &Station, servo: Servo, new: u8) -> Action {
     let profile = rt.device.profile.clone();
     Action::StartJob(Job::new(
         Text::new("set id", "设置 ID"),
@@ -316,7 +316,7 @@ fn id_job(rt: &AppState, servo: Servo, new: u8) -> Action {
     ))
 }
 
-fn baud_job(rt: &AppState, servo: Servo, option: u8) -> Action {
+fn baud_job(rt: &Station, servo: Servo, option: u8) -> Action {
     let profile = rt.device.profile.clone();
     Action::StartJob(Job::new(
         Text::new("set baud rate", "设置波特率"),

@@ -5,7 +5,7 @@
 //! for it with [`Action::Stop`].
 
 use super::super::Action;
-use super::super::state::AppState;
+use super::super::station::Station;
 use crate::link::{LinkCommand, ReplyTo};
 use crate::ops::exchange;
 use crate::profile::{CommandRole, Input, Value};
@@ -63,7 +63,7 @@ impl Control {
     /// returns the action that sends it; a refusal is recorded as the command's outcome.
     /// One attempt only: a retry after a late answer would apply a relative command (rotate)
     /// twice. A failure is shown, and the operator decides.
-    pub fn send(&mut self, rt: &AppState, id: u8, inputs: &[(String, Input)]) -> Option<Action> {
+    pub fn send(&mut self, rt: &Station, id: u8, inputs: &[(String, Input)]) -> Option<Action> {
         let profile = &rt.device.profile;
         let cmd = profile.command_by_id(id)?;
         let text = inputs
@@ -107,7 +107,7 @@ impl Control {
     /// period, so that the robot's own watchdog (where its firmware has one) agrees: the first
     /// request field of the profile's command with role [`CommandRole::Heartbeat`] (none sent
     /// when the profile has no such command).
-    pub fn arm(&mut self, rt: &AppState, on: bool) -> Option<Action> {
+    pub fn arm(&mut self, rt: &Station, on: bool) -> Option<Action> {
         self.deadman = on;
         if !on {
             return None;
@@ -138,7 +138,7 @@ impl Control {
     /// Called every frame, whichever panel is shown: takes answers, and asks for STOP when the
     /// dead-man runs out or the link goes down while it is armed (STOP then waits for the
     /// link).
-    pub fn tick(&mut self, rt: &AppState) -> Vec<Action> {
+    pub fn tick(&mut self, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         for (cmd, reply) in rt.device.take_answered(&mut self.sent) {
             let outcome = match reply {
@@ -176,8 +176,13 @@ mod tests {
     use super::*;
     use crate::link::LinkState;
 
-    fn runtime() -> AppState {
-        let mut rt = AppState::new(&eframe::egui::Context::default(), "solar-cleanbot").unwrap();
+    fn runtime() -> Station {
+        let mut rt = Station::new(
+            &eframe::egui::Context::default(),
+            std::sync::Arc::new(crate::profile::Registry::load().unwrap()),
+            "solar-cleanbot",
+        )
+        .unwrap();
         rt.link.state = Some(LinkState::Connected {
             port: "test".into(),
             baud: 115_200,
@@ -196,7 +201,7 @@ mod tests {
     }
 
     /// The id and first request field of the command with `role`.
-    fn with_role(rt: &AppState, role: CommandRole) -> (u8, String) {
+    fn with_role(rt: &Station, role: CommandRole) -> (u8, String) {
         let c = rt.device.profile.command_with_role(role).expect("role");
         (c.id, c.request[0].ident.clone())
     }

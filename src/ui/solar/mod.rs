@@ -9,7 +9,7 @@ mod control;
 pub use control::{Control, Outcome, Trip};
 
 use super::inputs::{command_inputs, readout_text, value_box};
-use super::state::{AppState, Reading};
+use super::station::{Reading, Station};
 use super::stop::StopControl;
 use super::{Action, plot};
 use crate::i18n::Lang;
@@ -41,7 +41,7 @@ const GREEN: egui::Color32 = egui::Color32::from_rgb(0, 140, 60);
 
 impl SolarPanel {
     /// Called every frame whichever panel is shown (the dead-man).
-    pub fn tick(&mut self, rt: &AppState) -> Vec<Action> {
+    pub fn tick(&mut self, rt: &Station) -> Vec<Action> {
         self.control.tick(rt)
     }
 
@@ -50,7 +50,7 @@ impl SolarPanel {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         stop: &mut StopControl,
     ) -> Vec<Action> {
         let mut actions = Vec::new();
@@ -76,7 +76,7 @@ impl SolarPanel {
         actions
     }
 
-    fn trip_status(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    fn trip_status(&self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
         if let Some((Trip::NotConfirmed, at)) = &self.control.trip {
             ui.colored_label(
                 RED,
@@ -95,7 +95,7 @@ impl SolarPanel {
         }
     }
 
-    fn deadman(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
+    fn deadman(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station, actions: &mut Vec<Action>) {
         crate::ui::layout::toolbar(ui, |ui| {
             let mut on = self.control.deadman;
             if ui
@@ -146,7 +146,7 @@ impl SolarPanel {
         ));
     }
 
-    fn readouts(&self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    fn readouts(&self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
         ui.strong(lang.tr("Readouts", "实时读数"));
         let cmds = rt.device.profile.commands.iter().filter(|c| {
             c.kind == CommandKind::Telemetry
@@ -210,7 +210,7 @@ impl SolarPanel {
             });
     }
 
-    fn plots(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    fn plots(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
         let now = rt.plot_end();
         let width_px = ui.available_width().max(100.0) as usize;
         for p in &rt.device.profile.plots {
@@ -236,13 +236,7 @@ impl SolarPanel {
         }
     }
 
-    fn controls(
-        &mut self,
-        ui: &mut egui::Ui,
-        lang: Lang,
-        rt: &AppState,
-        actions: &mut Vec<Action>,
-    ) {
+    fn controls(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station, actions: &mut Vec<Action>) {
         ui.strong(lang.tr("Controls", "控制"));
         let profile = rt.device.profile.clone();
         let cmds = profile
@@ -352,7 +346,7 @@ impl SolarPanel {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         stop_control: &mut StopControl,
         actions: &mut Vec<Action>,
     ) {

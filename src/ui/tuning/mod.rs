@@ -8,7 +8,7 @@ mod table;
 use super::Action;
 use super::confirm;
 use super::jobs;
-use super::state::AppState;
+use super::station::Station;
 use crate::i18n::Lang;
 use crate::ops::tuning::SetWrite;
 use crate::profile::{Command, CommandKind, Field, FieldError, Value};
@@ -80,7 +80,7 @@ pub struct TuningPanel {
 
 /// The ids of the profile's groups as the table shows them, in order ("" for the commands of
 /// no group).
-pub fn group_ids(rt: &AppState) -> Vec<String> {
+pub fn group_ids(rt: &Station) -> Vec<String> {
     table::groups(rt, Lang::En)
         .into_iter()
         .map(|g| g.id)
@@ -95,7 +95,7 @@ impl TuningPanel {
     }
 
     /// Drops edits that now equal the device's value (after a verified write, or typed back).
-    fn prune(&mut self, rt: &AppState) {
+    fn prune(&mut self, rt: &Station) {
         let profile = &rt.device.profile;
         self.edits.retain(|(get, ident), text| {
             let Some(field) = profile
@@ -112,7 +112,7 @@ impl TuningPanel {
     }
 
     /// The writes the edits call for, or why they cannot be made.
-    pub fn pending(&self, rt: &AppState) -> Result<(Vec<Change>, Writes), PendingError> {
+    pub fn pending(&self, rt: &Station) -> Result<(Vec<Change>, Writes), PendingError> {
         let mut changes = Vec::new();
         let mut writes = Vec::new();
         let profile = &rt.device.profile;
@@ -171,7 +171,7 @@ impl TuningPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         self.prune(rt);
         let pending = self.pending(rt);
@@ -249,7 +249,7 @@ impl TuningPanel {
         actions
     }
 
-    fn confirm_dialog(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Option<Action> {
+    fn confirm_dialog(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Option<Action> {
         let (changes, writes) = self.confirm.as_ref()?;
         let mut decision = None;
         let modal = egui::Modal::new(egui::Id::unique("confirm-write")).show(ui.ctx(), |ui| {
@@ -303,7 +303,7 @@ impl TuningPanel {
 }
 
 /// The Set command paired with Get `get`.
-fn profile_set(rt: &AppState, get: u8) -> Option<&Command> {
+fn profile_set(rt: &Station, get: u8) -> Option<&Command> {
     let p = &rt.device.profile;
     p.command_by_id(p.command_by_id(get)?.pair?)
 }
@@ -318,7 +318,7 @@ fn named(text: &str, f: &Field, lang: Lang) -> String {
 }
 
 /// A pending error as the window says it: fields and commands by their names, not wire names.
-fn pending_text(e: &PendingError, rt: &AppState, lang: Lang) -> String {
+fn pending_text(e: &PendingError, rt: &Station, lang: Lang) -> String {
     let p = &rt.device.profile;
     let fields = || {
         p.commands
@@ -349,7 +349,7 @@ fn pending_text(e: &PendingError, rt: &AppState, lang: Lang) -> String {
 
 /// MSP: when the device did not identify itself, writes go to the profile's device code: said
 /// above the values, in the UI's language.
-pub(super) fn unidentified_warning(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+pub(super) fn unidentified_warning(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     let profile = &rt.device.profile;
     let Some(Err(e)) = &rt.device.info else {
         return;

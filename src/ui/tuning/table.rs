@@ -5,7 +5,7 @@ use super::{TuningPanel, named, profile_set};
 use crate::i18n::Lang;
 use crate::profile::{Command, CommandKind, Field, FieldError, Value};
 use crate::ui::inputs::range_text;
-use crate::ui::state::{AppState, Mark, Reading};
+use crate::ui::station::{Mark, Reading, Station};
 use crate::ui::zh::Zh;
 use eframe::egui;
 
@@ -17,7 +17,7 @@ pub(super) struct Group<'p> {
 }
 
 /// The Get/Set pairs of the profile, grouped.
-pub(super) fn groups(rt: &AppState, lang: Lang) -> Vec<Group<'_>> {
+pub(super) fn groups(rt: &Station, lang: Lang) -> Vec<Group<'_>> {
     let p = &rt.device.profile;
     let pairs: Vec<(&Command, &Command)> = p
         .commands
@@ -64,7 +64,7 @@ impl TuningPanel {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         group: &Group<'_>,
         names: f32,
     ) {
@@ -129,7 +129,7 @@ impl TuningPanel {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         get: u8,
         f: &Field,
         name: egui::Id,
@@ -210,7 +210,7 @@ fn field_name(f: &Field, lang: Lang) -> String {
 }
 
 /// The width, points, of the longest command or field name the tables show in `lang`.
-pub(super) fn name_width(ui: &egui::Ui, lang: Lang, rt: &AppState) -> f32 {
+pub(super) fn name_width(ui: &egui::Ui, lang: Lang, rt: &Station) -> f32 {
     let mut names = Vec::new();
     for group in groups(rt, lang) {
         for (get, _) in &group.pairs {

@@ -4,7 +4,7 @@
 //! data point reported with another type or length than the profile's is shown raw with the
 //! mismatch. A command is marked by the data point's last report up to a read-back query.
 
-use super::{Action, AppState, clock, fire};
+use super::{Action, Station, clock, fire};
 use crate::i18n::Lang;
 use crate::link::{LinkCommand, ReplyTo};
 use crate::ops::OpError;
@@ -29,7 +29,7 @@ pub struct Pending {
     pub value: Value,
     /// When.
     pub sent: Instant,
-    /// Status queries sent before the command ([`crate::ui::state::TuyaModel::queries`]):
+    /// Status queries sent before the command ([`crate::ui::station::TuyaModel::queries`]):
     /// reports after a later query are the read-back's.
     pub queries: u64,
     /// The read-back query's reply id: once it is answered, the last report says.
@@ -108,7 +108,7 @@ fn allowed(lang: Lang, def: &DataPointDef) -> String {
 impl DpView {
     /// Sends `value` to data point `def` as a 0x06 command, checked against the profile first,
     /// then a status query that reads back every data point.
-    fn send(&mut self, rt: &AppState, def: &DataPointDef, value: Value) -> Vec<Action> {
+    fn send(&mut self, rt: &Station, def: &DataPointDef, value: Value) -> Vec<Action> {
         let profile = &rt.device.profile;
         match ops::dp_request(profile, def, value.clone()) {
             Ok(request) => {
@@ -141,7 +141,7 @@ impl DpView {
 
     /// Settles the commands whose read-back has ended: by the data point's last report after
     /// the command (one that came after the read-back query was sent).
-    fn settle(&mut self, rt: &AppState) {
+    fn settle(&mut self, rt: &Station) {
         let tuya = &rt.device.tuya;
         let mut settled = Vec::new();
         for (id, p) in &self.pending {
@@ -167,7 +167,7 @@ impl DpView {
     }
 
     /// Draws the section. `ota` is true while a firmware update holds the link.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState, ota: bool) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station, ota: bool) -> Vec<Action> {
         let mut actions = Vec::new();
         if self.generation != rt.device.tuya.generation {
             // A new connection: what was sent on the last one says nothing of this one.
@@ -249,7 +249,7 @@ impl DpView {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         def: &DataPointDef,
         can_send: bool,
     ) -> Vec<Action> {
@@ -343,7 +343,7 @@ impl DpView {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         def: &DataPointDef,
         label: egui::Id,
         can_send: bool,
@@ -454,7 +454,7 @@ impl DpView {
     }
 
     /// The report log, newest last.
-    fn log(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+    fn log(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
         let lines: Vec<_> = rt
             .device
             .tuya
@@ -474,7 +474,7 @@ impl DpView {
             ui.weak(format!(
                 "{} {}",
                 lang.tr("keeps the last", "保留最近"),
-                crate::ui::state::REPORT_LOG_CAPACITY
+                crate::ui::station::REPORT_LOG_CAPACITY
             ));
         });
         egui::ScrollArea::vertical()

@@ -1,7 +1,7 @@
 //! The start-up handshake step by step, where it stopped and that it retries, the heartbeat,
 //! MCU restarts, and the Wi-Fi state reported to the MCU.
 
-use super::{Action, AppState, clock, fire, wifi_state_name};
+use super::{Action, Station, clock, fire, wifi_state_name};
 use crate::i18n::Lang;
 use crate::link::session::tuya::HandshakeStep;
 use crate::link::{LinkCommand, TuyaModuleOptions};
@@ -32,7 +32,7 @@ fn config_mode(mode: i64, lang: Lang) -> String {
 }
 
 /// One line above the sections: the handshake's state, the last heartbeat, the product.
-pub fn summary(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+pub fn summary(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     let s = &rt.device.tuya;
     crate::ui::layout::toolbar(ui, |ui| {
         if !rt.connected() {
@@ -82,7 +82,7 @@ pub fn summary(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
 pub fn show(
     ui: &mut egui::Ui,
     lang: Lang,
-    rt: &AppState,
+    rt: &Station,
     opts: &mut TuyaModuleOptions,
 ) -> Vec<Action> {
     let mut actions = Vec::new();
@@ -131,7 +131,7 @@ pub fn show(
 
 /// The handshake's steps in a table: each one's result, when, and what came back; the step the
 /// current attempt waits at.
-fn steps_table(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+fn steps_table(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     let s = &rt.device.tuya;
     // Where the current attempt is: the first step without a result, unless one failed.
     let failed = s.done_at.is_none()
@@ -193,7 +193,7 @@ fn steps_table(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
 }
 
 /// What the handshake learned of the MCU: product, versions, modes, heartbeats, restarts.
-fn facts(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+fn facts(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     let s = &rt.device.tuya;
     egui::Grid::new("tuya-facts")
         .num_columns(2)
@@ -267,7 +267,7 @@ fn facts(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
 }
 
 /// The last heartbeat answered, a heartbeat lost since, and the MCU restarts detected.
-fn heartbeat_rows(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
+fn heartbeat_rows(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     let s = &rt.device.tuya;
     ui.label(lang.tr("Last heartbeat", "最近心跳"));
     match &s.last_heartbeat {
@@ -323,7 +323,7 @@ fn heartbeat_rows(ui: &mut egui::Ui, lang: Lang, rt: &AppState) {
 fn wifi_state(
     ui: &mut egui::Ui,
     lang: Lang,
-    rt: &AppState,
+    rt: &Station,
     opts: &mut TuyaModuleOptions,
 ) -> Vec<Action> {
     let mut actions = Vec::new();

@@ -2,7 +2,7 @@
 //! time, the Wi-Fi production test's result and signal, the network status, the MAC), and each
 //! request answered, reset-Wi-Fi acks shown clearly.
 
-use super::{Action, AppState, clock, wifi_state_name};
+use super::{Action, Station, clock, wifi_state_name};
 use crate::i18n::Lang;
 use crate::link::TuyaModuleOptions;
 use crate::protocol::tuya::cmd;
@@ -89,7 +89,7 @@ fn request_name(r: McuRequest, lang: Lang) -> &'static str {
 
 /// Buttons that make the built-in simulated MCU send its own requests, as a real MCU does when
 /// it wants the time or a factory test.
-fn demo_buttons(ui: &mut egui::Ui, lang: Lang, rt: &AppState, actions: &mut Vec<Action>) {
+fn demo_buttons(ui: &mut egui::Ui, lang: Lang, rt: &Station, actions: &mut Vec<Action>) {
     ui.strong(lang.tr(
         "Make the built-in MCU ask the module",
         "让内置模拟MCU向模块发出请求",
@@ -134,7 +134,7 @@ fn test_failure(reason: u8, lang: Lang) -> &'static str {
 }
 
 /// The module's answer, as a person reads it.
-fn answer_text(rt: &AppState, lang: Lang, command: u8, answer: &[u8]) -> String {
+fn answer_text(rt: &Station, lang: Lang, command: u8, answer: &[u8]) -> String {
     match (command, answer) {
         (cmd::RESET_WIFI | cmd::RESET_WIFI_MODE, _) => {
             lang.tr("acknowledged", "已应答确认").to_string()
@@ -202,7 +202,7 @@ impl RequestsView {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         opts: &mut TuyaModuleOptions,
     ) -> Vec<Action> {
         let mut actions = Vec::new();
@@ -356,7 +356,7 @@ fn wifi_test_row(ui: &mut egui::Ui, lang: Lang, opts: &mut TuyaModuleOptions) {
 }
 
 /// The network status the module reports (0x2b).
-fn net_status_row(ui: &mut egui::Ui, lang: Lang, rt: &AppState, opts: &mut TuyaModuleOptions) {
+fn net_status_row(ui: &mut egui::Ui, lang: Lang, rt: &Station, opts: &mut TuyaModuleOptions) {
     let label = ui.label(lang.tr("Network status (0x2b)", "联网状态 (0x2b)"));
     egui::ComboBox::from_id_salt("tuya-net-status")
         .selected_text(wifi_state_name(rt, lang, opts.net_status))

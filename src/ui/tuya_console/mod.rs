@@ -1,7 +1,7 @@
 //! The Tuya console: botbench as the Wi-Fi module. The handshake step by step, the data points
 //! generated from the profile, the MCU's own requests and the module's answers, and the MCU
 //! firmware update (OTA). What the link reported is kept by the device model
-//! ([`super::state::TuyaModel`]); this panel keeps only what the technician chose and typed.
+//! ([`super::station::TuyaModel`]); this panel keeps only what the technician chose and typed.
 
 mod dps;
 mod handshake;
@@ -12,7 +12,7 @@ pub use ota::FirmwareFileError;
 
 use super::Action;
 use super::jobs::JobError;
-use super::state::AppState;
+use super::station::Station;
 use crate::i18n::Lang;
 use crate::link::{LinkCommand, ReplyTo, Request, TuyaModuleOptions};
 use crate::ops::tuya::OtaReport;
@@ -89,7 +89,7 @@ pub(crate) fn fire(request: Request) -> Action {
 }
 
 /// The label of a state 0-6 (Wi-Fi state, network status), from the profile's Wi-Fi command.
-pub(crate) fn wifi_state_name(rt: &AppState, lang: Lang, state: u8) -> String {
+pub(crate) fn wifi_state_name(rt: &Station, lang: Lang, state: u8) -> String {
     rt.device
         .profile
         .command_by_id(crate::protocol::tuya::cmd::WIFI_STATE)
@@ -103,7 +103,7 @@ pub(crate) fn wifi_state_name(rt: &AppState, lang: Lang, state: u8) -> String {
 
 impl TuyaConsolePanel {
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         // A new connection has a new worker with default answers: give it ours.
         if rt.connected() && self.synced != Some(rt.device.tuya.generation) {

@@ -2,7 +2,7 @@
 //! image), confirm with the expected transfer time at the port's rate, send it in packets of the
 //! size the MCU asks for, with a progress bar, rate and time left, cancel, and the result.
 
-use super::{Action, AppState, Output};
+use super::{Action, Output, Station};
 use crate::i18n::Lang;
 use crate::i18n::Text;
 use crate::ops::OpError;
@@ -121,7 +121,7 @@ fn work(path: PathBuf, max: u32) -> Job {
 
 impl OtaView {
     /// Whether an update holds the link now.
-    pub fn active(&self, rt: &AppState) -> bool {
+    pub fn active(&self, rt: &Station) -> bool {
         self.running && rt.job_progress().is_some()
     }
 
@@ -137,7 +137,7 @@ impl OtaView {
     }
 
     /// Draws the section.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Vec<Action> {
+    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         let max = rt.device.profile.ota_max_bytes();
         let busy = rt.job_progress().is_some();
@@ -174,7 +174,7 @@ impl OtaView {
         &mut self,
         ui: &mut egui::Ui,
         lang: Lang,
-        rt: &AppState,
+        rt: &Station,
         busy: bool,
         active: bool,
     ) -> Vec<Action> {
@@ -292,7 +292,7 @@ impl OtaView {
         actions
     }
 
-    fn confirm_dialog(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &AppState) -> Option<Action> {
+    fn confirm_dialog(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Option<Action> {
         let (path, size) = self.confirm.clone()?;
         let max = rt.device.profile.ota_max_bytes();
         let baud = rt.link.baud().unwrap_or(rt.device.profile.baud);

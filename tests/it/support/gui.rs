@@ -5,7 +5,7 @@ use super::{PATIENCE, Port};
 use botbench::i18n::Lang;
 use botbench::link::PortOpener;
 use botbench::profile::{CommandKind, Value};
-use botbench::ui::state::Reading;
+use botbench::ui::station::Reading;
 use botbench::ui::{App, PanelId, Settings, Target};
 use eframe::egui;
 use egui_kittest::Harness;
@@ -113,8 +113,8 @@ pub fn step_until_or(
             let a = app(h);
             panic!(
                 "timed out waiting for {what}: link {:?}, status {:?}; {}",
-                a.state.link.state,
-                a.state.notice.as_ref().map(|s| &s.text),
+                a.station().link.state,
+                a.station().notice.as_ref().map(|s| &s.text),
                 diagnose(a)
             );
         }
@@ -154,7 +154,7 @@ pub fn has_label(h: &H, text: &str) -> bool {
 
 /// Whether no job runs.
 pub fn idle(a: &App) -> bool {
-    a.state.job_progress().is_none()
+    a.station().job_progress().is_none()
 }
 
 /// Each tuning value (every Get with a Set pair: what *Read all* reads), by command id, once
@@ -163,11 +163,11 @@ pub fn tuning_values(
     a: &App,
     since: Option<Instant>,
 ) -> Option<BTreeMap<u8, BTreeMap<String, Value>>> {
-    let p = &a.state.device.profile;
+    let p = &a.station().device.profile;
     p.commands
         .iter()
         .filter(|c| c.kind == CommandKind::Get && c.pair.is_some())
-        .map(|c| match a.state.device.readings.get(&c.id) {
+        .map(|c| match a.station().device.readings.get(&c.id) {
             Some(Reading::Values(v, at)) if since.is_none_or(|t| *at >= t) => Some((
                 c.id,
                 v.iter().map(|(k, v)| (k.to_string(), v.clone())).collect(),
@@ -180,7 +180,7 @@ pub fn tuning_values(
 /// Waits until the read the app makes on connecting has brought every tuning value and ended.
 pub fn read_on_connecting(h: &mut H) {
     step_until(h, "every tuning value read on connecting", |a| {
-        a.state.connected() && tuning_values(a, None).is_some() && idle(a)
+        a.station().connected() && tuning_values(a, None).is_some() && idle(a)
     });
 }
 

@@ -22,7 +22,7 @@ pub fn harness(b: &Bench, lang: Lang) -> H {
         settings(b.path(), "servo", PanelId::ServoBench, lang),
         b.ports(),
     );
-    step_until(&mut h, "the link", |a| a.state.connected());
+    step_until(&mut h, "the link", |a| a.station().connected());
     h
 }
 

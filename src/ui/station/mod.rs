@@ -1,7 +1,13 @@
-//! What the window knows at run time (never saved), split by what it is: the link's status, the
-//! device model as replies brought it, the packet log, the running job and the status line.
-//! Panels read it; it changes only through the app (link events, job output, actions), once per
-//! frame.
+//! A station: everything the window holds about one connected device, as one value, never
+//! saved: its link and the link's status, the device model as replies brought it (the Tuya
+//! module model in it), the packet log and capture, the running job and its output, the status
+//! line. Panels read the station they show; it changes only through the app (link events, job
+//! output, actions), once per frame.
+//!
+//! Nothing in a station refers to another station or to a process-wide value: two stations in
+//! one process connect, run jobs, lose their port and reconnect independently (the line station
+//! holds several). What they share is read-only or made for sharing: the profiles, the egui
+//! context that wakes the window, whether a file dialog can open, and the production records.
 
 mod capture;
 mod link;
@@ -86,10 +92,10 @@ pub enum ConnectError {
     Link(#[from] crate::link::LinkError),
 }
 
-/// The run-time state.
-pub struct AppState {
-    /// Every profile.
-    pub registry: Registry,
+/// One connected device as the window holds it (see the module's documentation).
+pub struct Station {
+    /// Every profile (shared by the stations of a window, read-only).
+    pub registry: Arc<Registry>,
     /// The link.
     pub link: LinkStatus,
     /// The device as its replies brought it.
@@ -108,11 +114,15 @@ pub struct AppState {
     pub records: super::records::RecordsHandle,
 }
 
-impl AppState {
-    /// The state with the profile `profile_id` (the window cleaner's if it does not load) and no
-    /// link yet.
-    pub fn new(ctx: &eframe::egui::Context, profile_id: &str) -> Result<Self, ProfileError> {
-        let registry = Registry::load()?;
+impl Station {
+    /// A station with the profile `profile_id` from `registry` (the window cleaner's if it does
+    /// not load) and no link yet; `ctx` is woken by its link and jobs.
+    /// Errors: neither profile is in `registry`.
+    pub fn new(
+        ctx: &eframe::egui::Context,
+        registry: Arc<Registry>,
+        profile_id: &str,
+    ) -> Result<Self, ProfileError> {
         let profile = registry
             .get(profile_id)
             .or_else(|_| registry.get("window-cleaner"))?;

@@ -105,6 +105,8 @@ pub struct LinkStatus {
     /// How a port named by its path is opened: the system's serial ports, or what a test
     /// serves ([`crate::ui::App::new`] is handed it).
     pub port_opener: PortOpener,
+    /// The last reply id given out ([`Self::reply_id`]).
+    next_reply_id: std::sync::atomic::AtomicU64,
 }
 
 /// Where the serial ports come from: the system's ([`system::list_ports`]), unless a test lists
@@ -194,10 +196,12 @@ impl LinkStatus {
     }
 
     /// A fresh id for a request whose result comes back as a `LinkEvent::Reply` (kept in
-    /// [`super::DeviceModel::replies`]).
+    /// [`super::DeviceModel::replies`]): 1, 2, 3… on this station, never reused by it (its
+    /// replies come on its own link, so another station's ids never meet them).
     pub fn reply_id(&self) -> u64 {
-        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
-        NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+        self.next_reply_id
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+            + 1
     }
 }
 

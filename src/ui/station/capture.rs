@@ -1,6 +1,6 @@
 //! Recording the link to a capture file, and viewing a capture offline (issue 16).
 
-use super::{AppState, Notice, OfflineCapture};
+use super::{Notice, OfflineCapture, Station};
 use crate::capture::{self, Capture, CaptureInfo};
 use crate::i18n::Text;
 use crate::link::LogEntry;
@@ -8,7 +8,7 @@ use crate::ui::zh::Zh;
 use std::path::Path;
 use std::time::{Duration, UNIX_EPOCH};
 
-impl AppState {
+impl Station {
     /// Starts recording the link's bytes to `path` (replacing a recording under way); says in
     /// the status line why not (not connected, the file cannot be created).
     pub fn start_capture(&mut self, path: &Path) {

@@ -5,7 +5,7 @@
 
 use super::jobs::{self, JobOutput};
 use super::settings::{self, FileKind, Settings};
-use super::state::{AppState, Notice, Target};
+use super::station::{Notice, Station, Target};
 use super::{
     Action, actions, connection, demo_hint, device, files, layout, monitor, presets, repaint,
     selftest, servo_bench, solar, status_bar, stop, telemetry, tour, tuning, tuya_console,
@@ -13,10 +13,11 @@ use super::{
 use crate::i18n::Lang;
 use crate::i18n::Text;
 use crate::link::{LinkCommand, PortOpener};
-use crate::profile::{PanelKind, ProfileError};
+use crate::profile::{PanelKind, ProfileError, Registry};
 use crate::ui::zh::Zh;
 use eframe::egui;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// The start of the window's title: `botbench 0.1.0`.
 pub const TITLE: &str = concat!("botbench ", env!("CARGO_PKG_VERSION"));
@@ -97,11 +98,48 @@ impl PanelId {
     }
 }
 
+/// The window's run-time state (never saved): its stations, one today, each everything the
+/// window holds about one connected device, and the profiles they share.
+pub struct AppState {
+    /// Every profile (each station holds the same, shared).
+    pub registry: Arc<Registry>,
+    /// Never empty: [`Self::new`] makes the first.
+    stations: Vec<Station>,
+    /// The index of the station the panels show.
+    shown: usize,
+}
+
+impl AppState {
+    /// The state of a window with one station, `first`, shown.
+    pub fn new(registry: Arc<Registry>, first: Station) -> Self {
+        Self {
+            registry,
+            stations: vec![first],
+            shown: 0,
+        }
+    }
+
+    /// The station the panels show.
+    pub fn station(&self) -> &Station {
+        &self.stations[self.shown]
+    }
+
+    /// The station the panels show, to change.
+    pub fn station_mut(&mut self) -> &mut Station {
+        &mut self.stations[self.shown]
+    }
+
+    /// Every station, in the order they were added.
+    pub fn stations(&self) -> &[Station] {
+        &self.stations
+    }
+}
+
 /// The application.
 pub struct App {
     /// Kept between runs.
     pub settings: Settings,
-    /// Not kept: link status, device model, packet log, job, status line.
+    /// Not kept: the stations (link status, device model, packet log, job, status line).
     pub state: AppState,
     /// The tuning panel's edits.
     pub tuning: tuning::TuningPanel,
@@ -148,9 +186,11 @@ impl App {
         // Scroll bars shown solid wherever a panel has more than its room (egui's floating
         // ones show only under the pointer: a technician does not see that more is below).
         ctx.all_styles_mut(|s| s.spacing.scroll = egui::style::ScrollStyle::solid());
-        let mut state = AppState::new(ctx, &settings.profile)?;
-        state.link.port_opener = ports;
-        let (baud, margin_ms) = port_for(&settings, &state, &settings.profile);
+        let registry = Arc::new(Registry::load()?);
+        let mut station = Station::new(ctx, registry.clone(), &settings.profile)?;
+        station.link.port_opener = ports;
+        let state = AppState::new(registry, station);
+        let (baud, margin_ms) = port_for(&settings, &state.registry, &settings.profile);
         let mut app = Self {
             connection: connection::ConnectionBar::new(&settings, baud),
             settings,
@@ -180,60 +220,71 @@ impl App {
         Ok(app)
     }
 
+    /// The station the panels show.
+    pub fn station(&self) -> &Station {
+        self.state.station()
+    }
+
+    /// The station the panels show, to change.
+    pub fn station_mut(&mut self) -> &mut Station {
+        self.state.station_mut()
+    }
+
     /// Work that is not drawing: worker events (within a time budget), job output, and what the
     /// app does on its own (the solar STOP and dead-man, reading a device that came up).
     pub fn logic(&mut self, ctx: &egui::Context) {
-        if self.state.drain_link_events() {
+        if self.state.station_mut().drain_link_events() {
             ctx.request_repaint();
         }
-        for out in self.state.take_job_output() {
+        for out in self.state.station_mut().take_job_output() {
             self.route(out);
         }
-        self.state.link.refresh_ports();
+        self.state.station_mut().link.refresh_ports();
         // The app leaves a panel the device turns out not to support.
         let panels = self.panels();
         if !panels.contains(&self.settings.panel) {
             self.settings.panel = panels[0];
         }
         // STOP-on-reconnect and the solar dead-man run whichever panel is shown.
-        for a in self.stop.tick(&self.state) {
+        for a in self.stop.tick(self.state.station()) {
             self.apply(a);
         }
-        for a in self.solar.tick(&self.state) {
+        for a in self.solar.tick(self.state.station()) {
             self.apply(a);
         }
         // A device that answers again after silence may be another unit on the same port (a
         // robot swapped on the fixture): what the last one showed is forgotten, and it is
         // identified and read again. A link that came back starts a new unit too.
-        let fresh = std::mem::take(&mut self.state.link.just_connected);
-        let back = std::mem::take(&mut self.state.link.device_back);
+        let fresh = std::mem::take(&mut self.state.station_mut().link.just_connected);
+        let back = std::mem::take(&mut self.state.station_mut().link.device_back);
         if back {
-            self.state.device.forget_unit();
-            self.state.send(LinkCommand::Identify);
-            self.state.notify(Notice::info(Text::new(
+            self.state.station_mut().device.forget_unit();
+            self.state.station_mut().send(LinkCommand::Identify);
+            self.state.station_mut().notify(Notice::info(Text::new(
                 "the device answers again: identified and read again (it may be another unit)",
                 "设备重新应答:已重新识别并读取(可能是另一台设备)",
             )));
         } else if fresh {
-            self.state.device.unit += 1;
+            self.state.station_mut().device.unit += 1;
         }
-        self.selftest.forget_other_unit(self.state.device.unit);
+        self.selftest
+            .forget_other_unit(self.state.station_mut().device.unit);
         if (fresh || back) && self.panels().contains(&PanelId::Tuning) {
             // What the device holds is shown as soon as it is known; nothing is shown before.
-            let profile = &self.state.device.profile;
+            let profile = self.station().device.profile.clone();
             let gets: Vec<u8> = profile
                 .commands
                 .iter()
                 .filter(|c| c.kind == crate::profile::CommandKind::Get && c.pair.is_some())
                 .map(|c| c.id)
                 .collect();
-            self.apply(Action::StartJob(jobs::read(profile, gets)));
+            self.apply(Action::StartJob(jobs::read(&profile, gets)));
         }
-        let title = match self.state.link.target() {
+        let title = match self.state.station_mut().link.target() {
             Some(t) => format!(
                 "{TITLE} — {} — {}",
                 t.label(),
-                self.state.device.profile.name.en
+                self.state.station_mut().device.profile.name.en
             ),
             None => format!("{TITLE} — not connected"),
         };
@@ -256,23 +307,27 @@ impl App {
     /// `None` otherwise (idle, paused or disconnected: the window sleeps until input or a
     /// worker event).
     pub fn repaint_after(&self) -> Option<std::time::Duration> {
-        let connected = self.state.connected();
+        let connected = self.state.station().connected();
         let live = match self.settings.panel {
-            PanelId::Telemetry | PanelId::Solar => connected && !self.state.link.polling_paused,
-            PanelId::Monitor => connected && !self.state.packets.paused,
+            PanelId::Telemetry | PanelId::Solar => {
+                connected && !self.state.station().link.polling_paused
+            }
+            PanelId::Monitor => connected && !self.state.station().packets.paused,
             _ => false,
         };
-        (live || self.state.job_progress().is_some()).then_some(repaint::LIVE)
+        (live || self.state.station().job_progress().is_some()).then_some(repaint::LIVE)
     }
 
     /// Routes one piece of job output: to the device model, the status line or its panel.
     fn route(&mut self, out: JobOutput) {
         match out {
             JobOutput::Progress(_) => {}
-            JobOutput::Read(id, r) => self.state.device.on_read(id, r),
-            JobOutput::Wrote(set, r) => self.state.device.on_written(set, r),
-            JobOutput::Done(r) => self.state.job_done(r),
-            JobOutput::Servo(o) => self.servo.on_output(o, &self.state.device.profile),
+            JobOutput::Read(id, r) => self.state.station_mut().device.on_read(id, r),
+            JobOutput::Wrote(set, r) => self.state.station_mut().device.on_written(set, r),
+            JobOutput::Done(r) => self.state.station_mut().job_done(r),
+            JobOutput::Servo(o) => self
+                .servo
+                .on_output(o, &self.state.station_mut().device.profile),
             JobOutput::Tuya(o) => self.tuya.on_output(o),
             JobOutput::Device(o) => self.device.on_output(o),
             JobOutput::SelfTest(o) => {
@@ -280,7 +335,8 @@ impl App {
                 if o.is_prompt() {
                     self.settings.panel = PanelId::SelfTest;
                 }
-                self.selftest.on_output(o, self.state.device.unit)
+                self.selftest
+                    .on_output(o, self.state.station_mut().device.unit)
             }
         }
     }
@@ -288,7 +344,7 @@ impl App {
     /// Draws the window and applies what the panels asked for.
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         let lang = self.settings.lang;
-        let (settings, state) = (&self.settings, &self.state);
+        let (settings, state) = (&self.settings, self.state.station());
         let mut actions = Vec::new();
         egui::Panel::top("connection").show(ui, |ui| {
             actions.extend(self.connection.show(ui, settings, state));
@@ -360,7 +416,7 @@ impl App {
             profile: kind.profile_id().to_string(),
             margin_ms: None,
         });
-        let (baud, _) = port_for(&self.settings, &self.state, &self.settings.profile);
+        let (baud, _) = port_for(&self.settings, &self.state.registry, &self.settings.profile);
         self.connection = connection::ConnectionBar::new(&self.settings, baud);
     }
 
@@ -374,8 +430,8 @@ impl App {
     /// capability bit the device reports clear is hidden (nothing is hidden before the device
     /// has answered CMD_VERSION).
     pub fn panels(&self) -> Vec<PanelId> {
-        let profile = &self.state.device.profile;
-        let info = match &self.state.device.info {
+        let profile = &self.state.station().device.profile;
+        let info = match &self.state.station().device.info {
             Some(Ok(info)) => Some(info),
             _ => None,
         };
@@ -403,67 +459,70 @@ impl App {
                 margin_ms,
             } => self.connect(target, baud, profile, margin_ms),
             Action::Disconnect => {
-                self.state.disconnect();
-                self.state
+                self.state.station_mut().disconnect();
+                self.station_mut()
                     .notify(Notice::info(Text::new("disconnected", "已断开")));
             }
             Action::SetLatencyTimer { port, ms } => {
                 match crate::system::adapter::set_latency_timer(&port, ms) {
                     Ok(now) => {
                         // The link reads the latency timer when it opens the port.
-                        if self.state.link.target() == Some(&Target::Port(port.clone())) {
+                        if self.state.station_mut().link.target()
+                            == Some(&Target::Port(port.clone()))
+                        {
                             let profile = self.settings.profile.clone();
-                            let (baud, margin_ms) = port_for(&self.settings, &self.state, &profile);
+                            let (baud, margin_ms) =
+                                port_for(&self.settings, &self.state.registry, &profile);
                             self.connect(Target::Port(port.clone()), baud, profile, margin_ms);
                         }
-                        self.state.link.refresh_ports_now();
-                        self.state.notify(Notice::info(Text::new(
+                        self.state.station_mut().link.refresh_ports_now();
+                        self.state.station_mut().notify(Notice::info(Text::new(
                             format!("{port}: latency timer set to {now} ms"),
                             format!("{port}:延迟定时器已设为 {now} ms"),
                         )));
                     }
-                    Err(e) => self.state.notify(Notice::error(Text::new(
+                    Err(e) => self.state.station_mut().notify(Notice::error(Text::new(
                         format!("{port}: latency timer not set: {e}"),
                         format!("{port}:延迟定时器未设置:{e}"),
                     ))),
                 }
             }
-            Action::StartJob(job) => self.state.start_job(job),
-            Action::CancelJob => self.state.cancel_job(),
+            Action::StartJob(job) => self.state.station_mut().start_job(job),
+            Action::CancelJob => self.state.station_mut().cancel_job(),
             Action::SetPollRate(hz) => {
                 self.settings.poll_hz = hz;
                 self.restart_polls();
             }
             Action::PausePolling(paused) => {
-                if paused != self.state.link.polling_paused {
+                if paused != self.state.station_mut().link.polling_paused {
                     // Nothing is measured while paused: the plots break there.
-                    self.state.device.mark_gap();
+                    self.state.station_mut().device.mark_gap();
                 }
-                self.state.link.polling_paused = paused;
-                self.state.link.paused_at = paused.then(std::time::Instant::now);
+                self.state.station_mut().link.polling_paused = paused;
+                self.state.station_mut().link.paused_at = paused.then(std::time::Instant::now);
                 self.restart_polls();
             }
             Action::SetPlotWindow(secs) => self.settings.window_secs = secs,
             Action::ShowPanel(panel) => self.settings.panel = panel,
             Action::SetLanguage(lang) => self.settings.lang = lang,
-            Action::PausePacketLog(paused) => self.state.packets.paused = paused,
-            Action::ClearPacketLog => self.state.packets.clear(),
-            Action::StartCapture(path) => self.state.start_capture(&path),
-            Action::StopCapture => self.state.stop_capture(),
-            Action::OpenCapture(path) => self.state.open_capture(&path),
-            Action::CloseCapture => self.state.close_capture(),
-            Action::Notify(n) => self.state.notify(n),
+            Action::PausePacketLog(paused) => self.state.station_mut().packets.paused = paused,
+            Action::ClearPacketLog => self.state.station_mut().packets.clear(),
+            Action::StartCapture(path) => self.state.station_mut().start_capture(&path),
+            Action::StopCapture => self.state.station_mut().stop_capture(),
+            Action::OpenCapture(path) => self.state.station_mut().open_capture(&path),
+            Action::CloseCapture => self.state.station_mut().close_capture(),
+            Action::Notify(n) => self.state.station_mut().notify(n),
             Action::DemoMcuRequest(r) => {
-                if let Some(mcu) = self.state.link.demo_tuya() {
+                if let Some(mcu) = self.state.station_mut().link.demo_tuya() {
                     mcu.lock().unwrap_or_else(|e| e.into_inner()).request(r);
                 }
             }
             Action::RememberFile(kind, path) => {
                 self.settings.files.insert(kind, path);
             }
-            Action::Link(cmd) => self.state.send(cmd),
+            Action::Link(cmd) => self.state.station_mut().send(cmd),
             Action::Stop => {
-                for a in self.stop.stop(&self.state) {
+                for a in self.stop.stop(self.state.station()) {
                     self.apply(a);
                 }
             }
@@ -499,7 +558,10 @@ impl App {
         if let Some(p) = file(FileKind::Capture) {
             self.monitor.capture_path = p;
         }
-        self.state.records.configure(file(FileKind::Records));
+        self.state
+            .station_mut()
+            .records
+            .configure(file(FileKind::Records));
         let shipped = |name| {
             files::shipped_in(&files::shipped_dir(), name)
                 .ok()
@@ -518,9 +580,14 @@ impl App {
     }
 
     fn connect(&mut self, target: Target, baud: u32, profile: String, margin_ms: Option<u64>) {
-        self.state.link.options.margin = margin_ms.map(std::time::Duration::from_millis);
-        if let Err(e) = self.state.connect(target.clone(), baud, &profile) {
-            self.state.notify(Notice::error(
+        self.state.station_mut().link.options.margin =
+            margin_ms.map(std::time::Duration::from_millis);
+        if let Err(e) = self
+            .state
+            .station_mut()
+            .connect(target.clone(), baud, &profile)
+        {
+            self.state.station_mut().notify(Notice::error(
                 Text::new("cannot connect", "无法连接").then(": ", &e.said()),
             ));
             return;
@@ -543,12 +610,15 @@ impl App {
     }
 
     fn restart_polls(&mut self) {
-        let polls = if self.state.link.polling_paused {
+        let polls = if self.state.station_mut().link.polling_paused {
             Vec::new()
         } else {
-            crate::ops::telemetry::polls(&self.state.device.profile, self.settings.poll_hz)
+            crate::ops::telemetry::polls(
+                &self.state.station_mut().device.profile,
+                self.settings.poll_hz,
+            )
         };
-        self.state.send(LinkCommand::SetPolls(polls));
+        self.state.station_mut().send(LinkCommand::SetPolls(polls));
     }
 }
 
@@ -567,9 +637,9 @@ fn nav_width(ui: &egui::Ui) -> f32 {
 
 /// The baud rate and margin to open `profile` with: its saved ones, or its usual rate and the
 /// protocol's own margin.
-fn port_for(saved: &Settings, state: &AppState, profile: &str) -> (u32, Option<u64>) {
+fn port_for(saved: &Settings, registry: &Registry, profile: &str) -> (u32, Option<u64>) {
     let port = saved.port_of(profile);
-    let usual = state.registry.get(profile).map_or(115_200, |p| p.baud);
+    let usual = registry.get(profile).map_or(115_200, |p| p.baud);
     (port.baud.unwrap_or(usual), port.margin_ms)
 }
 
