@@ -35,6 +35,13 @@ start)
     rm -rf "$dir"
     mkdir -p "$dir"
     chown postgres:postgres "$dir"
+    # The server runs as `postgres`, which must reach DIR: a folder from `mktemp -d` is
+    # root's alone (0700), so every folder above DIR is opened for traversal (x, not read).
+    up=$(dirname "$(realpath "$dir")")
+    while [ "$up" != / ]; do
+        chmod o+x "$up"
+        up=$(dirname "$up")
+    done
     port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
     su postgres -s /bin/sh -c "$bin/initdb -D '$dir/data' -U postgres -A trust --no-sync -E UTF8 >'$dir/initdb.log' 2>&1"
     # Password login for botbench_pw (tests of a refused login), trust for the rest.
