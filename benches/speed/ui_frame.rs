@@ -21,7 +21,7 @@ pub fn run(quick: bool) {
     let saved = Settings {
         // No device: the frame cost is drawing, not the link.
         target: Target::Port("/nonexistent/botbench-bench".into()),
-        panel: PanelId::Telemetry,
+        panel: PanelId::TELEMETRY,
         window_secs: 600.0,
         ..Settings::default()
     };

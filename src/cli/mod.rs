@@ -337,11 +337,12 @@ fn bench(long: bool, field: bool, json: bool, only: Option<&str>) -> CliResult {
 
 /// A panel by its name, as in the saved settings.
 fn parse_panel(name: &str) -> Result<crate::ui::PanelId, String> {
-    ron::from_str(name).map_err(|_| {
-        format!(
-            "unknown panel '{name}'; known: Device, Tuning, Telemetry, Presets, Actions, Solar, \
-             SelfTest, ServoBench, TuyaConsole, Monitor"
-        )
+    crate::ui::PanelId::parse(name).ok_or_else(|| {
+        let known: Vec<&str> = crate::ui::PanelId::all()
+            .into_iter()
+            .map(|id| id.as_str())
+            .collect();
+        format!("unknown panel '{name}'; known: {}", known.join(", "))
     })
 }
 

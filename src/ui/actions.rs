@@ -23,7 +23,7 @@ pub struct ActionsPanel {
 
 impl ActionsPanel {
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
+    fn draw(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         let ready = rt.connected() && rt.job_progress().is_none();
         let profile = &rt.device.profile;
@@ -178,5 +178,28 @@ fn fields(
                 .response
                 .labelled_by(name.id);
         });
+    }
+}
+
+impl crate::ui::PanelId {
+    /// The device's actions (motor, fan, spray…), from its profile.
+    pub const ACTIONS: crate::ui::PanelId = crate::ui::PanelId::new("Actions");
+}
+
+impl crate::ui::Panel for ActionsPanel {
+    fn id(&self) -> crate::ui::PanelId {
+        crate::ui::PanelId::ACTIONS
+    }
+
+    fn name(&self, lang: Lang) -> &'static str {
+        lang.tr("Actions", "动作测试")
+    }
+
+    fn kind(&self) -> Option<crate::profile::PanelKind> {
+        Some(crate::profile::PanelKind::Actions)
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &crate::ui::panel::Cx<'_>) -> Vec<Action> {
+        self.draw(ui, cx.lang, cx.station)
     }
 }

@@ -2,7 +2,7 @@
 //! and time, capability flags by name) and power state. Nothing is shown before a reply brings it.
 
 use super::Action;
-use super::jobs::{Job, JobOutput};
+use super::jobs::Job;
 use super::station::Station;
 use crate::i18n::Lang;
 use crate::i18n::Text;
@@ -52,12 +52,12 @@ fn read_job(profile: &std::sync::Arc<Profile>) -> Action {
         Text::new("version", "版本"),
         move |client, cancel, sink| {
             let v = ops::identify(client);
-            sink.send(JobOutput::Device(Output::Version(v.clone())));
+            sink.panel(Output::Version(v.clone()));
             if cancel.is_cancelled() {
                 return Err(OpError::Cancelled.into());
             }
             let pw = ops::power_state(Device::new(client, &p));
-            sink.send(JobOutput::Device(Output::Power(pw.clone())));
+            sink.panel(Output::Power(pw.clone()));
             v?;
             pw?;
             Ok(Text::new(
@@ -112,7 +112,7 @@ impl DevicePanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
+    fn draw(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         if self.unit != Some(rt.device.unit) {
             // Values of another connection (maybe another device) are never shown.
@@ -230,7 +230,7 @@ impl DevicePanel {
                     .panels
                     .iter()
                     .filter(|r| r.flag.is_some_and(|b| !info.supports(b)))
-                    .map(|r| super::PanelId::of(r.panel).name(lang).to_string())
+                    .filter_map(|r| panel_name(r.panel, lang))
                     .collect();
                 if !hidden.is_empty() {
                     ui.label(format!(
@@ -247,7 +247,7 @@ impl DevicePanel {
     }
 
     /// Takes what one of its jobs reported.
-    pub fn on_output(&mut self, out: Output) {
+    fn take_output(&mut self, out: Output) {
         self.at = Some(Instant::now());
         match out {
             Output::Ping(r) => self.ping = Some(r),
@@ -255,6 +255,14 @@ impl DevicePanel {
             Output::Power(r) => self.power = Some(r),
         }
     }
+}
+
+/// The name in `lang` of the panel the profile calls `kind`.
+fn panel_name(kind: crate::profile::PanelKind, lang: Lang) -> Option<String> {
+    super::panels()
+        .iter()
+        .find(|p| p.kind() == Some(kind))
+        .map(|p| p.name(lang).to_string())
 }
 
 /// Ping, and Read version and power state.
@@ -271,7 +279,7 @@ fn buttons(ui: &mut egui::Ui, lang: Lang, rt: &Station, ready: bool) -> Vec<Acti
                 Text::new("ping", "通讯检测"),
                 move |client, _cancel, sink| {
                     let r = ops::ping(Device::new(client, &p)).map(|ping| ping.rtt);
-                    sink.send(JobOutput::Device(Output::Ping(r.clone())));
+                    sink.panel(Output::Ping(r.clone()));
                     let rtt = r?;
                     let ms = rtt.as_secs_f64() * 1e3;
                     Ok(Text::new(
@@ -297,4 +305,38 @@ fn buttons(ui: &mut egui::Ui, lang: Lang, rt: &Station, ready: bool) -> Vec<Acti
         }
     });
     actions
+}
+
+impl crate::ui::PanelId {
+    /// MSP core commands: ping, version, power state.
+    pub const DEVICE: crate::ui::PanelId = crate::ui::PanelId::new("Device");
+}
+
+impl crate::ui::Panel for DevicePanel {
+    fn id(&self) -> crate::ui::PanelId {
+        crate::ui::PanelId::DEVICE
+    }
+
+    fn name(&self, lang: Lang) -> &'static str {
+        lang.tr("Device", "设备信息")
+    }
+
+    fn kind(&self) -> Option<crate::profile::PanelKind> {
+        Some(crate::profile::PanelKind::Device)
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &crate::ui::panel::Cx<'_>) -> Vec<Action> {
+        self.draw(ui, cx.lang, cx.station)
+    }
+
+    fn on_output(
+        &mut self,
+        out: crate::ui::panel::PanelOutput,
+        _station: &Station,
+    ) -> Vec<Action> {
+        if let Some(out) = out.take::<Output>() {
+            self.take_output(out);
+        }
+        Vec::new()
+    }
 }

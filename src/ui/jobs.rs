@@ -5,6 +5,8 @@
 //! The jobs several panels share (read, write with read-back, send) are made here; each runs an
 //! operation of [`crate::ops`].
 
+use super::panel::{PanelId, PanelOutput};
+use super::station::Verdict;
 use crate::document::DocumentError;
 use crate::i18n::Key;
 use crate::i18n::Text;
@@ -103,8 +105,10 @@ impl LogError {
     }
 }
 
-/// What a job reports.
-#[derive(Debug, Clone)]
+/// What a job reports. What concerns the station goes to it (the device model, the status
+/// line, the unit's verdicts); the rest goes to the panel that started the job, in that panel's
+/// own type ([`JobSink::panel`]).
+#[derive(Debug)]
 pub enum JobOutput {
     /// How far it got.
     Progress(Progress),
@@ -112,14 +116,10 @@ pub enum JobOutput {
     Read(u8, Result<FieldValues, OpError>),
     /// A Set was written and read back: the checks, or why not (for the device model).
     Wrote(u8, Result<Vec<Check>, OpError>),
-    /// For the servo bench panel.
-    Servo(super::servo_bench::Output),
-    /// For the Tuya console panel.
-    Tuya(super::tuya_console::Output),
-    /// For the device panel (ping, version, power state).
-    Device(super::device::Output),
-    /// For the self-test panel.
-    SelfTest(super::selftest::Output),
+    /// A verdict on the unit on the fixture (for the station).
+    Verdict(Verdict),
+    /// For the panel that started the job.
+    Panel(PanelOutput),
     /// The job ended: a summary, or the error that ended it.
     Done(JobResult),
 }
@@ -139,6 +139,11 @@ impl JobSink {
     pub fn progress(&self, p: Progress) {
         self.send(JobOutput::Progress(p));
     }
+
+    /// Sends `out` to the panel that started the job (which takes it as its own type).
+    pub fn panel<T: std::any::Any + Send>(&self, out: T) {
+        self.send(JobOutput::Panel(PanelOutput::new(out)));
+    }
 }
 
 /// What a job runs: on the job thread, with a link client, a cancel flag and a sink for output.
@@ -149,6 +154,9 @@ pub struct Job {
     /// What it does, for the status bar, in both languages.
     pub title: Text,
     work: Work,
+    /// The panel that started it, which its [`JobOutput::Panel`] output goes to (marked by
+    /// [`super::panel::Panels`] when the panel returns it).
+    owner: Option<PanelId>,
 }
 
 impl Job {
@@ -160,7 +168,14 @@ impl Job {
         Self {
             title: title.into(),
             work: Box::new(work),
+            owner: None,
         }
+    }
+
+    /// The job, started by panel `panel` (unless it already has an owner).
+    pub fn owned_by(mut self, panel: PanelId) -> Self {
+        self.owner.get_or_insert(panel);
+        self
     }
 }
 
@@ -168,6 +183,7 @@ impl std::fmt::Debug for Job {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Job")
             .field("title", &self.title.en)
+            .field("owner", &self.owner)
             .finish_non_exhaustive()
     }
 }
@@ -180,6 +196,8 @@ pub struct RunningJob {
     pub progress: Option<Progress>,
     /// Raise to stop it.
     pub cancel: Cancel,
+    /// The panel that started it, if one did.
+    pub owner: Option<PanelId>,
     rx: Receiver<JobOutput>,
     done: bool,
 }
@@ -207,6 +225,7 @@ impl RunningJob {
             title: job.title,
             progress: None,
             cancel,
+            owner: job.owner,
             rx,
             done: false,
         })

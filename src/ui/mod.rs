@@ -1,41 +1,63 @@
-//! The desktop window (eframe/egui): one file (or folder) per panel. Panels draw from the
-//! station they show ([`Station`]: one connected device's link status, device model, packet log,
-//! job, status line) and the saved [`Settings`], both read-only, and return [`Action`]s; the app applies them once per
+//! The desktop window (eframe/egui): one file (or folder) per panel, and one line in the list
+//! ([`panels`], see [`panel`]). Panels draw from the station they show ([`Station`]: one
+//! connected device's link status, device model, packet log, job, verdicts, status line) and
+//! the saved [`Settings`], both read-only, and return [`Action`]s; the app applies them once per
 //! frame. Panels never build a link request: they ask [`crate::ops`] for one, or start a
 //! [`Job`] that runs an operation. The UI never touches the port.
 
-mod actions;
 pub mod app;
 mod confirm;
 mod connection;
 pub mod demo_hint;
-mod device;
 pub mod files;
 pub(crate) mod inputs;
 pub mod jobs;
 pub mod layout;
-mod monitor;
+pub mod panel;
 mod plot;
-mod presets;
 pub mod records;
 pub mod repaint;
-mod selftest;
-mod servo_bench;
 pub mod settings;
-mod solar;
 pub mod station;
 mod status_bar;
 pub mod stop;
-mod telemetry;
 pub mod tour;
-pub(crate) mod tuning;
-mod tuya_console;
 pub mod views;
-pub mod yield_view;
 pub mod zh;
 
-pub use app::{App, AppState, PanelId};
+/// The list of panels: `panels! { module::Type, … }` declares each panel's module (a file or
+/// folder of `ui/`) and makes [`panels`], a fresh panel of each, in this order: the
+/// navigation's (a device's own panels are ordered by its profile; those every device has come
+/// after them, in this order).
+macro_rules! panels {
+    ($($module:ident :: $panel:ident),+ $(,)?) => {
+        $(pub mod $module;)+
+
+        /// A fresh panel of each kind, in the list's order.
+        pub fn panels() -> Vec<Box<dyn panel::Panel>> {
+            vec![$(Box::new($module::$panel::default())),+]
+        }
+    };
+}
+
+// Adding a panel: its file (implementing `panel::Panel`) and one line here.
+panels! {
+    device::DevicePanel,
+    tuning::TuningPanel,
+    telemetry::TelemetryPanel,
+    presets::PresetsPanel,
+    actions::ActionsPanel,
+    solar::SolarPanel,
+    selftest::SelfTestPanel,
+    servo_bench::ServoBenchPanel,
+    tuya_console::TuyaConsolePanel,
+    monitor::MonitorPanel,
+    yield_view::YieldPanel,
+}
+
+pub use app::{App, AppState};
 pub use jobs::Job;
+pub use panel::{Panel, PanelId};
 pub use settings::Settings;
 pub use solar::{Outcome as SolarOutcome, Trip as SolarTrip};
 pub use station::{Notice, Station, Target};

@@ -207,7 +207,7 @@ impl MonitorPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
+    fn draw(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         let log = &rt.packets;
         // A capture opened offline is shown in place of the live log, decoded with its profile;
@@ -439,4 +439,36 @@ fn record_to(path: &str) -> Result<std::path::PathBuf, Notice> {
         )));
     }
     Ok(p)
+}
+
+impl crate::ui::PanelId {
+    /// Frames sent and received, live or from a capture file.
+    pub const MONITOR: crate::ui::PanelId = crate::ui::PanelId::new("Monitor");
+}
+
+impl crate::ui::Panel for MonitorPanel {
+    fn id(&self) -> crate::ui::PanelId {
+        crate::ui::PanelId::MONITOR
+    }
+
+    fn name(&self, lang: Lang) -> &'static str {
+        lang.tr("Packet monitor", "报文监视")
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &crate::ui::panel::Cx<'_>) -> Vec<Action> {
+        self.draw(ui, cx.lang, cx.station)
+    }
+
+    fn restore(&mut self, settings: &crate::ui::Settings) {
+        if let Some(p) = settings.file(FileKind::Packets) {
+            self.save_path = p.to_string();
+        }
+        if let Some(p) = settings.file(FileKind::Capture) {
+            self.capture_path = p.to_string();
+        }
+    }
+
+    fn live(&self, station: &Station) -> bool {
+        station.connected() && !station.packets.paused
+    }
 }

@@ -134,7 +134,7 @@ impl PresetsPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
+    fn draw(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         let profile = &rt.device.profile;
         let busy = rt.job_progress().is_some();
@@ -348,4 +348,33 @@ fn diff_table(ui: &mut egui::Ui, lang: Lang, profile: &Profile, rows: &[DiffRow]
                 ui.end_row();
             }
         });
+}
+
+impl crate::ui::PanelId {
+    /// Presets: save, compare, apply.
+    pub const PRESETS: crate::ui::PanelId = crate::ui::PanelId::new("Presets");
+}
+
+impl crate::ui::Panel for PresetsPanel {
+    fn id(&self) -> crate::ui::PanelId {
+        crate::ui::PanelId::PRESETS
+    }
+
+    fn name(&self, lang: Lang) -> &'static str {
+        lang.tr("Presets", "预设")
+    }
+
+    fn kind(&self) -> Option<crate::profile::PanelKind> {
+        Some(crate::profile::PanelKind::Presets)
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &crate::ui::panel::Cx<'_>) -> Vec<Action> {
+        self.draw(ui, cx.lang, cx.station)
+    }
+
+    fn restore(&mut self, settings: &crate::ui::Settings) {
+        if let Some(p) = settings.file(FileKind::Preset) {
+            self.path = p.to_string();
+        }
+    }
 }

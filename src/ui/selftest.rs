@@ -4,6 +4,7 @@
 //! one JSON line per run appended to a log with the device's version and build info.
 
 use super::jobs::{Job, JobError, JobOutput, LogError};
+use super::station::Verdict;
 use super::settings::FileKind;
 use super::station::Station;
 use super::{Action, files};
@@ -44,18 +45,18 @@ pub struct SelfTestPanel {
     pub plan: Option<Plan>,
     /// Why the last open failed, with line and column.
     pub error: Option<DocumentError>,
-    /// Results of the run in progress (or the last), in step order.
+    /// Results of the run in progress (or the last), in step order. The last run's report is
+    /// the station's verdict ([`crate::ui::station::Verdicts::selftest`]).
     pub results: Vec<StepResult>,
-    /// The last finished run.
-    pub report: Option<Report>,
     /// Where the last record went, or why it could not be written.
     pub logged: Option<Result<PathBuf, LogError>>,
     /// A run is in progress.
     pub running: bool,
     /// The prompt the job waits on.
     pub prompt: Option<Prompt>,
-    /// The unit the last report is about (the device model's `unit` when it came): the
-    /// PASS/FAIL banner belongs to it and goes when another connection or unit comes.
+    /// The unit the results shown are about (the device model's `unit` when the run ended):
+    /// they and the PASS/FAIL banner belong to it and go when another connection or unit
+    /// comes; `None` while none is shown.
     pub report_unit: Option<u64>,
 }
 
@@ -67,7 +68,6 @@ impl Default for SelfTestPanel {
             plan: None,
             error: None,
             results: Vec::new(),
-            report: None,
             logged: None,
             running: false,
             prompt: None,
@@ -76,22 +76,15 @@ impl Default for SelfTestPanel {
     }
 }
 
-/// What this panel's jobs report.
+/// What this panel's jobs report (the verdict goes to the station).
 #[derive(Debug, Clone)]
 pub enum Output {
     /// A step's result.
     Step(StepResult),
     /// The job waits for the operator.
     Prompt(Prompt),
-    /// The run ended: its report, and where its record went (or why it was not written).
-    Done(Box<Report>, Option<Result<PathBuf, LogError>>),
-}
-
-impl Output {
-    /// Whether it asks the operator something (the app then shows this panel).
-    pub fn is_prompt(&self) -> bool {
-        matches!(self, Output::Prompt(_))
-    }
+    /// The run ended: its results, and where its record went (or why it was not written).
+    Done(Vec<StepResult>, Option<Result<PathBuf, LogError>>),
 }
 
 /// The unit of a step's first field, with a leading space (or empty).
@@ -216,7 +209,7 @@ impl SelfTestPanel {
             }
         }
         self.results.clear();
-        self.report = None;
+        self.report_unit = None;
         self.logged = None;
     }
 
@@ -232,7 +225,7 @@ impl SelfTestPanel {
             ..Default::default()
         };
         self.results.clear();
-        self.report = None;
+        self.report_unit = None;
         self.logged = None;
         self.running = true;
         Some(Action::StartJob(Job::new(
@@ -240,10 +233,10 @@ impl SelfTestPanel {
             move |client, cancel, sink| {
                 let mut operator = |text: &str| -> bool {
                     let (tx, rx) = crossbeam_channel::bounded(1);
-                    sink.send(JobOutput::SelfTest(Output::Prompt(Prompt {
+                    sink.panel(Output::Prompt(Prompt {
                         text: text.to_string(),
                         answer: tx,
-                    })));
+                    }));
                     loop {
                         if cancel.is_cancelled() {
                             return false;
@@ -265,7 +258,7 @@ impl SelfTestPanel {
                     &given,
                     &mut operator,
                     &mut Run::new(cancel, |p| sink.progress(p)),
-                    &mut |r| sink.send(JobOutput::SelfTest(Output::Step(r.clone()))),
+                    &mut |r| sink.panel(Output::Step(r.clone())),
                     &mut records,
                     (!log.as_os_str().is_empty()).then_some(log.as_path()),
                 );
@@ -276,10 +269,9 @@ impl SelfTestPanel {
                 let pass = report.pass;
                 let failed: Vec<String> = report.failed().map(|r| r.name.clone()).collect();
                 let aborted = report.aborted.clone();
-                sink.send(JobOutput::SelfTest(Output::Done(
-                    Box::new(report),
-                    logged.clone(),
-                )));
+                let results = report.results.clone();
+                sink.send(JobOutput::Verdict(Verdict::SelfTest(Box::new(report))));
+                sink.panel(Output::Done(results, logged.clone()));
                 if let Some(Err(e)) = logged {
                     return Err(e.into());
                 }
@@ -308,24 +300,30 @@ impl SelfTestPanel {
         )]
     }
 
-    /// Forgets the last run's verdict when it is about another unit than the one answering
-    /// now (a new connection, a lost link, a device answering again after silence).
-    pub fn forget_other_unit(&mut self, unit: u64) {
+    /// Forgets the last run's results when they are about another unit than the one
+    /// answering now (a new connection, a lost link, a device answering again after silence).
+    fn forget_other_unit(&mut self, unit: u64) {
         if !self.running && self.report_unit.is_some_and(|u| u != unit) {
             self.results.clear();
-            self.report = None;
             self.logged = None;
             self.report_unit = None;
         }
     }
 
+    /// The report of the run shown: the station's verdict on its unit, once the run has ended
+    /// on this unit.
+    fn report<'a>(&self, rt: &'a Station) -> Option<&'a Report> {
+        let ours = !self.running && self.report_unit == Some(rt.device.unit);
+        rt.verdicts.selftest.as_deref().filter(|_| ours)
+    }
+
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
+    fn draw(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         let busy = rt.job_progress().is_some();
         if self.running
             && !busy
-            && self.report.is_none()
+            && self.report(rt).is_none()
             && rt.job.as_ref().is_none_or(|j| j.is_done())
         {
             // The job ended without a report (it could not start).
@@ -415,15 +413,15 @@ impl SelfTestPanel {
                     .text(msg.get(lang)),
             );
         }
-        self.banner(ui, lang);
+        self.banner(ui, lang, rt);
         ui.separator();
-        self.table(ui, lang, &rt.device.profile);
+        self.table(ui, lang, rt);
         self.prompt_modal(ui, lang);
         actions
     }
 
-    fn banner(&self, ui: &mut egui::Ui, lang: Lang) {
-        let Some(report) = &self.report else {
+    fn banner(&self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
+        let Some(report) = self.report(rt) else {
             return;
         };
         let (text, color) = if report.pass {
@@ -496,7 +494,9 @@ impl SelfTestPanel {
         }
     }
 
-    fn table(&self, ui: &mut egui::Ui, lang: Lang, profile: &Profile) {
+    fn table(&self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
+        let profile = &rt.device.profile;
+        let reported = self.report(rt).is_some();
         let Some(plan) = &self.plan else { return };
         egui::ScrollArea::both().auto_shrink(false).show(ui, |ui| {
             // Four text columns share what the PASS/FAIL column leaves, the names of what is
@@ -558,7 +558,7 @@ impl SelfTestPanel {
                                 ui.label(lang.tr("running…", "进行中…"));
                                 ui.label("");
                             }
-                            None if self.report.is_some() => {
+                            None if reported => {
                                 ui.weak(lang.tr("not run", "未运行"));
                                 ui.label("");
                             }
@@ -604,19 +604,74 @@ impl SelfTestPanel {
         }
     }
 
-    /// Takes what one of its jobs reported; a report is about `unit` (the device model's).
-    pub fn on_output(&mut self, out: Output, unit: u64) {
+    /// Takes what one of its jobs reported; an end is about `unit` (the device model's).
+    fn take_output(&mut self, out: Output, unit: u64) {
         match out {
             Output::Step(r) => self.results.push(r),
             Output::Prompt(p) => self.prompt = Some(p),
-            Output::Done(report, logged) => {
-                self.results = report.results.clone();
-                self.report = Some(*report);
+            Output::Done(results, logged) => {
+                self.results = results;
                 self.report_unit = Some(unit);
                 self.logged = logged;
                 self.running = false;
                 self.prompt = None;
             }
+        }
+    }
+}
+
+impl crate::ui::PanelId {
+    /// The window cleaner's production self-test.
+    pub const SELF_TEST: crate::ui::PanelId = crate::ui::PanelId::new("SelfTest");
+}
+
+impl crate::ui::Panel for SelfTestPanel {
+    fn id(&self) -> crate::ui::PanelId {
+        crate::ui::PanelId::SELF_TEST
+    }
+
+    fn name(&self, lang: Lang) -> &'static str {
+        lang.tr("Self-test", "产线自检")
+    }
+
+    fn kind(&self) -> Option<crate::profile::PanelKind> {
+        Some(crate::profile::PanelKind::SelfTest)
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &crate::ui::panel::Cx<'_>) -> Vec<Action> {
+        self.draw(ui, cx.lang, cx.station)
+    }
+
+    fn tick(&mut self, station: &Station) -> Vec<Action> {
+        self.forget_other_unit(station.device.unit);
+        Vec::new()
+    }
+
+    /// An operator prompt is answered on this panel: it asks to be shown.
+    fn on_output(&mut self, out: crate::ui::panel::PanelOutput, station: &Station) -> Vec<Action> {
+        let Some(out) = out.take::<Output>() else {
+            return Vec::new();
+        };
+        let prompt = matches!(out, Output::Prompt(_));
+        self.take_output(out, station.device.unit);
+        if prompt {
+            vec![Action::ShowPanel(crate::ui::PanelId::SELF_TEST)]
+        } else {
+            Vec::new()
+        }
+    }
+
+    /// The plan and log last used; the shipped plan when none was used yet.
+    fn restore(&mut self, settings: &crate::ui::Settings) {
+        if let Some(p) = settings.file(FileKind::SelfTestLog) {
+            self.log_path = p.to_string();
+        }
+        if let Some(p) = crate::ui::app::file_or_shipped(
+            settings,
+            FileKind::SelfTestPlan,
+            "window-cleaner-selftest.ron",
+        ) {
+            self.path = p;
         }
     }
 }

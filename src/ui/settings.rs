@@ -2,7 +2,7 @@
 //! settings, the panel shown, the language, the telemetry view and the files last used.
 //! Changed only by the app, as panels ask ([`super::Action`]).
 
-use super::app::PanelId;
+use super::panel::PanelId;
 use super::station::Target;
 use crate::i18n::Lang;
 use serde::{Deserialize, Serialize};
@@ -76,7 +76,7 @@ impl Default for Settings {
             target: Target::Demo("window-cleaner".into()),
             profile: "window-cleaner".into(),
             ports: BTreeMap::new(),
-            panel: PanelId::Tuning,
+            panel: PanelId::TUNING,
             lang: Lang::En,
             poll_hz: Some(50.0),
             window_secs: 60.0,

@@ -162,42 +162,6 @@ impl StopControl {
         StopState::Waiting
     }
 
-    /// The STOP button: big, red, one click.
-    pub fn button(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
-        let b = egui::Button::new(
-            egui::RichText::new(lang.tr("STOP", "停止"))
-                .strong()
-                .color(egui::Color32::WHITE),
-        )
-        .fill(RED)
-        .min_size(egui::vec2(BUTTON_WIDTH, 32.0));
-        let what = rt
-            .device
-            .profile
-            .stop_commands()
-            .iter()
-            .map(|(c, inputs)| {
-                let values: Vec<String> = inputs
-                    .iter()
-                    .map(|(k, v)| match v {
-                        crate::profile::Input::Text(t) => format!("{k}={t}"),
-                        crate::profile::Input::Raw(r) => format!("{k}={r:?}"),
-                    })
-                    .collect();
-                format!("{} {}", lang.tr(&c.name.en, &c.name.zh), values.join(" "))
-            })
-            .collect::<Vec<_>>()
-            .join(", ");
-        if ui
-            .add(b)
-            .on_hover_text(format!("{}: {what}", lang.tr("Now", "立即")))
-            .clicked()
-        {
-            return self.stop(rt);
-        }
-        Vec::new()
-    }
-
     /// One line saying where the last STOP stands (nothing before the first).
     pub fn status(&self, ui: &mut egui::Ui, lang: Lang) {
         match self.state() {
@@ -239,6 +203,42 @@ impl StopControl {
             );
         }
     }
+}
+
+/// The STOP button: big, red, one click ([`Action::Stop`]); its hover says what it sends.
+pub fn button(ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
+    let b = egui::Button::new(
+        egui::RichText::new(lang.tr("STOP", "停止"))
+            .strong()
+            .color(egui::Color32::WHITE),
+    )
+    .fill(RED)
+    .min_size(egui::vec2(BUTTON_WIDTH, 32.0));
+    let what = rt
+        .device
+        .profile
+        .stop_commands()
+        .iter()
+        .map(|(c, inputs)| {
+            let values: Vec<String> = inputs
+                .iter()
+                .map(|(k, v)| match v {
+                    crate::profile::Input::Text(t) => format!("{k}={t}"),
+                    crate::profile::Input::Raw(r) => format!("{k}={r:?}"),
+                })
+                .collect();
+            format!("{} {}", lang.tr(&c.name.en, &c.name.zh), values.join(" "))
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    if ui
+        .add(b)
+        .on_hover_text(format!("{}: {what}", lang.tr("Now", "立即")))
+        .clicked()
+    {
+        return vec![Action::Stop];
+    }
+    Vec::new()
 }
 
 /// What the robot may be doing because this window told it to: "Running: Fan 60 %", one line

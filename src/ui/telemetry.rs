@@ -114,7 +114,7 @@ fn other_commands(rt: &Station) -> Vec<&crate::profile::Command> {
 
 impl TelemetryPanel {
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &Station) -> Vec<Action> {
+    fn draw(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &Station) -> Vec<Action> {
         let lang = saved.lang;
         let mut actions = Vec::new();
         crate::ui::layout::toolbar(ui, |ui| {
@@ -464,4 +464,37 @@ pub fn write_csv(
         .map_err(|e| crate::document::DocumentError::io(path, "write", &e))?;
     crate::document::write_atomic(path, &buf)?;
     Ok(n)
+}
+
+impl crate::ui::PanelId {
+    /// Live plots and telemetry.
+    pub const TELEMETRY: crate::ui::PanelId = crate::ui::PanelId::new("Telemetry");
+}
+
+impl crate::ui::Panel for TelemetryPanel {
+    fn id(&self) -> crate::ui::PanelId {
+        crate::ui::PanelId::TELEMETRY
+    }
+
+    fn name(&self, lang: Lang) -> &'static str {
+        lang.tr("Telemetry", "实时数据")
+    }
+
+    fn kind(&self) -> Option<crate::profile::PanelKind> {
+        Some(crate::profile::PanelKind::Telemetry)
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &crate::ui::panel::Cx<'_>) -> Vec<Action> {
+        self.draw(ui, cx.settings, cx.station)
+    }
+
+    fn restore(&mut self, settings: &Settings) {
+        if let Some(p) = settings.file(FileKind::TelemetryCsv) {
+            self.csv_path = p.to_string();
+        }
+    }
+
+    fn live(&self, station: &Station) -> bool {
+        station.connected() && !station.link.polling_paused
+    }
 }

@@ -13,6 +13,10 @@
 //! checked: a label it parts over two lines ([`super::layout::split_words`]) or a text drawn
 //! over another ([`super::layout::overlapping_texts`]) is a failure.
 
+use super::PanelId;
+use super::presets::PresetsPanel;
+use super::selftest::SelfTestPanel;
+use super::servo_bench::ServoBenchPanel;
 use super::station::Station;
 use super::{App, View};
 use crate::i18n::Lang;
@@ -176,7 +180,7 @@ impl Tour {
                         self.shots = shots(
                             app.views()
                                 .into_iter()
-                                .filter(|v| first || v.panel != super::PanelId::Yield)
+                                .filter(|v| first || v.panel != PanelId::YIELD)
                                 .collect(),
                         );
                         self.phase = Phase::Next;
@@ -373,12 +377,17 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
                 start: |app| {
                     let dir = super::files::shipped_dir();
                     if let Ok(p) = super::files::shipped_in(&dir, "window-cleaner-factory.ron") {
-                        app.presets.path = p.display().to_string();
-                        app.presets.open(app.state.station());
+                        app.with_panel(|presets: &mut PresetsPanel, st| {
+                            presets.path = p.display().to_string();
+                            presets.open(st);
+                        });
                     }
-                    app.selftest.open(app.state.station());
+                    app.with_panel(|selftest: &mut SelfTestPanel, st| selftest.open(st));
                 },
-                done: |app| app.selftest.plan.is_some() && app.presets.loaded.is_some(),
+                done: |app| {
+                    app.panel::<SelfTestPanel>().plan.is_some()
+                        && app.panel::<PresetsPanel>().loaded.is_some()
+                },
             },
             Prep {
                 what: "the Yield view's report of the tour's generated records computed",
@@ -403,18 +412,22 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
                 what: "the bus scanned, a servo selected and the provisioning plan open",
                 start: |app| {
                     let dir = super::files::shipped_dir();
-                    if let Ok(p) = super::files::shipped_in(&dir, "servo-provision-plan.ron") {
-                        app.servo.production.plan_path = p.display().to_string();
-                        app.servo.production.load(app.state.station());
-                    }
-                    if let Some(scan) = app.servo.scan.start(app.state.station()) {
-                        app.apply(scan);
+                    let scan = app.with_panel(|servo: &mut ServoBenchPanel, st| {
+                        if let Ok(p) = super::files::shipped_in(&dir, "servo-provision-plan.ron") {
+                            servo.production.plan_path = p.display().to_string();
+                            servo.production.load(st);
+                        }
+                        servo.scan.start(st)
+                    });
+                    if let Some(scan) = scan {
+                        app.apply_from(PanelId::SERVO_BENCH, scan);
                     }
                 },
                 done: |app| {
+                    let servo = app.panel::<ServoBenchPanel>();
                     app.station().job_progress().is_none()
-                        && app.servo.selected.is_some()
-                        && app.servo.production.plan.is_some()
+                        && servo.selected.is_some()
+                        && servo.production.plan.is_some()
                 },
             },
             Prep {
@@ -426,7 +439,8 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
                     }
                 },
                 done: |app| {
-                    app.station().job_progress().is_none() && !app.servo.params.values.is_empty()
+                    app.station().job_progress().is_none()
+                        && !app.panel::<ServoBenchPanel>().params.values.is_empty()
                 },
             },
         ],

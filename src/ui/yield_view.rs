@@ -78,7 +78,7 @@ impl Default for YieldPanel {
 
 impl YieldPanel {
     /// Draws the view; returns the setting to remember when applied.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, state: &Station) -> Vec<Action> {
+    fn draw(&mut self, ui: &mut egui::Ui, lang: Lang, state: &Station) -> Vec<Action> {
         let records = &state.records;
         if !self.loaded {
             self.setting = records.setting();
@@ -514,4 +514,23 @@ fn histogram(ui: &mut egui::Ui, lang: Lang, m: &MeasurementStats) {
                     .color(egui::Color32::from_rgb(25, 118, 210)),
             );
         });
+}
+
+impl crate::ui::PanelId {
+    /// Production records: yield, failing steps, measurements.
+    pub const YIELD: crate::ui::PanelId = crate::ui::PanelId::new("Yield");
+}
+
+impl crate::ui::Panel for YieldPanel {
+    fn id(&self) -> crate::ui::PanelId {
+        crate::ui::PanelId::YIELD
+    }
+
+    fn name(&self, lang: Lang) -> &'static str {
+        lang.tr("Yield", "良率")
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &crate::ui::panel::Cx<'_>) -> Vec<Action> {
+        self.draw(ui, cx.lang, cx.station)
+    }
 }

@@ -3,7 +3,9 @@
 use botbench::i18n::Lang;
 use botbench::profile::Value;
 use botbench::sim::Faults;
+use botbench::ui::presets::PresetsPanel;
 use botbench::ui::station::Reading;
+use botbench::ui::tuning::TuningPanel;
 use botbench::ui::{App, PanelId};
 use eframe::egui::accesskit::Role;
 use egui_kittest::kittest::{By, Queryable};
@@ -31,7 +33,7 @@ fn read_all_brings_every_parameter_from_the_device() {
         .unwrap()
         .set_param("waterPumpDuration", 4321)
         .unwrap();
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     gui::read_all(&mut h);
     let want = b.sim().param("waterPumpDuration").unwrap();
     let got = match app(&h).station().device.readings.get(&135) {
@@ -50,17 +52,21 @@ fn read_all_brings_every_parameter_from_the_device() {
 fn an_out_of_range_edit_is_refused_for_writing() {
     let b = bench();
     b.sim().set_param("pwmValue", 33).unwrap();
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     gui::read_all(&mut h);
     h.step();
     edit_value(&mut h, "33", "101");
     let a = app(&h);
     assert_eq!(
-        a.tuning.edits.values().cloned().collect::<Vec<_>>(),
+        a.panel::<TuningPanel>()
+            .edits
+            .values()
+            .cloned()
+            .collect::<Vec<_>>(),
         vec!["101".to_string()]
     );
     assert!(
-        a.tuning.pending(a.station()).is_err(),
+        a.panel::<TuningPanel>().pending(a.station()).is_err(),
         "an invalid edit blocks writing"
     );
     assert!(
@@ -78,7 +84,7 @@ fn an_out_of_range_edit_is_refused_for_writing() {
 fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
     let b = bench();
     b.sim().set_param("pwmValue", 33).unwrap();
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     gui::read_all(&mut h);
     h.step();
     edit_value(&mut h, "33", "64");
@@ -102,7 +108,7 @@ fn a_valid_edit_is_written_and_the_simulator_then_holds_it() {
 fn a_named_value_is_chosen_by_its_name_and_written() {
     let b = bench();
     b.sim().set_param("waterPump", 1).unwrap();
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     gui::read_all(&mut h);
     h.step();
     assert!(
@@ -117,7 +123,7 @@ fn a_named_value_is_chosen_by_its_name_and_written() {
     h.run_steps(2);
     assert_eq!(
         app(&h)
-            .tuning
+            .panel::<TuningPanel>()
             .edits
             .get(&(135, "waterPump".to_string()))
             .map(String::as_str),
@@ -139,7 +145,7 @@ fn a_named_value_is_chosen_by_its_name_and_written() {
 #[test]
 fn the_plots_receive_points() {
     let b = bench();
-    let mut h = harness(&b, PanelId::Telemetry);
+    let mut h = harness(&b, PanelId::TELEMETRY);
     step_until(&mut h, "attitude and battery points", |a| {
         let n = |id: &str, f: &str| {
             a.station()
@@ -158,9 +164,9 @@ fn a_preset_saves_and_applies_in_a_round_trip() {
     let b = bench();
     let dir = temp_dir();
     let path = dir.path().join("preset.ron");
-    let mut h = harness(&b, PanelId::Presets);
+    let mut h = harness(&b, PanelId::PRESETS);
     step_until(&mut h, "the first read", |a| all_read(a) && idle(a));
-    app_mut(&mut h).presets.path = path.display().to_string();
+    app_mut(&mut h).panel_mut::<PresetsPanel>().path = path.display().to_string();
     h.step();
     h.get_by_label("Save device to file").click();
     step_until(&mut h, "the preset saved", |_| path.exists());
@@ -218,15 +224,20 @@ fn a_malformed_preset_is_shown_with_its_line_and_column() {
     let dir = temp_dir();
     let path = dir.path().join("bad.ron");
     std::fs::write(&path, "(\n  version: 1,\n  profile: \"window-cleaner\",\n  values: {\n    \"MSP_SET_PWMVALUE\": { \"pwmValue\": \"101\" },\n  },\n)\n").unwrap();
-    let mut h = harness(&b, PanelId::Presets);
+    let mut h = harness(&b, PanelId::PRESETS);
     step_until(&mut h, "the link", |a| a.station().connected());
-    app_mut(&mut h).presets.path = path.display().to_string();
+    app_mut(&mut h).panel_mut::<PresetsPanel>().path = path.display().to_string();
     h.step();
     h.get_by_label("Open").click();
     h.run_steps(2);
-    let err = app(&h).presets.error.clone().expect("refused").to_string();
+    let err = app(&h)
+        .panel::<PresetsPanel>()
+        .error
+        .clone()
+        .expect("refused")
+        .to_string();
     assert!(err.contains(":5:") && err.contains("out of range"), "{err}");
-    assert!(app(&h).presets.loaded.is_none());
+    assert!(app(&h).panel::<PresetsPanel>().loaded.is_none());
 }
 
 #[test]
@@ -234,7 +245,7 @@ fn every_panel_renders_in_english_and_chinese() {
     // A glyph missing from the bundled fonts panics while drawing, so drawing every panel in both
     // languages checks the font as well as the layout.
     let b = bench();
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     step_until(&mut h, "the link", |a| a.station().connected());
     let panels = app(&h).panels();
     assert!(panels.len() >= 5, "{panels:?}");
@@ -258,7 +269,7 @@ fn nothing_is_shown_before_a_reply_and_a_failed_read_says_so_in_place() {
         ..Faults::default()
     };
     let b = serve_with(window_cleaner(), silent);
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     step_until(&mut h, "the reads to fail", |a| {
         matches!(
             a.station().device.readings.get(&130),
@@ -281,7 +292,7 @@ fn nothing_is_shown_before_a_reply_and_a_failed_read_says_so_in_place() {
 #[test]
 fn the_parameters_are_read_as_soon_as_the_link_is_up() {
     let b = bench();
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     step_until(&mut h, "every parameter read without a click", all_read);
 }
 
@@ -295,7 +306,7 @@ fn a_slow_device_is_read_with_the_automatic_margin_it_learns() {
     // Far beyond the protocol's own 20 ms: the automatic margin learns the device's answer
     // latency from its late answers, and every parameter is read without a margin chosen by
     // hand.
-    let saved = settings(served.path(), "window-cleaner", PanelId::Tuning, Lang::En);
+    let saved = settings(served.path(), "window-cleaner", PanelId::TUNING, Lang::En);
     assert_eq!(
         saved.port_of("window-cleaner").margin_ms,
         None,

@@ -28,7 +28,7 @@ fn a_capture_recorded_from_the_window_replays_with_the_window_showing_the_same_v
         .unwrap()
         .set_param("waterPumpDuration", 4321)
         .unwrap();
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     // The app reads every value on connecting: the recording starts after that read, and holds
     // the whole of the one asked for.
     gui::read_on_connecting(&mut h);
@@ -36,7 +36,7 @@ fn a_capture_recorded_from_the_window_replays_with_the_window_showing_the_same_v
     let recorded = gui::read_all(&mut h);
 
     // The monitor shows the recording and its size; Stop there ends it.
-    app_mut(&mut h).apply(Action::ShowPanel(PanelId::Monitor));
+    app_mut(&mut h).apply(Action::ShowPanel(PanelId::MONITOR));
     step_until(&mut h, "the file to hold the replies", |a| {
         a.station()
             .recording()
@@ -62,7 +62,7 @@ fn a_capture_recorded_from_the_window_replays_with_the_window_showing_the_same_v
         ReplayDevice::new(&file).expect("replayable"),
         Faults::default(),
     );
-    let mut h = harness(&replay, PanelId::Tuning);
+    let mut h = harness(&replay, PanelId::TUNING);
     let replayed = gui::read_all(&mut h);
     assert_eq!(replayed, recorded);
     assert_eq!(
@@ -72,7 +72,7 @@ fn a_capture_recorded_from_the_window_replays_with_the_window_showing_the_same_v
 
     // And the monitor opens the file offline, decoded with its profile.
     app_mut(&mut h).apply(Action::OpenCapture(path.clone()));
-    app_mut(&mut h).apply(Action::ShowPanel(PanelId::Monitor));
+    app_mut(&mut h).apply(Action::ShowPanel(PanelId::MONITOR));
     h.step();
     let offline = app(&h).station().packets.offline.as_ref().expect("opened");
     assert_eq!(offline.profile.id, "window-cleaner");

@@ -6,7 +6,11 @@
 use botbench::i18n::Lang;
 use botbench::link::PortOpener;
 use botbench::ui::files::Dialogs;
+use botbench::ui::monitor::MonitorPanel;
+use botbench::ui::selftest::SelfTestPanel;
+use botbench::ui::servo_bench::ServoBenchPanel;
 use botbench::ui::settings::FileKind;
+use botbench::ui::tuya_console::TuyaConsolePanel;
 use botbench::ui::{App, PanelId, Settings, Target};
 use egui_kittest::kittest::Queryable;
 
@@ -43,7 +47,7 @@ fn a_capture_is_recorded_to_and_opened_from_a_typed_path_and_browse_says_it_has_
     let dir = temp_dir();
     let path = dir.path().join("unit-1.pcapng");
     let path_text = path.display().to_string();
-    let mut h = demo(PanelId::Monitor, &[]);
+    let mut h = demo(PanelId::MONITOR, &[]);
     step_until(&mut h, "the link", |a| a.station().connected());
     h.step();
 
@@ -91,24 +95,30 @@ fn the_paths_used_come_back_in_their_boxes_and_the_shipped_plans_are_found() {
         (FileKind::SelfTestLog, "/bench/selftest.jsonl"),
         (FileKind::Packets, "/bench/packets.txt"),
     ];
-    let mut h = demo(PanelId::Monitor, &files);
+    let mut h = demo(PanelId::MONITOR, &files);
     h.step();
     let a = app_mut(&mut h);
     assert_eq!(
         [
-            a.servo.params.preset_path.as_str(),
-            a.servo.production.log_path.as_str(),
-            a.tuya.ota.path.as_str(),
-            a.monitor.capture_path.as_str(),
-            a.selftest.log_path.as_str(),
-            a.monitor.save_path.as_str(),
+            a.panel::<ServoBenchPanel>().params.preset_path.as_str(),
+            a.panel::<ServoBenchPanel>().production.log_path.as_str(),
+            a.panel::<TuyaConsolePanel>().ota.path.as_str(),
+            a.panel::<MonitorPanel>().capture_path.as_str(),
+            a.panel::<SelfTestPanel>().log_path.as_str(),
+            a.panel::<MonitorPanel>().save_path.as_str(),
         ],
         files.map(|(_, p)| p)
     );
     // No plan used yet: the shipped ones, wherever the binary runs.
     for (path, name) in [
-        (&a.selftest.path, "window-cleaner-selftest.ron"),
-        (&a.servo.production.plan_path, "servo-provision-plan.ron"),
+        (
+            &a.panel::<SelfTestPanel>().path,
+            "window-cleaner-selftest.ron",
+        ),
+        (
+            &a.panel::<ServoBenchPanel>().production.plan_path,
+            "servo-provision-plan.ron",
+        ),
     ] {
         assert!(path.ends_with(name), "{path}");
         assert!(std::path::Path::new(path).is_file(), "{path}");

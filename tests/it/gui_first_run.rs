@@ -27,7 +27,7 @@ fn the_demo_says_how_to_pick_a_real_port_and_the_title_names_the_version() {
     // A real port (a pty here): no hint.
     let b = serve(window_cleaner());
     let mut h = harness(
-        settings(b.path(), "window-cleaner", PanelId::Tuning, Lang::En),
+        settings(b.path(), "window-cleaner", PanelId::TUNING, Lang::En),
         b.ports(),
     );
     step_until(&mut h, "the link", |a| a.station().connected());

@@ -61,7 +61,7 @@ fn ftdi(path: &str) -> PortLister {
 fn hover_hints_say_the_wire_name_the_range_why_not_what_stop_sends_and_the_latency_timer() {
     let b = serve(window_cleaner());
     let path = b.path().to_string();
-    let mut saved = settings(&path, "window-cleaner", PanelId::Tuning, Lang::En);
+    let mut saved = settings(&path, "window-cleaner", PanelId::TUNING, Lang::En);
     saved.port_mut().margin_ms = Some(100);
     let lister = ftdi(&path);
     let mut h = harness_with(saved, b.ports(), move |a: &mut App| {
@@ -90,7 +90,7 @@ fn hover_hints_say_the_wire_name_the_range_why_not_what_stop_sends_and_the_laten
     );
 
     // Actions: an input's range, and why Send is greyed out.
-    app_mut(&mut h).settings.panel = PanelId::Actions;
+    app_mut(&mut h).settings.panel = PanelId::ACTIONS;
     h.run_steps(2);
     hint_on(&mut h, "Fan PWM", Role::TextInput, "0 – 100 %");
     // The Fan's comes first.
@@ -102,7 +102,7 @@ fn hover_hints_say_the_wire_name_the_range_why_not_what_stop_sends_and_the_laten
     );
 
     // A Browse that cannot open a dialog says why before it is clicked.
-    app_mut(&mut h).settings.panel = PanelId::Monitor;
+    app_mut(&mut h).settings.panel = PanelId::MONITOR;
     h.run_steps(2);
     hint_on(
         &mut h,

@@ -5,6 +5,9 @@ use botbench::i18n::Lang;
 use botbench::sim::SimOptions;
 use botbench::sim::solar_cleanbot::SolarCleanbot;
 use botbench::sim::window_cleaner::{Fault, WindowCleaner};
+use botbench::ui::device::DevicePanel;
+use botbench::ui::selftest::SelfTestPanel;
+use botbench::ui::solar::SolarPanel;
 use botbench::ui::{App, PanelId, SolarTrip};
 use egui_kittest::kittest::Queryable;
 
@@ -38,11 +41,11 @@ fn step_until(h: &mut H, what: &str, done: impl Fn(&App) -> bool) {
             "info {:?}, solar inputs {:?}, outcomes {:?}, self-test running {} results {:?} \
              error {:?}",
             a.station().device.info,
-            a.solar.inputs,
-            a.solar.control.outcomes,
-            a.selftest.running,
-            a.selftest.results,
-            a.selftest.error
+            a.panel::<SolarPanel>().inputs,
+            a.panel::<SolarPanel>().control.outcomes,
+            a.panel::<SelfTestPanel>().running,
+            a.panel::<SelfTestPanel>().results,
+            a.panel::<SelfTestPanel>().error
         )
     });
 }
@@ -59,61 +62,63 @@ fn nav_has(h: &H, name: &str) -> bool {
 fn a_clear_capability_bit_hides_its_panels_and_the_app_leaves_them() {
     // Bit 0 (config page) clear: the parameter pages are hidden.
     let b = window_cleaner(Some(0b1110), &[]);
-    let mut h = harness(&b, "window-cleaner", PanelId::Tuning, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::TUNING, Lang::En);
     step_until(&mut h, "the device identified", identified);
     h.run_steps(2);
     let a = app(&h);
-    assert!(!a.panels().contains(&PanelId::Tuning), "{:?}", a.panels());
-    assert!(!a.panels().contains(&PanelId::Presets), "{:?}", a.panels());
-    assert!(a.panels().contains(&PanelId::SelfTest));
+    assert!(!a.panels().contains(&PanelId::TUNING), "{:?}", a.panels());
+    assert!(!a.panels().contains(&PanelId::PRESETS), "{:?}", a.panels());
+    assert!(a.panels().contains(&PanelId::SELF_TEST));
     assert_ne!(
         a.settings.panel,
-        PanelId::Tuning,
+        PanelId::TUNING,
         "the app left the hidden panel"
     );
     assert!(!nav_has(&h, "Tuning") && !nav_has(&h, "Presets"));
     assert!(nav_has(&h, "Self-test"));
     // The device panel says why.
-    app_mut(&mut h).settings.panel = PanelId::Device;
+    app_mut(&mut h).settings.panel = PanelId::DEVICE;
     h.run_steps(2);
     assert!(h.query_by_label_contains("Hidden (not supported").is_some());
     assert!(h.query_all_by_label("not supported").next().is_some());
 
     // The same robot with the bit set shows them.
     let b = window_cleaner(Some(0b1111), &[]);
-    let mut h = harness(&b, "window-cleaner", PanelId::Tuning, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::TUNING, Lang::En);
     step_until(&mut h, "the device identified", identified);
     h.run_steps(2);
-    assert!(app(&h).panels().contains(&PanelId::Tuning));
-    assert_eq!(app(&h).settings.panel, PanelId::Tuning);
+    assert!(app(&h).panels().contains(&PanelId::TUNING));
+    assert_eq!(app(&h).settings.panel, PanelId::TUNING);
     assert!(nav_has(&h, "Tuning"));
 }
 
 #[test]
 fn the_device_panel_pings_and_shows_version_build_and_flags() {
     let b = window_cleaner(Some(0b1111), &[]);
-    let mut h = harness(&b, "window-cleaner", PanelId::Device, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::DEVICE, Lang::En);
     // The panel reads version and power state on its own once the link is free.
     step_until(&mut h, "the power state", |a| {
-        a.device.power.is_some() && a.station().job_progress().is_none()
+        a.panel::<DevicePanel>().power.is_some() && a.station().job_progress().is_none()
     });
-    assert!(matches!(app(&h).device.power, Some(Ok(_))));
+    assert!(matches!(app(&h).panel::<DevicePanel>().power, Some(Ok(_))));
     h.get_by_label("Ping").click();
-    step_until(&mut h, "the ping", |a| a.device.ping.is_some());
-    assert!(matches!(app(&h).device.ping, Some(Ok(_))));
+    step_until(&mut h, "the ping", |a| {
+        a.panel::<DevicePanel>().ping.is_some()
+    });
+    assert!(matches!(app(&h).panel::<DevicePanel>().ping, Some(Ok(_))));
     step_until(&mut h, "the ping job to end", |a| {
         a.station().job_progress().is_none()
     });
     b.sim().set_flags(Some(0b0101));
     h.get_by_label("Read version and power state").click();
     step_until(&mut h, "the new flags", |a| {
-        matches!(&a.device.version, Some(Ok(v)) if v.flags == Some(0b0101))
+        matches!(&a.panel::<DevicePanel>().version, Some(Ok(v)) if v.flags == Some(0b0101))
             && matches!(&a.station().device.info, Some(Ok(v)) if v.flags == Some(0b0101))
     });
     h.run_steps(2);
     assert_eq!(
         app(&h)
-            .device
+            .panel::<DevicePanel>()
             .version
             .as_ref()
             .map(|v| v.as_ref().map(|v| v.flags)),
@@ -130,7 +135,7 @@ fn the_device_panel_pings_and_shows_version_build_and_flags() {
 }
 
 fn solar_ready(b: &Bench<SolarCleanbot>) -> H {
-    let mut h = harness(b, "solar-cleanbot", PanelId::Solar, Lang::En);
+    let mut h = harness(b, "solar-cleanbot", PanelId::SOLAR, Lang::En);
     step_until(&mut h, "the device identified", identified);
     h.run_steps(2);
     h
@@ -151,8 +156,8 @@ fn drive(h: &mut H, b: &Bench<SolarCleanbot>, speed: i16) {
 fn speed_rotate_and_stop_from_the_solar_panel_drive_the_simulated_robot() {
     let b = solar();
     let mut h = solar_ready(&b);
-    assert!(app(&h).panels().contains(&PanelId::Solar));
-    assert!(!app(&h).panels().contains(&PanelId::SelfTest));
+    assert!(app(&h).panels().contains(&PanelId::SOLAR));
+    assert!(!app(&h).panels().contains(&PanelId::SELF_TEST));
     drive(&mut h, &b, 300);
     step_until(&mut h, "the robot to move", |_| b.sim().speed() > 100.0);
     step_until(&mut h, "the readouts", |a| {
@@ -169,15 +174,18 @@ fn speed_rotate_and_stop_from_the_solar_panel_drive_the_simulated_robot() {
     h.get_by_label("Confirm").click();
     step_until(&mut h, "the robot to turn", |_| b.sim().yaw() > 20.0);
     // STOP, while a job runs.
-    app_mut(&mut h).settings.panel = PanelId::Device;
+    app_mut(&mut h).settings.panel = PanelId::DEVICE;
     h.run_steps(2);
     h.get_by_label("Read version and power state").click();
     h.run_steps(1);
     h.get_by_label("STOP").click();
     step_until(&mut h, "STOP", |_| b.sim().commanded_speed() == 0);
-    app_mut(&mut h).settings.panel = PanelId::Solar;
+    app_mut(&mut h).settings.panel = PanelId::SOLAR;
     step_until(&mut h, "the STOP acknowledged", |a| {
-        matches!(a.stop.state(), botbench::ui::stop::StopState::Acked(_))
+        matches!(
+            a.station().stop.state(),
+            botbench::ui::stop::StopState::Acked(_)
+        )
     });
 }
 
@@ -202,7 +210,7 @@ fn out_of_range_control_values_are_refused_and_nothing_is_sent() {
     h.get_by_label("Set vision frame rate").click();
     h.run_steps(5);
     assert!(
-        app(&h).solar.control.outcomes.is_empty(),
+        app(&h).panel::<SolarPanel>().control.outcomes.is_empty(),
         "nothing was sent"
     );
     // A value in range goes through and is acknowledged; the link keeps order, so anything the
@@ -210,17 +218,17 @@ fn out_of_range_control_values_are_refused_and_nothing_is_sent() {
     type_into(&mut h, "Frame rate", "15");
     h.get_by_label("Set vision frame rate").click();
     step_until(&mut h, "the frame rate", |a| {
-        b.sim().frame_rate() == 15 && !a.solar.control.outcomes.is_empty()
+        b.sim().frame_rate() == 15 && !a.panel::<SolarPanel>().control.outcomes.is_empty()
     });
     let sim = b.sim();
     assert_eq!(sim.commanded_speed(), 0);
     assert_eq!(sim.heartbeat(), before);
     drop(sim);
     assert_eq!(
-        app(&h).solar.control.outcomes.len(),
+        app(&h).panel::<SolarPanel>().control.outcomes.len(),
         1,
         "only the frame rate was sent: {:?}",
-        app(&h).solar.control.outcomes
+        app(&h).panel::<SolarPanel>().control.outcomes
     );
 }
 
@@ -229,7 +237,10 @@ fn the_dead_man_stops_the_robot_when_the_operator_stops_confirming() {
     let b = solar();
     let mut h = solar_ready(&b);
     drive(&mut h, &b, 200);
-    app_mut(&mut h).solar.control.deadman_secs = 1;
+    app_mut(&mut h)
+        .panel_mut::<SolarPanel>()
+        .control
+        .deadman_secs = 1;
     h.get_by_label("Dead-man").click();
     // Arming sets the robot's heartbeat to the same period.
     step_until(&mut h, "the heartbeat set", |_| b.sim().heartbeat() == 1);
@@ -239,10 +250,13 @@ fn the_dead_man_stops_the_robot_when_the_operator_stops_confirming() {
         b.sim().commanded_speed() == 0
     });
     assert!(matches!(
-        app(&h).solar.control.trip,
+        app(&h).panel::<SolarPanel>().control.trip,
         Some((SolarTrip::NotConfirmed, _))
     ));
-    assert!(!app(&h).solar.control.deadman, "it disarms once tripped");
+    assert!(
+        !app(&h).panel::<SolarPanel>().control.deadman,
+        "it disarms once tripped"
+    );
     h.run_steps(2);
     assert!(h.query_by_label_contains("stopped confirming").is_some());
 }
@@ -262,7 +276,7 @@ fn start_selftest(h: &mut H) {
     });
     h.get_by_label("Run self-test").click();
     step_until(h, "the self-test job", |a| {
-        a.selftest.running && a.station().job.as_ref().is_some_and(|j| !j.is_done())
+        a.panel::<SelfTestPanel>().running && a.station().job.as_ref().is_some_and(|j| !j.is_done())
     });
 }
 
@@ -280,25 +294,27 @@ fn run_selftest(
     });
     {
         let a = app_mut(h);
-        a.selftest.path = plan.display().to_string();
-        a.selftest.log_path = log.display().to_string();
+        a.panel_mut::<SelfTestPanel>().path = plan.display().to_string();
+        a.panel_mut::<SelfTestPanel>().log_path = log.display().to_string();
     }
     h.step();
     h.get_by_label("Open plan").click();
     h.run_steps(2);
     assert!(
-        app(h).selftest.plan.is_some(),
+        app(h).panel::<SelfTestPanel>().plan.is_some(),
         "{:?}",
-        app(h).selftest.error
+        app(h).panel::<SelfTestPanel>().error
     );
     start_selftest(h);
-    step_until(h, "the operator prompt", |a| a.selftest.prompt.is_some());
+    step_until(h, "the operator prompt", |a| {
+        a.panel::<SelfTestPanel>().prompt.is_some()
+    });
     h.run_steps(2);
     assert!(h.query_by_label_contains("corner switches").is_some());
     // The step has read the corners all released before it asked: the operator covers them.
     b.sim().set_corners(0b1111);
     h.get_by_label("Done").click();
-    step_until(h, "the report", |a| a.selftest.report.is_some());
+    step_until(h, "the report", |a| a.station().verdicts.selftest.is_some());
     h.run_steps(2);
     log
 }
@@ -306,10 +322,10 @@ fn run_selftest(
 #[test]
 fn the_self_test_passes_on_a_healthy_robot_and_logs_the_device() {
     let b = window_cleaner(Some(0x0F), &[]);
-    let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::SELF_TEST, Lang::En);
     let dir = temp_dir();
     let log = run_selftest(&mut h, &b, &dir);
-    let report = app(&h).selftest.report.clone().unwrap();
+    let report = app(&h).station().verdicts.selftest.clone().unwrap();
     assert!(report.pass, "{report:#?}");
     assert_eq!(
         h.query_all_by_label("PASS").count(),
@@ -332,10 +348,10 @@ fn the_self_test_passes_on_a_healthy_robot_and_logs_the_device() {
 #[test]
 fn the_self_test_fails_naming_the_faulty_check() {
     let b = window_cleaner(Some(0x0F), &[Fault::FanCurrentStuck]);
-    let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::SELF_TEST, Lang::En);
     let dir = temp_dir();
     run_selftest(&mut h, &b, &dir);
-    let report = app(&h).selftest.report.clone().unwrap();
+    let report = app(&h).station().verdicts.selftest.clone().unwrap();
     assert!(!report.pass);
     let failed: Vec<&str> = report.failed().map(|r| r.name.as_str()).collect();
     assert_eq!(failed, ["Fan current"], "{report:#?}");
@@ -351,7 +367,7 @@ fn the_self_test_fails_naming_the_faulty_check() {
 #[test]
 fn a_malformed_plan_is_refused_with_its_line() {
     let b = window_cleaner(Some(0x0F), &[]);
-    let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::SELF_TEST, Lang::En);
     step_until(&mut h, "the link", |a| a.station().connected());
     let dir = temp_dir();
     let path = dir.path().join("bad-plan.ron");
@@ -360,16 +376,21 @@ fn a_malformed_plan_is_refused_with_its_line() {
         "(\n  version: 1,\n  profile: \"window-cleaner\",\n  name: \"bad\",\n  steps: [\n    Reads(name: \"Water\", command: \"MSP_NO_SUCH_COMMAND\"),\n  ],\n)\n",
     )
     .unwrap();
-    app_mut(&mut h).selftest.path = path.display().to_string();
+    app_mut(&mut h).panel_mut::<SelfTestPanel>().path = path.display().to_string();
     h.step();
     h.get_by_label("Open plan").click();
     h.run_steps(2);
-    let err = app(&h).selftest.error.clone().expect("refused").to_string();
+    let err = app(&h)
+        .panel::<SelfTestPanel>()
+        .error
+        .clone()
+        .expect("refused")
+        .to_string();
     assert!(
         err.contains(":6:") && err.contains("MSP_NO_SUCH_COMMAND"),
         "{err}"
     );
-    assert!(app(&h).selftest.plan.is_none());
+    assert!(app(&h).panel::<SelfTestPanel>().plan.is_none());
     assert!(
         h.query_by_label("Run self-test").is_none(),
         "nothing to run"
@@ -381,7 +402,7 @@ fn a_malformed_plan_is_refused_with_its_line() {
 fn the_msp_panels_render_in_english_and_chinese() {
     let b = solar();
     for lang in [Lang::En, Lang::Zh] {
-        let mut h = harness(&b, "solar-cleanbot", PanelId::Solar, lang);
+        let mut h = harness(&b, "solar-cleanbot", PanelId::SOLAR, lang);
         step_until(&mut h, "readings", |a| {
             a.station().device.readings.len() > 5
         });
@@ -393,20 +414,20 @@ fn the_msp_panels_render_in_english_and_chinese() {
     }
     let b = window_cleaner(Some(0x0F), &[]);
     for lang in [Lang::En, Lang::Zh] {
-        let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, lang);
+        let mut h = harness(&b, "window-cleaner", PanelId::SELF_TEST, lang);
         step_until(&mut h, "the link", |a| a.station().connected());
-        app_mut(&mut h).selftest.path = SELFTEST_PLAN.into();
+        app_mut(&mut h).panel_mut::<SelfTestPanel>().path = SELFTEST_PLAN.into();
         h.step();
         let open = lang.tr("Open plan", "打开方案");
         h.get_by_label(open).click();
         h.run_steps(2);
         assert!(
-            app(&h).selftest.plan.is_some(),
+            app(&h).panel::<SelfTestPanel>().plan.is_some(),
             "{:?} on {:?}",
-            app(&h).selftest.error,
+            app(&h).panel::<SelfTestPanel>().error,
             app(&h).settings.panel
         );
-        app_mut(&mut h).settings.panel = PanelId::Device;
+        app_mut(&mut h).settings.panel = PanelId::DEVICE;
         h.run_steps(2);
     }
 }
@@ -414,7 +435,7 @@ fn the_msp_panels_render_in_english_and_chinese() {
 #[test]
 fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step() {
     let b = window_cleaner(Some(0x0F), &[]);
-    let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::SELF_TEST, Lang::En);
     let dir = temp_dir();
     let plan = plan_file(&dir);
     step_until(&mut h, "the device identified", |a| {
@@ -422,22 +443,24 @@ fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step
     });
     {
         let a = app_mut(&mut h);
-        a.selftest.path = plan.display().to_string();
-        a.selftest.log_path = String::new();
+        a.panel_mut::<SelfTestPanel>().path = plan.display().to_string();
+        a.panel_mut::<SelfTestPanel>().log_path = String::new();
     }
     h.step();
     h.get_by_label("Open plan").click();
     h.run_steps(2);
     start_selftest(&mut h);
     step_until(&mut h, "the operator prompt", |a| {
-        a.selftest.prompt.is_some()
+        a.panel::<SelfTestPanel>().prompt.is_some()
     });
     b.server.vanish_handle().vanish();
     h.run_steps(2);
     h.get_by_label("Done").click();
-    step_until(&mut h, "the report", |a| a.selftest.report.is_some());
+    step_until(&mut h, "the report", |a| {
+        a.station().verdicts.selftest.is_some()
+    });
     h.run_steps(2);
-    let report = app(&h).selftest.report.clone().unwrap();
+    let report = app(&h).station().verdicts.selftest.clone().unwrap();
     assert!(!report.pass);
     let aborted = report.aborted.as_deref().unwrap_or_default();
     assert!(aborted.starts_with("step 'Corner switches':"), "{aborted}");
@@ -453,7 +476,7 @@ fn a_fan_left_on_is_shown_running_the_self_test_starts_safe_and_its_verdict_belo
     use botbench::profile::Input;
     use botbench::ui::{Action, jobs};
     let b = window_cleaner(Some(0x0F), &[]);
-    let mut h = harness(&b, "window-cleaner", PanelId::SelfTest, Lang::En);
+    let mut h = harness(&b, "window-cleaner", PanelId::SELF_TEST, Lang::En);
     step_until(&mut h, "the device identified", |a| {
         identified(a) && a.station().job_progress().is_none()
     });
@@ -475,7 +498,7 @@ fn a_fan_left_on_is_shown_running_the_self_test_starts_safe_and_its_verdict_belo
     // The plan starts from the safe state it sets: no false "Fan current" failure.
     let dir = temp_dir();
     run_selftest(&mut h, &b, &dir);
-    let report = app(&h).selftest.report.clone().unwrap();
+    let report = app(&h).station().verdicts.selftest.clone().unwrap();
     assert!(report.pass, "{report:#?}");
     assert!(!report.safe_state.is_empty());
     assert!(h.query_by_label("Running:").is_none(), "nothing runs after");
@@ -483,7 +506,7 @@ fn a_fan_left_on_is_shown_running_the_self_test_starts_safe_and_its_verdict_belo
     // Another connection is maybe another unit: the verdict goes with the old one.
     app_mut(&mut h).apply(Action::Disconnect);
     h.run_steps(3);
-    assert!(app(&h).selftest.report.is_none());
+    assert!(app(&h).station().verdicts.selftest.is_none());
     assert!(
         h.query_all_by_label("PASS").next().is_none(),
         "no banner left"

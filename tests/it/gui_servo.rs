@@ -7,6 +7,7 @@ use botbench::ops::servo::Presence;
 use botbench::sim::servo_bus::{Motion, ServoBus, SimServo};
 use botbench::ui::Action;
 use botbench::ui::files::Dialogs;
+use botbench::ui::servo_bench::ServoBenchPanel;
 use botbench::ui::settings::FileKind;
 use egui::accesskit::Role;
 use egui_kittest::kittest::{By, NodeT, Queryable};
@@ -30,7 +31,7 @@ fn a_scan_finds_the_configured_servos_and_shows_a_duplicate_as_such() {
     h.step();
     scan(&mut h, "0", "40");
     let mut rows: Vec<(u8, u32, bool)> = app(&h)
-        .servo
+        .panel::<ServoBenchPanel>()
         .scan
         .rows
         .iter()
@@ -53,7 +54,7 @@ fn a_scan_finds_the_configured_servos_and_shows_a_duplicate_as_such() {
     );
     assert_eq!(
         app(&h)
-            .servo
+            .panel::<ServoBenchPanel>()
             .scan
             .rows
             .iter()
@@ -63,10 +64,13 @@ fn a_scan_finds_the_configured_servos_and_shows_a_duplicate_as_such() {
         Some(77)
     );
     // Two clean servos: none is picked for the technician.
-    assert_eq!(app(&h).servo.selected, None);
+    assert_eq!(app(&h).panel::<ServoBenchPanel>().selected, None);
     h.get_by_label("Servo 30").click();
     h.step();
-    let sel = app(&h).servo.selected.expect("selected");
+    let sel = app(&h)
+        .panel::<ServoBenchPanel>()
+        .selected
+        .expect("selected");
     assert_eq!((sel.id, sel.baud), (30, 57_600));
     // Rescanning the duplicate id still finds it garbled, never "no servo".
     h.get_by_label("Rescan 9").click();
@@ -74,7 +78,7 @@ fn a_scan_finds_the_configured_servos_and_shows_a_duplicate_as_such() {
     step_until(&mut h, "the rescan", idle);
     assert!(
         app(&h)
-            .servo
+            .panel::<ServoBenchPanel>()
             .scan
             .rows
             .iter()
@@ -87,21 +91,27 @@ fn a_parameter_out_of_range_is_refused_and_one_in_range_is_written_and_verified(
     let b = bench(vec![SimServo::fresh(21).with_id(5).with_param(41, 77)]);
     let mut h = harness(&b, Lang::En);
     scan(&mut h, "0", "10");
-    let sel = app(&h).servo.selected.expect("the only servo is selected");
+    let sel = app(&h)
+        .panel::<ServoBenchPanel>()
+        .selected
+        .expect("the only servo is selected");
     assert_eq!(sel.id, 5);
     h.get_by_label("Parameters").click();
     h.step();
     h.get_by_label("Read all").click();
     h.step();
     step_until(&mut h, "the parameters", |a| {
-        idle(a) && a.servo.params.values.len() == 30
+        idle(a) && a.panel::<ServoBenchPanel>().params.values.len() == 30
     });
     h.step();
-    assert_eq!(app(&h).servo.params.values.get(&41), Some(&Ok(77)));
+    assert_eq!(
+        app(&h).panel::<ServoBenchPanel>().params.values.get(&41),
+        Some(&Ok(77))
+    );
     type_into(&mut h, "Temperature limit", "70000");
     assert!(
         app(&h)
-            .servo
+            .panel::<ServoBenchPanel>()
             .params
             .pending(&app(&h).station().device.profile)
             .is_err()
@@ -119,11 +129,14 @@ fn a_parameter_out_of_range_is_refused_and_one_in_range_is_written_and_verified(
     h.get_by_label("Write changes (1)").click();
     h.step();
     step_until(&mut h, "the write", |a| {
-        idle(a) && !a.servo.params.marks.is_empty()
+        idle(a) && !a.panel::<ServoBenchPanel>().params.marks.is_empty()
     });
     h.step();
     assert_eq!(b.servo(21).param(41), Some(65));
-    assert_eq!(app(&h).servo.params.values.get(&41), Some(&Ok(65)));
+    assert_eq!(
+        app(&h).panel::<ServoBenchPanel>().params.values.get(&41),
+        Some(&Ok(65))
+    );
     assert!(h.query_by_label("verified").is_some());
 }
 
@@ -156,21 +169,21 @@ fn provision_next_on_a_fresh_servo_shows_pass_and_the_servo_has_the_plans_id_and
     h.get_by_label("Load plan").click();
     h.step();
     assert!(
-        app(&h).servo.production.plan.is_some(),
+        app(&h).panel::<ServoBenchPanel>().production.plan.is_some(),
         "{:?}",
-        app(&h).servo.production.plan_error
+        app(&h).panel::<ServoBenchPanel>().production.plan_error
     );
     assert_eq!(app(&h).settings.file(FileKind::ProvisionPlan), Some(plan));
     h.get_by_label("Provision next").click();
     h.step();
     step_until(&mut h, "provisioning", |a| {
-        idle(a) && !a.servo.production.history.is_empty()
+        idle(a) && !a.panel::<ServoBenchPanel>().production.history.is_empty()
     });
     h.step();
     assert!(
         h.query_all_by_label("PASS").next().is_some(),
         "{:?}",
-        app(&h).servo.production.history
+        app(&h).panel::<ServoBenchPanel>().production.history
     );
     let s = b.servo(4001);
     assert_eq!((s.id(), s.baud()), (1, 500_000));
@@ -186,7 +199,7 @@ fn provision_next_on_a_fresh_servo_shows_pass_and_the_servo_has_the_plans_id_and
     h.get_by_label("Provision next").click();
     h.step();
     step_until(&mut h, "the second attempt", |a| {
-        idle(a) && a.servo.production.history.len() == 2
+        idle(a) && a.panel::<ServoBenchPanel>().production.history.len() == 2
     });
     h.step();
     assert!(h.query_by_label_contains("FAIL · step detect").is_some());
@@ -252,13 +265,16 @@ fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
     h.step();
     h.get_by_label("Cancel job").click();
     step_until(&mut h, "the cancel", |a| {
-        idle(a) && a.servo.scan.outcome.is_some()
+        idle(a) && a.panel::<ServoBenchPanel>().scan.outcome.is_some()
     });
     h.step();
     assert!(
-        matches!(&app(&h).servo.scan.outcome, Some(Err(OpError::Cancelled))),
+        matches!(
+            &app(&h).panel::<ServoBenchPanel>().scan.outcome,
+            Some(Err(OpError::Cancelled))
+        ),
         "{:?}",
-        app(&h).servo.scan.outcome
+        app(&h).panel::<ServoBenchPanel>().scan.outcome
     );
     assert!(h.query_by_label_contains("scan stopped").is_some());
 }
@@ -293,7 +309,7 @@ fn the_panel_renders_every_tab_in_english_and_chinese() {
         h.get_by_label(lang.tr("Scan", "扫描")).click();
         h.step();
         step_until(&mut h, "the scan", |a| {
-            idle(a) && a.servo.scan.outcome.is_some()
+            idle(a) && a.panel::<ServoBenchPanel>().scan.outcome.is_some()
         });
         for tab in tabs {
             h.get_by_label(tab).click();
@@ -314,12 +330,16 @@ fn a_parameter_preset_saves_loads_and_writes_and_a_bad_one_is_refused_with_its_p
     h.get_by_label("Read all").click();
     h.step();
     step_until(&mut h, "the parameters", |a| {
-        idle(a) && a.servo.params.values.len() == 30
+        idle(a) && a.panel::<ServoBenchPanel>().params.values.len() == 30
     });
     type_into(&mut h, "Parameter preset", &path.display().to_string());
     h.get_by_label("Save preset").click();
     h.step();
-    assert!(path.exists(), "{:?}", app(&h).servo.params.message);
+    assert!(
+        path.exists(),
+        "{:?}",
+        app(&h).panel::<ServoBenchPanel>().params.message
+    );
     assert_eq!(
         app(&h).settings.file(FileKind::ServoPreset),
         Some(path.display().to_string().as_str()),
@@ -333,7 +353,7 @@ fn a_parameter_preset_saves_loads_and_writes_and_a_bad_one_is_refused_with_its_p
     h.get_by_label("Read all").click();
     h.step();
     step_until(&mut h, "the new value", |a| {
-        idle(a) && a.servo.params.values.get(&41) == Some(&Ok(80))
+        idle(a) && a.panel::<ServoBenchPanel>().params.values.get(&41) == Some(&Ok(80))
     });
     h.get_by_label("Load preset").click();
     h.step();
@@ -341,7 +361,7 @@ fn a_parameter_preset_saves_loads_and_writes_and_a_bad_one_is_refused_with_its_p
     h.get_by_label("Write changes (1)").click();
     h.step();
     step_until(&mut h, "the write", |a| {
-        idle(a) && !a.servo.params.marks.is_empty()
+        idle(a) && !a.panel::<ServoBenchPanel>().params.marks.is_empty()
     });
     assert_eq!(b.servo(91).param(41), Some(66));
 
@@ -352,13 +372,18 @@ fn a_parameter_preset_saves_loads_and_writes_and_a_bad_one_is_refused_with_its_p
     .unwrap();
     h.get_by_label("Load preset").click();
     h.step();
-    let msg = app(&h).servo.params.message.clone().unwrap();
+    let msg = app(&h)
+        .panel::<ServoBenchPanel>()
+        .params
+        .message
+        .clone()
+        .unwrap();
     assert!(
         !msg.0 && msg.1.contains(":5:9:") && msg.1.contains("accel_switch"),
         "{msg:?}"
     );
     assert!(
-        app(&h).servo.params.edits.is_empty(),
+        app(&h).panel::<ServoBenchPanel>().params.edits.is_empty(),
         "nothing of a bad preset is taken"
     );
 }
@@ -369,8 +394,11 @@ fn a_new_connection_forgets_the_servos_found_on_the_last_one() {
     let other = serve(ServoBus::new(Vec::new()));
     let mut h = harness(&b, Lang::En);
     scan(&mut h, "0", "10");
-    assert_eq!(app(&h).servo.scan.rows.len(), 1);
-    assert!(app(&h).servo.selected.is_some(), "a lone servo is selected");
+    assert_eq!(app(&h).panel::<ServoBenchPanel>().scan.rows.len(), 1);
+    assert!(
+        app(&h).panel::<ServoBenchPanel>().selected.is_some(),
+        "a lone servo is selected"
+    );
     app_mut(&mut h).apply(Action::Connect {
         target: botbench::ui::Target::Port(other.path().to_string()),
         baud: 115_200,
@@ -379,8 +407,12 @@ fn a_new_connection_forgets_the_servos_found_on_the_last_one() {
     });
     step_until(&mut h, "the new link", |a| a.station().connected());
     let a = app(&h);
-    assert!(a.servo.scan.rows.is_empty(), "{:?}", a.servo.scan.rows);
-    assert!(a.servo.selected.is_none());
+    assert!(
+        a.panel::<ServoBenchPanel>().scan.rows.is_empty(),
+        "{:?}",
+        a.panel::<ServoBenchPanel>().scan.rows
+    );
+    assert!(a.panel::<ServoBenchPanel>().selected.is_none());
 }
 
 /// The name label of the parameter row named `name`.
@@ -396,7 +428,7 @@ fn an_invalid_keystroke_moves_no_row_keeps_focus_enums_are_chosen_and_reserved_i
     h.get_by_label("Parameters").click();
     h.step();
     step_until(&mut h, "the parameters", |a| {
-        idle(a) && a.servo.params.values.len() == 30
+        idle(a) && a.panel::<ServoBenchPanel>().params.values.len() == 30
     });
     h.step();
     let rows = |h: &H| {
@@ -414,7 +446,12 @@ fn an_invalid_keystroke_moves_no_row_keeps_focus_enums_are_chosen_and_reserved_i
     h.event(egui::Event::Text("9".into()));
     h.run_steps(2);
     assert_eq!(
-        app(&h).servo.params.edits.get(&41).map(String::as_str),
+        app(&h)
+            .panel::<ServoBenchPanel>()
+            .params
+            .edits
+            .get(&41)
+            .map(String::as_str),
         Some("7x9"),
         "no keystroke is lost"
     );
@@ -432,7 +469,12 @@ fn an_invalid_keystroke_moves_no_row_keeps_focus_enums_are_chosen_and_reserved_i
     h.get_by_label("On (on)").click();
     h.run_steps(2);
     assert_eq!(
-        app(&h).servo.params.edits.get(&48).map(String::as_str),
+        app(&h)
+            .panel::<ServoBenchPanel>()
+            .params
+            .edits
+            .get(&48)
+            .map(String::as_str),
         Some("on")
     );
 

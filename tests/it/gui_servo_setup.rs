@@ -4,6 +4,7 @@
 
 use botbench::i18n::Lang;
 use botbench::sim::servo_bus::{Motion, SimServo};
+use botbench::ui::servo_bench::ServoBenchPanel;
 use egui_kittest::kittest::Queryable;
 use std::time::Instant;
 
@@ -36,18 +37,25 @@ fn an_id_change_from_the_panel_is_verified_and_bad_ids_are_refused() {
     h.get_by_label("Set ID").click();
     h.step();
     step_until(&mut h, "the id change", |a| {
-        idle(a) && a.servo.setup.message.is_some()
+        idle(a) && a.panel::<ServoBenchPanel>().setup.message.is_some()
     });
     h.step();
     assert_eq!(b.servo(31).id(), 12);
     assert_eq!(b.servo(32).id(), 7);
-    let sel = app(&h).servo.selected.unwrap();
+    let sel = app(&h).panel::<ServoBenchPanel>().selected.unwrap();
     assert_eq!((sel.id, sel.baud), (12, 115_200));
     assert!(
         h.query_by_label_contains("verified at the new id")
             .is_some()
     );
-    assert!(app(&h).servo.scan.rows.iter().any(|r| r.id == 12));
+    assert!(
+        app(&h)
+            .panel::<ServoBenchPanel>()
+            .scan
+            .rows
+            .iter()
+            .any(|r| r.id == 12)
+    );
 }
 
 #[test]
@@ -63,7 +71,7 @@ fn the_live_angle_follows_a_move() {
     type_into(&mut h, "Interval (ms)", "100");
     h.get_by_label("Go to angle").click();
     step_until(&mut h, "the plotted angle", |a| {
-        a.servo
+        a.panel::<ServoBenchPanel>()
             .motion
             .series
             .last()
@@ -84,11 +92,11 @@ fn a_baud_change_is_followed_and_verified_and_a_lost_servo_is_found() {
     scan(&mut h, "0", "8");
     set_baud(&mut h, "Servo 4", "4 (57600)");
     step_until(&mut h, "the baud change", |a| {
-        idle(a) && a.servo.setup.message.is_some()
+        idle(a) && a.panel::<ServoBenchPanel>().setup.message.is_some()
     });
     h.step();
     assert_eq!(b.servo(81).baud(), 57_600);
-    let sel = app(&h).servo.selected.unwrap();
+    let sel = app(&h).panel::<ServoBenchPanel>().selected.unwrap();
     assert_eq!((sel.id, sel.baud), (4, 57_600));
     assert!(h.query_by_label_contains("57600 baud: verified").is_some());
 
@@ -97,13 +105,13 @@ fn a_baud_change_is_followed_and_verified_and_a_lost_servo_is_found() {
     set_baud(&mut h, "Servo 6", "8 (1000000, newer servos)");
     step_until(&mut h, "the failed baud change", |a| {
         idle(a)
-            && a.servo
+            && a.panel::<ServoBenchPanel>()
                 .setup
                 .message
                 .as_ref()
                 .is_some_and(|(ok, m)| !ok && m.contains("found at 115200"))
     });
-    let sel = app(&h).servo.selected.unwrap();
+    let sel = app(&h).panel::<ServoBenchPanel>().selected.unwrap();
     assert_eq!(
         (sel.id, sel.baud),
         (6, 115_200),
@@ -126,7 +134,7 @@ fn reset_user_data_asks_first_then_follows_the_servo_to_id_0() {
     h.get_by_label("Parameters").click();
     // The tab reads the selected servo as soon as it shows it.
     step_until(&mut h, "the parameters read", |a| {
-        idle(a) && a.servo.params.values.get(&41) == Some(&Ok(61))
+        idle(a) && a.panel::<ServoBenchPanel>().params.values.get(&41) == Some(&Ok(61))
     });
     h.get_by_label("Reset user data…").click();
     h.run_steps(2);
@@ -139,14 +147,14 @@ fn reset_user_data_asks_first_then_follows_the_servo_to_id_0() {
     h.get_by_label("Reset").click();
     h.step();
     step_until(&mut h, "the reset", |a| {
-        idle(a) && a.servo.params.message.is_some()
+        idle(a) && a.panel::<ServoBenchPanel>().params.message.is_some()
     });
     let s = b.servo(95);
     assert_eq!((s.id(), s.baud()), (0, 115_200));
-    let sel = app(&h).servo.selected.unwrap();
+    let sel = app(&h).panel::<ServoBenchPanel>().selected.unwrap();
     assert_eq!((sel.id, sel.baud), (0, 115_200));
     assert!(
-        app(&h).servo.params.values.get(&34) == Some(&Ok(0)),
+        app(&h).panel::<ServoBenchPanel>().params.values.get(&34) == Some(&Ok(0)),
         "read again"
     );
 }

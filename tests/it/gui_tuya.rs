@@ -7,6 +7,7 @@ use botbench::profile::registry::parse;
 use botbench::protocol::tuya::dp::DpValue;
 use botbench::sim::Faults;
 use botbench::sim::tuya_mcu::{OtaState, TuyaConfig, TuyaMcu, crc32};
+use botbench::ui::tuya_console::TuyaConsolePanel;
 use botbench::ui::{App, FirmwareFileError, PanelId};
 use eframe::egui;
 use egui::accesskit::Role;
@@ -58,7 +59,7 @@ fn writable_profile(dir: &std::path::Path) -> (String, Bench) {
 }
 
 pub(crate) fn harness(port: &impl Port, profile: &str) -> H {
-    let mut saved = settings(port.path(), profile, PanelId::TuyaConsole, Lang::En);
+    let mut saved = settings(port.path(), profile, PanelId::TUYA_CONSOLE, Lang::En);
     saved.port_mut().baud = Some(BAUD);
     crate::support::gui::harness(saved, port.ports())
 }
@@ -178,8 +179,8 @@ fn an_mcu_restart_is_shown_and_the_handshake_runs_again() {
     h.step();
     // A short heartbeat, sent to the worker on the next frame.
     let a = app_mut(&mut h);
-    a.tuya.opts.heartbeat = Duration::from_millis(300);
-    a.tuya.synced = None;
+    a.panel_mut::<TuyaConsolePanel>().opts.heartbeat = Duration::from_millis(300);
+    a.panel_mut::<TuyaConsolePanel>().synced = None;
     handshake(&mut h);
     b.sim().restart();
     step_until(&mut h, "the restart and a new handshake", |a| {
@@ -205,7 +206,8 @@ fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_
         .click();
     step_until(&mut h, "find_robot reported on", |a| {
         reported(a, 13) == Some(Value::Int(1))
-            && format!("{:?}", a.tuya.dps.marks.get(&13)) == "Some(Confirmed)"
+            && format!("{:?}", a.panel::<TuyaConsolePanel>().dps.marks.get(&13))
+                == "Some(Confirmed)"
     });
     assert_eq!(b.sim().dp(13), Some(&DpValue::Bool(true)));
     h.get_by(|n| n.role() == Role::ComboBox && n.label().as_deref() == Some("3 Work mode"))
@@ -213,7 +215,8 @@ fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_
     h.run_steps(2);
     h.get_by_label("Spot clean").click();
     step_until(&mut h, "the mode reported", |a| {
-        reported(a, 3) == Some(Value::Int(5)) && a.tuya.dps.pending.is_empty()
+        reported(a, 3) == Some(Value::Int(5))
+            && a.panel::<TuyaConsolePanel>().dps.pending.is_empty()
     });
     assert_eq!(b.sim().dp(3), Some(&DpValue::Enum(5)));
     h.run_steps(2);
@@ -260,7 +263,11 @@ fn a_value_out_of_range_is_refused_before_sending_and_typed_data_points_are_set(
     assert_eq!(sent_dp_commands(app(&h)), 0, "no 0x06 went out");
     // A valid value of each typed kind goes out and comes back. The link keeps order: had the
     // refused value been sent, the MCU would have taken it before the first of these.
-    app_mut(&mut h).tuya.dps.edits.clear();
+    app_mut(&mut h)
+        .panel_mut::<TuyaConsolePanel>()
+        .dps
+        .edits
+        .clear();
     h.run_steps(2);
     let cases: [(&str, &str, u8, Value, DpValue); 4] = [
         (
@@ -299,14 +306,18 @@ fn a_value_out_of_range_is_refused_before_sending_and_typed_data_points_are_set(
         type_into(&mut h, label, text);
         h.get_by_label("Send").click();
         step_until(&mut h, label, |a| {
-            reported(a, id) == Some(value.clone()) && a.tuya.dps.pending.is_empty()
+            reported(a, id) == Some(value.clone())
+                && a.panel::<TuyaConsolePanel>().dps.pending.is_empty()
         });
         assert_eq!(b.sim().dp(id), Some(&dp), "{label}");
         if id == 16 {
             assert_eq!(sent_dp_commands(app(&h)), 1, "only the valid area went out");
         }
         assert_eq!(
-            format!("{:?}", app(&h).tuya.dps.marks.get(&id)),
+            format!(
+                "{:?}",
+                app(&h).panel::<TuyaConsolePanel>().dps.marks.get(&id)
+            ),
             "Some(Confirmed)",
             "{label}"
         );
@@ -323,11 +334,20 @@ fn the_mcus_requests_are_answered_and_shown_with_a_chosen_time() {
     let mut h = harness(&b, "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "MCU requests");
-    app_mut(&mut h).tuya.requests.time_text = "2026-11-22 08:30:15".into();
+    app_mut(&mut h)
+        .panel_mut::<TuyaConsolePanel>()
+        .requests
+        .time_text = "2026-11-22 08:30:15".into();
     h.get_by(|n| n.role() == Role::RadioButton && n.label().as_deref() == Some("chosen time"))
         .click();
     h.run_steps(3);
-    assert!(app(&h).tuya.opts.fixed_time.is_some());
+    assert!(
+        app(&h)
+            .panel::<TuyaConsolePanel>()
+            .opts
+            .fixed_time
+            .is_some()
+    );
     h.run_steps(2);
     {
         let mut m = b.sim();
@@ -385,8 +405,15 @@ fn an_update_from_the_panel_completes_and_the_mcu_holds_the_image() {
         "the typed image's path is remembered"
     );
     h.get_by_label("Update").click();
-    step_until(&mut h, "the update to end", |a| a.tuya.ota.result.is_some());
-    let result = app(&h).tuya.ota.result.clone().unwrap();
+    step_until(&mut h, "the update to end", |a| {
+        a.panel::<TuyaConsolePanel>().ota.result.is_some()
+    });
+    let result = app(&h)
+        .panel::<TuyaConsolePanel>()
+        .ota
+        .result
+        .clone()
+        .unwrap();
     let report = result.expect("the update succeeds");
     assert_eq!(
         (report.size, report.packet_size, report.packets),
@@ -414,7 +441,11 @@ fn an_empty_or_missing_firmware_file_is_refused_with_a_clear_message() {
     handshake(&mut h);
     tab(&mut h, "Firmware update");
     // No file named: nothing to start.
-    app_mut(&mut h).tuya.ota.path.clear();
+    app_mut(&mut h)
+        .panel_mut::<TuyaConsolePanel>()
+        .ota
+        .path
+        .clear();
     h.step();
     assert!(
         egui_kittest::kittest::NodeT::accesskit_node(&h.get_by_label("Start update")).is_disabled()
@@ -426,11 +457,16 @@ fn an_empty_or_missing_firmware_file_is_refused_with_a_clear_message() {
             "No such file",
         ),
     ] {
-        app_mut(&mut h).tuya.ota.path = path.clone();
+        app_mut(&mut h).panel_mut::<TuyaConsolePanel>().ota.path = path.clone();
         h.step();
         h.get_by_label("Start update").click();
         h.run_steps(2);
-        let err = app(&h).tuya.ota.error.clone().expect("refused");
+        let err = app(&h)
+            .panel::<TuyaConsolePanel>()
+            .ota
+            .error
+            .clone()
+            .expect("refused");
         let err = err.to_string();
         assert!(err.contains(&path) && err.contains(why), "{err}");
         assert!(has_label(&h, why));
@@ -445,15 +481,27 @@ fn an_update_can_be_cancelled_and_says_where_it_stopped() {
     let (_dir, b, mut h) = update_asked(&image(65_536));
     h.get_by_label("Update").click();
     step_until(&mut h, "some progress", |a| {
-        a.tuya.ota.progress.as_ref().is_some_and(|p| p.done >= 1024)
+        a.panel::<TuyaConsolePanel>()
+            .ota
+            .progress
+            .as_ref()
+            .is_some_and(|p| p.done >= 1024)
     });
     h.run_steps(1);
     assert!(has_label(&h, "B/s"), "the rate is shown");
     assert!(has_label(&h, "left"), "the time left is shown");
     assert!(has_label(&h, "packets of 256 bytes (asked by the MCU)"));
     h.get_by_label("Cancel update").click();
-    step_until(&mut h, "the update to end", |a| a.tuya.ota.result.is_some());
-    let err = app(&h).tuya.ota.result.clone().unwrap().unwrap_err();
+    step_until(&mut h, "the update to end", |a| {
+        a.panel::<TuyaConsolePanel>().ota.result.is_some()
+    });
+    let err = app(&h)
+        .panel::<TuyaConsolePanel>()
+        .ota
+        .result
+        .clone()
+        .unwrap()
+        .unwrap_err();
     assert!(err.to_string().contains("cancelled after offset"), "{err}");
     assert!(!matches!(b.sim().ota_state(), OtaState::Complete { .. }));
 }
@@ -487,7 +535,7 @@ fn every_section_renders_in_english_and_chinese() {
     });
     tab(&mut h, "Data points");
     type_into(&mut h, "16 Clean area", "-5");
-    app_mut(&mut h).tuya.ota.error = Some(FirmwareFileError::Empty {
+    app_mut(&mut h).panel_mut::<TuyaConsolePanel>().ota.error = Some(FirmwareFileError::Empty {
         path: "firmware.bin".into(),
     });
     for (lang, tabs) in [

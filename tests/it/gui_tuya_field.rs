@@ -5,6 +5,7 @@ use botbench::link::{LinkState, PortOpener};
 use botbench::profile::Value;
 use botbench::sim::Faults;
 use botbench::sim::tuya_mcu::{TuyaConfig, TuyaMcu, WireForm};
+use botbench::ui::tuya_console::TuyaConsolePanel;
 use botbench::ui::{PanelId, Settings, Target, launch_settings};
 use eframe::egui::accesskit::Role;
 use egui_kittest::kittest::Queryable;
@@ -31,7 +32,7 @@ fn the_demo_mcu_runs_at_the_profiles_rate_and_sends_its_requests_when_asked() {
         Some(Target::Demo("tuya-vacuum".into())),
         None,
         Some("tuya-vacuum".into()),
-        Some(PanelId::TuyaConsole),
+        Some(PanelId::TUYA_CONSOLE),
     );
     assert_eq!(
         saved.port_of("tuya-vacuum").baud,
@@ -106,16 +107,20 @@ fn after_a_command_the_console_shows_what_the_mcu_holds_though_the_report_of_a_c
     h.run_steps(2);
     h.get_by_label("Right zigzag").click();
     step_until(&mut h, "the mode read back", |a| {
-        format!("{:?}", a.tuya.dps.marks.get(&3)) == "Some(Confirmed)"
+        format!("{:?}", a.panel::<TuyaConsolePanel>().dps.marks.get(&3)) == "Some(Confirmed)"
     });
     assert_eq!(reported(app(&h), 3), Some(Value::Int(8)));
     h.get_by(|n| n.role() == Role::CheckBox && n.label().as_deref() == Some("1 Power"))
         .click();
     step_until(&mut h, "the power read back", |a| {
-        a.tuya.dps.pending.is_empty() && a.tuya.dps.marks.contains_key(&1)
+        a.panel::<TuyaConsolePanel>().dps.pending.is_empty()
+            && a.panel::<TuyaConsolePanel>().dps.marks.contains_key(&1)
     });
     assert_eq!(
-        format!("{:?}", app(&h).tuya.dps.marks.get(&1)),
+        format!(
+            "{:?}",
+            app(&h).panel::<TuyaConsolePanel>().dps.marks.get(&1)
+        ),
         "Some(Confirmed)"
     );
     // The read-back brought the mode the MCU holds, whose own report was lost.
@@ -137,7 +142,7 @@ fn an_image_over_the_profiles_maximum_is_refused_and_one_that_fits_shows_its_exp
     let mut h = harness(&b, "tuya-vacuum");
     handshake(&mut h);
     tab(&mut h, "Firmware update");
-    app_mut(&mut h).tuya.ota.path = big.display().to_string();
+    app_mut(&mut h).panel_mut::<TuyaConsolePanel>().ota.path = big.display().to_string();
     h.step();
     h.get_by_label("Start update").click();
     h.run_steps(2);
@@ -146,7 +151,7 @@ fn an_image_over_the_profiles_maximum_is_refused_and_one_that_fits_shows_its_exp
         "20000000 bytes is over the largest image the profile allows (524288 bytes)"
     ));
     assert!(h.query_by_label("Update the MCU firmware?").is_none());
-    app_mut(&mut h).tuya.ota.path = fw.display().to_string();
+    app_mut(&mut h).panel_mut::<TuyaConsolePanel>().ota.path = fw.display().to_string();
     h.step();
     h.get_by_label("Start update").click();
     h.run_steps(2);

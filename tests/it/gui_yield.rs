@@ -7,6 +7,7 @@ use botbench::i18n::Lang;
 use botbench::ops::records::SqliteStore;
 use botbench::ui::PanelId;
 use botbench::ui::settings::FileKind;
+use botbench::ui::yield_view::YieldPanel;
 use egui_kittest::kittest::Queryable;
 
 fn hand_records(dir: &std::path::Path) -> String {
@@ -29,17 +30,18 @@ fn the_yield_view_shows_the_hand_sets_yields_in_both_languages() {
         let mut saved = settings(
             "/dev/botbench-no-port",
             "window-cleaner",
-            PanelId::Yield,
+            PanelId::YIELD,
             lang,
         );
         saved.files.insert(FileKind::Records, records.clone());
         let mut h = harness(saved, botbench::link::PortOpener::system());
         // The view covers the last 7 days by default: the hand set is older, so all records.
         step_until(&mut h, "the view drawn", |a| {
-            a.settings.panel == PanelId::Yield
+            a.settings.panel == PanelId::YIELD
         });
-        crate::support::gui::app_mut(&mut h).yield_view.period =
-            botbench::ui::yield_view::Period::All;
+        crate::support::gui::app_mut(&mut h)
+            .panel_mut::<YieldPanel>()
+            .period = botbench::ui::yield_view::Period::All;
         step_until(
             &mut h,
             "the report of every record",

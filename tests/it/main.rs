@@ -54,6 +54,7 @@ mod series;
 mod servo_sync;
 mod sim_devices;
 mod sim_msp;
+mod stations;
 mod tuya_field;
 mod tuya_sdk_vectors;
 mod window_kinds;

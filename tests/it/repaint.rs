@@ -48,7 +48,7 @@ fn a_streaming_plot_redraws_at_the_live_rate_not_on_every_sample() {
     // No faster than the eye needs: at most 15 frames a second.
     assert!(LIVE >= Duration::from_millis(66), "live rate {LIVE:?}");
     let b = serve(window_cleaner());
-    let mut saved = settings(b.path(), "window-cleaner", PanelId::Telemetry, Lang::En);
+    let mut saved = settings(b.path(), "window-cleaner", PanelId::TELEMETRY, Lang::En);
     saved.poll_hz = Some(50.0);
     let mut h = harness(saved, b.ports());
     step_until(&mut h, "telemetry points", streaming);
@@ -72,10 +72,10 @@ fn a_streaming_plot_redraws_at_the_live_rate_not_on_every_sample() {
     assert_eq!(app(&h).repaint_after(), None, "paused");
     app_mut(&mut h).apply(Action::PausePolling(false));
     // Another panel while telemetry is polled behind it: only the worker's background wake.
-    app_mut(&mut h).apply(Action::ShowPanel(PanelId::Tuning));
+    app_mut(&mut h).apply(Action::ShowPanel(PanelId::TUNING));
     assert_eq!(app(&h).repaint_after(), None, "tuning panel");
     // The packet monitor is live while frames are logged, and not once its log is paused.
-    app_mut(&mut h).apply(Action::ShowPanel(PanelId::Monitor));
+    app_mut(&mut h).apply(Action::ShowPanel(PanelId::MONITOR));
     assert_eq!(app(&h).repaint_after(), Some(LIVE), "monitor");
     app_mut(&mut h).apply(Action::PausePacketLog(true));
     assert_eq!(app(&h).repaint_after(), None, "monitor paused");
@@ -84,7 +84,7 @@ fn a_streaming_plot_redraws_at_the_live_rate_not_on_every_sample() {
 #[test]
 fn a_disconnected_window_asks_for_no_frame() {
     let b = serve(window_cleaner());
-    let saved = settings(b.path(), "window-cleaner", PanelId::Telemetry, Lang::En);
+    let saved = settings(b.path(), "window-cleaner", PanelId::TELEMETRY, Lang::En);
     let mut h = harness(saved, b.ports());
     step_until(&mut h, "telemetry points", streaming);
     app_mut(&mut h).apply(Action::Disconnect);

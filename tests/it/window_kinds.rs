@@ -5,6 +5,7 @@ use botbench::i18n::Lang;
 use botbench::i18n::Text;
 use botbench::sim::SimOptions;
 use botbench::sim::solar_cleanbot::SolarCleanbot;
+use botbench::ui::monitor::MonitorPanel;
 use botbench::ui::{Action, App, Job, PanelId, Target};
 use egui_kittest::kittest::Queryable;
 
@@ -14,7 +15,7 @@ use crate::support::{serve, window_cleaner};
 #[test]
 fn the_battery_state_is_named_beside_its_plot_and_is_no_line() {
     let b = serve(SolarCleanbot::new(&SimOptions::default()).unwrap());
-    let mut saved = settings(b.path(), "solar-cleanbot", PanelId::Telemetry, Lang::En);
+    let mut saved = settings(b.path(), "solar-cleanbot", PanelId::TELEMETRY, Lang::En);
     saved.port_mut().margin_ms = Some(100);
     let mut h = harness(saved, b.ports());
     let voltage = |a: &App| {
@@ -58,7 +59,7 @@ fn logged(a: &App, profile: &str) -> usize {
 #[test]
 fn frames_logged_before_a_device_change_keep_the_profile_they_came_under() {
     let b = serve(window_cleaner());
-    let mut saved = settings(b.path(), "window-cleaner", PanelId::Monitor, Lang::En);
+    let mut saved = settings(b.path(), "window-cleaner", PanelId::MONITOR, Lang::En);
     saved.port_mut().margin_ms = Some(100);
     let mut h = harness(saved, b.ports());
     let attitude = |a: &App| {
@@ -115,7 +116,7 @@ fn frames_logged_before_a_device_change_keep_the_profile_they_came_under() {
 
 /// The monitor's rows with `filter` typed in its box.
 fn filtered(h: &mut H, filter: &str) -> Vec<String> {
-    app_mut(h).monitor.filter = filter.into();
+    app_mut(h).panel_mut::<MonitorPanel>().filter = filter.into();
     h.run_steps(2);
     // Each row holds its frame's time: hh:mm:ss.mmm.
     h.query_all_by_label_contains(":")

@@ -120,7 +120,7 @@ fn demo(kind: SimKind, panel: PanelId) -> H {
 #[test]
 fn in_chinese_a_technicians_day_on_the_window_cleaner_is_said_in_chinese() {
     let mut said = Said::default();
-    let mut h = demo(SimKind::WindowCleaner, PanelId::Device);
+    let mut h = demo(SimKind::WindowCleaner, PanelId::DEVICE);
     said.step_until(&mut h, "the first read", |a| {
         a.station().device.info.is_some() && a.station().job_progress().is_none()
     });
@@ -131,17 +131,17 @@ fn in_chinese_a_technicians_day_on_the_window_cleaner_is_said_in_chinese() {
             notice_has(a, done) && a.station().job_progress().is_none()
         });
     }
-    app_mut(&mut h).settings.panel = PanelId::Tuning;
+    app_mut(&mut h).settings.panel = PanelId::TUNING;
     h.run_steps(2);
     h.get_by_label("全部读取").click();
     said.step_until(&mut h, "every parameter read", |a| {
         notice_has(a, "读取:") && a.station().job_progress().is_none()
     });
-    app_mut(&mut h).settings.panel = PanelId::Telemetry;
+    app_mut(&mut h).settings.panel = PanelId::TELEMETRY;
     h.run_steps(2);
     h.get_by_label("导出 CSV").click();
     said.step_until(&mut h, "the export refused", |a| notice_has(a, "导出"));
-    app_mut(&mut h).settings.panel = PanelId::Monitor;
+    app_mut(&mut h).settings.panel = PanelId::MONITOR;
     h.run_steps(2);
     h.get_by_label("复制").click();
     said.step_until(&mut h, "the frames copied", |a| notice_has(a, "复制"));
@@ -165,7 +165,7 @@ fn in_chinese_a_silent_device_and_a_servo_scan_are_said_in_chinese() {
             ..Faults::default()
         },
     );
-    let mut saved = settings(silent.path(), "window-cleaner", PanelId::Tuning, Lang::Zh);
+    let mut saved = settings(silent.path(), "window-cleaner", PanelId::TUNING, Lang::Zh);
     saved.port_mut().margin_ms = Some(5);
     let mut h = harness_with(saved, silent.ports(), |_| {});
     // On connecting, the tuning panel's values are read: none answers.
@@ -178,7 +178,7 @@ fn in_chinese_a_silent_device_and_a_servo_scan_are_said_in_chinese() {
         said.english()
     );
 
-    let mut h = demo(SimKind::ServoBus, PanelId::ServoBench);
+    let mut h = demo(SimKind::ServoBus, PanelId::SERVO_BENCH);
     said.step_until(&mut h, "connected", |a| a.station().connected());
     h.get_by_label("扫描").click();
     said.step_until(&mut h, "the scan", |a| {
@@ -194,7 +194,7 @@ fn in_chinese_a_silent_device_and_a_servo_scan_are_said_in_chinese() {
 
 #[test]
 fn in_chinese_the_other_telemetry_names_its_fields_not_their_wire_names() {
-    let mut h = demo(SimKind::SolarCleanbot, PanelId::Telemetry);
+    let mut h = demo(SimKind::SolarCleanbot, PanelId::TELEMETRY);
     step_until(&mut h, "the rangefinder read", |a| {
         a.station()
             .device

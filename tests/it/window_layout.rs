@@ -9,7 +9,11 @@ use botbench::i18n::Lang;
 use botbench::link::PortOpener;
 use botbench::sim::SimKind;
 use botbench::ui::layout::{one_line, overlapping_texts, split_words};
+use botbench::ui::presets::PresetsPanel;
+use botbench::ui::selftest::SelfTestPanel;
+use botbench::ui::servo_bench::ServoBenchPanel;
 use botbench::ui::station::Answering;
+use botbench::ui::telemetry::TelemetryPanel;
 use botbench::ui::{App, PanelId, Settings, Target};
 use eframe::egui;
 use egui_kittest::Harness;
@@ -111,7 +115,7 @@ fn demo(kind: SimKind, lang: Lang, size: egui::Vec2) -> H {
     let mut saved = Settings {
         target: Target::Demo(kind.name().to_string()),
         profile: kind.profile_id().to_string(),
-        panel: PanelId::Monitor,
+        panel: PanelId::MONITOR,
         lang,
         ..Settings::default()
     };
@@ -136,20 +140,24 @@ fn prepare(h: &mut H, kind: SimKind) {
     if kind == SimKind::WindowCleaner {
         // The self-test's plan and a preset open, as a technician has them.
         let a = app_mut(h);
-        a.selftest.open(a.state.station());
+        a.with_panel(|p: &mut SelfTestPanel, st| p.open(st));
         let dir = botbench::ui::files::shipped_dir();
         let preset = botbench::ui::files::shipped_in(&dir, "window-cleaner-factory.ron");
-        a.presets.path = preset.unwrap().display().to_string();
-        a.presets.open(a.state.station());
-        assert!(a.selftest.plan.is_some() && a.presets.loaded.is_some());
+        a.with_panel(|p: &mut PresetsPanel, st| {
+            p.path = preset.unwrap().display().to_string();
+            p.open(st);
+        });
+        assert!(
+            a.panel::<SelfTestPanel>().plan.is_some() && a.panel::<PresetsPanel>().loaded.is_some()
+        );
     }
     if kind == SimKind::ServoBus {
         // The bus scanned and the servo's parameters read, as a technician has them.
-        app_mut(h).settings.panel = PanelId::ServoBench;
+        app_mut(h).settings.panel = PanelId::SERVO_BENCH;
         h.run_steps(2);
         h.get_by_label("扫描").click();
         step_until(h, "the scan", |a| {
-            a.servo.selected.is_some() && a.station().job_progress().is_none()
+            a.panel::<ServoBenchPanel>().selected.is_some() && a.station().job_progress().is_none()
         });
         let params = app(h)
             .views()
@@ -157,7 +165,8 @@ fn prepare(h: &mut H, kind: SimKind) {
             .find(|v| v.name.ends_with("Params"));
         app_mut(h).show_view(&params.expect("a Params tab"));
         step_until(h, "the parameters read", |a| {
-            !a.servo.params.values.is_empty() && a.station().job_progress().is_none()
+            !a.panel::<ServoBenchPanel>().params.values.is_empty()
+                && a.station().job_progress().is_none()
         });
         h.run_steps(2);
         // Ranges are the profile's, named values by their names: no type limit, no ident.
@@ -302,18 +311,26 @@ fn at_1024_px_in_chinese_the_navigation_and_the_status_line_keep_one_line() {
 #[test]
 fn at_1024_px_every_solar_plot_keeps_its_height_and_scrolls_into_view() {
     let mut h = demo(SimKind::SolarCleanbot, Lang::Zh, SMALL);
-    app_mut(&mut h).settings.panel = PanelId::Telemetry;
+    app_mut(&mut h).settings.panel = PanelId::TELEMETRY;
     step_until(&mut h, "every plot drawn", |a| {
-        a.telemetry.shown.len() == a.station().device.profile.plots.len()
+        a.panel::<TelemetryPanel>().shown.len() == a.station().device.profile.plots.len()
     });
     h.run_steps(2);
     let inside = |a: &App| {
-        let last = a.telemetry.shown.last().expect("a plot").rect;
-        a.telemetry.plots_view.expand(1.0).contains_rect(last)
+        let last = a
+            .panel::<TelemetryPanel>()
+            .shown
+            .last()
+            .expect("a plot")
+            .rect;
+        a.panel::<TelemetryPanel>()
+            .plots_view
+            .expand(1.0)
+            .contains_rect(last)
     };
     let a = app(&h);
-    assert!(a.telemetry.shown.len() >= 3);
-    for s in &a.telemetry.shown {
+    assert!(a.panel::<TelemetryPanel>().shown.len() >= 3);
+    for s in &a.panel::<TelemetryPanel>().shown {
         assert!(
             s.rect.height() >= botbench::ui::MIN_PLOT_HEIGHT - 1.0,
             "{} is {} high",
@@ -326,7 +343,7 @@ fn at_1024_px_every_solar_plot_keeps_its_height_and_scrolls_into_view() {
         "at 600 points the last plot starts below the view"
     );
     // The mouse wheel over the plots brings the last one into view.
-    let over = a.telemetry.plots_view.center();
+    let over = a.panel::<TelemetryPanel>().plots_view.center();
     h.hover_at(over);
     for _ in 0..4 {
         h.event(egui::Event::MouseWheel {
@@ -347,13 +364,15 @@ fn a_panel_keeps_its_own_scroll_place_when_another_panel_was_scrolled() {
     let a = app_mut(&mut h);
     let dir = botbench::ui::files::shipped_dir();
     let preset = botbench::ui::files::shipped_in(&dir, "window-cleaner-factory.ron");
-    a.presets.path = preset.unwrap().display().to_string();
-    a.presets.open(a.state.station());
+    a.with_panel(|p: &mut PresetsPanel, st| {
+        p.path = preset.unwrap().display().to_string();
+        p.open(st);
+    });
     // The tuning table scrolled to its last group…
     let last = app(&h)
         .views()
         .into_iter()
-        .rfind(|v| v.panel == PanelId::Tuning);
+        .rfind(|v| v.panel == PanelId::TUNING);
     app_mut(&mut h).show_view(&last.expect("a tuning group"));
     h.run_steps(3);
     let read_all = h.get_by_label("Read all").rect();
@@ -363,7 +382,7 @@ fn a_panel_keeps_its_own_scroll_place_when_another_panel_was_scrolled() {
         "the tuning table is scrolled down"
     );
     // …and the presets' table starts at its top.
-    app_mut(&mut h).settings.panel = PanelId::Presets;
+    app_mut(&mut h).settings.panel = PanelId::PRESETS;
     h.run_steps(3);
     let compare = h.get_by_label("Compare with device").rect();
     let header = h.get_by_label("Command").rect();
@@ -376,7 +395,7 @@ fn a_panel_keeps_its_own_scroll_place_when_another_panel_was_scrolled() {
 #[test]
 fn at_1024_px_every_range_hint_of_the_solar_actions_is_drawn_whole() {
     let mut h = demo(SimKind::SolarCleanbot, Lang::En, SMALL);
-    app_mut(&mut h).settings.panel = PanelId::Actions;
+    app_mut(&mut h).settings.panel = PanelId::ACTIONS;
     h.run_steps(3);
     let profile = app(&h).station().device.profile.clone();
     let mut hints = 0;

@@ -5,6 +5,8 @@
 use botbench::i18n::Lang;
 use botbench::sim::SimOptions;
 use botbench::ui::PanelId;
+use botbench::ui::selftest::SelfTestPanel;
+use botbench::ui::solar::SolarPanel;
 use eframe::egui;
 use egui_kittest::kittest::Queryable;
 
@@ -12,7 +14,7 @@ use crate::support::gui::{H, app, app_mut, settings, step_until};
 use crate::support::{Port, serve, served_window_cleaner as bench};
 
 fn sized(port: &impl Port, size: egui::Vec2, lang: Lang) -> H {
-    let mut saved = settings(port.path(), "window-cleaner", PanelId::Tuning, lang);
+    let mut saved = settings(port.path(), "window-cleaner", PanelId::TUNING, lang);
     saved.port_mut().margin_ms = Some(100);
     crate::support::gui::harness_sized(saved, port.ports(), size, |_| {})
 }
@@ -63,33 +65,38 @@ fn the_top_bar_keeps_its_badge_whole_and_its_switch_in_place() {
 fn the_solar_plots_take_the_whole_width() {
     let b =
         serve(botbench::sim::solar_cleanbot::SolarCleanbot::new(&SimOptions::default()).unwrap());
-    let mut saved = settings(b.path(), "solar-cleanbot", PanelId::Solar, Lang::En);
+    let mut saved = settings(b.path(), "solar-cleanbot", PanelId::SOLAR, Lang::En);
     saved.port_mut().margin_ms = Some(100);
     let mut h =
         crate::support::gui::harness_sized(saved, b.ports(), egui::vec2(1280.0, 800.0), |_| {});
-    step_until(&mut h, "the plots drawn", |a| a.solar.plot_width > 0.0);
+    step_until(&mut h, "the plots drawn", |a| {
+        a.panel::<SolarPanel>().plot_width > 0.0
+    });
     assert!(
-        app(&h).solar.plot_width > 1280.0 * 0.8,
+        app(&h).panel::<SolarPanel>().plot_width > 1280.0 * 0.8,
         "{}",
-        app(&h).solar.plot_width
+        app(&h).panel::<SolarPanel>().plot_width
     );
 }
 
 #[test]
 fn at_1024_px_the_self_tests_measured_and_result_columns_stay_in_the_window() {
     let b = bench();
-    let mut saved = settings(b.path(), "window-cleaner", PanelId::SelfTest, Lang::En);
+    let mut saved = settings(b.path(), "window-cleaner", PanelId::SELF_TEST, Lang::En);
     saved.port_mut().margin_ms = Some(100);
     let mut h =
         crate::support::gui::harness_sized(saved, b.ports(), egui::vec2(1024.0, 600.0), |_| {});
     h.run_steps(3);
     h.get_by_label("Open plan").click();
     h.run_steps(2);
-    let Some(plan) = app(&h).selftest.plan.clone() else {
-        panic!("the shipped plan opens: {:?}", app(&h).selftest.error)
+    let Some(plan) = app(&h).panel::<SelfTestPanel>().plan.clone() else {
+        panic!(
+            "the shipped plan opens: {:?}",
+            app(&h).panel::<SelfTestPanel>().error
+        )
     };
     // Every step measured, with a detail as long as a failing range check writes.
-    app_mut(&mut h).selftest.results = plan
+    app_mut(&mut h).panel_mut::<SelfTestPanel>().results = plan
         .steps
         .iter()
         .map(|s| botbench::ops::selftest::StepResult {
@@ -122,7 +129,7 @@ fn at_1024_px_a_bit_field_takes_its_rows_height_and_draws_over_no_other_row() {
             ..Default::default()
         },
     ));
-    let mut saved = settings(b.path(), "tuya-vacuum", PanelId::TuyaConsole, Lang::En);
+    let mut saved = settings(b.path(), "tuya-vacuum", PanelId::TUYA_CONSOLE, Lang::En);
     saved.port_mut().baud = Some(115_200);
     let mut h =
         crate::support::gui::harness_sized(saved, b.ports(), egui::vec2(1024.0, 600.0), |_| {});

@@ -6,6 +6,10 @@
 use botbench::i18n::Lang;
 use botbench::sim::SimOptions;
 use botbench::sim::window_cleaner::WindowCleaner;
+use botbench::ui::monitor::MonitorPanel;
+use botbench::ui::presets::PresetsPanel;
+use botbench::ui::telemetry::TelemetryPanel;
+use botbench::ui::tuning::TuningPanel;
 use botbench::ui::{App, PanelId};
 use eframe::egui;
 use egui_kittest::kittest::Queryable;
@@ -27,19 +31,19 @@ fn show(h: &mut H, panel: PanelId) {
 #[test]
 fn the_packet_monitor_opened_late_shows_the_newest_and_holds_where_the_technician_scrolled() {
     let b = bench();
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     // A small log, so that it is full (and drops its oldest) within the test.
     app_mut(&mut h).station_mut().packets.capacity = 400;
     step_until(&mut h, "traffic", |a| {
         a.station().packets.entries.len() >= 400
     });
-    show(&mut h, PanelId::Monitor);
+    show(&mut h, PanelId::MONITOR);
     let newest =
         |a: &App| a.station().packets.first_seq() + a.station().packets.entries.len() as u64;
     {
         let a = app(&h);
-        assert!(a.monitor.follow, "it follows by default");
-        let top = a.monitor.top.expect("rows shown");
+        assert!(a.panel::<MonitorPanel>().follow, "it follows by default");
+        let top = a.panel::<MonitorPanel>().top.expect("rows shown");
         assert!(
             top + 60 >= newest(a),
             "the newest is in view: top {top}, newest {}",
@@ -65,16 +69,16 @@ fn the_packet_monitor_opened_late_shows_the_newest_and_holds_where_the_technicia
         h.step();
     }
     // Until the wheel's smooth scrolling has come to rest.
-    let (mut last, mut still) = (app(&h).monitor.top, 0);
+    let (mut last, mut still) = (app(&h).panel::<MonitorPanel>().top, 0);
     while still < 10 {
         h.step();
         std::thread::sleep(std::time::Duration::from_millis(20));
-        let top = app(&h).monitor.top;
+        let top = app(&h).panel::<MonitorPanel>().top;
         still = if top == last { still + 1 } else { 0 };
         last = top;
     }
-    let held = app(&h).monitor.top.unwrap();
-    assert!(!app(&h).monitor.follow);
+    let held = app(&h).panel::<MonitorPanel>().top.unwrap();
+    assert!(!app(&h).panel::<MonitorPanel>().follow);
     let until = newest(app(&h)) + 200;
     step_until(&mut h, "more traffic", |a| newest(a) >= until);
     h.run_steps(2);
@@ -82,11 +86,14 @@ fn the_packet_monitor_opened_late_shows_the_newest_and_holds_where_the_technicia
     // On a loaded machine more frames may come than the log keeps: a held frame that was
     // dropped leaves the view on the oldest one kept.
     assert_eq!(
-        a.monitor.top,
+        a.panel::<MonitorPanel>().top,
         Some(held.max(a.station().packets.first_seq())),
         "the view stays on the frames it was on"
     );
-    let (below, secs) = a.monitor.behind.expect("says how far behind");
+    let (below, secs) = a
+        .panel::<MonitorPanel>()
+        .behind
+        .expect("says how far behind");
     assert!(below >= 200 && secs > 0.0, "{below} {secs}");
     assert!(
         h.query_by_label_contains("newer frame(s) below the view")
@@ -96,12 +103,12 @@ fn the_packet_monitor_opened_late_shows_the_newest_and_holds_where_the_technicia
     h.get_by_label("Newest").click();
     h.run_steps(3);
     let a = app(&h);
-    assert!(a.monitor.follow);
-    assert!(a.monitor.top.unwrap() + 60 >= newest(a));
+    assert!(a.panel::<MonitorPanel>().follow);
+    assert!(a.panel::<MonitorPanel>().top.unwrap() + 60 >= newest(a));
 }
 
 fn telemetry(port: &impl Port, lang: Lang) -> H {
-    let mut saved = settings(port.path(), "window-cleaner", PanelId::Telemetry, lang);
+    let mut saved = settings(port.path(), "window-cleaner", PanelId::TELEMETRY, lang);
     saved.port_mut().margin_ms = Some(100);
     // A window far longer than the test: its left part is before any data.
     saved.window_secs = 600.0;
@@ -124,16 +131,19 @@ fn the_cursor_readout_is_a_sample_under_the_pointer_or_nothing_and_moves_nothing
     let b = bench();
     let mut h = telemetry(&b, Lang::En);
     step_until(&mut h, "samples", |a| {
-        samples(a) >= 5 && a.telemetry.shown.len() >= 2
+        samples(a) >= 5 && a.panel::<TelemetryPanel>().shown.len() >= 2
     });
-    let before = app(&h).telemetry.shown[1].rect;
-    let plot = app(&h).telemetry.shown[0].rect;
+    let before = app(&h).panel::<TelemetryPanel>().shown[1].rect;
+    let plot = app(&h).panel::<TelemetryPanel>().shown[0].rect;
     // Over the newest data: the readout is a sample's own time, with values.
     h.hover_at(egui::pos2(plot.right() - 4.0, plot.center().y));
     h.run_steps(3);
     {
         let a = app(&h);
-        let r = a.telemetry.shown[0].readout.clone().expect("a readout");
+        let r = a.panel::<TelemetryPanel>().shown[0]
+            .readout
+            .clone()
+            .expect("a readout");
         let id = &a.station().device.profile.plots[0].id;
         let set = a.station().device.plots.get(id).unwrap();
         let (field, series) = set.iter().next().unwrap();
@@ -144,21 +154,32 @@ fn the_cursor_readout_is_a_sample_under_the_pointer_or_nothing_and_moves_nothing
         );
         assert!(!r.values.is_empty());
         assert_eq!(
-            a.telemetry.shown[1].rect, before,
+            a.panel::<TelemetryPanel>().shown[1].rect,
+            before,
             "the readout moves nothing"
         );
-        for s in &a.telemetry.shown {
+        for s in &a.panel::<TelemetryPanel>().shown {
             assert!(!s.legend.names.iter().any(|n| n.contains("cursor")));
         }
     }
     // Before any data: nothing.
     h.hover_at(egui::pos2(plot.left() + 10.0, plot.center().y));
     h.run_steps(3);
-    assert_eq!(app(&h).telemetry.shown[0].readout, None, "no sample there");
+    assert_eq!(
+        app(&h).panel::<TelemetryPanel>().shown[0].readout,
+        None,
+        "no sample there"
+    );
     // Off the plots (over the top bar): nothing anywhere.
     h.hover_at(egui::pos2(plot.right() - 4.0, 5.0));
     h.run_steps(3);
-    assert!(app(&h).telemetry.shown.iter().all(|s| s.readout.is_none()));
+    assert!(
+        app(&h)
+            .panel::<TelemetryPanel>()
+            .shown
+            .iter()
+            .all(|s| s.readout.is_none())
+    );
 }
 
 #[test]
@@ -166,7 +187,7 @@ fn a_pause_keeps_the_paused_data_in_view_and_breaks_the_line() {
     let b = bench();
     let mut h = telemetry(&b, Lang::En);
     step_until(&mut h, "samples", |a| {
-        samples(a) >= 5 && !a.telemetry.shown.is_empty()
+        samples(a) >= 5 && !a.panel::<TelemetryPanel>().shown.is_empty()
     });
     let window = h.get_all_by_label("Window").next().unwrap().rect();
     h.get_by_label("Pause").click();
@@ -176,15 +197,15 @@ fn a_pause_keeps_the_paused_data_in_view_and_breaks_the_line() {
         window,
         "Pause/Resume moves nothing"
     );
-    let end = app(&h).telemetry.shown[0].x.1;
+    let end = app(&h).panel::<TelemetryPanel>().shown[0].x.1;
     let t0 = app(&h).station().device.t0;
     step_until(&mut h, "time to pass", |a| {
         a.station().device.t0.elapsed().as_secs_f64() > end + 0.5 && t0 == a.station().device.t0
     });
     h.run_steps(2);
-    assert!(app(&h).telemetry.follow);
+    assert!(app(&h).panel::<TelemetryPanel>().follow);
     assert_eq!(
-        app(&h).telemetry.shown[0].x.1,
+        app(&h).panel::<TelemetryPanel>().shown[0].x.1,
         end,
         "the view stays where polling paused"
     );
@@ -219,7 +240,7 @@ fn a_silent_device_is_a_port_open_not_a_device_answering() {
             ..Default::default()
         },
     );
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     step_until(&mut h, "the port", |a| a.station().connected());
     step_until(&mut h, "unanswered requests", |a| {
         matches!(
@@ -235,7 +256,7 @@ fn a_silent_device_is_a_port_open_not_a_device_answering() {
 #[test]
 fn a_disconnect_forgets_the_units_version_values_and_marks() {
     let b = bench();
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     // Whether the device answers comes with the worker's next statistics report, which may
     // arrive after the values: wait for it, not for a number of frames.
     step_until(&mut h, "the device read and its answers counted", |a| {
@@ -264,16 +285,16 @@ fn a_disconnect_forgets_the_units_version_values_and_marks() {
 #[test]
 fn stop_is_on_every_window_cleaner_panel_and_goes_straight_to_the_robot() {
     let b = bench();
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     step_until(&mut h, "the link", |a| a.station().connected());
     for panel in [
-        PanelId::Tuning,
-        PanelId::Telemetry,
-        PanelId::Monitor,
-        PanelId::Presets,
-        PanelId::Actions,
-        PanelId::Device,
-        PanelId::SelfTest,
+        PanelId::TUNING,
+        PanelId::TELEMETRY,
+        PanelId::MONITOR,
+        PanelId::PRESETS,
+        PanelId::ACTIONS,
+        PanelId::DEVICE,
+        PanelId::SELF_TEST,
     ] {
         show(&mut h, panel);
         assert!(
@@ -281,7 +302,7 @@ fn stop_is_on_every_window_cleaner_panel_and_goes_straight_to_the_robot() {
             "{panel:?} has STOP"
         );
     }
-    show(&mut h, PanelId::Tuning);
+    show(&mut h, PanelId::TUNING);
     h.get_all_by_label("STOP").next().unwrap().click();
     let ids: Vec<u8> = {
         let p = &app(&h).station().device.profile;
@@ -300,7 +321,10 @@ fn stop_is_on_every_window_cleaner_panel_and_goes_straight_to_the_robot() {
         })
     });
     step_until(&mut h, "the acknowledgement", |a| {
-        matches!(a.stop.state(), botbench::ui::stop::StopState::Acked(_))
+        matches!(
+            a.station().stop.state(),
+            botbench::ui::stop::StopState::Acked(_)
+        )
     });
     h.run_steps(2);
     assert!(h.query_by_label_contains("STOP acknowledged").is_some());
@@ -321,7 +345,7 @@ fn input_lefts(h: &H) -> Vec<f32> {
 fn the_tuning_tables_line_up_across_the_width_and_say_only_what_the_profile_gives() {
     let b = bench();
     b.sim.lock().unwrap().set_param("pwmvalueMax", 97).unwrap();
-    let mut h = harness(&b, PanelId::Tuning);
+    let mut h = harness(&b, PanelId::TUNING);
     step_until(&mut h, "the device read", |a| {
         (130..=136).all(|id| a.station().device.readings.contains_key(&id))
             && a.station().job_progress().is_none()
@@ -383,7 +407,7 @@ fn the_configurator_variants_own_set_layout_is_written_and_verified() {
     let mut saved = settings(
         b.path(),
         "window-cleaner-configurator",
-        PanelId::Tuning,
+        PanelId::TUNING,
         Lang::En,
     );
     saved.port_mut().margin_ms = Some(100);
@@ -404,7 +428,7 @@ fn the_configurator_variants_own_set_layout_is_written_and_verified() {
     h.run_steps(2);
     let a = app(&h);
     let (_, writes) = a
-        .tuning
+        .panel::<TuningPanel>()
         .pending(a.station())
         .expect("the write is possible");
     let set = writes.iter().find(|(id, _)| *id == 225).expect("SET 225");
@@ -440,12 +464,12 @@ fn in_chinese_the_status_line_and_the_plot_legends_are_chinese() {
     let b = bench();
     let mut h = telemetry(&b, Lang::Zh);
     step_until(&mut h, "samples", |a| {
-        samples(a) >= 2 && !a.telemetry.shown.is_empty()
+        samples(a) >= 2 && !a.panel::<TelemetryPanel>().shown.is_empty()
     });
     h.run_steps(2);
     let a = app(&h);
     let profile = &a.station().device.profile;
-    for s in &a.telemetry.shown {
+    for s in &a.panel::<TelemetryPanel>().shown {
         let p = profile.plots.iter().find(|p| p.id == s.id).unwrap();
         for (ident, name) in p.fields.iter().zip(&s.legend.names) {
             assert!(
@@ -456,7 +480,7 @@ fn in_chinese_the_status_line_and_the_plot_legends_are_chinese() {
         }
         assert!(!s.legend.y_label.is_empty());
     }
-    let first = a.telemetry.shown[0].legend.names[0].clone();
+    let first = a.panel::<TelemetryPanel>().shown[0].legend.names[0].clone();
     assert!(
         h.query_by_label(&format!("— {first}")).is_some(),
         "the key shows {first}"
@@ -472,11 +496,11 @@ fn factory_defaults_leave_no_file_named_and_a_typed_preset_path_is_remembered() 
     let dir = std::env::temp_dir().join(format!("botbench-wt-preset-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("golden.ron");
-    let mut h = harness(&b, PanelId::Presets);
+    let mut h = harness(&b, PanelId::PRESETS);
     step_until(&mut h, "the device read", |a| {
         a.station().device.value(130, "pwmValue").is_some() && a.station().job_progress().is_none()
     });
-    app_mut(&mut h).presets.path = path.display().to_string();
+    app_mut(&mut h).panel_mut::<PresetsPanel>().path = path.display().to_string();
     h.step();
     h.get_by_label("Save device to file").click();
     step_until(&mut h, "the preset saved", |a| {
@@ -491,9 +515,9 @@ fn factory_defaults_leave_no_file_named_and_a_typed_preset_path_is_remembered() 
     );
     h.get_by_label("Factory defaults").click();
     h.run_steps(2);
-    assert!(app(&h).presets.loaded.is_some());
+    assert!(app(&h).panel::<PresetsPanel>().loaded.is_some());
     assert_eq!(
-        app(&h).presets.path,
+        app(&h).panel::<PresetsPanel>().path,
         "",
         "the defaults are not the file named before"
     );
@@ -530,7 +554,7 @@ fn other_telemetry_lists_every_telemetry_command_in_a_box_of_many_rows() {
 #[test]
 fn a_profiles_port_settings_are_its_own() {
     let b = bench();
-    let mut saved = settings(b.path(), "window-cleaner", PanelId::Telemetry, Lang::En);
+    let mut saved = settings(b.path(), "window-cleaner", PanelId::TELEMETRY, Lang::En);
     saved.port_mut().margin_ms = Some(300);
     let mut h = crate::support::gui::harness(saved, b.ports());
     h.run_steps(3);

@@ -17,7 +17,7 @@ mod scan;
 mod setup;
 
 use super::Action;
-use super::jobs::{JobOutput, JobSink, LogError};
+use super::jobs::{JobSink, LogError};
 use super::station::{Notice, Station};
 use crate::i18n::Lang;
 use crate::i18n::Text;
@@ -162,7 +162,7 @@ pub enum Output {
 
 /// Sends a panel output from a job.
 pub(crate) fn send(sink: &JobSink, out: Output) {
-    sink.send(JobOutput::Servo(out));
+    sink.panel(out);
 }
 
 /// The rate the port is at now.
@@ -220,7 +220,7 @@ impl ServoBenchPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
+    fn draw(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         self.header(ui, lang, rt, &mut actions);
         ui.separator();
@@ -240,26 +240,25 @@ impl ServoBenchPanel {
             .auto_shrink(false)
             .show(ui, |ui| match self.tab {
                 Tab::Scan => {
-                    let picked = self
-                        .scan
-                        .show(ui, lang, rt, busy, self.selected, &mut actions);
+                    let (picked, asked) = self.scan.show(ui, lang, rt, busy, self.selected);
+                    actions.extend(asked);
                     if let Some(s) = picked {
-                        self.select(Some(s), rt, &mut actions);
+                        actions.extend(self.select(Some(s), rt));
                     }
                 }
-                Tab::Params => self
-                    .params
-                    .show(ui, lang, rt, busy, self.selected, &mut actions),
+                Tab::Params => {
+                    actions.extend(self.params.show(ui, lang, rt, busy, self.selected));
+                }
                 Tab::Setup => {
                     actions.extend(
                         self.setup
                             .show(ui, lang, rt, busy, self.selected, &self.scan),
-                    )
+                    );
                 }
-                Tab::Motion => self
-                    .motion
-                    .show(ui, lang, rt, busy, self.selected, &mut actions),
-                Tab::Production => self.production.show(ui, lang, rt, busy, &mut actions),
+                Tab::Motion => {
+                    actions.extend(self.motion.show(ui, lang, rt, busy, self.selected));
+                }
+                Tab::Production => actions.extend(self.production.show(ui, lang, rt, busy)),
             });
         // Live polling stops when a job starts: the job may take the port to other rates.
         if actions.iter().any(|a| matches!(a, Action::StartJob(_))) && self.motion.live {
@@ -364,7 +363,8 @@ impl ServoBenchPanel {
     }
 
     /// Works on `servo` from now on: the port follows it; what was read of another servo goes.
-    fn select(&mut self, servo: Option<Servo>, rt: &Station, actions: &mut Vec<Action>) {
+    fn select(&mut self, servo: Option<Servo>, rt: &Station) -> Vec<Action> {
+        let mut actions = Vec::new();
         if self.selected != servo {
             self.params = ParamsState {
                 preset_path: std::mem::take(&mut self.params.preset_path),
@@ -382,6 +382,7 @@ impl ServoBenchPanel {
         {
             actions.push(a);
         }
+        actions
     }
 
     /// The servo moved (new id, new rate, reset): the selection and the scan table follow it;
@@ -400,7 +401,7 @@ impl ServoBenchPanel {
 
     /// Takes what one of its jobs reported; `profile` (the servo profile) says which
     /// parameters hold the id and the baud option.
-    pub fn on_output(&mut self, out: Output, profile: &crate::profile::Profile) {
+    fn take_output(&mut self, out: Output, profile: &crate::profile::Profile) {
         match out {
             Output::Found(row) => self.scan.on_found(row),
             Output::Scanned(result) => {
@@ -478,6 +479,74 @@ impl ServoBenchPanel {
                 state,
                 log_error,
             } => self.production.on_record(record, state, log_error),
+        }
+    }
+}
+
+impl crate::ui::PanelId {
+    /// Bus servos: scan, parameters, id and baud, motion, provisioning.
+    pub const SERVO_BENCH: crate::ui::PanelId = crate::ui::PanelId::new("ServoBench");
+}
+
+impl crate::ui::Panel for ServoBenchPanel {
+    fn id(&self) -> crate::ui::PanelId {
+        crate::ui::PanelId::SERVO_BENCH
+    }
+
+    fn name(&self, lang: Lang) -> &'static str {
+        lang.tr("Servo bench", "舵机调试")
+    }
+
+    fn kind(&self) -> Option<crate::profile::PanelKind> {
+        Some(crate::profile::PanelKind::ServoBench)
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &crate::ui::panel::Cx<'_>) -> Vec<Action> {
+        self.draw(ui, cx.lang, cx.station)
+    }
+
+    /// What was found on another connection is not on this one.
+    fn forget(&mut self, _station: &Station, why: crate::ui::panel::Forget) -> Vec<Action> {
+        if why == crate::ui::panel::Forget::Connection {
+            self.forget_bus();
+        }
+        Vec::new()
+    }
+
+    fn on_output(&mut self, out: crate::ui::panel::PanelOutput, station: &Station) -> Vec<Action> {
+        if let Some(out) = out.take::<Output>() {
+            self.take_output(out, &station.device.profile);
+        }
+        Vec::new()
+    }
+
+    /// The parameter preset, the provisioning log and plan last used; the shipped plan when
+    /// none was used yet.
+    fn restore(&mut self, settings: &crate::ui::Settings) {
+        use crate::ui::settings::FileKind;
+        if let Some(p) = settings.file(FileKind::ServoPreset) {
+            self.params.preset_path = p.to_string();
+        }
+        if let Some(p) = settings.file(FileKind::ProvisionLog) {
+            self.production.log_path = p.to_string();
+        }
+        if let Some(p) = crate::ui::app::file_or_shipped(
+            settings,
+            FileKind::ProvisionPlan,
+            "servo-provision-plan.ron",
+        ) {
+            self.production.plan_path = p;
+        }
+    }
+
+    /// Its tabs.
+    fn parts(&self, _station: &Station) -> Vec<String> {
+        Tab::ALL.iter().map(|t| format!("{t:?}")).collect()
+    }
+
+    fn show_part(&mut self, part: usize, _station: &Station) {
+        if let Some(&tab) = Tab::ALL.get(part) {
+            self.tab = tab;
         }
     }
 }

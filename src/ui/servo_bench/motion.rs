@@ -194,10 +194,10 @@ impl MotionState {
         rt: &Station,
         busy: bool,
         selected: Option<Servo>,
-        actions: &mut Vec<Action>,
-    ) {
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
         let Some(servo) = selection_or_hint(ui, lang, selected) else {
-            return;
+            return actions;
         };
         let can = rt.connected() && !busy;
         if busy {
@@ -210,6 +210,7 @@ impl MotionState {
         actions.extend(self.live_section(ui, lang, rt, servo, can));
         actions.extend(self.wheel_section(ui, lang, rt, servo, can));
         actions.extend(self.damping_section(ui, lang, rt, servo, can));
+        actions
     }
 
     /// Go to an angle: typed or on the slider, with its interval and power.

@@ -19,8 +19,8 @@ impl ParamsState {
         ui: &mut egui::Ui,
         lang: Lang,
         rt: &Station,
-        actions: &mut Vec<Action>,
-    ) {
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
         let profile = &rt.device.profile;
         crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
@@ -39,7 +39,7 @@ impl ParamsState {
             let load = ui
                 .add_enabled(named, egui::Button::new(lang.tr("Load preset", "载入预设")))
                 .clicked();
-            if event.go(load, actions) && self.load_preset(profile) {
+            if event.go(load, &mut actions) && self.load_preset(profile) {
                 actions.push(self.remember());
             }
             crate::ui::layout::group(ui, "note", |ui| {
@@ -55,6 +55,7 @@ impl ParamsState {
                 actions.push(self.remember());
             }
         });
+        actions
     }
 
     fn remember(&self) -> Action {

@@ -212,10 +212,10 @@ impl ParamsState {
         rt: &Station,
         busy: bool,
         selected: Option<Servo>,
-        actions: &mut Vec<Action>,
-    ) {
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
         let Some(servo) = selection_or_hint(ui, lang, selected) else {
-            return;
+            return actions;
         };
         self.lang = lang;
         let profile = rt.device.profile.clone();
@@ -236,7 +236,7 @@ impl ParamsState {
                 ui.label("");
             }
         }
-        self.preset_row(ui, lang, rt, actions);
+        actions.extend(self.preset_row(ui, lang, rt));
         match &self.message {
             Some((true, m)) => ok_label(ui, m),
             Some((false, m)) => error_label(ui, m),
@@ -266,8 +266,9 @@ impl ParamsState {
                 }
             });
         if self.confirm_reset {
-            self.reset_dialog(ui, lang, rt, servo, actions);
+            actions.extend(self.reset_dialog(ui, lang, rt, servo));
         }
+        actions
     }
 
     fn row(&mut self, ui: &mut egui::Ui, lang: Lang, p: &Param) {
@@ -364,8 +365,8 @@ impl ParamsState {
         lang: Lang,
         rt: &Station,
         servo: Servo,
-        actions: &mut Vec<Action>,
-    ) {
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
         let home = ops::factory_location(&rt.device.profile);
         let mut decision = None;
         let modal = egui::Modal::new(egui::Id::unique("servo-reset")).show(ui.ctx(), |ui| {
@@ -401,5 +402,6 @@ impl ParamsState {
                 actions.push(reset_job(rt, servo));
             }
         }
+        actions
     }
 }

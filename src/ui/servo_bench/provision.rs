@@ -144,8 +144,8 @@ impl ProvisionPanel {
         lang: Lang,
         rt: &Station,
         busy: bool,
-        actions: &mut Vec<Action>,
-    ) {
+    ) -> Vec<Action> {
+        let mut actions = Vec::new();
         crate::ui::layout::toolbar(ui, |ui| {
             let event = files::row(
                 ui,
@@ -165,7 +165,7 @@ impl ProvisionPanel {
                     egui::Button::new(lang.tr("Load plan", "载入计划")),
                 )
                 .clicked();
-            if event.go(load, actions) {
+            if event.go(load, &mut actions) {
                 self.load(rt);
                 if self.plan.is_some() {
                     actions.push(Action::RememberFile(
@@ -191,7 +191,7 @@ impl ProvisionPanel {
                 &mut self.log_path,
                 &rt.dialogs,
             );
-            event.go(false, actions);
+            event.go(false, &mut actions);
         });
         self.plan_summary(ui, lang, rt);
         ui.add_space(6.0);
@@ -227,6 +227,7 @@ impl ProvisionPanel {
             ));
             history(ui, lang, &self.history);
         }
+        actions
     }
 }
 
@@ -367,6 +368,9 @@ fn job(
                     reason: reason.clone() + &crate::ui::records::note_en(&kept),
                 }),
             };
+            sink.send(crate::ui::jobs::JobOutput::Verdict(
+                crate::ui::station::Verdict::Provisioned(Box::new(record.clone())),
+            ));
             send(
                 sink,
                 Output::Provisioned {

@@ -384,8 +384,8 @@ impl ScanState {
         rt: &Station,
         busy: bool,
         selected: Option<Servo>,
-        actions: &mut Vec<Action>,
-    ) -> Option<Servo> {
+    ) -> (Option<Servo>, Vec<Action>) {
+        let mut actions = Vec::new();
         let ids = self.ids();
         let profile = &rt.device.profile;
         let bauds = self.chosen_bauds(profile);
@@ -422,11 +422,11 @@ impl ScanState {
         ui.separator();
         if self.rows.is_empty() {
             ui.weak(lang.tr("No servos listed yet.", "尚无舵机。"));
-            return None;
+            return (None, actions);
         }
         let (picked, rescans) = self.table(ui, lang, rt, busy, selected);
         actions.extend(rescans);
-        picked
+        (picked, actions)
     }
 }
 

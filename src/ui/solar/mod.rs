@@ -10,7 +10,7 @@ pub use control::{Control, Outcome, Trip};
 
 use super::inputs::{command_inputs, readout_text, value_box};
 use super::station::{Reading, Station};
-use super::stop::StopControl;
+use super::stop;
 use super::{Action, plot};
 use crate::i18n::Lang;
 use crate::profile::{Command, CommandKind, Field, FieldType, Input, Value};
@@ -40,23 +40,12 @@ const RED: egui::Color32 = egui::Color32::from_rgb(200, 30, 30);
 const GREEN: egui::Color32 = egui::Color32::from_rgb(0, 140, 60);
 
 impl SolarPanel {
-    /// Called every frame whichever panel is shown (the dead-man).
-    pub fn tick(&mut self, rt: &Station) -> Vec<Action> {
-        self.control.tick(rt)
-    }
-
-    /// Draws the panel; `stop` is the window's STOP.
-    pub fn show(
-        &mut self,
-        ui: &mut egui::Ui,
-        lang: Lang,
-        rt: &Station,
-        stop: &mut StopControl,
-    ) -> Vec<Action> {
+    /// Draws the panel, with the station's STOP at the top.
+    fn draw(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         crate::ui::layout::toolbar(ui, |ui| {
-            actions.extend(stop.button(ui, lang, rt));
-            stop.status(ui, lang);
+            actions.extend(stop::button(ui, lang, rt));
+            rt.stop.status(ui, lang);
             self.trip_status(ui, lang, rt);
         });
         self.deadman(ui, lang, rt, &mut actions);
@@ -72,7 +61,7 @@ impl SolarPanel {
                 // The plots across the whole width, their key above them.
                 self.plots(ui, lang, rt);
             });
-        self.confirm_modal(ui, lang, rt, stop, &mut actions);
+        self.confirm_modal(ui, lang, rt, &mut actions);
         actions
     }
 
@@ -347,7 +336,6 @@ impl SolarPanel {
         ui: &mut egui::Ui,
         lang: Lang,
         rt: &Station,
-        stop_control: &mut StopControl,
         actions: &mut Vec<Action>,
     ) {
         let Some((id, inputs)) = &self.confirm else {
@@ -369,7 +357,7 @@ impl SolarPanel {
             .collect::<Vec<_>>()
             .join(", ");
         let mut decision = None;
-        let mut stop = Vec::new();
+        let mut stopped = Vec::new();
         let modal = egui::Modal::new(egui::Id::unique("solar-confirm")).show(ui.ctx(), |ui| {
             ui.heading(lang.tr("The robot will move", "机器人将会动作"));
             ui.label(format!("{name}: {what}"));
@@ -384,11 +372,11 @@ impl SolarPanel {
                     lang.tr("Cancel", "取消"),
                 );
                 ui.separator();
-                stop = stop_control.button(ui, lang, rt);
+                stopped = stop::button(ui, lang, rt);
             });
         });
-        if !stop.is_empty() {
-            actions.extend(stop);
+        if !stopped.is_empty() {
+            actions.extend(stopped);
             decision = Some(false);
         }
         match super::confirm::decided(&modal, decision) {
@@ -400,5 +388,41 @@ impl SolarPanel {
             Some(false) => self.confirm = None,
             None => {}
         }
+    }
+}
+
+impl crate::ui::PanelId {
+    /// The solar cleanbot's readouts and controls.
+    pub const SOLAR: crate::ui::PanelId = crate::ui::PanelId::new("Solar");
+}
+
+impl crate::ui::Panel for SolarPanel {
+    fn id(&self) -> crate::ui::PanelId {
+        crate::ui::PanelId::SOLAR
+    }
+
+    fn name(&self, lang: Lang) -> &'static str {
+        lang.tr("Solar cleanbot", "光伏清扫机器人")
+    }
+
+    fn kind(&self) -> Option<crate::profile::PanelKind> {
+        Some(crate::profile::PanelKind::Solar)
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &crate::ui::panel::Cx<'_>) -> Vec<Action> {
+        self.draw(ui, cx.lang, cx.station)
+    }
+
+    /// The dead-man, whichever panel is shown.
+    fn tick(&mut self, station: &Station) -> Vec<Action> {
+        self.control.tick(station)
+    }
+
+    fn live(&self, station: &Station) -> bool {
+        station.connected() && !station.link.polling_paused
+    }
+
+    fn shows_stop(&self) -> bool {
+        true
     }
 }

@@ -10,11 +10,14 @@
 //! context that wakes the window, whether a file dialog can open, and the production records.
 
 mod capture;
+mod frame;
+mod job;
 mod link;
 mod model;
 mod packets;
 mod running;
 mod tuya;
+mod verdicts;
 
 pub use link::{Answering, Connection, LinkStatus, PortLister, SILENT_AFTER, Target};
 pub use model::{DeviceModel, Mark, Reading, ReadingError};
@@ -23,13 +26,16 @@ pub use running::{Running, RunningSet};
 pub use tuya::{
     DpState, LOG_CAPACITY as REPORT_LOG_CAPACITY, LogLine, RequestLine, StepResult, TuyaModel,
 };
+pub use verdicts::{Verdict, Verdicts};
 
-use super::jobs::{Job, JobError, JobOutput, RunningJob};
+use super::Action;
+use super::jobs::RunningJob;
+use super::panel::{Forget, Panels};
+use super::stop::StopControl;
 use crate::i18n::Text;
 use crate::link::{Link, LinkCommand, LinkEvent, LinkState, LinkStats, Opener};
 use crate::profile::{ProfileError, Registry};
 use crate::sim::{Faults, SharedDevice, SimKind, SimOptions, SimTransport};
-use crate::ui::zh::Zh;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -110,8 +116,16 @@ pub struct Station {
     pub ctx: eframe::egui::Context,
     /// Whether the system can show a file dialog (looked up once).
     pub dialogs: super::files::Dialogs,
-    /// The production records: where they go, the recorder jobs save through, the report.
+    /// The production records: where they go, the recorder jobs save through, the report
+    /// (one store for the window's stations, made for sharing).
     pub records: super::records::RecordsHandle,
+    /// The verdicts on the unit now on the fixture.
+    pub verdicts: Verdicts,
+    /// STOP: what was sent, what answered, what waits for the link.
+    pub stop: StopControl,
+    /// The window's panels of this station, each with what it holds of this device (empty
+    /// while one of them runs: see [`Self::with_panels`]).
+    pub panels: Panels,
 }
 
 impl Station {
@@ -136,6 +150,9 @@ impl Station {
             ctx: ctx.clone(),
             dialogs: super::files::Dialogs::detect(),
             records: super::records::RecordsHandle::default(),
+            verdicts: Verdicts::default(),
+            stop: StopControl::default(),
+            panels: Panels::default(),
         })
     }
 
@@ -156,40 +173,20 @@ impl Station {
         self.notice = Some(notice);
     }
 
-    /// Opens a link to `target` with `profile_id`, closing any other; the device model starts
-    /// over.
+    /// Opens a link to `target` with `profile_id`, closing any other; the device model, STOP
+    /// and what the panels showed start over. Returns what the panels ask for on the new
+    /// connection. Errors: the profile, the built-in simulator or the worker.
     pub fn connect(
         &mut self,
         target: Target,
         baud: u32,
         profile_id: &str,
-    ) -> Result<(), ConnectError> {
+    ) -> Result<Vec<Action>, ConnectError> {
         self.disconnect();
         let profile = self.registry.get(profile_id)?;
-        let mut demo_tuya = None;
-        let opener: Opener = match &target {
-            Target::Demo(kind) => {
-                let kind: SimKind = kind.parse().map_err(ConnectError::Simulator)?;
-                let opts = SimOptions {
-                    baud: Some(baud),
-                    ..SimOptions::default()
-                };
-                // One device for the connection, kept across reconnects; the Tuya MCU's handle
-                // lets the window ask it to send its own requests.
-                let device: SharedDevice = if kind == SimKind::TuyaVacuum {
-                    let mcu = Arc::new(Mutex::new(crate::sim::tuya_mcu(&opts)));
-                    demo_tuya = Some(mcu.clone());
-                    mcu
-                } else {
-                    crate::sim::build(kind, &opts).map_err(ConnectError::Simulator)?
-                };
-                Box::new(move || {
-                    let t =
-                        SimTransport::new(device.clone(), baud, Faults::default(), kind.describe());
-                    Ok(Box::new(t) as Box<dyn crate::link::Transport>)
-                })
-            }
-            Target::Port(path) => self.link.port_opener.open(path, baud),
+        let (opener, demo_tuya) = match &target {
+            Target::Demo(kind) => demo_opener(kind, baud)?,
+            Target::Port(path) => (self.link.port_opener.open(path, baud), None),
         };
         let opener = self.packets.tap.wrap(opener);
         let ctx = self.ctx.clone();
@@ -210,7 +207,8 @@ impl Station {
             demo_tuya,
         });
         self.link.state = None;
-        Ok(())
+        self.stop = StopControl::default();
+        Ok(self.with_panels(|p, st| p.forget(st, Forget::Connection)))
     }
 
     /// Closes the link (a running job is cancelled); what the device showed is forgotten.
@@ -307,60 +305,31 @@ impl Station {
             LinkEvent::Device(ev) => self.link.on_device(ev),
         }
     }
-
-    /// Starts `job` on the link unless one is running; says why not in the status line.
-    pub fn start_job(&mut self, job: Job) {
-        if self.job.as_ref().is_some_and(|j| !j.is_done()) {
-            self.notify(Notice::error(Text::new(
-                "wait for the running job to finish, or cancel it",
-                "请等待正在运行的任务结束,或取消它",
-            )));
-            return;
-        }
-        let Some(conn) = &self.link.connection else {
-            self.notify(Notice::error(Text::new("not connected", "未连接")));
-            return;
-        };
-        match RunningJob::spawn(job, conn.link.client(), &self.ctx) {
-            Ok(job) => self.job = Some(job),
-            Err(e) => self.notify(Notice::error(e.said())),
-        }
-    }
-
-    /// Raises the running job's cancel flag.
-    pub fn cancel_job(&self) {
-        if let Some(j) = &self.job {
-            j.cancel.cancel();
-        }
-    }
-
-    /// What the running job has reported since the last frame (its progress is also kept on
-    /// the job).
-    pub fn take_job_output(&mut self) -> Vec<JobOutput> {
-        self.job.as_mut().map(RunningJob::drain).unwrap_or_default()
-    }
-
-    /// The running job's title and progress (fraction done, what it is doing), if a job runs.
-    pub fn job_progress(&self) -> Option<(&Text, f32, Text)> {
-        let job = self.job.as_ref().filter(|j| !j.is_done())?;
-        let (f, msg) = job
-            .progress
-            .as_ref()
-            .map_or((0.0, Text::same("")), |p| (p.fraction(), p.message.clone()));
-        Some((&job.title, f, msg))
-    }
-
-    /// The status line's message for a job that ended: its title, then its summary or why it
-    /// failed.
-    pub fn job_done(&mut self, result: Result<Text, JobError>) {
-        let title = self
-            .job
-            .as_ref()
-            .map_or_else(|| Text::new("job", "任务"), |j| j.title.clone());
-        let notice = match result {
-            Ok(summary) => Notice::info(title.then(": ", &summary)),
-            Err(e) => Notice::error(title.then(": ", &e.said())),
-        };
-        self.notify(notice);
-    }
 }
+
+/// The opener of the built-in simulated device `kind` at `baud`: one device for the
+/// connection, kept across reconnects; for the Tuya vacuum also its handle, through which the
+/// window asks it to send its own requests.
+fn demo_opener(kind: &str, baud: u32) -> Result<(Opener, DemoTuya), ConnectError> {
+    let kind: SimKind = kind.parse().map_err(ConnectError::Simulator)?;
+    let opts = SimOptions {
+        baud: Some(baud),
+        ..SimOptions::default()
+    };
+    let mut demo_tuya = None;
+    let device: SharedDevice = if kind == SimKind::TuyaVacuum {
+        let mcu = Arc::new(Mutex::new(crate::sim::tuya_mcu(&opts)));
+        demo_tuya = Some(mcu.clone());
+        mcu
+    } else {
+        crate::sim::build(kind, &opts).map_err(ConnectError::Simulator)?
+    };
+    let opener: Opener = Box::new(move || {
+        let t = SimTransport::new(device.clone(), baud, Faults::default(), kind.describe());
+        Ok(Box::new(t) as Box<dyn crate::link::Transport>)
+    });
+    Ok((opener, demo_tuya))
+}
+
+/// The built-in simulated Tuya MCU of a demo connection, if that is what it talks to.
+type DemoTuya = Option<Arc<Mutex<crate::sim::tuya_mcu::TuyaMcu>>>;

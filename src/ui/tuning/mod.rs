@@ -171,7 +171,7 @@ impl TuningPanel {
     }
 
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
+    fn draw(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         self.prune(rt);
         let pending = self.pending(rt);
@@ -368,4 +368,64 @@ pub(super) fn unidentified_warning(ui: &mut egui::Ui, lang: Lang, rt: &Station) 
         ),
     };
     ui.colored_label(egui::Color32::from_rgb(220, 150, 0), format!("⚠ {text}"));
+}
+
+impl crate::ui::PanelId {
+    /// The window cleaner's parameters, read, edited and written with read-back.
+    pub const TUNING: crate::ui::PanelId = crate::ui::PanelId::new("Tuning");
+}
+
+impl crate::ui::Panel for TuningPanel {
+    fn id(&self) -> crate::ui::PanelId {
+        crate::ui::PanelId::TUNING
+    }
+
+    fn name(&self, lang: Lang) -> &'static str {
+        lang.tr("Tuning", "参数调校")
+    }
+
+    fn kind(&self) -> Option<crate::profile::PanelKind> {
+        Some(crate::profile::PanelKind::Tuning)
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &crate::ui::panel::Cx<'_>) -> Vec<Action> {
+        self.draw(ui, cx.lang, cx.station)
+    }
+
+    /// Another connection: the edits go. Another unit: what it holds is read as soon as it
+    /// answers (nothing is shown before).
+    fn forget(&mut self, station: &Station, why: crate::ui::panel::Forget) -> Vec<Action> {
+        match why {
+            crate::ui::panel::Forget::Connection => {
+                *self = Self::default();
+                Vec::new()
+            }
+            crate::ui::panel::Forget::Unit => {
+                if !station.has_panel(crate::profile::PanelKind::Tuning) {
+                    return Vec::new();
+                }
+                let profile = &station.device.profile;
+                let gets: Vec<u8> = profile
+                    .commands
+                    .iter()
+                    .filter(|c| c.kind == CommandKind::Get && c.pair.is_some())
+                    .map(|c| c.id)
+                    .collect();
+                vec![Action::StartJob(jobs::read(profile, gets))]
+            }
+        }
+    }
+
+    /// Its groups of parameters, by id (`other` for those in none).
+    fn parts(&self, station: &Station) -> Vec<String> {
+        group_ids(station)
+            .into_iter()
+            .map(|id| if id.is_empty() { "other".into() } else { id })
+            .collect()
+    }
+
+    /// Brings group `part` to the top.
+    fn show_part(&mut self, part: usize, station: &Station) {
+        self.scroll_to = group_ids(station).into_iter().nth(part);
+    }
 }

@@ -103,7 +103,7 @@ pub(crate) fn wifi_state_name(rt: &Station, lang: Lang, state: u8) -> String {
 
 impl TuyaConsolePanel {
     /// Draws the panel.
-    pub fn show(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
+    fn draw(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
         // A new connection has a new worker with default answers: give it ours.
         if rt.connected() && self.synced != Some(rt.device.tuya.generation) {
@@ -138,8 +138,52 @@ impl TuyaConsolePanel {
         actions
     }
 
-    /// Takes what one of its jobs reported.
-    pub fn on_output(&mut self, out: Output) {
-        self.ota.on_output(out);
+}
+
+impl crate::ui::PanelId {
+    /// Tuya: the module side, data points, the MCU's requests, OTA.
+    pub const TUYA_CONSOLE: crate::ui::PanelId = crate::ui::PanelId::new("TuyaConsole");
+}
+
+impl crate::ui::Panel for TuyaConsolePanel {
+    fn id(&self) -> crate::ui::PanelId {
+        crate::ui::PanelId::TUYA_CONSOLE
+    }
+
+    fn name(&self, lang: Lang) -> &'static str {
+        lang.tr("Tuya console", "涂鸦控制台")
+    }
+
+    fn kind(&self) -> Option<crate::profile::PanelKind> {
+        Some(crate::profile::PanelKind::TuyaConsole)
+    }
+
+    fn show(&mut self, ui: &mut egui::Ui, cx: &crate::ui::panel::Cx<'_>) -> Vec<Action> {
+        self.draw(ui, cx.lang, cx.station)
+    }
+
+    fn on_output(&mut self, out: crate::ui::panel::PanelOutput, _station: &Station) -> Vec<Action> {
+        if let Some(out) = out.take::<Output>() {
+            self.ota.on_output(out);
+        }
+        Vec::new()
+    }
+
+    /// The firmware image last used.
+    fn restore(&mut self, settings: &crate::ui::Settings) {
+        if let Some(p) = settings.file(crate::ui::settings::FileKind::Firmware) {
+            self.ota.path = p.to_string();
+        }
+    }
+
+    /// Its tabs.
+    fn parts(&self, _station: &Station) -> Vec<String> {
+        Tab::ALL.iter().map(|t| format!("{t:?}")).collect()
+    }
+
+    fn show_part(&mut self, part: usize, _station: &Station) {
+        if let Some(&tab) = Tab::ALL.get(part) {
+            self.tab = tab;
+        }
     }
 }

@@ -10,7 +10,7 @@ pub use crate::ops::tuya::FirmwareFileError;
 use crate::ops::tuya::{self as ops, OtaTiming};
 use crate::ops::{Progress, Run};
 use crate::ui::files;
-use crate::ui::jobs::{Job, JobError, JobOutput};
+use crate::ui::jobs::{Job, JobError};
 use crate::ui::settings::FileKind;
 use eframe::egui;
 use std::path::PathBuf;
@@ -60,7 +60,7 @@ fn work(path: PathBuf, max: u32) -> Job {
         Text::new("OTA", "固件升级"),
         move |client, cancel, sink| {
             let done = |r: Result<ops::OtaReport, JobError>| {
-                sink.send(JobOutput::Tuya(Output::OtaDone(r.clone())));
+                sink.panel(Output::OtaDone(r.clone()));
                 r.map(|rep| {
                     Text::new(
                         format!(
@@ -98,13 +98,13 @@ fn work(path: PathBuf, max: u32) -> Job {
                     }
                     acked = p.done;
                     let rate = p.done as f64 / started.elapsed().as_secs_f64().max(1e-3);
-                    sink.send(JobOutput::Tuya(Output::OtaProgress(OtaProgress {
+                    sink.panel(Output::OtaProgress(OtaProgress {
                         done: p.done,
                         total: p.total,
                         rate,
                         left: p.total.saturating_sub(p.done) as f64 / rate.max(1.0),
                         packet,
-                    })));
+                    }));
                     sink.progress(p);
                 }),
             );

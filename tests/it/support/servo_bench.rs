@@ -6,6 +6,7 @@ use super::{Served, serve};
 use botbench::i18n::Lang;
 use botbench::sim::servo_bus::{ServoBus, SimServo};
 use botbench::ui::PanelId;
+use botbench::ui::servo_bench::ServoBenchPanel;
 use egui_kittest::kittest::Queryable;
 
 /// The simulated bus on its pty, in lockstep with the app's link.
@@ -19,7 +20,7 @@ pub fn bench(servos: Vec<SimServo>) -> Bench {
 /// The app on the servo bench panel, connected with the servo protocol's own answer margin.
 pub fn harness(b: &Bench, lang: Lang) -> H {
     let mut h = gui::harness(
-        settings(b.path(), "servo", PanelId::ServoBench, lang),
+        settings(b.path(), "servo", PanelId::SERVO_BENCH, lang),
         b.ports(),
     );
     step_until(&mut h, "the link", |a| a.station().connected());
@@ -46,6 +47,8 @@ pub fn scan(h: &mut H, first: &str, last: &str) {
     type_into(h, "Last id", last);
     h.get_by_label("Scan").click();
     h.step();
-    step_until(h, "the scan", |a| idle(a) && a.servo.scan.outcome.is_some());
+    step_until(h, "the scan", |a| {
+        idle(a) && a.panel::<ServoBenchPanel>().scan.outcome.is_some()
+    });
     h.step();
 }

@@ -1,0 +1,195 @@
+//! Applying the actions the panels, STOP and the connection bar return: what concerns one
+//! station alone it does itself ([`Station::apply`]); the rest is the app's: a connection (and
+//! the settings it leaves), the USB adapter's latency timer, polling, the plot window, the panel
+//! shown, the language and the files last used.
+
+use super::{App, port_for};
+use crate::i18n::Text;
+use crate::ui::panel::PanelId;
+use crate::ui::settings::PortSettings;
+use crate::ui::station::{ConnectError, Notice, Station, Target};
+use crate::ui::zh::Zh;
+use crate::ui::{Action, connection};
+
+impl App {
+    /// Carries out one action, for the station shown.
+    pub fn apply(&mut self, action: Action) {
+        self.apply_to(self.state.shown(), action);
+    }
+
+    /// Carries out `action`, asked for by panel `panel` of the station shown: a job it starts
+    /// reports to that panel (as when the panel returns it from drawing).
+    pub fn apply_from(&mut self, panel: PanelId, action: Action) {
+        let action = match action {
+            Action::StartJob(job) => Action::StartJob(job.owned_by(panel)),
+            a => a,
+        };
+        self.apply(action);
+    }
+
+    /// Carries out one action that station `i` (in [`super::AppState::stations`]) asked for.
+    pub fn apply_to(&mut self, i: usize, action: Action) {
+        let Some(station) = self.state.station_at_mut(i) else {
+            return;
+        };
+        let Some(action) = station.apply(action) else {
+            return;
+        };
+        match action {
+            Action::Connect {
+                target,
+                baud,
+                profile,
+                margin_ms,
+            } => self.connect(i, target, baud, profile, margin_ms),
+            Action::SetLatencyTimer { port, ms } => self.set_latency_timer(i, &port, ms),
+            Action::SetPollRate(hz) => {
+                self.settings.poll_hz = hz;
+                self.restart_polls(i);
+            }
+            Action::PausePolling(paused) => {
+                if let Some(station) = self.state.station_at_mut(i) {
+                    if paused != station.link.polling_paused {
+                        // Nothing is measured while paused: the plots break there.
+                        station.device.mark_gap();
+                    }
+                    station.link.polling_paused = paused;
+                    station.link.paused_at = paused.then(std::time::Instant::now);
+                }
+                self.restart_polls(i);
+            }
+            Action::SetPlotWindow(secs) => self.settings.window_secs = secs,
+            Action::ShowPanel(panel) => self.settings.panel = panel,
+            Action::SetLanguage(lang) => self.settings.lang = lang,
+            Action::RememberFile(kind, path) => {
+                self.settings.files.insert(kind, path);
+            }
+            // The station's own (see `Station::apply`).
+            _ => {}
+        }
+    }
+
+    /// Adds a station to the window (the one shown stays shown), connected to `target` at
+    /// `baud` with the profile `profile_id`; a port named by its path is opened with `ports`.
+    /// It shares the window's profiles, records and file dialogs, and nothing else: its link,
+    /// job, panels, STOP and verdicts are its own. Returns its index in
+    /// [`super::AppState::stations`]. Errors: the profile does not load, or the link cannot
+    /// start ([`ConnectError`]).
+    pub fn add_station(
+        &mut self,
+        target: Target,
+        baud: u32,
+        profile_id: &str,
+        ports: crate::link::PortOpener,
+    ) -> Result<usize, ConnectError> {
+        let first = self.state.station();
+        let mut station = Station::new(&first.ctx, self.state.registry.clone(), profile_id)?;
+        station.records = first.records.clone();
+        station.dialogs = first.dialogs.clone();
+        station.link.port_opener = ports;
+        station.panels.restore(&self.settings);
+        let actions = station.connect(target, baud, profile_id)?;
+        let i = self.state.add(station);
+        self.restart_polls(i);
+        for a in actions {
+            self.apply_to(i, a);
+        }
+        Ok(i)
+    }
+
+    /// Connects to the built-in demo device `kind` at its own rate with its profile, as the
+    /// port picker does (the connection bar shows it).
+    pub fn connect_demo(&mut self, kind: crate::sim::SimKind) {
+        self.apply(Action::Connect {
+            target: Target::Demo(kind.name().to_string()),
+            baud: kind.default_baud(),
+            profile: kind.profile_id().to_string(),
+            margin_ms: None,
+        });
+        let (baud, _) = port_for(&self.settings, &self.state.registry, &self.settings.profile);
+        self.connection = connection::ConnectionBar::new(&self.settings, baud);
+    }
+
+    /// Connects station `i`; the shown station's connection is saved (target, profile, its
+    /// port settings) as the one to open next time.
+    fn connect(
+        &mut self,
+        i: usize,
+        target: Target,
+        baud: u32,
+        profile: String,
+        margin_ms: Option<u64>,
+    ) {
+        let Some(station) = self.state.station_at_mut(i) else {
+            return;
+        };
+        station.link.options.margin = margin_ms.map(std::time::Duration::from_millis);
+        let actions = match station.connect(target.clone(), baud, &profile) {
+            Ok(actions) => actions,
+            Err(e) => {
+                station.notify(Notice::error(
+                    Text::new("cannot connect", "无法连接").then(": ", &e.said()),
+                ));
+                return;
+            }
+        };
+        // The shown station's connection is the one saved (another station keeps its own).
+        if i == self.state.shown() {
+            self.settings.target = target;
+            self.settings.profile = profile;
+            // Kept for this profile only: another device keeps its own.
+            *self.settings.port_mut() = PortSettings {
+                baud: Some(baud),
+                margin_ms,
+            };
+        }
+        let shown = self.panels();
+        if !shown.contains(&self.settings.panel)
+            && let Some(&first) = shown.first()
+        {
+            self.settings.panel = first;
+        }
+        self.restart_polls(i);
+        for a in actions {
+            self.apply_to(i, a);
+        }
+    }
+
+    /// Sets the latency timer of the USB adapter at `port`, then reconnects station `i` if it
+    /// is open on it (the link reads the latency timer when it opens the port).
+    fn set_latency_timer(&mut self, i: usize, port: &str, ms: u32) {
+        let result = crate::system::adapter::set_latency_timer(port, ms);
+        let on_it = self
+            .state
+            .station_at_mut(i)
+            .is_some_and(|s| s.link.target() == Some(&Target::Port(port.to_string())));
+        if result.is_ok() && on_it {
+            let profile = self.settings.profile.clone();
+            let (baud, margin_ms) = port_for(&self.settings, &self.state.registry, &profile);
+            self.connect(i, Target::Port(port.to_string()), baud, profile, margin_ms);
+        }
+        let Some(station) = self.state.station_at_mut(i) else {
+            return;
+        };
+        match result {
+            Ok(now) => {
+                station.link.refresh_ports_now();
+                station.notify(Notice::info(Text::new(
+                    format!("{port}: latency timer set to {now} ms"),
+                    format!("{port}:延迟定时器已设为 {now} ms"),
+                )));
+            }
+            Err(e) => station.notify(Notice::error(Text::new(
+                format!("{port}: latency timer not set: {e}"),
+                format!("{port}:延迟定时器未设置:{e}"),
+            ))),
+        }
+    }
+
+    fn restart_polls(&mut self, i: usize) {
+        let poll_hz = self.settings.poll_hz;
+        if let Some(station) = self.state.station_at_mut(i) {
+            Station::restart_polls(station, poll_hz);
+        }
+    }
+}
