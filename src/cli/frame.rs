@@ -145,13 +145,13 @@ pub(crate) fn run(cmd: FrameCmd) -> CliResult {
                     errors += 1;
                 }
                 if json {
-                    println!("{}", item_json(&profile, item));
+                    outln!("{}", item_json(&profile, item));
                 } else {
-                    print!("{}", item_text(&profile, item));
+                    out!("{}", item_text(&profile, item));
                 }
             }
             if items.is_empty() && !json {
-                println!("no bytes");
+                outln!("no bytes");
             }
             Ok(u8::from(errors > 0))
         }
@@ -191,9 +191,9 @@ pub(crate) fn run(cmd: FrameCmd) -> CliResult {
                     "hex": hex::format(&packet.wire),
                     "bytes": packet.wire,
                 });
-                println!("{doc}");
+                outln!("{doc}");
             } else {
-                println!("{}", hex::format(&packet.wire));
+                outln!("{}", hex::format(&packet.wire));
             }
             Ok(0)
         }
@@ -223,7 +223,7 @@ fn decode_capture(
             .map_err(|e| CliError::input(format!("the capture's profile: {e} (give --profile)")))?,
     };
     if !json {
-        println!(
+        outln!(
             "# {}: {}, profile {}, {} baud, {} chunks{}",
             path.display(),
             file.info.application,
@@ -250,13 +250,13 @@ fn decode_capture(
             doc["at_us"] = json!(f.at_us);
             doc["t"] = json!(seconds);
             doc["wire_direction"] = json!(f.direction);
-            println!("{doc}");
+            outln!("{doc}");
         } else {
-            print!("{seconds:>11.6} {}", item_text(&profile, &f.item));
+            out!("{seconds:>11.6} {}", item_text(&profile, &f.item));
         }
     }
     if frames.is_empty() && !json {
-        println!("no bytes");
+        outln!("no bytes");
     }
     Ok(u8::from(errors > 0 || file.truncated.is_some()))
 }

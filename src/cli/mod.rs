@@ -3,6 +3,8 @@
 //! Exit codes: 0 success; 1 the device (or the data) failed, disagreed or did not answer;
 //! 2 bad input (usage, out-of-range value, malformed file).
 
+#[macro_use]
+mod console;
 mod checks;
 mod frame;
 mod msp;
@@ -161,10 +163,44 @@ where
     I: IntoIterator<Item = T>,
     T: Into<std::ffi::OsString> + Clone,
 {
+    console::scoped(console::Console::process(), || run_in_console(args, ports)).0
+}
+
+/// As [`run_args`], in a program's own process, with its own console: what it writes to
+/// stdout and stderr goes to `into` (readable while it runs), it reads no operator (stdin is
+/// closed) and leaves Ctrl-C alone. Several runs at once, on several threads, never mix: a test
+/// runs the command line this way against a simulator served in lockstep with its link
+/// ([`simulated`]), so that no verdict depends on how fast another process is scheduled.
+pub fn run_args_captured<I, T>(args: I, ports: &PortOpener, into: &Captured) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    console::scoped(console::Console::buffers(into), || {
+        run_in_console(args, ports)
+    })
+    .0
+}
+
+pub use console::Captured;
+pub use sim::{SimControl, Simulated, simulated};
+
+/// The command line's run, on this thread's console.
+fn run_in_console<I, T>(args: I, ports: &PortOpener) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
     let cli = match Cli::try_parse_from(args) {
         Ok(c) => c,
         Err(e) => {
-            let _ = e.print();
+            if console::is_process() {
+                let _ = e.print();
+            } else if e.use_stderr() {
+                err!("{}", e.render());
+            } else {
+                out!("{}", e.render());
+            }
             return if e.use_stderr() { 2 } else { 0 };
         }
     };
@@ -177,7 +213,7 @@ where
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("botbench: {}", bounded(&e.message));
+            errln!("botbench: {}", bounded(&e.message));
             e.code
         }
     }
@@ -254,9 +290,9 @@ fn profiles(json: bool) -> CliResult {
                 "protocol": p.protocol.name(), "baud": p.baud,
                 "commands": p.commands.len(), "source": source,
             });
-            println!("{doc}");
+            outln!("{doc}");
         } else {
-            println!(
+            outln!(
                 "{:<28} {:<6} {:>7} baud  {:>3} commands  {} / {}  ({source})",
                 p.id,
                 p.protocol.name(),
@@ -293,17 +329,17 @@ fn ports(json: bool, set_latency_timer: Option<Vec<String>>) -> CliResult {
         }
         let now = crate::system::adapter::set_latency_timer(port, ms).map_err(CliError::device)?;
         if !json {
-            println!("{port}: latency timer set to {now} ms");
+            outln!("{port}: latency timer set to {now} ms");
         }
     }
     let ports = crate::system::list_ports();
     if json {
-        println!("{}", serde_json::json!({ "ports": ports }));
+        outln!("{}", serde_json::json!({ "ports": ports }));
     } else if ports.is_empty() {
-        println!("no serial ports found (pseudo-terminals are not listed; open them by path)");
+        outln!("no serial ports found (pseudo-terminals are not listed; open them by path)");
     } else {
         for p in &ports {
-            println!("{}", p.label());
+            outln!("{}", p.label());
         }
     }
     Ok(0)
@@ -312,7 +348,7 @@ fn ports(json: bool, set_latency_timer: Option<Vec<String>>) -> CliResult {
 fn bench(long: bool, field: bool, json: bool, only: Option<&str>) -> CliResult {
     crate::bench::check_only(only, field).map_err(CliError::input)?;
     if cfg!(debug_assertions) {
-        eprintln!(
+        errln!(
             "botbench: this is a debug build; run `cargo run --release -- bench` for real figures"
         );
     }
@@ -323,11 +359,15 @@ fn bench(long: bool, field: bool, json: bool, only: Option<&str>) -> CliResult {
     };
     crate::bench::run_all(long, field, only, &cancel, &mut |f| {
         if json {
-            println!("{}", serde_json::to_string(f).unwrap_or_default());
+            outln!("{}", serde_json::to_string(f).unwrap_or_default());
         } else {
-            println!(
+            outln!(
                 "{:<48} {:>8.3} s  wire {:>8.3} s  ratio {:>5.2}  {}",
-                f.name, f.seconds, f.wire_seconds, f.wire_ratio, f.notes
+                f.name,
+                f.seconds,
+                f.wire_seconds,
+                f.wire_ratio,
+                f.notes
             );
         }
     })

@@ -228,7 +228,7 @@ fn unsolicited_json(profile: &Profile, frames: &[Packet]) -> serde_json::Value {
 /// Prints frames the device sent on its own (text mode), each as what it is.
 fn print_unsolicited(profile: &Profile, frames: &[Packet]) {
     for p in frames {
-        println!("~~ {}", p.summary(profile));
+        outln!("~~ {}", p.summary(profile));
     }
 }
 
@@ -264,14 +264,14 @@ fn print_fields(
             doc["payload_len"] = serde_json::json!(m.payload.len());
             doc["expected_len"] = serde_json::json!({"min": m.expected.0, "max": m.expected.1});
         }
-        println!("{}", super::port::with_warnings(doc));
+        outln!("{}", super::port::with_warnings(doc));
     } else {
         print_unsolicited(profile, frames);
         for v in &d.values {
-            println!("{:<24} {}", v.ident, v.display());
+            outln!("{:<24} {}", v.ident, v.display());
         }
         if let Some(m) = &misfit {
-            println!(
+            outln!(
                 "!! {}-byte answer where the layout takes {}: {}\n!! payload = {}",
                 m.payload.len(),
                 m.expected_text(),
@@ -316,12 +316,12 @@ pub(crate) fn run(mut args: MspArgs, ports: &PortOpener) -> CliResult {
         Checked::Ping => {
             let r = crate::ops::device::ping(Device::new(&client, &profile)).map_err(op_error)?;
             if json {
-                println!(
+                outln!(
                     "{}",
                     serde_json::json!({"rtt_ms": r.rtt.as_secs_f64() * 1e3, "attempts": r.attempts})
                 );
             } else {
-                println!("answered in {:.2} ms", r.rtt.as_secs_f64() * 1e3);
+                outln!("answered in {:.2} ms", r.rtt.as_secs_f64() * 1e3);
             }
             Ok(0)
         }
@@ -380,16 +380,16 @@ pub(crate) fn run(mut args: MspArgs, ports: &PortOpener) -> CliResult {
 
 fn print_version(profile: &Profile, info: &crate::link::DeviceInfo, json: bool) {
     if json {
-        println!("{}", serde_json::to_string(info).unwrap_or_default());
+        outln!("{}", serde_json::to_string(info).unwrap_or_default());
         return;
     }
-    println!("hardware   {:#04x}", info.hw);
-    println!("firmware   {}", info.firmware);
-    println!("api        {}", info.api);
-    println!("build      {}", info.build);
-    println!("build date {}", info.build_date.as_deref().unwrap_or("-"));
+    outln!("hardware   {:#04x}", info.hw);
+    outln!("firmware   {}", info.firmware);
+    outln!("api        {}", info.api);
+    outln!("build      {}", info.build);
+    outln!("build date {}", info.build_date.as_deref().unwrap_or("-"));
     if let Some(extra) = &info.extra {
-        println!("!! bytes past the profile's CMD_VERSION layout: {extra}");
+        outln!("!! bytes past the profile's CMD_VERSION layout: {extra}");
     }
     match info.flags {
         Some(f) => {
@@ -397,9 +397,9 @@ fn print_version(profile: &Profile, info: &crate::link::DeviceInfo, json: bool) 
                 .iter()
                 .map(|c| format!("{} {}", c.name.en, yes(c.set)))
                 .collect();
-            println!("flags      {f:#04x}: {}", bits.join(", "));
+            outln!("flags      {f:#04x}: {}", bits.join(", "));
         }
-        None => println!("flags      none (older firmware)"),
+        None => outln!("flags      none (older firmware)"),
     }
 }
 
@@ -437,17 +437,17 @@ fn watch(
                     Ok(p) => {
                         let line = p.summary(profile);
                         if json {
-                            println!(
+                            outln!(
                                 "{}",
                                 serde_json::json!({"t": t, "command": cmd.ident, "summary": line})
                             );
                         } else {
-                            println!("{t:9.3} {line}");
+                            outln!("{t:9.3} {line}");
                         }
                     }
                     Err(e) => {
                         failures += 1;
-                        println!("{t:9.3} {} !{e}", cmd.ident);
+                        outln!("{t:9.3} {} !{e}", cmd.ident);
                     }
                 }
             }
@@ -455,9 +455,9 @@ fn watch(
                 let t = started.elapsed().as_secs_f64();
                 if json {
                     let doc = unsolicited_json(profile, std::slice::from_ref(&p));
-                    println!("{}", serde_json::json!({"t": t, "unsolicited": doc[0]}));
+                    outln!("{}", serde_json::json!({"t": t, "unsolicited": doc[0]}));
                 } else {
-                    println!("{t:9.3} ~~ unsolicited: {}", p.summary(profile));
+                    outln!("{t:9.3} ~~ unsolicited: {}", p.summary(profile));
                 }
             }
             LinkEvent::State(crate::link::LinkState::Lost { reason }) => {
@@ -476,17 +476,15 @@ struct Console {
 
 impl Operator for Console {
     fn prompt(&mut self, text: &str) -> bool {
-        use std::io::{BufRead, Write};
         if self.yes {
-            eprintln!("OPERATOR: {text} (--yes: not waiting)");
+            errln!("OPERATOR: {text} (--yes: not waiting)");
             return true;
         }
-        eprint!("OPERATOR: {text}. Press Enter to start, or q and Enter to abort: ");
-        let _ = std::io::stderr().flush();
+        err!("OPERATOR: {text}. Press Enter to start, or q and Enter to abort: ");
         let mut line = String::new();
-        match std::io::stdin().lock().read_line(&mut line) {
+        match super::console::read_line(&mut line) {
             Ok(0) | Err(_) => {
-                eprintln!("\nno operator (stdin closed): aborting; use --yes for unattended runs");
+                errln!("\nno operator (stdin closed): aborting; use --yes for unattended runs");
                 false
             }
             Ok(_) => !line.trim().eq_ignore_ascii_case("q"),
@@ -511,7 +509,7 @@ fn selftest_run(
     }
     let mut operator = Console { yes };
     if !json {
-        println!(
+        outln!(
             "self-test: {} ({} steps)",
             if plan.name.is_empty() {
                 "plan"
@@ -529,7 +527,7 @@ fn selftest_run(
         &mut Run::quiet(&cancel),
         &mut |r| {
             if !json {
-                println!(
+                outln!(
                     "{}  {:<26} {}",
                     if r.pass { "PASS" } else { "FAIL" },
                     r.name,
@@ -551,22 +549,22 @@ fn selftest_run(
     });
     let kept = super::records::say_kept(&recorded.kept, json);
     if json {
-        println!("{}", serde_json::to_string(&report).unwrap_or_default());
+        outln!("{}", serde_json::to_string(&report).unwrap_or_default());
     } else {
         let device = report.device.as_deref().unwrap_or("unknown device");
         if !report.safe_state.is_empty() {
-            println!(
+            outln!(
                 "safe state before the first step: {}",
                 report.safe_state.join("; ")
             );
         }
         let failed: Vec<&str> = report.failed().map(|r| r.name.as_str()).collect();
         if report.pass {
-            println!("PASS: all {} steps passed ({device})", report.results.len());
+            outln!("PASS: all {} steps passed ({device})", report.results.len());
         } else if let Some(why) = &report.aborted {
-            println!("FAIL: stopped at {why} ({device})");
+            outln!("FAIL: stopped at {why} ({device})");
         } else {
-            println!(
+            outln!(
                 "FAIL: {} of {} steps failed: {} ({device})",
                 failed.len(),
                 report.results.len(),

@@ -42,22 +42,17 @@ pub(crate) struct PortArgs {
     pub ports: PortOpener,
 }
 
-/// Warnings said in this run (also on stderr), for the JSON document a command prints.
-static WARNINGS: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
-
 /// Says `message` on stderr as a warning and keeps it for [`with_warnings`]: a script reading
 /// `--json` sees it in the document as well.
 pub(crate) fn warn(message: &str) {
-    eprintln!("botbench: warning: {message}");
-    WARNINGS
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .push(message.to_string());
+    errln!("botbench: warning: {message}");
+    super::console::with(|c| c.warnings.push(message.to_string()));
 }
 
-/// `doc` with the warnings said so far as its `warnings` member (absent when there were none).
+/// `doc` with the warnings said so far in this run as its `warnings` member (absent when there
+/// were none).
 pub(crate) fn with_warnings(mut doc: serde_json::Value) -> serde_json::Value {
-    let warnings = WARNINGS.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    let warnings = super::console::with(|c| c.warnings.clone());
     if !warnings.is_empty()
         && let Some(map) = doc.as_object_mut()
     {
@@ -66,13 +61,10 @@ pub(crate) fn with_warnings(mut doc: serde_json::Value) -> serde_json::Value {
     doc
 }
 
-/// The captures this process records, finished by [`finish_captures`].
-static CAPTURES: std::sync::Mutex<Vec<Capture>> = std::sync::Mutex::new(Vec::new());
-
 /// Waits until every capture file is complete (their links are closed by now) and tells on
 /// stderr what each holds; an error when one could not be written.
 pub(crate) fn finish_captures() -> Result<(), CliError> {
-    let captures = std::mem::take(&mut *CAPTURES.lock().unwrap_or_else(|e| e.into_inner()));
+    let captures = super::console::with(|c| std::mem::take(&mut c.captures));
     let mut failed = None;
     for c in captures {
         match c.stop() {
@@ -82,7 +74,7 @@ pub(crate) fn finish_captures() -> Result<(), CliError> {
                 } else {
                     String::new()
                 };
-                eprintln!(
+                errln!(
                     "botbench: capture {}: {} chunks, {} bytes{lost}",
                     c.path(),
                     s.chunks,
@@ -148,10 +140,7 @@ impl PortArgs {
             let info = CaptureInfo::new(port, baud, &profile.id, options.margin);
             let capture = Capture::create(path, info).map_err(CliError::input)?;
             opener = capture.wrap(opener);
-            CAPTURES
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .push(capture);
+            super::console::with(|c| c.captures.push(capture));
         }
         let link = Link::open(opener, profile.clone(), options, None)
             .map_err(|e| CliError::input(e.to_string()))?;
@@ -216,7 +205,7 @@ pub(crate) fn print_checks_with(
         if let Some((name, value)) = extra {
             doc[name] = value;
         }
-        println!("{}", with_warnings(doc));
+        outln!("{}", with_warnings(doc));
     } else {
         for c in checks {
             let (w, r) = match field_of(&c.field) {
@@ -233,13 +222,13 @@ pub(crate) fn print_checks_with(
                 ""
             };
             if c.ok() {
-                println!("{:<24} {w:>12}  {how}verified", c.field);
+                outln!("{:<24} {w:>12}  {how}verified", c.field);
             } else {
-                println!("{:<24} {w:>12}  {how}MISMATCH: device holds {r}", c.field);
+                outln!("{:<24} {w:>12}  {how}MISMATCH: device holds {r}", c.field);
             }
         }
         if checks.is_empty() {
-            println!("sent and acknowledged (no read-back for this command)");
+            outln!("sent and acknowledged (no read-back for this command)");
         }
     }
     u8::from(bad > 0)
@@ -274,16 +263,20 @@ pub(crate) fn parse_assignments(
 /// write is not left half-done and unreported). A second Ctrl-C exits at once.
 pub(crate) fn cancel_on_ctrl_c() -> crate::ops::Cancel {
     let cancel = crate::ops::Cancel::new();
+    if !super::console::is_process() {
+        // A run in another program's process: Ctrl-C is that program's.
+        return cancel;
+    }
     let flag = cancel.clone();
     let result = ctrlc::set_handler(move || {
         if flag.is_cancelled() {
             std::process::exit(130);
         }
-        eprintln!("botbench: stopping safely (Ctrl-C again to quit at once)");
+        errln!("botbench: stopping safely (Ctrl-C again to quit at once)");
         flag.cancel();
     });
     if let Err(e) = result {
-        eprintln!("botbench: Ctrl-C will not stop safely: {e}");
+        errln!("botbench: Ctrl-C will not stop safely: {e}");
     }
     cancel
 }

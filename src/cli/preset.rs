@@ -94,7 +94,7 @@ fn save(file: &std::path::Path, note: &str, port: &PortArgs) -> CliResult {
         .map_err(CliError::input)?;
     let fields: usize = captured.values.iter().map(|c| c.fields.len()).sum();
     if port.json {
-        println!(
+        outln!(
             "{}",
             serde_json::json!({
                 "file": file.display().to_string(), "profile": profile.id,
@@ -102,7 +102,7 @@ fn save(file: &std::path::Path, note: &str, port: &PortArgs) -> CliResult {
             })
         );
     } else {
-        println!(
+        outln!(
             "saved {} commands ({fields} fields) from {} to {}",
             captured.values.len(),
             captured.device.as_deref().unwrap_or("the device"),
@@ -123,17 +123,20 @@ fn diff(file: &std::path::Path, port: &PortArgs) -> CliResult {
     let rows = preset.diff(&profile, &device);
     let differing = rows.iter().filter(|r| r.differs).count();
     if port.json {
-        println!(
+        outln!(
             "{}",
             serde_json::json!({ "same": differing == 0, "differing": differing, "rows": rows })
         );
     } else {
-        println!(
+        outln!(
             "{:<36} {:<22} {:>10} {:>10}",
-            "command", "field", "preset", "device"
+            "command",
+            "field",
+            "preset",
+            "device"
         );
         for r in &rows {
-            println!(
+            outln!(
                 "{:<36} {:<22} {:>10} {:>10}{}",
                 r.command,
                 r.field,
@@ -143,9 +146,9 @@ fn diff(file: &std::path::Path, port: &PortArgs) -> CliResult {
             );
         }
         if differing == 0 {
-            println!("the device holds the preset ({} fields)", rows.len());
+            outln!("the device holds the preset ({} fields)", rows.len());
         } else {
-            println!("{differing} of {} fields differ", rows.len());
+            outln!("{differing} of {} fields differ", rows.len());
         }
     }
     Ok(u8::from(differing > 0))
@@ -168,7 +171,7 @@ fn apply(file: &std::path::Path, port: &PortArgs, rec: &super::records::RecordAr
         &mut Run::quiet(&super::port::cancel_on_ctrl_c()),
         &mut |command, checks| {
             if !json {
-                println!("{command}");
+                outln!("{command}");
                 let set = profile.command(command);
                 let field_of = |ident: &str| {
                     set.and_then(|s| s.request.iter().find(|f| f.ident == ident))
@@ -196,15 +199,15 @@ fn apply(file: &std::path::Path, port: &PortArgs, rec: &super::records::RecordAr
                 })).collect::<Vec<_>>(),
             })).collect::<Vec<_>>(),
         });
-        println!("{doc}");
+        outln!("{doc}");
     }
     let kept = super::records::say_kept(&recorded.kept, json);
     outcome.map_err(op_error)?;
     if !json {
         if bad == 0 {
-            println!("applied {}: every field verified", file.display());
+            outln!("applied {}: every field verified", file.display());
         } else {
-            println!("{bad} field(s) MISMATCH: the device does not hold the preset");
+            outln!("{bad} field(s) MISMATCH: the device does not hold the preset");
         }
     }
     kept?;

@@ -8,7 +8,6 @@ use crate::ops::servo::provision::{self as ops, Outcome, Plan, ProvisionState, R
 use crate::ops::servo::{self as servo_ops, Presence};
 use crate::ops::{Device, Progress, Run};
 use crate::profile::{Profile, Protocol};
-use std::io::BufRead;
 use std::path::Path;
 use std::time::Duration;
 
@@ -39,7 +38,7 @@ pub(crate) fn run(
         if let Some(prev) = &last {
             let go_on = match wait_ms {
                 Some(ms) => {
-                    eprintln!(
+                    errln!(
                         "Swap the servo: waiting for a new fresh servo (id 0) for servo {n} of {count}…"
                     );
                     wait_for_new(&client, &profile, prev.serial, Duration::from_millis(ms));
@@ -48,13 +47,13 @@ pub(crate) fn run(
                 None => prompt(n, count),
             };
             if !go_on {
-                eprintln!("stopped by the operator before servo {n} of {count}");
+                errln!("stopped by the operator before servo {n} of {count}");
                 break;
             }
         }
         let mut run = Run::new(&cancel, |p: Progress| {
             if !port.json {
-                eprintln!("  {}", p.message.en);
+                errln!("  {}", p.message.en);
             }
         });
         let recorded = crate::ops::records::runs::provision(
@@ -93,7 +92,7 @@ pub(crate) fn run(
         last = Some(record);
     }
     if !port.json && count > 1 {
-        println!("{passed} PASS, {failed} FAIL");
+        outln!("{passed} PASS, {failed} FAIL");
     }
     Ok(u8::from(failed > 0))
 }
@@ -128,17 +127,17 @@ fn say_earlier(
     });
     if let Some(earlier) = found.filter(|n| *n > 0) {
         // On stderr: stdout keeps one verdict line per servo for the scripts that read it.
-        eprintln!("botbench: servo serial {serial}: provisioned {earlier} time(s) before this run");
+        errln!("botbench: servo serial {serial}: provisioned {earlier} time(s) before this run");
     }
 }
 
 /// Asks the operator to swap the servo; false when they stop (q, or end of input).
 fn prompt(n: u32, count: u32) -> bool {
-    eprintln!(
+    errln!(
         "Swap the servo: plug in servo {n} of {count} (fresh, id 0), then press Enter (q then Enter to stop)."
     );
     let mut line = String::new();
-    match std::io::stdin().lock().read_line(&mut line) {
+    match super::console::read_line(&mut line) {
         Ok(0) | Err(_) => false,
         Ok(_) => !line.trim().eq_ignore_ascii_case("q"),
     }
@@ -177,8 +176,8 @@ fn wait_for_new(client: &Client, profile: &Profile, previous: Option<u32>, every
 fn print_record(r: &Record, n: u32, count: u32, params: usize, json: bool) {
     if json {
         match serde_json::to_string(r) {
-            Ok(s) => println!("{s}"),
-            Err(e) => eprintln!("botbench: cannot print the record as JSON: {e}"),
+            Ok(s) => outln!("{s}"),
+            Err(e) => errln!("botbench: cannot print the record as JSON: {e}"),
         }
         return;
     }
@@ -190,20 +189,20 @@ fn print_record(r: &Record, n: u32, count: u32, params: usize, json: bool) {
         .map(|(k, v)| format!("{k}={}", v.as_deref().unwrap_or("?")))
         .collect();
     match &r.result {
-        Outcome::Pass => println!(
+        Outcome::Pass => outln!(
             "==== PASS ==== servo {n}/{count}  serial {serial}  id {}  {} baud  {params} params verified  {}",
             opt(r.id.map(|i| i.to_string())),
             opt(r.baud.map(|b| b.to_string())),
             recorded.join(" ")
         ),
         Outcome::Fail { step, reason } => {
-            println!(
+            outln!(
                 "#### FAIL #### servo {n}/{count}  serial {serial}  id {}  baud {}  at step \"{step}\": {reason}",
                 opt(r.id.map(|i| i.to_string())),
                 opt(r.baud.map(|b| b.to_string())),
             );
             for m in &r.mismatches {
-                println!("               mismatch: {m}");
+                outln!("               mismatch: {m}");
             }
         }
     }

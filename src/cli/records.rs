@@ -90,7 +90,7 @@ impl RecordArgs {
                 "{e}; records wait in this PC's spool until it is back ({waiting} waiting)"
             ));
         } else if waiting > 0 && !quiet {
-            eprintln!("botbench: {waiting} record(s) wait in the spool for {location}");
+            errln!("botbench: {waiting} record(s) wait in the spool for {location}");
         }
         Ok(recorder)
     }
@@ -129,9 +129,9 @@ pub(crate) fn say_history(recorder: &mut Recorder, profile: &str, serial: &str, 
         (Ok(()), None) => format!("serial {serial}: not tested before"),
     };
     if json {
-        eprintln!("botbench: {line}");
+        errln!("botbench: {line}");
     } else {
-        println!("{line}");
+        outln!("{line}");
     }
 }
 
@@ -141,7 +141,7 @@ pub(crate) fn say_kept(kept: &Kept, json: bool) -> Result<(), CliError> {
     match kept {
         Kept::Stored { .. } => {
             if !json {
-                eprintln!("botbench: {}", kept.line());
+                errln!("botbench: {}", kept.line());
             }
             Ok(())
         }
@@ -314,9 +314,9 @@ pub(crate) fn run(args: RecordsCmdArgs) -> CliResult {
                 .map_err(read_error)?;
             for l in &lines {
                 if json {
-                    println!("{}", serde_json::to_string(l).unwrap_or_default());
+                    outln!("{}", serde_json::to_string(l).unwrap_or_default());
                 } else {
-                    println!(
+                    outln!(
                         "{}  {:<4}  {:<12}  {:<16}  {:<14}  {}{}",
                         query::local_time(l.started_ms),
                         l.verdict,
@@ -332,7 +332,7 @@ pub(crate) fn run(args: RecordsCmdArgs) -> CliResult {
                 }
             }
             if !json && lines.is_empty() {
-                println!("no records ({})", filter.said());
+                outln!("no records ({})", filter.said());
             }
             Ok(0)
         }
@@ -348,7 +348,7 @@ pub(crate) fn run(args: RecordsCmdArgs) -> CliResult {
                     query::each_record(db, &filter, &mut |r| {
                         n += 1;
                         if json {
-                            println!("{}", serde_json::to_string(&r).unwrap_or_default());
+                            outln!("{}", serde_json::to_string(&r).unwrap_or_default());
                         } else {
                             print_record(&r);
                         }
@@ -369,7 +369,7 @@ pub(crate) fn run(args: RecordsCmdArgs) -> CliResult {
         RecordsCmd::Demo { .. } => Ok(0),
         RecordsCmd::Forward => {
             let left = recorder.forward_waiting().map_err(read_error)?;
-            println!("{left} record(s) still waiting");
+            outln!("{left} record(s) still waiting");
             Ok(u8::from(left > 0))
         }
     }
@@ -420,13 +420,13 @@ fn demo(records: Option<&str>, units: u64, days: u64) -> CliResult {
     if let Some(e) = failed {
         return Err(CliError::device(e));
     }
-    println!("{n} generated records of {units} units saved to {location}");
+    outln!("{n} generated records of {units} units saved to {location}");
     Ok(0)
 }
 
 fn print_record(r: &crate::ops::records::Record) {
     let o = |v: &Option<String>| v.clone().unwrap_or_else(|| "-".into());
-    println!(
+    outln!(
         "{} {}  {}  {}  serial {} ({})  plan {} {}",
         query::local_time(r.started_ms),
         r.verdict.name(),
@@ -439,7 +439,7 @@ fn print_record(r: &crate::ops::records::Record) {
             .as_deref()
             .map_or("-", |h| &h[..h.len().min(12)]),
     );
-    println!(
+    outln!(
         "  station {}  slot {}  operator {}  host {}  botbench {} ({})  hw {} fw {} build {}",
         o(&r.context.station),
         o(&r.context.slot),
@@ -452,7 +452,7 @@ fn print_record(r: &crate::ops::records::Record) {
         o(&r.unit.build)
     );
     for s in &r.steps {
-        println!(
+        outln!(
             "  {:<4} {:<28} {:>6} ms  {}",
             s.verdict.name(),
             s.name,
@@ -461,7 +461,7 @@ fn print_record(r: &crate::ops::records::Record) {
         );
         for m in &s.measurements {
             let lim = |v: Option<f64>| v.map_or("–".into(), short);
-            println!(
+            outln!(
                 "         {} = {} {} [{} .. {}]{}",
                 m.name,
                 short(m.value),
@@ -472,7 +472,7 @@ fn print_record(r: &crate::ops::records::Record) {
             );
         }
         for w in &s.writes {
-            println!(
+            outln!(
                 "         {} := {} {} (before {}, after {})",
                 w.name,
                 w.value,
@@ -492,12 +492,11 @@ fn export(
 ) -> CliResult {
     let csv_mode = format == "csv";
     let mut buffer: Vec<u8> = Vec::new();
-    let stdout = std::io::stdout();
-    let mut lock = stdout.lock();
+    let mut stdout = super::console::Stdout;
     let sink: &mut dyn Write = if output.is_some() {
         &mut buffer
     } else {
-        &mut lock
+        &mut stdout
     };
     let as_csv = |rows: &[Vec<String>]| -> Result<Vec<u8>, String> {
         let mut w = csv::Writer::from_writer(Vec::new());

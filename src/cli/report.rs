@@ -46,7 +46,7 @@ pub(crate) fn run(args: ReportArgs) -> CliResult {
     let mut r = report::of_store(recorder.store(), &q).map_err(read_error)?;
     r.waiting = recorder.waiting();
     if args.json {
-        println!("{}", serde_json::to_string(&r).unwrap_or_default());
+        outln!("{}", serde_json::to_string(&r).unwrap_or_default());
     } else {
         print(&r, &args.filter.said());
     }
@@ -54,7 +54,7 @@ pub(crate) fn run(args: ReportArgs) -> CliResult {
         let page = report::html::page(&r, &args.filter.said());
         crate::document::write_atomic(path, page.as_bytes()).map_err(CliError::input)?;
         if !args.json {
-            println!("HTML report written to {}", path.display());
+            outln!("HTML report written to {}", path.display());
         }
     }
     Ok(0)
@@ -72,13 +72,17 @@ fn table(title: &str, rows: &[Yield]) {
     if rows.is_empty() {
         return;
     }
-    println!("\n{title}");
-    println!(
+    outln!("\n{title}");
+    outln!(
         "  {:<28} {:>7} {:>7} {:>10} {:>10}",
-        "", "units", "runs", "first-pass", "final"
+        "",
+        "units",
+        "runs",
+        "first-pass",
+        "final"
     );
     for y in rows {
-        println!(
+        outln!(
             "  {:<28} {:>7} {:>7} {:>10} {:>10}",
             y.label(),
             y.units,
@@ -91,16 +95,16 @@ fn table(title: &str, rows: &[Yield]) {
 
 /// The report on the terminal.
 fn print(r: &Report, period: &str) {
-    println!("records: {}  ({period}; shifts {})", r.source, r.shifts);
+    outln!("records: {}  ({period}; shifts {})", r.source, r.shifts);
     if r.waiting > 0 {
-        println!(
+        outln!(
             "note: {} record(s) wait in this PC's spool and are not in this report",
             r.waiting
         );
     }
     for m in r.measurements.iter().filter(|m| m.drift.is_some()) {
         if let Some(d) = &m.drift {
-            println!(
+            outln!(
                 "DRIFT: {} walks toward its {} limit {} {}: means of the last 3 × {} units {:.4} → {:.4} → {:.4} (moved {:.1} σ, {:.1} σ left)",
                 m.name,
                 d.toward,
@@ -116,7 +120,7 @@ fn print(r: &Report, period: &str) {
         }
     }
     let o = &r.overall;
-    println!(
+    outln!(
         "\n{} units, {} runs: first-pass yield {}, final yield {}",
         o.units,
         o.runs,
@@ -128,9 +132,9 @@ fn print(r: &Report, period: &str) {
     table("per slot", &r.by_slot);
     table("per plan version", &r.by_plan);
     if !r.pareto.is_empty() {
-        println!("\nfailing steps (Pareto)");
+        outln!("\nfailing steps (Pareto)");
         for p in &r.pareto {
-            println!(
+            outln!(
                 "  {:<32} {:>7}  {}  cumulative {}",
                 p.step,
                 p.count,
@@ -138,20 +142,27 @@ fn print(r: &Report, period: &str) {
                 pct(p.cumulative)
             );
         }
-        println!("\nfailing steps by reason");
+        outln!("\nfailing steps by reason");
         for c in &r.causes {
-            println!("  {:>7}  {}: {}", c.count, c.step, c.reason);
+            outln!("  {:>7}  {}: {}", c.count, c.step, c.reason);
         }
     }
     if !r.measurements.is_empty() {
-        println!("\nmeasurements");
-        println!(
+        outln!("\nmeasurements");
+        outln!(
             "  {:<28} {:>6} {:>10} {:>10} {:>7} {:>10} {:>10} {:>6}  drift",
-            "", "n", "low", "high", "failed", "mean", "sigma", "Cpk"
+            "",
+            "n",
+            "low",
+            "high",
+            "failed",
+            "mean",
+            "sigma",
+            "Cpk"
         );
         for m in &r.measurements {
             let lim = |v: Option<f64>| v.map_or("–".to_string(), |x| format!("{x}"));
-            println!(
+            outln!(
                 "  {:<28} {:>6} {:>10} {:>10} {:>7} {:>10.4} {:>10.4} {:>6}  {}",
                 if m.unit.is_empty() {
                     m.name.clone()

@@ -391,9 +391,9 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
         Checked::Ping(id) => {
             let p = ops::ping(&client, id, 3).map_err(op_error)?;
             if json {
-                println!("{}", serde_json::json!({"id": id, "presence": p}));
+                outln!("{}", serde_json::json!({"id": id, "presence": p}));
             } else {
-                println!("servo {id}: {p:?}");
+                outln!("servo {id}: {p:?}");
             }
             Ok(u8::from(p != Presence::Present))
         }
@@ -428,7 +428,7 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
                 .ok_or_else(|| CliError::input("the profile has no ROTATE"))?;
             crate::ops::exchange::send(dev, rotate, &inputs).map_err(op_error)?;
             if !json {
-                println!("servo {id}: turning over {ms} ms");
+                outln!("servo {id}: turning over {ms} ms");
             }
             Ok(0)
         }
@@ -438,9 +438,9 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
 /// Prints `doc` with `--json`, else `said`; exit code 0.
 fn said_or_json(json: bool, doc: serde_json::Value, said: &str) -> CliResult {
     if json {
-        println!("{doc}");
+        outln!("{doc}");
     } else {
-        println!("{said}");
+        outln!("{said}");
     }
     Ok(0)
 }
@@ -458,10 +458,10 @@ fn read(dev: Device<'_>, id: u8, params: &[&Param], json: bool) -> CliResult {
             "param": p.field.ident, "id": p.id, "value": v, "display": p.field.display(&Value::Int(*v)), "unit": p.field.unit,
             "converted": p.field.convert.and_then(|c| c.apply(*v)),
         })).collect();
-        println!("{}", serde_json::json!({"servo": id, "params": doc}));
+        outln!("{}", serde_json::json!({"servo": id, "params": doc}));
     } else {
         for (p, v) in out {
-            println!(
+            outln!(
                 "{:>3} {:<22} {}",
                 p.id,
                 p.field.ident,
@@ -477,12 +477,12 @@ fn read(dev: Device<'_>, id: u8, params: &[&Param], json: bool) -> CliResult {
 fn write_broadcast(dev: Device<'_>, id: u8, p: &Param, value: Value, json: bool) -> CliResult {
     let written = ops::write_param_broadcast(dev, p, Input::Raw(value)).map_err(op_error)?;
     if json {
-        println!(
+        outln!(
             "{}",
             serde_json::json!({"servo": id, "param": p.field.ident, "written": written, "broadcast": true, "verified": false})
         );
     } else {
-        println!(
+        outln!(
             "{:<24} {:>12}  broadcast to every servo at this rate; none answers a broadcast, nothing read back",
             p.field.ident,
             p.field.format(&written)
@@ -506,7 +506,7 @@ fn print_scan(profile: &Profile, report: &ops::ScanReport, seconds: f64, json: b
                 row
             })
             .collect();
-        println!(
+        outln!(
             "{}",
             serde_json::json!({
                 "servos": servos,
@@ -518,9 +518,16 @@ fn print_scan(profile: &Profile, report: &ops::ScanReport, seconds: f64, json: b
         );
         return;
     }
-    println!(
+    outln!(
         "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>18} {:>6}  presence",
-        "id", "baud", "type", "firmware", "serial", "mV", "temp", "status"
+        "id",
+        "baud",
+        "type",
+        "firmware",
+        "serial",
+        "mV",
+        "temp",
+        "status"
     );
     for r in rows {
         let o = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
@@ -529,7 +536,7 @@ fn print_scan(profile: &Profile, report: &ops::ScanReport, seconds: f64, json: b
             Presence::PossibleDuplicate(e) => format!("possible duplicate id ({e})"),
             Presence::Absent => "absent".to_string(),
         };
-        println!(
+        outln!(
             "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>18} {:>6}  {presence}",
             r.id,
             r.baud,
@@ -541,7 +548,7 @@ fn print_scan(profile: &Profile, report: &ops::ScanReport, seconds: f64, json: b
             r.status_hex()
         );
     }
-    println!(
+    outln!(
         "{} found in {seconds:.2} s; {} id(s) asked again, {} late answer(s), margin {:.1} ms",
         rows.len(),
         report.asked_again,
@@ -557,16 +564,23 @@ fn monitor(client: &crate::link::Client, profile: &Profile, ids: &[u8], json: bo
         .iter()
         .any(|r| !matches!(r.reading, Reading::Values(_)));
     if json {
-        println!("{}", serde_json::json!({ "servos": rows }));
+        outln!("{}", serde_json::json!({ "servos": rows }));
         return Ok(u8::from(missing));
     }
-    println!(
+    outln!(
         "{:>3} {:>6} {:>6} {:>6} {:>18} {:>6} {:>10} {:>6}",
-        "id", "mV", "mA", "mW", "temp °C (raw)", "status", "angle °", "turns"
+        "id",
+        "mV",
+        "mA",
+        "mW",
+        "temp °C (raw)",
+        "status",
+        "angle °",
+        "turns"
     );
     for r in &rows {
         match &r.reading {
-            Reading::Values(m) => println!(
+            Reading::Values(m) => outln!(
                 "{:>3} {:>6} {:>6} {:>6} {:>18} {:>6} {:>10.1} {:>6}",
                 r.id,
                 m.voltage_mv,
@@ -581,8 +595,8 @@ fn monitor(client: &crate::link::Client, profile: &Profile, ids: &[u8], json: bo
                 m.angle_deg,
                 m.turns
             ),
-            Reading::Misfit { error } => println!("{:>3} !! {error}", r.id),
-            Reading::NoAnswer => println!("{:>3} no answer", r.id),
+            Reading::Misfit { error } => outln!("{:>3} !! {error}", r.id),
+            Reading::NoAnswer => outln!("{:>3} no answer", r.id),
         }
     }
     Ok(u8::from(missing))

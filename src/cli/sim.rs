@@ -11,7 +11,6 @@ use crate::sim::window_cleaner::WindowCleaner;
 use crate::sim::{Faults, PtyServer, SharedDevice, SimKind, SimOptions, build};
 use clap::Args;
 use std::io::BufRead;
-use std::io::Write;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -102,16 +101,60 @@ fn parse_byte(text: &str) -> Result<u8, String> {
 /// Prints a served pty's path alone on stdout's first line, flushed at once (scripts and tests
 /// read it before the simulator is stopped).
 pub(super) fn print_path(path: &str) -> Result<(), CliError> {
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "{path}")
-        .and_then(|()| out.flush())
-        .map_err(|e| CliError::device(format!("cannot write to stdout: {e}")))
+    outln!("{path}");
+    super::console::flush().map_err(|e| CliError::device(format!("cannot write to stdout: {e}")))
 }
 
 pub(crate) fn run(args: SimArgs) -> CliResult {
     if args.kind == "replay" {
         return super::replay::serve(args.capture.as_deref());
     }
+    let (kind, sim) = build_sim(&args)?;
+    serve(kind, sim.baud, sim.device, sim.control, sim.faults)
+}
+
+/// The device `botbench sim ARGS...` serves, built in this process rather than served on a
+/// pty of its own: its kind, the device, the faults of its wire and line, the control that
+/// `sim` reads on stdin (`fault battery-low`, `corners 15`, `restart`) and its baud rate.
+pub struct Simulated {
+    /// Its kind (`None`: a capture replayed).
+    pub kind: Option<SimKind>,
+    /// The device.
+    pub device: SharedDevice,
+    /// The faults of its wire and line (`--drop`, `--latency-ms`, the field's misbehaviours).
+    pub faults: Faults,
+    /// What `sim` takes on stdin, for a window cleaner or a Tuya vacuum.
+    pub control: Option<SimControl>,
+    /// Its UART's rate.
+    pub baud: u32,
+}
+
+/// The device `botbench sim ARGS...` (the kind first, as after `sim`) would serve, with the same
+/// checks and errors; `replay FILE` serves the capture's device. A test serves it in lockstep
+/// with its link (`PtyServer::start_lockstep`) and runs the command line against it in its own
+/// process ([`super::run_args_captured`]). Errors: what `sim` would say, with its exit code.
+pub fn simulated<I, T>(args: I) -> Result<Simulated, CliError>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    #[derive(clap::Parser)]
+    struct Sim {
+        #[command(flatten)]
+        args: SimArgs,
+    }
+    let all =
+        std::iter::once(std::ffi::OsString::from("sim")).chain(args.into_iter().map(Into::into));
+    let sim =
+        <Sim as clap::Parser>::try_parse_from(all).map_err(|e| CliError::input(e.render()))?;
+    if sim.args.kind == "replay" {
+        return super::replay::simulated(sim.args.capture.as_deref());
+    }
+    build_sim(&sim.args).map(|(_, sim)| sim)
+}
+
+/// The simulated device `args` describe, and its kind.
+fn build_sim(args: &SimArgs) -> Result<(SimKind, Simulated), CliError> {
     if let Some(extra) = &args.capture {
         return Err(CliError::input(format!(
             "unexpected argument '{}': only `sim replay` takes a file",
@@ -141,9 +184,16 @@ pub(crate) fn run(args: SimArgs) -> CliResult {
         msp: args.field.msp(kind)?,
         ignore_baud_change: args.field.ignore_baud_change(kind)?,
     };
-    let firmware = firmware(&args, kind)?;
-    let (device, control) = device(&args, kind, firmware, &opts)?;
-    serve(kind, device, control, faults, &opts)
+    let firmware = firmware(args, kind)?;
+    let (device, control) = device(args, kind, firmware, &opts)?;
+    let sim = Simulated {
+        kind: Some(kind),
+        device,
+        faults,
+        control,
+        baud: opts.baud.unwrap_or_else(|| kind.default_baud()),
+    };
+    Ok((kind, sim))
 }
 
 /// The profile `--profile` names, checked to be of the simulator's protocol.
@@ -171,12 +221,12 @@ fn device(
     kind: SimKind,
     firmware: Option<Arc<Profile>>,
     opts: &SimOptions,
-) -> Result<(SharedDevice, Option<Control>), CliError> {
+) -> Result<(SharedDevice, Option<SimControl>), CliError> {
     Ok(match (kind, firmware) {
         (SimKind::WindowCleaner, Some(p)) => {
             let core = MspCore::with_options(p, crate::sim::window_cleaner::DEVICE_CODE, opts);
             let wc = Arc::new(Mutex::new(WindowCleaner::with_core(core, opts.seed)));
-            (wc.clone(), Some(Control::WindowCleaner(wc)))
+            (wc.clone(), Some(SimControl::WindowCleaner(wc)))
         }
         (SimKind::ServoBus, Some(p)) => {
             let ids: &[u8] = if opts.servos.is_empty() {
@@ -198,13 +248,13 @@ fn device(
         }
         (SimKind::TuyaVacuum, None) => {
             let mcu = tuya_vacuum(args, opts)?;
-            (mcu.clone(), Some(Control::Tuya(mcu)))
+            (mcu.clone(), Some(SimControl::Tuya(mcu)))
         }
         (SimKind::WindowCleaner, None) => {
             let wc = Arc::new(Mutex::new(
                 WindowCleaner::new(opts).map_err(CliError::input)?,
             ));
-            (wc.clone(), Some(Control::WindowCleaner(wc)))
+            (wc.clone(), Some(SimControl::WindowCleaner(wc)))
         }
         (kind, None) => (build(kind, opts).map_err(CliError::input)?, None),
     })
@@ -230,27 +280,26 @@ fn tuya_vacuum(args: &SimArgs, opts: &SimOptions) -> Result<Arc<Mutex<TuyaMcu>>,
 /// stdout's first line, the control commands on stdin.
 fn serve(
     kind: SimKind,
+    baud: u32,
     device: SharedDevice,
-    control: Option<Control>,
+    control: Option<SimControl>,
     faults: Faults,
-    opts: &SimOptions,
 ) -> CliResult {
     let vanish_after = faults.line.vanish_after_bytes;
     let server = PtyServer::start(device, faults).map_err(CliError::device)?;
     print_path(server.path())?;
-    eprintln!(
-        "botbench: serving a {} at {} baud on {}; stop with Ctrl-C",
+    errln!(
+        "botbench: serving a {} at {baud} baud on {}; stop with Ctrl-C",
         kind.describe(),
-        opts.baud.unwrap_or_else(|| kind.default_baud()),
         server.path()
     );
     if let Some(control) = control {
-        eprintln!("botbench: {}", control.help());
+        errln!("botbench: {}", control.help());
         let spawned = std::thread::Builder::new()
             .name("sim-control".into())
             .spawn(move || control.serve_stdin());
         if let Err(e) = spawned {
-            eprintln!("botbench: no stdin control: {e}");
+            errln!("botbench: no stdin control: {e}");
         }
     }
     while server.is_running() {
@@ -263,18 +312,21 @@ fn serve(
 }
 
 /// Commands typed on the simulator's stdin, for what a device does on its own.
-enum Control {
+pub enum SimControl {
+    /// The Tuya vacuum's MCU: its own requests, a restart.
     Tuya(Arc<Mutex<TuyaMcu>>),
+    /// The window cleaner: faults, corners, battery.
     WindowCleaner(Arc<Mutex<WindowCleaner>>),
 }
 
-impl Control {
-    fn help(&self) -> &'static str {
+impl SimControl {
+    /// The commands it takes, as `sim` says them.
+    pub fn help(&self) -> &'static str {
         match self {
-            Control::Tuya(_) => {
+            SimControl::Tuya(_) => {
                 "stdin commands: time | wifi-test | reset-wifi | reset-wifi-mode 0|1 | net-status | mac | restart"
             }
-            Control::WindowCleaner(_) => {
+            SimControl::WindowCleaner(_) => {
                 "stdin commands: fault NAME | clear | corners BITS | battery VOLTS"
             }
         }
@@ -288,23 +340,33 @@ impl Control {
                 continue;
             }
             match self.apply(&words) {
-                Ok(()) => eprintln!("botbench: ok: {line}"),
-                Err(e) => eprintln!("botbench: {e}; {}", self.help()),
+                Ok(()) => errln!("botbench: ok: {line}"),
+                Err(e) => errln!("botbench: {e}; {}", self.help()),
             }
         }
+    }
+
+    /// Carries out one command typed on stdin (`corners 15`, `fault battery-low`, `restart`).
+    /// Errors: an unknown command or a bad argument, said as `sim` says it.
+    pub fn type_line(&self, line: &str) -> Result<(), String> {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if words.is_empty() {
+            return Err("no command".into());
+        }
+        self.apply(&words)
     }
 
     fn apply(&self, words: &[&str]) -> Result<(), String> {
         let arg = |i: usize| words.get(i).copied().ok_or("missing argument");
         match self {
-            Control::Tuya(m) => {
+            SimControl::Tuya(m) => {
                 let mut m = m.lock().map_err(|_| "simulator poisoned")?;
                 match words[0] {
                     "restart" => m.restart(),
                     word => m.request(McuRequest::parse(word, words.get(1).copied())?),
                 }
             }
-            Control::WindowCleaner(w) => {
+            SimControl::WindowCleaner(w) => {
                 let mut w = w.lock().map_err(|_| "simulator poisoned")?;
                 match words[0] {
                     "fault" => w.inject_named(arg(1)?)?,

@@ -61,12 +61,12 @@ impl HandshakeWatch {
             TuyaEvent::Step { step, result } => {
                 let ok = result.ok();
                 if json && show {
-                    println!(
+                    outln!(
                         "{}",
                         json!({"step": step, "ok": ok, "detail": result.to_string()})
                     );
                 } else if show {
-                    println!(
+                    outln!(
                         "{:<14} {}  {result}",
                         format!("{step:?}"),
                         if ok { "ok  " } else { "FAIL" },
@@ -163,21 +163,21 @@ fn print_status(profile: &Profile, status: &Status, version: Option<u8>, json: b
                 "id": id, "dp": profile.data_point(*id).map(|d| &d.field.ident),
             })).collect::<Vec<_>>(),
         });
-        println!("{doc}");
+        outln!("{doc}");
         return;
     }
     if let Some(v) = version {
-        println!("{}", version_text(v));
+        outln!("{}", version_text(v));
     }
     for d in &status.data_points {
         match &d.misfit {
-            None => println!("{:<20} {}", d.name(), d.shown(profile)),
-            Some(_) => println!("{:<20} MISFIT {}", d.name(), d.shown(profile)),
+            None => outln!("{:<20} {}", d.name(), d.shown(profile)),
+            Some(_) => outln!("{:<20} MISFIT {}", d.name(), d.shown(profile)),
         }
     }
     if !status.missing.is_empty() {
         let names: Vec<String> = status.missing.iter().map(|id| name(*id)).collect();
-        println!(
+        outln!(
             "not reported after {} status queries: {}",
             status.queries,
             names.join(", ")
@@ -195,7 +195,7 @@ fn print_checks(profile: &Profile, checks: &[DpCheck], json: bool) -> u8 {
                 "reports": c.reports, "last": c.last.as_ref().map(report_json),
             })).collect::<Vec<_>>(),
         });
-        println!("{doc}");
+        outln!("{doc}");
     } else {
         for c in checks {
             let sent = shown(profile, c.id, &c.sent);
@@ -204,7 +204,7 @@ fn print_checks(profile: &Profile, checks: &[DpCheck], json: bool) -> u8 {
                 Some(r) => format!("MISMATCH: the MCU reports {}", r.shown(profile)),
                 None => "NOT VERIFIED: the MCU reported nothing of it after the command".into(),
             };
-            println!("{:<20} {sent:>12}  {verdict}", c.ident);
+            outln!("{:<20} {sent:>12}  {verdict}", c.ident);
         }
     }
     u8::from(bad > 0)
@@ -235,15 +235,15 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
     match args.cmd {
         TuyaCmd::Init => {
             if json {
-                println!(
+                outln!(
                     "{}",
                     json!({"done": true, "frame_version": watch.frame_version})
                 );
             } else {
                 if let Some(v) = watch.frame_version {
-                    println!("{}", version_text(v));
+                    outln!("{}", version_text(v));
                 }
-                println!("handshake done");
+                outln!("handshake done");
             }
             Ok(0)
         }
@@ -257,7 +257,7 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
             Ok(print_checks(&profile, &checks, json))
         }
         TuyaCmd::Ota { .. } => {
-            eprintln!(
+            errln!(
                 "firmware: {}",
                 ops::expected_text(image.len() as u64, link_baud(&args.port, &profile))
             );
@@ -271,17 +271,21 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
                     let pct = (p.fraction() * 100.0) as u32;
                     if !json && pct >= last_pct + 10 {
                         last_pct = pct;
-                        eprintln!("{pct:3}%  {}", p.message.en);
+                        errln!("{pct:3}%  {}", p.message.en);
                     }
                 }),
             )
             .map_err(op_error)?;
             if json {
-                println!("{}", serde_json::to_string(&report).unwrap_or_default());
+                outln!("{}", serde_json::to_string(&report).unwrap_or_default());
             } else {
-                println!(
+                outln!(
                     "sent {} bytes in {} packets of {} in {:.1} s ({} retries)",
-                    report.size, report.packets, report.packet_size, report.seconds, report.retries
+                    report.size,
+                    report.packets,
+                    report.packet_size,
+                    report.seconds,
+                    report.retries
                 );
             }
             Ok(0)

@@ -264,7 +264,8 @@ fn serve_lockstep(mut master: TTYPort, mut wire: Wire, flags: &Flags, lockstep: 
     let mut heard: VecDeque<u8> = VecDeque::new();
     let mut out = [0u8; 4096];
     loop {
-        if flags.stop.load(Ordering::SeqCst) || flags.vanish.is_vanished() {
+        // A port that vanishes after so many bytes from the host vanishes in lockstep too.
+        if flags.stop.load(Ordering::SeqCst) || flags.vanish.is_vanished() || wire.vanished() {
             return;
         }
         let mut due: Vec<u8> = Vec::new();

@@ -2,9 +2,9 @@
 //! back with the pcap-file crate (and tshark where it is installed), bounded when the disk
 //! stalls, and from the command line.
 
-use crate::support::cli::{MARGIN_MS, SimProcess, run};
+use crate::support::cli::{Sim, run};
 use botbench::capture::{self, Capture, CaptureError, CaptureInfo, QUEUE_CHUNKS, ReplayDevice};
-use botbench::link::{Link, LinkOptions, Opener, Request, Transport, serial};
+use botbench::link::{Link, LinkOptions, Opener, Request, Transport};
 use botbench::profile::Profile;
 use botbench::protocol::Direction;
 use botbench::sim::{Faults, PtyServer, SharedDevice, SimTransport};
@@ -44,11 +44,12 @@ fn session(link: &Link) -> Vec<Vec<u8>> {
 /// Records `session` against the window-cleaner simulator on a pty into `path`.
 fn record_window_cleaner(path: &std::path::Path) -> Vec<Vec<u8>> {
     let device: SharedDevice = Arc::new(Mutex::new(crate::support::window_cleaner()));
-    let server = PtyServer::start(device, Faults::default()).expect("pty");
+    // In lockstep with the link: the device answers in its own time whatever the load.
+    let server = PtyServer::start_lockstep(device, Faults::default()).expect("pty");
     let info = CaptureInfo::new(server.path(), 115_200, "window-cleaner", None);
     let capture = Capture::create(path, info).expect("creates");
     let link = Link::open(
-        capture.wrap(serial::opener(server.path(), 115_200)),
+        capture.wrap(server.opener(115_200)),
         window_cleaner(),
         options(),
         None,
@@ -151,14 +152,17 @@ fn tshark_reads_the_capture_where_it_is_installed() {
     let path = dir.path().join("wc.pcapng");
     record_window_cleaner(&path);
     let file = capture::read_path(&path).expect("reads");
-    let o = Command::new("tshark")
-        .args(["-r", path.to_str().unwrap(), "-T", "fields"])
-        .args(["-e", "frame.len", "-e", "frame.time_epoch"])
-        .args(["-e", "frame.packet_flags_direction"])
-        .output()
-        .expect("runs tshark");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let rows: Vec<Vec<String>> = String::from_utf8_lossy(&o.stdout)
+    let o = crate::support::cli::watched(
+        Command::new("tshark")
+            .args(["-r", path.to_str().unwrap(), "-T", "fields"])
+            .args(["-e", "frame.len", "-e", "frame.time_epoch"])
+            .args(["-e", "frame.packet_flags_direction"])
+            .stdin(std::process::Stdio::null()),
+        "tshark",
+    );
+    assert_eq!(o.code, 0, "{}", o.text());
+    let rows: Vec<Vec<String>> = o
+        .out
         .lines()
         .map(|l| l.split('\t').map(str::to_string).collect())
         .collect();
@@ -190,14 +194,9 @@ fn a_window_cleaner_capture_replays_the_same_values_on_a_pty_and_in_process() {
 
     // On a pseudo-terminal, as `botbench sim replay` serves it.
     let device: SharedDevice = Arc::new(Mutex::new(ReplayDevice::new(&file).unwrap()));
-    let server = PtyServer::start(device, Faults::default()).expect("pty");
-    let link = Link::open(
-        serial::opener(server.path(), 115_200),
-        window_cleaner(),
-        options(),
-        None,
-    )
-    .expect("opens");
+    let server = PtyServer::start_lockstep(device, Faults::default()).expect("pty");
+    let link =
+        Link::open(server.opener(115_200), window_cleaner(), options(), None).expect("opens");
     assert_eq!(session(&link), answers);
     drop(link);
 
@@ -278,9 +277,7 @@ fn a_drop_is_marked_on_the_next_chunk_written() {
     assert!(dropped > 0);
     drop(go);
     // Once the writer has caught up, the next chunk is taken and carries the count.
-    while capture.queued() > 0 {
-        std::thread::sleep(Duration::from_millis(1));
-    }
+    crate::support::wait_until("the writer to catch up", || capture.queued() == 0);
     capture.record(Direction::HostToDevice, b"after the stall");
     capture.stop().expect("written");
     let back = capture::read_path(&path).expect("reads");
@@ -336,17 +333,17 @@ fn the_command_line_records_with_capture_prints_it_and_replays_it() {
     let dir = crate::support::temp_dir();
     let path = dir.path().join("cli.pcapng");
     let file = path.to_str().unwrap();
-    let sim = SimProcess::start(&["window-cleaner"]);
-    let get = |port: &str, capture: Option<&str>| {
-        let mut args = vec!["msp", "--port", port, "--margin-ms", MARGIN_MS];
+    let sim = Sim::start(&["window-cleaner"]);
+    let get = |sim: &Sim, capture: Option<&str>| {
+        let mut args = vec!["msp", "--port", &sim.path];
         if let Some(f) = capture {
             args.extend(["--capture", f]);
         }
-        let ran = run(&[&args[..], &["get", "108", "--json"]].concat());
+        let ran = sim.run(&[&args[..], &["get", "108", "--json"]].concat());
         assert_eq!(ran.code, 0, "{}", ran.err);
         ran
     };
-    let recorded = get(&sim.path, Some(file));
+    let recorded = get(&sim, Some(file));
     assert!(
         recorded.err.contains("capture"),
         "the capture is summed up on stderr"
@@ -358,8 +355,8 @@ fn the_command_line_records_with_capture_prints_it_and_replays_it() {
     assert!(docs.iter().any(|d| d["command"] == 108));
     assert!(docs.iter().all(|d| d["at_us"].as_u64().is_some()));
 
-    let replay = SimProcess::start(&["replay", file]);
-    let replayed = get(&replay.path, None);
+    let replay = Sim::start(&["replay", file]);
+    let replayed = get(&replay, None);
     assert_eq!(
         replayed.out, recorded.out,
         "the replay answers what the device answered"

@@ -263,18 +263,11 @@ fn a_save_to_where_it_cannot_be_written_is_refused_before_the_device_is_read() {
 #[test]
 fn a_set_given_some_fields_keeps_the_devices_values_for_the_rest() {
     // Fields left out were written with the profile's defaults, over the device's tuning.
-    let sim = crate::support::cli::SimProcess::start(&["window-cleaner"]);
+    let sim = crate::support::cli::Sim::start(&["window-cleaner"]);
     let msp = |args: &[&str]| {
-        let mut all = vec![
-            "msp",
-            "--port",
-            &sim.path,
-            "--margin-ms",
-            crate::support::cli::MARGIN_MS,
-            "--json",
-        ];
+        let mut all = vec!["msp", "--port", &sim.path, "--json"];
         all.extend(args);
-        run(&all)
+        sim.run(&all)
     };
     let set = "MSP_SET_USE_FAN_LEVEL_DYNAMIC_COMP";
     let ran = msp(&["set", set, "pwmvalueMax=95", "pwmvalueMin=60"]);

@@ -3,7 +3,7 @@
 //! reported (HTML with inline SVG), and bad records locations refused before anything runs, or,
 //! for a line server away, the verdict shown and the record kept in the spool.
 
-use crate::support::cli::{SimProcess, botbench, output, run};
+use crate::support::cli::{Sim, SimProcess, botbench, output, run};
 
 /// A short plan: the battery voltage and the water box.
 const PLAN: &str = r#"(
@@ -24,7 +24,7 @@ fn a_self_test_is_recorded_with_its_serial_and_read_back_listed_shown_exported_a
     std::fs::write(&plan, PLAN).unwrap();
     let db = dir.path().join("line.sqlite");
     let (plan, db) = (plan.to_str().unwrap(), db.to_str().unwrap());
-    let sim = SimProcess::start(&["window-cleaner"]);
+    let sim = Sim::start(&["window-cleaner"]);
     let args = [
         "selftest",
         plan,
@@ -179,7 +179,7 @@ fn bad_records_locations_are_refused_before_anything_runs() {
         "{}",
         bad.err
     );
-    let sim = SimProcess::start(&["window-cleaner"]);
+    let sim = Sim::start(&["window-cleaner"]);
     let notdb = sim.cli(
         "msp",
         &["selftest", plan, "--records", notes.to_str().unwrap()],
@@ -215,6 +215,8 @@ fn a_line_server_away_still_shows_the_verdict_and_keeps_the_record_in_the_spool(
     let plan = dir.path().join("plan.ron");
     std::fs::write(&plan, PLAN).unwrap();
     let spool = dir.path().join("spool.sqlite");
+    // The spool is named by BOTBENCH_SPOOL, a variable of the whole process: the command line
+    // runs in a process of its own, and so does its simulator.
     let sim = SimProcess::start(&["window-cleaner"]);
     // Port 1 on this machine: nothing listens there.
     let mut cmd = botbench([

@@ -9,18 +9,18 @@ use botbench::sim::{Faults, PtyServer, SharedDevice, SimOptions};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use crate::support::cli::{SimProcess, run_watched};
+use crate::support::cli::Sim;
 
 /// A window cleaner that pushes `ff fe 82 01 ee 6d` (command 130, 238 %) before each reply.
-fn pushing() -> SimProcess {
-    SimProcess::start(&["window-cleaner", "--async-before-reply", "ee"])
+fn pushing() -> Sim {
+    Sim::start(&["window-cleaner", "--async-before-reply", "ee"])
 }
 
 #[test]
 fn a_request_is_answered_by_its_reply_never_by_an_unsolicited_frame() {
     let sim = pushing();
     let p = sim.path.as_str();
-    let get = run_watched(&["msp", "--port", p, "get", "MSP_GET_PWMVALUE"]);
+    let get = sim.run(&["msp", "--port", p, "get", "MSP_GET_PWMVALUE"]);
     assert_eq!(get.code, 0, "{}", get.text());
     let value = get
         .out
@@ -39,7 +39,7 @@ fn a_request_is_answered_by_its_reply_never_by_an_unsolicited_frame() {
         "{pushed}"
     );
 
-    let json = run_watched(&["msp", "--port", p, "--json", "get", "MSP_GET_PWMVALUE"]);
+    let json = sim.run(&["msp", "--port", p, "--json", "get", "MSP_GET_PWMVALUE"]);
     let doc = &json.json_docs()[0];
     assert_eq!(doc["fields"][0]["value"], 85, "{}", json.text());
     assert_eq!(doc["ok"], true);
@@ -53,7 +53,7 @@ fn a_request_is_answered_by_its_reply_never_by_an_unsolicited_frame() {
     assert_eq!(pwm["fields"][0]["value"], 238);
     assert_eq!(pwm["fields"][0]["out_of_range"], true);
 
-    let set = run_watched(&[
+    let set = sim.run(&[
         "msp",
         "--port",
         p,
@@ -68,7 +68,7 @@ fn a_request_is_answered_by_its_reply_never_by_an_unsolicited_frame() {
     assert_eq!(doc["fields"][0]["read"], 85);
     assert!(doc["unsolicited"].is_array(), "{}", set.text());
 
-    let watch = run_watched(&[
+    let watch = sim.run(&[
         "msp",
         "--port",
         p,
@@ -126,9 +126,9 @@ fn out_of_range_firmware() -> std::path::PathBuf {
 #[test]
 fn a_value_outside_its_range_is_flagged_wherever_it_is_printed() {
     let firmware = out_of_range_firmware();
-    let sim = SimProcess::start(&["window-cleaner", "--profile", firmware.to_str().unwrap()]);
+    let sim = Sim::start(&["window-cleaner", "--profile", firmware.to_str().unwrap()]);
     let p = sim.path.as_str();
-    let get = run_watched(&["msp", "--port", p, "get", "MSP_GET_PWMVALUE"]);
+    let get = sim.run(&["msp", "--port", p, "get", "MSP_GET_PWMVALUE"]);
     assert_eq!(get.code, 1, "{}", get.text());
     assert!(
         get.out
@@ -136,7 +136,7 @@ fn a_value_outside_its_range_is_flagged_wherever_it_is_printed() {
         "{}",
         get.text()
     );
-    let json = run_watched(&["msp", "--port", p, "--json", "get", "MSP_GET_PWMVALUE"]);
+    let json = sim.run(&["msp", "--port", p, "--json", "get", "MSP_GET_PWMVALUE"]);
     assert_eq!(json.code, 1, "{}", json.text());
     let doc = &json.json_docs()[0];
     assert_eq!(doc["ok"], false);
@@ -150,7 +150,7 @@ fn a_value_outside_its_range_is_flagged_wherever_it_is_printed() {
         "{}",
         json.text()
     );
-    let watch = run_watched(&[
+    let watch = sim.run(&[
         "msp",
         "--port",
         p,
@@ -174,9 +174,9 @@ fn a_value_outside_its_range_is_flagged_wherever_it_is_printed() {
 #[test]
 fn an_unidentified_device_is_said_and_strict_refuses_to_write() {
     // Every CMD_VERSION reply fails its checksum.
-    let sim = SimProcess::start(&["window-cleaner", "--garble-command", "2"]);
+    let sim = Sim::start(&["window-cleaner", "--garble-command", "2"]);
     let p = sim.path.as_str();
-    let strict = run_watched(&[
+    let strict = sim.run(&[
         "msp",
         "--port",
         p,
@@ -192,7 +192,7 @@ fn an_unidentified_device_is_said_and_strict_refuses_to_write() {
         strict.text()
     );
     // Nothing was written: the device still holds its default.
-    let get = run_watched(&["msp", "--port", p, "--json", "get", "MSP_GET_PWMVALUE"]);
+    let get = sim.run(&["msp", "--port", p, "--json", "get", "MSP_GET_PWMVALUE"]);
     assert_eq!(
         get.json_docs()[0]["fields"][0]["value"],
         85,
@@ -212,7 +212,7 @@ fn an_unidentified_device_is_said_and_strict_refuses_to_write() {
         "a script reading --json sees it too: {}",
         get.text()
     );
-    let set = run_watched(&["msp", "--port", p, "set", "MSP_SET_PWMVALUE", "pwmValue=40"]);
+    let set = sim.run(&["msp", "--port", p, "set", "MSP_SET_PWMVALUE", "pwmValue=40"]);
     assert_eq!(set.code, 0, "{}", set.text());
     assert!(
         set.err

@@ -2,6 +2,10 @@
 //! replies split by a USB adapter's latency tick, adapters that hold answers back, a slow host, a
 //! one-wire bus that echoes every request, a servo that ignores a baud change, and the broadcast
 //! id. Verdicts only: every servo found, the right value, the right error; never how fast.
+//!
+//! The command line runs in this process against the simulator served in lockstep with its link
+//! ([`Sim`]): the field's timing (a latency timer, a slow host, a late servo) is the simulator's,
+//! made explicit by its options, and a loaded machine starves neither side.
 
 use botbench::link::{Link, LinkEvent, LinkOptions};
 use botbench::ops::OpError;
@@ -13,7 +17,7 @@ use botbench::sim::servo_bus::{ServoBus, SimServo};
 use botbench::sim::{Faults, PtyServer, SharedDevice};
 use std::sync::{Arc, Mutex};
 
-use crate::support::cli::{Ran, SimProcess, run_watched};
+use crate::support::cli::{Ran, Sim, run_watched};
 
 /// The ids a `servo --json scan` found, each with its presence status.
 fn scanned(run: &Ran) -> Vec<(u64, String)> {
@@ -38,7 +42,7 @@ fn present(ids: &[u64]) -> Vec<(u64, String)> {
 #[test]
 fn a_reply_split_by_a_latency_tick_is_read_whole() {
     // The servo answers 8 ms late, its 9-byte reply as 4 bytes, then 5 bytes 16 ms later.
-    let sim = SimProcess::start(&[
+    let sim = Sim::start(&[
         "servo-bus",
         "--servos",
         "1",
@@ -51,7 +55,7 @@ fn a_reply_split_by_a_latency_tick_is_read_whole() {
     ]);
     let p = sim.path.as_str();
     for _ in 0..4 {
-        let read = run_watched(&[
+        let read = sim.run(&[
             "servo",
             "--port",
             p,
@@ -71,17 +75,17 @@ fn a_reply_split_by_a_latency_tick_is_read_whole() {
         );
     }
     // Nor is a lone servo taken for a duplicate, at the default margin.
-    let scan = run_watched(&["servo", "--port", p, "--json", "scan", "--ids", "0-20"]);
+    let scan = sim.run(&["servo", "--port", p, "--json", "scan", "--ids", "0-20"]);
     assert_eq!(scan.code, 0, "{}", scan.text());
     assert_eq!(scanned(&scan), present(&[1]), "{}", scan.text());
 }
 
 #[test]
 fn a_default_scan_behind_a_16_ms_adapter_finds_every_servo_and_says_how() {
-    let sim = SimProcess::start(&["servo-bus", "--servos", "0,1,5", "--latency-timer-ms", "16"]);
+    let sim = Sim::start(&["servo-bus", "--servos", "0,1,5", "--latency-timer-ms", "16"]);
     let p = sim.path.as_str();
     for _ in 0..3 {
-        let scan = run_watched(&["servo", "--port", p, "--json", "scan"]);
+        let scan = sim.run(&["servo", "--port", p, "--json", "scan"]);
         assert_eq!(scan.code, 0, "{}", scan.text());
         assert_eq!(scanned(&scan), present(&[0, 1, 5]), "{}", scan.text());
         let doc = &scan.json_docs()[0];
@@ -105,7 +109,7 @@ fn a_default_scan_behind_a_16_ms_adapter_finds_every_servo_and_says_how() {
             );
         }
     }
-    let text = run_watched(&["servo", "--port", p, "scan", "--ids", "0-10"]);
+    let text = sim.run(&["servo", "--port", p, "scan", "--ids", "0-10"]);
     assert!(
         text.out.contains("id(s) asked again") && text.out.contains("margin"),
         "{}",
@@ -113,7 +117,7 @@ fn a_default_scan_behind_a_16_ms_adapter_finds_every_servo_and_says_how() {
     );
     // Single exchanges too, at the default margin.
     for _ in 0..4 {
-        let ping = run_watched(&["servo", "--port", p, "ping", "5"]);
+        let ping = sim.run(&["servo", "--port", p, "ping", "5"]);
         assert_eq!(ping.code, 0, "{}", ping.text());
     }
 }
@@ -121,7 +125,7 @@ fn a_default_scan_behind_a_16_ms_adapter_finds_every_servo_and_says_how() {
 #[test]
 fn a_slow_host_still_finds_every_servo_and_every_answer() {
     // Each answer is seen up to 25 ms late, at random.
-    let sim = SimProcess::start(&[
+    let sim = Sim::start(&[
         "servo-bus",
         "--servos",
         "0,1,5",
@@ -132,14 +136,14 @@ fn a_slow_host_still_finds_every_servo_and_every_answer() {
     ]);
     let p = sim.path.as_str();
     for _ in 0..3 {
-        let scan = run_watched(&["servo", "--port", p, "--json", "scan"]);
+        let scan = sim.run(&["servo", "--port", p, "--json", "scan"]);
         assert_eq!(scan.code, 0, "{}", scan.text());
         assert_eq!(scanned(&scan), present(&[0, 1, 5]), "{}", scan.text());
     }
     for _ in 0..6 {
-        let ping = run_watched(&["servo", "--port", p, "ping", "5"]);
+        let ping = sim.run(&["servo", "--port", p, "ping", "5"]);
         assert_eq!(ping.code, 0, "{}", ping.text());
-        let read = run_watched(&["servo", "--port", p, "--json", "read", "1", "assigned_id"]);
+        let read = sim.run(&["servo", "--port", p, "--json", "read", "1", "assigned_id"]);
         assert_eq!(read.code, 0, "{}", read.text());
         assert_eq!(
             read.json_docs()[0]["params"][0]["value"],
@@ -152,7 +156,7 @@ fn a_slow_host_still_finds_every_servo_and_every_answer() {
 
 #[test]
 fn a_one_wire_bus_echo_is_not_taken_for_an_answer() {
-    let sim = SimProcess::start(&["servo-bus", "--servos", "2,3", "--echo"]);
+    let sim = Sim::start(&["servo-bus", "--servos", "2,3", "--echo"]);
     let scan = sim.cli("servo", &["--json", "scan", "--ids", "0-10"]);
     assert_eq!(scanned(&scan), present(&[2, 3]), "{}", scan.text());
     let write = sim.cli("servo", &["write", "3", "over_temprature", "70"]);
@@ -162,7 +166,7 @@ fn a_one_wire_bus_echo_is_not_taken_for_an_answer() {
 
 #[test]
 fn a_servo_that_ignores_a_baud_change_is_reported_where_it_still_is() {
-    let sim = SimProcess::start(&["servo-bus", "--servos", "4", "--ignore-baud-change"]);
+    let sim = Sim::start(&["servo-bus", "--servos", "4", "--ignore-baud-change"]);
     let set = sim.cli("servo", &["set-baud", "4", "57600"]);
     assert_eq!(set.code, 1, "{}", set.text());
     assert!(
@@ -202,7 +206,7 @@ fn the_broadcast_id_is_refused_where_an_answer_is_expected_before_the_port_is_op
 
 #[test]
 fn an_explicit_broadcast_changes_every_servo_and_reads_nothing_back() {
-    let sim = SimProcess::start(&["servo-bus", "--servos", "1,2"]);
+    let sim = Sim::start(&["servo-bus", "--servos", "1,2"]);
     let run = sim.cli(
         "servo",
         &["write", "255", "over_temprature", "70", "--broadcast"],

@@ -2,9 +2,10 @@
 //! unplugged, a simulator killed. The simulator vanishes once the host has sent it a given number
 //! of bytes (`botbench sim --vanish-after-bytes`), so the loss comes mid-operation on every run;
 //! each operation must then end with exit 1 and the reason, never hang (the watchdog of
-//! [`run_watched`] fails the test instead).
+//! [`Sim::run`] fails the test instead). The simulator is served in lockstep with the command
+//! line, both in this process.
 
-use crate::support::cli::{MARGIN_MS, Ran, SimProcess, run_watched};
+use crate::support::cli::{Ran, Sim};
 
 fn preset(name: &str) -> String {
     format!("{}/presets/{name}", env!("CARGO_MANIFEST_DIR"))
@@ -17,15 +18,15 @@ fn ends_on_the_loss(sim: &[&str], bytes: u64, args: &[&str]) -> Ran {
     let bytes = bytes.to_string();
     let mut all = sim.to_vec();
     all.extend(["--vanish-after-bytes", &bytes]);
-    let mut sim = SimProcess::start(&all);
+    let sim = Sim::start(&all);
     let path = sim.path.clone();
     let args: Vec<&str> = args
         .iter()
         .map(|a| if *a == "PORT" { path.as_str() } else { a })
         .collect();
-    let run = run_watched(&args);
-    // The simulator ends on its own once its port has vanished: the loss did happen.
-    assert!(!sim.wait_exit().success(), "the port vanished");
+    let run = sim.run(&args);
+    // The simulator stops on its own once its port has vanished: the loss did happen.
+    sim.wait_stopped();
     assert_eq!(run.code, 1, "{args:?}: {}", run.text());
     let said = format!("{}{}", run.out, run.err);
     assert!(
@@ -55,8 +56,6 @@ fn provisioning_ends_when_the_port_vanishes() {
             "servo",
             "--port",
             "PORT",
-            "--margin-ms",
-            MARGIN_MS,
             "provision",
             &preset("servo-provision-plan.ron"),
         ],

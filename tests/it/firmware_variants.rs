@@ -14,7 +14,7 @@ use botbench::sim::msp_device::MspCore;
 use botbench::sim::window_cleaner::{DEVICE_CODE, WindowCleaner};
 use std::sync::Arc;
 
-use crate::support::cli::{SimProcess, run as botbench};
+use crate::support::cli::{Sim, run as botbench};
 use crate::support::{Served, builtin_src, connect, inputs, line_of, profile, serve, temp_dir};
 
 #[test]
@@ -198,7 +198,7 @@ fn msp_get_shows_a_short_answer_as_such_with_its_raw_bytes() {
     let dir = temp_dir();
     let file = dir.path().join("window-cleaner-drift.ron");
     std::fs::write(&file, DRIFT).unwrap();
-    let sim = SimProcess::start(&["window-cleaner", "--profile", file.to_str().unwrap()]);
+    let sim = Sim::start(&["window-cleaner", "--profile", file.to_str().unwrap()]);
     let o = sim.cli("msp", &["get", "MSP_GET_SPRAY_VALUE"]);
     assert_eq!(o.code, 1, "{}{}", o.out, o.err);
     let out = o.out;

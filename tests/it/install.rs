@@ -4,24 +4,24 @@
 
 use serialport::SerialPort;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
-use crate::support::cli::botbench;
+use crate::support::cli::{Ran, botbench, output, watched};
 use crate::support::{temp_dir, wait_until};
 
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_botbench")
 }
 
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
+fn stderr(out: &Ran) -> String {
+    out.err.clone()
 }
 
 #[test]
 fn version_names_the_version_and_the_commit() {
-    let out = botbench(["--version"]).output().unwrap();
-    assert!(out.status.success());
-    let line = String::from_utf8(out.stdout).unwrap();
+    let out = output(&mut botbench(["--version"]));
+    assert_eq!(out.code, 0, "{}", out.text());
+    let line = out.out;
     let want = format!("botbench {} (", env!("CARGO_PKG_VERSION"));
     assert!(line.starts_with(&want), "{line}");
     let commit = line.trim().strip_prefix(&want).unwrap().strip_suffix(')');
@@ -64,18 +64,20 @@ fn an_installed_binary_reads_the_shipped_plans_from_any_folder() {
     let elsewhere = tmp.path().join("home");
     std::fs::create_dir_all(&elsewhere).unwrap();
     let run = |plan: &str| {
-        Command::new(&exe)
-            .args([
-                "msp",
-                "--port",
-                "/dev/botbench-no-such-port",
-                "selftest",
-                plan,
-            ])
-            .current_dir(&elsewhere)
-            .env_remove("BOTBENCH_DATA_DIR")
-            .output()
-            .unwrap()
+        watched(
+            Command::new(&exe)
+                .args([
+                    "msp",
+                    "--port",
+                    "/dev/botbench-no-such-port",
+                    "selftest",
+                    plan,
+                ])
+                .current_dir(&elsewhere)
+                .env_remove("BOTBENCH_DATA_DIR")
+                .stdin(std::process::Stdio::null()),
+            "the installed botbench",
+        )
     };
     // The plan is read and checked (from PREFIX/share/botbench), then the port is opened.
     let out = run("presets/window-cleaner-selftest.ron");
@@ -84,7 +86,7 @@ fn an_installed_binary_reads_the_shipped_plans_from_any_folder() {
     assert!(!err.contains("selftest.ron"), "{err}");
     // A plan that is neither here nor shipped is refused by the name given.
     let out = run("presets/no-such-plan.ron");
-    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert_eq!(out.code, 2, "{}", out.text());
     let err = stderr(&out);
     assert!(err.contains("presets/no-such-plan.ron"), "{err}");
     assert!(!err.contains("/dev/botbench-no-such-port"), "{err}");
@@ -163,19 +165,16 @@ fn a_port_this_user_may_not_open_says_which_group_to_join() {
         };
         cmd.env("HOME", "/tmp")
             .env(botbench::profile::registry::DIR_ENV, "/nonexistent")
-            .stdin(std::process::Stdio::null())
-            .output()
-            .unwrap()
+            .stdin(std::process::Stdio::null());
+        watched(&mut cmd, "botbench as nobody")
     } else {
         // Another user: a mode that forbids even the owner.
         let chmod = Command::new("chmod").args(["000", &path]).status().unwrap();
         assert!(chmod.success());
-        botbench(["msp", "--port", &path, "version"])
-            .output()
-            .unwrap()
+        output(&mut botbench(["msp", "--port", &path, "version"]))
     };
     // A port that cannot be opened is bad input to the command line: exit 2.
-    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert_eq!(out.code, 2, "{}", out.text());
     let err = stderr(&out);
     assert!(err.contains(&format!("cannot open {path}")), "{err}");
     assert!(err.contains("permission denied"), "{err}");
@@ -216,14 +215,12 @@ fn a_busy_port_says_so_and_names_what_holds_it() {
     wait_until("the stand-in brltty to run", || {
         std::fs::read_to_string(&comm).is_ok_and(|c| c.trim() == "brltty")
     });
-    let out = botbench(["msp", "--port", &path, "version"])
-        .output()
-        .unwrap();
+    let out = output(&mut botbench(["msp", "--port", &path, "version"]));
     let _ = daemon.kill();
     let _ = daemon.wait();
     drop(held);
     // A port that cannot be opened is bad input to the command line: exit 2.
-    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert_eq!(out.code, 2, "{}", out.text());
     let err = stderr(&out);
     assert!(err.contains(&format!("cannot open {path}: busy")), "{err}");
     assert!(

@@ -320,7 +320,10 @@ fn a_simulator_held_up_past_the_answer_deadline_still_answers_in_time() {
     let ping = std::thread::spawn(move || ops::ping(&client, 3, 1));
     std::thread::sleep(std::time::Duration::from_millis(50));
     drop(held);
-    assert_eq!(ping.join().unwrap().unwrap(), Presence::Present);
+    assert_eq!(
+        crate::support::joined(ping, "the ping").unwrap(),
+        Presence::Present
+    );
 }
 
 #[test]

@@ -8,7 +8,7 @@ use botbench::profile::Profile;
 use botbench::sim::servo_bus::SimServo;
 use std::collections::BTreeMap;
 
-use crate::support::cli::{self, SimProcess};
+use crate::support::cli::{self, Sim};
 use crate::support::servo::Bench;
 use crate::support::{profile, temp_dir};
 
@@ -451,14 +451,11 @@ fn a_log_for_other_recorded_params_is_not_mixed() {
 
 #[test]
 fn the_cli_provisions_one_servo_with_a_pass_line_and_a_log() {
-    let sim = SimProcess::start(&["servo-bus", "--servos", "0"]);
+    let sim = Sim::start(&["servo-bus", "--servos", "0"]);
     let dir = temp_dir();
     let log = dir.path().join("cli.csv");
-    let provision = || {
-        let mut c = cli::botbench(["servo", "--port", &sim.path, "--margin-ms", cli::MARGIN_MS]);
-        c.args(["provision", PLAN_FILE]).arg("--log").arg(&log);
-        cli::output(&mut c)
-    };
+    let log_s = log.to_str().unwrap();
+    let provision = || sim.cli("servo", &["provision", PLAN_FILE, "--log", log_s]);
     let out = provision();
     // A second run finds no fresh servo: a FAIL, exit 1, and a second line in the log.
     let again = provision();
@@ -506,25 +503,23 @@ fn the_cli_refuses_a_bad_plan_before_opening_the_port() {
 
 #[test]
 fn the_cli_asks_for_the_next_servo_and_stops_when_told() {
-    use std::io::Write;
-    use std::process::Stdio;
     // Only a provisioned servo (id 7) on the bus: the first attempt fails at once, at detect
     // (one that passes is above); then the operator is asked for the next.
-    let sim = SimProcess::start(&["servo-bus", "--servos", "7"]);
-    let mut run = cli::botbench(["servo", "--port", &sim.path, "--margin-ms", cli::MARGIN_MS])
-        .args(["provision", PLAN_FILE, "--count", "3"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let sim = Sim::start(&["servo-bus", "--servos", "7"]);
     // The operator has no second servo and types q at the prompt.
-    run.stdin.take().unwrap().write_all(b"q\n").unwrap();
-    let out = run.wait_with_output().unwrap();
+    let args = [
+        "servo",
+        "--port",
+        &sim.path,
+        "provision",
+        PLAN_FILE,
+        "--count",
+        "3",
+    ];
+    let out = sim.run_typing(&args, "q\n");
     drop(sim);
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{stdout}{stderr}");
+    let (stdout, stderr) = (&out.out, &out.err);
+    assert_eq!(out.code, 1, "{stdout}{stderr}");
     assert!(stderr.contains("plug in servo 2 of 3"), "{stderr}");
     assert!(
         stderr.contains("stopped by the operator before servo 2 of 3"),
@@ -565,10 +560,8 @@ fn a_late_answer_from_a_short_latency_timer_or_a_slow_servo_is_never_a_second_se
 fn found_once_at_its_own_rate(baud: &str, field: &[&str]) {
     let mut args = vec!["servo-bus", "--servos", "0", "--baud", baud];
     args.extend(field);
-    let sim = SimProcess::start(&args);
-    let mut c = cli::botbench(["servo", "--port", &sim.path]);
-    c.args(["provision", PLAN_FILE]);
-    let out = cli::output(&mut c);
+    let sim = Sim::start(&args);
+    let out = sim.cli("servo", &["provision", PLAN_FILE]);
     drop(sim);
     assert_eq!(out.code, 0, "{field:?}: {}{}", out.out, out.err);
     assert!(

@@ -7,11 +7,9 @@ use botbench::ops::selftest::{self, Plan, Report};
 use botbench::ops::{Device, Run};
 use botbench::profile::{Input, Profile};
 use botbench::sim::window_cleaner::{Fault, Motor, WindowCleaner};
-use std::io::{BufRead, BufReader};
-use std::process::Stdio;
 use std::sync::{Arc, Mutex};
 
-use crate::support::cli::{self, SimProcess};
+use crate::support::cli::{self, Sim};
 use crate::support::{
     SELFTEST_PLAN, Served, identified, open_link, selftest_plan, serve, temp_dir, wait_until,
 };
@@ -189,7 +187,8 @@ fn each_fault_fails_exactly_its_own_step() {
         })
         .collect();
     for t in runs {
-        let (fault, expected, report, motor, fan) = t.join().unwrap();
+        let (fault, expected, report, motor, fan) =
+            crate::support::joined(t, "a faulty robot's self-test");
         assert!(!report.pass, "{fault:?}: {report:#?}");
         assert_eq!(report.aborted, None, "{fault:?}");
         assert_eq!(report.results.len(), 9, "{fault:?}: every step ran");
@@ -309,7 +308,7 @@ fn a_cancelled_rises_step_still_stops_the_motor() {
         c.cancel();
     });
     let report = run(&b, &plan, &mut |_: &str| true, &cancel);
-    t.join().unwrap();
+    crate::support::joined(t, "the motor to run");
     assert!(!report.pass);
     let r = &report.results[0];
     assert!(r.detail.starts_with("cancelled"), "{}", r.detail);
@@ -331,7 +330,7 @@ fn a_link_lost_while_the_motor_runs_is_fail_naming_the_step() {
         vanish.vanish();
     });
     let report = run(&b, &plan, &mut |_: &str| true, &Cancel::new());
-    t.join().unwrap();
+    crate::support::joined(t, "the motor to run");
     assert!(!report.pass, "{report:#?}");
     let r = &report.results[0];
     assert_eq!(r.name, "Wheels");
@@ -485,36 +484,22 @@ fn malformed_plans_are_refused_with_file_line_and_column() {
 // ---- The command line ----
 
 /// Runs the self-test CLI on `plan` against `sim`; when it prompts the operator, the simulator's
-/// corners are pressed through its stdin (as a fixture would), all released before.
-fn cli_selftest(sim: &mut SimProcess, plan: &str, extra: &[&str]) -> cli::Ran {
+/// corners are pressed (as a fixture would), all released before.
+fn cli_selftest(sim: &mut Sim, plan: &str, extra: &[&str]) -> cli::Ran {
     sim.type_line("corners 0");
-    let mut child = cli::botbench(["msp", "--port", &sim.path, "--margin-ms", cli::MARGIN_MS])
-        .args(["selftest", plan, "--yes"])
-        .args(extra)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut err_lines = BufReader::new(child.stderr.take().unwrap()).lines();
-    let mut err = String::new();
-    for line in err_lines.by_ref() {
-        let line = line.unwrap();
-        err.push_str(&line);
-        err.push('\n');
-        if line.starts_with("OPERATOR:") {
-            sim.type_line("corners 15");
-            break;
-        }
-    }
-    for line in err_lines {
-        err.push_str(&line.unwrap());
-        err.push('\n');
-    }
-    let out = child.wait_with_output().unwrap();
+    let mut args = vec!["msp", "--port", &sim.path, "selftest", plan, "--yes"];
+    args.extend_from_slice(extra);
+    let captured = botbench::cli::Captured::default();
+    let run = cli::start_in_process(&args, sim.ports(), &captured);
+    crate::support::wait_until("the operator prompt", || {
+        captured.err().contains("OPERATOR:") || run.is_finished()
+    });
+    sim.type_line("corners 15");
+    let code = cli::finish_in_process(run, &captured, "msp selftest");
     cli::Ran {
-        code: out.status.code().unwrap_or(-1),
-        out: String::from_utf8_lossy(&out.stdout).into_owned(),
-        err,
+        code: code.into(),
+        out: captured.out(),
+        err: captured.err(),
     }
 }
 
@@ -527,7 +512,7 @@ fn cli_selftest_passes_a_healthy_robot_and_fails_a_faulty_one() {
     std::fs::write(&plan, selftest_plan(60_000)).unwrap();
     let plan = plan.to_str().unwrap();
 
-    let mut sim = SimProcess::start(&["window-cleaner"]);
+    let mut sim = Sim::start(&["window-cleaner"]);
     let cli::Ran { code, out, err } = cli_selftest(&mut sim, plan, &["--log", log_s]);
     assert_eq!(code, 0, "{out}\n{err}");
     assert!(
@@ -547,7 +532,7 @@ fn cli_selftest_passes_a_healthy_robot_and_fails_a_faulty_one() {
     );
     drop(sim);
 
-    let mut sim = SimProcess::start(&["window-cleaner"]);
+    let mut sim = Sim::start(&["window-cleaner"]);
     sim.type_line("fault battery-low");
     let cli::Ran { code, out, err } = cli_selftest(&mut sim, plan, &["--log", log_s]);
     assert_eq!(code, 1, "{out}\n{err}");

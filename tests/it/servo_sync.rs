@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 
 use crate::support::ms;
 
-use crate::support::cli::{self, SimProcess};
+use crate::support::cli::Sim;
 use crate::support::servo::Bench;
 use crate::support::wait_until;
 
@@ -259,21 +259,13 @@ fn through_a_pty_one_exchange_reads_every_servo_and_the_temperatures_agree() {
 
 #[test]
 fn servo_monitor_on_the_command_line_reads_every_servo_in_one_exchange() {
-    let sim = SimProcess::start(&["servo-bus", "--servos", "1,2,3"]);
+    let sim = Sim::start(&["servo-bus", "--servos", "1,2,3"]);
     let monitor = |ids: &str, json: bool| {
-        let mut args = vec![
-            "servo",
-            "--margin-ms",
-            cli::MARGIN_MS,
-            "--port",
-            &sim.path,
-            "monitor",
-            ids,
-        ];
+        let mut args = vec!["servo", "--port", &sim.path, "monitor", ids];
         if json {
             args.push("--json");
         }
-        cli::run(&args)
+        sim.run(&args)
     };
     let text = monitor("1-3", false);
     let json = monitor("2,7", true);

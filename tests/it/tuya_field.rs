@@ -9,44 +9,22 @@ use botbench::ops::Device;
 use botbench::protocol::tuya::{Frame, TuyaDecoder, cmd};
 use botbench::sim::Faults;
 use botbench::sim::tuya_mcu::{TuyaConfig, TuyaMcu};
-use std::process::Stdio;
 use std::time::{Duration, Instant};
 
-use crate::support::cli::{Ran, SimProcess, botbench};
-use crate::support::{Served, lossy, next_event, open_link, profile, serve_plain, temp_dir};
+use crate::support::cli::{Ran, Sim, run_in_process};
+use crate::support::{Served, lossy, next_event, open_link, profile, serve_with, temp_dir};
 
-/// The longest a command may run before it is taken for hung (an upload of hours).
-const HUNG: Duration = Duration::from_secs(90);
-
-/// Runs botbench to its end, or kills it after [`HUNG`] (then its code is not 0).
-fn run(args: &[&str]) -> Ran {
-    let mut child = botbench(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("botbench runs");
-    let deadline = Instant::now() + HUNG;
-    while child.try_wait().expect("wait").is_none() && Instant::now() < deadline {
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let _ = child.kill();
-    let o = child.wait_with_output().expect("output");
-    Ran {
-        code: o.status.code().unwrap_or(-1),
-        out: String::from_utf8_lossy(&o.stdout).into_owned(),
-        err: String::from_utf8_lossy(&o.stderr).into_owned(),
-    }
-}
-
-/// `botbench sim tuya-vacuum ARGS` on its pseudo-terminal, stopped when dropped.
-fn sim(args: &[&str]) -> SimProcess {
+/// `botbench sim tuya-vacuum ARGS`, served in lockstep with the command line run in this
+/// process ([`Sim`]).
+fn sim(args: &[&str]) -> Sim {
     let all: Vec<&str> = ["tuya-vacuum"].iter().chain(args).copied().collect();
-    SimProcess::start(&all)
+    Sim::start(&all)
 }
 
-/// An in-process MCU on a pseudo-terminal at 115200 baud, for a command in another process.
+/// An MCU at 115200 baud on a pseudo-terminal, in lockstep with the command line run in this
+/// process.
 fn serve(cfg: TuyaConfig, faults: Faults) -> Served<TuyaMcu> {
-    serve_plain(
+    serve_with(
         TuyaMcu::new(TuyaConfig {
             baud: Some(115_200),
             ..cfg
@@ -55,11 +33,11 @@ fn serve(cfg: TuyaConfig, faults: Faults) -> Served<TuyaMcu> {
     )
 }
 
-/// `botbench tuya --port PATH --baud 115200 ARGS`.
-fn tuya(path: &str, args: &[&str]) -> Ran {
+/// `botbench tuya --port PATH --baud 115200 ARGS`, `PATH` opened with `ports`.
+fn tuya(path: &str, ports: &botbench::link::PortOpener, args: &[&str]) -> Ran {
     let mut all = vec!["tuya", "--port", path, "--baud", "115200"];
     all.extend_from_slice(args);
-    run(&all)
+    run_in_process(&all, ports)
 }
 
 // ---------------------------------------------------------------- 1. version byte 0x00
@@ -67,7 +45,7 @@ fn tuya(path: &str, args: &[&str]) -> Ran {
 #[test]
 fn an_mcu_whose_frames_carry_version_0x00_is_answered_and_its_version_shown() {
     let sim = sim(&["--frame-version", "0", "--baud", "115200"]);
-    let o = tuya(&sim.path, &["init"]);
+    let o = tuya(&sim.path, sim.ports(), &["init"]);
     assert_eq!(o.code, 0, "{o:?}");
     let out = o.out.clone();
     assert!(out.contains("Heartbeat      ok"), "{out}");
@@ -75,7 +53,7 @@ fn an_mcu_whose_frames_carry_version_0x00_is_answered_and_its_version_shown() {
         out.contains("MCU frames carry version 0x00 (the protocol document says 0x03)"),
         "{out}"
     );
-    let o = tuya(&sim.path, &["status", "--json"]);
+    let o = tuya(&sim.path, sim.ports(), &["status", "--json"]);
     assert_eq!(o.code, 0, "{o:?}");
     let doc = o.json();
     assert_eq!(doc["frame_version"], 0);
@@ -90,7 +68,7 @@ fn on_a_line_that_echoes_the_modules_frames_a_version_0x00_mcu_is_told_apart_by_
         ..TuyaConfig::default()
     };
     let served = serve(cfg, Faults::default());
-    let o = tuya(served.path(), &["dp", "find_robot=on"]);
+    let o = tuya(served.path(), &served.ports(), &["dp", "find_robot=on"]);
     assert_eq!(o.code, 0, "{o:?}");
     assert!(o.out.contains("verified"), "{o:?}");
     // The MCU's requests: a reset-Wi-Fi ack is the very bytes of the request (version 0x00);
@@ -125,13 +103,13 @@ fn on_a_line_that_echoes_the_modules_frames_a_version_0x00_mcu_is_told_apart_by_
 fn an_mcu_that_reports_every_30_ms_is_initialised_queried_and_commanded() {
     // At the profile's 9600 baud, as the issue found it.
     let sim = sim(&["--report-every", "30"]);
-    let o = run(&["tuya", "--port", &sim.path, "init"]);
+    let o = sim.run(&["tuya", "--port", &sim.path, "init"]);
     assert_eq!(o.code, 0, "{o:?}");
     assert_eq!(o.out.matches("  ok  ").count(), 5, "{o:?}");
-    let o = run(&["tuya", "--port", &sim.path, "status", "--json"]);
+    let o = sim.run(&["tuya", "--port", &sim.path, "status", "--json"]);
     assert_eq!(o.code, 0, "{o:?}");
     assert_eq!(o.json()["data_points"].as_array().map(Vec::len), Some(19));
-    let o = run(&[
+    let o = sim.run(&[
         "tuya",
         "--port",
         &sim.path,
@@ -155,7 +133,7 @@ fn data_points_of_another_type_or_length_are_shown_raw_and_status_fails() {
         "--baud",
         "115200",
     ]);
-    let o = tuya(&sim.path, &["status"]);
+    let o = tuya(&sim.path, sim.ports(), &["status"]);
     assert_eq!(o.code, 1, "{o:?}");
     let out = o.out.clone();
     assert!(
@@ -167,7 +145,7 @@ fn data_points_of_another_type_or_length_are_shown_raw_and_status_fails() {
         "{out}"
     );
     assert!(out.contains("battery"), "the others are listed: {out}");
-    let o = tuya(&sim.path, &["status", "--json"]);
+    let o = tuya(&sim.path, sim.ports(), &["status", "--json"]);
     assert_eq!(o.code, 1, "{o:?}");
     let doc = o.json();
     assert_eq!(doc["complete"], false);
@@ -193,7 +171,7 @@ fn data_points_of_another_type_or_length_are_shown_raw_and_status_fails() {
 fn under_drops_and_corruption_status_asks_again_or_names_what_is_missing() {
     for seed in 1..=8u64 {
         let served = serve(TuyaConfig::default(), lossy(seed));
-        let o = tuya(served.path(), &["status", "--json"]);
+        let o = tuya(served.path(), &served.ports(), &["status", "--json"]);
         let doc = o.json();
         let points = doc["data_points"].as_array().expect("data points").len();
         let missing = doc["missing"].as_array().expect("missing").clone();
@@ -220,7 +198,11 @@ fn a_value_the_mcu_changed_back_is_not_verified_though_the_report_of_the_change_
         ..TuyaConfig::default()
     };
     let served = serve(cfg, Faults::default());
-    let o = tuya(served.path(), &["dp", "mode=8", "power=off"]);
+    let o = tuya(
+        served.path(),
+        &served.ports(),
+        &["dp", "mode=8", "power=off"],
+    );
     assert_eq!(o.code, 1, "{o:?}");
     let out = o.out.clone();
     let mode = out
@@ -240,7 +222,11 @@ fn a_value_the_mcu_changed_back_is_not_verified_though_the_report_of_the_change_
     );
     // A firmware that keeps what it was told: both verified, by the read-back.
     let served = serve(TuyaConfig::default(), Faults::default());
-    let o = tuya(served.path(), &["dp", "mode=8", "power=off", "--json"]);
+    let o = tuya(
+        served.path(),
+        &served.ports(),
+        &["dp", "mode=8", "power=off", "--json"],
+    );
     assert_eq!(o.code, 0, "{o:?}");
     let doc = o.json();
     assert_eq!(doc["verified"], true);
@@ -276,7 +262,7 @@ fn an_image_over_the_profiles_maximum_is_refused_before_anything_is_sent() {
             "/dev/zero: not a firmware image file (a folder, a device or a pipe)",
         ),
     ] {
-        let o = tuya(served.path(), &["ota", file]);
+        let o = tuya(served.path(), &served.ports(), &["ota", file]);
         assert_eq!(o.code, 2, "{file}: {o:?}");
         assert!(
             format!("{}{}", o.out, o.err).contains(said),
@@ -291,7 +277,11 @@ fn an_image_over_the_profiles_maximum_is_refused_before_anything_is_sent() {
     // An image that fits: the expected time at the port's rate, before it starts.
     let fw = dir.join("fw.bin");
     std::fs::write(&fw, vec![0x5a; 3000]).unwrap();
-    let o = tuya(served.path(), &["ota", &fw.display().to_string()]);
+    let o = tuya(
+        served.path(),
+        &served.ports(),
+        &["ota", &fw.display().to_string()],
+    );
     assert_eq!(o.code, 0, "{o:?}");
     let err = &o.err;
     assert!(

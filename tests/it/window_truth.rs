@@ -70,7 +70,12 @@ fn the_packet_monitor_opened_late_shows_the_newest_and_holds_where_the_technicia
     }
     // Until the wheel's smooth scrolling has come to rest.
     let (mut last, mut still) = (app(&h).panel::<MonitorPanel>().top, 0);
+    let deadline = std::time::Instant::now() + crate::support::PATIENCE;
     while still < 10 {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the wheel's scrolling never came to rest"
+        );
         h.step();
         std::thread::sleep(std::time::Duration::from_millis(20));
         let top = app(&h).panel::<MonitorPanel>().top;

@@ -4,14 +4,9 @@ use super::*;
 
 // ---- The command line ----
 
-/// `botbench` with `args`: exit code, stdout, stderr. A device command is given the tests'
-/// answer margin across processes.
+/// `botbench` with `args`: exit code, stdout, stderr.
 fn botbench(args: &[&str]) -> (i32, String, String) {
-    let mut args = args.to_vec();
-    if args.contains(&"--port") {
-        args.extend(["--margin-ms", cli::MARGIN_MS]);
-    }
-    let ran = cli::run(&args);
+    let ran = cli::run(args);
     (ran.code, ran.out, ran.err)
 }
 
@@ -71,8 +66,13 @@ fn cli_preset_apply_refuses_a_bad_file_before_opening_the_port() {
 
 #[test]
 fn cli_preset_save_diff_and_apply_against_the_simulator() {
-    let sim = SimProcess::start(&["window-cleaner"]);
+    let sim = Sim::start(&["window-cleaner"]);
     let port = sim.path.as_str();
+    // Against the simulator, the command line runs in this process, in lockstep with it.
+    let botbench = |args: &[&str]| {
+        let ran = sim.run(args);
+        (ran.code, ran.out, ran.err)
+    };
     let dir = temp_dir();
     let tuned = dir.path().join("tuned.ron");
     let tuned_s = tuned.to_str().unwrap();

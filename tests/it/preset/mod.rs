@@ -9,7 +9,7 @@ use botbench::sim::Faults;
 use botbench::sim::window_cleaner::WindowCleaner;
 use std::path::Path;
 
-use crate::support::cli::{self, SimProcess};
+use crate::support::cli::{self, Sim};
 use crate::support::{Served, connect, profile, serve, serve_plain, temp_dir};
 
 const FACTORY: &str = concat!(

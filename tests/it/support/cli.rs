@@ -1,5 +1,15 @@
-//! The command line as a user runs it: the `botbench` binary in a child process, with no user
-//! profiles, and `botbench sim` serving a device on a pseudo-terminal.
+//! The command line as a user runs it, two ways:
+//!
+//! - against a simulated device, in this process ([`Sim`]: what `botbench sim ARGS` serves,
+//!   served on a pty in lockstep with the link of `cli::run_args_captured`): a device that a
+//!   loaded machine cannot starve, as a real one has a processor of its own, so no verdict
+//!   depends on how soon another process is scheduled;
+//! - without a device, or where only a process will do (an installed binary, another user, an
+//!   environment variable, a program that is not botbench driving `botbench sim`): the `botbench`
+//!   binary in a child process with no user profiles ([`run`], [`run_watched`]), and
+//!   [`SimProcess`] for `botbench sim` in a process of its own.
+//!
+//! Every run is watched: a run that does not end within [`WATCHDOG`] fails its test.
 
 use std::io::{BufRead, BufReader, Lines, Write};
 use std::path::PathBuf;
@@ -63,11 +73,20 @@ pub struct Ran {
 }
 
 impl Ran {
-    fn of(o: std::process::Output) -> Self {
+    /// The exit code (`None`: killed by a signal) and what the threads reading the outputs got
+    /// (they end when the process and its children have closed them).
+    fn from_parts(
+        code: Option<i32>,
+        out: std::thread::JoinHandle<Vec<u8>>,
+        err: std::thread::JoinHandle<Vec<u8>>,
+    ) -> Self {
+        let text = |h: std::thread::JoinHandle<Vec<u8>>| {
+            String::from_utf8_lossy(&h.join().unwrap_or_default()).into_owned()
+        };
         Self {
-            code: o.status.code().unwrap_or(-1),
-            out: String::from_utf8_lossy(&o.stdout).into_owned(),
-            err: String::from_utf8_lossy(&o.stderr).into_owned(),
+            code: code.unwrap_or(-1),
+            out: text(out),
+            err: text(err),
         }
     }
 
@@ -112,36 +131,56 @@ impl Ran {
 /// silent device): the test fails once it has run for [`WATCHDOG`]. The watchdog never decides
 /// a verdict.
 pub fn run_watched(args: &[&str]) -> Ran {
-    let mut child = botbench(args)
+    watched(&mut botbench(args), &format!("botbench {args:?}"))
+}
+
+/// Runs `command` (`what`, for the failure) to its end with its outputs piped; the test fails
+/// once it has run for [`WATCHDOG`] (the process killed), rather than hang.
+pub fn watched(command: &mut Command, what: &str) -> Ran {
+    let mut child = command
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .expect("runs botbench");
+        .unwrap_or_else(|e| panic!("cannot run {what}: {e}"));
+    // The outputs are read as they come, so that a child writing more than a pipe holds never
+    // blocks on a full pipe while it is waited for.
+    let out = drain(child.stdout.take());
+    let err = drain(child.stderr.take());
     let deadline = std::time::Instant::now() + WATCHDOG;
-    loop {
-        if child.try_wait().expect("waits on botbench").is_some() {
-            return Ran::of(child.wait_with_output().expect("botbench's output"));
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("waits on the child") {
+            break status;
         }
         if std::time::Instant::now() >= deadline {
             let _ = child.kill();
-            let ran = Ran::of(child.wait_with_output().expect("botbench's output"));
-            panic!(
-                "botbench {args:?} did not end within {WATCHDOG:?}: {}",
-                ran.text()
-            );
+            let _ = child.wait();
+            let ran = Ran::from_parts(None, out, err);
+            panic!("{what} did not end within {WATCHDOG:?}: {}", ran.text());
         }
         std::thread::sleep(std::time::Duration::from_millis(10));
-    }
+    };
+    Ran::from_parts(status.code(), out, err)
 }
 
-/// Runs `botbench` with `args` to its end.
+/// A thread reading `pipe` to its end.
+fn drain<R: std::io::Read + Send + 'static>(pipe: Option<R>) -> std::thread::JoinHandle<Vec<u8>> {
+    std::thread::spawn(move || {
+        let mut bytes = Vec::new();
+        if let Some(mut p) = pipe {
+            let _ = p.read_to_end(&mut bytes);
+        }
+        bytes
+    })
+}
+
+/// Runs `botbench` with `args` to its end (within [`WATCHDOG`], see [`run_watched`]).
 pub fn run(args: &[&str]) -> Ran {
-    output(&mut botbench(args))
+    run_watched(args)
 }
 
-/// Runs `command` to its end.
+/// Runs `command` (a [`botbench`] command) to its end, within [`WATCHDOG`].
 pub fn output(command: &mut Command) -> Ran {
-    Ran::of(command.output().expect("runs botbench"))
+    watched(command, "botbench")
 }
 
 /// A `botbench sim` process serving a device on a pty, with its stdin to type controls into;
@@ -210,5 +249,159 @@ impl SimProcess {
             }
         }
         panic!("the simulator did not confirm {control}");
+    }
+}
+
+/// A simulated device as `botbench sim ARGS...` serves it, but served in this process on a pty
+/// in lockstep with the link of a command line run in this process ([`Sim::run`],
+/// [`Sim::cli`]): a device that a loaded machine cannot starve, as a real device has a
+/// processor of its own. What the verdict is about (a late answer, a split reply, a slow host)
+/// is the simulator's explicit timing, never how soon a thread is scheduled.
+pub struct Sim {
+    server: botbench::sim::PtyServer,
+    control: Option<botbench::cli::SimControl>,
+    ports: botbench::link::PortOpener,
+    /// The pty's path, for `--port`.
+    pub path: String,
+}
+
+impl Sim {
+    /// Serves what `botbench sim ARGS...` (`args`: the kind first) would.
+    pub fn start(args: &[&str]) -> Self {
+        let sim = botbench::cli::simulated(args)
+            .unwrap_or_else(|e| panic!("sim {args:?}: {}", e.message));
+        let server =
+            botbench::sim::PtyServer::start_lockstep(sim.device, sim.faults).expect("serves a pty");
+        Self {
+            path: server.path().to_string(),
+            ports: server.port_opener(),
+            control: sim.control,
+            server,
+        }
+    }
+
+    /// Runs `botbench ARGS...` in this process, `--port` this simulator's path reaching it in
+    /// lockstep (see [`run_in_process`]).
+    pub fn run(&self, args: &[&str]) -> Ran {
+        run_in_process(args, &self.ports)
+    }
+
+    /// As [`Self::run`], the operator typing `input` (lines) at the command's prompts.
+    pub fn run_typing(&self, args: &[&str], input: &str) -> Ran {
+        run_in_process_into(args, &self.ports, botbench::cli::Captured::typing(input))
+    }
+
+    /// Runs `botbench GROUP --port PATH ARGS...` against this simulator (see [`Self::run`]).
+    pub fn cli(&self, group: &str, args: &[&str]) -> Ran {
+        let mut all = vec![group, "--port", &self.path];
+        all.extend_from_slice(args);
+        self.run(&all)
+    }
+
+    /// Does what a line typed on `botbench sim`'s stdin does (`fault battery-low`, `corners
+    /// 15`).
+    pub fn type_line(&mut self, control: &str) {
+        let c = self
+            .control
+            .as_ref()
+            .expect("a simulator that takes commands");
+        c.type_line(control)
+            .unwrap_or_else(|e| panic!("{control}: {e}"));
+    }
+
+    /// Waits, within [`WATCHDOG`], until the simulator stops serving (its port vanished, as
+    /// asked).
+    pub fn wait_stopped(&self) {
+        let deadline = std::time::Instant::now() + WATCHDOG;
+        while self.server.is_running() {
+            assert!(
+                std::time::Instant::now() < deadline,
+                "the simulator did not stop"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+    }
+
+    /// The port opener that reaches this simulator (for a run that is watched as it goes).
+    pub fn ports(&self) -> &botbench::link::PortOpener {
+        &self.ports
+    }
+}
+
+/// Runs `botbench ARGS...` in this process (`cli::run_args_captured`), ports opened with
+/// `ports`, on a thread of its own; the test fails once it has run for [`WATCHDOG`] rather than
+/// hang. A run that records (see [`records_in_tests`]) records in the tests' own file.
+pub fn run_in_process(args: &[&str], ports: &botbench::link::PortOpener) -> Ran {
+    run_in_process_into(args, ports, botbench::cli::Captured::default())
+}
+
+/// As [`run_in_process`], writing into `captured` (its operator's typing, if given).
+pub fn run_in_process_into(
+    args: &[&str],
+    ports: &botbench::link::PortOpener,
+    captured: botbench::cli::Captured,
+) -> Ran {
+    let run = start_in_process(args, ports, &captured);
+    let what = format!("botbench {args:?} (in process)");
+    let code = finish_in_process(run, &captured, &what);
+    Ran {
+        code: code.into(),
+        out: captured.out(),
+        err: captured.err(),
+    }
+}
+
+/// `args`, with `--records` naming the tests' own file when they run a command that records a
+/// run (`msp selftest`, `servo provision`, `preset apply`) and name none: a child process gets
+/// it as `BOTBENCH_RECORDS` ([`as_user`]), a run in this process as an option (the variable is
+/// the whole process's, and other tests run beside it).
+fn records_in_tests(args: &[&str]) -> Vec<String> {
+    let mut all: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+    let has = |w: &str| args.contains(&w);
+    let records = (has("selftest") && has("msp"))
+        || (has("provision") && has("servo"))
+        || (has("preset") && has("apply"));
+    if records && !has("--records") {
+        let file = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli-records.sqlite");
+        all.extend(["--records".to_string(), file.display().to_string()]);
+    }
+    all
+}
+
+/// Starts `botbench ARGS...` in this process on a thread of its own, writing to `captured`.
+pub fn start_in_process(
+    args: &[&str],
+    ports: &botbench::link::PortOpener,
+    captured: &botbench::cli::Captured,
+) -> std::thread::JoinHandle<u8> {
+    let mut all = vec!["botbench".to_string()];
+    all.extend(records_in_tests(args));
+    let (ports, into) = (ports.clone(), captured.clone());
+    std::thread::Builder::new()
+        .name("cli-in-process".into())
+        .spawn(move || botbench::cli::run_args_captured(all, &ports, &into))
+        .expect("starts the command line's thread")
+}
+
+/// The exit code of a run started with [`start_in_process`], once it has ended; fails after
+/// [`WATCHDOG`] with what it wrote so far.
+pub fn finish_in_process(
+    run: std::thread::JoinHandle<u8>,
+    captured: &botbench::cli::Captured,
+    what: &str,
+) -> u8 {
+    let deadline = std::time::Instant::now() + WATCHDOG;
+    while !run.is_finished() {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "{what} did not end within {WATCHDOG:?}\n--- stdout\n{}--- stderr\n{}",
+            captured.out(),
+            captured.err()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    match run.join() {
+        Ok(code) => code,
+        Err(panic) => std::panic::resume_unwind(panic),
     }
 }

@@ -244,6 +244,16 @@ pub fn wait_until(what: &str, mut done: impl FnMut() -> bool) {
     }
 }
 
+/// The result of the thread `handle` (`what`, for the failure), once it has ended; fails after
+/// [`PATIENCE`] rather than hang, and passes its panic on.
+pub fn joined<T>(handle: std::thread::JoinHandle<T>, what: &str) -> T {
+    wait_until(what, || handle.is_finished());
+    match handle.join() {
+        Ok(t) => t,
+        Err(panic) => std::panic::resume_unwind(panic),
+    }
+}
+
 /// The example self-test plan (`presets/window-cleaner-selftest.ron`).
 pub const SELFTEST_PLAN: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
