@@ -93,6 +93,24 @@ impl Lockstep {
         s.actions.push_back((at, action));
     }
 
+    /// How many of the bytes after the first `taken` the host may read by `deadline`: those of
+    /// the simulator's batches due by then (a batch whose first byte was due later is not yet
+    /// there for a host that reads by `deadline`, however late the host's thread runs).
+    fn due_by(&self, taken: u64, deadline: Instant) -> u64 {
+        let s = self.lock();
+        let mut upto = taken;
+        for &(total, due) in &s.written {
+            if total <= taken {
+                continue;
+            }
+            if due > deadline {
+                break;
+            }
+            upto = total;
+        }
+        upto - taken
+    }
+
     /// Whether the device side still owes the host a byte due by `deadline`: the simulator has not
     /// caught up with it yet, or has written such a byte that the host has not read.
     fn owes(&self, deadline: Instant) -> bool {
@@ -166,6 +184,7 @@ pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener
             port,
             lockstep: lockstep.clone(),
             last_return: Instant::now(),
+            held: VecDeque::new(),
         }) as Box<dyn Transport>)
     })
 }
@@ -174,7 +193,11 @@ pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener
 const CATCH_UP_POLL: Duration = Duration::from_millis(1);
 
 /// The host's side of a pty served in lockstep: the real serial port, with each write and baud
-/// switch stamped for the simulator, and reads that time out only once nothing more is due.
+/// switch stamped for the simulator, and reads that time out only once nothing more is due, and
+/// that hand the host only what was due by their deadline. A host thread that runs late (a
+/// loaded machine) finds in the pty bytes that came after the deadline it reads by; they are
+/// held for its next read, so that it sees what a punctual host would: the timing a test is
+/// about is the simulator's, never the scheduler's.
 ///
 /// A write is stamped with the instant the port's previous call returned: a host takes the time
 /// its answer deadline starts from after that call and before the write, so the device never
@@ -185,6 +208,8 @@ pub struct LockstepPort {
     port: SerialTransport,
     lockstep: Arc<Lockstep>,
     last_return: Instant,
+    /// Bytes read from the pty that were due after the deadline of the read that found them.
+    held: VecDeque<u8>,
 }
 
 impl LockstepPort {
@@ -195,21 +220,41 @@ impl LockstepPort {
 
     fn read_in_step(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
         let mut until = deadline;
+        let mut chunk = [0u8; 4096];
         loop {
-            let n = self.port.read(buf, until)?;
-            if n > 0 {
-                self.lockstep.lock().read_total += n as u64;
+            let n = self.hand_over(buf, deadline);
+            if n > 0 || buf.is_empty() {
                 return Ok(n);
+            }
+            let got = self.port.read(&mut chunk, until)?;
+            if got > 0 {
+                self.held.extend(&chunk[..got]);
+                continue;
             }
             let now = Instant::now();
             if now < deadline {
                 continue;
             }
-            if buf.is_empty() || !self.lockstep.owes(deadline) {
+            if !self.lockstep.owes(deadline) {
                 return Ok(0);
             }
             until = now + CATCH_UP_POLL;
         }
+    }
+
+    /// Hands the host the held bytes that were due by `deadline` (as many as `buf` takes).
+    fn hand_over(&mut self, buf: &mut [u8], deadline: Instant) -> usize {
+        if self.held.is_empty() {
+            return 0;
+        }
+        let taken = self.lockstep.lock().read_total;
+        let due = usize::try_from(self.lockstep.due_by(taken, deadline)).unwrap_or(usize::MAX);
+        let n = due.min(self.held.len()).min(buf.len());
+        for (slot, byte) in buf.iter_mut().zip(self.held.drain(..n)) {
+            *slot = byte;
+        }
+        self.lockstep.lock().read_total += n as u64;
+        n
     }
 }
 
@@ -239,6 +284,7 @@ impl Transport for LockstepPort {
     }
 
     fn clear_input(&mut self) -> Result<(), LinkError> {
+        self.held.clear();
         let result = self.port.clear_input();
         {
             let mut s = self.lockstep.lock();

@@ -260,7 +260,12 @@ impl Worker {
         let Some(each) = x.each.as_ref().filter(|_| x.in_order) else {
             return Err(last);
         };
-        let grace = Instant::now() + self.timing.learned.grace(x.margin);
+        // Counted from when the last attempt's answer was due, not from when this thread got to
+        // it: a loaded host that wakes late gives no more grace than a punctual one.
+        let due = x.sends.last().map_or_else(Instant::now, |&t0| {
+            t0 + wire_time(x.bytes.len() + 1, self.wire.baud()) + x.margin
+        });
+        let grace = due + self.timing.learned.grace(x.margin);
         let waited = self.wait_for(each, None, grace)?;
         if let Outcome::Answered {
             packets,

@@ -203,7 +203,8 @@ impl Worker {
 
     fn handle(&mut self, cmd: LinkCommand) {
         let open = self.wire.is_open();
-        let lost = || "port lost".to_string();
+        let why = self.wire.why_lost();
+        let lost = || why.clone();
         match cmd {
             LinkCommand::Request { request, reply_to } if open => {
                 self.queue.push(Queued::Exchange(request, reply_to));

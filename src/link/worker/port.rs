@@ -38,7 +38,7 @@ impl Worker {
     /// The port went away (`reason`): closed, and everything waiting for it told.
     pub(super) fn lost(&mut self, reason: String) {
         debug!("port lost: {reason}");
-        self.wire.lose();
+        self.wire.lose(&reason);
         self.liveness.forget();
         self.fail_polls_in_flight(&reason);
         self.session.lost(&reason);

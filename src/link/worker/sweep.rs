@@ -149,7 +149,7 @@ impl Worker {
             }
             let now = Instant::now();
             if now >= deadline {
-                let n = self.read_some(now)?;
+                let n = self.read_some(deadline)?;
                 if n > 0 {
                     flushed = false;
                     if settle {

@@ -30,6 +30,8 @@ pub(super) struct Wire {
     checked_at: Instant,
     /// Frames sent and received, errors, timeouts, margins: what the status bar shows.
     pub(super) stats: LinkStats,
+    /// Why the port was lost, while it is: what a request made since is told.
+    lost_because: Option<String>,
 }
 
 impl Wire {
@@ -44,6 +46,7 @@ impl Wire {
             sent_until: now,
             checked_at: now,
             stats: LinkStats::default(),
+            lost_because: None,
         }
     }
 
@@ -79,7 +82,7 @@ impl Wire {
     /// loses it ([`Self::lose`]).
     pub(super) fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
         let Some(t) = self.transport.as_mut() else {
-            return Err(LinkError::Disconnected("port lost".into()));
+            return Err(LinkError::Disconnected(self.why_lost()));
         };
         t.write(bytes)?;
         let now = Instant::now();
@@ -92,7 +95,7 @@ impl Wire {
     /// means the port is gone: the caller loses it.
     pub(super) fn read_some(&mut self, deadline: Instant) -> Result<usize, LinkError> {
         let Some(t) = self.transport.as_mut() else {
-            return Err(LinkError::Disconnected("port lost".into()));
+            return Err(LinkError::Disconnected(self.why_lost()));
         };
         let mut buf = [0u8; READ_CHUNK];
         let n = t.read(&mut buf, deadline)?;
@@ -124,20 +127,31 @@ impl Wire {
             std::thread::sleep(self.sent_until - now);
         }
         self.baud = baud;
+        let why = self.why_lost();
         let t = self
             .transport
             .as_mut()
-            .ok_or_else(|| LinkError::Disconnected("port lost".into()))?;
+            .ok_or(LinkError::Disconnected(why))?;
         t.set_baud(baud)?;
         let _ = t.clear_input();
         self.decoder.clear();
         Ok(())
     }
 
-    /// The port went away: closed, and what was half decoded dropped.
-    pub(super) fn lose(&mut self) {
+    /// The port went away (`reason`): closed, and what was half decoded dropped.
+    pub(super) fn lose(&mut self, reason: &str) {
         self.transport = None;
         self.decoder.clear();
+        self.lost_because = Some(reason.to_string());
+    }
+
+    /// Why the port is lost, for a request made since it was: `port lost: ` and the reason it
+    /// went (the same words whenever the request came).
+    pub(super) fn why_lost(&self) -> String {
+        match &self.lost_because {
+            Some(reason) => format!("port lost: {reason}"),
+            None => "port lost".into(),
+        }
     }
 
     /// Reopens a lost port at the rate it had.
@@ -148,6 +162,7 @@ impl Wire {
         }
         self.transport = Some(t);
         self.decoder.clear();
+        self.lost_because = None;
         Ok(())
     }
 
