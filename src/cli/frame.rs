@@ -394,6 +394,8 @@ fn value_json(v: &FieldValue<'_>) -> Json {
         "value": v.value,
         "display": v.display(),
         "unit": v.field.unit,
+        "in_profile": v.in_profile,
+        "limit": v.limit.as_ref().map(ToString::to_string),
     });
     // A converted field (a thermistor reading): `value` is the raw reading, `converted` the
     // value it stands for in `unit` (null where the conversion is undefined).
@@ -515,7 +517,9 @@ fn item_text(profile: &Profile, item: &Item) -> String {
             match p.decode_lenient(profile) {
                 Some(d) => {
                     for v in &d.values {
-                        s.push_str(&format!("       {} = {}\n", v.ident, v.display()));
+                        // A data point the profile lacks: `dp 101 (not in the profile): value 50`.
+                        let sep = if v.in_profile { " =" } else { ":" };
+                        s.push_str(&format!("       {}{sep} {}\n", v.ident, v.display()));
                     }
                     if let Some(m) = d.misfit() {
                         s.push_str(&format!(

@@ -51,7 +51,8 @@ pub(crate) struct SimArgs {
     field: super::sim_field::FieldArgs,
 }
 
-/// How the simulated Tuya MCU misbehaves, as MCUs in the field do (PROTOCOL_NOTES §4).
+/// How the simulated Tuya MCU misbehaves, as MCUs in the field do (PROTOCOL_NOTES §4,
+/// TUYA_FIELD_NOTES).
 #[derive(Debug, Args)]
 struct TuyaSimArgs {
     /// Tuya vacuum: the version byte of the MCU's frames (0x03 by the protocol document; 0x01
@@ -69,12 +70,80 @@ struct TuyaSimArgs {
     /// `ID:TYPE:LEN` (e.g. `3:value:4`); repeat for more.
     #[arg(long, value_name = "ID:TYPE:LEN", value_parser = crate::sim::tuya_mcu::parse_misreport)]
     misreport: Vec<(u8, crate::sim::tuya_mcu::WireForm)>,
+    /// Tuya vacuum: a slow MCU, its reports to a status query MS (or MIN-MAX ms, e.g. 100-150)
+    /// apart, 1 to 10000.
+    #[arg(long, value_name = "MS|MIN-MAX", value_parser = crate::sim::tuya_mcu::parse_gap)]
+    report_gap_ms: Option<(Duration, Duration)>,
+    /// Tuya vacuum: report its own changes as 0x22 and wait for the module's 0x23 before the
+    /// next (synchronous reports).
+    #[arg(long)]
+    sync_reports: bool,
+    /// Tuya vacuum: also report a data point the profile does not have, `ID:TYPE:VALUE` (e.g.
+    /// `101:value:50`); repeat for more.
+    #[arg(long, value_name = "ID:TYPE:VALUE", value_parser = crate::sim::tuya_mcu::parse_unknown_dp)]
+    report_unknown_dp: Vec<(u8, crate::protocol::tuya::dp::DpValue)>,
+    /// Tuya vacuum: report a value the profile does not allow for data point ID, `ID=VALUE`
+    /// (raw, e.g. `6=150` a battery of 150 %, `3=32` mode 32) or `ID=len:N` (a string of N
+    /// bytes); repeat for more.
+    #[arg(long, value_name = "ID=VALUE", value_parser = crate::sim::tuya_mcu::parse_id_value)]
+    report_out_of_range: Vec<(u8, crate::sim::tuya_mcu::RawValue)>,
+    /// Tuya vacuum: how a firmware update fails: `old-version` (restarts with its old
+    /// version), `never-back` (never restarts), `refuse-packet:OFFSET` (stops acking there).
+    #[arg(long, value_name = "FAULT", value_parser = clap::value_parser!(crate::sim::tuya_mcu::OtaFault))]
+    ota_fault: Option<crate::sim::tuya_mcu::OtaFault>,
+    /// Tuya vacuum: how long the MCU takes to restart after an update, 0 to 120000 ms
+    /// (default 2000).
+    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(0..=120_000))]
+    ota_restart_ms: Option<u64>,
+    /// Tuya vacuum: the version it runs after an update (default: the one the image names,
+    /// else its own with the last number raised).
+    #[arg(long, value_name = "X.Y.Z", value_parser = version)]
+    ota_version: Option<String>,
+    /// Tuya vacuum: take writes of report-only data points (the SDK refuses them).
+    #[arg(long)]
+    accept_read_only: bool,
+    /// Tuya vacuum: take frames whatever their checksum.
+    #[arg(long)]
+    ignore_checksum: bool,
+    /// Tuya vacuum: answer commands it does not know (the SDK ignores them).
+    #[arg(long)]
+    answer_unknown: bool,
+    /// Tuya vacuum: leave these data points (ids 1 to 255) out of the answer to a status
+    /// query, e.g. `15,19`.
+    #[arg(long, value_name = "IDS", value_delimiter = ',', value_parser = clap::value_parser!(u8).range(1..=255))]
+    never_report: Vec<u8>,
+}
+
+/// A dot-decimal MCU version, `1.0.1`.
+pub(crate) fn version(text: &str) -> Result<String, String> {
+    let t = text.trim();
+    if crate::ops::tuya::is_version(t) {
+        Ok(t.to_string())
+    } else {
+        Err(format!(
+            "'{}' is not an MCU version: x.y.z, each 0 to 99 (e.g. 1.0.1)",
+            crate::document::quote(text)
+        ))
+    }
 }
 
 impl TuyaSimArgs {
     /// Whether any was given.
     fn any(&self) -> bool {
-        self.frame_version.is_some() || self.report_every.is_some() || !self.misreport.is_empty()
+        self.frame_version.is_some()
+            || self.report_every.is_some()
+            || !self.misreport.is_empty()
+            || self.report_gap_ms.is_some()
+            || self.sync_reports
+            || !self.report_unknown_dp.is_empty()
+            || !self.report_out_of_range.is_empty()
+            || self.ota_fault.is_some()
+            || self.ota_restart_ms.is_some()
+            || self.ota_version.is_some()
+            || self.accept_read_only
+            || self.ignore_checksum
+            || self.answer_unknown
+            || !self.never_report.is_empty()
     }
 
     /// Applies them to the MCU's settings (clap has checked their ranges).
@@ -86,6 +155,23 @@ impl TuyaSimArgs {
             config.report_every = Some((self.report_dp, Duration::from_millis(ms)));
         }
         config.misreport.extend(self.misreport.iter().copied());
+        config.report_gap = self.report_gap_ms;
+        config.sync_reports = self.sync_reports;
+        config
+            .report_unknown_dp
+            .extend(self.report_unknown_dp.iter().cloned());
+        config
+            .report_out_of_range
+            .extend(self.report_out_of_range.iter().copied());
+        config.ota_fault = self.ota_fault;
+        if let Some(ms) = self.ota_restart_ms {
+            config.ota_restart = Duration::from_millis(ms);
+        }
+        config.ota_version.clone_from(&self.ota_version);
+        config.accept_read_only = self.accept_read_only;
+        config.ignore_checksum = self.ignore_checksum;
+        config.answer_unknown = self.answer_unknown;
+        config.never_report.clone_from(&self.never_report);
     }
 }
 
@@ -164,7 +250,7 @@ fn build_sim(args: &SimArgs) -> Result<(SimKind, Simulated), CliError> {
     let kind: SimKind = args.kind.parse().map_err(CliError::input)?;
     if args.tuya.any() && kind != SimKind::TuyaVacuum {
         return Err(CliError::input(format!(
-            "--frame-version, --report-every and --misreport are for the tuya-vacuum simulator, not {kind}"
+            "the Tuya options (--frame-version, --report-every, --misreport, --report-gap-ms, ...) are for the tuya-vacuum simulator, not {kind}"
         )));
     }
     let faults = Faults {
@@ -272,6 +358,20 @@ fn tuya_vacuum(args: &SimArgs, opts: &SimOptions) -> Result<Arc<Mutex<TuyaMcu>>,
             "--report-dp {id}: the vacuum has no data point {id}"
         )));
     }
+    for (id, _) in &args.tuya.report_unknown_dp {
+        if profile.data_point(*id).is_some() {
+            return Err(CliError::input(format!(
+                "--report-unknown-dp {id}: data point {id} is in the vacuum's profile; pick an id it lacks (e.g. 101)"
+            )));
+        }
+    }
+    for (id, _) in &args.tuya.report_out_of_range {
+        if profile.data_point(*id).is_none() {
+            return Err(CliError::input(format!(
+                "--report-out-of-range {id}: the vacuum has no data point {id}"
+            )));
+        }
+    }
     args.tuya.apply(mcu.config_mut());
     Ok(Arc::new(Mutex::new(mcu)))
 }
@@ -324,7 +424,7 @@ impl SimControl {
     pub fn help(&self) -> &'static str {
         match self {
             SimControl::Tuya(_) => {
-                "stdin commands: time | wifi-test | reset-wifi | reset-wifi-mode 0|1 | net-status | mac | restart"
+                "stdin commands: time | utc-time | wifi-test | reset-wifi | reset-wifi-mode 0|1 | net-status | mac | rssi | stop-heartbeat | extended SUB | send CMD [HEX] | oversize BYTES | dp ID VALUE | restart"
             }
             SimControl::WindowCleaner(_) => {
                 "stdin commands: fault NAME | clear | corners BITS | battery VOLTS"
@@ -363,6 +463,28 @@ impl SimControl {
                 let mut m = m.lock().map_err(|_| "simulator poisoned")?;
                 match words[0] {
                     "restart" => m.restart(),
+                    "send" => {
+                        let command = crate::profile::codec::parse_id(arg(1)?)
+                            .ok_or("send takes a command byte, e.g. send 0x99 01 02")?;
+                        let data = crate::protocol::hex::parse(&words[2..].join(" "))
+                            .map_err(|e| e.to_string())?;
+                        m.send_frame(command, data);
+                    }
+                    "oversize" => m.send_oversize(
+                        arg(1)?
+                            .parse()
+                            .map_err(|_| "oversize takes a frame length in bytes")?,
+                    ),
+                    "dp" => {
+                        let id =
+                            crate::profile::codec::parse_id(arg(1)?).ok_or("dp takes ID VALUE")?;
+                        let v: i64 = arg(2)?
+                            .parse()
+                            .map_err(|_| "dp takes ID VALUE (a number)")?;
+                        if !m.set_dp_raw(id, v) {
+                            return Err(format!("the vacuum has no number data point {id}"));
+                        }
+                    }
                     word => m.request(McuRequest::parse(word, words.get(1).copied())?),
                 }
             }

@@ -1,12 +1,12 @@
 //! `botbench tuya`: botbench as the Wi-Fi module of a Tuya MCU.
 
 use super::port::{PortArgs, op_error, parse_assignments};
-use super::{CliError, CliResult};
-use crate::link::session::tuya::{HandshakeStep, TuyaEvent, version_text};
+use super::{CliError, CliResult, tuya_show};
+use crate::link::session::tuya::{HandshakeStep, StepResult, TuyaEvent, version_text};
 use crate::link::{LinkEvent, LinkState, PortOpener};
-use crate::ops::tuya::{self as ops, DpCheck, ReportedDp, Status};
+use crate::ops::tuya::{self as ops, Gathered};
 use crate::ops::{Device, Progress, Run};
-use crate::profile::{Profile, Protocol, Value};
+use crate::profile::{Profile, Protocol};
 use clap::Subcommand;
 use serde_json::json;
 use std::path::PathBuf;
@@ -36,10 +36,20 @@ enum TuyaCmd {
         #[arg(value_name = "NAME=VALUE", required = true)]
         values: Vec<String>,
     },
-    /// Update the MCU's firmware with FILE (at most the profile's `ota_max_bytes`).
+    /// Update the MCU's firmware with FILE (at most the profile's `ota_max_bytes`), then wait
+    /// for the MCU to restart and name the image's version in its product info (0x01); exit 0
+    /// only then.
     Ota {
         /// The firmware image.
         file: PathBuf,
+        /// The version the MCU must report after the update, x.y.z (each 0 to 99); default:
+        /// the one version string the image holds.
+        #[arg(long, value_name = "X.Y.Z", value_parser = super::sim::version)]
+        expect_version: Option<String>,
+        /// How long the MCU may take, from the last packet, to come back with it, 1 to 600
+        /// seconds (Tuya's rule: 60).
+        #[arg(long, default_value_t = 60, value_parser = super::checks::handshake_s)]
+        restart_wait: u64,
     },
 }
 
@@ -52,6 +62,14 @@ pub(crate) struct HandshakeWatch {
     last_failed: Option<String>,
     /// The version byte of the MCU's frames.
     pub(crate) frame_version: Option<u8>,
+    /// The data points the handshake's status query did not hear.
+    pub(crate) missing: Vec<u8>,
+    /// The reports received during the handshake (its status query's, and any other).
+    pub(crate) reports: Vec<crate::packet::Packet>,
+    /// The MCU's product info.
+    pub(crate) product: Option<crate::link::ProductInfo>,
+    /// Frames refused during the handshake (too long, a bad checksum).
+    pub(crate) refused: Vec<crate::protocol::FrameError>,
 }
 
 impl HandshakeWatch {
@@ -72,13 +90,18 @@ impl HandshakeWatch {
                         if ok { "ok  " } else { "FAIL" },
                     );
                 }
-                if ok {
+                if let StepResult::Status { missing, .. } = result {
+                    // Asked again after the handshake: not where the handshake stopped.
+                    self.missing.clone_from(missing);
+                    self.last_ok = Some(*step);
+                } else if ok {
                     self.last_ok = Some(*step);
                 } else {
                     self.last_failed = Some(format!("{step:?}: {result}"));
                 }
             }
             TuyaEvent::FrameVersion { version } => self.frame_version = Some(*version),
+            TuyaEvent::ProductInfo(info) => self.product = Some(info.clone()),
             _ => {}
         }
     }
@@ -124,90 +147,18 @@ fn handshake(
         match ev {
             LinkEvent::Tuya(TuyaEvent::HandshakeDone) => return Ok(watch),
             LinkEvent::Tuya(ev) => watch.on_event(&ev, show, json),
+            LinkEvent::Report(p) => watch.reports.push(p),
+            LinkEvent::Frame(crate::link::LogEntry {
+                frame: Err(e),
+                direction: crate::protocol::Direction::DeviceToHost,
+                ..
+            }) => watch.refused.push(e),
             LinkEvent::State(LinkState::Lost { reason }) => {
                 return Err(CliError::device(format!("link lost: {reason}")));
             }
             _ => {}
         }
     }
-}
-
-/// A raw value as the data point's field shows it, with its unit.
-fn shown(profile: &Profile, id: u8, v: &Value) -> String {
-    profile.data_point(id).map_or(format!("{v:?}"), |d| {
-        format!("{}{}", d.field.format(v), d.field.unit_suffix())
-    })
-}
-
-/// A report as JSON: `dp`, `id`, `value` (raw units, or null), `raw`, `misfit`, `mismatch`.
-fn report_json(r: &ReportedDp) -> serde_json::Value {
-    let mut doc = serde_json::to_value(r).unwrap_or_default();
-    doc["dp"] = json!(r.ident);
-    doc["mismatch"] = json!(r.misfit.as_ref().map(ToString::to_string));
-    doc
-}
-
-fn print_status(profile: &Profile, status: &Status, version: Option<u8>, json: bool) {
-    let name = |id: u8| {
-        profile
-            .data_point(id)
-            .map_or(id.to_string(), |d| format!("{} ({id})", d.field.ident))
-    };
-    if json {
-        let doc = json!({
-            "frame_version": version,
-            "complete": status.complete(),
-            "queries": status.queries,
-            "data_points": status.data_points.iter().map(report_json).collect::<Vec<_>>(),
-            "missing": status.missing.iter().map(|id| json!({
-                "id": id, "dp": profile.data_point(*id).map(|d| &d.field.ident),
-            })).collect::<Vec<_>>(),
-        });
-        outln!("{doc}");
-        return;
-    }
-    if let Some(v) = version {
-        outln!("{}", version_text(v));
-    }
-    for d in &status.data_points {
-        match &d.misfit {
-            None => outln!("{:<20} {}", d.name(), d.shown(profile)),
-            Some(_) => outln!("{:<20} MISFIT {}", d.name(), d.shown(profile)),
-        }
-    }
-    if !status.missing.is_empty() {
-        let names: Vec<String> = status.missing.iter().map(|id| name(*id)).collect();
-        outln!(
-            "not reported after {} status queries: {}",
-            status.queries,
-            names.join(", ")
-        );
-    }
-}
-
-fn print_checks(profile: &Profile, checks: &[DpCheck], json: bool) -> u8 {
-    let bad = checks.iter().filter(|c| !c.verified()).count();
-    if json {
-        let doc = json!({
-            "verified": bad == 0,
-            "data_points": checks.iter().map(|c| json!({
-                "dp": c.ident, "id": c.id, "sent": c.sent, "ok": c.verified(),
-                "reports": c.reports, "last": c.last.as_ref().map(report_json),
-            })).collect::<Vec<_>>(),
-        });
-        outln!("{doc}");
-    } else {
-        for c in checks {
-            let sent = shown(profile, c.id, &c.sent);
-            let verdict = match &c.last {
-                _ if c.verified() => "verified".to_string(),
-                Some(r) => format!("MISMATCH: the MCU reports {}", r.shown(profile)),
-                None => "NOT VERIFIED: the MCU reported nothing of it after the command".into(),
-            };
-            outln!("{:<20} {sent:>12}  {verdict}", c.ident);
-        }
-    }
-    u8::from(bad > 0)
 }
 
 pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
@@ -218,9 +169,27 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
     let profile = args.port.profile("tuya-vacuum", Protocol::Tuya)?;
     let mut image = Vec::new();
     let mut inputs = Vec::new();
+    let mut expect = None;
     match &args.cmd {
-        TuyaCmd::Ota { file } => {
+        TuyaCmd::Ota {
+            file,
+            expect_version,
+            restart_wait,
+        } => {
             image = ops::read_image(file, profile.ota_max_bytes()).map_err(CliError::input)?;
+            let version = expect_version
+                .clone()
+                .or_else(|| ops::image_version(&image));
+            let version = version.ok_or_else(|| {
+                CliError::input(format!(
+                    "{}: the image names no single version (x.y.z); give the one the MCU must report after the update with --expect-version",
+                    file.display()
+                ))
+            })?;
+            expect = Some(ops::Expect {
+                version,
+                limit: Duration::from_secs(*restart_wait),
+            });
         }
         TuyaCmd::Dp { values } => {
             inputs = parse_assignments(values, "NAME")?;
@@ -233,44 +202,33 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
     let watch = handshake(&link, wait, matches!(args.cmd, TuyaCmd::Init), json)?;
     let client = link.client();
     match args.cmd {
-        TuyaCmd::Init => {
-            if json {
-                outln!(
-                    "{}",
-                    json!({"done": true, "frame_version": watch.frame_version})
-                );
-            } else {
-                if let Some(v) = watch.frame_version {
-                    outln!("{}", version_text(v));
-                }
-                outln!("handshake done");
-            }
-            Ok(0)
-        }
+        TuyaCmd::Init => init_done(Device::new(&client, &profile), &watch, json),
         TuyaCmd::Status => {
             let status = ops::query_status(Device::new(&client, &profile)).map_err(op_error)?;
-            print_status(&profile, &status, watch.frame_version, json);
+            tuya_show::print_status(&profile, &status, watch.frame_version, json);
             Ok(u8::from(!status.complete()))
         }
         TuyaCmd::Dp { .. } => {
             let checks = ops::set_dps(Device::new(&client, &profile), &inputs).map_err(op_error)?;
-            Ok(print_checks(&profile, &checks, json))
+            Ok(tuya_show::print_checks(&profile, &checks, json))
         }
         TuyaCmd::Ota { .. } => {
             errln!(
                 "firmware: {}",
                 ops::expected_text(image.len() as u64, link_baud(&args.port, &profile))
             );
-            let mut last_pct = 0;
-            let report = ops::ota(
+            let expect = expect.ok_or_else(|| CliError::input("no expected version"))?;
+            let mut last = (0, String::new());
+            let report = ops::update(
                 &client,
                 &image,
                 profile.ota_max_bytes(),
+                &expect,
                 ops::OtaTiming::default(),
                 &mut Run::new(&super::port::cancel_on_ctrl_c(), |p: Progress| {
                     let pct = (p.fraction() * 100.0) as u32;
-                    if !json && pct >= last_pct + 10 {
-                        last_pct = pct;
+                    if !json && (pct >= last.0 + 10 || (pct == 100 && p.message.en != last.1)) {
+                        last = (pct, p.message.en.clone());
                         errln!("{pct:3}%  {}", p.message.en);
                     }
                 }),
@@ -279,18 +237,77 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
             if json {
                 outln!("{}", serde_json::to_string(&report).unwrap_or_default());
             } else {
-                outln!(
-                    "sent {} bytes in {} packets of {} in {:.1} s ({} retries)",
-                    report.size,
-                    report.packets,
-                    report.packet_size,
-                    report.seconds,
-                    report.retries
-                );
+                print_update(&report);
             }
             Ok(0)
         }
     }
+}
+
+/// An update's result: what was sent, then the versions before and after and how long the MCU
+/// took to come back.
+fn print_update(report: &ops::OtaReport) {
+    outln!(
+        "sent {} bytes in {} packets of {} in {:.1} s ({} retries)",
+        report.size,
+        report.packets,
+        report.packet_size,
+        report.seconds,
+        report.retries
+    );
+    outln!(
+        "update done: version {} before, {} now; the MCU came back {:.1} s after the last packet",
+        report.before_version.as_deref().unwrap_or("unknown"),
+        report.after_version.as_deref().unwrap_or("unknown"),
+        report.back_seconds.unwrap_or_default()
+    );
+}
+
+/// After the handshake: the data points its status query did not hear are asked again (a slow
+/// MCU's late reports are listened for first, [`ops::gather`]), and every report is read
+/// against the profile. Exit 1 when a data point is still missing or does not fit, or a frame
+/// was refused: `init` never says done with 7 of 19 data points.
+fn init_done(dev: Device<'_>, watch: &HandshakeWatch, json: bool) -> CliResult {
+    let profile = dev.profile;
+    let mut gathered = Gathered {
+        reports: watch.reports.clone(),
+        queries: 1,
+        between: 0,
+        refused: watch.refused.clone(),
+    };
+    if !watch.missing.is_empty() {
+        let more = ops::gather(dev, &watch.missing, ops::QUERIES).map_err(op_error)?;
+        gathered.reports.extend(more.reports);
+        gathered.queries += more.queries;
+        gathered.between += more.between;
+        gathered.refused.extend(more.refused);
+    }
+    let ids = ops::reported_dps(profile);
+    let status = ops::status_of(profile, &ids, &gathered);
+    if json {
+        let mut doc = tuya_show::status_json(profile, &status, watch.frame_version);
+        doc["done"] = json!(true);
+        outln!("{doc}");
+        return Ok(u8::from(!status.complete()));
+    }
+    if let Some(v) = watch.frame_version {
+        outln!("{}", version_text(v));
+    }
+    let heard = ids.len() - status.missing.len();
+    if status.complete() {
+        outln!("handshake done; all {heard} data points reported and fit the profile");
+        return Ok(0);
+    }
+    outln!(
+        "handshake done; {heard} of {} data points reported, {} do not fit the profile",
+        ids.len(),
+        status.suspect().len()
+    );
+    for d in status.suspect() {
+        outln!("{:<24} MISFIT {}", d.name(), d.shown(profile));
+    }
+    tuya_show::print_status_notes(profile, &status);
+    Ok(1)
 }
 
 /// The port's rate: `--baud`, else the profile's.
@@ -301,7 +318,6 @@ fn link_baud(port: &PortArgs, profile: &Profile) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::StepResult;
 
     fn step(step: HandshakeStep, ok: bool) -> TuyaEvent {
         let result = if ok {

@@ -8,6 +8,7 @@ pub mod request;
 pub mod serial;
 pub mod session;
 pub mod transport;
+pub mod watch;
 mod worker;
 pub use worker::default_margin;
 
@@ -16,6 +17,7 @@ pub use serial::PortOpener;
 pub use session::tuya::{HandshakeStep, ProductInfo, StepResult, TuyaEvent, TuyaModuleOptions};
 pub use session::{Capability, DeviceInfo, capabilities};
 pub use transport::{LinkError, Transport, wire_time};
+pub use watch::{Watch, Watched};
 
 use crate::packet::Packet;
 use crate::profile::Profile;
@@ -93,6 +95,9 @@ pub enum LinkCommand {
     Handshake,
     /// Tuya: changes what the module answers the MCU.
     TuyaOptions(TuyaModuleOptions),
+    /// Starts a watch ([`Client::watch`]): what the worker reads and says goes into this
+    /// channel too, from now until its receiver is dropped.
+    Watch(Sender<Watched>),
     /// Closes the port and ends the worker.
     Shutdown,
 }
@@ -448,6 +453,15 @@ impl Client {
             .map_err(|_| LinkError::Disconnected("link closed".into()))?;
         rx.recv()
             .unwrap_or(Err(LinkError::Disconnected("link closed".into())))
+    }
+
+    /// Starts a [`Watch`] on what the worker reads and says from now on (Tuya reports, refused
+    /// frames, the session's events), including during the exchanges after it; it ends when
+    /// dropped. A closed link gives a watch that sees nothing.
+    pub fn watch(&self) -> Watch {
+        let (tx, watch) = watch::channel();
+        let _ = self.commands.send(LinkCommand::Watch(tx));
+        watch
     }
 
     /// Sends a command without waiting.

@@ -23,16 +23,52 @@ pub struct FieldValue<'p> {
     pub field: &'p Field,
     /// The raw value.
     pub value: Value,
-    /// The value lies outside the field's range: a device sent what the field does not allow.
-    /// It is shown with the mark ([`Field::display`]), never as a clean value.
+    /// The value lies outside the field's range, or (a Tuya data point) outside what the data
+    /// point allows: a device sent what the field does not allow. It is shown with the mark
+    /// ([`Field::display`], [`FieldValue::limit`]), never as a clean value.
     pub out_of_range: bool,
+    /// A Tuya data point's value outside what the data point allows (no label, undefined bits,
+    /// between steps, too long, out of range: [`super::DpLimit`]).
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "ser_limit")]
+    pub limit: Option<super::DpLimit>,
+    /// False for a Tuya data point the profile does not have: its value is read by its own
+    /// type byte and length, its ident is `dp 101 (not in the profile)` and its field a
+    /// stand-in of that type ([`unknown_dp_field`]).
+    pub in_profile: bool,
 }
 
-impl FieldValue<'_> {
+fn ser_limit<S: serde::Serializer>(l: &Option<super::DpLimit>, s: S) -> Result<S::Ok, S::Error> {
+    match l {
+        Some(l) => s.serialize_some(&l.to_string()),
+        None => s.serialize_none(),
+    }
+}
+
+impl<'p> FieldValue<'p> {
+    /// A field's value as read from its layout: in the profile, its range checked afterwards.
+    fn plain(ident: String, field: &'p Field, value: Value) -> Self {
+        FieldValue {
+            ident,
+            field,
+            value,
+            out_of_range: false,
+            limit: None,
+            in_profile: true,
+        }
+    }
+
     /// The value as shown: scaled or converted (raw beside it), labelled, with its unit, and
-    /// marked when it is out of the field's range.
+    /// marked when it is out of the field's range or the data point's limits; a data point the
+    /// profile lacks as its type and value, `value 50`.
     pub fn display(&self) -> String {
-        self.field.display(&self.value)
+        if !self.in_profile {
+            return format!("{} {}", self.field.ident, self.field.format(&self.value));
+        }
+        match &self.limit {
+            // The range's own mark says it: `150 % !! out of range 0 to 100 %`.
+            Some(super::DpLimit::OutOfRange { .. }) | None => self.field.display(&self.value),
+            Some(l) => format!("{} !! {l}", self.field.display_plain(&self.value)),
+        }
     }
 
     /// The converted number, for a field with a conversion (`None` where it is undefined).
@@ -233,7 +269,7 @@ impl Profile {
         let mut values = Vec::new();
         let error = self.read_fields(fields, &mut r, &mut values, "").err();
         for v in &mut values {
-            v.out_of_range = v.field.out_of_range(&v.value).is_some();
+            v.out_of_range = v.limit.is_some() || v.field.out_of_range(&v.value).is_some();
         }
         Decoded {
             command: String::new(),
@@ -281,49 +317,40 @@ impl Profile {
             if let (Some(o), Some(v)) = (omitted, field.omitted_when)
                 && std::ptr::eq(o, field)
             {
-                values.push(FieldValue {
-                    ident: named(field),
-                    field,
-                    value: Value::Int(v),
-                    out_of_range: false,
-                });
+                values.push(FieldValue::plain(named(field), field, Value::Int(v)));
                 continue;
             }
             match field.ty {
                 FieldType::ParamId => {
                     let id = r.take(field, 1)?[0];
                     param = Some(id);
-                    values.push(FieldValue {
-                        ident: named(field),
+                    values.push(FieldValue::plain(
+                        named(field),
                         field,
-                        value: Value::Int(id as i64),
-                        out_of_range: false,
-                    });
+                        Value::Int(id as i64),
+                    ));
                 }
                 FieldType::ParamValue => match param.and_then(|id| self.param(id)) {
-                    Some(p) => values.push(FieldValue {
-                        ident: named(&p.field),
-                        field: &p.field,
-                        value: read_scalar(r, &p.field, order)?,
-                        out_of_range: false,
-                    }),
-                    None => values.push(FieldValue {
-                        ident: named(field),
+                    Some(p) => values.push(FieldValue::plain(
+                        named(&p.field),
+                        &p.field,
+                        read_scalar(r, &p.field, order)?,
+                    )),
+                    None => values.push(FieldValue::plain(
+                        named(field),
                         field,
-                        value: Value::Bytes(r.rest().to_vec()),
-                        out_of_range: false,
-                    }),
+                        Value::Bytes(r.rest().to_vec()),
+                    )),
                 },
                 FieldType::ParamBlock => {
                     let block = r.take(field, 32)?;
                     let mut br = Reader { buf: block, at: 0 };
                     for p in self.block_params() {
-                        values.push(FieldValue {
-                            ident: named(&p.field),
-                            field: &p.field,
-                            value: read_scalar(&mut br, &p.field, order)?,
-                            out_of_range: false,
-                        });
+                        values.push(FieldValue::plain(
+                            named(&p.field),
+                            &p.field,
+                            read_scalar(&mut br, &p.field, order)?,
+                        ));
                     }
                 }
                 FieldType::DataPoints => {
@@ -344,12 +371,7 @@ impl Profile {
                             _ => {}
                         }
                     }
-                    values.push(FieldValue {
-                        ident: named(field),
-                        field,
-                        value,
-                        out_of_range: false,
-                    });
+                    values.push(FieldValue::plain(named(field), field, value));
                 }
             }
         }
@@ -410,6 +432,8 @@ impl Profile {
                     field,
                     value: Value::Bytes(bytes.to_vec()),
                     out_of_range: false,
+                    limit: None,
+                    in_profile: true,
                 }),
             }
         }
@@ -421,11 +445,21 @@ impl Profile {
         Ok(())
     }
 
+    /// A data point read against the profile: one it lacks by its own type (with a stand-in
+    /// field, [`unknown_dp_field`]); one of another type is an error; a value the data point
+    /// does not allow is kept with its [`FieldValue::limit`].
     fn dp_value(&self, point: DataPoint) -> Result<FieldValue<'_>, FieldError> {
-        let def = self.data_point(point.id).ok_or(FieldError::Unknown {
-            what: "data point",
-            id: point.id.to_string(),
-        })?;
+        let Some(def) = self.data_point(point.id) else {
+            let value = super::data_point::value_of(&point.value);
+            return Ok(FieldValue {
+                ident: format!("dp {} (not in the profile)", point.id),
+                field: unknown_dp_field(point.value.dp_type()),
+                value,
+                out_of_range: false,
+                limit: None,
+                in_profile: false,
+            });
+        };
         let actual = point.value.dp_type();
         if actual != def.dp_type {
             return Err(FieldError::DpType {
@@ -434,19 +468,14 @@ impl Profile {
                 actual: actual.name(),
             });
         }
-        let value = match point.value {
-            DpValue::Bool(b) => Value::Int(b as i64),
-            DpValue::Value(v) => Value::Int(v as i64),
-            DpValue::Enum(e) => Value::Int(e as i64),
-            DpValue::Bitmap { bits, .. } => Value::Int(bits as i64),
-            DpValue::String(s) => Value::Text(s),
-            DpValue::Raw(b) => Value::Bytes(b),
-        };
+        let value = super::data_point::value_of(&point.value);
         Ok(FieldValue {
             ident: def.field.ident.clone(),
             field: &def.field,
+            limit: def.limit_of(&value),
             value,
             out_of_range: false,
+            in_profile: true,
         })
     }
 
@@ -457,6 +486,26 @@ impl Profile {
             .collect::<Vec<_>>()
             .join(", ")
     }
+}
+
+/// The stand-in field of a data point the profile lacks, by its wire type: its ident is the
+/// type's name (`value`), so that the value reads `value 50`.
+pub fn unknown_dp_field(ty: DpType) -> &'static Field {
+    static FIELDS: std::sync::OnceLock<Vec<Field>> = std::sync::OnceLock::new();
+    let all = FIELDS.get_or_init(|| {
+        [
+            (DpType::Raw, FieldType::Bytes(Len::Rest)),
+            (DpType::Bool, FieldType::Bool),
+            (DpType::Value, FieldType::I32),
+            (DpType::String, FieldType::Str(Len::Rest)),
+            (DpType::Enum, FieldType::U8),
+            (DpType::Bitmap, FieldType::U32),
+        ]
+        .into_iter()
+        .map(|(t, ty)| Field::plain(t.name(), ty))
+        .collect()
+    });
+    &all[usize::from(ty.byte()).min(all.len() - 1)]
 }
 
 /// A checked value as the data point it is on the wire.

@@ -342,9 +342,16 @@ impl Profile {
                     field: def.field.ident.clone(),
                 });
             }
+            let value = input.resolve(&def.field)?;
+            if let Some(limit) = def.limit_of(&value) {
+                return Err(FieldError::DataPointLimit {
+                    field: def.field.ident.clone(),
+                    limit: Box::new(limit),
+                });
+            }
             points.push(DataPoint {
                 id: def.id,
-                value: super::codec::dp_value_of(def, input.resolve(&def.field)?),
+                value: super::codec::dp_value_of(def, value),
             });
             ins.used[i] = true;
         }

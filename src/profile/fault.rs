@@ -197,6 +197,15 @@ pub enum FieldError {
         /// The field's ident.
         field: String,
     },
+    /// A data point value outside what the data point allows (range, step, labels, bits,
+    /// length: [`super::DpLimit`]).
+    #[error("{field}: {limit}")]
+    DataPointLimit {
+        /// The data point's ident.
+        field: String,
+        /// Which limit, with the value and what is allowed.
+        limit: Box<super::DpLimit>,
+    },
     /// A parameter or data point that cannot be written.
     #[error("{field} is read-only")]
     ReadOnly {

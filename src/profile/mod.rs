@@ -6,6 +6,7 @@ pub mod model;
 pub use model::*;
 pub mod codec;
 pub mod convert;
+pub mod data_point;
 pub mod encode;
 pub mod fault;
 pub mod registry;
@@ -16,6 +17,7 @@ pub mod validate;
 pub mod value;
 
 pub use codec::{Decoded, FieldValue, Input};
+pub use data_point::DpLimit;
 pub use registry::{ProfileError, Registry, Source};
 pub use roles::{CommandRole, ParamRole};
 pub use value::{FieldError, Misfit, Value};

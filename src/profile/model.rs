@@ -499,13 +499,37 @@ pub struct Bit {
     pub name: Text,
 }
 
-/// Whether a parameter or data point can be written.
+/// Whether a parameter or data point can be written, and whether it is read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Access {
-    /// Read or reported only.
+    /// Read or reported only (a Tuya schema's mode `ro`).
     ReadOnly,
-    /// Read and written.
+    /// Read and written (mode `rw`).
     ReadWrite,
+    /// Tuya only: sent by the module, never reported by the MCU (mode `wr`, e.g. a "beep once"
+    /// trigger). Servo parameters are never write-only (checked at load).
+    WriteOnly,
+}
+
+impl Access {
+    /// Whether the module (or the host) may write it.
+    pub fn writable(self) -> bool {
+        matches!(self, Access::ReadWrite | Access::WriteOnly)
+    }
+
+    /// Whether the device reports (or is read for) it.
+    pub fn reported(self) -> bool {
+        matches!(self, Access::ReadOnly | Access::ReadWrite)
+    }
+
+    /// The Tuya schema's `mode`: `ro`, `rw` or `wr`.
+    pub fn tuya_mode(self) -> &'static str {
+        match self {
+            Access::ReadOnly => "ro",
+            Access::ReadWrite => "rw",
+            Access::WriteOnly => "wr",
+        }
+    }
 }
 
 /// A servo parameter (`data_id`).
@@ -539,7 +563,16 @@ pub struct DataPointDef {
     pub dp_type: DpType,
     /// Its name, range, unit, labels or bit names. The field type must suit `dp_type`:
     /// Raw↔Bytes(Rest), Bool↔Bool, Value↔I32, String↔Str(Rest), Enum↔U8, Bitmap↔U8/U16/U32.
+    /// A value's `scale` is a power of ten (a Tuya schema's `scale` n is `scale: 1e-n` here).
     pub field: Field,
+    /// String and raw only: the most bytes the value may have (a schema's `maxlen`). `None`:
+    /// no limit beyond the frame's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_len: Option<u16>,
+    /// Value only: the step between allowed raw values, counted from the range's low end (a
+    /// schema's `step`, in transmitted units). `None` or 1: every raw value in range.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub step: Option<i64>,
 }
 
 /// A live plot: fields of one telemetry command drawn together.

@@ -1,6 +1,6 @@
 //! Consistency rules that a profile must meet beyond its syntax.
 
-use super::model::{Access, CommandKind, Field, FieldType, Len, Profile, Protocol};
+use super::model::{Access, CommandKind, DataPointDef, Field, FieldType, Len, Profile, Protocol};
 use crate::document::Step::{self, Index, Key};
 use crate::protocol::tuya::dp::DpType;
 use std::collections::HashSet;
@@ -407,6 +407,15 @@ fn check_params(p: &mut Profile) -> Result<(), Issue> {
                 format!("{}: parameters are integers", prm.field.ident),
             ));
         }
+        if prm.access == Access::WriteOnly {
+            return Err(issue(
+                vec![Key("params"), Index(i), Key("access")],
+                format!(
+                    "{}: a servo parameter is ReadOnly or ReadWrite (WriteOnly is for Tuya data points)",
+                    prm.field.ident
+                ),
+            ));
+        }
         check_field(&prm.field, &at)?;
     }
     p.params.sort_by_key(|x| x.id);
@@ -478,8 +487,44 @@ fn check_data_points(p: &Profile) -> Result<(), Issue> {
             ));
         }
         check_field(&d.field, &at)?;
+        check_dp_limits(d, i)?;
     }
     Ok(())
+}
+
+/// A data point's own limits: `max_len` on strings and raw bytes only, `step` on values only
+/// (positive), and a value's scale a power of ten as the Tuya schema's is.
+fn check_dp_limits(d: &DataPointDef, i: usize) -> Result<(), Issue> {
+    let at = |k: &'static str| vec![Key("data_points"), Index(i), Key(k)];
+    let ident = &d.field.ident;
+    if d.max_len.is_some() && !matches!(d.dp_type, DpType::String | DpType::Raw) {
+        return Err(issue(
+            at("max_len"),
+            format!("{ident}: `max_len` is for string and raw data points"),
+        ));
+    }
+    match d.step {
+        Some(_) if d.dp_type != DpType::Value => Err(issue(
+            at("step"),
+            format!("{ident}: `step` is for value data points"),
+        )),
+        Some(s) if s < 1 => Err(issue(
+            at("step"),
+            format!("{ident}: `step` is 1 or more (raw units), not {s}"),
+        )),
+        _ if d.dp_type == DpType::Value
+            && super::data_point::decimal_scale(d.field.scale).is_none() =>
+        {
+            Err(issue(
+                vec![Key("data_points"), Index(i), Key("field"), Key("scale")],
+                format!(
+                    "{ident}: a value data point's scale is a power of ten (1, 0.1, 0.01 …), not {}",
+                    d.field.scale
+                ),
+            ))
+        }
+        _ => Ok(()),
+    }
 }
 
 fn check_plots(p: &Profile) -> Result<(), Issue> {

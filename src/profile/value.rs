@@ -22,6 +22,25 @@ pub enum Value {
 const BOOL_WORDS: &str = "on, off (or true, false, yes, no, 1, 0)";
 
 impl Field {
+    /// A field with only an ident (also its name, in both languages) and a type: no scale,
+    /// unit, range, labels or bits.
+    pub fn plain(ident: &str, ty: FieldType) -> Field {
+        Field {
+            ident: ident.to_string(),
+            name: crate::i18n::Text::new(ident, ident),
+            ty,
+            scale: 1.0,
+            unit: String::new(),
+            range: None,
+            labels: Vec::new(),
+            bits: Vec::new(),
+            default: None,
+            optional: false,
+            omitted_when: None,
+            convert: None,
+        }
+    }
+
     /// What may be written, as a message says it: `0 to 100 %`, `strong (0), normal (1)`,
     /// `on, off (…)`, bit names, `text of 16 bytes`, `hex bytes`.
     pub fn allowed_text(&self) -> String {
@@ -178,7 +197,8 @@ impl Field {
         }
     }
 
-    fn display_plain(&self, value: &Value) -> String {
+    /// A value as shown with its unit, without the out-of-range mark.
+    pub(super) fn display_plain(&self, value: &Value) -> String {
         match value {
             Value::Int(raw) if self.label(*raw).is_none() => match self.convert {
                 Some(c) => match c.apply(*raw) {

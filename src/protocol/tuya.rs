@@ -18,9 +18,14 @@ pub const VERSION_MODULE: u8 = 0x00;
 /// The version byte of frames from the MCU, as the protocol document (and MCU SDK v2.5) gives
 /// it. MCUs in the field also send 0x01 (MCU SDK v2.3) and 0x00.
 pub const VERSION_MCU: u8 = 0x03;
-/// The largest data length a decoder accepts by default: an OTA packet of 1024 bytes plus its
-/// offset, with room to spare. The MCU SDK's own buffers are far smaller.
-pub const DEFAULT_MAX_DATA: usize = 2048;
+/// The largest data length a decoder accepts by default: the protocol's largest frame, an OTA
+/// packet of 1024 bytes with its 4-byte offset (1035 bytes on the wire). A Wi-Fi module's UART
+/// buffer holds at least 1024 bytes on every chip but the ESP8266 (256), and the MCU SDK's
+/// buffers are far smaller (TUYA_FIELD_NOTES §6); a longer frame is refused as
+/// [`super::FrameError::TooLong`] and the decoder resynchronises on the next `55 AA`. Tuya gives
+/// no rule for a module that receives a longer frame (UNCONFIRMED): this is botbench's choice,
+/// above every frame of the protocol and of the vacuum's data points.
+pub const DEFAULT_MAX_DATA: usize = 1028;
 /// The largest data length the length field can carry.
 pub const MAX_DATA: usize = u16::MAX as usize;
 
@@ -48,14 +53,40 @@ pub mod cmd {
     pub const OTA_START: u8 = 0x0A;
     /// OTA packet: offset and data.
     pub const OTA_PACKET: u8 = 0x0B;
+    /// The MCU asks for the GMT (UTC) time: answered `ok, yy, MM, dd, hh, mm, ss` (7 bytes).
+    pub const UTC_TIME: u8 = 0x0C;
     /// Wi-Fi production test.
     pub const WIFI_TEST: u8 = 0x0E;
+    /// The MCU asks for the module's free memory: answered with 4 bytes.
+    pub const FREE_MEMORY: u8 = 0x0F;
     /// Local time.
     pub const LOCAL_TIME: u8 = 0x1C;
+    /// The MCU asks for weather data (`w.<param>` items); not a bench service.
+    pub const WEATHER_OPEN: u8 = 0x20;
+    /// Weather data from the module.
+    pub const WEATHER_DATA: u8 = 0x21;
+    /// A data-point report the MCU wants acknowledged (synchronous report, as 0x07 data).
+    pub const DP_REPORT_SYNC: u8 = 0x22;
+    /// The module's result of a synchronous report: `01` success, `00` failure.
+    pub const DP_REPORT_SYNC_RESULT: u8 = 0x23;
+    /// The MCU asks for the Wi-Fi signal strength: answered with one signed byte, dBm.
+    pub const WIFI_RSSI: u8 = 0x24;
+    /// The MCU tells the module to stop its heartbeat: acknowledged with an empty 0x25.
+    pub const HEARTBEAT_STOP: u8 = 0x25;
+    /// Stream (map) data from the MCU: answered with one result byte.
+    pub const STREAM: u8 = 0x28;
     /// Network status.
     pub const NET_STATUS: u8 = 0x2B;
+    /// Wi-Fi test: join the router named in the JSON data; answered `01` received.
+    pub const WIFI_CONNECT_TEST: u8 = 0x2C;
     /// MAC address.
     pub const MAC: u8 = 0x2D;
+    /// Multi-map stream data from the MCU: answered with one result byte.
+    pub const MAPS_STREAM: u8 = 0x30;
+    /// Extended services: the sub-command is the first data byte.
+    pub const EXTENDED: u8 = 0x34;
+    /// "New function" settings (sub-command 0x00 with JSON): answered `00, result`.
+    pub const NEW_FUNC: u8 = 0x37;
 }
 
 /// A Tuya frame.

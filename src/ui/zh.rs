@@ -11,7 +11,7 @@ use crate::i18n::{Lang, Text};
 use crate::link::session::tuya::StepResult;
 use crate::link::{ExchangeError, LinkError};
 use crate::ops::OpError;
-use crate::profile::FieldError;
+use crate::profile::{DpLimit, FieldError};
 use crate::protocol::FrameError;
 use crate::protocol::tuya::VERSION_MCU;
 use crate::protocol::tuya::dp::DpError;
@@ -303,6 +303,32 @@ impl Zh for DpError {
     }
 }
 
+impl Zh for DpLimit {
+    fn zh(&self) -> String {
+        match self {
+            DpLimit::OutOfRange {
+                value,
+                min,
+                max,
+                unit,
+            } => format!("{value}{unit} 超出范围:设备配置允许 {min} 至 {max}{unit}"),
+            DpLimit::OffStep {
+                value,
+                step,
+                min,
+                unit,
+            } => format!("{value}{unit} 不在步长上:设备配置允许从 {min} 起以 {step} 为步长"),
+            DpLimit::NoLabel { index, allowed } => {
+                format!("枚举序号 {index} 没有标签:设备配置的标签为 {allowed}")
+            }
+            DpLimit::UndefinedBits { undefined, defined } => {
+                format!("位 {undefined:#x} 未定义:设备配置定义的位为 {defined}")
+            }
+            DpLimit::TooLong { len, max } => format!("{len} 字节,超过设备配置的最大值 {max}"),
+        }
+    }
+}
+
 impl Zh for FieldError {
     fn zh(&self) -> String {
         match self {
@@ -351,6 +377,7 @@ impl Zh for FieldError {
             FieldError::MissingField { command, field } => {
                 format!("{command}:缺少字段 '{field}'")
             }
+            FieldError::DataPointLimit { field, limit } => format!("{field}:{}", limit.zh()),
             FieldError::ReadOnly { field } => format!("{field} 为只读"),
             FieldError::Unknown { what, id } => format!("设备配置中没有 {what} {id}"),
             FieldError::DpType {

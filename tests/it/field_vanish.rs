@@ -127,7 +127,15 @@ fn a_firmware_upload_ends_when_the_port_vanishes() {
     let run = ends_on_the_loss(
         &["tuya-vacuum"],
         3000,
-        &["tuya", "--port", "PORT", "ota", image.to_str().unwrap()],
+        &[
+            "tuya",
+            "--port",
+            "PORT",
+            "ota",
+            "--expect-version",
+            "1.0.1",
+            image.to_str().unwrap(),
+        ],
     );
     let _ = std::fs::remove_file(&image);
     assert!(

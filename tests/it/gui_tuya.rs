@@ -254,9 +254,12 @@ fn a_value_out_of_range_is_refused_before_sending_and_typed_data_points_are_set(
     let mut h = harness(&b, &profile);
     handshake(&mut h);
     tab(&mut h, "Data points");
-    assert_eq!(reported(app(&h), 16), Some(Value::Int(35)));
-    type_into(&mut h, "16 Clean area", "12000");
-    assert!(has_label(&h, "12000 is out of range; allowed 0 to 9999 m²"));
+    assert_eq!(reported(app(&h), 16), Some(Value::Int(350)));
+    type_into(&mut h, "16 Clean area", "1200");
+    assert!(has_label(
+        &h,
+        "1200.0 is out of range; allowed 0.0 to 999.9 m²"
+    ));
     assert!(h.query_by_label("Send").is_none(), "nothing to send");
     h.key_press(egui::Key::Enter);
     h.run_steps(5);
@@ -272,10 +275,10 @@ fn a_value_out_of_range_is_refused_before_sending_and_typed_data_points_are_set(
     let cases: [(&str, &str, u8, Value, DpValue); 4] = [
         (
             "16 Clean area",
-            "120",
+            "12.5",
             16,
-            Value::Int(120),
-            DpValue::Value(120),
+            Value::Int(125),
+            DpValue::Value(125),
         ),
         (
             "15 Clean record",

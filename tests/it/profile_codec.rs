@@ -32,6 +32,11 @@ fn valid_value(f: &Field) -> BoxedStrategy<Value> {
                 .prop_map(Value::Bytes)
                 .boxed()
         }
+        // A bitmap: only the bits the field defines (others are a misfit a report is flagged for).
+        _ if !f.bits.is_empty() => {
+            let mask: i64 = f.bits.iter().map(|b| 1i64 << b.bit).sum();
+            (0..=mask).prop_map(move |v| Value::Int(v & mask)).boxed()
+        }
         _ => match f.allowed() {
             botbench::profile::value::Allowed::Range(lo, hi) => {
                 (lo..=hi).prop_map(Value::Int).boxed()

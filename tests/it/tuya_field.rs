@@ -137,11 +137,11 @@ fn data_points_of_another_type_or_length_are_shown_raw_and_status_fails() {
     assert_eq!(o.code, 1, "{o:?}");
     let out = o.out.clone();
     assert!(
-        out.contains("power (1)            MISFIT raw 00 00 00 01 (bool of 4 byte(s) on the wire; a bool is 1 byte(s))"),
+        out.contains("power (1)                MISFIT raw 00 00 00 01 (bool of 4 byte(s) on the wire; a bool is 1 byte(s); allowed: bool false or true)"),
         "{out}"
     );
     assert!(
-        out.contains("mode (3)             MISFIT raw 00 00 00 00 (type value on the wire, the profile says enum)"),
+        out.contains("mode (3)                 MISFIT raw 00 00 00 00 (type value on the wire, the profile says enum; allowed: enum labels 0 to 11)"),
         "{out}"
     );
     assert!(out.contains("battery"), "the others are listed: {out}");
@@ -280,7 +280,12 @@ fn an_image_over_the_profiles_maximum_is_refused_before_anything_is_sent() {
     let o = tuya(
         served.path(),
         &served.ports(),
-        &["ota", &fw.display().to_string()],
+        &[
+            "ota",
+            "--expect-version",
+            "1.0.1",
+            &fw.display().to_string(),
+        ],
     );
     assert_eq!(o.code, 0, "{o:?}");
     let err = &o.err;

@@ -43,13 +43,18 @@ pub(crate) enum Unasked {
     LateReply,
     /// An answer to something else (a late MSP or Tuya answer): dropped.
     Stale,
-    /// The Tuya MCU's own request: the module writes `reply` and reports `event`.
+    /// The Tuya MCU's own request: the module writes `reply` (if it needs one) and reports
+    /// `events`; a synchronous report (0x22) is passed on as a report too (`report`).
     McuRequest {
-        /// The module's answer.
-        reply: tuya_codec::Frame,
+        /// The module's answer; `None` for an acknowledgement of the module's own push.
+        reply: Option<tuya_codec::Frame>,
         /// What is reported.
-        event: TuyaEvent,
+        events: Vec<TuyaEvent>,
+        /// The frame is a data-point report as well.
+        report: bool,
     },
+    /// A Tuya MCU command the module does not know: reported (`event`), logged and ignored.
+    Ignored(TuyaEvent),
 }
 
 impl Unasked {
@@ -291,7 +296,7 @@ impl ProtocolSession {
     }
 
     /// What `p`, a frame that is not the awaited answer, is.
-    pub(crate) fn unasked(&self, p: &Packet) -> Unasked {
+    pub(crate) fn unasked(&mut self, p: &Packet) -> Unasked {
         if p.direction != Direction::DeviceToHost {
             return Unasked::Echo;
         }

@@ -52,7 +52,9 @@ impl Driver {
             let (request, _) = self.answer(WIFI_STATE, mcu(WIFI_STATE, &[]));
             assert_eq!(request.payload, vec![4], "the Wi-Fi state of the options");
         }
-        let report = mcu(tuya::cmd::DP_REPORT, &[1, 1, 0, 1, 1]);
+        // Every data point of the vacuum, in one report (their types do not matter here).
+        let all: Vec<u8> = (1..=19).flat_map(|id| [id, 1, 0, 1, 1]).collect();
+        let report = mcu(tuya::cmd::DP_REPORT, &all);
         assert!(!self.answer(QUERY_STATUS, report).1);
         std::mem::take(&mut self.events)
     }
@@ -279,15 +281,25 @@ fn the_mcus_own_requests_are_answered_with_the_module_options() {
         },
         ..LinkOptions::default()
     };
-    let s = Driver::new("tuya-vacuum", &options).s;
+    let mut s = Driver::new("tuya-vacuum", &options).s;
     let ask = Packet::tuya(tuya::Frame::from_mcu(tuya::cmd::NET_STATUS, Vec::new()));
     let Unasked::McuRequest { reply, .. } = s.unasked(&ask) else {
         panic!("not answered");
     };
     assert_eq!(
         reply,
-        tuya::Frame::from_module(tuya::cmd::NET_STATUS, vec![2])
+        Some(tuya::Frame::from_module(tuya::cmd::NET_STATUS, vec![2]))
     );
+    // A synchronous report is a report, answered 0x23.
+    let sync = Packet::tuya(tuya::Frame::from_mcu(0x22, vec![6, 2, 0, 4, 0, 0, 0, 85]));
+    let Unasked::McuRequest { reply, report, .. } = s.unasked(&sync) else {
+        panic!("not answered");
+    };
+    assert!(report);
+    assert_eq!(reply, Some(tuya::Frame::from_module(0x23, vec![1])));
+    // A command nobody knows is ignored, and said with its bytes.
+    let odd = Packet::tuya(tuya::Frame::from_mcu(0x99, vec![1, 2]));
+    assert!(matches!(s.unasked(&odd), Unasked::Ignored(_)));
     let report = tuya::Frame::from_mcu(tuya::cmd::DP_REPORT, vec![1, 1, 0, 1, 1]);
     assert!(matches!(s.unasked(&Packet::tuya(report)), Unasked::Report));
     let late = Packet::tuya(tuya::Frame::from_mcu(WORK_MODE, Vec::new()));
@@ -298,7 +310,7 @@ fn the_mcus_own_requests_are_answered_with_the_module_options() {
 fn frames_are_sorted_by_their_own_protocol_only() {
     // An MSP answer numbered like a Tuya MCU request (0x05 is CMD_BUILD_INFO) answers something
     // else all the same; an async message answers nothing.
-    let s = Driver::new("window-cleaner", &LinkOptions::default()).s;
+    let mut s = Driver::new("window-cleaner", &LinkOptions::default()).s;
     let late = Packet::msp_reply(msp::Reply::new(CMD_BUILD_INFO, Vec::new()));
     assert!(s.unasked(&late).answers_other());
     let mut async_msg = msp::Reply::new(0x40, vec![1]);
@@ -308,7 +320,7 @@ fn frames_are_sorted_by_their_own_protocol_only() {
 
     // A late servo answer is reported and answers something else, whatever its command; our own
     // request read back (a one-wire adapter) is neither.
-    let s = Driver::new("servo", &LinkOptions::default()).s;
+    let mut s = Driver::new("servo", &LinkOptions::default()).s;
     let late = Packet::servo(servo::Frame::reply(servo::cmd::WRITE_DATA, vec![1, 1]));
     assert!(matches!(s.unasked(&late), Unasked::LateReply));
     let echo = Packet::servo(servo::Frame::request(servo::cmd::WRITE_DATA, vec![1, 1]));

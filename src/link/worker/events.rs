@@ -2,6 +2,7 @@
 //! reads them), the packet tap (every frame sent and received, for the packet monitor), and the
 //! waker that tells the UI to look.
 
+use crate::link::watch::Watchers;
 use crate::link::{LinkEvent, LogEntry, Waker};
 use crate::packet::Packet;
 use crate::protocol::{Direction, FrameError};
@@ -17,21 +18,35 @@ pub(super) struct Events {
     wake: bool,
     /// Events dropped because the channel was full.
     dropped: u64,
+    /// Blocking callers' watches ([`crate::link::Client::watch`]).
+    pub(super) watchers: Watchers,
+    /// The link's protocol (only Tuya reports are watched).
+    protocol: crate::profile::Protocol,
 }
 
 impl Events {
     /// Events into `tx`; `waker` wakes whoever reads them.
-    pub(super) fn new(tx: Sender<LinkEvent>, waker: Option<Waker>) -> Self {
+    pub(super) fn new(
+        tx: Sender<LinkEvent>,
+        waker: Option<Waker>,
+        protocol: crate::profile::Protocol,
+    ) -> Self {
         Self {
             tx,
             waker,
             wake: false,
             dropped: 0,
+            watchers: Watchers::default(),
+            protocol,
         }
     }
 
-    /// Sends `ev`, or drops and counts it when the channel is full (nobody reads it).
+    /// Sends `ev`, or drops and counts it when the channel is full (nobody reads it). What the
+    /// Tuya session says goes to the watches too.
     pub(super) fn emit(&mut self, ev: LinkEvent) {
+        if let LinkEvent::Tuya(t) = &ev {
+            self.watchers.tuya(t);
+        }
         match self.tx.try_send(ev) {
             Ok(()) => self.wake = true,
             Err(TrySendError::Full(ev)) => {
@@ -66,8 +81,10 @@ impl Events {
         }));
     }
 
-    /// The packet tap of a frame (or frame error) from the device.
+    /// The packet tap of a frame (or frame error) from the device; reports and refused frames
+    /// go to the watches too.
     pub(super) fn tap_in(&mut self, frame: Result<Packet, FrameError>, note: Option<String>) {
+        self.watchers.frame(self.protocol, &frame);
         self.tap(Direction::DeviceToHost, frame, note);
     }
 

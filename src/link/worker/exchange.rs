@@ -143,13 +143,25 @@ impl Worker {
         match unasked {
             Unasked::Echo | Unasked::Stale => {}
             Unasked::Report | Unasked::LateReply => self.events.emit(LinkEvent::Report(p)),
-            Unasked::McuRequest { reply, event } => {
-                let bytes = reply
-                    .encode()
-                    .map_err(|e| ExchangeError::Encode(e.to_string()))?;
-                self.write(&bytes, Packet::tuya(reply))?;
-                self.events.emit(LinkEvent::Tuya(event));
+            Unasked::McuRequest {
+                reply,
+                events,
+                report,
+            } => {
+                if report {
+                    self.events.emit(LinkEvent::Report(p));
+                }
+                if let Some(reply) = reply {
+                    let bytes = reply
+                        .encode()
+                        .map_err(|e| ExchangeError::Encode(e.to_string()))?;
+                    self.write(&bytes, Packet::tuya(reply))?;
+                }
+                for ev in events {
+                    self.events.emit(LinkEvent::Tuya(ev));
+                }
             }
+            Unasked::Ignored(event) => self.events.emit(LinkEvent::Tuya(event)),
         }
         Ok(())
     }
@@ -428,7 +440,8 @@ impl Worker {
 
 /// How the answer to an attempt written at `t0` ends when it is a burst: when the line is quiet,
 /// or when every data point has been reported, by the reports' wire time twice over after the
-/// request and the margin at the latest.
+/// request and the margin at the latest, later while reports of data points not yet heard keep
+/// coming within a margin of each other.
 fn burst_end(
     reply: &ReplySpec,
     t0: Instant,
@@ -438,10 +451,18 @@ fn burst_end(
 ) -> Option<BurstEnd> {
     match reply {
         ReplySpec::Burst { quiet, .. } => Some(BurstEnd::Quiet(*quiet)),
-        ReplySpec::Reports { ids, bytes, .. } => Some(BurstEnd::Reported {
-            ids: ids.clone(),
-            until: t0 + wire_time(request_bytes, baud) + wire_time(*bytes, baud) * 2 + margin,
-        }),
+        ReplySpec::Reports { ids, bytes, .. } => {
+            let until = t0 + wire_time(request_bytes, baud) + wire_time(*bytes, baud) * 2 + margin;
+            // A report of a data point not yet heard earns the next one the margin and a
+            // report's wire time; all of them, at most.
+            let gap = margin + wire_time(bytes / ids.len().max(1), baud);
+            Some(BurstEnd::Reported {
+                ids: ids.clone(),
+                until,
+                gap,
+                hard: until + gap * ids.len() as u32,
+            })
+        }
         _ => None,
     }
 }

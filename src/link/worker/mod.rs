@@ -104,7 +104,7 @@ impl Worker {
             polls: Polls::default(),
             unclaimed: sweep::Unclaimed::default(),
             liveness: liveness::Liveness::default(),
-            events: Events::new(events, waker),
+            events: Events::new(events, waker, protocol),
             cmds,
             opts,
             stats_reported: (LinkStats::default(), now),
@@ -235,6 +235,7 @@ impl Worker {
             LinkCommand::Identify => self.session.identify_again(),
             LinkCommand::Handshake => self.session.handshake_again(Instant::now()),
             LinkCommand::TuyaOptions(o) => self.session.set_tuya_options(o),
+            LinkCommand::Watch(tx) => self.events.watchers.add(tx),
             LinkCommand::Shutdown => self.shutdown = true,
         }
     }
@@ -265,6 +266,8 @@ impl Worker {
                 // What the module answers the MCU takes effect at once: the MCU may ask while
                 // an exchange is under way.
                 LinkCommand::TuyaOptions(o) => self.session.set_tuya_options(o),
+                // A watch starts at once: what the exchange under way reads is watched.
+                LinkCommand::Watch(tx) => self.events.watchers.add(tx),
                 other => self.queue.defer(other),
             }
         }

@@ -43,8 +43,15 @@ pub(super) enum Outcome {
 pub(super) enum BurstEnd {
     /// When the line has been quiet this long.
     Quiet(Duration),
-    /// When each of these Tuya data points has been reported, or at `until` at the latest.
-    Reported { ids: Vec<u8>, until: Instant },
+    /// When each of these Tuya data points has been reported, or at `until` at the latest;
+    /// while reports of data points not yet heard keep coming (a slow MCU that reports 100-150
+    /// ms apart), each moves the end to `gap` after it, never past `hard`.
+    Reported {
+        ids: Vec<u8>,
+        until: Instant,
+        gap: Duration,
+        hard: Instant,
+    },
 }
 
 impl BurstEnd {
@@ -57,6 +64,17 @@ impl BurstEnd {
                 ids.iter().all(|id| reported.contains(id))
             }
         }
+    }
+
+    /// Whether `p` reports an awaited data point that `got` has not.
+    fn brings_news(&self, got: &[Packet], p: &Packet) -> bool {
+        let BurstEnd::Reported { ids, .. } = self else {
+            return false;
+        };
+        let before = crate::link::session::tuya::reported_ids(got);
+        crate::link::session::tuya::reported_ids(std::slice::from_ref(p))
+            .iter()
+            .any(|id| ids.contains(id) && !before.contains(id))
     }
 }
 
@@ -194,6 +212,11 @@ impl Worker {
         let now = Instant::now();
         w.first_at.get_or_insert(now);
         w.last_at = now;
+        if let Some(end @ BurstEnd::Reported { gap, hard, .. }) = &w.burst
+            && end.brings_news(&w.got, &p)
+        {
+            w.cap = w.cap.max((now + *gap).min(*hard));
+        }
         w.got.push(p);
         match &w.burst {
             Some(BurstEnd::Quiet(quiet)) => w.deadline = now + *quiet,

@@ -144,6 +144,42 @@ pub fn expected_text(size: u64, baud: u32) -> String {
     )
 }
 
+/// The MCU version a firmware image names, if it names exactly one: the only distinct
+/// dot-decimal `x.y.z` string in it (each part 1 or 2 digits, between bytes that are no digit
+/// or dot). An MCU SDK image holds its `MCU_VER` string (`"1.0.0"`), which the product info's
+/// `"v"` reports; the image carries no header that says it (TUYA_FIELD_NOTES §5 gives none), so
+/// this is botbench's reading, and `--expect-version` overrides it. `None` when the image holds
+/// none, or several different ones.
+pub fn image_version(image: &[u8]) -> Option<String> {
+    let is_version = |t: &[u8]| {
+        let parts: Vec<&[u8]> = t.split(|b| *b == b'.').collect();
+        parts.len() == 3
+            && parts
+                .iter()
+                .all(|p| (1..=2).contains(&p.len()) && p.iter().all(u8::is_ascii_digit))
+    };
+    let mut found: Option<&[u8]> = None;
+    for token in image.split(|b| !(b.is_ascii_digit() || *b == b'.')) {
+        if !is_version(token) {
+            continue;
+        }
+        match found {
+            Some(f) if f != token => return None,
+            _ => found = Some(token),
+        }
+    }
+    found.map(|t| String::from_utf8_lossy(t).into_owned())
+}
+
+/// Whether `text` is a dot-decimal MCU version (`1.0.0`; each part 0-99, as Tuya's pages allow).
+pub fn is_version(text: &str) -> bool {
+    let parts: Vec<&str> = text.split('.').collect();
+    parts.len() == 3
+        && parts
+            .iter()
+            .all(|p| (1..=2).contains(&p.len()) && p.bytes().all(|b| b.is_ascii_digit()))
+}
+
 /// The result of a firmware upload.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct OtaReport {
@@ -155,8 +191,15 @@ pub struct OtaReport {
     pub packets: usize,
     /// Packets sent again after a missing ack.
     pub retries: u32,
-    /// Seconds taken.
+    /// Seconds the upload took (0x0a to the end frame).
     pub seconds: f64,
+    /// The version the MCU's product info named before the update (`None`: not asked, or
+    /// it named none).
+    pub before_version: Option<String>,
+    /// The version it names after it restarted ([`update`]; `None` from [`ota`] alone).
+    pub after_version: Option<String>,
+    /// Seconds from the end frame to the product info that named the new version.
+    pub back_seconds: Option<f64>,
 }
 
 /// The packet size of the MCU's answer to 0x0a: 0 → 256, 1 → 512, 2 → 1024, nothing → 256.
@@ -263,12 +306,90 @@ pub fn ota(
         packets,
         retries,
         seconds: started.elapsed().as_secs_f64(),
+        before_version: None,
+        after_version: None,
+        back_seconds: None,
     })
+}
+
+/// What an update must prove: the version the MCU reports once it runs the image (from the
+/// image, [`image_version`], or given), and how long after the end frame it may take.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Expect {
+    /// The dot-decimal version, `1.0.1`.
+    pub version: String,
+    /// At most this from the end frame ([`super::COME_BACK_LIMIT`], 60 s, by default).
+    pub limit: Duration,
+}
+
+/// A proven firmware update: the version before (product info, 0x01), the upload ([`ota`]),
+/// then the wait until the MCU restarted and names `expect.version`
+/// ([`super::confirm::await_new_version`]). Only then is it done; each way it fails is said as
+/// what it is (a refused packet, never back, back with the old version, never restarted).
+pub fn update(
+    client: &Client,
+    image: &[u8],
+    max: u32,
+    expect: &Expect,
+    timing: OtaTiming,
+    run: &mut Run<'_>,
+) -> Result<OtaReport, OpError> {
+    let before = super::confirm::product_info(client).and_then(|i| i.version);
+    let watch = client.watch();
+    let mut report = ota(client, image, max, timing, run)?;
+    let ended = Instant::now();
+    let size = image.len() as u64;
+    let limit = expect.limit.as_secs();
+    run.report(Progress {
+        done: size,
+        total: size,
+        message: crate::i18n::Text::new(
+            format!(
+                "all {size} bytes sent; waiting for the MCU to restart with version {} (at most {limit} s)",
+                expect.version
+            ),
+            format!(
+                "{size} 字节已全部发送;等待 MCU 以版本 {} 重启(最多 {limit} 秒)",
+                expect.version
+            ),
+        ),
+    });
+    let back = super::confirm::await_new_version(
+        client,
+        &watch,
+        &expect.version,
+        ended,
+        expect.limit,
+        run,
+    )?;
+    report.before_version = before;
+    report.after_version = Some(back.version);
+    report.back_seconds = Some(back.seconds);
+    Ok(report)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_image_names_its_version_when_it_holds_exactly_one() {
+        let mut image = vec![0u8; 64];
+        image.extend_from_slice(b"{\"p\":\"\0lgldgnmt4ifc.jzex\0");
+        image.extend_from_slice(b"1.2.3\0");
+        assert_eq!(image_version(&image).as_deref(), Some("1.2.3"));
+        image.extend_from_slice(b"\x001.2.3\x00");
+        assert_eq!(
+            image_version(&image).as_deref(),
+            Some("1.2.3"),
+            "the same twice"
+        );
+        image.extend_from_slice(b"\x002.0.10\x00");
+        assert_eq!(image_version(&image), None, "two different");
+        assert_eq!(image_version(b"v1.2.3.4 and 123.1.1"), None);
+        assert!(is_version("1.0.0") && is_version("10.2.33"));
+        assert!(!is_version("1.0") && !is_version("1.0.0.0") && !is_version("a.b.c"));
+    }
 
     #[test]
     fn the_expected_time_is_the_wire_time_of_every_frame() {

@@ -295,7 +295,7 @@ impl SimServo {
         let p = profile.param(id)?;
         let n = width(p);
         let v: i64 = match (p.access, id) {
-            (Access::ReadWrite, _) => *self.params.get(&id)?,
+            (Access::ReadWrite | Access::WriteOnly, _) => *self.params.get(&id)?,
             (Access::ReadOnly, 1) => self.live(now, rng).voltage as i64,
             (Access::ReadOnly, 2) => self.current_ma(now, rng) as i64,
             (Access::ReadOnly, 3) => self.live(now, rng).power as i64,

@@ -12,10 +12,12 @@
 //! reported with another type or length than the profile's, rules that override a command, lost
 //! reports of its own changes, and a line that echoes the module's frames.
 
+mod field;
 mod ota;
 mod sdk;
 mod vacuum;
 
+pub use field::{OtaFault, RawValue, parse_gap, parse_id_value, parse_unknown_dp};
 pub use ota::{OtaState, crc32};
 pub use sdk::{WireForm, parse_misreport};
 
@@ -114,11 +116,14 @@ impl OtaPacketAnswer {
     }
 }
 
-/// A request the MCU sends the module on its own (PROTOCOL_NOTES §3), answered by the module.
+/// A request the MCU sends the module on its own (PROTOCOL_NOTES §3, TUYA_FIELD_NOTES §1-4),
+/// answered by the module.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum McuRequest {
     /// 0x1c: the local time.
     LocalTime,
+    /// 0x0c: the GMT (UTC) time.
+    UtcTime,
     /// 0x0e: the Wi-Fi production test.
     WifiTest,
     /// 0x04: reset the Wi-Fi.
@@ -129,28 +134,44 @@ pub enum McuRequest {
     NetStatus,
     /// 0x2d: the module's MAC address.
     Mac,
+    /// 0x24: the Wi-Fi signal strength.
+    Rssi,
+    /// 0x25: stop the module's heartbeat.
+    StopHeartbeat,
+    /// 0x34 with this sub-command (0x01 open the time service, 0x04 open reset notifications,
+    /// 0x07 module information...).
+    Extended(u8),
 }
 
 impl McuRequest {
-    /// Every request, the pairing mode reset into AP mode.
-    pub const ALL: [McuRequest; 6] = [
+    /// Every request, the pairing mode reset into AP mode and the module information asked of
+    /// the extended services.
+    pub const ALL: [McuRequest; 10] = [
         McuRequest::LocalTime,
+        McuRequest::UtcTime,
         McuRequest::WifiTest,
         McuRequest::ResetWifi,
         McuRequest::ResetWifiMode(1),
         McuRequest::NetStatus,
         McuRequest::Mac,
+        McuRequest::Rssi,
+        McuRequest::StopHeartbeat,
+        McuRequest::Extended(0x07),
     ];
 
     /// Its command word.
     pub fn command(self) -> u8 {
         match self {
             McuRequest::LocalTime => cmd::LOCAL_TIME,
+            McuRequest::UtcTime => cmd::UTC_TIME,
             McuRequest::WifiTest => cmd::WIFI_TEST,
             McuRequest::ResetWifi => cmd::RESET_WIFI,
             McuRequest::ResetWifiMode(_) => cmd::RESET_WIFI_MODE,
             McuRequest::NetStatus => cmd::NET_STATUS,
             McuRequest::Mac => cmd::MAC,
+            McuRequest::Rssi => cmd::WIFI_RSSI,
+            McuRequest::StopHeartbeat => cmd::HEARTBEAT_STOP,
+            McuRequest::Extended(_) => cmd::EXTENDED,
         }
     }
 
@@ -158,24 +179,30 @@ impl McuRequest {
     pub fn data(self) -> Vec<u8> {
         match self {
             McuRequest::ResetWifiMode(mode) => vec![mode],
+            McuRequest::Extended(sub) => vec![sub],
             _ => Vec::new(),
         }
     }
 
-    /// The word `botbench sim tuya-vacuum` takes on its stdin for it: `time`, `wifi-test`,
-    /// `reset-wifi`, `reset-wifi-mode`, `net-status`, `mac`.
+    /// The word `botbench sim tuya-vacuum` takes on its stdin for it: `time`, `utc-time`,
+    /// `wifi-test`, `reset-wifi`, `reset-wifi-mode`, `net-status`, `mac`, `rssi`,
+    /// `stop-heartbeat`, `extended`.
     pub fn word(self) -> &'static str {
         match self {
             McuRequest::LocalTime => "time",
+            McuRequest::UtcTime => "utc-time",
             McuRequest::WifiTest => "wifi-test",
             McuRequest::ResetWifi => "reset-wifi",
             McuRequest::ResetWifiMode(_) => "reset-wifi-mode",
             McuRequest::NetStatus => "net-status",
             McuRequest::Mac => "mac",
+            McuRequest::Rssi => "rssi",
+            McuRequest::StopHeartbeat => "stop-heartbeat",
+            McuRequest::Extended(_) => "extended",
         }
     }
 
-    /// The request a word and its argument name (`reset-wifi-mode 0`).
+    /// The request a word and its argument name (`reset-wifi-mode 0`, `extended 0x07`).
     pub fn parse(word: &str, arg: Option<&str>) -> Result<Self, String> {
         let found = Self::ALL.into_iter().find(|r| r.word() == word);
         match found {
@@ -183,6 +210,10 @@ impl McuRequest {
                 Some(Ok(mode @ (0 | 1))) => Ok(McuRequest::ResetWifiMode(mode)),
                 _ => Err("reset-wifi-mode takes 0 (smartconfig) or 1 (AP)".into()),
             },
+            Some(McuRequest::Extended(_)) => arg
+                .and_then(crate::profile::codec::parse_id)
+                .map(McuRequest::Extended)
+                .ok_or_else(|| "extended takes a sub-command byte, e.g. extended 0x07".into()),
             Some(r) => Ok(r),
             None => Err(format!("unknown command '{word}'")),
         }
@@ -233,6 +264,34 @@ pub struct TuyaConfig {
     pub lose_rule_reports: bool,
     /// The line echoes every module frame back to the module, as a one-wire adapter does.
     pub echo: bool,
+    /// A slow MCU: the reports answering a status query come this far apart (each drawn between
+    /// the two bounds), not at once.
+    pub report_gap: Option<(Duration, Duration)>,
+    /// The MCU reports its own changes as 0x22 and waits for the module's 0x23 before the next
+    /// (a synchronous report; a battery sensor sends nothing else).
+    pub sync_reports: bool,
+    /// Data points the product's profile does not have, reported with the others on a query.
+    pub report_unknown_dp: Vec<(u8, DpValue)>,
+    /// Values the profile does not allow, reported for these data points whatever they hold
+    /// (battery 150 %, mode 32, a string longer than its maximum).
+    pub report_out_of_range: BTreeMap<u8, RawValue>,
+    /// How a firmware update fails, if it does.
+    pub ota_fault: Option<OtaFault>,
+    /// How long the MCU takes to restart after the last OTA packet.
+    pub ota_restart: Duration,
+    /// The version the MCU runs after an update; `None`: the one the image names (its only
+    /// `x.y.z` string), else the old one with its last number raised.
+    pub ota_version: Option<String>,
+    /// A firmware that takes writes of report-only data points (and reports them changed).
+    pub accept_read_only: bool,
+    /// A firmware that takes frames whatever their checksum.
+    pub ignore_checksum: bool,
+    /// A firmware that answers a command it does not know (with an empty frame of the same
+    /// command), where the SDK ignores it.
+    pub answer_unknown: bool,
+    /// A firmware that leaves these data points out of its answer to a status query (it
+    /// reports them only when they change).
+    pub never_report: Vec<u8>,
 }
 
 impl Default for TuyaConfig {
@@ -255,6 +314,17 @@ impl Default for TuyaConfig {
             rules_override_command: false,
             lose_rule_reports: false,
             echo: false,
+            report_gap: None,
+            sync_reports: false,
+            report_unknown_dp: Vec::new(),
+            report_out_of_range: BTreeMap::new(),
+            ota_fault: None,
+            ota_restart: Duration::from_secs(2),
+            ota_version: None,
+            accept_read_only: false,
+            ignore_checksum: false,
+            answer_unknown: false,
+            never_report: Vec::new(),
         }
     }
 }
@@ -295,6 +365,16 @@ pub struct TuyaMcu {
     outbox: VecDeque<Vec<u8>>,
     answers: Vec<(u8, Vec<u8>)>,
     ota: ota::Ota,
+    /// Synchronous reports waiting, awaiting their 0x23, and the module's results.
+    sync: field::Sync,
+    /// Restarting after an update: silent until this time (`None` with `offline`: for good).
+    back_at: Option<Instant>,
+    /// Silent (restarting after an update, or never back).
+    offline: bool,
+    /// The version running since the last update, when it changed.
+    installed: Option<String>,
+    /// Frames the module sent that the MCU does not know, as (command, data).
+    unknown: Vec<(u8, Vec<u8>)>,
 }
 
 impl Default for TuyaMcu {
@@ -329,6 +409,11 @@ impl TuyaMcu {
             outbox: VecDeque::new(),
             answers: Vec::new(),
             ota: ota::Ota::default(),
+            sync: field::Sync::default(),
+            back_at: None,
+            offline: false,
+            installed: None,
+            unknown: Vec::new(),
         }
     }
 
@@ -368,10 +453,56 @@ impl TuyaMcu {
             return false;
         }
         self.dps.insert(id, value);
-        if let Some(f) = self.report(id) {
-            self.outbox.push_back(f);
-        }
+        self.own_report(id);
         true
+    }
+
+    /// Changes a bool, value, enum or bitmap data point to raw `v` as the robot itself would,
+    /// and reports it (as 0x22 with `sync_reports`). False for an id it lacks or a string.
+    pub fn set_dp_raw(&mut self, id: u8, v: i64) -> bool {
+        let known = matches!(
+            self.dps.get(&id),
+            Some(DpValue::Bool(_) | DpValue::Value(_) | DpValue::Enum(_) | DpValue::Bitmap { .. })
+        );
+        if known {
+            self.set_int(id, v);
+            self.own_report(id);
+        }
+        known
+    }
+
+    /// The version the MCU runs: its configured one, or the one an update installed.
+    pub fn version(&self) -> &str {
+        self.installed.as_deref().unwrap_or(&self.config.version)
+    }
+
+    /// Whether it is silent, restarting after an update (or never back).
+    pub fn offline(&self) -> bool {
+        self.offline
+    }
+
+    /// Frames the module sent that the MCU does not know (command, data), oldest first.
+    pub fn unknown_frames(&self) -> &[(u8, Vec<u8>)] {
+        &self.unknown
+    }
+
+    /// Sends a frame of any command and data from the next tick (`send 0x99 01 02` on the
+    /// simulator's stdin): a command the module does not know, a malformed request.
+    pub fn send_frame(&mut self, command: u8, data: Vec<u8>) {
+        if let Some(bytes) = self.encode(command, data) {
+            self.outbox.push_back(bytes);
+        }
+    }
+
+    /// Sends a data-point report (0x07) of `total` bytes on the wire from the next tick: the
+    /// clean record (DP 15) padded to that length, to see how a frame over the protocol's
+    /// maximum is taken (`oversize N` on the stdin).
+    pub fn send_oversize(&mut self, total: usize) {
+        let len = total.saturating_sub(7 + 4).max(1);
+        let mut data = vec![dpid::CLEAN_RECORD, 3];
+        data.extend_from_slice(&(len.min(usize::from(u16::MAX)) as u16).to_be_bytes());
+        data.extend(std::iter::repeat_n(b'x', len));
+        self.send_frame(cmd::DP_REPORT, data);
     }
 
     /// The Wi-Fi state the module last reported (0x03).
@@ -442,61 +573,131 @@ impl TuyaMcu {
             Some(raw) => raw.clone(),
             None => format!(
                 "{{\"p\":\"{}\",\"v\":\"{}\",\"m\":{}}}",
-                self.config.pid, self.config.version, self.config.mode
+                self.config.pid,
+                self.version(),
+                self.config.mode
             )
             .into_bytes(),
         }
     }
 
-    /// The frames answering one module frame.
-    fn handle(&mut self, f: Frame) -> Vec<Vec<u8>> {
+    /// The frames answering one module frame, each after its delay (the MCU's latency; a slow
+    /// MCU's query answer spread out).
+    fn handle(&mut self, f: Frame, now: Instant) -> Vec<Outgoing> {
+        let latency = self.config.latency;
+        let at_once = |frames: Vec<Vec<u8>>| {
+            frames
+                .into_iter()
+                .map(|b| Outgoing::new(latency, b))
+                .collect()
+        };
         let data = f.data;
-        let answer = |s: &Self, command: u8, data: Vec<u8>| s.encode(command, data);
         let one = match f.command {
             cmd::HEARTBEAT => {
                 let first = !self.heartbeat_answered;
                 self.heartbeat_answered = true;
-                answer(self, cmd::HEARTBEAT, vec![u8::from(!first)])
+                self.encode(cmd::HEARTBEAT, vec![u8::from(!first)])
             }
-            cmd::PRODUCT_INFO => answer(self, cmd::PRODUCT_INFO, self.product_info()),
+            cmd::PRODUCT_INFO => self.encode(cmd::PRODUCT_INFO, self.product_info()),
             cmd::WORK_MODE => {
                 let data = self.config.work_mode.map(Vec::from).unwrap_or_default();
-                answer(self, cmd::WORK_MODE, data)
+                self.encode(cmd::WORK_MODE, data)
             }
             cmd::WIFI_STATE => match data.as_slice() {
                 [s] => {
                     self.wifi_state = Some(*s);
-                    answer(self, cmd::WIFI_STATE, Vec::new())
+                    self.encode(cmd::WIFI_STATE, Vec::new())
                 }
                 _ => None,
             },
-            cmd::DP_COMMAND => return self.dp_command(&data),
-            cmd::QUERY_STATUS => {
-                let ids: Vec<u8> = self.dps.keys().copied().collect();
-                return ids.into_iter().filter_map(|id| self.report(id)).collect();
-            }
+            cmd::DP_COMMAND => return at_once(self.dp_command(&data)),
+            cmd::QUERY_STATUS => return self.query_answer(),
             cmd::OTA_START => {
                 let packet = self.config.ota_packet;
                 let data = self.ota.start(&data, packet);
-                data.and_then(|d| answer(self, cmd::OTA_START, d))
+                data.and_then(|d| self.encode(cmd::OTA_START, d))
             }
-            cmd::OTA_PACKET => {
-                let ack = self.ota.packet(&data, self.config.stop_acking_at);
-                ack.then(|| answer(self, cmd::OTA_PACKET, Vec::new()))
-                    .flatten()
+            cmd::OTA_PACKET => self.ota_packet(&data, now),
+            cmd::DP_REPORT_SYNC_RESULT => {
+                self.answers.push((f.command, data.clone()));
+                self.sync_result(&data);
+                None
             }
-            cmd::RESET_WIFI
-            | cmd::RESET_WIFI_MODE
-            | cmd::WIFI_TEST
-            | cmd::LOCAL_TIME
-            | cmd::NET_STATUS
-            | cmd::MAC => {
+            c if MODULE_ANSWERS.contains(&c) => {
                 self.answers.push((f.command, data));
                 None
             }
+            c => {
+                self.unknown.push((c, data));
+                // The SDK ignores a command it does not know; this firmware answers it.
+                self.config
+                    .answer_unknown
+                    .then(|| self.encode(c, Vec::new()))
+                    .flatten()
+            }
+        };
+        at_once(one.into_iter().collect())
+    }
+
+    /// The answer to a status query (0x08): a report of every data point, then of those the
+    /// profile lacks (`report_unknown_dp`); at once, or a slow MCU's `report_gap` apart.
+    fn query_answer(&mut self) -> Vec<Outgoing> {
+        let ids: Vec<u8> = self
+            .dps
+            .keys()
+            .copied()
+            .filter(|id| !self.config.never_report.contains(id))
+            .collect();
+        let mut frames: Vec<Vec<u8>> = ids.into_iter().filter_map(|id| self.report(id)).collect();
+        frames.extend(self.unknown_reports());
+        let delays = self.burst_delays(frames.len());
+        frames
+            .into_iter()
+            .zip(delays)
+            .map(|(b, after)| Outgoing::new(after, b))
+            .collect()
+    }
+
+    /// An OTA packet (0x0b): its ack, if any. After the last one the MCU restarts: silent for
+    /// `ota_restart`, then running the new version (or, with an [`OtaFault`], the old one, or
+    /// never back).
+    fn ota_packet(&mut self, data: &[u8], now: Instant) -> Option<Vec<u8>> {
+        let refuse = match self.config.ota_fault {
+            Some(OtaFault::RefusePacket(at)) => Some(at),
             _ => None,
         };
-        one.into_iter().collect()
+        let was_complete = matches!(self.ota.state, OtaState::Complete { .. });
+        let ack = self.ota.packet(data, self.config.stop_acking_at.or(refuse));
+        let answer = ack
+            .then(|| self.encode(cmd::OTA_PACKET, Vec::new()))
+            .flatten();
+        if !was_complete && matches!(self.ota.state, OtaState::Complete { .. }) {
+            self.offline = true;
+            self.back_at = match self.config.ota_fault {
+                Some(OtaFault::NeverBack) => None,
+                _ => Some(now + self.config.ota_restart),
+            };
+        }
+        answer
+    }
+
+    /// The MCU comes back after an update, if it is time: restarted, running the image's
+    /// version (or its old one, with [`OtaFault::OldVersion`]).
+    fn come_back(&mut self, now: Instant) {
+        if !self.offline || self.back_at.is_none_or(|at| now < at) {
+            return;
+        }
+        self.offline = false;
+        self.back_at = None;
+        if self.config.ota_fault != Some(OtaFault::OldVersion) {
+            let next = self
+                .config
+                .ota_version
+                .clone()
+                .or_else(|| crate::ops::tuya::image_version(&self.ota.image));
+            self.installed = Some(next.unwrap_or_else(|| bumped(self.version())));
+        }
+        self.restart();
     }
 
     /// The chatty data point's report, when it is due.
@@ -511,32 +712,83 @@ impl TuyaMcu {
     }
 }
 
+/// Commands the module sends in answer to the MCU's own requests (recorded in
+/// [`TuyaMcu::answers`]).
+const MODULE_ANSWERS: [u8; 17] = [
+    cmd::RESET_WIFI,
+    cmd::RESET_WIFI_MODE,
+    cmd::WIFI_TEST,
+    cmd::LOCAL_TIME,
+    cmd::UTC_TIME,
+    cmd::NET_STATUS,
+    cmd::MAC,
+    cmd::WIFI_RSSI,
+    cmd::HEARTBEAT_STOP,
+    cmd::EXTENDED,
+    cmd::FREE_MEMORY,
+    cmd::STREAM,
+    cmd::MAPS_STREAM,
+    cmd::WIFI_CONNECT_TEST,
+    cmd::NEW_FUNC,
+    cmd::WEATHER_OPEN,
+    cmd::WEATHER_DATA,
+];
+
+/// `1.0.0` → `1.0.1`: the version after an update whose image names none.
+fn bumped(version: &str) -> String {
+    let mut parts: Vec<String> = version.split('.').map(str::to_string).collect();
+    if let Some(last) = parts.last_mut()
+        && let Ok(n) = last.parse::<u32>()
+    {
+        *last = (n + 1).to_string();
+    }
+    parts.join(".")
+}
+
+impl TuyaMcu {
+    /// The module frames in what the decoder holds: good ones, and with `ignore_checksum`
+    /// those whose checksum is wrong, read all the same. Frames of another version than the
+    /// module's are dropped, as the SDK does.
+    fn frames(&mut self) -> Vec<Frame> {
+        let lax = self.config.ignore_checksum;
+        self.decoder
+            .by_ref()
+            .filter_map(|r| match r {
+                Ok(f) => Some(f),
+                Err(crate::protocol::FrameError::Checksum { bytes, .. })
+                    if lax && bytes.len() >= 7 =>
+                {
+                    Some(Frame {
+                        version: bytes[2],
+                        command: bytes[3],
+                        data: bytes[6..bytes.len() - 1].to_vec(),
+                    })
+                }
+                Err(_) => None,
+            })
+            .filter(|f| f.version == VERSION_MODULE)
+            .collect()
+    }
+}
+
 impl Device for TuyaMcu {
     fn receive(&mut self, bytes: &[u8], baud: u32, now: Instant) -> Vec<Outgoing> {
         let mut out = Vec::new();
         if self.config.echo {
             out.push(Outgoing::new(Duration::ZERO, bytes.to_vec()));
         }
-        if self.config.baud.is_some_and(|b| b != baud) {
-            // Framing errors at the wrong rate: whatever was half-received is lost too.
+        self.come_back(now);
+        if self.config.baud.is_some_and(|b| b != baud) || self.offline {
+            // Framing errors at the wrong rate (or a restarting MCU): whatever was
+            // half-received is lost too.
             self.decoder.clear();
             return out;
         }
         self.decoder.push(bytes);
-        let frames: Vec<Frame> = self
-            .decoder
-            .by_ref()
-            .filter_map(Result::ok)
-            .filter(|f| f.version == VERSION_MODULE)
-            .collect();
+        let frames = self.frames();
         let was_cleaning = self.cleaning();
         for f in frames {
-            let latency = self.config.latency;
-            out.extend(
-                self.handle(f)
-                    .into_iter()
-                    .map(|b| Outgoing::new(latency, b)),
-            );
+            out.extend(self.handle(f, now));
         }
         if self.cleaning() && !was_cleaning {
             self.last_drain = Some(now);
@@ -545,6 +797,10 @@ impl Device for TuyaMcu {
     }
 
     fn tick(&mut self, now: Instant) -> Vec<Outgoing> {
+        self.come_back(now);
+        if self.offline {
+            return Vec::new();
+        }
         let mut out: Vec<Outgoing> = self
             .outbox
             .drain(..)
@@ -554,6 +810,9 @@ impl Device for TuyaMcu {
             out.push(Outgoing::new(Duration::ZERO, b));
         }
         if let Some(b) = self.chatter(now) {
+            out.push(Outgoing::new(Duration::ZERO, b));
+        }
+        if let Some(b) = self.next_sync(now) {
             out.push(Outgoing::new(Duration::ZERO, b));
         }
         out

@@ -18,7 +18,6 @@
 
 use super::TuyaMcu;
 use super::vacuum::as_value;
-use crate::profile::Access;
 use crate::protocol::tuya::dp::{self, DpType, DpValue, RawPoint};
 use crate::protocol::tuya::{Frame, cmd};
 use std::collections::BTreeMap;
@@ -130,7 +129,8 @@ impl TuyaMcu {
     /// it; `None` when it gets no answer.
     fn accepted(&self, raw: &RawPoint) -> Option<DpValue> {
         let def = self.profile.data_point(raw.id)?;
-        if def.access != Access::ReadWrite || raw.ty != def.dp_type.byte() {
+        let writable = def.access.writable() || self.config.accept_read_only;
+        if !writable || raw.ty != def.dp_type.byte() {
             return None;
         }
         let value = raw.value().ok()?;
@@ -171,10 +171,8 @@ impl TuyaMcu {
                 continue;
             }
             reported.push(id);
-            if !self.config.lose_rule_reports
-                && let Some(f) = self.report(id)
-            {
-                self.outbox.push_back(f);
+            if !self.config.lose_rule_reports {
+                self.own_report(id);
             }
         }
         answers
@@ -182,8 +180,7 @@ impl TuyaMcu {
 
     /// A 0x07 frame reporting one data point, with the MCU's version byte.
     pub(super) fn report(&self, id: u8) -> Option<Vec<u8>> {
-        let value = self.dps.get(&id)?;
-        let data = report_data(id, value, &self.config.misreport);
+        let data = self.report_data_of(id)?;
         self.encode(cmd::DP_REPORT, data)
     }
 

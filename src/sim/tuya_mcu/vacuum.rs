@@ -28,7 +28,8 @@ pub(super) fn initial_value(def: &DataPointDef) -> DpValue {
         dpid::EDGE_BRUSH_LIFE => int(90),
         dpid::ROLL_BRUSH_LIFE => int(85),
         dpid::FILTER_LIFE => int(70),
-        dpid::CLEAN_AREA => int(35),
+        // 35.0 m² (one decimal: raw 350).
+        dpid::CLEAN_AREA => int(350),
         dpid::CLEAN_TIME => int(28),
         dpid::CLEAN_RECORD if def.dp_type == DpType::String => {
             DpValue::String("20180411051102008000020".into())
@@ -165,6 +166,10 @@ impl TuyaMcu {
             return None;
         }
         self.set_int(dpid::BATTERY, battery - 1);
+        if self.config.sync_reports {
+            self.own_report(dpid::BATTERY);
+            return None;
+        }
         self.report(dpid::BATTERY)
     }
 }

@@ -120,6 +120,11 @@ pub struct TuyaModel {
     pub requests: VecDeque<RequestLine>,
     /// Reset-Wi-Fi requests (0x04, 0x05) acknowledged, and the last one.
     pub resets: (u32, Option<RequestLine>),
+    /// Frames the MCU sent that the module does not know (logged and ignored), oldest first:
+    /// when, the command word, what it was taken for, its data.
+    pub unknown_commands: VecDeque<(DateTime<Local>, u8, String, Vec<u8>)>,
+    /// When the MCU asked for no heartbeats (0x25), until the next handshake.
+    pub heartbeat_stopped: Option<DateTime<Local>>,
 }
 
 fn step_index(step: HandshakeStep) -> usize {
@@ -156,6 +161,7 @@ impl TuyaModel {
                     self.attempts += 1;
                     self.done_at = None;
                     self.product_in_attempt = false;
+                    self.heartbeat_stopped = None;
                 }
                 let result = StepResult {
                     ok,
@@ -190,10 +196,22 @@ impl TuyaModel {
                 self.last_query = Some(now);
                 self.queries += 1;
             }
+            TuyaEvent::McuUnknown {
+                command,
+                what,
+                data,
+            } => {
+                if self.unknown_commands.len() >= REQUESTS_CAPACITY {
+                    self.unknown_commands.pop_front();
+                }
+                self.unknown_commands.push_back((now, command, what, data));
+            }
+            TuyaEvent::HeartbeatStopped => self.heartbeat_stopped = Some(now),
             TuyaEvent::McuRequest {
                 command,
                 name,
                 answer,
+                ..
             } => {
                 let line = RequestLine {
                     clock: now,
@@ -320,6 +338,8 @@ mod tests {
             s.on_event(TuyaEvent::McuRequest {
                 command: cmd::RESET_WIFI,
                 name: "reset Wi-Fi".into(),
+                request: Vec::new(),
+                reply: Some(cmd::RESET_WIFI),
                 answer: Vec::new(),
             });
         }

@@ -84,6 +84,13 @@ fn request_name(r: McuRequest, lang: Lang) -> &'static str {
         ),
         McuRequest::NetStatus => lang.tr("Ask the network status (0x2b)", "查询联网状态 (0x2b)"),
         McuRequest::Mac => lang.tr("Ask the module's MAC (0x2d)", "获取模块MAC (0x2d)"),
+        McuRequest::UtcTime => lang.tr("Ask the GMT time (0x0c)", "请求格林尼治时间 (0x0c)"),
+        McuRequest::Rssi => lang.tr("Ask the signal strength (0x24)", "获取WiFi信号强度 (0x24)"),
+        McuRequest::StopHeartbeat => lang.tr("Stop the heartbeat (0x25)", "关闭模块心跳 (0x25)"),
+        McuRequest::Extended(_) => lang.tr(
+            "Ask the module information (0x34 07)",
+            "获取模块信息 (0x34 07)",
+        ),
     }
 }
 

@@ -31,7 +31,7 @@ proptest! {
         let (proto, cap) = if small {
             (tuya_small_proto(), SMALL_CAP)
         } else {
-            (tuya_proto(), 2048)
+            (tuya_proto(), botbench::protocol::tuya::DEFAULT_MAX_DATA)
         };
         let len = cap + over;
         prop_assume!(len <= 65535);

@@ -10,7 +10,9 @@ mod mcu_requests;
 mod product_info;
 mod reports;
 
-pub use mcu_requests::{TuyaModuleOptions, answer_mcu_request, local_time};
+pub use mcu_requests::{
+    Effect, McuAnswer, TuyaModuleOptions, Unknown, answer_mcu_request, local_time, utc_time,
+};
 pub use product_info::{ProductInfo, parse_product_info};
 pub use reports::{command_ids, reported_ids, reports_reply};
 
@@ -107,11 +109,13 @@ pub enum StepResult {
 }
 
 impl StepResult {
-    /// Whether the step worked: it did not fail, and a product info was valid JSON.
+    /// Whether the step worked: it did not fail, a product info was valid JSON, and the status
+    /// query heard every data point (the handshake goes on either way).
     pub fn ok(&self) -> bool {
         match self {
             StepResult::Failed(_) => false,
             StepResult::ProductInfo(info) => info.error.is_none(),
+            StepResult::Status { missing, .. } => missing.is_empty(),
             _ => true,
         }
     }
@@ -212,15 +216,34 @@ pub enum TuyaEvent {
     WifiStateAcked,
     /// The module asked for every data point's status (0x08).
     StatusQueried,
-    /// The MCU asked something and the module answered.
+    /// The MCU asked something and the module answered (or, for an acknowledgement of the
+    /// module's own push, took it).
     McuRequest {
         /// The MCU's command word.
         command: u8,
         /// What it asked.
         name: String,
+        /// The request's data.
+        request: Vec<u8>,
+        /// The answer's command word (the request's, 0x23 for a 0x22); `None` when the frame
+        /// needs no answer.
+        reply: Option<u8>,
         /// The answer's data.
         answer: Vec<u8>,
     },
+    /// The MCU sent a command (or an extended-service sub-command) the module does not know:
+    /// logged with its bytes and ignored, as a real module does.
+    McuUnknown {
+        /// The command word.
+        command: u8,
+        /// What the module made of it: `command 0x99`, `extended service sub-command 0x36`.
+        what: String,
+        /// The frame's data.
+        data: Vec<u8>,
+    },
+    /// The MCU asked the module to stop its heartbeat (0x25): the module acknowledged and sends
+    /// none from now until the next handshake; an MCU restart is then not seen by it.
+    HeartbeatStopped,
 }
 
 /// The Tuya session of one link: the module's side of the handshake and heartbeat.
@@ -239,6 +262,8 @@ pub(crate) struct TuyaSession {
     status_reply: ReplySpec,
     /// The module's own frames read back on a line that echoes.
     echo: echo::EchoFilter,
+    /// The MCU asked for no heartbeats (0x25): none is sent until the next handshake.
+    heartbeat_stopped: bool,
 }
 
 /// Where the module stands with the MCU.
@@ -272,7 +297,13 @@ impl TuyaSession {
         handshake_on_connect: bool,
         now: Instant,
     ) -> Self {
-        let data_points: Vec<u8> = profile.data_points.iter().map(|d| d.id).collect();
+        // A write-only data point is never reported.
+        let data_points: Vec<u8> = profile
+            .data_points
+            .iter()
+            .filter(|d| d.access.reported())
+            .map(|d| d.id)
+            .collect();
         let mut session = Self {
             options,
             handshake_on_connect,
@@ -281,6 +312,7 @@ impl TuyaSession {
             status_reply: reports_reply(profile, &data_points),
             data_points,
             echo: echo::EchoFilter::default(),
+            heartbeat_stopped: false,
         };
         session.connected(now);
         session
@@ -301,6 +333,7 @@ impl TuyaSession {
     /// A new connection (the first, or after a reconnect).
     pub(crate) fn connected(&mut self, now: Instant) {
         self.echo.connected();
+        self.heartbeat_stopped = false;
         if self.handshake_on_connect {
             self.phase = Phase::HandshakeAt(now);
         }
@@ -317,12 +350,14 @@ impl TuyaSession {
     /// [`crate::link::LinkCommand::Handshake`]: the handshake starts again at `now`.
     pub(crate) fn handshake_again(&mut self, now: Instant) {
         self.phase = Phase::HandshakeAt(now);
+        self.heartbeat_stopped = false;
     }
 
-    /// Whether a request is due at `now`.
+    /// Whether a request is due at `now`: no heartbeat after the MCU asked for none (0x25).
     pub(crate) fn due(&self, now: Instant) -> bool {
         match self.phase {
             Phase::Idle => false,
+            Phase::Heartbeat(_) if self.heartbeat_stopped => false,
             Phase::HandshakeAt(at) | Phase::Heartbeat(at) => at <= now,
             Phase::Handshake(_) => true,
         }
@@ -477,22 +512,49 @@ impl TuyaSession {
         }
     }
 
-    /// A frame from the MCU that is not the awaited answer: one of its own requests (answered
-    /// with the same command word), a data-point report, or an answer to something else.
-    pub(crate) fn unasked(&self, p: &Packet) -> Unasked {
-        if let Some((name, answer)) = answer_mcu_request(&self.options, p.command) {
-            Unasked::McuRequest {
-                reply: tuya::Frame::from_module(p.command, answer.clone()),
-                event: TuyaEvent::McuRequest {
+    /// A frame from the MCU that is not the awaited answer: one of its own requests (answered:
+    /// a synchronous report 0x22 is a report too, answered 0x23), a data-point report, a
+    /// command the module does not know (logged and ignored), or an answer to something else.
+    pub(crate) fn unasked(&mut self, p: &Packet) -> Unasked {
+        match answer_mcu_request(&self.options, p.command, &p.payload) {
+            Ok(Some(answer)) => {
+                if answer.effect == Some(Effect::StopHeartbeat) {
+                    self.heartbeat_stopped = true;
+                }
+                let reply = answer
+                    .reply
+                    .as_ref()
+                    .map(|(c, d)| tuya::Frame::from_module(*c, d.clone()));
+                let (reply_command, data) = answer.reply.unwrap_or((p.command, Vec::new()));
+                let mut events = vec![TuyaEvent::McuRequest {
                     command: p.command,
-                    name: name.to_string(),
-                    answer,
-                },
+                    name: answer.name.to_string(),
+                    request: p.payload.clone(),
+                    reply: reply.as_ref().map(|_| reply_command),
+                    answer: data,
+                }];
+                if answer.effect == Some(Effect::StopHeartbeat) {
+                    events.push(TuyaEvent::HeartbeatStopped);
+                }
+                Unasked::McuRequest {
+                    reply,
+                    events,
+                    report: p.command == cmd::DP_REPORT_SYNC,
+                }
             }
-        } else if p.command == cmd::DP_REPORT {
-            Unasked::Report
-        } else {
-            Unasked::Stale
+            Ok(None) if p.command == cmd::DP_REPORT => Unasked::Report,
+            Ok(None) => Unasked::Stale,
+            Err(Unknown { what }) => {
+                log::warn!(
+                    "MCU {what} not known to the module: ignored [{}]",
+                    crate::protocol::hex::format(&p.wire)
+                );
+                Unasked::Ignored(TuyaEvent::McuUnknown {
+                    command: p.command,
+                    what,
+                    data: p.payload.clone(),
+                })
+            }
         }
     }
 }

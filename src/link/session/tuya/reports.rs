@@ -22,11 +22,12 @@ pub fn command_ids(data: &[u8]) -> Vec<u8> {
     ids
 }
 
-/// The data points that `reports` (0x07 frames) carry, whatever their type or length.
+/// The data points that `reports` (0x07 frames, and 0x22 synchronous reports) carry, whatever
+/// their type or length.
 pub fn reported_ids(reports: &[Packet]) -> Vec<u8> {
     reports
         .iter()
-        .filter(|p| p.command == cmd::DP_REPORT)
+        .filter(|p| p.command == cmd::DP_REPORT || p.command == cmd::DP_REPORT_SYNC)
         .flat_map(|p| dp::walk(&p.payload).points)
         .map(|p| p.id)
         .collect()
