@@ -18,6 +18,7 @@ mod servo;
 mod sim;
 mod sim_field;
 mod tuya;
+mod tuya_conform;
 mod tuya_show;
 
 use crate::link::PortOpener;

@@ -51,6 +51,12 @@ enum TuyaCmd {
         #[arg(long, default_value_t = 60, value_parser = super::checks::handshake_s)]
         restart_wait: u64,
     },
+    /// Grade the MCU's firmware against the protocol: a table of checks, PASS or FAIL with the
+    /// bytes that show it; exit 0 only when every mandatory check passes. The run is recorded.
+    Conform {
+        #[command(flatten)]
+        args: super::tuya_conform::ConformArgs,
+    },
 }
 
 /// What the handshake's events said, and where it stands.
@@ -176,24 +182,16 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
             expect_version,
             restart_wait,
         } => {
-            image = ops::read_image(file, profile.ota_max_bytes()).map_err(CliError::input)?;
-            let version = expect_version
-                .clone()
-                .or_else(|| ops::image_version(&image));
-            let version = version.ok_or_else(|| {
-                CliError::input(format!(
-                    "{}: the image names no single version (x.y.z); give the one the MCU must report after the update with --expect-version",
-                    file.display()
-                ))
-            })?;
-            expect = Some(ops::Expect {
-                version,
-                limit: Duration::from_secs(*restart_wait),
-            });
+            let (i, e) = read_update(file, expect_version.as_deref(), *restart_wait, &profile)?;
+            image = i;
+            expect = Some(e);
         }
         TuyaCmd::Dp { values } => {
             inputs = parse_assignments(values, "NAME")?;
             ops::set_dps_request(&profile, &inputs).map_err(op_error)?;
+        }
+        TuyaCmd::Conform { args: c } => {
+            return super::tuya_conform::run(c, &args.port, &profile);
         }
         TuyaCmd::Init | TuyaCmd::Status => {}
     }
@@ -212,6 +210,7 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
             let checks = ops::set_dps(Device::new(&client, &profile), &inputs).map_err(op_error)?;
             Ok(tuya_show::print_checks(&profile, &checks, json))
         }
+        TuyaCmd::Conform { .. } => unreachable!("conform runs without the handshake, above"),
         TuyaCmd::Ota { .. } => {
             errln!(
                 "firmware: {}",
@@ -242,6 +241,32 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
             Ok(0)
         }
     }
+}
+
+/// Reads a firmware image (bounded by the profile's largest) and the version the MCU must
+/// report after it: `--expect-version`, else the one x.y.z string the image holds; refused
+/// (exit 2, nothing sent) when neither says one.
+pub(crate) fn read_update(
+    file: &std::path::Path,
+    expect_version: Option<&str>,
+    restart_wait: u64,
+    profile: &Profile,
+) -> Result<(Vec<u8>, ops::Expect), CliError> {
+    let image = ops::read_image(file, profile.ota_max_bytes()).map_err(CliError::input)?;
+    let version = expect_version
+        .map(str::to_string)
+        .or_else(|| ops::image_version(&image));
+    let version = version.ok_or_else(|| {
+        CliError::input(format!(
+            "{}: the image names no single version (x.y.z); give the one the MCU must report after the update with --expect-version",
+            file.display()
+        ))
+    })?;
+    let expect = ops::Expect {
+        version,
+        limit: Duration::from_secs(restart_wait),
+    };
+    Ok((image, expect))
 }
 
 /// An update's result: what was sent, then the versions before and after and how long the MCU

@@ -21,6 +21,9 @@ pub struct Request {
     /// How long the device may take to start answering, beyond the wire time; `None` for the
     /// link's default.
     pub margin: Option<Duration>,
+    /// Send the frame with its checksum off by one: a conformance test of how the device takes
+    /// a corrupted frame ([`Request::bad_checksum`]).
+    pub bad_checksum: bool,
 }
 
 impl Request {
@@ -33,6 +36,7 @@ impl Request {
             reply: ReplySpec::Required(Match::command(command)),
             attempts: 3,
             margin: None,
+            bad_checksum: false,
         }
     }
 
@@ -63,7 +67,14 @@ impl Request {
         self
     }
 
-    /// Sets the device's answer margin.
+    /// Sends the frame with its last byte (the checksum, in every protocol here) one more than
+    /// it should be: a well-behaved device drops it and answers nothing.
+    pub fn bad_checksum(mut self) -> Self {
+        self.bad_checksum = true;
+        self
+    }
+
+    /// Sets how long the device may take to start answering.
     pub fn margin(mut self, margin: Duration) -> Self {
         self.margin = Some(margin);
         self

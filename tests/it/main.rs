@@ -55,6 +55,7 @@ mod servo_sync;
 mod sim_devices;
 mod sim_msp;
 mod stations;
+mod tuya_conform;
 mod tuya_field;
 mod tuya_module;
 mod tuya_sdk_vectors;

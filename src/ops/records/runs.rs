@@ -379,3 +379,78 @@ pub fn preset_apply(
         export: None,
     }
 }
+
+/// Grades a Tuya MCU firmware ([`crate::ops::tuya::conform::conform`]) and records the run:
+/// one step a check, its evidence in the detail; an advisory check that fails is recorded PASS
+/// with `advisory, not met:` before its detail (the firmware conforms without it), a skipped
+/// one is left out. The unit's firmware is the product info's version, its hardware the pid.
+pub fn tuya_conform(
+    dev: Device<'_>,
+    options: &crate::ops::tuya::conform::Options,
+    given: &Given,
+    run: &mut Run<'_>,
+    each: &mut dyn FnMut(&crate::ops::tuya::conform::Check),
+    recorder: &mut dyn Keeper,
+) -> Recorded<Result<crate::ops::tuya::conform::Conformance, OpError>> {
+    let mut record = Record::start(
+        RunKind::TuyaConform,
+        given.plan_name.as_deref().unwrap_or("tuya conformance"),
+        given.plan_sha256.clone(),
+        &dev.profile.id,
+    );
+    with_serial(&mut record, given);
+    let outcome = crate::ops::tuya::conform::conform(dev, options, run, each);
+    match &outcome {
+        Ok(c) => conform_into(&mut record, c),
+        Err(e) => record.finish(Some(("conformance".to_string(), e.to_string()))),
+    }
+    let kept = recorder.keep(&mut record);
+    Recorded {
+        outcome,
+        record,
+        kept,
+        export: None,
+    }
+}
+
+/// A conformance run's checks as the record's steps.
+fn conform_into(record: &mut Record, c: &crate::ops::tuya::conform::Conformance) {
+    use crate::ops::tuya::conform::Grade;
+    record.unit.hardware.clone_from(&c.pid);
+    record.unit.firmware.clone_from(&c.version);
+    let start = record.started_ms;
+    let mut at = start;
+    for check in c.checks.iter().filter(|c| c.grade != Grade::Skip) {
+        let failed = check.grade == Grade::Fail;
+        let detail = match (failed, check.mandatory, check.evidence.is_empty()) {
+            (true, false, _) => format!("advisory, not met: {}", check.detail),
+            (_, _, true) => check.detail.clone(),
+            (_, _, false) => format!("{} [{}]", check.detail, check.evidence),
+        };
+        let detail = if failed && !check.evidence.is_empty() && !check.mandatory {
+            format!("{detail} [{}]", check.evidence)
+        } else {
+            detail
+        };
+        let fail = failed && check.mandatory;
+        record.steps.push(StepRecord {
+            name: check.id.to_string(),
+            kind: if check.mandatory {
+                "Mandatory"
+            } else {
+                "Advisory"
+            }
+            .to_string(),
+            started_ms: at,
+            duration_ms: i64::try_from(check.duration_ms).unwrap_or(i64::MAX),
+            verdict: Verdict::of(!fail),
+            reason: fail.then(|| check.name.to_string()),
+            detail,
+            measurements: Vec::new(),
+            writes: Vec::new(),
+        });
+        at += i64::try_from(check.duration_ms).unwrap_or(0);
+    }
+    record.finish(None);
+    record.ended_ms = start + (c.seconds * 1000.0) as i64;
+}

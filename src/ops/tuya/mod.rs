@@ -5,6 +5,7 @@
 //! verified by the reports received after it, up to a read-back query ([`verify`]).
 
 pub mod confirm;
+pub mod conform;
 mod ota;
 mod reports;
 mod verify;

@@ -1,0 +1,279 @@
+//! `botbench tuya conform` (issue 26, item 8): the simulated MCU, which follows the SDK,
+//! conforms; each of its field misbehaviours (items 1-6) fails the check that matches it, with
+//! the bytes that show it; the run is recorded through the records layer.
+
+use botbench::link::LinkOptions;
+use botbench::ops::tuya::Expect;
+use botbench::ops::tuya::conform::{self, Conformance, Grade};
+use botbench::ops::{Device, Run};
+use botbench::protocol::tuya::dp::DpValue;
+use botbench::sim::tuya_mcu::{OtaFault, RawValue, TuyaConfig, TuyaMcu, parse_misreport};
+use std::collections::BTreeMap;
+use std::time::Duration;
+
+use crate::support::cli::{Sim, run};
+use crate::support::{open_link, profile, serve};
+
+const BAUD: u32 = 115_200;
+
+/// A 4 KiB image naming version 1.2.3.
+fn image() -> Vec<u8> {
+    let mut image = vec![0xA5u8; 4096];
+    image[64..70].copy_from_slice(b"1.2.3\0");
+    image
+}
+
+/// Grades a simulated MCU configured with `cfg`, in this process (no module session: the
+/// checks drive it), with the update when `ota`.
+fn grade(cfg: TuyaConfig, ota: bool) -> Conformance {
+    let mcu = serve(TuyaMcu::new(TuyaConfig {
+        baud: Some(BAUD),
+        ota_restart: Duration::from_millis(300),
+        ..cfg
+    }));
+    let p = profile("tuya-vacuum");
+    let link = open_link(
+        &mcu,
+        BAUD,
+        p.clone(),
+        LinkOptions {
+            start_session: false,
+            ..LinkOptions::default()
+        },
+    );
+    let options = conform::Options {
+        ota: ota.then(|| {
+            (
+                image(),
+                Expect {
+                    version: "1.2.3".into(),
+                    limit: Duration::from_secs(5),
+                },
+            )
+        }),
+        ota_max: p.ota_max_bytes(),
+    };
+    let c = link.client();
+    conform::conform(
+        Device::new(&c, &p),
+        &options,
+        &mut Run::new(&Default::default(), |_| {}),
+        &mut |_| {},
+    )
+    .expect("graded")
+}
+
+fn check<'c>(c: &'c Conformance, id: &str) -> &'c conform::Check {
+    c.checks
+        .iter()
+        .find(|k| k.id == id)
+        .unwrap_or_else(|| panic!("no check {id}: {c:#?}"))
+}
+
+#[test]
+fn the_simulated_mcu_conforms_and_its_update_is_proven() {
+    let c = grade(TuyaConfig::default(), true);
+    for k in &c.checks {
+        assert_eq!(k.grade, Grade::Pass, "{k:#?}");
+    }
+    assert!(c.pass());
+    assert_eq!(c.version.as_deref(), Some("1.0.0"));
+    assert!(check(&c, "ota").detail.contains("version 1.0.0 → 1.2.3"));
+    // Without --ota the update is skipped, not failed.
+    let c = grade(TuyaConfig::default(), false);
+    assert_eq!(check(&c, "ota").grade, Grade::Skip);
+    assert!(c.pass());
+}
+
+#[test]
+fn each_field_misbehaviour_fails_its_own_check() {
+    let cases: Vec<(&str, TuyaConfig, &str, bool)> = vec![
+        (
+            "battery 150 %",
+            TuyaConfig {
+                report_out_of_range: BTreeMap::from([(6, RawValue::Int(150))]),
+                ..TuyaConfig::default()
+            },
+            "status_range",
+            true,
+        ),
+        (
+            "mode reported as a value",
+            TuyaConfig {
+                misreport: BTreeMap::from([parse_misreport("3:value:4").unwrap()]),
+                ..TuyaConfig::default()
+            },
+            "status_types",
+            true,
+        ),
+        (
+            "DP 101 the profile lacks",
+            TuyaConfig {
+                report_unknown_dp: vec![(101, DpValue::Value(50))],
+                ..TuyaConfig::default()
+            },
+            "status_unknown",
+            false,
+        ),
+        (
+            "reports 100-150 ms apart",
+            TuyaConfig {
+                report_gap: Some((Duration::from_millis(100), Duration::from_millis(150))),
+                ..TuyaConfig::default()
+            },
+            "status_burst",
+            false,
+        ),
+        (
+            "DP 19 never reported",
+            TuyaConfig {
+                never_report: vec![19],
+                ..TuyaConfig::default()
+            },
+            "status_all",
+            true,
+        ),
+        (
+            "a 2000-byte clean record (a frame over the cap)",
+            TuyaConfig {
+                report_out_of_range: BTreeMap::from([(15, RawValue::Len(2000))]),
+                ..TuyaConfig::default()
+            },
+            "frames_clean",
+            true,
+        ),
+        (
+            "writes of report-only DPs taken",
+            TuyaConfig {
+                accept_read_only: true,
+                ..TuyaConfig::default()
+            },
+            "read_only_refused",
+            true,
+        ),
+        (
+            "a bad checksum read all the same",
+            TuyaConfig {
+                ignore_checksum: true,
+                ..TuyaConfig::default()
+            },
+            "bad_checksum",
+            true,
+        ),
+        (
+            "an unknown command answered",
+            TuyaConfig {
+                answer_unknown: true,
+                ..TuyaConfig::default()
+            },
+            "unknown_command",
+            true,
+        ),
+        (
+            "frames of version 0x00",
+            TuyaConfig {
+                frame_version: 0,
+                ..TuyaConfig::default()
+            },
+            "frame_version",
+            false,
+        ),
+    ];
+    for (what, cfg, id, mandatory) in cases {
+        let c = grade(cfg, false);
+        let k = check(&c, id);
+        assert_eq!(k.grade, Grade::Fail, "{what}: {k:#?}");
+        assert_eq!(k.mandatory, mandatory, "{what}");
+        assert_eq!(c.pass(), !mandatory, "{what}: {:#?}", c.failed());
+    }
+}
+
+#[test]
+fn each_way_an_update_fails_fails_the_update_check() {
+    for (fault, said) in [
+        (OtaFault::OldVersion, "still running version 1.0.0"),
+        (OtaFault::NeverBack, "never came back"),
+        (
+            OtaFault::RefusePacket(1024),
+            "stopped acking at offset 1024",
+        ),
+    ] {
+        let c = grade(
+            TuyaConfig {
+                ota_fault: Some(fault),
+                ..TuyaConfig::default()
+            },
+            true,
+        );
+        let k = check(&c, "ota");
+        assert_eq!(k.grade, Grade::Fail, "{fault:?}: {k:#?}");
+        assert!(k.detail.contains(said), "{fault:?}: {}", k.detail);
+        assert!(!c.pass());
+    }
+}
+
+#[test]
+fn tuya_conform_prints_the_table_exits_by_the_mandatory_checks_and_records_the_run() {
+    let dir = crate::support::temp_dir();
+    let db = dir.path().join("line.sqlite");
+    let db = db.to_str().unwrap();
+    let good = Sim::start(&["tuya-vacuum", "--baud", "115200"]);
+    let o = good.cli(
+        "tuya",
+        &[
+            "--baud",
+            "115200",
+            "conform",
+            "--records",
+            db,
+            "--serial",
+            "VAC-7",
+        ],
+    );
+    assert_eq!(o.code, 0, "{}", o.text());
+    assert!(o.out.contains("CONFORMS:"), "{}", o.text());
+    assert!(
+        o.out
+            .lines()
+            .any(|l| l.starts_with("heartbeat") && l.contains("PASS"))
+    );
+    let bad = Sim::start(&["tuya-vacuum", "--baud", "115200", "--ignore-checksum"]);
+    let o = bad.cli(
+        "tuya",
+        &[
+            "--baud",
+            "115200",
+            "--json",
+            "conform",
+            "--records",
+            db,
+            "--serial",
+            "VAC-8",
+        ],
+    );
+    assert_eq!(o.code, 1, "{}", o.text());
+    let doc = &o.json_docs()[0];
+    let k = doc["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["id"] == "bad_checksum")
+        .unwrap();
+    assert_eq!(k["grade"], "FAIL");
+    // The corrupted heartbeat and the MCU's answer to it are the evidence.
+    assert!(
+        k["evidence"]
+            .as_str()
+            .unwrap()
+            .starts_with("55 aa 00 00 00 00 00 →"),
+        "{k}"
+    );
+    let show = run(&["records", "--records", db, "show", "VAC-8", "--json"]);
+    let r = &show.json_lines()[0];
+    assert_eq!(r["kind"], "tuya-conform", "{r}");
+    assert_eq!(r["verdict"], "FAIL");
+    assert_eq!(r["failed_step"], "bad_checksum");
+    assert_eq!(r["unit"]["firmware"], "1.0.0");
+    let show = run(&["records", "--records", db, "show", "VAC-7", "--json"]);
+    assert_eq!(show.json_lines()[0]["verdict"], "PASS", "{}", show.text());
+}
