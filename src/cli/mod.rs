@@ -10,6 +10,7 @@ mod frame;
 mod msp;
 mod port;
 mod preset;
+mod profile;
 mod provision;
 mod records;
 mod replay;
@@ -95,6 +96,9 @@ enum Cmd {
     Frame(frame::FrameCmd),
     /// Serve a simulated device on a pseudo-terminal; prints its path, then serves until killed.
     Sim(sim::SimArgs),
+    /// Make a device profile from a vendor's data-point schema.
+    #[command(subcommand)]
+    Profile(profile::ProfileCmd),
     /// List the device profiles and where each comes from.
     Profiles {
         /// Print JSON.
@@ -246,6 +250,7 @@ fn run(cli: Cli, opener: &PortOpener) -> CliResult {
     match cli.command {
         Some(Cmd::Frame(cmd)) => frame::run(cmd),
         Some(Cmd::Profiles { json }) => profiles(json),
+        Some(Cmd::Profile(cmd)) => profile::run(cmd),
         Some(Cmd::Ports {
             json,
             set_latency_timer,

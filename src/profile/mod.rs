@@ -13,6 +13,7 @@ pub mod registry;
 pub mod relation;
 pub mod roles;
 pub mod stop;
+pub mod tuya_schema;
 pub mod validate;
 pub mod value;
 

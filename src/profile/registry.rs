@@ -351,7 +351,9 @@ impl Registry {
     }
 }
 
-fn user_dir() -> Option<PathBuf> {
+/// The folder of a user's profiles: `BOTBENCH_PROFILE_DIR`, else
+/// `$XDG_CONFIG_HOME/botbench/profiles` or `~/.config/botbench/profiles`.
+pub fn user_dir() -> Option<PathBuf> {
     if let Some(dir) = std::env::var_os(DIR_ENV) {
         return Some(PathBuf::from(dir));
     }

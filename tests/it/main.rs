@@ -58,6 +58,7 @@ mod stations;
 mod tuya_conform;
 mod tuya_field;
 mod tuya_module;
+mod tuya_schema;
 mod tuya_sdk_vectors;
 mod tuya_update;
 mod window_kinds;
