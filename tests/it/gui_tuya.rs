@@ -389,6 +389,8 @@ fn update_asked(img: &[u8]) -> (tempfile::TempDir, Bench, H) {
     handshake(&mut h);
     tab(&mut h, "Firmware update");
     type_into(&mut h, "Firmware file", &file.display().to_string());
+    // The image names no version: the simulator comes back with its own raised (1.0.1).
+    type_into(&mut h, "Version after the update", "1.0.1");
     h.get_by_label("Start update").click();
     h.run_steps(2);
     (tmp, b, h)
@@ -429,8 +431,16 @@ fn an_update_from_the_panel_completes_and_the_mcu_holds_the_image() {
             crc32: crc32(&img)
         }
     );
+    assert_eq!(
+        (
+            report.before_version.as_deref(),
+            report.after_version.as_deref()
+        ),
+        (Some("1.0.0"), Some("1.0.1"))
+    );
     h.run_steps(2);
     assert!(has_label(&h, "Update complete"));
+    assert!(has_label(&h, "MCU version 1.0.0 → 1.0.1"));
 }
 
 #[test]

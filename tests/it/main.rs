@@ -30,6 +30,7 @@ mod gui_servo;
 mod gui_servo_setup;
 mod gui_tuya;
 mod gui_tuya_field;
+mod gui_tuya_module;
 mod gui_yield;
 mod i18n;
 mod install;

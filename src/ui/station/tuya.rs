@@ -110,6 +110,9 @@ pub struct TuyaModel {
     /// id, with when and the queries sent before it (as [`DpState::query`]): shown raw with
     /// the mismatch.
     pub misfits: BTreeMap<u8, (ReportedDp, DateTime<Local>, u64)>,
+    /// Data points the profile does not have, read by their own type and length (issue 26:
+    /// decoded, not dropped), by id, with when they were last reported.
+    pub unknown_dps: BTreeMap<u8, (ReportedDp, DateTime<Local>)>,
     /// Status queries (0x08) sent on this connection.
     pub queries: u64,
     /// The report log, oldest first.
@@ -231,15 +234,22 @@ impl TuyaModel {
         }
     }
 
-    /// Takes a report (0x07): each data point in it, checked against the profile. One that
-    /// fits is shown as its value; one of another type or length is shown raw with the
-    /// mismatch, and the value shown before stays marked as older.
+    /// Takes a report (0x07 or 0x22), whenever it comes (a slow MCU's late one too): each data
+    /// point in it, checked against the profile. One that fits is shown as its value; one of
+    /// another type or length, or a value the data point does not allow, is shown raw with the
+    /// mismatch, and the value shown before stays marked as older; one the profile lacks is
+    /// kept apart by its own type.
     pub fn on_report(&mut self, profile: &Profile, p: &Packet) {
         if !matches!(p.header, Header::Tuya { .. }) || p.direction != Direction::DeviceToHost {
             return;
         }
         let (at, clock) = (Instant::now(), Local::now());
         for item in read_reports(profile, std::slice::from_ref(p)) {
+            if !item.in_profile() {
+                self.unknown_dps.insert(item.id, (item.clone(), clock));
+                self.log(clock, item);
+                continue;
+            }
             match (&item.value, &item.misfit) {
                 (Some(value), None) => {
                     self.misfits.remove(&item.id);

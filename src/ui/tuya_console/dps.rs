@@ -240,6 +240,8 @@ impl DpView {
                     ui.end_row();
                 }
             });
+        since_query(ui, lang, rt);
+        unknown(ui, lang, rt);
         ui.separator();
         self.log(ui, lang, rt);
         actions
@@ -545,6 +547,65 @@ fn bits(ui: &mut egui::Ui, lang: Lang, def: &DataPointDef, v: &Value, width: f32
     });
 }
 
+/// Since the last status query: how many of the profile's reported data points came (reports
+/// are taken whenever they come: a slow MCU's late ones count), and which are still missing.
+fn since_query(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
+    let tuya = &rt.device.tuya;
+    let Some(t) = &tuya.last_query else {
+        return;
+    };
+    let profile = &rt.device.profile;
+    let ids: Vec<&DataPointDef> = profile.data_points.iter().filter(|d| d.access.reported()).collect();
+    let came = |id: u8| {
+        tuya.dps.get(&id).is_some_and(|st| st.query >= tuya.queries)
+            || tuya.misfits.get(&id).is_some_and(|m| m.2 >= tuya.queries)
+    };
+    let missing: Vec<String> = ids
+        .iter()
+        .filter(|d| !came(d.id))
+        .map(|d| format!("{} {}", d.id, d.field.ident))
+        .collect();
+    let heard = ids.len() - missing.len();
+    let text = format!(
+        "{} {}: {heard} / {} {}",
+        lang.tr("Since the query at", "自查询"),
+        clock(t),
+        ids.len(),
+        lang.tr("data points reported", "个数据点已上报")
+    );
+    if missing.is_empty() {
+        ui.label(text);
+    } else {
+        ui.colored_label(
+            ORANGE,
+            format!("{text}; {} {}", lang.tr("still missing:", "仍未上报:"), missing.join(", ")),
+        );
+    }
+}
+
+/// The data points the profile does not have, read by their own type and length.
+fn unknown(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
+    let tuya = &rt.device.tuya;
+    if tuya.unknown_dps.is_empty() {
+        return;
+    }
+    ui.add_space(4.0);
+    ui.strong(lang.tr(
+        "Data points not in the profile (read by their own type and length)",
+        "配置中没有的数据点(按其自身类型与长度解析)",
+    ));
+    egui::Grid::new("tuya-unknown-dps").striped(true).show(ui, |ui| {
+        for (d, t) in tuya.unknown_dps.values() {
+            let ty = DpType::from_byte(d.wire_type).map_or_else(|| format!("{:#04x}", d.wire_type), |t| t.name().to_string());
+            ui.label(format!("dp {}", d.id));
+            ui.monospace(format!("{ty}, {} B", d.raw.len()));
+            ui.monospace(d.shown(&rt.device.profile));
+            ui.monospace(clock(t));
+            ui.end_row();
+        }
+    });
+}
+
 /// A report that does not fit the profile: its raw bytes and the mismatch.
 fn misfit_text(lang: Lang, m: &ReportedDp) -> String {
     let why = m
@@ -562,7 +623,7 @@ fn misfit_text(lang: Lang, m: &ReportedDp) -> String {
 fn misfit_label(ui: &mut egui::Ui, lang: Lang, m: &ReportedDp) {
     ui.colored_label(egui::Color32::RED, misfit_text(lang, m))
         .on_hover_text(lang.tr(
-            "Reported with another type or length than the profile's data point",
-            "上报的类型或长度与配置中的数据点不符",
+            "Reported with another type or length than the profile's data point, or a value it does not allow",
+            "上报的类型、长度或数值与配置中的数据点不符",
         ));
 }

@@ -255,6 +255,21 @@ impl RequestsView {
                 .strong(),
             );
         }
+        if let Some(t) = &s.heartbeat_stopped {
+            ui.colored_label(
+                ORANGE,
+                format!(
+                    "{} {} {}",
+                    lang.tr("The MCU asked for no heartbeats (0x25) at", "MCU于"),
+                    clock(t),
+                    lang.tr(
+                        "(acknowledged): none is sent until the next handshake, so a restart is not seen.",
+                        "请求关闭心跳(0x25),已应答:下次握手前不再发送心跳,MCU重启将无法察觉。"
+                    ),
+                ),
+            );
+        }
+        unknown_commands(ui, lang, rt);
         ui.strong(format!(
             "{} ({})",
             lang.tr("Requests answered", "已应答的请求"),
@@ -376,6 +391,32 @@ fn net_status_row(ui: &mut egui::Ui, lang: Lang, rt: &Station, opts: &mut TuyaMo
         .response
         .labelled_by(label.id);
     ui.end_row();
+}
+
+/// Commands (and extended-service sub-commands) the MCU sent that the module does not know:
+/// logged with their bytes and not answered, as a real module does.
+fn unknown_commands(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
+    let list = &rt.device.tuya.unknown_commands;
+    if list.is_empty() {
+        return;
+    }
+    ui.strong(format!(
+        "{} ({})",
+        lang.tr("Unknown commands, not answered", "未知命令,未应答"),
+        list.len()
+    ));
+    egui::Grid::new("tuya-unknown-commands")
+        .num_columns(3)
+        .striped(true)
+        .show(ui, |ui| {
+            for (t, _, what, data) in list.iter().rev() {
+                ui.monospace(clock(t));
+                ui.label(what);
+                ui.monospace(crate::protocol::hex::format(data));
+                ui.end_row();
+            }
+        });
+    ui.separator();
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 //! firmware update (OTA). What the link reported is kept by the device model
 //! ([`super::station::TuyaModel`]); this panel keeps only what the technician chose and typed.
 
+mod conform;
 mod dps;
 mod handshake;
 mod mcu_requests;
@@ -31,11 +32,19 @@ pub enum Tab {
     Requests,
     /// Firmware update.
     Ota,
+    /// The conformance grade of the MCU's firmware.
+    Conform,
 }
 
 impl Tab {
     /// Every tab, in the order shown.
-    pub(crate) const ALL: [Tab; 4] = [Tab::Handshake, Tab::DataPoints, Tab::Requests, Tab::Ota];
+    pub(crate) const ALL: [Tab; 5] = [
+        Tab::Handshake,
+        Tab::DataPoints,
+        Tab::Requests,
+        Tab::Ota,
+        Tab::Conform,
+    ];
 
     fn name(self, lang: Lang) -> &'static str {
         match self {
@@ -43,6 +52,7 @@ impl Tab {
             Tab::DataPoints => lang.tr("Data points", "数据点"),
             Tab::Requests => lang.tr("MCU requests", "MCU请求"),
             Tab::Ota => lang.tr("Firmware update", "固件升级"),
+            Tab::Conform => lang.tr("Conformance", "协议一致性"),
         }
     }
 }
@@ -63,6 +73,8 @@ pub struct TuyaConsolePanel {
     pub requests: mcu_requests::RequestsView,
     /// The firmware update.
     pub ota: ota::OtaView,
+    /// The conformance grade.
+    pub conform: conform::ConformView,
 }
 
 /// What this panel's jobs report.
@@ -72,6 +84,10 @@ pub enum Output {
     OtaProgress(ota::OtaProgress),
     /// The firmware update ended.
     OtaDone(Result<OtaReport, JobError>),
+    /// A conformance check ended.
+    ConformCheck(crate::ops::tuya::conform::Check),
+    /// The conformance grade ended.
+    ConformDone(Result<crate::ops::tuya::conform::Conformance, JobError>),
 }
 
 /// A time as shown: `12:03:04.512`.
@@ -130,6 +146,7 @@ impl TuyaConsolePanel {
                 Tab::DataPoints => actions.extend(self.dps.show(ui, lang, rt, self.ota.active(rt))),
                 Tab::Requests => actions.extend(self.requests.show(ui, lang, rt, &mut self.opts)),
                 Tab::Ota => actions.extend(self.ota.show(ui, lang, rt)),
+                Tab::Conform => actions.extend(self.conform.show(ui, lang, rt)),
             });
         if self.opts != before {
             // Options go before anything the section asked for (the Wi-Fi state report).
@@ -163,8 +180,10 @@ impl crate::ui::Panel for TuyaConsolePanel {
     }
 
     fn on_output(&mut self, out: crate::ui::panel::PanelOutput, _station: &Station) -> Vec<Action> {
-        if let Some(out) = out.take::<Output>() {
-            self.ota.on_output(out);
+        match out.take::<Output>() {
+            Some(out @ (Output::OtaProgress(_) | Output::OtaDone(_))) => self.ota.on_output(out),
+            Some(out) => self.conform.on_output(out),
+            None => {}
         }
         Vec::new()
     }

@@ -1,6 +1,8 @@
 //! The MCU firmware update: choose a file, check it (not empty, not over the profile's largest
 //! image), confirm with the expected transfer time at the port's rate, send it in packets of the
-//! size the MCU asks for, with a progress bar, rate and time left, cancel, and the result.
+//! size the MCU asks for, with a progress bar, rate and time left, cancel; then the wait for the
+//! MCU to restart and name the new version (typed, or the one the image holds), and the result
+//! with the versions before and after and the time it took to come back.
 
 use super::{Action, Output, Station};
 use crate::i18n::Lang;
@@ -31,6 +33,8 @@ pub struct OtaProgress {
     pub left: f64,
     /// The packet size the MCU asked for, once known.
     pub packet: Option<usize>,
+    /// Every packet is acked: waiting for the MCU to restart and name its new version.
+    pub waiting: bool,
 }
 
 /// The firmware update's state.
@@ -48,6 +52,11 @@ pub struct OtaView {
     pub result: Option<Result<ops::OtaReport, JobError>>,
     /// An update was started and has not ended.
     pub running: bool,
+    /// The version the MCU must name after the update, as typed; empty: the one the image
+    /// holds ([`ops::image_version`]).
+    pub expect_version: String,
+    /// The version the running update waits for.
+    expecting: Option<String>,
 }
 
 /// Seconds as `1 min 05 s` or `12 s`.
@@ -55,42 +64,52 @@ fn duration(secs: f64) -> String {
     ops::duration_text(std::time::Duration::from_secs_f64(secs.max(0.0)))
 }
 
-fn work(path: PathBuf, max: u32) -> Job {
+fn work(path: PathBuf, max: u32, typed: Option<String>) -> Job {
     Job::new(
         Text::new("OTA", "固件升级"),
         move |client, cancel, sink| {
             let done = |r: Result<ops::OtaReport, JobError>| {
                 sink.panel(Output::OtaDone(r.clone()));
                 r.map(|rep| {
+                    let (before, after) = versions(&rep);
                     Text::new(
                         format!(
-                            "{} bytes sent in {} packets of {} bytes",
+                            "{} bytes sent in {} packets of {} bytes; version {before} → {after}",
                             rep.size, rep.packets, rep.packet_size
                         ),
                         format!(
-                            "已发送 {} 字节,共 {} 包,每包 {} 字节",
+                            "已发送 {} 字节,共 {} 包,每包 {} 字节;版本 {before} → {after}",
                             rep.size, rep.packets, rep.packet_size
                         ),
                     )
                 })
             };
+            let file_error = |reason: String| JobError::File {
+                path: path.clone(),
+                reason,
+            };
             // Read with the profile's bound: a file that grew past it, or a device, stops there.
             let image = match ops::read_image(&path, max) {
                 Ok(i) => i,
-                Err(e) => {
-                    return done(Err(JobError::File {
-                        path: path.clone(),
-                        reason: e.to_string(),
-                    }));
-                }
+                Err(e) => return done(Err(file_error(e.to_string()))),
+            };
+            let Some(version) = typed.clone().or_else(|| ops::image_version(&image)) else {
+                return done(Err(file_error(
+                    "the image names no single version (x.y.z): type the version the MCU must report after the update".into(),
+                )));
+            };
+            let expect = ops::Expect {
+                version,
+                limit: ops::COME_BACK_LIMIT,
             };
             let started = Instant::now();
             let mut packet = None;
             let mut acked = 0u64;
-            let result = ops::ota(
+            let result = ops::update(
                 client,
                 &image,
                 max,
+                &expect,
                 OtaTiming::default(),
                 &mut Run::new(cancel, |p: Progress| {
                     if packet.is_none() && p.done < p.total {
@@ -104,6 +123,7 @@ fn work(path: PathBuf, max: u32) -> Job {
                         rate,
                         left: p.total.saturating_sub(p.done) as f64 / rate.max(1.0),
                         packet,
+                        waiting: p.done >= p.total,
                     }));
                     sink.progress(p);
                 }),
@@ -116,6 +136,14 @@ fn work(path: PathBuf, max: u32) -> Job {
                 e => e.into(),
             }))
         },
+    )
+}
+
+/// The versions before and after an update, `unknown` where not known.
+fn versions(r: &ops::OtaReport) -> (&str, &str) {
+    (
+        r.before_version.as_deref().unwrap_or("?"),
+        r.after_version.as_deref().unwrap_or("?"),
     )
 }
 
@@ -133,6 +161,7 @@ impl OtaView {
                 self.running = false;
                 self.result = Some(r);
             }
+            Output::ConformCheck(_) | Output::ConformDone(_) => {}
         }
     }
 
@@ -197,6 +226,18 @@ impl OtaView {
             if self.path != before {
                 self.error = None;
             }
+            let label = lang.tr("Version after the update", "升级后的版本");
+            // The label stays on the row of its box.
+            crate::ui::layout::group(ui, label, |ui| {
+                let l = ui.label(label);
+                ui.add_enabled(
+                    !active,
+                    egui::TextEdit::singleline(&mut self.expect_version)
+                        .hint_text(lang.tr("from the image", "取自固件"))
+                        .desired_width(90.0),
+                )
+                .labelled_by(l.id);
+            });
             // A file chosen is checked at once; it is sent only on Start update.
             if event.go(false, &mut actions) {
                 self.error = ops::check_file(&PathBuf::from(self.path.trim()), max).err();
@@ -257,6 +298,14 @@ impl OtaView {
                         lang.tr("bytes (asked by the MCU)", "字节(MCU要求)")
                     ));
                 }
+                if p.waiting && active {
+                    ui.label(format!(
+                        "{} {} ({} 60 s)",
+                        lang.tr("Waiting for the MCU to restart with version", "等待MCU重启并报告版本"),
+                        self.expecting.as_deref().unwrap_or("?"),
+                        lang.tr("at most", "最多")
+                    ));
+                }
                 if active && ui.button(lang.tr("Cancel update", "取消升级")).clicked() {
                     actions.push(Action::CancelJob);
                 }
@@ -278,6 +327,17 @@ impl OtaView {
                         duration(r.seconds),
                         r.retries,
                         lang.tr("retries", "次重发")
+                    ),
+                );
+                let (before, after) = versions(r);
+                ui.colored_label(
+                    GREEN,
+                    format!(
+                        "{} {before} → {after}; {} {:.1} s {}",
+                        lang.tr("MCU version", "MCU版本"),
+                        lang.tr("it came back", "重启后"),
+                        r.back_seconds.unwrap_or_default(),
+                        lang.tr("after the last packet", "恢复应答(自最后一包起)")
                     ),
                 );
             }
@@ -341,7 +401,13 @@ impl OtaView {
                 self.running = true;
                 self.progress = None;
                 self.result = None;
-                Some(Action::StartJob(work(path, max)))
+                let typed = Some(self.expect_version.trim().to_string()).filter(|v| !v.is_empty());
+                self.expecting = typed.clone().or_else(|| {
+                    ops::read_image(&path, max)
+                        .ok()
+                        .and_then(|i| ops::image_version(&i))
+                });
+                Some(Action::StartJob(work(path, max, typed)))
             }
             false => {
                 self.confirm = None;
