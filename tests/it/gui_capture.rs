@@ -8,11 +8,10 @@ use botbench::ui::{Action, PanelId};
 use egui_kittest::kittest::Queryable;
 
 use crate::support::gui::{self, H, app, app_mut, step_until};
-use crate::support::{Port, serve_plain, temp_dir, window_cleaner};
+use crate::support::{Port, serve_with, temp_dir, window_cleaner};
 use botbench::sim::Faults;
 
-/// The app on the window cleaner at `path`, with 100 ms for it to start answering: a plain pty
-/// keeps no lockstep with the link.
+/// The app on the window cleaner at `path`, with 100 ms for it to start answering.
 fn harness(port: &impl Port, panel: PanelId) -> H {
     gui::on_window_cleaner(port, panel, Some(100))
 }
@@ -21,8 +20,9 @@ fn harness(port: &impl Port, panel: PanelId) -> H {
 fn a_capture_recorded_from_the_window_replays_with_the_window_showing_the_same_values() {
     let dir = temp_dir();
     let path = dir.path().join("window.pcapng");
-    // Plain ptys: the replay keeps the recorded timing, as `botbench sim replay` does.
-    let b = serve_plain(window_cleaner(), Faults::default());
+    // In lockstep with the window's link, so that a loaded machine never starves the device; the
+    // replay keeps the recorded timing, as `botbench sim replay` does.
+    let b = serve_with(window_cleaner(), Faults::default());
     b.sim
         .lock()
         .unwrap()
@@ -58,7 +58,7 @@ fn a_capture_recorded_from_the_window_replays_with_the_window_showing_the_same_v
         .unwrap();
     let file = capture::read_path(&path).expect("reads");
     assert_eq!(file.info.profile, "window-cleaner");
-    let replay = serve_plain(
+    let replay = serve_with(
         ReplayDevice::new(&file).expect("replayable"),
         Faults::default(),
     );

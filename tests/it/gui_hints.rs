@@ -22,19 +22,33 @@ fn hint_on(h: &mut H, label: &str, role: Role, hint: &str) {
         h.query_all_by_label_contains(hint).next().is_none(),
         "'{hint}' is shown before the pointer rests on {label}"
     );
-    h.query_all_by(|n| {
-        n.role() == role
-            && (n.label().as_deref() == Some(label) || n.value().as_deref() == Some(label))
-    })
-    .next()
-    .unwrap_or_else(|| panic!("no {role:?} {label}"))
-    .hover();
-    // The tooltip shows once the pointer has rested for egui's delay (0.5 s; a step is 0.25 s).
-    h.run_steps(4);
-    assert!(
-        h.query_all_by_label_contains(hint).next().is_some(),
-        "no hint '{hint}' on {label}"
-    );
+    // The tooltip shows once the pointer has rested on the widget for egui's delay (0.5 s; a
+    // step is 0.25 s). The pointer follows the widget if it moves: a reading that arrives
+    // meanwhile may move it (the window lays out what the link brings).
+    let deadline = std::time::Instant::now() + crate::support::PATIENCE;
+    let mut on = None;
+    loop {
+        let widget = h
+            .query_all_by(|n| {
+                n.role() == role
+                    && (n.label().as_deref() == Some(label) || n.value().as_deref() == Some(label))
+            })
+            .next()
+            .unwrap_or_else(|| panic!("no {role:?} {label}"));
+        let at = widget.rect().center();
+        if on != Some(at) {
+            widget.hover();
+            on = Some(at);
+        }
+        h.step();
+        if h.query_all_by_label_contains(hint).next().is_some() {
+            return;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "no hint '{hint}' on {label}"
+        );
+    }
 }
 
 /// The pty's port as an FTDI adapter with a 16 ms latency timer that this user may set.

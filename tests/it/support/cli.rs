@@ -104,9 +104,12 @@ impl Ran {
     }
 }
 
-/// How long [`run_watched`] lets a command run before the test fails instead of hanging: far
-/// beyond what a loaded machine needs, since a command that ends returns at once.
-pub const WATCHDOG: std::time::Duration = std::time::Duration::from_secs(120);
+/// How long a run ([`run_watched`], [`run_in_process`]) may take before the test fails instead
+/// of hanging: far beyond what a loaded machine needs, since a command that ends returns at
+/// once. 120 s was too short: with two CPU-bound loops beside eight tests, a provisioning in
+/// lockstep (some two thousand exchanges, each a hand-over between the link's thread and the
+/// simulator's) ran past it, slow but right.
+pub const WATCHDOG: std::time::Duration = std::time::Duration::from_secs(600);
 
 impl Ran {
     /// Both outputs and the exit code, for assertion messages.
