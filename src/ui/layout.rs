@@ -285,6 +285,22 @@ fn breaks_a_word(galley: &egui::Galley) -> bool {
     })
 }
 
+/// A table: `grid` (its id and any widths the caller sets), striped, with one column per header
+/// and the headers as its first row, then the rows `body` adds. Returns what `body` returns.
+pub fn table<R>(
+    ui: &mut egui::Ui,
+    grid: egui::Grid,
+    headers: &[&str],
+    body: impl FnOnce(&mut egui::Ui) -> R,
+) -> egui::InnerResponse<R> {
+    grid.striped(true)
+        .num_columns(headers.len())
+        .show(ui, |ui| {
+            header_row(ui, headers);
+            body(ui)
+        })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

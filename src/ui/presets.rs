@@ -307,19 +307,12 @@ fn confirm(ui: &mut egui::Ui, lang: Lang, differing: usize) -> Option<bool> {
 /// The preset beside the device, field by field, by the profile's names (the wire names on
 /// hover); a preset value that differs is marked.
 fn diff_table(ui: &mut egui::Ui, lang: Lang, profile: &Profile, rows: &[DiffRow]) {
-    egui::Grid::new("preset-diff")
-        .striped(true)
-        .num_columns(4)
-        .show(ui, |ui| {
-            crate::ui::layout::header_row(
-                ui,
-                &[
+    crate::ui::layout::table(ui, egui::Grid::new("preset-diff"), &[
                     lang.tr("Command", "命令"),
                     lang.tr("Field", "字段"),
                     lang.tr("Preset", "预设值"),
                     lang.tr("Device", "设备值"),
-                ],
-            );
+                ], |ui| {
             for r in rows {
                 // The profile's names, the wire names on hover.
                 let cmd = profile.command(&r.command);

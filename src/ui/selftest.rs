@@ -515,20 +515,13 @@ impl SelfTestPanel {
             let cell = |ui: &mut egui::Ui, text: egui::RichText| {
                 crate::ui::layout::wrapped_cell(ui, w_measured, egui::Label::new(text));
             };
-            egui::Grid::new("selftest-results")
-                .num_columns(5)
-                .striped(true)
-                .show(ui, |ui| {
-                    crate::ui::layout::header_row(
-                        ui,
-                        &[
+            crate::ui::layout::table(ui, egui::Grid::new("selftest-results"), &[
                             lang.tr("Check", "检查项"),
                             lang.tr("Reads", "读取"),
                             lang.tr("Bounds", "判定范围"),
                             lang.tr("Measured", "测量值"),
                             lang.tr("Result", "结果"),
-                        ],
-                    );
+                        ], |ui| {
                     // The identity step appears only when it failed.
                     for r in self.results.iter().filter(|r| r.kind == "Identify") {
                         words(ui, w_check, &r.name, |t| t);

@@ -254,19 +254,12 @@ impl TuningPanel {
         let mut decision = None;
         let modal = egui::Modal::new(egui::Id::unique("confirm-write")).show(ui.ctx(), |ui| {
             ui.heading(lang.tr("Write these changes?", "写入以下修改?"));
-            egui::Grid::new("diff")
-                .striped(true)
-                .num_columns(4)
-                .show(ui, |ui| {
-                    crate::ui::layout::header_row(
-                        ui,
-                        &[
+            crate::ui::layout::table(ui, egui::Grid::new("diff"), &[
                             lang.tr("Command", "命令"),
                             lang.tr("Field", "字段"),
                             lang.tr("Device", "设备值"),
                             lang.tr("New", "新值"),
-                        ],
-                    );
+                        ], |ui| {
                     for c in changes {
                         ui.label(lang.tr(&c.command_name.en, &c.command_name.zh))
                             .on_hover_text(&c.command);

@@ -208,20 +208,13 @@ fn table(ui: &mut egui::Ui, lang: Lang, checks: &[Check]) {
     if checks.is_empty() {
         return;
     }
-    egui::Grid::new("tuya-conform")
-        .num_columns(5)
-        .striped(true)
-        .show(ui, |ui| {
-            crate::ui::layout::header_row(
-                ui,
-                &[
+    crate::ui::layout::table(ui, egui::Grid::new("tuya-conform"), &[
                     lang.tr("Check", "检查项"),
                     lang.tr("Result", "结果"),
                     lang.tr("Kind", "类别"),
                     lang.tr("What was seen", "所见"),
                     lang.tr("Evidence (bytes)", "证据(字节)"),
-                ],
-            );
+                ], |ui| {
             for c in checks {
                 ui.label(c.id).on_hover_text(c.name);
                 let color = match (c.grade, c.mandatory) {

@@ -219,22 +219,14 @@ impl DpView {
         ui.add_space(4.0);
         let defs = rt.device.profile.data_points.clone();
         self.bits_width = (ui.available_width() * 0.3).clamp(160.0, 420.0);
-        egui::Grid::new("tuya-dps")
-            .num_columns(6)
-            .striped(true)
-            .min_col_width(40.0)
-            .show(ui, |ui| {
-                crate::ui::layout::header_row(
-                    ui,
-                    &[
+        crate::ui::layout::table(ui, egui::Grid::new("tuya-dps").min_col_width(40.0), &[
                         lang.tr("Data point", "数据点"),
                         lang.tr("Reported", "上报值"),
                         lang.tr("Last report", "最近上报"),
                         lang.tr("Command", "下发"),
                         lang.tr("Allowed", "允许值"),
                         "",
-                    ],
-                );
+                    ], |ui| {
                 for def in &defs {
                     actions.extend(self.row(ui, lang, rt, def, can_send));
                     ui.end_row();

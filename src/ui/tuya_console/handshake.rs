@@ -142,19 +142,12 @@ fn steps_table(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     let waiting_at = (!failed && s.done_at.is_none() && s.attempts > 0 && rt.connected())
         .then(|| s.steps.iter().position(Option::is_none))
         .flatten();
-    egui::Grid::new("tuya-steps")
-        .num_columns(4)
-        .striped(true)
-        .show(ui, |ui| {
-            crate::ui::layout::header_row(
-                ui,
-                &[
+    crate::ui::layout::table(ui, egui::Grid::new("tuya-steps"), &[
                     lang.tr("Step", "步骤"),
                     lang.tr("Result", "结果"),
                     lang.tr("Time", "时间"),
                     lang.tr("Detail", "详情"),
-                ],
-            );
+                ], |ui| {
             for (i, step) in HandshakeStep::ALL.iter().enumerate() {
                 ui.label(step_name(*step, lang));
                 match &s.steps[i] {

@@ -279,18 +279,11 @@ impl RequestsView {
             ui.weak(lang.tr("The MCU has asked nothing yet.", "MCU尚未发出请求。"));
             return actions;
         }
-        egui::Grid::new("tuya-requests")
-            .num_columns(3)
-            .striped(true)
-            .show(ui, |ui| {
-                crate::ui::layout::header_row(
-                    ui,
-                    &[
+        crate::ui::layout::table(ui, egui::Grid::new("tuya-requests"), &[
                         lang.tr("Time", "时间"),
                         lang.tr("Request", "请求"),
                         lang.tr("Answer", "应答"),
-                    ],
-                );
+                    ], |ui| {
                 for r in s.requests.iter().rev() {
                     ui.monospace(clock(&r.clock));
                     let name = rt
