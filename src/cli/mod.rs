@@ -18,6 +18,7 @@ mod report;
 mod servo;
 mod sim;
 mod sim_field;
+mod station;
 mod tuya;
 mod tuya_conform;
 mod tuya_show;
@@ -149,6 +150,9 @@ enum Cmd {
     Preset(preset::PresetCmd),
     /// The production records: list, show a unit's runs, export as CSV or JSON lines.
     Records(records::RecordsCmdArgs),
+    /// The line station: several fixtures on one PC, each slot running a line plan
+    /// (`station new` writes an example bundle; `station BUNDLE --check` checks one).
+    Station(station::StationArgs),
     /// Yield per shift, station, slot and plan; failing steps; each measurement's histogram,
     /// Cpk and drift (--html FILE for one self-contained page).
     Report(report::ReportArgs),
@@ -267,6 +271,7 @@ fn run(cli: Cli, opener: &PortOpener) -> CliResult {
         Some(Cmd::Preset(cmd)) => preset::run(cmd, opener),
         Some(Cmd::Records(args)) => records::run(args),
         Some(Cmd::Report(args)) => report::run(args),
+        Some(Cmd::Station(args)) => station::run(args),
         Some(Cmd::Sim(args)) => sim::run(args),
         Some(Cmd::Gui {
             port,

@@ -16,6 +16,7 @@
 //! - [`servo`] (scan, parameters, id / baud / reset, motion, production provisioning, parameter
 //!   presets), [`selftest`] (the window cleaner's production test), [`tuya`] (data points,
 //!   status query, OTA).
+//! - [`station`]: the line station: its bundle, line plans and the slot runner.
 
 pub mod device;
 pub mod error;
@@ -24,6 +25,7 @@ pub mod preset;
 pub mod records;
 pub mod selftest;
 pub mod servo;
+pub mod station;
 pub mod stop;
 pub mod telemetry;
 pub mod tuning;

@@ -55,6 +55,7 @@ mod series;
 mod servo_sync;
 mod sim_devices;
 mod sim_msp;
+mod station_bundle;
 mod stations;
 mod tuya_conform;
 mod tuya_field;

@@ -1,0 +1,19 @@
+//! The line station: several fixtures on one PC, each slot running a line plan on its own
+//! worker. A station is data first: a bundle file ([`doc`]) checked whole ([`load`]) into a
+//! [`Bundle`] whose hash goes into every record; the slot runner ([`runner`]) runs each
+//! slot's [`LinePlan`] over the operations botbench already has, sends [`Event`]s and keeps one
+//! record per unit. The command line and the window are thin over it.
+//!
+//! - [`doc`]: the RON shapes; [`example`]: the commented bundle `botbench station new` writes.
+//! - [`load`]: read, hash, check; [`plan`]: a plan's steps with their files parsed.
+//! - [`port`]: finding a slot's port by what stays true when its adapter is replugged.
+
+pub mod doc;
+pub mod example;
+pub mod load;
+pub mod plan;
+pub mod port;
+
+pub use doc::{PortLocator, StartMode};
+pub use load::{Bundle, HashedFile, LoadContext, Slot, bundle_sha256, load};
+pub use plan::{LinePlan, LineStep, Op};
