@@ -23,6 +23,7 @@ pub(crate) struct Console {
     pub(crate) captures: Vec<Capture>,
 }
 
+#[derive(Clone)]
 enum Sink {
     /// The process's stdout, stderr and stdin.
     Process,
@@ -110,6 +111,16 @@ pub(crate) fn scoped<R>(console: Console, f: impl FnOnce() -> R) -> (R, Console)
     let r = f();
     let after = CONSOLE.with(|c| c.replace(before));
     (r, after.unwrap_or_else(Console::process))
+}
+
+/// A console on this thread's run's stdout, stderr and stdin, for a thread the run starts
+/// (the station's operator input).
+pub(crate) fn handle() -> Console {
+    with(|c| Console {
+        sink: c.sink.clone(),
+        warnings: Vec::new(),
+        captures: Vec::new(),
+    })
 }
 
 /// Runs `f` on this thread's run console (the process's when no run is under way).

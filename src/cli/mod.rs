@@ -19,6 +19,7 @@ mod servo;
 mod sim;
 mod sim_field;
 mod station;
+mod station_headless;
 mod tuya;
 mod tuya_conform;
 mod tuya_show;
@@ -271,7 +272,7 @@ fn run(cli: Cli, opener: &PortOpener) -> CliResult {
         Some(Cmd::Preset(cmd)) => preset::run(cmd, opener),
         Some(Cmd::Records(args)) => records::run(args),
         Some(Cmd::Report(args)) => report::run(args),
-        Some(Cmd::Station(args)) => station::run(args),
+        Some(Cmd::Station(args)) => station::run(args, opener),
         Some(Cmd::Sim(args)) => sim::run(args),
         Some(Cmd::Gui {
             port,

@@ -22,9 +22,15 @@ pub(crate) struct StationArgs {
     /// with the problem).
     #[arg(long)]
     pub check: bool,
+    /// Run without a window: events on stdout, Start and answers from stdin.
+    #[arg(long, conflicts_with = "check")]
+    pub headless: bool,
     /// Print JSON (one document a line).
     #[arg(long)]
     pub json: bool,
+    /// Headless: one unit per slot, then exit 0 when every slot passed, 1 otherwise.
+    #[arg(long, requires = "headless")]
+    pub once: bool,
     /// Who operates the station, in every record (default: BOTBENCH_OPERATOR).
     #[arg(long, value_name = "NAME")]
     pub operator: Option<String>,
@@ -33,7 +39,7 @@ pub(crate) struct StationArgs {
     pub records: Option<String>,
 }
 
-pub(crate) fn run(args: StationArgs) -> CliResult {
+pub(crate) fn run(args: StationArgs, opener: &crate::link::PortOpener) -> CliResult {
     match args.bundle.as_str() {
         "new" => new(args.file.as_deref().unwrap_or(Path::new("station.ron"))),
         "password" => password(),
@@ -54,9 +60,18 @@ pub(crate) fn run(args: StationArgs) -> CliResult {
                     None => Ok(0),
                 };
             }
-            Err(CliError::input(
-                "say what to do with the bundle: --check (the station's run comes next)",
-            ))
+            if let Some((slot, why)) = missing.first() {
+                return Err(CliError::input(format!(
+                    "slot {slot}: {why}; nothing was started"
+                )));
+            }
+            if args.headless {
+                super::station_headless::run(&bundle, &args, opener)
+            } else {
+                Err(CliError::input(
+                    "the station's window is not built yet: run it with --headless",
+                ))
+            }
         }
     }
 }

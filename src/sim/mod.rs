@@ -4,6 +4,7 @@
 
 use std::time::{Duration, Instant};
 
+pub mod fixture;
 mod kind;
 pub mod line;
 pub mod lockstep;
@@ -14,6 +15,7 @@ pub mod runner;
 pub mod solar_cleanbot;
 pub mod window_cleaner;
 
+pub use fixture::SimFixture;
 pub use kind::{SimKind, SimOptions, build, tuya_mcu};
 pub use line::{Line, Split};
 pub use pty::PtyServer;

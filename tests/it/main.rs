@@ -56,6 +56,7 @@ mod servo_sync;
 mod sim_devices;
 mod sim_msp;
 mod station_bundle;
+mod station_headless;
 mod stations;
 mod tuya_conform;
 mod tuya_field;

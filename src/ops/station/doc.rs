@@ -124,16 +124,13 @@ pub enum StepDoc {
         #[serde(default)]
         firmware: Vec<String>,
     },
-    /// The unit's serial number: scanned (a barcode scanner types it and Enter) and checked
-    /// against `pattern` (a regular expression, whole match), or read from the device
-    /// (`from_device: true`, the servo's serial-number parameter).
+    /// The unit's serial number from a barcode scanner (a keyboard that types the code and
+    /// Enter), checked against `pattern` (a regular expression, whole match). A servo's serial
+    /// is read from the servo by its Provision step.
     Scan {
         /// The regular expression a scanned serial must match whole (`WC[0-9]{6}`).
         #[serde(default)]
         pattern: Option<String>,
-        /// Read from the device instead of scanned.
-        #[serde(default)]
-        from_device: bool,
         /// How long to wait for the scan, s (default 120).
         #[serde(default)]
         timeout_s: Option<u32>,
@@ -228,8 +225,7 @@ impl StepDoc {
             | StepDoc::TuyaStatus
             | StepDoc::TuyaConform
             | StepDoc::FirmwareUpdate { .. } => Some(Protocol::Tuya),
-            StepDoc::Scan { from_device, .. } => from_device.then_some(Protocol::Servo),
-            StepDoc::Confirm { .. } | StepDoc::Measure { .. } => None,
+            StepDoc::Scan { .. } | StepDoc::Confirm { .. } | StepDoc::Measure { .. } => None,
         }
     }
 }

@@ -503,17 +503,9 @@ impl<'s> Reader<'s> {
                 hardware: hardware.clone(),
                 firmware: firmware.clone(),
             },
-            StepDoc::Scan {
-                pattern,
-                from_device,
-                timeout_s,
-            } => self.scan(
-                pattern.as_deref(),
-                *from_device,
-                profile,
-                at,
-                secs(*timeout_s, 120),
-            )?,
+            StepDoc::Scan { pattern, timeout_s } => {
+                self.scan(pattern.as_deref(), at, secs(*timeout_s, 120))?
+            }
             StepDoc::Preset(file) => {
                 let (shown, text) = self.text(file, Limit::PRESET, at)?;
                 let loaded = crate::preset::Preset::parse(&shown, &text, profile)?;
@@ -600,21 +592,9 @@ impl<'s> Reader<'s> {
     fn scan(
         &mut self,
         pattern: Option<&str>,
-        from_device: bool,
-        profile: &Profile,
         at: &[At],
         timeout: std::time::Duration,
     ) -> Result<Op, DocumentError> {
-        if from_device && profile.serial_number_param().is_none() {
-            return Err(self.src.error(
-                ErrorKind::Value,
-                at,
-                format!(
-                    "Scan from_device: profile '{}' has no serial-number parameter",
-                    profile.id
-                ),
-            ));
-        }
         let pattern = match pattern {
             None => None,
             Some(p) => Some(regex::Regex::new(&format!("^(?:{p})$")).map_err(|e| {
@@ -623,11 +603,7 @@ impl<'s> Reader<'s> {
                     .error(ErrorKind::Value, at, format!("Scan pattern {p:?}: {first}"))
             })?),
         };
-        Ok(Op::Scan {
-            pattern,
-            from_device,
-            timeout,
-        })
+        Ok(Op::Scan { pattern, timeout })
     }
 
     fn firmware(

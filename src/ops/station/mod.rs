@@ -17,3 +17,9 @@ pub mod port;
 pub use doc::{PortLocator, StartMode};
 pub use load::{Bundle, HashedFile, LoadContext, Slot, bundle_sha256, load};
 pub use plan::{LinePlan, LineStep, Op};
+pub mod event;
+pub mod runner;
+pub mod steps;
+
+pub use event::{Answer, Command, Event, What};
+pub use runner::{Hands, OperatorHands, SlotHandle, StationContext, spawn};

@@ -49,12 +49,10 @@ pub enum Op {
         /// Allowed firmware versions.
         firmware: Vec<String>,
     },
-    /// The unit's serial: scanned and matched whole against `pattern`, or read from the device.
+    /// The unit's serial, scanned and matched whole against `pattern`.
     Scan {
         /// `^(?:pattern)$`; `None`: any non-empty code.
         pattern: Option<regex::Regex>,
-        /// Read from the device (the servo's serial-number parameter).
-        from_device: bool,
         /// How long the scan is waited for.
         timeout: Duration,
     },
@@ -156,12 +154,7 @@ impl Op {
     pub fn needs_operator(&self) -> bool {
         matches!(
             self,
-            Op::Confirm { .. }
-                | Op::Measure { .. }
-                | Op::Scan {
-                    from_device: false,
-                    ..
-                }
+            Op::Confirm { .. } | Op::Measure { .. } | Op::Scan { .. }
         )
     }
 }

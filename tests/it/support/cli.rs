@@ -325,6 +325,12 @@ impl Sim {
         }
     }
 
+    /// `ports`, with this simulator's path reaching it in lockstep (several simulators for
+    /// one run: a station's slots).
+    pub fn serve_in(&self, ports: botbench::link::PortOpener) -> botbench::link::PortOpener {
+        self.server.serve_in(ports)
+    }
+
     /// The port opener that reaches this simulator (for a run that is watched as it goes).
     pub fn ports(&self) -> &botbench::link::PortOpener {
         &self.ports

@@ -1,0 +1,513 @@
+//! The slot runner: one named thread per slot owns the slot's link, waits for its port and for
+//! a unit (Start, a scanned serial, or a new unit answering), runs the line plan step by step,
+//! keeps one record per unit run (`RunKind::Station`, the bundle's hash in it) before it says
+//! the verdict, and stops at once on its cancel flag (STOP for the slot, STOP ALL for all).
+
+use super::StartMode;
+use super::event::{Answer, Command, Event, What};
+use super::load::Slot;
+use super::plan::LinePlan;
+use super::steps::{Desk, UnitRun, run_step};
+use crate::i18n::Text;
+use crate::link::{Client, Link, LinkOptions, PortOpener};
+use crate::ops::records::record::{Record, RunKind, Unit, Verdict};
+use crate::ops::records::{Recorder, SerialSource};
+use crate::ops::{Cancel, Device};
+use crossbeam_channel::{Receiver, Sender};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// How often an idle fixture's identity is read to see a new unit, and a missing port looked
+/// for (the earlier line tool's 0.5 s).
+pub const IDLE_POLL: Duration = Duration::from_millis(500);
+
+/// What the station's slots share: its id, the bundle's hash, who operates it, the records.
+#[derive(Clone)]
+pub struct StationContext {
+    /// The station's id.
+    pub id: String,
+    /// The bundle's hash (into every record).
+    pub bundle_sha256: String,
+    /// The operator's name, when known.
+    pub operator: Option<String>,
+    /// Where every slot's records go (one recorder, taken in turn).
+    pub recorder: Arc<Mutex<Recorder>>,
+}
+
+/// A fixture's hands: what a simulated fixture does where the operator's would (the corner
+/// switches), and its next unit after a verdict. A real fixture's do nothing.
+pub trait Hands: Send {
+    /// The operator is asked to do `text` (a self-test's Operator step); a simulated fixture
+    /// acts it out. `false` aborts the step.
+    fn prompt(&mut self, text: &str) -> bool;
+    /// The unit's verdict is out: a simulated fixture swaps in a fresh unit and says `true`
+    /// (it is there now); a real one says `false` (the next unit is seen when it answers).
+    fn next_unit(&mut self) -> bool;
+}
+
+/// A real fixture: the operator's hands do what prompts say.
+pub struct OperatorHands;
+
+impl Hands for OperatorHands {
+    fn prompt(&mut self, _text: &str) -> bool {
+        true
+    }
+    fn next_unit(&mut self) -> bool {
+        false
+    }
+}
+
+/// A running slot: where its commands go, its STOP, its thread.
+pub struct SlotHandle {
+    /// The slot's name.
+    pub name: String,
+    /// Start and answers.
+    pub commands: Sender<Command>,
+    /// STOP for this slot.
+    pub cancel: Cancel,
+    /// The slot's thread (ends after STOP, or after one unit with `once`).
+    pub thread: std::thread::JoinHandle<()>,
+}
+
+/// Starts slot `slot` on a thread of its own (`slot-NAME`): its port opened with `opener`,
+/// events to `events`; with `once`, it ends after one unit's verdict. Errors: the thread
+/// could not be started.
+pub fn spawn(
+    slot: Slot,
+    station: StationContext,
+    opener: PortOpener,
+    hands: Box<dyn Hands>,
+    events: Sender<Event>,
+    once: bool,
+) -> std::io::Result<SlotHandle> {
+    let (tx, rx) = crossbeam_channel::bounded(64);
+    let cancel = Cancel::new();
+    let name = slot.name.clone();
+    let runner = SlotRunner {
+        slot,
+        station,
+        opener,
+        hands,
+        events,
+        commands: rx,
+        cancel: cancel.clone(),
+        once,
+    };
+    let thread = std::thread::Builder::new()
+        .name(format!("slot-{name}"))
+        .spawn(move || runner.serve())?;
+    Ok(SlotHandle {
+        name,
+        commands: tx,
+        cancel,
+        thread,
+    })
+}
+
+struct SlotRunner {
+    slot: Slot,
+    station: StationContext,
+    opener: PortOpener,
+    hands: Box<dyn Hands>,
+    events: Sender<Event>,
+    commands: Receiver<Command>,
+    cancel: Cancel,
+    once: bool,
+}
+
+impl SlotRunner {
+    fn tell(&self, what: What) {
+        let _ = self.events.send(Event {
+            slot: self.slot.name.clone(),
+            what,
+        });
+    }
+
+    /// Waits `d` or until cancelled; `false` when cancelled.
+    fn pause(&self, d: Duration) -> bool {
+        let end = Instant::now() + d;
+        while Instant::now() < end {
+            if self.cancel.is_cancelled() {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(20).min(end - Instant::now()));
+        }
+        !self.cancel.is_cancelled()
+    }
+
+    fn serve(mut self) {
+        let why = self.serve_units();
+        self.tell(What::Stopped { why });
+    }
+
+    /// Opens the port (waiting for it while it is missing) and runs units until stopped.
+    fn serve_units(&mut self) -> String {
+        let mut ready = true;
+        loop {
+            let Some(link) = self.open() else {
+                return "stopped".into();
+            };
+            let client = link.client();
+            loop {
+                let serial = match self.wait_start(&client, ready) {
+                    Start::Go(serial) => serial,
+                    Start::Stopped => return "stopped".into(),
+                    Start::Lost => break,
+                };
+                let record = self.unit(&client, serial);
+                let lost = record
+                    .reason
+                    .as_deref()
+                    .is_some_and(|r| r.starts_with("link lost"));
+                if self.once {
+                    return "one unit run (--once)".into();
+                }
+                if lost {
+                    break;
+                }
+                ready = self.hands.next_unit();
+            }
+        }
+    }
+
+    /// The link to the slot's port, once it is there; `None` when stopped first.
+    fn open(&self) -> Option<Link> {
+        let mut said = None;
+        loop {
+            if self.cancel.is_cancelled() {
+                return None;
+            }
+            let ports = if super::port::needs_port_list(&self.slot.port) {
+                crate::system::list_ports()
+            } else {
+                Vec::new()
+            };
+            let found = super::port::resolve(&self.slot.port, &self.slot.name, &ports);
+            let opened = found.and_then(|path| {
+                let profile = self.slot.profile.clone();
+                let options = LinkOptions {
+                    reconnect: false,
+                    ..LinkOptions::default()
+                };
+                Link::open(
+                    self.opener.open(&path, profile.baud),
+                    profile,
+                    options,
+                    None,
+                )
+                .map(|l| (l, path))
+                .map_err(|e| e.to_string())
+            });
+            match opened {
+                Ok((link, path)) => {
+                    self.tell(What::Port {
+                        present: true,
+                        detail: path,
+                    });
+                    return Some(link);
+                }
+                Err(why) => {
+                    if said.as_ref() != Some(&why) {
+                        self.tell(What::Port {
+                            present: false,
+                            detail: why.clone(),
+                        });
+                        said = Some(why);
+                    }
+                    if !self.pause(IDLE_POLL) {
+                        return None;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// How waiting for a unit ended.
+enum Start {
+    /// Go, with the serial scanned to start it.
+    Go(Option<String>),
+    /// STOP.
+    Stopped,
+    /// The port went away.
+    Lost,
+}
+
+impl SlotRunner {
+    /// Waits for the next unit as the plan says: the Start button, a scanned serial, or a new
+    /// unit answering: at once when `ready` (the first unit, or a simulated fixture has just
+    /// presented a fresh one), else after the fixture was seen empty.
+    fn wait_start(&self, client: &Client, ready: bool) -> Start {
+        let plan = &self.slot.plan;
+        let how = match plan.start {
+            StartMode::Button => "button",
+            StartMode::Scan => "scan",
+            StartMode::Auto => "auto",
+        };
+        self.tell(What::Waiting { how });
+        let mut absent_seen = ready;
+        loop {
+            if self.cancel.is_cancelled() {
+                return Start::Stopped;
+            }
+            match self.commands.recv_timeout(IDLE_POLL) {
+                // Start works in every mode: the operator may always start a unit by hand.
+                Ok(Command::Start) => return Start::Go(None),
+                Ok(Command::Answer(Answer::Text(code))) if plan.start == StartMode::Scan => {
+                    return Start::Go(Some(code));
+                }
+                Ok(_) => continue,
+                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => return Start::Stopped,
+                Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+            }
+            if plan.start == StartMode::Auto {
+                match self.probe(client) {
+                    Probe::Present if absent_seen => return Start::Go(None),
+                    Probe::Present => {}
+                    Probe::Absent => absent_seen = true,
+                    Probe::Lost => return Start::Lost,
+                }
+            }
+        }
+    }
+
+    /// Whether a unit answers on the port now: its identity (MSP), a fresh servo (id 0), the
+    /// MCU's product info (Tuya).
+    fn probe(&self, client: &Client) -> Probe {
+        use crate::profile::Protocol;
+        let profile = &self.slot.profile;
+        let dev = Device::new(client, profile);
+        let answered: Result<bool, crate::ops::OpError> = match profile.protocol {
+            Protocol::Msp => crate::ops::device::identify(client).map(|_| true),
+            Protocol::Servo => {
+                crate::ops::servo::provision::find_fresh(dev, &profile.servo_bauds()).map(|found| {
+                    found
+                        .iter()
+                        .any(|(_, p)| *p == crate::ops::servo::Presence::Present)
+                })
+            }
+            Protocol::Tuya => Ok(crate::ops::tuya::product_info(client).is_some()),
+        };
+        match answered {
+            Ok(true) => Probe::Present,
+            Ok(false) => Probe::Absent,
+            Err(crate::ops::OpError::Exchange(crate::link::ExchangeError::Disconnected(_))) => {
+                Probe::Lost
+            }
+            Err(_) => Probe::Absent,
+        }
+    }
+}
+
+/// What a look at the idle fixture found.
+enum Probe {
+    Present,
+    Absent,
+    Lost,
+}
+
+impl SlotRunner {
+    /// Runs one unit through the plan and keeps its record; says the verdict after.
+    fn unit(&mut self, client: &Client, serial: Option<String>) -> Record {
+        let slot = self.slot.clone();
+        let plan: &LinePlan = &slot.plan;
+        self.tell(What::Unit {
+            serial: serial.clone(),
+        });
+        let mut record = Record::start(
+            RunKind::Station,
+            &plan.name,
+            Some(self.station.bundle_sha256.clone()),
+            &slot.profile.id,
+        );
+        record.context.station = Some(self.station.id.clone());
+        record.context.slot = Some(slot.name.clone());
+        record.context.fixture = Some(slot.fixture.clone());
+        record.context.operator.clone_from(&self.station.operator);
+        record.context.bundle_sha256 = Some(self.station.bundle_sha256.clone());
+        let mut u = UnitRun {
+            dev: Device::new(client, &slot.profile),
+            cancel: &self.cancel.clone(),
+            unit: Unit {
+                serial_source: serial.as_ref().map(|_| SerialSource::Scanned),
+                serial,
+                ..Unit::default()
+            },
+            pass_so_far: true,
+            provision: Default::default(),
+        };
+        let failed = self.steps(plan, &mut u, &mut record);
+        record.unit = u.unit.clone();
+        record.finish(None);
+        match failed {
+            None => {
+                record.verdict = Verdict::Pass;
+                record.failed_step = None;
+                record.reason = None;
+            }
+            Some((step, reason)) => {
+                record.verdict = Verdict::Fail;
+                record.failed_step = Some(step);
+                record.reason = Some(reason);
+            }
+        }
+        self.keep(&mut record);
+        record
+    }
+
+    /// Runs the plan's steps; the first step that failed (after its retry) and why. After a
+    /// failure only WriteResult steps still run (the device is told it failed); a link lost
+    /// or STOP ends the run at once.
+    fn steps(
+        &mut self,
+        plan: &LinePlan,
+        u: &mut UnitRun<'_>,
+        record: &mut Record,
+    ) -> Option<(String, String)> {
+        let mut failed: Option<(String, String)> = None;
+        let of = plan.steps.len();
+        for (i, step) in plan.steps.iter().enumerate() {
+            if failed.is_some() && !matches!(step.op, super::Op::WriteResult) {
+                continue;
+            }
+            let mut attempt = 1;
+            loop {
+                if self.cancel.is_cancelled() {
+                    return failed.or(Some((step.name.clone(), "cancelled".into())));
+                }
+                self.tell(What::Step {
+                    index: i + 1,
+                    of,
+                    name: step.name.clone(),
+                    attempt,
+                });
+                let done = run_step(u, &step.name, &step.op, &mut SlotDesk { runner: self });
+                let seen = done
+                    .records
+                    .last()
+                    .map(|r| r.detail.clone())
+                    .unwrap_or_default();
+                self.tell(What::StepDone {
+                    name: step.name.clone(),
+                    pass: done.failure.is_none(),
+                    detail: match &done.failure {
+                        Some(reason) if seen.is_empty() || &seen == reason => reason.clone(),
+                        Some(reason) => format!("{reason}: {seen}"),
+                        None => seen,
+                    },
+                });
+                record.steps.extend(done.records);
+                let Some(reason) = done.failure else { break };
+                if reason.starts_with("link lost") {
+                    return failed.or(Some((
+                        step.name.clone(),
+                        format!("link lost during {}", step.name),
+                    )));
+                }
+                if plan.retry_once
+                    && attempt == 1
+                    && !self.cancel.is_cancelled()
+                    && self.retry(&step.name, &reason)
+                {
+                    attempt = 2;
+                    continue;
+                }
+                u.pass_so_far = false;
+                if failed.is_none() {
+                    failed = Some((step.name.clone(), reason));
+                }
+                break;
+            }
+        }
+        failed
+    }
+
+    /// Asks the operator whether to retry `step`.
+    fn retry(&mut self, step: &str, reason: &str) -> bool {
+        let q = Text::new(
+            format!("{step} failed: {reason}. Retry once?"),
+            format!("{step} 失败:{reason}。重试一次?"),
+        );
+        matches!(
+            SlotDesk { runner: self }.ask("retry", &q, Duration::from_secs(120)),
+            Some(Answer::Yes)
+        )
+    }
+
+    /// Keeps `record` (before the verdict is said) and says the verdict with the unit's
+    /// earlier runs.
+    fn keep(&mut self, record: &mut Record) {
+        let (kept, earlier) = {
+            let mut recorder = self
+                .station
+                .recorder
+                .lock()
+                .unwrap_or_else(|e| e.into_inner());
+            let earlier = record.unit.serial.as_ref().and_then(|serial| {
+                let mut found = None;
+                let _ = recorder.store().read(&mut |db| {
+                    found = crate::ops::records::query::history(db, &record.profile, serial)?;
+                    Ok(())
+                });
+                found.map(|h| h.runs as i64)
+            });
+            (recorder.save(record), earlier)
+        };
+        self.tell(What::Verdict {
+            pass: record.verdict == Verdict::Pass,
+            serial: record.unit.serial.clone(),
+            failed_step: record.failed_step.clone(),
+            reason: record.reason.clone(),
+            earlier_runs: earlier,
+            record: record.uuid.clone(),
+            kept: kept.line(),
+        });
+    }
+}
+
+/// The operator's side of a running slot.
+struct SlotDesk<'r> {
+    runner: &'r mut SlotRunner,
+}
+
+impl Desk for SlotDesk<'_> {
+    fn ask(&mut self, kind: &'static str, text: &Text, timeout: Duration) -> Option<Answer> {
+        let r = &self.runner;
+        r.tell(What::Ask {
+            kind,
+            text: text.en.clone(),
+            text_zh: text.zh.clone(),
+        });
+        let end = Instant::now() + timeout;
+        loop {
+            if r.cancel.is_cancelled() {
+                return None;
+            }
+            let left = end.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return None;
+            }
+            match r
+                .commands
+                .recv_timeout(left.min(Duration::from_millis(100)))
+            {
+                Ok(Command::Answer(a)) => return Some(a),
+                Ok(Command::Start) | Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => return None,
+            }
+        }
+    }
+
+    fn prompt(&mut self, text: &str) -> bool {
+        self.runner.tell(What::Ask {
+            kind: "prompt",
+            text: text.to_string(),
+            text_zh: text.to_string(),
+        });
+        self.runner.hands.prompt(text)
+    }
+
+    fn tell(&mut self, what: What) {
+        self.runner.tell(what);
+    }
+}

@@ -1,0 +1,147 @@
+//! A simulated fixture for the line station: a built-in device on a slot, which plays the
+//! operator's hands where a step needs them (covering the corner switches in turn) and, after
+//! each verdict, is swapped for a fresh unit (a new serial number or seed, factory settings, a
+//! fresh servo at id 0), so that a demo station runs unit after unit with no hardware.
+
+use super::servo_bus::{ServoBus, SimServo, builtin_servo_profile};
+use super::solar_cleanbot::SolarCleanbot;
+use super::tuya_mcu::TuyaMcu;
+use super::window_cleaner::WindowCleaner;
+use super::{Faults, SharedDevice, SimKind, SimOptions, SimTransport};
+use crate::link::Opener;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+/// How long each corner switch is held, and released, when the fixture's hands cover them.
+const CORNER_HOLD: Duration = Duration::from_millis(250);
+
+/// The device on a simulated fixture, kept so that it can be acted on and swapped.
+#[derive(Clone)]
+enum Unit {
+    WindowCleaner(Arc<Mutex<WindowCleaner>>),
+    Solar(Arc<Mutex<SolarCleanbot>>),
+    Servos(Arc<Mutex<ServoBus>>),
+    Tuya(Arc<Mutex<TuyaMcu>>),
+}
+
+/// A slot's simulated device: [`SimFixture::opener`] serves it to the slot's link; as
+/// [`crate::ops::station::Hands`] it acts prompts out and presents the next unit.
+#[derive(Clone)]
+pub struct SimFixture {
+    kind: SimKind,
+    unit: Unit,
+    /// Units presented so far (1 for the first).
+    units: u32,
+}
+
+impl SimFixture {
+    /// The first unit of `kind` (a servo bus holds one fresh servo at id 0). Errors: a
+    /// simulator that cannot be built (its built-in profile).
+    pub fn new(kind: SimKind) -> Result<Self, String> {
+        Ok(Self {
+            kind,
+            unit: unit(kind, 1)?,
+            units: 1,
+        })
+    }
+
+    /// The device as the simulated wire serves it.
+    fn shared(&self) -> SharedDevice {
+        match &self.unit {
+            Unit::WindowCleaner(d) => d.clone(),
+            Unit::Solar(d) => d.clone(),
+            Unit::Servos(d) => d.clone(),
+            Unit::Tuya(d) => d.clone(),
+        }
+    }
+
+    /// Opens the fixture's device at a baud rate: what [`crate::link::PortOpener::with_port`]
+    /// takes for the slot's simulated port name.
+    pub fn opener(&self) -> impl Fn(u32) -> Opener + Send + Sync + 'static {
+        let device = self.shared();
+        let kind = self.kind;
+        move |baud| {
+            let device = device.clone();
+            Box::new(move || {
+                let t = SimTransport::new(device.clone(), baud, Faults::default(), kind.describe());
+                Ok(Box::new(t) as Box<dyn crate::link::Transport>)
+            })
+        }
+    }
+
+    /// Units presented so far.
+    pub fn units(&self) -> u32 {
+        self.units
+    }
+}
+
+/// Unit `n` of `kind`, factory fresh: seed `n`; a servo's serial number 1000 + n.
+fn unit(kind: SimKind, n: u32) -> Result<Unit, String> {
+    let opts = SimOptions {
+        seed: u64::from(n),
+        ..SimOptions::default()
+    };
+    Ok(match kind {
+        SimKind::WindowCleaner => {
+            Unit::WindowCleaner(Arc::new(Mutex::new(WindowCleaner::new(&opts)?)))
+        }
+        SimKind::SolarCleanbot => Unit::Solar(Arc::new(Mutex::new(SolarCleanbot::new(&opts)?))),
+        SimKind::ServoBus => {
+            let profile = builtin_servo_profile();
+            let servo = SimServo::fresh_with(&profile, 1000 + n)
+                .with_id(0)
+                .with_baud(kind.default_baud());
+            Unit::Servos(Arc::new(Mutex::new(
+                ServoBus::with_profile(profile, vec![servo]).with_seed(u64::from(n)),
+            )))
+        }
+        SimKind::TuyaVacuum => Unit::Tuya(Arc::new(Mutex::new(super::tuya_mcu(&opts)))),
+    })
+}
+
+impl crate::ops::station::Hands for SimFixture {
+    /// Covers each corner switch in turn and releases it (a window cleaner's Corner switches
+    /// step), on a thread of its own while the step watches.
+    fn prompt(&mut self, _text: &str) -> bool {
+        if let Unit::WindowCleaner(d) = &self.unit {
+            let d = d.clone();
+            let _ = std::thread::Builder::new()
+                .name("sim-fixture-hands".into())
+                .spawn(move || {
+                    for bit in [1u8, 2, 4, 8] {
+                        for bits in [bit, 0] {
+                            std::thread::sleep(CORNER_HOLD);
+                            d.lock()
+                                .unwrap_or_else(|e| e.into_inner())
+                                .set_corners(bits);
+                        }
+                    }
+                });
+        }
+        true
+    }
+
+    /// Swaps the device for a fresh one: the same wire, a new unit on it.
+    fn next_unit(&mut self) -> bool {
+        let n = self.units + 1;
+        let Ok(fresh) = unit(self.kind, n) else {
+            return false;
+        };
+        match (&self.unit, fresh) {
+            (Unit::WindowCleaner(d), Unit::WindowCleaner(f)) => swap(d, &f),
+            (Unit::Solar(d), Unit::Solar(f)) => swap(d, &f),
+            (Unit::Servos(d), Unit::Servos(f)) => swap(d, &f),
+            (Unit::Tuya(d), Unit::Tuya(f)) => swap(d, &f),
+            _ => return false,
+        }
+        self.units = n;
+        true
+    }
+}
+
+/// Puts `fresh`'s device in `d`'s place.
+fn swap<T>(d: &Arc<Mutex<T>>, fresh: &Arc<Mutex<T>>) {
+    let mut f = fresh.lock().unwrap_or_else(|e| e.into_inner());
+    let mut d = d.lock().unwrap_or_else(|e| e.into_inner());
+    std::mem::swap(&mut *d, &mut *f);
+}

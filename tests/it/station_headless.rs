@@ -1,0 +1,258 @@
+//! The line station headless (issue 27): `station BUNDLE --headless --json --once` runs every
+//! slot to its verdict, one record per unit (kind `station`, the bundle's hash in it) kept
+//! before the verdict is said; the demo bundle's simulated fixtures play the operator's hands
+//! and a Confirm takes `yes` from stdin; three slots on ptys (a window cleaner, a servo bus
+//! with a fresh servo, a Tuya vacuum) reach their verdicts, and a `no` fails the unit and
+//! writes that into the robot (147, read back with 148).
+
+use crate::support::cli::{Sim, run_in_process_into};
+use botbench::cli::Captured;
+use botbench::link::PortOpener;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// The verdict events of a run's JSON lines, by slot.
+fn verdicts(docs: &[Value]) -> Vec<(String, bool)> {
+    let mut v: Vec<(String, bool)> = docs
+        .iter()
+        .filter(|d| d["event"] == "verdict")
+        .map(|d| {
+            (
+                d["slot"].as_str().unwrap().to_string(),
+                d["pass"].as_bool().unwrap(),
+            )
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// `(kind, verdict, slot, bundle_sha256, failed_step)` of every run in the records `file`.
+fn runs(file: &Path) -> Vec<(String, String, String, String, Option<String>)> {
+    let db = rusqlite::Connection::open(file).unwrap();
+    let mut q = db
+        .prepare("SELECT kind, verdict, slot, bundle_sha256, failed_step FROM runs ORDER BY slot")
+        .unwrap();
+    q.query_map([], |r| {
+        Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?, r.get(4)?))
+    })
+    .unwrap()
+    .map(Result::unwrap)
+    .collect()
+}
+
+#[test]
+fn the_demo_station_runs_headless_to_three_verdicts_with_no_hardware() {
+    let dir = tempfile::tempdir().unwrap();
+    let records = dir.path().join("records.sqlite");
+    let bundle = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/demo-station.ron");
+    let ran = run_in_process_into(
+        &[
+            "station",
+            &bundle.display().to_string(),
+            "--headless",
+            "--json",
+            "--once",
+            "--records",
+            &records.display().to_string(),
+        ],
+        &PortOpener::system(),
+        Captured::typing("yes\n"),
+    );
+    assert_eq!(ran.code, 0, "{}", ran.text());
+    let docs = ran.json_lines();
+    assert_eq!(
+        verdicts(&docs),
+        [("1".into(), true), ("2".into(), true), ("3".into(), true)],
+        "{}",
+        ran.text()
+    );
+    let hash = docs[0]["bundle_sha256"].as_str().unwrap().to_string();
+    let kept = runs(&records);
+    assert_eq!(kept.len(), 3, "{kept:?}");
+    for (kind, verdict, _, bundle_sha256, _) in &kept {
+        assert_eq!((kind.as_str(), verdict.as_str()), ("station", "PASS"));
+        assert_eq!(bundle_sha256, &hash);
+    }
+    // The simulated fixture's hands covered the corners: the self-test's Operator step passed
+    // without anyone typing `corners`.
+    let prompt = docs
+        .iter()
+        .position(|d| d["kind"] == "prompt")
+        .expect("the corner prompt");
+    let verdict_1 = docs
+        .iter()
+        .position(|d| d["event"] == "verdict" && d["slot"] == "1")
+        .unwrap();
+    assert!(prompt < verdict_1);
+    // The servo's serial is read from it, and the record was kept before the verdict was said.
+    let servo = docs
+        .iter()
+        .find(|d| d["event"] == "verdict" && d["slot"] == "2")
+        .unwrap();
+    assert_eq!(servo["serial"], "1001", "{servo}");
+    assert!(
+        servo["kept"]
+            .as_str()
+            .unwrap()
+            .starts_with("record saved to"),
+        "{servo}"
+    );
+}
+
+/// A bundle of three slots on the simulators' ptys, with a short self-test plan (no operator
+/// step: on a pty nobody's hands cover the corners).
+fn pty_bundle(dir: &Path, wc: &str, servo: &str, tuya: &str) -> PathBuf {
+    let presets = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets");
+    std::fs::copy(
+        presets.join("servo-provision-plan.ron"),
+        dir.join("servo-provision-plan.ron"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("short-selftest.ron"),
+        r#"(version: 1, profile: "window-cleaner", name: "Short line test", steps: [
+            Range(name: "Battery voltage", command: "MSP_ADAPTER", field: "batteryVoltage",
+                  min: "11.5", max: "16.8", samples: 3),
+            Reads(name: "Water box", command: "MSP_WATER_BOX", expect: {"status": "1"}),
+        ])"#,
+    )
+    .unwrap();
+    let text = format!(
+        r#"(version: 1, id: "pty-station",
+    plans: {{
+        "wc": (start: Button, steps: [
+            Scan(pattern: "WC[0-9]{{6}}"),
+            Identify(hardware: [3]),
+            SelfTest("short-selftest.ron"),
+            Confirm(question: "Did it spray?"),
+            WriteResult,
+        ]),
+        "servo": (start: Auto, steps: [Provision(plan: "servo-provision-plan.ron")]),
+        "tuya": (start: Auto, steps: [TuyaHandshake, TuyaStatus]),
+    }},
+    slots: [
+        (name: "1", fixture: "WC", port: Path("{wc}"), profile: "window-cleaner", plan: "wc"),
+        (name: "2", fixture: "Servos", port: Path("{servo}"), profile: "servo", plan: "servo"),
+        (name: "3", fixture: "MCU", port: Path("{tuya}"), profile: "tuya-vacuum", plan: "tuya"),
+    ],
+)"#
+    );
+    let path = dir.join("pty-station.ron");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Runs the pty station once with the operator typing `input`.
+fn run_pty_station(input: &str) -> (crate::support::cli::Ran, Vec<Value>, PathBuf, Sim) {
+    let wc = Sim::start(&["window-cleaner"]);
+    let servo = Sim::start(&["servo-bus", "--servos", "0"]);
+    let tuya = Sim::start(&["tuya-vacuum"]);
+    let dir = tempfile::tempdir().unwrap().keep();
+    let bundle = pty_bundle(&dir, &wc.path, &servo.path, &tuya.path);
+    let records = dir.join("records.sqlite");
+    let ports = tuya.serve_in(servo.serve_in(wc.ports().clone()));
+    let ran = run_in_process_into(
+        &[
+            "station",
+            &bundle.display().to_string(),
+            "--headless",
+            "--json",
+            "--once",
+            "--records",
+            &records.display().to_string(),
+        ],
+        &ports,
+        Captured::typing(input),
+    );
+    let docs = ran.json_lines();
+    (ran, docs, records, wc)
+}
+
+#[test]
+fn three_slots_on_ptys_run_headless_to_their_verdicts() {
+    // Slot 1 starts by the Start line, its serial scanned, its Confirm answered `1 y`.
+    let (ran, docs, records, wc) = run_pty_station("start 1\nWC000123\n1 y\n");
+    assert_eq!(ran.code, 0, "{}", ran.text());
+    assert_eq!(
+        verdicts(&docs),
+        [("1".into(), true), ("2".into(), true), ("3".into(), true)],
+        "{}",
+        ran.text()
+    );
+    let verdict = docs
+        .iter()
+        .find(|d| d["event"] == "verdict" && d["slot"] == "1")
+        .unwrap();
+    assert_eq!(verdict["serial"], "WC000123", "{verdict}");
+    let done: Vec<&Value> = docs
+        .iter()
+        .filter(|d| d["event"] == "step-done" && d["slot"] == "1")
+        .collect();
+    assert!(
+        done.iter()
+            .any(|d| d["name"] == "WriteResult" && d["pass"] == true),
+        "{}",
+        ran.text()
+    );
+    assert_eq!(runs(&records).len(), 3);
+    // The robot holds its PASS (MSP_AUTO_TEST_RESULT 148 reads 1).
+    assert_eq!(auto_test_result(&wc), 1);
+}
+
+/// What the window cleaner's MSP_AUTO_TEST_RESULT (148) reads now.
+fn auto_test_result(wc: &Sim) -> i64 {
+    let dev = wc.run(&[
+        "msp",
+        "--port",
+        &wc.path,
+        "get",
+        "MSP_AUTO_TEST_RESULT",
+        "--json",
+    ]);
+    assert_eq!(dev.code, 0, "{}", dev.text());
+    dev.json()["fields"][0]["value"].as_i64().unwrap()
+}
+
+#[test]
+fn an_operator_no_fails_the_unit_and_the_robot_is_told_it_failed() {
+    let (ran, docs, records, wc) = run_pty_station("start 1\nWC000124\n1 n\n");
+    assert_eq!(ran.code, 1, "{}", ran.text());
+    let v = docs
+        .iter()
+        .find(|d| d["event"] == "verdict" && d["slot"] == "1")
+        .unwrap();
+    assert_eq!(v["pass"], false);
+    assert_eq!(v["failed_step"], "Confirm: Did it spray?", "{v}");
+    assert_eq!(v["reason"], "operator said no", "{v}");
+    // WriteResult still ran after the failure: 0 written, read back 0.
+    let write = docs
+        .iter()
+        .find(|d| d["event"] == "step-done" && d["name"] == "WriteResult")
+        .expect("WriteResult ran after the failure");
+    assert_eq!(write["pass"], true, "{write}");
+    assert_eq!(auto_test_result(&wc), 0);
+    let kept = runs(&records);
+    let slot1 = kept.iter().find(|r| r.2 == "1").unwrap();
+    assert_eq!(slot1.1, "FAIL");
+    assert_eq!(slot1.4.as_deref(), Some("Confirm: Did it spray?"));
+}
+
+#[test]
+fn a_scan_that_does_not_match_the_plan_s_pattern_fails_before_the_robot_is_touched() {
+    let (ran, docs, _records, _wc) = run_pty_station("start 1\nXX1\n");
+    assert_eq!(ran.code, 1, "{}", ran.text());
+    let v = docs
+        .iter()
+        .find(|d| d["event"] == "verdict" && d["slot"] == "1")
+        .unwrap();
+    assert_eq!(v["failed_step"], "Scan", "{v}");
+    assert_eq!(v["reason"], "serial does not match the pattern", "{v}");
+    // Nothing after the scan ran but the result written into the robot.
+    let ran_after: Vec<&str> = docs
+        .iter()
+        .filter(|d| d["event"] == "step" && d["slot"] == "1")
+        .map(|d| d["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(ran_after, ["Scan", "WriteResult"], "{}", ran.text());
+}
