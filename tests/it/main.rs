@@ -57,6 +57,7 @@ mod sim_devices;
 mod sim_msp;
 mod station_bundle;
 mod station_headless;
+mod station_runner;
 mod stations;
 mod tuya_conform;
 mod tuya_field;

@@ -325,6 +325,11 @@ impl Sim {
         }
     }
 
+    /// Makes the port vanish now, as an unplugged adapter (its pty's master side closed).
+    pub fn vanish_now(&mut self) {
+        self.server.vanish();
+    }
+
     /// `ports`, with this simulator's path reaching it in lockstep (several simulators for
     /// one run: a station's slots).
     pub fn serve_in(&self, ports: botbench::link::PortOpener) -> botbench::link::PortOpener {
