@@ -256,3 +256,84 @@ fn a_scan_that_does_not_match_the_plan_s_pattern_fails_before_the_robot_is_touch
         .collect();
     assert_eq!(ran_after, ["Scan", "WriteResult"], "{}", ran.text());
 }
+
+/// Runs a one-slot station of a simulated window cleaner with `plan` (RON steps and options),
+/// the operator typing `input`; its JSON lines and the records file.
+fn one_slot(plan: &str, input: &str) -> (crate::support::cli::Ran, Vec<Value>, PathBuf) {
+    let dir = tempfile::tempdir().unwrap().keep();
+    let bundle = dir.join("one.ron");
+    std::fs::write(
+        &bundle,
+        format!(
+            r#"(version: 1, id: "one", plans: {{ "p": ({plan}) }},
+                slots: [(name: "1", fixture: "F", port: Simulated("window-cleaner"),
+                         profile: "window-cleaner", plan: "p")])"#
+        ),
+    )
+    .unwrap();
+    let records = dir.join("records.sqlite");
+    let ran = run_in_process_into(
+        &[
+            "station",
+            &bundle.display().to_string(),
+            "--headless",
+            "--json",
+            "--once",
+            "--records",
+            &records.display().to_string(),
+        ],
+        &PortOpener::system(),
+        Captured::typing(input),
+    );
+    let docs = ran.json_lines();
+    (ran, docs, records)
+}
+
+#[test]
+fn a_failed_step_retried_once_passes_and_the_record_keeps_both_tries() {
+    let plan = r#"start: Button, retry_once: true, steps: [
+        Measure(name: "Suction", unit: "kPa", min: 2.0, max: 3.5)]"#;
+    // Start; 5.0 kPa is out of limits; retry: yes; 2.5 kPa passes.
+    let (ran, docs, records) = one_slot(plan, "start\n5.0\nyes\n2.5\n");
+    assert_eq!(ran.code, 0, "{}", ran.text());
+    let asked: Vec<&str> = docs
+        .iter()
+        .filter(|d| d["event"] == "ask")
+        .map(|d| d["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(asked, ["measure", "retry", "measure"], "{}", ran.text());
+    let db = rusqlite::Connection::open(&records).unwrap();
+    let tries: Vec<(String, String, Option<String>)> = db
+        .prepare("SELECT name, verdict, reason FROM steps ORDER BY idx")
+        .unwrap()
+        .query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)))
+        .unwrap()
+        .map(Result::unwrap)
+        .collect();
+    assert_eq!(
+        tries,
+        [
+            (
+                "Measure Suction".to_string(),
+                "FAIL".to_string(),
+                Some("out of limits: Suction".to_string())
+            ),
+            ("Measure Suction".to_string(), "PASS".to_string(), None),
+        ]
+    );
+    let verdict: String = db
+        .query_row("SELECT verdict FROM runs", [], |r| r.get(0))
+        .unwrap();
+    assert_eq!(verdict, "PASS");
+}
+
+#[test]
+fn a_retry_refused_leaves_the_unit_failed_at_that_step() {
+    let plan = r#"start: Button, retry_once: true, steps: [
+        Measure(name: "Suction", unit: "kPa", min: 2.0, max: 3.5)]"#;
+    let (ran, docs, _) = one_slot(plan, "start\n1.0\nno\n");
+    assert_eq!(ran.code, 1, "{}", ran.text());
+    let v = docs.iter().find(|d| d["event"] == "verdict").unwrap();
+    assert_eq!(v["failed_step"], "Measure Suction", "{v}");
+    assert_eq!(v["reason"], "out of limits: Suction", "{v}");
+}
