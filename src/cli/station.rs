@@ -68,9 +68,11 @@ pub(crate) fn run(args: StationArgs, opener: &crate::link::PortOpener) -> CliRes
             if args.headless {
                 super::station_headless::run(&bundle, &args, opener)
             } else {
-                Err(CliError::input(
-                    "the station's window is not built yet: run it with --headless",
-                ))
+                let (slots, events) =
+                    super::station_headless::start(&bundle, &args, opener, false)?;
+                crate::ui::line::run(&bundle, slots, events)
+                    .map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
+                Ok(0)
             }
         }
     }

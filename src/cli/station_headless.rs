@@ -20,7 +20,15 @@ use crate::sim::{SimFixture, SimKind};
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 
-pub(crate) fn run(bundle: &Bundle, args: &StationArgs, ports: &PortOpener) -> CliResult {
+/// Starts every slot of `bundle` (a simulated slot on its own [`SimFixture`], the others on
+/// `ports`), recording where `--records`, else the bundle, says; the slots' handles and their
+/// events. With `once`, each slot ends after one unit.
+pub(crate) fn start(
+    bundle: &Bundle,
+    args: &StationArgs,
+    ports: &PortOpener,
+    once: bool,
+) -> Result<(Vec<SlotHandle>, crossbeam_channel::Receiver<Event>), CliError> {
     let records = args.records.as_deref().or(bundle.records.as_deref());
     let location = super::records::location(records)?;
     let operator = args
@@ -50,14 +58,18 @@ pub(crate) fn run(bundle: &Bundle, args: &StationArgs, ports: &PortOpener) -> Cl
             opener,
             hands,
             tx.clone(),
-            args.once,
+            once,
         )
         .map_err(|e| {
             CliError::device(format!("slot {}: cannot start its thread: {e}", slot.name))
         })?;
         slots.push(handle);
     }
-    drop(tx);
+    Ok((slots, rx))
+}
+
+pub(crate) fn run(bundle: &Bundle, args: &StationArgs, ports: &PortOpener) -> CliResult {
+    let (slots, rx) = start(bundle, args, ports, args.once)?;
     say_start(bundle, args.json);
     let slots = Arc::new(slots);
     let routing: Arc<Mutex<Routing>> = Arc::default();

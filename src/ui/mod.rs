@@ -13,6 +13,7 @@ pub mod files;
 pub(crate) mod inputs;
 pub mod jobs;
 pub mod layout;
+pub mod line;
 pub mod panel;
 mod plot;
 pub mod records;

@@ -25,6 +25,7 @@ mod gui_capture;
 mod gui_files;
 mod gui_first_run;
 mod gui_hints;
+mod gui_line_station;
 mod gui_msp;
 mod gui_servo;
 mod gui_servo_setup;

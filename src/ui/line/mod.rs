@@ -1,0 +1,278 @@
+//! The line station's window (`botbench station BUNDLE`): one tile per slot with its fixture,
+//! port, unit, step, progress and a PASS/FAIL banner readable from two metres; Start, STOP per
+//! slot and STOP ALL always on screen; the operator's answers by buttons or by keys (Y/N for the
+//! oldest question). The slots run on their own threads ([`crate::ops::station::runner`]); the
+//! window only shows their events and sends their commands.
+//!
+//! The operator view holds only the scan and answer fields, Start, STOP, the banners and each
+//! slot's history; nothing of ports, plans or settings can be changed from it.
+
+mod tile;
+
+use crate::i18n::Lang;
+use crate::ops::station::{Answer, Command, Event, SlotHandle, What};
+use crossbeam_channel::Receiver;
+use eframe::egui;
+use std::collections::VecDeque;
+
+/// Verdicts kept per slot for its history.
+const HISTORY: usize = 8;
+
+/// What the window knows of one slot, from its events.
+#[derive(Debug, Clone, Default)]
+pub struct TileState {
+    /// The slot's name.
+    pub slot: String,
+    /// The fixture's name.
+    pub fixture: String,
+    /// Whether its port is there, and the path or why not.
+    pub port: Option<(bool, String)>,
+    /// How it waits for a unit (`button`, `scan`, `auto`), while idle.
+    pub waiting: Option<&'static str>,
+    /// The unit's serial, when known.
+    pub serial: Option<String>,
+    /// The step running: index (1-based), of, name.
+    pub step: Option<(usize, usize, String)>,
+    /// The question waiting: kind and text in both languages.
+    pub asking: Option<(&'static str, String, String)>,
+    /// The last verdict: pass, failed step, reason.
+    pub verdict: Option<(bool, Option<String>, Option<String>)>,
+    /// Recent verdicts, newest first: (pass, serial or `unit`).
+    pub history: VecDeque<(bool, String)>,
+    /// What the operator types into the answer field.
+    pub typed: String,
+    /// Whether the slot has stopped.
+    pub stopped: Option<String>,
+}
+
+/// The station window's state.
+pub struct LineStation {
+    /// The station's id.
+    pub id: String,
+    /// The bundle's hash (shown short in the title bar).
+    pub bundle_sha256: String,
+    /// The language shown.
+    pub lang: Lang,
+    /// One tile per slot, in the bundle's order.
+    pub tiles: Vec<TileState>,
+    slots: Vec<SlotHandle>,
+    events: Receiver<Event>,
+}
+
+impl LineStation {
+    /// The window over running `slots` (their events on `events`), with the fixtures' names.
+    pub fn new(
+        bundle: &crate::ops::station::Bundle,
+        slots: Vec<SlotHandle>,
+        events: Receiver<Event>,
+    ) -> Self {
+        let tiles = bundle
+            .slots
+            .iter()
+            .map(|s| TileState {
+                slot: s.name.clone(),
+                fixture: s.fixture.clone(),
+                ..TileState::default()
+            })
+            .collect();
+        Self {
+            id: bundle.id.clone(),
+            bundle_sha256: bundle.sha256.clone(),
+            lang: bundle.language,
+            tiles,
+            slots,
+            events,
+        }
+    }
+
+    /// Takes every event waiting; asks for the next frame soon while slots run.
+    pub fn logic(&mut self, ctx: &egui::Context) {
+        while let Ok(ev) = self.events.try_recv() {
+            self.on_event(ev);
+        }
+        ctx.request_repaint_after(std::time::Duration::from_millis(100));
+    }
+
+    fn on_event(&mut self, ev: Event) {
+        let Some(t) = self.tiles.iter_mut().find(|t| t.slot == ev.slot) else {
+            return;
+        };
+        match ev.what {
+            What::Port { present, detail } => t.port = Some((present, detail)),
+            What::Waiting { how } => {
+                t.waiting = Some(how);
+                t.step = None;
+            }
+            What::Unit { serial } => {
+                t.waiting = None;
+                t.serial = serial;
+                t.verdict = None;
+                t.step = None;
+            }
+            What::Step {
+                index, of, name, ..
+            } => t.step = Some((index, of, name)),
+            What::Ask {
+                kind,
+                text,
+                text_zh,
+            } => t.asking = Some((kind, text, text_zh)),
+            What::StepDone { .. } => t.asking = None,
+            What::Verdict {
+                pass,
+                serial,
+                failed_step,
+                reason,
+                ..
+            } => {
+                t.asking = None;
+                t.serial.clone_from(&serial);
+                t.verdict = Some((pass, failed_step, reason));
+                t.history
+                    .push_front((pass, serial.unwrap_or_else(|| "unit".into())));
+                t.history.truncate(HISTORY);
+            }
+            What::Stopped { why } => {
+                t.asking = None;
+                t.stopped = Some(why);
+            }
+        }
+    }
+
+    /// Sends `command` to slot `slot`.
+    pub fn send(&self, slot: &str, command: Command) {
+        if let Some(s) = self.slots.iter().find(|s| s.name == slot) {
+            let _ = s.commands.try_send(command);
+        }
+    }
+
+    /// STOP for slot `slot`.
+    pub fn stop(&self, slot: &str) {
+        if let Some(s) = self.slots.iter().find(|s| s.name == slot) {
+            s.cancel.cancel();
+        }
+    }
+
+    /// STOP ALL.
+    pub fn stop_all(&self) {
+        self.slots.iter().for_each(|s| s.cancel.cancel());
+    }
+
+    /// Y or N typed: the answer to the oldest yes/no question waiting.
+    fn keys(&mut self, ctx: &egui::Context) {
+        let (yes, no) = ctx.input(|i| (i.key_pressed(egui::Key::Y), i.key_pressed(egui::Key::N)));
+        if !(yes || no) || ctx.egui_wants_keyboard_input() {
+            return;
+        }
+        let asking = self
+            .tiles
+            .iter()
+            .find(|t| matches!(t.asking, Some(("confirm" | "retry", _, _))))
+            .map(|t| t.slot.clone());
+        if let Some(slot) = asking {
+            let answer = if yes { Answer::Yes } else { Answer::No };
+            self.send(&slot, Command::Answer(answer));
+        }
+    }
+
+    /// Draws the station: the title bar with STOP ALL, then the tiles.
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        self.keys(ui.ctx());
+        let zh = self.lang == Lang::Zh;
+        egui::Panel::top("station-bar").show(ui, |ui| {
+            ui.horizontal(|ui| {
+                let stop_all = egui::Button::new(
+                    egui::RichText::new(if zh { "全部停止" } else { "STOP ALL" })
+                        .size(22.0)
+                        .strong()
+                        .color(egui::Color32::WHITE),
+                )
+                .fill(egui::Color32::from_rgb(200, 30, 30));
+                if ui.add(stop_all).clicked() {
+                    self.stop_all();
+                }
+                ui.heading(format!(
+                    "{} {}",
+                    if zh { "工位" } else { "Station" },
+                    self.id
+                ));
+                ui.label(format!(
+                    "{} {}",
+                    if zh { "配置包" } else { "bundle" },
+                    &self.bundle_sha256[..12.min(self.bundle_sha256.len())]
+                ));
+                let lang = if zh { "English" } else { "中文" };
+                if ui.button(lang).clicked() {
+                    self.lang = if zh { Lang::En } else { Lang::Zh };
+                }
+            });
+        });
+        egui::CentralPanel::default().show(ui, |ui| {
+            let n = self.tiles.len().max(1);
+            let columns = if ui.available_width() > 1100.0 {
+                n.min(3)
+            } else {
+                n.min(2)
+            };
+            let mut actions = Vec::new();
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                ui.columns(columns, |cols| {
+                    for (i, t) in self.tiles.iter_mut().enumerate() {
+                        let col = &mut cols[i % columns];
+                        actions.extend(tile::show(col, t, self.lang));
+                    }
+                });
+            });
+            for (slot, action) in actions {
+                match action {
+                    tile::Action::Stop => self.stop(&slot),
+                    tile::Action::Send(c) => self.send(&slot, c),
+                }
+            }
+        });
+    }
+}
+
+/// Opens the station window over running slots; returns when it is closed (every slot is
+/// stopped then). Errors: the window could not be opened.
+pub fn run(
+    bundle: &crate::ops::station::Bundle,
+    slots: Vec<SlotHandle>,
+    events: Receiver<Event>,
+) -> Result<(), String> {
+    let station = LineStation::new(bundle, slots, events);
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_inner_size([1280.0, 800.0])
+            .with_min_inner_size([800.0, 500.0])
+            .with_title(format!("botbench station {}", bundle.id)),
+        dithering: false,
+        ..Default::default()
+    };
+    eframe::run_native(
+        "botbench-station",
+        options,
+        Box::new(move |cc| {
+            crate::i18n::install_cjk_font(&cc.egui_ctx);
+            Ok(Box::new(station))
+        }),
+    )
+    .map_err(|e| e.to_string())
+}
+
+impl eframe::App for LineStation {
+    fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+        LineStation::logic(self, ctx);
+    }
+
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        LineStation::ui(self, ui);
+    }
+}
+
+impl Drop for LineStation {
+    /// The window closed: every slot stops (its device left in its safe state).
+    fn drop(&mut self) {
+        self.stop_all();
+    }
+}

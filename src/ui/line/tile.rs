@@ -1,0 +1,211 @@
+//! One slot's tile: fixture, port, unit, step with a progress bar, the verdict as a banner
+//! readable from two metres (PASS green, FAIL red with the failing step and reason), the
+//! question waiting with its answer buttons or field, Start and STOP, the slot's history.
+
+use super::TileState;
+use crate::i18n::Lang;
+use crate::ops::station::{Answer, Command};
+use eframe::egui::{self, Color32, RichText};
+
+/// What the operator asked of a slot.
+pub enum Action {
+    /// STOP this slot.
+    Stop,
+    /// Start, or an answer.
+    Send(Command),
+}
+
+const PASS_GREEN: Color32 = Color32::from_rgb(20, 150, 40);
+const FAIL_RED: Color32 = Color32::from_rgb(200, 30, 30);
+
+/// Draws `t`; returns what the operator asked, with the slot's name.
+pub fn show(ui: &mut egui::Ui, t: &mut TileState, lang: Lang) -> Vec<(String, Action)> {
+    let zh = lang == Lang::Zh;
+    let mut out = Vec::new();
+    egui::Frame::group(ui.style()).show(ui, |ui| {
+        ui.set_min_width(ui.available_width());
+        ui.horizontal(|ui| {
+            ui.heading(format!(
+                "{} {}  {}",
+                if zh { "工位" } else { "Slot" },
+                t.slot,
+                t.fixture
+            ));
+        });
+        port_line(ui, t, zh);
+        let unit = t.serial.clone().unwrap_or_else(|| "—".into());
+        ui.label(format!("{} {unit}", if zh { "序列号" } else { "Unit" }));
+        step_line(ui, t, zh);
+        banner(ui, t, zh);
+        question(ui, t, lang, &mut out);
+        ui.horizontal(|ui| {
+            let idle = t.waiting.is_some() && t.stopped.is_none();
+            let start =
+                egui::Button::new(RichText::new(if zh { "开始" } else { "Start" }).size(20.0));
+            if ui.add_enabled(idle, start).clicked() {
+                out.push((t.slot.clone(), Action::Send(Command::Start)));
+            }
+            let stop = egui::Button::new(
+                RichText::new(if zh { "停止" } else { "STOP" })
+                    .size(20.0)
+                    .strong()
+                    .color(Color32::WHITE),
+            )
+            .fill(FAIL_RED);
+            if ui.add(stop).clicked() {
+                out.push((t.slot.clone(), Action::Stop));
+            }
+        });
+        history(ui, t, zh);
+    });
+    out
+}
+
+fn port_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {
+    let text = match (&t.port, &t.stopped) {
+        (_, Some(why)) => format!("{} {why}", if zh { "已停止:" } else { "stopped:" }),
+        (Some((true, path)), _) => format!("{} {path}", if zh { "端口" } else { "port" }),
+        (Some((false, why)), _) => {
+            format!("{} {why}", if zh { "端口缺失:" } else { "PORT MISSING:" })
+        }
+        (None, _) => (if zh {
+            "正在打开端口…"
+        } else {
+            "opening the port…"
+        })
+        .to_string(),
+    };
+    let missing = matches!(t.port, Some((false, _)));
+    let color = if missing {
+        FAIL_RED
+    } else {
+        ui.visuals().text_color()
+    };
+    ui.label(RichText::new(text).color(color));
+}
+
+fn step_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {
+    match (&t.step, t.waiting) {
+        (Some((i, of, name)), _) if t.verdict.is_none() => {
+            ui.label(format!(
+                "{} {i}/{of}: {name}",
+                if zh { "步骤" } else { "Step" }
+            ));
+            ui.add(egui::ProgressBar::new(*i as f32 / (*of).max(1) as f32).show_percentage());
+        }
+        (_, Some(how)) => {
+            let how = match (how, zh) {
+                ("scan", false) => "waiting: scan the unit's serial",
+                ("scan", true) => "等待:扫描序列号",
+                ("auto", false) => "waiting for a unit on the fixture",
+                ("auto", true) => "等待产品放上治具",
+                (_, false) => "waiting: press Start",
+                (_, true) => "等待:按开始",
+            };
+            ui.label(how);
+        }
+        _ => {}
+    }
+}
+
+/// The verdict, big: PASS on green, FAIL on red with the failing step and why.
+fn banner(ui: &mut egui::Ui, t: &TileState, zh: bool) {
+    let Some((pass, step, reason)) = &t.verdict else {
+        return;
+    };
+    let (word, fill) = match (pass, zh) {
+        (true, false) => ("PASS", PASS_GREEN),
+        (true, true) => ("合格 PASS", PASS_GREEN),
+        (false, false) => ("FAIL", FAIL_RED),
+        (false, true) => ("不合格 FAIL", FAIL_RED),
+    };
+    egui::Frame::new()
+        .fill(fill)
+        .inner_margin(12.0)
+        .show(ui, |ui| {
+            ui.set_min_width(ui.available_width());
+            ui.vertical_centered(|ui| {
+                ui.label(
+                    RichText::new(word)
+                        .size(56.0)
+                        .strong()
+                        .color(Color32::WHITE),
+                );
+                if let Some(step) = step {
+                    let why = reason.as_deref().unwrap_or_default();
+                    ui.label(
+                        RichText::new(format!("{step}: {why}"))
+                            .size(20.0)
+                            .color(Color32::WHITE),
+                    );
+                }
+            });
+        });
+}
+
+/// The question waiting: Yes/No buttons, or a field for a value or a scanned code.
+fn question(ui: &mut egui::Ui, t: &mut TileState, lang: Lang, out: &mut Vec<(String, Action)>) {
+    let zh = lang == Lang::Zh;
+    let scan_idle = t.waiting == Some("scan") && t.stopped.is_none();
+    let (kind, text) = match &t.asking {
+        Some((kind, en, zh_text)) => (*kind, if zh { zh_text.clone() } else { en.clone() }),
+        None if scan_idle => (
+            "scan",
+            (if zh {
+                "扫描序列号"
+            } else {
+                "Scan the unit's serial"
+            })
+            .to_string(),
+        ),
+        None => return,
+    };
+    ui.label(RichText::new(&text).size(20.0).strong());
+    match kind {
+        "confirm" | "retry" => {
+            ui.horizontal(|ui| {
+                let yes = egui::Button::new(
+                    RichText::new(if zh { "是 (Y)" } else { "Yes (Y)" }).size(22.0),
+                );
+                if ui.add(yes).clicked() {
+                    out.push((t.slot.clone(), Action::Send(Command::Answer(Answer::Yes))));
+                }
+                let no = egui::Button::new(
+                    RichText::new(if zh { "否 (N)" } else { "No (N)" }).size(22.0),
+                );
+                if ui.add(no).clicked() {
+                    out.push((t.slot.clone(), Action::Send(Command::Answer(Answer::No))));
+                }
+            });
+        }
+        "measure" | "scan" => {
+            ui.horizontal(|ui| {
+                let field = ui.add(egui::TextEdit::singleline(&mut t.typed).desired_width(200.0));
+                let entered = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+                if (ui.button("OK").clicked() || entered) && !t.typed.trim().is_empty() {
+                    let answer = Answer::Text(t.typed.trim().to_string());
+                    out.push((t.slot.clone(), Action::Send(Command::Answer(answer))));
+                    t.typed.clear();
+                }
+            });
+        }
+        _ => {}
+    }
+}
+
+fn history(ui: &mut egui::Ui, t: &TileState, zh: bool) {
+    if t.history.is_empty() {
+        return;
+    }
+    ui.horizontal_wrapped(|ui| {
+        ui.label(if zh { "记录:" } else { "History:" });
+        for (pass, unit) in &t.history {
+            let (word, color) = if *pass {
+                ("PASS", PASS_GREEN)
+            } else {
+                ("FAIL", FAIL_RED)
+            };
+            ui.label(RichText::new(format!("{unit} {word}")).color(color));
+        }
+    });
+}
