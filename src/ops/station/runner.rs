@@ -498,13 +498,13 @@ impl Desk for SlotDesk<'_> {
         }
     }
 
-    fn prompt(&mut self, text: &str) -> bool {
+    fn prompt(&mut self, text: &Text) -> bool {
         self.runner.tell(What::Ask {
             kind: "prompt",
-            text: text.to_string(),
-            text_zh: text.to_string(),
+            text: text.en.clone(),
+            text_zh: text.zh.clone(),
         });
-        self.runner.hands.prompt(text)
+        self.runner.hands.prompt(&text.en)
     }
 
     fn tell(&mut self, what: What) {

@@ -16,9 +16,10 @@ pub trait Desk {
     /// Asks `text` (`kind`: `confirm`, `measure`, `scan`, `retry`) and waits at most `timeout`
     /// for the answer; `None` when none came, or the slot was stopped.
     fn ask(&mut self, kind: &'static str, text: &Text, timeout: Duration) -> Option<Answer>;
-    /// A self-test's prompt to the operator (cover the corner switches): shown, and acted out
-    /// by a simulated fixture's hands; the step then watches for it. `false` aborts.
-    fn prompt(&mut self, text: &str) -> bool;
+    /// A self-test's prompt to the operator (cover the corner switches), in both languages:
+    /// shown, and acted out by a simulated fixture's hands; the step then watches for it.
+    /// `false` aborts.
+    fn prompt(&mut self, text: &Text) -> bool;
     /// Says something happened (a step's progress).
     fn tell(&mut self, what: What);
 }
@@ -149,7 +150,10 @@ fn confirm(u: &UnitRun<'_>, name: &str, answer: Option<Answer>, clock: &StepCloc
 /// A self-test plan run unchanged; its steps become the station record's.
 fn selftest(u: &mut UnitRun<'_>, plan: &crate::ops::selftest::Plan, desk: &mut dyn Desk) -> Done {
     let mut run = Run::quiet(u.cancel);
-    let mut prompt = |text: &str| desk.prompt(text);
+    let mut prompt = |text: &str| {
+        let zh = plan.said(text, crate::i18n::Lang::Zh).to_string();
+        desk.prompt(&Text::new(text.to_string(), zh))
+    };
     let report = crate::ops::selftest::run_each(u.dev, plan, &mut prompt, &mut run, &mut |_| {});
     if let Some(info) = &report.device_info {
         u.unit.hardware = Some(format!("{:#04x}", info.hw));

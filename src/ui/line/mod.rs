@@ -241,10 +241,21 @@ pub fn run(
     events: Receiver<Event>,
 ) -> Result<(), String> {
     let station = LineStation::new(bundle, slots, events);
+    // `BOTBENCH_WINDOW_SIZE=1024x600`: the window's size where no window manager maximises it
+    // (the screenshots under Xvfb).
+    let size = std::env::var("BOTBENCH_WINDOW_SIZE")
+        .ok()
+        .and_then(|s| {
+            let (w, h) = s.split_once('x')?;
+            Some([w.trim().parse::<f32>().ok()?, h.trim().parse::<f32>().ok()?])
+        })
+        .unwrap_or([1280.0, 800.0]);
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
-            .with_inner_size([1280.0, 800.0])
+            .with_inner_size(size)
             .with_min_inner_size([800.0, 500.0])
+            // A line PC shows the station and nothing else.
+            .with_maximized(true)
             .with_title(format!("botbench station {}", bundle.id)),
         dithering: false,
         ..Default::default()

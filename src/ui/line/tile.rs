@@ -25,16 +25,19 @@ pub fn show(ui: &mut egui::Ui, t: &mut TileState, lang: Lang) -> Vec<(String, Ac
     egui::Frame::group(ui.style()).show(ui, |ui| {
         ui.set_min_width(ui.available_width());
         ui.horizontal(|ui| {
-            ui.heading(format!(
+            let title = format!(
                 "{} {}  {}",
                 if zh { "工位" } else { "Slot" },
                 t.slot,
                 t.fixture
-            ));
+            );
+            ui.label(RichText::new(title).size(24.0).strong());
         });
         port_line(ui, t, zh);
         let unit = t.serial.clone().unwrap_or_else(|| "—".into());
-        ui.label(format!("{} {unit}", if zh { "序列号" } else { "Unit" }));
+        ui.label(
+            RichText::new(format!("{} {unit}", if zh { "序列号" } else { "Unit" })).size(20.0),
+        );
         step_line(ui, t, zh);
         banner(ui, t, zh);
         question(ui, t, lang, &mut out);
@@ -87,10 +90,8 @@ fn port_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {
 fn step_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {
     match (&t.step, t.waiting) {
         (Some((i, of, name)), _) if t.verdict.is_none() => {
-            ui.label(format!(
-                "{} {i}/{of}: {name}",
-                if zh { "步骤" } else { "Step" }
-            ));
+            let step = format!("{} {i}/{of}: {name}", if zh { "步骤" } else { "Step" });
+            ui.label(RichText::new(step).size(18.0));
             ui.add(egui::ProgressBar::new(*i as f32 / (*of).max(1) as f32).show_percentage());
         }
         (_, Some(how)) => {
@@ -102,7 +103,7 @@ fn step_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {
                 (_, false) => "waiting: press Start",
                 (_, true) => "等待:按开始",
             };
-            ui.label(how);
+            ui.label(RichText::new(how).size(18.0));
         }
         _ => {}
     }
