@@ -4,6 +4,7 @@
 
 mod field;
 mod records;
+mod station;
 mod tuya;
 
 pub use field::{ScanRuns, field_scans};
@@ -381,7 +382,7 @@ impl StepTimes {
 }
 
 /// The cases [`run_all`] runs, by the names `bench --only` takes.
-pub const CASES: [&str; 8] = [
+pub const CASES: [&str; 9] = [
     "msp-polling",
     "servo-scan",
     "servo-field-scan",
@@ -390,6 +391,7 @@ pub const CASES: [&str; 8] = [
     "tuya-dp-report",
     "tuya-handshake",
     "records-report",
+    "station",
 ];
 
 /// Whether `only` (of `bench --only`) selects a case that runs (the field scan's with `field`
@@ -462,6 +464,11 @@ pub fn run_all(
     }
     if wanted("records-report") {
         for f in records::records_report()? {
+            add(f, &mut out);
+        }
+    }
+    if wanted("station") {
+        for f in station::station_figures()? {
             add(f, &mut out);
         }
     }

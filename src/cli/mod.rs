@@ -141,7 +141,8 @@ enum Cmd {
         json: bool,
         /// Only the cases whose name contains this: msp-polling, servo-scan,
         /// servo-field-scan (with --field), servo-provision, tuya-ota, tuya-dp-report,
-        /// tuya-handshake, records-report (SQLite; and PostgreSQL when
+        /// tuya-handshake, station (4 slots at once against one alone), records-report
+        /// (SQLite; and PostgreSQL when
         /// BOTBENCH_BENCH_POSTGRES=postgres://... names a server).
         #[arg(long, value_name = "CASE")]
         only: Option<String>,
