@@ -18,6 +18,17 @@ use std::time::Instant;
 
 /// The demo station's slots started, in a window of `size` showing `lang`.
 fn demo_window(dir: &Path, size: egui::Vec2, lang: Lang) -> Harness<'static, LineStation> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/demo-station.ron");
+    window_of(&path, dir, size, lang)
+}
+
+/// The station of the bundle at `path` started, in a window of `size` showing `lang`.
+fn window_of(
+    path: &Path,
+    dir: &Path,
+    size: egui::Vec2,
+    lang: Lang,
+) -> Harness<'static, LineStation> {
     let registry = botbench::profile::Registry::builtin().unwrap();
     let sims: Vec<(&str, &str)> = SimKind::ALL
         .iter()
@@ -27,8 +38,7 @@ fn demo_window(dir: &Path, size: egui::Vec2, lang: Lang) -> Harness<'static, Lin
         registry: &registry,
         simulated: &sims,
     };
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/demo-station.ron");
-    let bundle = station::load(&path, &cx).unwrap();
+    let bundle = station::load(path, &cx).unwrap();
     let store = SqliteStore::open(&dir.join("records.sqlite")).unwrap();
     let context = station::StationContext {
         id: bundle.id.clone(),
@@ -127,4 +137,54 @@ fn the_station_in_chinese_and_stop_all_stops_every_slot() {
     });
     h.step();
     assert!(h.query_all_by_label_contains("已停止").count() >= 3);
+}
+
+#[test]
+fn the_operator_view_is_locked_until_the_engineer_s_password_unlocks_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let presets = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets");
+    for f in ["window-cleaner-selftest.ron", "servo-provision-plan.ron"] {
+        std::fs::copy(presets.join(f), dir.path().join(f)).unwrap();
+    }
+    // The example's commented hash is SHA-256 of `password`.
+    let text = std::fs::read_to_string(presets.join("demo-station.ron"))
+        .unwrap()
+        .replace("// engineer_password_sha256:", "engineer_password_sha256:");
+    let bundle = dir.path().join("locked.ron");
+    std::fs::write(&bundle, text).unwrap();
+    let mut h = window_of(&bundle, dir.path(), egui::vec2(1280.0, 800.0), Lang::En);
+    h.step();
+    // Locked: no slot's configuration is shown.
+    assert!(
+        h.query_by_label_contains("simulated servo-bus · servo")
+            .is_none()
+    );
+    h.get_by_label("Engineer unlock").click();
+    h.step();
+    h.step();
+    h.state_mut().engineer.typed = "not it".into();
+    h.get_by_label("Unlock").click();
+    h.step();
+    h.step();
+    assert!(h.query_by_label("wrong password").is_some());
+    assert!(!h.state().engineer.unlocked());
+    h.state_mut().engineer.typed = "password".into();
+    h.get_by_label("Unlock").click();
+    h.step();
+    h.step();
+    assert!(h.state().engineer.unlocked());
+    assert!(h.query_by_label_contains("engineer view (since").is_some());
+    assert!(
+        h.query_by_label_contains("simulated servo-bus · servo · servo: Provision")
+            .is_some()
+    );
+    // Locked again: the configuration is gone.
+    h.get_by_label("Lock").click();
+    h.step();
+    h.step();
+    assert!(
+        h.query_by_label_contains("simulated servo-bus · servo")
+            .is_none()
+    );
+    h.state().stop_all();
 }

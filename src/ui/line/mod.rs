@@ -7,7 +7,10 @@
 //! The operator view holds only the scan and answer fields, Start, STOP, the banners and each
 //! slot's history; nothing of ports, plans or settings can be changed from it.
 
+mod engineer;
 mod tile;
+
+pub use engineer::Engineer;
 
 use crate::i18n::Lang;
 use crate::ops::station::{Answer, Command, Event, SlotHandle, What};
@@ -43,6 +46,10 @@ pub struct TileState {
     pub typed: String,
     /// Whether the slot has stopped.
     pub stopped: Option<String>,
+    /// How many runs the records held of this unit before its last run.
+    pub earlier_runs: Option<i64>,
+    /// The slot's configuration, shown in the engineer view: port, profile, plan and steps.
+    pub details: String,
 }
 
 /// The station window's state.
@@ -55,6 +62,8 @@ pub struct LineStation {
     pub lang: Lang,
     /// One tile per slot, in the bundle's order.
     pub tiles: Vec<TileState>,
+    /// The engineer's unlock.
+    pub engineer: Engineer,
     slots: Vec<SlotHandle>,
     events: Receiver<Event>,
 }
@@ -72,6 +81,18 @@ impl LineStation {
             .map(|s| TileState {
                 slot: s.name.clone(),
                 fixture: s.fixture.clone(),
+                details: format!(
+                    "{} · {} · {}: {}",
+                    s.port.said(),
+                    s.profile.id,
+                    s.plan_name,
+                    s.plan
+                        .steps
+                        .iter()
+                        .map(|st| st.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
                 ..TileState::default()
             })
             .collect();
@@ -80,6 +101,10 @@ impl LineStation {
             bundle_sha256: bundle.sha256.clone(),
             lang: bundle.language,
             tiles,
+            engineer: Engineer {
+                password_sha256: bundle.engineer_password_sha256.clone(),
+                ..Engineer::default()
+            },
             slots,
             events,
         }
@@ -123,9 +148,11 @@ impl LineStation {
                 serial,
                 failed_step,
                 reason,
+                earlier_runs,
                 ..
             } => {
                 t.asking = None;
+                t.earlier_runs = earlier_runs;
                 t.serial.clone_from(&serial);
                 t.verdict = Some((pass, failed_step, reason));
                 t.history
@@ -205,6 +232,7 @@ impl LineStation {
                 if ui.button(lang).clicked() {
                     self.lang = if zh { Lang::En } else { Lang::Zh };
                 }
+                self.engineer.show(ui, &self.id, zh);
             });
         });
         egui::CentralPanel::default().show(ui, |ui| {
@@ -219,7 +247,8 @@ impl LineStation {
                 ui.columns(columns, |cols| {
                     for (i, t) in self.tiles.iter_mut().enumerate() {
                         let col = &mut cols[i % columns];
-                        actions.extend(tile::show(col, t, self.lang));
+                        let engineer = self.engineer.unlocked();
+                        actions.extend(tile::show(col, t, self.lang, engineer));
                     }
                 });
             });

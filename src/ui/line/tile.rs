@@ -19,7 +19,13 @@ const PASS_GREEN: Color32 = Color32::from_rgb(20, 150, 40);
 const FAIL_RED: Color32 = Color32::from_rgb(200, 30, 30);
 
 /// Draws `t`; returns what the operator asked, with the slot's name.
-pub fn show(ui: &mut egui::Ui, t: &mut TileState, lang: Lang) -> Vec<(String, Action)> {
+/// With `engineer` (unlocked), the slot's configuration too.
+pub fn show(
+    ui: &mut egui::Ui,
+    t: &mut TileState,
+    lang: Lang,
+    engineer: bool,
+) -> Vec<(String, Action)> {
     let zh = lang == Lang::Zh;
     let mut out = Vec::new();
     egui::Frame::group(ui.style()).show(ui, |ui| {
@@ -34,12 +40,25 @@ pub fn show(ui: &mut egui::Ui, t: &mut TileState, lang: Lang) -> Vec<(String, Ac
             ui.label(RichText::new(title).size(24.0).strong());
         });
         port_line(ui, t, zh);
+        if engineer {
+            ui.label(RichText::new(&t.details).monospace());
+        }
         let unit = t.serial.clone().unwrap_or_else(|| "—".into());
         ui.label(
             RichText::new(format!("{} {unit}", if zh { "序列号" } else { "Unit" })).size(20.0),
         );
         step_line(ui, t, zh);
         banner(ui, t, zh);
+        if let Some(n) = t.earlier_runs.filter(|n| *n > 0) {
+            ui.label(
+                RichText::new(if zh {
+                    format!("此产品已测试 {n} 次")
+                } else {
+                    format!("already tested {n} times before")
+                })
+                .size(18.0),
+            );
+        }
         question(ui, t, lang, &mut out);
         ui.horizontal(|ui| {
             let idle = t.waiting.is_some() && t.stopped.is_none();
