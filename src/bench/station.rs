@@ -7,7 +7,7 @@
 use super::Figure;
 use crate::ops::records::{Recorder, RunContext, SqliteStore};
 use crate::ops::station::{self, LoadContext, What};
-use crate::sim::{SimFixture, SimKind};
+use crate::sim::SimKind;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -66,21 +66,9 @@ fn run_slots(kind: SimKind, steps: &str, slots: usize) -> Result<(Vec<f64>, f64)
     let (tx, rx) = crossbeam_channel::unbounded();
     let started = Instant::now();
     let mut handles = Vec::new();
+    let ports = crate::link::PortOpener::system();
     for slot in &bundle.slots {
-        let fixture = SimFixture::new(kind)?;
-        let opener = crate::link::PortOpener::system().with_port(
-            station::port::simulated_path(kind.name(), &slot.name),
-            fixture.opener(),
-        );
-        let h = station::spawn(
-            slot.clone(),
-            context.clone(),
-            opener,
-            Box::new(fixture),
-            tx.clone(),
-            true,
-        )
-        .map_err(|e| e.to_string())?;
+        let h = crate::sim::fixture::start_slot(slot, context.clone(), &ports, tx.clone(), true)?;
         handles.push(h);
     }
     drop(tx);

@@ -164,12 +164,7 @@ fn print_check(bundle: &Bundle, missing: &[(String, String)], json: bool) {
             s.port.said(),
             s.profile.id,
             s.plan_name,
-            s.plan
-                .steps
-                .iter()
-                .map(|st| st.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
+            s.plan.step_names()
         );
     }
     if missing.is_empty() {

@@ -15,12 +15,11 @@ use super::station::StationArgs;
 use super::{CliError, CliResult};
 use crate::link::PortOpener;
 use crate::ops::records::{Recorder, RunContext};
-use crate::ops::station::{self, Answer, Bundle, Command, Event, PortLocator, SlotHandle, What};
-use crate::sim::{SimFixture, SimKind};
+use crate::ops::station::{self, Answer, Bundle, Command, Event, SlotHandle, What};
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 
-/// Starts every slot of `bundle` (a simulated slot on its own [`SimFixture`], the others on
+/// Starts every slot of `bundle` (a simulated slot on its own [`crate::sim::SimFixture`], the others on
 /// `ports`), recording where `--records`, else the bundle, says; the slots' handles and their
 /// events. With `once`, each slot ends after one unit.
 pub(crate) fn start(
@@ -51,18 +50,9 @@ pub(crate) fn start(
     let (tx, rx) = crossbeam_channel::bounded::<Event>(1024);
     let mut slots = Vec::new();
     for slot in &bundle.slots {
-        let (opener, hands) = fixture_of(slot, ports)?;
-        let handle = station::spawn(
-            slot.clone(),
-            station_cx.clone(),
-            opener,
-            hands,
-            tx.clone(),
-            once,
-        )
-        .map_err(|e| {
-            CliError::device(format!("slot {}: cannot start its thread: {e}", slot.name))
-        })?;
+        let handle =
+            crate::sim::fixture::start_slot(slot, station_cx.clone(), ports, tx.clone(), once)
+                .map_err(CliError::device)?;
         slots.push(handle);
     }
     Ok((slots, rx))
@@ -100,23 +90,6 @@ pub(crate) fn run(bundle: &Bundle, args: &StationArgs, ports: &PortOpener) -> Cl
     Ok(u8::from(
         failed > 0 || (args.once && verdicts < slots.len()),
     ))
-}
-
-/// The slot's port opener and hands: a simulated slot's own device, or the system's ports.
-fn fixture_of(
-    slot: &station::Slot,
-    ports: &PortOpener,
-) -> Result<(PortOpener, Box<dyn station::Hands>), CliError> {
-    match &slot.port {
-        PortLocator::Simulated(kind) => {
-            let kind: SimKind = kind.parse().map_err(CliError::input)?;
-            let fixture = SimFixture::new(kind).map_err(CliError::device)?;
-            let path = station::port::simulated_path(kind.name(), &slot.name);
-            let opener = ports.clone().with_port(path, fixture.opener());
-            Ok((opener, Box::new(fixture)))
-        }
-        _ => Ok((ports.clone(), Box::new(station::OperatorHands))),
-    }
 }
 
 /// Who the operator's next line is for: the slots with a question waiting (oldest first), the

@@ -145,3 +145,31 @@ fn swap<T>(d: &Arc<Mutex<T>>, fresh: &Arc<Mutex<T>>) {
     let mut d = d.lock().unwrap_or_else(|e| e.into_inner());
     std::mem::swap(&mut *d, &mut *f);
 }
+
+/// Starts `slot` ([`crate::ops::station::spawn`]): a simulated slot on a [`SimFixture`] of its
+/// own (served under [`crate::ops::station::port::simulated_path`]), any other on `ports` with
+/// the operator's hands. Errors: an unknown simulated kind, a simulator that cannot be built,
+/// a thread that cannot be started.
+pub fn start_slot(
+    slot: &crate::ops::station::Slot,
+    context: crate::ops::station::StationContext,
+    ports: &crate::link::PortOpener,
+    events: crossbeam_channel::Sender<crate::ops::station::Event>,
+    once: bool,
+) -> Result<crate::ops::station::SlotHandle, String> {
+    use crate::ops::station::{self, PortLocator};
+    let (opener, hands): (crate::link::PortOpener, Box<dyn station::Hands>) = match &slot.port {
+        PortLocator::Simulated(kind) => {
+            let kind: SimKind = kind.parse()?;
+            let fixture = SimFixture::new(kind)?;
+            let path = station::port::simulated_path(kind.name(), &slot.name);
+            (
+                ports.clone().with_port(path, fixture.opener()),
+                Box::new(fixture),
+            )
+        }
+        _ => (ports.clone(), Box::new(station::OperatorHands)),
+    };
+    station::spawn(slot.clone(), context, opener, hands, events, once)
+        .map_err(|e| format!("slot {}: cannot start its thread: {e}", slot.name))
+}

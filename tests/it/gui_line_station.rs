@@ -6,8 +6,8 @@ use crate::support::cli::WATCHDOG as PATIENCE;
 use botbench::i18n::Lang;
 use botbench::link::PortOpener;
 use botbench::ops::records::{Recorder, RunContext, SqliteStore};
-use botbench::ops::station::{self, LoadContext, PortLocator};
-use botbench::sim::{SimFixture, SimKind};
+use botbench::ops::station::{self, LoadContext};
+use botbench::sim::SimKind;
 use botbench::ui::line::LineStation;
 use eframe::egui;
 use egui_kittest::Harness;
@@ -53,25 +53,11 @@ fn window_of(
     let (tx, rx) = crossbeam_channel::unbounded();
     let mut slots = Vec::new();
     for slot in &bundle.slots {
-        let PortLocator::Simulated(kind) = &slot.port else {
-            unreachable!()
-        };
-        let kind: SimKind = kind.parse().unwrap();
-        let fixture = SimFixture::new(kind).unwrap();
-        let opener = PortOpener::system().with_port(
-            station::port::simulated_path(kind.name(), &slot.name),
-            fixture.opener(),
+        let ports = PortOpener::system();
+        slots.push(
+            botbench::sim::fixture::start_slot(slot, context.clone(), &ports, tx.clone(), true)
+                .unwrap(),
         );
-        let handle = station::spawn(
-            slot.clone(),
-            context.clone(),
-            opener,
-            Box::new(fixture),
-            tx.clone(),
-            true,
-        )
-        .unwrap();
-        slots.push(handle);
     }
     let mut st = LineStation::new(&bundle, slots, rx);
     st.lang = lang;

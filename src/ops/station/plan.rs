@@ -19,6 +19,17 @@ pub struct LinePlan {
     pub steps: Vec<LineStep>,
 }
 
+impl LinePlan {
+    /// The steps' names, joined: `Identify, SelfTest window-cleaner-selftest.ron, WriteResult`.
+    pub fn step_names(&self) -> String {
+        self.steps
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
 /// One step: its name as shown and recorded, and its operation.
 #[derive(Debug, Clone)]
 pub struct LineStep {

@@ -86,12 +86,7 @@ impl LineStation {
                     s.port.said(),
                     s.profile.id,
                     s.plan_name,
-                    s.plan
-                        .steps
-                        .iter()
-                        .map(|st| st.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    s.plan.step_names()
                 ),
                 ..TileState::default()
             })
