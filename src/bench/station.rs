@@ -29,7 +29,8 @@ fn run_slots(kind: SimKind, steps: &str, slots: usize) -> Result<(Vec<f64>, f64)
     let slot_list: Vec<String> = (1..=slots)
         .map(|i| {
             format!(
-                r#"(name: "{i}", fixture: "F{i}", port: Simulated("{}"), profile: "{}", plan: "p")"#,
+                r#"(name: "{i}", fixture: "F{i}", port: Simulated("{}"),
+                    profile: "{}", plan: "p")"#,
                 kind.name(),
                 kind.profile_id()
             )

@@ -183,7 +183,8 @@ fn new(path: &Path) -> CliResult {
     crate::document::write_atomic(path, station::example::EXAMPLE.as_bytes())
         .map_err(CliError::input)?;
     outln!(
-        "wrote {}: a station of three simulated slots; edit its slots and plans, then `botbench station {} --check`",
+        "wrote {}: a station of three simulated slots; edit its slots and plans, then \
+         `botbench station {} --check`",
         path.display(),
         path.display()
     );

@@ -19,9 +19,9 @@ use crate::ops::station::{self, Answer, Bundle, Command, Event, SlotHandle, What
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 
-/// Starts every slot of `bundle` (a simulated slot on its own [`crate::sim::SimFixture`], the others on
-/// `ports`), recording where `--records`, else the bundle, says; the slots' handles and their
-/// events. With `once`, each slot ends after one unit.
+/// Starts every slot of `bundle` (a simulated slot on its own [`crate::sim::SimFixture`], the
+/// others on `ports`), recording where `--records`, else the bundle, says; the slots' handles
+/// and their events. With `once`, each slot ends after one unit.
 pub(crate) fn start(
     bundle: &Bundle,
     args: &StationArgs,

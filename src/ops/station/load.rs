@@ -473,8 +473,8 @@ impl<'s> Reader<'s> {
                     ErrorKind::Value,
                     &at,
                     format!(
-                        "slot {slot}: plan {name}, step {} ({}): takes a device speaking {}; profile '{}' \
-                         speaks {}",
+                        "slot {slot}: plan {name}, step {} ({}): takes a device speaking {}; \
+                         profile '{}' speaks {}",
                         i + 1,
                         step.kind(),
                         p.name(),
