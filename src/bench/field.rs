@@ -1,9 +1,10 @@
 //! The field scan (issue 11): a default `botbench servo --port PTY --json scan` (ids 0-254, the
 //! automatic margin, a new process and connection each run) against `botbench sim servo-bus
-//! --servos 0,1,5` in a process of its own (half-duplex, as the field's bus is), 20 runs of
-//! each case: no adapter latency; behind a USB adapter with a 16 ms latency timer
-//! (`--latency-timer-ms 16`); and that again with two CPU-bound processes beside it. Every
-//! process it starts is killed when the case ends, on an error or a cancel too.
+//! --servos 0,1,5` in a process of its own (half-duplex, as the field's bus is): 20 runs with no
+//! adapter latency; 20 behind a USB adapter with a 16 ms latency timer (`--latency-timer-ms
+//! 16`); and 300 of that with two CPU-bound processes beside it (issue 25, 4e), where a scan may
+//! fail saying why but never exit 0 having missed a servo. Every process it starts is killed
+//! when the case ends, on an error or a cancel too.
 
 use super::{Figure, scan_wire};
 use crate::ops::Cancel;
@@ -15,8 +16,6 @@ use std::process::{Child, Command, Stdio};
 
 /// The servos on the simulated bus.
 const SERVOS: [u8; 3] = [0, 1, 5];
-/// Scans a case.
-const RUNS: usize = 20;
 /// The servos' rate, the servo profile's default (a default scan's only rate).
 const BAUD: u32 = 115_200;
 
@@ -29,6 +28,8 @@ struct Case {
     busy: usize,
     /// The issue's limit on each run, seconds.
     target: Option<f64>,
+    /// Scans made.
+    runs: usize,
 }
 
 const CASES: [Case; 3] = [
@@ -37,18 +38,22 @@ const CASES: [Case; 3] = [
         latency_timer_ms: None,
         busy: 0,
         target: Some(0.6),
+        runs: 20,
     },
     Case {
         name: "field scan 0-254, servos 0 1 5, 16 ms latency-timer adapter",
         latency_timer_ms: Some(16),
         busy: 0,
         target: Some(1.0),
+        runs: 20,
     },
     Case {
         name: "field scan 0-254, servos 0 1 5, 16 ms adapter, 2 CPU-bound processes",
         latency_timer_ms: Some(16),
         busy: 2,
         target: None,
+        // Issue 25, 4e: 3 in 240 such scans once exited 0 having missed a servo.
+        runs: 300,
     },
 ];
 
@@ -59,6 +64,13 @@ pub struct ScanRuns {
     pub runs: usize,
     /// Scans that found every servo on the bus (0, 1 and 5 present, nothing else).
     pub found_all: usize,
+    /// Scans that exited 0 without finding every servo: a servo missed and not said. Must be 0.
+    pub missed: usize,
+    /// Scans that exited non-zero, saying why (a scan may fail; it may not lie).
+    pub failed: usize,
+    /// What the first failed scan said.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failed_said: Option<String>,
     /// The median scan, seconds (from the scan's start to its report: the `seconds` the
     /// command line prints).
     pub median_seconds: f64,
@@ -91,6 +103,10 @@ pub struct ScanRuns {
 
 /// What one `servo --json scan` printed.
 struct ScanRun {
+    /// Exited 0.
+    exit_ok: bool,
+    /// What it said on failure.
+    said: Option<String>,
     found_all: bool,
     seconds: f64,
     margin_ms: f64,
@@ -132,7 +148,7 @@ impl Drop for Busy {
     }
 }
 
-/// The three cases, 20 scans each (about a minute). Errors when a process cannot be started, a
+/// The three cases: 20 scans each unloaded, 300 beside two CPU-bound processes (some minutes). Errors when a process cannot be started, a
 /// scan fails or prints what is not its JSON report, or `cancel` is raised (checked between
 /// scans); every process started is killed first.
 pub fn field_scans(cancel: &Cancel) -> Result<Vec<Figure>, String> {
@@ -159,8 +175,8 @@ fn field_scan(bin: &Path, case: &Case, cancel: &Cancel) -> Result<Figure, String
         .stderr(Stdio::null());
     let sim = SimProcess::start(sim_command)?;
     let _busy = Busy::start(case.busy)?;
-    let mut runs = Vec::with_capacity(RUNS);
-    for _ in 0..RUNS {
+    let mut runs = Vec::with_capacity(case.runs);
+    for _ in 0..case.runs {
         if cancel.is_cancelled() {
             return Err("cancelled".into());
         }
@@ -172,16 +188,25 @@ fn field_scan(bin: &Path, case: &Case, cancel: &Cancel) -> Result<Figure, String
         bauds: vec![BAUD],
         home_baud: BAUD,
     };
+    let n = case.runs;
     let target = match (runs.target_seconds, runs.target_met) {
-        (Some(t), Some(true)) => format!("target {RUNS} of {RUNS}, each ≤ {t} s: met"),
-        (Some(t), _) => format!("target {RUNS} of {RUNS}, each ≤ {t} s: NOT met"),
-        _ if runs.found_all == RUNS => format!("target {RUNS} of {RUNS}: met"),
-        _ => format!("target {RUNS} of {RUNS}: NOT met"),
+        (Some(t), Some(true)) => format!("target {n} of {n}, each ≤ {t} s: met"),
+        (Some(t), _) => format!("target {n} of {n}, each ≤ {t} s: NOT met"),
+        _ if runs.missed == 0 && runs.found_all + runs.failed == n => {
+            "target 0 missed: met".to_string()
+        }
+        _ => "target 0 missed: NOT met".to_string(),
     };
     let notes = format!(
-        "{}/{RUNS} found 0, 1, 5; median {:.3} s, max {:.3} s; margin {:.1}-{:.1} ms; asked \
-         again {} (≤ {} a run); late answers {} (≤ {} a run); simulator {}; {target}",
+        "{}/{n} found 0, 1, 5; {} missed (exit 0 without them); {} failed saying why{}; \
+         median {:.3} s, max {:.3} s; margin {:.1}-{:.1} ms; asked again {} (≤ {} a run); \
+         late answers {} (≤ {} a run); simulator {}; {target}",
         runs.found_all,
+        runs.missed,
+        runs.failed,
+        runs.failed_said
+            .as_deref()
+            .map_or(String::new(), |s| format!(" (first: {s})")),
         runs.median_seconds,
         runs.max_seconds,
         runs.margin_ms_min,
@@ -202,7 +227,12 @@ fn field_scan(bin: &Path, case: &Case, cancel: &Cancel) -> Result<Figure, String
         scan_wire(&plan, SERVOS.len()),
         notes,
     );
-    figure.target_met = Some(runs.found_all == RUNS && runs.target_met != Some(false));
+    figure.target_met = Some(match case.target {
+        // Unloaded: every scan finds every servo, in time.
+        Some(_) => runs.found_all == n && runs.target_met != Some(false),
+        // Loaded: a scan may fail saying so, never exit 0 having missed a servo.
+        None => runs.missed == 0 && runs.found_all + runs.failed == n,
+    });
     figure.runs = Some(runs);
     Ok(figure)
 }
@@ -224,12 +254,21 @@ fn scan_once(bin: &Path, path: &str) -> Result<ScanRun, String> {
         .map_err(|e| format!("cannot run `{}`: {e}", bin.display()))?;
     let stdout = String::from_utf8_lossy(&out.stdout);
     if !out.status.success() {
-        return Err(format!(
-            "`servo scan` ended with {}: {}{}",
+        // A scan that fails and says why is no lie: counted, not an error of the bench.
+        let said = format!(
+            "{}: {}",
             out.status,
-            stdout.trim(),
             String::from_utf8_lossy(&out.stderr).trim()
-        ));
+        );
+        return Ok(ScanRun {
+            exit_ok: false,
+            said: Some(said),
+            found_all: false,
+            seconds: 0.0,
+            margin_ms: 0.0,
+            asked_again: 0,
+            late_answers: 0,
+        });
     }
     let doc: serde_json::Value = serde_json::from_str(stdout.trim())
         .map_err(|e| format!("`servo scan` printed what is not its JSON report ({e}): {stdout}"))?;
@@ -255,6 +294,8 @@ fn scan_once(bin: &Path, path: &str) -> Result<ScanRun, String> {
         })
         .collect();
     Ok(ScanRun {
+        exit_ok: true,
+        said: None,
         found_all: found == SERVOS.map(|id| (u64::from(id), "present")),
         seconds: number("seconds")?,
         margin_ms: number("margin_ms")?,
@@ -264,7 +305,8 @@ fn scan_once(bin: &Path, path: &str) -> Result<ScanRun, String> {
 }
 
 /// The runs of `case` summed up.
-fn summary(case: &Case, runs: &[ScanRun]) -> ScanRuns {
+fn summary(case: &Case, all: &[ScanRun]) -> ScanRuns {
+    let runs: Vec<&ScanRun> = all.iter().filter(|r| r.exit_ok).collect();
     let mut secs: Vec<f64> = runs.iter().map(|r| r.seconds).collect();
     secs.sort_by(f64::total_cmp);
     let n = secs.len();
@@ -276,12 +318,15 @@ fn summary(case: &Case, runs: &[ScanRun]) -> ScanRuns {
     let found_all = runs.iter().filter(|r| r.found_all).count();
     let margins = runs.iter().map(|r| r.margin_ms);
     ScanRuns {
-        runs: n,
+        runs: all.len(),
         found_all,
+        missed: runs.iter().filter(|r| !r.found_all).count(),
+        failed: all.len() - runs.len(),
+        failed_said: all.iter().find_map(|r| r.said.clone()),
         median_seconds: median,
         max_seconds: max,
         target_seconds: case.target,
-        target_met: case.target.map(|t| max <= t && found_all == n),
+        target_met: case.target.map(|t| max <= t && found_all == all.len()),
         margin_ms_min: margins.clone().fold(f64::INFINITY, f64::min),
         margin_ms_max: margins.fold(0.0, f64::max),
         asked_again_total: runs.iter().map(|r| r.asked_again).sum(),

@@ -374,8 +374,25 @@ fn chunk(
     })
 }
 
-/// Reads the capture at `path`.
+/// Refuses `path` when it exists and is not a regular file: a named pipe (opening it waits for
+/// its other end), a device, a folder.
+pub(crate) fn regular_or_absent(path: &std::path::Path) -> Result<(), CaptureError> {
+    match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() => Err(CaptureError::Open {
+            path: path.display().to_string(),
+            reason: format!(
+                "not a regular file: {}",
+                crate::document::file::kind_of(m.file_type())
+            ),
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// Reads the capture at `path`; what is not a regular file (a named pipe) is refused before it
+/// is opened.
 pub fn read_path(path: &std::path::Path) -> Result<CaptureFile, CaptureError> {
+    regular_or_absent(path)?;
     let f = std::fs::File::open(path).map_err(|e| CaptureError::Open {
         path: path.display().to_string(),
         reason: e.to_string(),

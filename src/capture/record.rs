@@ -114,7 +114,10 @@ pub struct CaptureSummary {
 impl Capture {
     /// Creates (or truncates) the file at `path` and writes its header now, so that a path
     /// that cannot be written is an immediate error.
+    /// A path that exists and is not a regular file (a named pipe, whose opening would wait for
+    /// a reader; a device; a folder) is refused before it is opened.
     pub fn create(path: &std::path::Path, info: CaptureInfo) -> Result<Self, CaptureError> {
+        super::format::regular_or_absent(path)?;
         let file = std::fs::File::create(path).map_err(|e| CaptureError::Open {
             path: path.display().to_string(),
             reason: e.to_string(),
@@ -353,6 +356,18 @@ impl Transport for RecordingTransport {
 
     fn describe(&self) -> String {
         self.inner.describe()
+    }
+
+    fn latency_timer(&self) -> Option<std::time::Duration> {
+        self.inner.latency_timer()
+    }
+
+    fn taken(&self) -> u64 {
+        self.inner.taken()
+    }
+
+    fn others_reading(&mut self) -> Vec<crate::system::Holder> {
+        self.inner.others_reading()
     }
 
     fn check(&mut self) -> Result<(), LinkError> {

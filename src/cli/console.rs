@@ -39,6 +39,8 @@ pub struct Captured {
     out: std::sync::Arc<std::sync::Mutex<Vec<u8>>>,
     err: std::sync::Arc<std::sync::Mutex<Vec<u8>>>,
     input: std::sync::Arc<std::sync::Mutex<std::io::Cursor<Vec<u8>>>>,
+    /// The run's Ctrl-C: raised by [`Captured::interrupt`].
+    ctrl_c: crate::ops::Cancel,
 }
 
 impl Captured {
@@ -48,6 +50,12 @@ impl Captured {
         *c.input.lock().unwrap_or_else(|e| e.into_inner()) =
             std::io::Cursor::new(input.as_bytes().to_vec());
         c
+    }
+
+    /// The operator presses Ctrl-C: the run's long operation stops safely, as the process's
+    /// first Ctrl-C makes it ([`super::port::cancel_on_ctrl_c`]).
+    pub fn interrupt(&self) {
+        self.ctrl_c.cancel();
     }
 
     /// What the run has written to stdout so far.
@@ -193,6 +201,15 @@ pub(crate) fn read_line(line: &mut String) -> std::io::Result<usize> {
 /// Whether this run is the process's own (its Ctrl-C is this run's to catch).
 pub(crate) fn is_process() -> bool {
     with(|c| matches!(c.sink, Sink::Process))
+}
+
+/// The Ctrl-C of a run in another program's process ([`Captured::interrupt`]); `None` for the
+/// process's own run.
+pub(crate) fn captured_ctrl_c() -> Option<crate::ops::Cancel> {
+    with(|c| match &c.sink {
+        Sink::Process => None,
+        Sink::Buffers(b) => Some(b.ctrl_c.clone()),
+    })
 }
 
 /// `println!` for the run's stdout.

@@ -151,7 +151,12 @@ impl PortArgs {
 /// Maps an operation's error to an exit code: refused for its input 2, everything else 1. A
 /// device that never answered gets the technician's checklist beside the error.
 pub(crate) fn op_error(e: OpError) -> CliError {
-    if e.is_input() {
+    if e.is_cancel() {
+        CliError {
+            code: EXIT_CANCELLED,
+            message: e.to_string(),
+        }
+    } else if e.is_input() {
         CliError::input(e)
     } else if let OpError::Exchange(ExchangeError::Timeout { .. }) = e {
         CliError::device(format!("{e}{SILENT_HINT}"))
@@ -168,8 +173,11 @@ pub(crate) fn exchange_error(e: ExchangeError) -> CliError {
     }
 }
 
+/// The exit code of an operation the operator cancelled (Ctrl-C), as shells give SIGINT.
+pub(crate) const EXIT_CANCELLED: u8 = 130;
+
 /// What to check when a device never answers.
-const SILENT_HINT: &str = "; nothing answered: is the device powered, its TX wired to the \
+pub(crate) const SILENT_HINT: &str = "; nothing answered: is the device powered, its TX wired to the \
      adapter's RX (and RX to TX, GND to GND), at this baud rate (--baud) and with this profile \
      (--profile)?";
 
@@ -262,11 +270,12 @@ pub(crate) fn parse_assignments(
 /// A cancel flag raised by Ctrl-C, so that a long operation stops safely (a motor is stopped, a
 /// write is not left half-done and unreported). A second Ctrl-C exits at once.
 pub(crate) fn cancel_on_ctrl_c() -> crate::ops::Cancel {
-    let cancel = crate::ops::Cancel::new();
-    if !super::console::is_process() {
-        // A run in another program's process: Ctrl-C is that program's.
-        return cancel;
+    if let Some(captured) = super::console::captured_ctrl_c() {
+        // A run in another program's process: Ctrl-C is that program's, which raises it with
+        // `Captured::interrupt`.
+        return captured;
     }
+    let cancel = crate::ops::Cancel::new();
     let flag = cancel.clone();
     let result = ctrlc::set_handler(move || {
         if flag.is_cancelled() {

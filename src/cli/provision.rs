@@ -41,8 +41,30 @@ pub(crate) fn run(
                     errln!(
                         "Swap the servo: waiting for a new fresh servo (id 0) for servo {n} of {count}…"
                     );
-                    wait_for_new(&client, &profile, prev.serial, Duration::from_millis(ms));
-                    true
+                    match wait_for_new(
+                        &client,
+                        &profile,
+                        prev.serial,
+                        Duration::from_millis(ms),
+                        &cancel,
+                    ) {
+                        Waited::New => true,
+                        Waited::Cancelled => {
+                            return Err(CliError {
+                                code: super::port::EXIT_CANCELLED,
+                                message: format!(
+                                    "cancelled while waiting for servo {n} of {count}: \
+                                     {passed} PASS, {failed} FAIL; servos {n} to {count} not provisioned"
+                                ),
+                            });
+                        }
+                        Waited::Lost(reason) => {
+                            return Err(CliError::device(format!(
+                                "link lost while waiting for servo {n} of {count}: {reason}; \
+                                 {passed} PASS, {failed} FAIL"
+                            )));
+                        }
+                    }
                 }
                 None => prompt(n, count),
             };
@@ -143,28 +165,72 @@ fn prompt(n: u32, count: u32) -> bool {
     }
 }
 
+/// How a wait for the next servo ended.
+enum Waited {
+    /// A new fresh servo answers.
+    New,
+    /// The operator pressed Ctrl-C.
+    Cancelled,
+    /// The port went away (why).
+    Lost(String),
+}
+
+/// How often a wait between servos looks at the cancel flag.
+const CANCEL_SLICE: Duration = Duration::from_millis(20);
+
+/// Sleeps `every`, in slices that look at `cancel`; false when it was raised.
+fn nap(every: Duration, cancel: &crate::ops::Cancel) -> bool {
+    let until = std::time::Instant::now() + every;
+    loop {
+        if cancel.is_cancelled() {
+            return false;
+        }
+        let left = until.saturating_duration_since(std::time::Instant::now());
+        if left.is_zero() {
+            return true;
+        }
+        std::thread::sleep(left.min(CANCEL_SLICE));
+    }
+}
+
 /// Waits until one fresh servo answers whose serial number is not `previous` (when the previous
-/// servo's serial is unknown, until the bus has held no fresh servo once). Polls until then.
-fn wait_for_new(client: &Client, profile: &Profile, previous: Option<u32>, every: Duration) {
+/// servo's serial is unknown, until the bus has held no fresh servo once), polling every
+/// `every`; leaves at once on Ctrl-C (`cancel`) or when the port is gone.
+fn wait_for_new(
+    client: &Client,
+    profile: &Profile,
+    previous: Option<u32>,
+    every: Duration,
+    cancel: &crate::ops::Cancel,
+) -> Waited {
     let serial = profile.serial_number_param();
     let bauds = profile.servo_bauds();
     let mut emptied = previous.is_some();
     loop {
-        std::thread::sleep(every);
-        let Ok(found) = ops::find_fresh(Device::new(client, profile), &bauds) else {
-            continue;
+        if !nap(every, cancel) {
+            return Waited::Cancelled;
+        }
+        let found = match ops::find_fresh(Device::new(client, profile), &bauds) {
+            Ok(found) => found,
+            Err(crate::ops::OpError::Exchange(crate::link::ExchangeError::Disconnected(r))) => {
+                return Waited::Lost(r);
+            }
+            Err(e) if e.is_cancel() => return Waited::Cancelled,
+            Err(_) => continue,
         };
         match found.as_slice() {
             [] => emptied = true,
             [(baud, Presence::Present)] if emptied => {
-                let Some(param) = serial else { return };
+                let Some(param) = serial else {
+                    return Waited::New;
+                };
                 if client.set_baud(*baud).is_err() {
                     continue;
                 }
                 let fresh = servo_ops::factory_location(profile).id;
                 match servo_ops::read_param(Device::new(client, profile), fresh, param) {
                     Ok(s) if previous.is_some_and(|p| i64::from(p) == s) => {}
-                    Ok(_) => return,
+                    Ok(_) => return Waited::New,
                     Err(_) => {}
                 }
             }

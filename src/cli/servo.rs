@@ -28,6 +28,10 @@ enum ServoCmd {
         /// Baud rates: `all`, or a list such as `115200,9600` (default: the port's).
         #[arg(long)]
         bauds: Option<String>,
+        /// Exit 0 when no servo answers (a script that expects an empty bus); otherwise a scan
+        /// that finds nothing exits 1.
+        #[arg(long)]
+        allow_empty: bool,
     },
     /// The live values of several servos in one exchange (voltage, current, power,
     /// temperature with its raw reading, status, angle): the synchronous MONITOR, command 25.
@@ -234,7 +238,7 @@ fn param<'p>(profile: &'p Profile, name: &str) -> Result<&'p crate::profile::Par
 
 /// A `servo` subcommand with everything it was given checked, before the port is opened.
 enum Checked<'p> {
-    Scan(ops::ScanPlan),
+    Scan(ops::ScanPlan, bool),
     Monitor(Vec<u8>),
     Ping(u8),
     Read(u8, Vec<&'p crate::profile::Param>),
@@ -248,11 +252,18 @@ enum Checked<'p> {
 /// Checks every id, name and value of `cmd` against `profile`; `home` is the port's baud rate.
 fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<'p>, CliError> {
     Ok(match cmd {
-        ServoCmd::Scan { ids, bauds } => Checked::Scan(ops::ScanPlan {
-            ids: parse_ids(ids)?,
-            bauds: parse_bauds(profile, bauds.as_deref(), home)?,
-            home_baud: home,
-        }),
+        ServoCmd::Scan {
+            ids,
+            bauds,
+            allow_empty,
+        } => Checked::Scan(
+            ops::ScanPlan {
+                ids: parse_ids(ids)?,
+                bauds: parse_bauds(profile, bauds.as_deref(), home)?,
+                home_baud: home,
+            },
+            *allow_empty,
+        ),
         ServoCmd::Monitor { ids } => Checked::Monitor(parse_id_list(ids)?),
         ServoCmd::Ping { id } => Checked::Ping(*id),
         ServoCmd::Read { id, param: name } => Checked::Read(
@@ -380,11 +391,21 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
     let cancel = super::port::cancel_on_ctrl_c();
     let dev = Device::new(&client, &profile);
     match checked {
-        Checked::Scan(plan) => {
+        Checked::Scan(plan, allow_empty) => {
             let started = std::time::Instant::now();
             let report =
                 ops::scan(dev, &plan, &mut Run::quiet(&cancel), &mut |_| {}).map_err(op_error)?;
             print_scan(&profile, &report, started.elapsed().as_secs_f64(), json);
+            if report.rows.is_empty() && !allow_empty {
+                errln!(
+                    "no servo answered on {} (ids {}-{}){}",
+                    args.port.port.as_deref().unwrap_or("the port"),
+                    plan.ids.start(),
+                    plan.ids.end(),
+                    super::port::SILENT_HINT
+                );
+                return Ok(1);
+            }
             Ok(0)
         }
         Checked::Monitor(ids) => monitor(&client, &profile, &ids, json),

@@ -56,8 +56,8 @@ pub fn size_text(bytes: u64) -> String {
     format!("{bytes} bytes")
 }
 
-/// What a path that is not a regular file is, for a message.
-fn kind_of(t: std::fs::FileType) -> &'static str {
+/// What a path that is not a regular file is, for a message: `a named pipe`, `a folder`.
+pub fn kind_of(t: std::fs::FileType) -> &'static str {
     #[cfg(unix)]
     {
         use std::os::unix::fs::FileTypeExt;

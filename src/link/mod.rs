@@ -225,6 +225,15 @@ pub struct LinkStats {
     pub answer_latency: Option<Duration>,
     /// The USB adapter's latency timer, where the OS gives it.
     pub latency_timer: Option<Duration>,
+    /// Reads that found the bytes the port said had arrived gone: another reader of the same
+    /// port took them.
+    pub taken_reads: u64,
+    /// Times the link's thread ran more than 2 ms behind a deadline it had set (held up in a
+    /// write, or woken late from a wait): a loaded computer. Its answers are still waited for,
+    /// from when the thread got to them.
+    pub host_late: u64,
+    /// The most the link's thread ran behind a deadline.
+    pub host_late_max: Duration,
 }
 
 /// Requests in a row without an answer after which the device counts as silent (and, when it

@@ -266,6 +266,37 @@ pub enum ExchangeError {
     /// The request could not be built (payload too long).
     #[error("cannot send: {0}")]
     Encode(String),
+    /// No answer, and the answers are being taken by someone else: the port said bytes had
+    /// arrived and they were gone when read, or another program has the port open (a second
+    /// botbench, a terminal program, ModemManager). Not the device's silence nor the wiring.
+    #[error(
+        "no answer to command {command}: bytes are being taken by someone else reading {port} ({by}); close it and try again"
+    )]
+    Taken {
+        /// The command.
+        command: u8,
+        /// The port.
+        port: String,
+        /// Who: the programs that have it open (`cat (pid 4711)`), or that the port said bytes
+        /// had arrived that were gone when read.
+        by: String,
+    },
+    /// The device identified as another kind than its profile is for (CMD_VERSION's `hw`):
+    /// nothing but identification is sent to it, whatever `--strict` says.
+    #[error(
+        "command {command} not sent: the device identifies as hardware {hw:#04x}, and profile \
+         {profile} is for hardware {claimed:#04x}; choose this device's profile (--profile)"
+    )]
+    NotThisDevice {
+        /// The command refused.
+        command: u8,
+        /// The hardware code the device gave.
+        hw: u8,
+        /// The hardware code the profile is for.
+        claimed: u8,
+        /// The profile.
+        profile: String,
+    },
     /// The port went away.
     #[error("link lost: {0}")]
     Disconnected(String),

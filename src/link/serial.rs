@@ -2,7 +2,7 @@
 
 use super::Opener;
 use super::transport::{LinkError, Transport};
-use crate::system::list_ports;
+use crate::system::{Holder, list_ports, other_readers};
 use serialport::SerialPort;
 use std::io::{ErrorKind, Read, Write};
 use std::sync::Arc;
@@ -15,6 +15,11 @@ pub struct SerialTransport {
     baud: u32,
     /// The adapter's latency timer, read when the port was opened.
     latency_timer: Option<Duration>,
+    /// Reads the OS said bytes were ready for, that found none: another reader of the same port
+    /// took them (see [`Transport::taken`]).
+    taken: u64,
+    /// The other programs that had the port open when it was last looked at, and when.
+    holders: (Vec<Holder>, Option<Instant>),
 }
 
 impl std::fmt::Debug for SerialTransport {
@@ -47,14 +52,38 @@ impl SerialTransport {
         let _ = meta;
         let port = serialport::new(path, baud)
             .timeout(Duration::from_millis(10))
-            .open()
+            .open_native()
             .map_err(|e| open_err(crate::system::open_failure(path, &e)))?;
-        Ok(Self {
-            port,
+        non_blocking(&port).map_err(|e| open_err(format!("non-blocking reads: {e}")))?;
+        let mut t = Self {
+            port: Box::new(port),
             path: path.to_string(),
             baud,
             latency_timer: crate::system::adapter::adapter_of(path).latency_timer(),
-        })
+            taken: 0,
+            holders: (Vec::new(), None),
+        };
+        let others = t.holders_now();
+        if !others.is_empty() {
+            log::warn!(
+                "{path} is also open in {}: it may take the device's answers",
+                Holder::list(&others)
+            );
+        }
+        Ok(t)
+    }
+
+    /// The other programs that have the port open, looked up at most every
+    /// [`HOLDERS_EVERY`] (a scan of `/proc` costs milliseconds).
+    fn holders_now(&mut self) -> Vec<Holder> {
+        let fresh = self
+            .holders
+            .1
+            .is_some_and(|at| at.elapsed() < HOLDERS_EVERY);
+        if !fresh {
+            self.holders = (other_readers(&self.path), Some(Instant::now()));
+        }
+        self.holders.0.clone()
     }
 
     /// The USB serial number of the adapter at `path`, where the OS gives one.
@@ -79,29 +108,79 @@ impl SerialTransport {
 }
 
 impl Transport for SerialTransport {
+    /// Writes every byte; a port that takes none for [`WRITE_STALL`] is lost (the port is
+    /// non-blocking: a full output buffer is waited on, never blocked in).
     fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
-        self.port.write_all(bytes).map_err(|e| self.lost(&e))?;
+        let mut rest = bytes;
+        let mut stalled_since: Option<Instant> = None;
+        while !rest.is_empty() {
+            if self.port.timeout() != WRITE_STALL {
+                self.port
+                    .set_timeout(WRITE_STALL)
+                    .map_err(|e| LinkError::Setting(e.to_string()))?;
+            }
+            match self.port.write(rest) {
+                Ok(0) => return Err(LinkError::Disconnected(format!("{}: write", self.path))),
+                Ok(n) => {
+                    rest = &rest[n..];
+                    stalled_since = None;
+                }
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+                    ) =>
+                {
+                    let since = *stalled_since.get_or_insert_with(Instant::now);
+                    if since.elapsed() >= WRITE_STALL {
+                        return Err(LinkError::Disconnected(format!(
+                            "{}: the port took no byte for {} ms",
+                            self.path,
+                            WRITE_STALL.as_millis()
+                        )));
+                    }
+                }
+                Err(e) => return Err(self.lost(&e)),
+            }
+        }
         self.port.flush().map_err(|e| self.lost(&e))
     }
 
+    /// Waits for bytes until `deadline` at most (the OS's poll), then reads them without
+    /// blocking: when another reader of the port took them in between, the read finds none,
+    /// counts it ([`Transport::taken`]) and waits on, never past `deadline`.
     fn read(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
-        let now = Instant::now();
-        // Zero is a poll: what has already arrived, without waiting.
-        let wait = deadline.saturating_duration_since(now);
-        if self.port.timeout() != wait {
-            self.port
-                .set_timeout(wait)
-                .map_err(|e| LinkError::Setting(e.to_string()))?;
-        }
-        match self.port.read(buf) {
-            Ok(0) => Err(LinkError::Disconnected(format!(
-                "{}: end of file",
-                self.path
-            ))),
-            Ok(n) => Ok(n),
-            Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::WouldBlock => Ok(0),
-            Err(e) if e.kind() == ErrorKind::Interrupted => Ok(0),
-            Err(e) => Err(self.lost(&e)),
+        loop {
+            // Zero is a poll: what has already arrived, without waiting.
+            let wait = deadline.saturating_duration_since(Instant::now());
+            if self.port.timeout() != wait {
+                self.port
+                    .set_timeout(wait)
+                    .map_err(|e| LinkError::Setting(e.to_string()))?;
+            }
+            match self.port.read(buf) {
+                Ok(0) => {
+                    return Err(LinkError::Disconnected(format!(
+                        "{}: end of file",
+                        self.path
+                    )));
+                }
+                Ok(n) => return Ok(n),
+                Err(e) if e.kind() == ErrorKind::TimedOut => return Ok(0),
+                // The port said bytes were there, and they were gone: someone else read them.
+                Err(e) if e.kind() == ErrorKind::WouldBlock => {
+                    self.taken += 1;
+                    if wait.is_zero() {
+                        return Ok(0);
+                    }
+                }
+                Err(e) if e.kind() == ErrorKind::Interrupted => {
+                    if wait.is_zero() {
+                        return Ok(0);
+                    }
+                }
+                Err(e) => return Err(self.lost(&e)),
+            }
         }
     }
 
@@ -131,6 +210,14 @@ impl Transport for SerialTransport {
         self.latency_timer
     }
 
+    fn taken(&self) -> u64 {
+        self.taken
+    }
+
+    fn others_reading(&mut self) -> Vec<Holder> {
+        self.holders_now()
+    }
+
     fn check(&mut self) -> Result<(), LinkError> {
         if std::path::Path::new(&self.path).exists() {
             Ok(())
@@ -141,6 +228,40 @@ impl Transport for SerialTransport {
             )))
         }
     }
+}
+
+/// How long a write may find the port taking no byte before the port counts as lost.
+const WRITE_STALL: Duration = Duration::from_secs(2);
+/// How often the other programs holding the port are looked up again.
+const HOLDERS_EVERY: Duration = Duration::from_secs(1);
+
+/// Makes reads from `port` non-blocking (Unix: `O_NONBLOCK`): the serialport crate polls before
+/// it reads, and a blocking read after the poll said bytes were ready would wait forever when
+/// another reader of the same port took them. Reads still wait, in the poll, until their
+/// deadline. Elsewhere (Windows: reads end at the port's timeout) nothing is needed.
+///
+/// The one `unsafe` of the crate: serialport gives the descriptor only as a raw one.
+#[cfg(unix)]
+#[allow(unsafe_code)]
+fn non_blocking(port: &serialport::TTYPort) -> std::io::Result<()> {
+    use std::os::fd::AsRawFd;
+    let fd = port.as_raw_fd();
+    // SAFETY: `fd` is the open descriptor `port` owns for as long as this call; F_GETFL and
+    // F_SETFL read and set its status flags only.
+    let flags = unsafe { libc::fcntl(fd, libc::F_GETFL) };
+    if flags < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    // SAFETY: as above.
+    if unsafe { libc::fcntl(fd, libc::F_SETFL, flags | libc::O_NONBLOCK) } < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    Ok(())
+}
+
+#[cfg(not(unix))]
+fn non_blocking(_port: &serialport::COMPort) -> std::io::Result<()> {
+    Ok(())
 }
 
 /// Opens `path`, and after a loss reopens it by path, or by the adapter's USB serial number when

@@ -42,6 +42,17 @@ pub trait Transport: Send {
     fn latency_timer(&self) -> Option<Duration> {
         None
     }
+    /// How many times, since the port was opened, the OS said bytes had arrived and they were
+    /// gone when read: another reader of the same port (a second botbench, a terminal program,
+    /// ModemManager) took them. Only a real port can tell; 0 elsewhere.
+    fn taken(&self) -> u64 {
+        0
+    }
+    /// The other programs that have the port open (Linux, those this user may see), looked up
+    /// at most once a second: who may be taking its bytes.
+    fn others_reading(&mut self) -> Vec<crate::system::Holder> {
+        Vec::new()
+    }
     /// Checks, while idle, that the port is still there (a USB adapter unplugged).
     fn check(&mut self) -> Result<(), LinkError> {
         Ok(())

@@ -77,6 +77,16 @@ pub enum OpError {
         /// More on what is allowed (with a leading space), or empty.
         note: String,
     },
+    /// A servo's id or baud option given to a broadcast write: every servo would take the same
+    /// id, or move to a rate the port does not follow. Nothing was sent.
+    #[error(
+        "{param} is not written to every servo at once: it changes how a servo is reached; \
+         give one servo its id with `servo set-id` or its rate with `servo set-baud`"
+    )]
+    NotBroadcast {
+        /// The parameter.
+        param: String,
+    },
     /// A read-only servo parameter given to a write. Nothing was sent.
     #[error("{param} is read-only")]
     ReadOnly {
@@ -206,9 +216,43 @@ pub enum OpError {
     /// Cancelled by the operator.
     #[error("cancelled")]
     Cancelled,
+    /// Cancelled by the operator part of the way through a batch (a preset, tuning writes,
+    /// servo parameters, provisioning, a self-test, an update): `done` of `total` items were
+    /// carried out (written and read back), the others were not. Never a success.
+    #[error(
+        "cancelled after {done} of {total} {what}{}{}",
+        list("; done: ", done_items),
+        list("; not done: ", not_done)
+    )]
+    CancelledAfter {
+        /// How many items were carried out.
+        done: usize,
+        /// How many the batch had.
+        total: usize,
+        /// Of what: `commands`, `parameters`, `servos`, `steps`.
+        what: &'static str,
+        /// The items carried out, by name (the commands written).
+        done_items: Vec<String>,
+        /// The items not carried out, by name.
+        not_done: Vec<String>,
+    },
+}
+
+/// `items` after `head`, comma-separated; nothing when there are none.
+fn list(head: &str, items: &[String]) -> String {
+    if items.is_empty() {
+        String::new()
+    } else {
+        format!("{head}{}", items.join(", "))
+    }
 }
 
 impl OpError {
+    /// Whether the operator cancelled it ([`OpError::Cancelled`], [`OpError::CancelledAfter`]).
+    pub fn is_cancel(&self) -> bool {
+        matches!(self, OpError::Cancelled | OpError::CancelledAfter { .. })
+    }
+
     /// The device's answer to `command` does not fit the profile.
     pub fn answer(command: &str, error: FieldError) -> Self {
         OpError::Answer {
@@ -244,6 +288,7 @@ impl OpError {
                 | OpError::WrongCommand { .. }
                 | OpError::NothingGiven { .. }
                 | OpError::OutOfRange { .. }
+                | OpError::NotBroadcast { .. }
                 | OpError::ReadOnly { .. }
                 | OpError::BroadcastId
                 | OpError::BroadcastAnswer { .. }

@@ -60,7 +60,7 @@ pub fn capture(dev: Device<'_>, run: &mut Run<'_>) -> Result<Preset, OpError> {
 /// Checks `preset` against the profile, then writes each Set command's full payload with
 /// [`exchange::write_verified`], reporting progress per command. Returns every read-back check;
 /// a mismatch is a check that is not `ok()`, not an error. When cancelled it stops between
-/// commands and returns the checks of what was written. A preset that does not fit the profile
+/// commands with [`OpError::CancelledAfter`]. A preset that does not fit the profile
 /// is refused (`OpError::Document`) before anything is written.
 pub fn apply(dev: Device<'_>, preset: &Preset, run: &mut Run<'_>) -> Result<Vec<Check>, OpError> {
     let mut all = Vec::new();
@@ -71,7 +71,8 @@ pub fn apply(dev: Device<'_>, preset: &Preset, run: &mut Run<'_>) -> Result<Vec<
 }
 
 /// [`apply`], telling `written` each command's checks as it is written. Progress is reported
-/// before the first command and after each; a cancel raised then stops before the next command.
+/// before the first command and after each; a cancel raised then stops before the next command
+/// and ends the apply with [`OpError::CancelledAfter`] (what was written and what was not).
 pub fn apply_each(
     dev: Device<'_>,
     preset: &Preset,
@@ -88,7 +89,14 @@ pub fn apply_each(
     });
     for (i, w) in writes.iter().enumerate() {
         if run.is_cancelled() {
-            break;
+            let name = |w: &crate::preset::SetWrite| w.command.clone();
+            return Err(OpError::CancelledAfter {
+                done: i,
+                total: writes.len(),
+                what: "commands",
+                done_items: writes[..i].iter().map(name).collect(),
+                not_done: writes[i..].iter().map(name).collect(),
+            });
         }
         let set = profile
             .command(&w.command)

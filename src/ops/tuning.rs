@@ -57,7 +57,8 @@ pub fn read_commands(
 /// Writes each Set command with its full payload, then reads it back through its Get
 /// ([`exchange::write_verified`]); `each` sees every command's checks (or why it failed) as they
 /// come. A failed or mismatched write does not stop the batch; a cancel does, between commands
-/// (`Err(Cancelled)`, after `each` has seen what was written).
+/// ([`OpError::CancelledAfter`]: what was written and what was not, after `each` has seen what
+/// was written).
 pub fn write_commands(
     dev: Device<'_>,
     writes: &[SetWrite],
@@ -69,8 +70,21 @@ pub fn write_commands(
         total: writes.len(),
         ..Tally::default()
     };
+    let name = |(id, _): &SetWrite| {
+        profile
+            .command_by_id(*id)
+            .map_or_else(|| format!("command {id}"), |c| c.ident.clone())
+    };
     for (i, (set, inputs)) in writes.iter().enumerate() {
-        run.go_on()?;
+        if run.is_cancelled() {
+            return Err(OpError::CancelledAfter {
+                done: i,
+                total: writes.len(),
+                what: "commands",
+                done_items: writes[..i].iter().map(name).collect(),
+                not_done: writes[i..].iter().map(name).collect(),
+            });
+        }
         let Some(cmd) = profile.command_by_id(*set) else {
             continue;
         };

@@ -297,6 +297,14 @@ impl Transport for LockstepPort {
         self.port.describe()
     }
 
+    fn taken(&self) -> u64 {
+        self.port.taken()
+    }
+
+    fn others_reading(&mut self) -> Vec<crate::system::Holder> {
+        self.port.others_reading()
+    }
+
     fn check(&mut self) -> Result<(), LinkError> {
         let result = self.port.check();
         self.returns(result)

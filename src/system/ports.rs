@@ -111,12 +111,29 @@ pub struct Holder {
     pub name: String,
 }
 
+impl Holder {
+    /// `holders` as words: `cat (pid 4711), ModemManager (pid 812)`.
+    pub fn list(holders: &[Holder]) -> String {
+        holders
+            .iter()
+            .map(|h| format!("{} (pid {})", h.name, h.pid))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
 /// The other processes that have `path` open, among those this user may look into (all of them
 /// for root). Linux: a scan of `/proc/*/fd`; elsewhere nothing is found.
 pub fn holders(path: &str) -> Vec<Holder> {
     #[cfg(target_os = "linux")]
     {
+        use std::os::unix::fs::MetadataExt;
         let Ok(target) = std::fs::canonicalize(path) else {
+            return Vec::new();
+        };
+        // The same node, not only the same name: a pseudo-terminal's name is given again once it
+        // is closed, and a process may still hold the old one.
+        let Ok(node) = std::fs::metadata(&target).map(|m| (m.dev(), m.ino())) else {
             return Vec::new();
         };
         let me = std::process::id();
@@ -138,9 +155,10 @@ pub fn holders(path: &str) -> Vec<Holder> {
             let Ok(fds) = std::fs::read_dir(entry.path().join("fd")) else {
                 continue;
             };
-            let holds = fds
-                .flatten()
-                .any(|fd| std::fs::read_link(fd.path()).is_ok_and(|l| l == target));
+            let holds = fds.flatten().any(|fd| {
+                std::fs::read_link(fd.path()).is_ok_and(|l| l == target)
+                    && std::fs::metadata(fd.path()).is_ok_and(|m| (m.dev(), m.ino()) == node)
+            });
             if holds {
                 let name = std::fs::read_to_string(entry.path().join("comm"))
                     .map(|s| s.trim().to_string())
@@ -156,6 +174,59 @@ pub fn holders(path: &str) -> Vec<Holder> {
         let _ = path;
         Vec::new()
     }
+}
+
+/// The other processes that may read `path`'s bytes: [`holders`], except, for a pseudo-terminal,
+/// the program that serves its other side (it holds the pty's master, whose
+/// `/proc/PID/fdinfo` names the pty by `tty-index`; a simulator also keeps the pty's own side
+/// open, and never reads it) and the children that inherited it from that program.
+pub fn other_readers(path: &str) -> Vec<Holder> {
+    let found = holders(path);
+    if found.is_empty() {
+        return found;
+    }
+    let index = std::fs::canonicalize(path).ok().and_then(|p| {
+        p.strip_prefix("/dev/pts")
+            .ok()
+            .and_then(|n| n.to_str()?.parse::<u32>().ok())
+    });
+    match index {
+        // A child of the serving program holds the pty only as inherited from it (it opened
+        // both sides without close-on-exec): not a reader either.
+        Some(index) => found
+            .into_iter()
+            .filter(|h| {
+                !serves_pty(h.pid, index) && !parent_of(h.pid).is_some_and(|p| serves_pty(p, index))
+            })
+            .collect(),
+        None => found,
+    }
+}
+
+/// The parent of process `pid` (`/proc/PID/stat`, the field after the command's closing
+/// parenthesis and state).
+fn parent_of(pid: u32) -> Option<u32> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    let after = &stat[stat.rfind(')')? + 1..];
+    after.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// Whether process `pid` holds the master side of pseudo-terminal `index` (`/dev/pts/INDEX`).
+fn serves_pty(pid: u32, index: u32) -> bool {
+    let Ok(fds) = std::fs::read_dir(format!("/proc/{pid}/fd")) else {
+        return false;
+    };
+    let want = format!("tty-index:\t{index}");
+    fds.flatten().any(|fd| {
+        let is_master = std::fs::read_link(fd.path())
+            .is_ok_and(|l| l.ends_with("ptmx") || l == std::path::Path::new("/dev/pts/ptmx"));
+        is_master
+            && std::fs::read_to_string(format!(
+                "/proc/{pid}/fdinfo/{}",
+                fd.file_name().to_string_lossy()
+            ))
+            .is_ok_and(|info| info.lines().any(|l| l.trim_end() == want))
+    })
 }
 
 /// The message for a busy port.

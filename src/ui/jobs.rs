@@ -292,7 +292,7 @@ pub fn write(profile: &Arc<Profile>, writes: Vec<ops::tuning::SetWrite>) -> Job 
             },
         )
         .map_err(|e| match e {
-            OpError::Cancelled => JobError::CancelledAfter {
+            OpError::Cancelled | OpError::CancelledAfter { .. } => JobError::CancelledAfter {
                 done,
                 total: writes.len(),
                 what: "commands",

@@ -216,7 +216,26 @@ impl Zh for OpError {
                 None => format!("舵机 {id} 在 {baud} 波特及其他波特率下均无应答"),
             },
             OpError::Verify(what) => format!("校验不符:{what}"),
+            OpError::NotBroadcast { param } => format!(
+                "{param} 不能一次写入所有舵机:它决定如何找到舵机;请用 set-id 或 set-baud 逐个设置"
+            ),
             OpError::Cancelled => "已取消".into(),
+            OpError::CancelledAfter {
+                done,
+                total,
+                done_items,
+                not_done,
+                ..
+            } => {
+                let mut s = format!("已在 {total} 项中完成 {done} 项后取消");
+                if !done_items.is_empty() {
+                    s.push_str(&format!(";已完成:{}", done_items.join(", ")));
+                }
+                if !not_done.is_empty() {
+                    s.push_str(&format!(";未完成:{}", not_done.join(", ")));
+                }
+                s
+            }
         }
     }
 }
@@ -247,6 +266,17 @@ impl Zh for ExchangeError {
                 format!("{} 协议没有 {what}", protocol.name())
             }
             ExchangeError::Encode(e) => format!("无法发送:{e}"),
+            ExchangeError::Taken { command, port, by } => format!(
+                "命令 {command} 无应答:另有程序在读取 {port},字节被它取走({by});请关闭它后重试"
+            ),
+            ExchangeError::NotThisDevice {
+                command,
+                hw,
+                claimed,
+                profile,
+            } => format!(
+                "命令 {command} 未发送:设备报告的硬件为 {hw:#04x},而配置 {profile} 适用于硬件 {claimed:#04x};请选择此设备的配置"
+            ),
             ExchangeError::Disconnected(e) => format!("连接丢失:{e}"),
             ExchangeError::Cancelled => "已取消".into(),
         }

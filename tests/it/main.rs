@@ -8,6 +8,7 @@
 
 mod support;
 
+mod cancel_truth;
 mod capture_faults;
 mod capture_record;
 mod cli_edges;
@@ -18,6 +19,7 @@ mod cli_records;
 mod codec_props;
 mod field_msp;
 mod field_servo;
+mod field_shared;
 mod field_vanish;
 mod firmware_variants;
 mod gui;

@@ -115,6 +115,9 @@ impl ProtocolSession {
         let enc = |e: EncodeError| ExchangeError::Encode(e.to_string());
         Ok(match self {
             Self::Msp(s) => {
+                if let Some(refused) = s.refuses(req.command) {
+                    return Err(refused);
+                }
                 let mut r = msp_codec::Request::new(
                     req.device.unwrap_or(s.device_code()),
                     req.command,

@@ -154,6 +154,9 @@ pub(crate) struct MspSession {
     state: Identify,
     /// Callers waiting for the identification under way.
     waiters: Vec<InfoWaiter>,
+    /// The device on this connection identified as hardware this profile is not for (its `hw`
+    /// code): nothing but identification is sent to it ([`Self::refuses`]).
+    misfit: Option<u8>,
 }
 
 /// Where the identification of the current connection stands.
@@ -190,9 +193,28 @@ impl MspSession {
             identify_on_connect,
             state: Identify::NotAsked,
             waiters: Vec::new(),
+            misfit: None,
         };
         session.connected();
         session
+    }
+
+    /// Why `command` is not sent: the device identified as hardware the profile is not for, and
+    /// the request is not one of the identification's (ping, version, build information).
+    pub(crate) fn refuses(&self, command: u8) -> Option<ExchangeError> {
+        let hw = self.misfit?;
+        if matches!(
+            command,
+            msp::CMD_PING | msp::CMD_VERSION | msp::CMD_BUILD_INFO
+        ) {
+            return None;
+        }
+        Some(ExchangeError::NotThisDevice {
+            command,
+            hw,
+            claimed: self.profile.device_code.map_or(0, DeviceCode::initial),
+            profile: self.profile.id.clone(),
+        })
     }
 
     /// The device code of requests that name none.
@@ -202,6 +224,7 @@ impl MspSession {
 
     /// A new connection (the first, or after a reconnect): its device is identified afresh.
     pub(crate) fn connected(&mut self) {
+        self.misfit = None;
         self.state = if self.identify_on_connect {
             Identify::Due(Ask::Version)
         } else {
@@ -293,7 +316,12 @@ impl MspSession {
                 });
                 match info {
                     Ok(info) => {
-                        if let Some(DeviceCode::Auto(_)) = self.profile.device_code {
+                        if let Some(DeviceCode::Auto(claimed)) = self.profile.device_code {
+                            // An `Auto` code names the hardware the profile is for; another
+                            // kind of device gets nothing written (PROTOCOL_NOTES §1: 0x03 the
+                            // window cleaner, 0x04 the solar cleanbot).
+                            self.misfit = (info.hw != claimed).then_some(info.hw);
+                            // Its core requests (ping) go to the code it gave.
                             self.device_code = info.hw;
                         }
                         self.state = Identify::Due(Ask::BuildInfo(info));

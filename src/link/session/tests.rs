@@ -118,10 +118,29 @@ fn msp_identifies_before_requests_and_learns_the_device_code() {
     assert_eq!(read, (7, "1.2.3", "4.5"));
     assert_eq!(info.build_date.as_deref(), Some("2025-03-14 12:30:00"));
     assert_eq!(d.s.due(d.now), None);
-    // Later requests go to the hardware code the device named (the profile says Auto).
-    let (bytes, _) = d.s.encode(&Request::new(0x20, Vec::new())).unwrap();
-    let to_7 = msp::Request::new(0x07, 0x20, Vec::new()).encode().unwrap();
+    // Core requests go to the hardware code the device named (the profile says Auto)...
+    let (bytes, _) =
+        d.s.encode(&Request::new(msp::CMD_PING, Vec::new()))
+            .unwrap();
+    let to_7 = msp::Request::new(0x07, msp::CMD_PING, Vec::new())
+        .encode()
+        .unwrap();
     assert_eq!(bytes, to_7);
+    // ...and nothing else: hardware 7 is not what the window cleaner's profile is for (issue
+    // 25, 4d).
+    let refused = d.s.encode(&Request::new(0x20, Vec::new()));
+    assert!(
+        matches!(
+            refused,
+            Err(ExchangeError::NotThisDevice {
+                command: 0x20,
+                hw: 7,
+                claimed: 3,
+                ..
+            })
+        ),
+        "{refused:?}"
+    );
 }
 
 #[test]

@@ -15,6 +15,10 @@ use crate::protocol::{Direction, FrameError};
 use log::debug;
 use std::time::{Duration, Instant};
 
+/// How far behind a deadline it set the link's thread may run before it counts as a late host
+/// (a loaded computer): a scheduler's ordinary wake-up is well under a millisecond.
+pub(super) const HOST_LATE: Duration = Duration::from_millis(2);
+
 /// The default answer margin of a protocol: how long the device may think before its first byte
 /// (the seeds' and the field's figures: MSP 20 ms, servo 1.5 ms, Tuya 300 ms).
 pub fn default_margin(protocol: Protocol) -> Duration {
@@ -62,6 +66,37 @@ impl Worker {
         }
         self.events.tap(Direction::HostToDevice, Ok(sent), None);
         Ok(())
+    }
+
+    /// When a request asked for at `asked`, whose write of `bytes` bytes returned at `written`,
+    /// counts as sent: `written` when the host was held up in the write for longer than
+    /// [`HOST_LATE`] beyond the bytes' own wire time (counted in the link's counters), else
+    /// `asked`.
+    pub(super) fn host_was_late_by(
+        &mut self,
+        asked: Instant,
+        written: Instant,
+        bytes: usize,
+    ) -> Instant {
+        let late = written
+            .saturating_duration_since(asked)
+            .saturating_sub(wire_time(bytes, self.wire.baud()));
+        if late <= HOST_LATE {
+            return asked;
+        }
+        self.host_late(late);
+        written
+    }
+
+    /// The host ran `late` behind a deadline it had set: counted, the worst kept.
+    pub(super) fn host_late(&mut self, late: Duration) {
+        let stats = &mut self.wire.stats;
+        stats.host_late += 1;
+        stats.host_late_max = stats.host_late_max.max(late);
+        debug!(
+            "the host ran {:.1} ms behind a deadline (a loaded computer)",
+            late.as_secs_f64() * 1e3
+        );
     }
 
     /// Reads what arrives before `deadline` into the decoder; a failed read loses the port.
@@ -227,6 +262,10 @@ impl Worker {
         }
         let t0 = Instant::now();
         self.write(&x.bytes, x.sent.clone())?;
+        // The answer is due after the request has left: a host thread held up in the write (a
+        // loaded computer) does not shorten the device's time to answer. The round trip still
+        // counts from `t0`.
+        let due_from = self.host_was_late_by(t0, Instant::now(), x.bytes.len());
         x.sends.push(t0);
         let Some(each) = x.each.clone() else {
             return Ok(Tried::Done(Reply {
@@ -236,8 +275,8 @@ impl Worker {
             }));
         };
         let baud = self.wire.baud();
-        let burst = burst_end(&x.req.reply, t0, x.bytes.len(), baud, x.margin);
-        let first = t0 + wire_time(x.bytes.len() + 1, baud) + x.margin;
+        let burst = burst_end(&x.req.reply, due_from, x.bytes.len(), baud, x.margin);
+        let first = due_from + wire_time(x.bytes.len() + 1, baud) + x.margin;
         let waited = self.wait_for(&each, burst, first)?;
         x.frame_err = waited.frame_err.or(x.frame_err.take());
         x.mismatch = waited.mismatch.or(x.mismatch);
@@ -378,13 +417,20 @@ impl Worker {
         sent: Instant,
     ) -> ExchangeError {
         if let Some(error) = frame_err {
-            ExchangeError::Garbled { command, error }
+            // Part of an answer taken by another reader reads as a damaged frame.
+            match self.wire.taken_by() {
+                Some((port, by)) => ExchangeError::Taken { command, port, by },
+                None => ExchangeError::Garbled { command, error },
+            }
         } else if let Some((got, from)) = mismatch {
             ExchangeError::Mismatch {
                 expected,
                 got,
                 from,
             }
+        } else if let Some((port, by)) = self.wire.taken_by() {
+            self.wire.stats.timeouts += 1;
+            ExchangeError::Taken { command, port, by }
         } else {
             self.wire.stats.timeouts += 1;
             if let Some(ev) = self.liveness.unanswered() {

@@ -104,8 +104,9 @@ impl Worker {
             // The bus is free once the last answer can have ended, or has been read whole.
             self.sweep_read(sweep, &mut run, next, false)?;
             self.commands_during_exchange()?;
-            let t = Instant::now();
+            let asked = Instant::now();
             self.write(&bytes, packet)?;
+            let t = self.host_was_late_by(asked, Instant::now(), bytes.len());
             let on_wire = wire_time(bytes.len(), baud);
             run.sent.push(t);
             run.on_wire.push(on_wire);
@@ -124,6 +125,15 @@ impl Worker {
             until = until.max(started + self.timing.learned.grace(margin));
         }
         self.sweep_read(sweep, &mut run, until, true)?;
+        let unanswered = run.answers.iter().position(Option::is_none);
+        if let (Some(i), Some((port, by))) = (unanswered, self.wire.taken_by()) {
+            // What is missing may have been taken: no request of it can count as unanswered.
+            return Err(ExchangeError::Taken {
+                command: sweep.requests[i].command,
+                port,
+                by,
+            });
+        }
         Ok(finish(run))
     }
 

@@ -32,7 +32,14 @@ pub(super) struct Wire {
     pub(super) stats: LinkStats,
     /// Why the port was lost, while it is: what a request made since is told.
     lost_because: Option<String>,
+    /// The port's count of bytes taken by another reader ([`Transport::taken`]) when last
+    /// looked at, and when it last grew.
+    taken: (u64, Option<Instant>),
 }
+
+/// How long after the port last said bytes had been taken by another reader an unanswered
+/// request is put down to that reader.
+const TAKEN_RECENTLY: Duration = Duration::from_secs(5);
 
 impl Wire {
     /// The wire over `transport`, opened by `opener`, carrying `protocol`.
@@ -47,7 +54,38 @@ impl Wire {
             checked_at: now,
             stats: LinkStats::default(),
             lost_because: None,
+            taken: (0, None),
         }
+    }
+
+    /// Who is taking this port's bytes, when someone is: the other programs that have it open,
+    /// or, when the OS names none this user may see, that it said bytes had arrived which were
+    /// gone when read within the last [`TAKEN_RECENTLY`]. `None` while the port is not shared.
+    pub(super) fn taken_by(&mut self) -> Option<(String, String)> {
+        let t = self.transport.as_mut()?;
+        let count = t.taken();
+        if count > self.taken.0 {
+            self.stats.taken_reads += count - self.taken.0;
+            self.taken = (count, Some(Instant::now()));
+        }
+        let recently = self.taken.1.is_some_and(|at| at.elapsed() < TAKEN_RECENTLY);
+        let others = t.others_reading();
+        let port = t.describe();
+        if !others.is_empty() {
+            let mut by = crate::system::Holder::list(&others);
+            if recently {
+                by.push_str("; answers vanished after the port said they had come");
+            }
+            return Some((port, by));
+        }
+        recently.then(|| {
+            (
+                port,
+                "a program this user cannot see: answers vanished after the port said they had \
+                 come; `sudo fuser -v PORT` names it"
+                    .replace("PORT", &t.describe()),
+            )
+        })
     }
 
     /// Whether the port is open (not lost).

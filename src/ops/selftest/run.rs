@@ -43,7 +43,7 @@ impl Halt {
 impl From<OpError> for Halt {
     fn from(e: OpError) -> Self {
         match e {
-            OpError::Cancelled => Halt::Cancelled,
+            OpError::Cancelled | OpError::CancelledAfter { .. } => Halt::Cancelled,
             OpError::Exchange(crate::link::ExchangeError::Disconnected(m)) => {
                 Halt::Device(format!("link lost: {m}"))
             }

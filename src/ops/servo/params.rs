@@ -6,7 +6,7 @@ use crate::link::{Match, ReplySpec, Request};
 use crate::ops::{Check, OpError, Progress};
 use crate::ops::{Device, Run};
 use crate::profile::model::Access;
-use crate::profile::{Input, Param, Profile, Value};
+use crate::profile::{Input, Param, ParamRole, Profile, Value};
 use crate::protocol::Direction;
 use crate::protocol::servo::cmd;
 
@@ -60,6 +60,9 @@ pub fn write_param(dev: Device<'_>, id: u8, param: &Param, input: Input) -> Resu
     let Device { client, profile } = dev;
     super::addressed(id, "write a parameter and read it back")?;
     let (write, payload, written) = write_payload(profile, id, param, input)?;
+    if let Some(role @ (ParamRole::ServoId | ParamRole::BaudOption { .. })) = &param.role {
+        return write_followed(dev, id, param, role, written);
+    }
     // A relation with other parameters (angle limits low ≤ high) is checked against what the
     // servo holds now, before anything is written.
     if let Value::Int(raw) = written {
@@ -87,6 +90,46 @@ pub fn write_param(dev: Device<'_>, id: u8, param: &Param, input: Input) -> Resu
     })
 }
 
+/// Writes servo `id`'s id or baud option (`param`, whose role is `role`) as the one checked way
+/// to change them does: [`super::set_id`] (the new id free, a fresh servo alone on the bus, the
+/// servo verified at its new id) or [`super::set_baud`] (the port follows the servo to its new
+/// rate and verifies it there). `written` is the raw value, already checked against the profile.
+fn write_followed(
+    dev: Device<'_>,
+    id: u8,
+    param: &Param,
+    role: &ParamRole,
+    written: Value,
+) -> Result<Check, OpError> {
+    let raw = match &written {
+        Value::Int(raw) => u8::try_from(*raw).map_err(|_| OpError::OutOfRange {
+            what: "servo id or baud option",
+            value: *raw,
+            min: 0,
+            max: 254,
+            note: String::new(),
+        })?,
+        other => {
+            return Err(OpError::Verify(format!(
+                "{} takes a whole number, not {other:?}",
+                param.field.ident
+            )));
+        }
+    };
+    match role {
+        ParamRole::ServoId => super::set_id(dev, id, raw, &crate::ops::Cancel::new())?,
+        _ => {
+            super::set_baud(dev, id, raw)?;
+        }
+    }
+    // Both read the value back where the servo now is (its new id, its new rate).
+    Ok(Check {
+        field: param.field.ident.clone(),
+        written: written.clone(),
+        read: written,
+    })
+}
+
 /// Writes one user parameter to every servo at the port's rate (id 255, the broadcast address),
 /// asked for on purpose: nobody answers a broadcast, so nothing is read back. The value is
 /// checked against the profile first. Returns the raw value written.
@@ -96,6 +139,14 @@ pub fn write_param_broadcast(
     input: Input,
 ) -> Result<Value, OpError> {
     let Device { client, profile } = dev;
+    if matches!(
+        param.role,
+        Some(ParamRole::ServoId | ParamRole::BaudOption { .. })
+    ) {
+        return Err(OpError::NotBroadcast {
+            param: param.field.ident.clone(),
+        });
+    }
     let id = crate::protocol::servo::BROADCAST_ID;
     let (write, payload, written) = write_payload(profile, id, param, input)?;
     client.request(Request::for_command(profile, write, payload).reply(ReplySpec::None))?;

@@ -252,7 +252,7 @@ fn the_factory_preset_applies_to_a_tuned_device() {
 }
 
 #[test]
-fn a_cancel_stops_between_commands_and_returns_what_was_done() {
+fn a_cancel_stops_between_commands_and_says_what_was_and_was_not_written() {
     let p = profile("window-cleaner");
     let wc = window_cleaner();
     wc.sim().set_param("gyroThreshold", 99).unwrap();
@@ -265,10 +265,26 @@ fn a_cancel_stops_between_commands_and_returns_what_was_done() {
             c2.cancel();
         }
     });
-    let checks = ops::preset::apply(Device::new(&link.client(), &p), &factory, &mut run).unwrap();
+    // Issue 25, 4a: a cancelled apply is no success, and says where it stopped.
+    let e = ops::preset::apply(Device::new(&link.client(), &p), &factory, &mut run).unwrap_err();
+    let botbench::ops::OpError::CancelledAfter {
+        done,
+        total,
+        done_items,
+        not_done,
+        ..
+    } = &e
+    else {
+        panic!("not a cancel after some: {e:?}");
+    };
     // Only MSP_SET_PWMVALUE was written.
-    assert_eq!(checks.len(), 1);
-    assert_eq!(checks[0].field, "pwmValue");
+    assert_eq!((*done, *total), (1, 7), "{e}");
+    assert_eq!(done_items, &["MSP_SET_PWMVALUE"], "{e}");
+    assert_eq!(not_done.len(), 6, "{e}");
+    assert!(
+        e.to_string().starts_with("cancelled after 1 of 7 commands"),
+        "{e}"
+    );
     assert_eq!(wc.sim().param("gyroThreshold"), Some(99));
 }
 

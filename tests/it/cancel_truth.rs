@@ -1,0 +1,179 @@
+//! A cancelled operation never reports success (issue 25, item 4a): Ctrl-C part of the way
+//! through a batch ends it as "cancelled after N of M", exit 130, with what was and was not
+//! written. The operator's Ctrl-C reaches a run in this process through
+//! `Captured::interrupt`, as the process's own first Ctrl-C does.
+
+use crate::support::PATIENCE;
+use crate::support::cli::{Sim, finish_in_process, start_in_process};
+use std::time::Instant;
+
+fn preset(name: &str) -> String {
+    format!("{}/presets/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Runs `args` against `sim`, pressing Ctrl-C once stdout has `after` lines; `None` when the
+/// run had ended before (a loaded machine can let a short batch finish first: that run proves
+/// nothing about a cancel, and the caller runs again).
+fn interrupted(sim: &Sim, args: &[&str], after: usize) -> Option<(u8, String, String)> {
+    let captured = botbench::cli::Captured::default();
+    let run = start_in_process(args, sim.ports(), &captured);
+    let deadline = Instant::now() + PATIENCE;
+    while captured.out().lines().count() < after {
+        if run.is_finished() {
+            let _ = finish_in_process(run, &captured, "the run");
+            return None;
+        }
+        assert!(Instant::now() < deadline, "no output: {}", captured.err());
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    captured.interrupt();
+    let code = finish_in_process(run, &captured, &format!("botbench {args:?}"));
+    Some((code, captured.out(), captured.err()))
+}
+
+#[test]
+fn a_preset_apply_cancelled_part_way_says_so_and_exits_130() {
+    // Each answer waits for the adapter's 20 ms latency timer: the apply takes a while.
+    let sim = Sim::start(&["window-cleaner", "--latency-timer-ms", "20"]);
+    let factory = preset("window-cleaner-factory.ron");
+    let args = ["preset", "apply", &factory, "--port", &sim.path];
+    let (code, out, err) = (0..5)
+        // The first command's name and its first check are printed: cancel then.
+        .find_map(|_| interrupted(&sim, &args, 2))
+        .expect("a run still under way when Ctrl-C came, in 5 tries");
+    let text = format!("exit {code}\n--- stdout\n{out}--- stderr\n{err}");
+    assert_eq!(code, 130, "{text}");
+    assert!(!out.contains("every field verified"), "{text}");
+    assert!(err.contains("cancelled after "), "{text}");
+    assert!(
+        err.contains("of 7 commands") && err.contains("not done: "),
+        "says how many of the preset's commands were written, and which were not: {text}"
+    );
+}
+
+#[test]
+fn the_wait_between_servos_leaves_on_ctrl_c() {
+    // One fresh servo, never swapped: the wait for the second one would last for ever.
+    let sim = Sim::start(&["servo-bus", "--servos", "0"]);
+    let plan = preset("servo-provision-plan.ron");
+    let args = [
+        "servo",
+        "--port",
+        &sim.path,
+        "provision",
+        &plan,
+        "--count",
+        "2",
+        "--wait-ms",
+        "50",
+    ];
+    let captured = botbench::cli::Captured::default();
+    let run = start_in_process(&args, sim.ports(), &captured);
+    let deadline = Instant::now() + PATIENCE;
+    while !captured.err().contains("waiting for a new fresh servo") {
+        assert!(
+            !run.is_finished() && Instant::now() < deadline,
+            "the first servo, then the wait: {}{}",
+            captured.out(),
+            captured.err()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    captured.interrupt();
+    let code = finish_in_process(run, &captured, "provisioning");
+    let text = format!("exit {code}\n{}{}", captured.out(), captured.err());
+    assert_eq!(code, 130, "{text}");
+    // The first servo's verdict was given (PASS, or on a loaded machine maybe FAIL: not what
+    // this test is about), and the tally with it.
+    assert!(
+        captured.out().contains("servo 1/2"),
+        "the first servo's verdict: {text}"
+    );
+    assert!(
+        captured
+            .err()
+            .contains("cancelled while waiting for servo 2 of 2: "),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_named_pipe_given_as_a_capture_is_refused_before_it_is_opened() {
+    let dir = crate::support::temp_dir();
+    let fifo = dir.path().join("capture.pcapng");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("runs mkfifo");
+    assert!(made.success());
+    let fifo = fifo.display().to_string();
+    let sim = Sim::start(&["window-cleaner"]);
+    // Opening a named pipe waits for its other end: both would hang without the check.
+    let recording = sim.cli("msp", &["--capture", &fifo, "version"]);
+    assert_ne!(recording.code, 0, "{}", recording.text());
+    assert!(recording.err.contains("named pipe"), "{}", recording.text());
+    let decoding = sim.run(&["frame", "decode", "--capture", &fifo]);
+    assert_ne!(decoding.code, 0, "{}", decoding.text());
+    assert!(decoding.err.contains("named pipe"), "{}", decoding.text());
+}
+
+/// Issue 25, 4c: `servo write ID assigned_id N` and `servo write ID baudrate B` go through the
+/// checks of `set-id` and `set-baud`: no duplicate id is made, and the port follows a servo to
+/// its new rate.
+#[test]
+fn an_id_or_baud_written_as_a_parameter_goes_through_set_id_and_set_baud() {
+    let sim = Sim::start(&["servo-bus", "--servos", "1,2"]);
+    // Id 2 is taken: refused before anything is written, as set-id refuses it.
+    let dup = sim.cli("servo", &["write", "1", "assigned_id", "2"]);
+    assert_ne!(dup.code, 0, "{}", dup.text());
+    assert!(dup.err.contains("2"), "{}", dup.text());
+    let scan = sim.cli("servo", &["--json", "scan", "--ids", "0-5"]);
+    let ids: Vec<u64> = scan.json_docs()[0]["servos"]
+        .as_array()
+        .expect("servos")
+        .iter()
+        .filter_map(|s| s["id"].as_u64())
+        .collect();
+    assert_eq!(ids, vec![1, 2], "no duplicate id was made: {}", scan.text());
+    // A free id is given and verified at the new id.
+    let moved = sim.cli("servo", &["write", "1", "assigned_id", "7"]);
+    assert_eq!(moved.code, 0, "{}", moved.text());
+    let ping = sim.cli("servo", &["ping", "7"]);
+    assert_eq!(ping.code, 0, "{}", ping.text());
+    // A broadcast of an id would give every servo the same one: refused.
+    let all = sim.cli(
+        "servo",
+        &["write", "255", "assigned_id", "9", "--broadcast"],
+    );
+    assert_eq!(all.code, 2, "{}", all.text());
+    assert!(all.err.contains("set-id"), "{}", all.text());
+}
+
+/// Issue 25, 4d: with the window cleaner's profile, a device that identifies as hardware 0x04
+/// (the solar cleanbot) gets nothing written, with or without `--strict`, and is not called
+/// unpowered.
+#[test]
+fn a_device_of_another_kind_than_its_profile_is_refused_before_any_write() {
+    let sim = Sim::start(&["solar-cleanbot"]);
+    for strict in [false, true] {
+        let mut args = vec!["msp", "--port", &sim.path];
+        if strict {
+            args.push("--strict");
+        }
+        args.extend(["set", "MSP_SET_PWMVALUE", "pwmValue=40"]);
+        let run = sim.run(&args);
+        assert_eq!(run.code, 1, "{}", run.text());
+        assert!(
+            run.err.contains("identifies as hardware 0x04")
+                && run
+                    .err
+                    .contains("profile window-cleaner is for hardware 0x03"),
+            "{}",
+            run.text()
+        );
+        assert!(!run.err.contains("powered"), "{}", run.text());
+    }
+    // What it is can still be asked.
+    let version = sim.cli("msp", &["version"]);
+    assert_eq!(version.code, 0, "{}", version.text());
+}
