@@ -617,6 +617,7 @@ fn monitor(client: &crate::link::Client, profile: &Profile, ids: &[u8], json: bo
                 m.turns
             ),
             Reading::Misfit { error } => outln!("{:>3} !! {error}", r.id),
+            Reading::NoData => outln!("{:>3} no data (the servo has no reading to give)", r.id),
             Reading::NoAnswer => outln!("{:>3} no answer", r.id),
         }
     }

@@ -269,6 +269,7 @@ fn build_sim(args: &SimArgs) -> Result<(SimKind, Simulated), CliError> {
         servos: args.servos.clone(),
         msp: args.field.msp(kind)?,
         ignore_baud_change: args.field.ignore_baud_change(kind)?,
+        monitor_no_data: args.field.monitor_no_data(kind)?,
     };
     let firmware = firmware(args, kind)?;
     let (device, control) = device(args, kind, firmware, &opts)?;
@@ -324,7 +325,8 @@ fn device(
             let bus = crate::sim::servo_bus::ServoBus::with_profile_ids(p, ids, baud)
                 .map_err(CliError::input)?
                 .with_seed(opts.seed)
-                .with_baud_change_ignored(opts.ignore_baud_change);
+                .with_baud_change_ignored(opts.ignore_baud_change)
+                .with_monitor_no_data(opts.monitor_no_data);
             (Arc::new(Mutex::new(bus)), None)
         }
         (_, Some(_)) => {

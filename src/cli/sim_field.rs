@@ -48,6 +48,10 @@ pub(crate) struct FieldArgs {
     /// Servo bus: every servo acknowledges a baud change and keeps talking at its old rate.
     #[arg(long)]
     ignore_baud_change: bool,
+    /// Servo bus: every servo answers MONITOR with its "no data" form (angle -235929599,
+    /// turns 0), as a servo with no reading to give does.
+    #[arg(long)]
+    monitor_no_data: bool,
 }
 
 fn hex(what: &str, text: &str) -> Result<Vec<u8>, CliError> {
@@ -105,6 +109,17 @@ impl FieldArgs {
             )));
         }
         Ok(self.ignore_baud_change)
+    }
+
+    /// Whether servos answer MONITOR with no data; refused for a simulator that is not a
+    /// servo bus.
+    pub(crate) fn monitor_no_data(&self, kind: SimKind) -> Result<bool, CliError> {
+        if self.monitor_no_data && kind != SimKind::ServoBus {
+            return Err(CliError::input(format!(
+                "--monitor-no-data is for the servo-bus simulator, not a {kind}"
+            )));
+        }
+        Ok(self.monitor_no_data)
     }
 
     fn async_frame(&self) -> Result<AsyncFrame, CliError> {

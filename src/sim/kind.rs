@@ -126,6 +126,8 @@ pub struct SimOptions {
     pub msp: super::msp_device::MspQuirks,
     /// Servo bus only: every servo acknowledges a baud change and keeps its old rate.
     pub ignore_baud_change: bool,
+    /// Servo bus only: every servo answers MONITOR with the "no data" form.
+    pub monitor_no_data: bool,
 }
 
 /// The Tuya vacuum MCU with these options.
@@ -158,7 +160,8 @@ pub fn build(kind: SimKind, opts: &SimOptions) -> Result<SharedDevice, String> {
             let mut bus =
                 ServoBus::with_profile_ids(super::servo_bus::builtin_servo_profile(), ids, baud)?
                     .with_seed(opts.seed)
-                    .with_baud_change_ignored(opts.ignore_baud_change);
+                    .with_baud_change_ignored(opts.ignore_baud_change)
+                    .with_monitor_no_data(opts.monitor_no_data);
             if let Some(l) = opts.latency {
                 bus = bus.with_latency(l);
             }

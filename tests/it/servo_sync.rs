@@ -280,3 +280,19 @@ fn servo_monitor_on_the_command_line_reads_every_servo_in_one_exchange() {
     assert_eq!(doc["servos"][0]["temperature_raw"], 1779);
     assert_eq!(doc["servos"][1]["answer"], "no_answer");
 }
+
+#[test]
+fn a_monitor_answer_without_data_is_shown_as_no_data_not_as_an_angle() {
+    // The "no data" form: angle -235929599 (0.1°), turns 0; the vendor SDK skips it.
+    let sim = Sim::start(&["servo-bus", "--servos", "1,2", "--monitor-no-data"]);
+    let text = sim.run(&["servo", "--port", &sim.path, "monitor", "1,2"]);
+    let json = sim.run(&["servo", "--port", &sim.path, "monitor", "1", "--json"]);
+    drop(sim);
+    let out = &text.out;
+    assert!(!out.contains("-23592959"), "{out}");
+    assert_eq!(out.matches("no data").count(), 2, "{out}");
+    assert_eq!(text.code, 1, "no values is not a full reading: {out}");
+    let doc: serde_json::Value = serde_json::from_str(&json.out).unwrap();
+    assert_eq!(doc["servos"][0]["answer"], "no_data", "{}", json.out);
+    assert!(doc["servos"][0].get("angle_deg").is_none(), "{}", json.out);
+}

@@ -15,6 +15,16 @@ use serde::Serialize;
 /// a servo) fits the frame's one-byte length.
 pub const MAX_SERVOS: usize = 252;
 
+/// The raw MONITOR angle (0.1°) of the "no data" form: with turns 0, the servo has no reading
+/// to give (the vendor SDK 1.3.12, `response_query_servo_monitor`, skips such an answer). Read
+/// as an angle it would be -23592959.9°.
+pub const NO_DATA_ANGLE: i32 = -235_929_599;
+
+/// Whether a MONITOR answer's raw angle (0.1°) and turns are the "no data" form.
+pub fn is_no_data(angle_raw: i64, turns: i64) -> bool {
+    angle_raw == i64::from(NO_DATA_ANGLE) && turns == 0
+}
+
 /// One servo's MONITOR values, in the profile's display units.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Monitor {
@@ -36,7 +46,7 @@ pub struct Monitor {
     pub turns: i64,
 }
 
-/// What a servo answered (JSON: `"answer": "values" | "misfit" | "no_answer"`).
+/// What a servo answered (JSON: `"answer": "values" | "misfit" | "no_data" | "no_answer"`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "answer", rename_all = "snake_case")]
 pub enum Reading {
@@ -47,6 +57,8 @@ pub enum Reading {
         /// The fault, the values read before it and the raw bytes.
         error: String,
     },
+    /// It answered with the "no data" form ([`NO_DATA_ANGLE`], turns 0): no values.
+    NoData,
     /// It did not answer.
     NoAnswer,
 }
@@ -123,18 +135,30 @@ pub fn monitor_all(dev: Device<'_>, ids: &[u8]) -> Result<Vec<MonitorRow>, OpErr
                 .iter_mut()
                 .find(|r| r.id == id && r.reading == Reading::NoAnswer)
             {
-                row.reading = match read_monitor(profile, &p.payload) {
-                    Ok(m) => Reading::Values(m),
-                    Err(error) => Reading::Misfit { error },
-                };
+                row.reading = reading(profile, &p.payload);
             }
         }
     }
     Ok(rows)
 }
 
+/// One MONITOR answer as a [`Reading`]: its values, no data, or a misfit naming its bytes.
+pub fn reading(profile: &Profile, payload: &[u8]) -> Reading {
+    match decode(profile, payload) {
+        Ok((_, angle_raw)) if is_no_data(angle_raw.0, angle_raw.1) => Reading::NoData,
+        Ok((m, _)) => Reading::Values(m),
+        Err(error) => Reading::Misfit { error },
+    }
+}
+
 /// One MONITOR answer as values; a payload that does not fit is an error naming its bytes.
+/// The "no data" form reads as an angle of -23592959.9°: [`reading`] tells it apart.
 pub fn read_monitor(profile: &Profile, payload: &[u8]) -> Result<Monitor, String> {
+    decode(profile, payload).map(|(m, _)| m)
+}
+
+/// The values and the raw (angle 0.1°, turns) of one MONITOR answer.
+fn decode(profile: &Profile, payload: &[u8]) -> Result<(Monitor, (i64, i64)), String> {
     let monitor = profile
         .command_by_id(cmd::MONITOR)
         .ok_or_else(|| format!("the profile has no MONITOR ({})", cmd::MONITOR))?;
@@ -156,7 +180,8 @@ pub fn read_monitor(profile: &Profile, payload: &[u8]) -> Result<Monitor, String
         .find(|v| v.ident == "angle")
         .ok_or("MONITOR has no field 'angle'")?;
     let temperature_raw = int("temperature")?;
-    Ok(Monitor {
+    let raw = (int("angle")?, int("turns")?);
+    let m = Monitor {
         voltage_mv: int("voltage")?,
         current_ma: int("current")?,
         power_mw: int("power")?,
@@ -165,5 +190,6 @@ pub fn read_monitor(profile: &Profile, payload: &[u8]) -> Result<Monitor, String
         status: int("status")?,
         angle_deg: angle.field.display_number(int("angle")?).unwrap_or(0.0),
         turns: int("turns")?,
-    })
+    };
+    Ok((m, raw))
 }

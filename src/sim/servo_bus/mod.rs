@@ -185,6 +185,14 @@ impl ServoBus {
         self
     }
 
+    /// Every servo answers MONITOR with the "no data" form (angle -235929599, turns 0).
+    pub fn with_monitor_no_data(mut self, no_data: bool) -> Self {
+        for s in &mut self.servos {
+            *s = s.clone().with_monitor_no_data(no_data);
+        }
+        self
+    }
+
     /// Seeds the noise on live readings.
     pub fn with_seed(mut self, seed: u64) -> Self {
         self.rng = fastrand::Rng::with_seed(seed);

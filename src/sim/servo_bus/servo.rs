@@ -57,6 +57,9 @@ pub struct SimServo {
     /// Stores a new baud option but keeps talking at its old rate (firmware that applies it
     /// only after a power cycle, or not at all).
     ignores_baud_change: bool,
+    /// Answers MONITOR with its "no data" form (angle -235929599, turns 0), as servos do
+    /// that have no reading to give; the vendor SDK skips such an answer.
+    monitor_no_data: bool,
 }
 
 impl SimServo {
@@ -98,12 +101,19 @@ impl SimServo {
             holding: false,
             held: None,
             ignores_baud_change: false,
+            monitor_no_data: false,
         }
     }
 
     /// A servo that acknowledges a baud change and keeps its old rate.
     pub fn with_baud_change_ignored(mut self, ignored: bool) -> Self {
         self.ignores_baud_change = ignored;
+        self
+    }
+
+    /// A servo whose MONITOR answers carry the "no data" form (angle -235929599, turns 0).
+    pub fn with_monitor_no_data(mut self, no_data: bool) -> Self {
+        self.monitor_no_data = no_data;
         self
     }
 
@@ -507,7 +517,11 @@ impl SimServo {
         let now = bus.now;
         self.advance(now);
         let live = self.live(now, bus.rng);
-        let (angle, turns) = mturn(self.current_angle(now));
+        let (angle, turns) = if self.monitor_no_data {
+            (crate::ops::servo::monitor::NO_DATA_ANGLE, 0)
+        } else {
+            mturn(self.current_angle(now))
+        };
         let mut out = vec![self.id()];
         out.extend(live.voltage.to_le_bytes());
         out.extend(live.current.to_le_bytes());

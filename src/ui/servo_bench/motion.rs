@@ -495,6 +495,12 @@ impl MotionState {
             return;
         }
         match rt.device.readings.get(&cmd::MONITOR) {
+            Some(Reading::Values(values, _)) if of_servo(values) && monitor_no_data(values) => {
+                ui.weak(lang.tr(
+                    "monitor: no data (the servo has no reading to give)",
+                    "监控:无数据(舵机暂无读数)",
+                ));
+            }
             Some(Reading::Values(values, _)) if of_servo(values) => {
                 let Some(mon) = rt.device.profile.command_by_id(cmd::MONITOR) else {
                     return;
@@ -545,5 +551,14 @@ fn send(
             actions.push(direct(r));
         }
         Err(e) => actions.push(Action::Notify(Notice::error(e.said()))),
+    }
+}
+
+/// Whether a MONITOR answer is the "no data" form (angle -235929599, turns 0): shown as no
+/// data, not as an angle of -23592959.9°.
+fn monitor_no_data(values: &FieldValues) -> bool {
+    match (values.int("angle"), values.int("turns")) {
+        (Some(a), Some(t)) => crate::ops::servo::monitor::is_no_data(a, t),
+        _ => false,
     }
 }
