@@ -20,6 +20,9 @@ pub struct SerialTransport {
     taken: u64,
     /// The other programs that had the port open when it was last looked at, and when.
     holders: (Vec<Holder>, Option<Instant>),
+    /// The USB serial number of the adapter, read when the port was opened: a port that
+    /// vanishes is looked for under another name by it.
+    usb_serial: Option<String>,
 }
 
 impl std::fmt::Debug for SerialTransport {
@@ -62,6 +65,7 @@ impl SerialTransport {
             latency_timer: crate::system::adapter::adapter_of(path).latency_timer(),
             taken: 0,
             holders: (Vec::new(), None),
+            usb_serial: Self::usb_serial_of(path),
         };
         let others = t.holders_now();
         if !others.is_empty() {
@@ -103,7 +107,17 @@ impl SerialTransport {
     }
 
     fn lost(&self, e: &std::io::Error) -> LinkError {
-        LinkError::Disconnected(format!("{}: {e}", self.path))
+        self.gone(&e.to_string())
+    }
+
+    /// The port is lost (`what` happened): its path, what happened and, where one is seen, the
+    /// likely cause ([`crate::system::vanished`]).
+    fn gone(&self, what: &str) -> LinkError {
+        let mut why = format!("{}: {what}", self.path);
+        if let Some(cause) = crate::system::vanished(&self.path, self.usb_serial.as_deref()) {
+            why.push_str(&format!(" — {cause}"));
+        }
+        LinkError::Disconnected(why)
     }
 }
 
@@ -120,7 +134,7 @@ impl Transport for SerialTransport {
                     .map_err(|e| LinkError::Setting(e.to_string()))?;
             }
             match self.port.write(rest) {
-                Ok(0) => return Err(LinkError::Disconnected(format!("{}: write", self.path))),
+                Ok(0) => return Err(self.gone("write")),
                 Ok(n) => {
                     rest = &rest[n..];
                     stalled_since = None;
@@ -159,12 +173,7 @@ impl Transport for SerialTransport {
                     .map_err(|e| LinkError::Setting(e.to_string()))?;
             }
             match self.port.read(buf) {
-                Ok(0) => {
-                    return Err(LinkError::Disconnected(format!(
-                        "{}: end of file",
-                        self.path
-                    )));
-                }
+                Ok(0) => return Err(self.gone("end of file")),
                 Ok(n) => return Ok(n),
                 Err(e) if e.kind() == ErrorKind::TimedOut => return Ok(0),
                 // The port said bytes were there, and they were gone: someone else read them.
@@ -199,7 +208,7 @@ impl Transport for SerialTransport {
     fn clear_input(&mut self) -> Result<(), LinkError> {
         self.port
             .clear(serialport::ClearBuffer::Input)
-            .map_err(|e| LinkError::Disconnected(format!("{}: {e}", self.path)))
+            .map_err(|e| self.gone(&e.to_string()))
     }
 
     fn describe(&self) -> String {
@@ -222,10 +231,7 @@ impl Transport for SerialTransport {
         if std::path::Path::new(&self.path).exists() {
             Ok(())
         } else {
-            Err(LinkError::Disconnected(format!(
-                "{}: the port is gone",
-                self.path
-            )))
+            Err(self.gone("the port is gone"))
         }
     }
 }

@@ -102,6 +102,79 @@ pub fn open_failure(path: &str, error: &serialport::Error) -> String {
     }
 }
 
+/// The likely cause, in words that say what to do, of a port at `path` that went away while
+/// open: renamed after a replug (the adapter whose USB serial number was `usb_serial` is listed
+/// at another path now), taken by brltty (the braille daemon runs, or holds the port), or
+/// unplugged (with the USB serial ports listed now, where another name may be the same
+/// adapter back). `None` while `path` is still there and no brltty holds it.
+pub fn vanished(path: &str, usb_serial: Option<&str>) -> Option<String> {
+    if std::path::Path::new(path).exists() {
+        return vanish_cause(path, Some(&holders(path)), &[], usb_serial, None);
+    }
+    let brltty = process_named("brltty");
+    vanish_cause(path, None, &list_ports(), usb_serial, brltty)
+}
+
+/// [`vanished`] from what was seen: `holders` of the port while it is still there (`None`: it
+/// is gone), the `ports` listed now, and the pid of a running brltty.
+fn vanish_cause(
+    path: &str,
+    holders: Option<&[Holder]>,
+    ports: &[PortInfo],
+    usb_serial: Option<&str>,
+    brltty_pid: Option<u32>,
+) -> Option<String> {
+    let brltty = |pid: u32| {
+        format!(
+            "taken by brltty (pid {pid}), the braille display daemon, which claims CH340/CH341 \
+             adapters on Ubuntu; without a braille display, remove it: sudo apt remove brltty"
+        )
+    };
+    if let Some(holders) = holders {
+        return holders
+            .iter()
+            .find(|h| h.name == "brltty")
+            .map(|h| brltty(h.pid));
+    }
+    if let Some(sn) = usb_serial
+        && let Some(now) = ports
+            .iter()
+            .find(|p| p.serial_number.as_deref() == Some(sn) && p.path != path)
+    {
+        return Some(format!(
+            "renamed after a replug: the same adapter (USB serial {sn}) is now {}; connect to \
+             that port",
+            now.path
+        ));
+    }
+    if let Some(pid) = brltty_pid {
+        return Some(brltty(pid));
+    }
+    let usb: Vec<&str> = ports
+        .iter()
+        .filter(|p| p.kind == "usb")
+        .map(|p| p.path.as_str())
+        .collect();
+    Some(if usb.is_empty() {
+        format!("{path} is gone: unplugged (no USB serial port is listed now); plug it in again")
+    } else {
+        format!(
+            "{path} is gone: unplugged, or plugged in again under another name (listed now: {})",
+            usb.join(", ")
+        )
+    })
+}
+
+/// The id of a running process whose command name is `name` (`/proc/PID/comm`), if any.
+fn process_named(name: &str) -> Option<u32> {
+    let procs = std::fs::read_dir("/proc").ok()?;
+    procs.flatten().find_map(|entry| {
+        let pid = entry.file_name().to_str()?.parse::<u32>().ok()?;
+        let comm = std::fs::read_to_string(entry.path().join("comm")).ok()?;
+        (comm.trim() == name).then_some(pid)
+    })
+}
+
 /// A process that has a device open.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Holder {
@@ -382,6 +455,52 @@ fn user_name() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn usb(path: &str, sn: &str) -> PortInfo {
+        PortInfo {
+            path: path.into(),
+            kind: "usb",
+            vid: Some(0x1a86),
+            pid: Some(0x7523),
+            serial_number: Some(sn.into()),
+            manufacturer: None,
+            product: None,
+            adapter: super::super::adapter::Adapter::default(),
+        }
+    }
+
+    #[test]
+    fn a_vanished_port_says_renamed_brltty_or_unplugged() {
+        let now = [usb("/dev/ttyUSB1", "A1")];
+        let c = |ports: &[PortInfo], sn: Option<&str>, brltty: Option<u32>| {
+            vanish_cause("/dev/ttyUSB0", None, ports, sn, brltty).unwrap_or_default()
+        };
+        let renamed = c(&now, Some("A1"), Some(9));
+        assert!(renamed.starts_with("renamed after a replug"), "{renamed}");
+        assert!(renamed.contains("is now /dev/ttyUSB1"), "{renamed}");
+        let taken = c(&now, Some("B2"), Some(9));
+        assert!(taken.starts_with("taken by brltty (pid 9)"), "{taken}");
+        let other = c(&now, Some("B2"), None);
+        assert!(
+            other.contains("/dev/ttyUSB0 is gone: unplugged, or plugged in again under another name (listed now: /dev/ttyUSB1)"),
+            "{other}"
+        );
+        let none = c(&[], None, None);
+        assert!(
+            none.contains("unplugged (no USB serial port is listed now)"),
+            "{none}"
+        );
+        let held = [Holder {
+            pid: 4,
+            name: "brltty".into(),
+        }];
+        let here = vanish_cause("/dev/ttyUSB0", Some(&held), &[], None, None);
+        assert!(here.is_some_and(|m| m.starts_with("taken by brltty (pid 4)")));
+        assert_eq!(
+            vanish_cause("/dev/ttyUSB0", Some(&[]), &now, None, None),
+            None
+        );
+    }
 
     #[cfg(target_os = "linux")]
     #[test]

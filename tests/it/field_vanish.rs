@@ -154,3 +154,22 @@ fn a_tuya_init_ends_when_the_port_vanishes() {
 fn a_tuya_status_ends_when_the_port_vanishes() {
     ends_on_the_loss(&["tuya-vacuum"], 30, &["tuya", "--port", "PORT", "status"]);
 }
+
+#[test]
+fn a_vanished_port_is_named_with_its_likely_cause() {
+    let sim = Sim::start(&["servo-bus", "--servos", "1", "--vanish-after-bytes", "600"]);
+    let path = sim.path.clone();
+    let run = sim.run(&["servo", "--port", &path, "scan"]);
+    sim.wait_stopped();
+    assert_eq!(run.code, 1, "{}", run.text());
+    let said = format!("{}{}", run.out, run.err);
+    let line = said
+        .lines()
+        .find(|l| l.contains("port disconnected"))
+        .unwrap_or_else(|| panic!("says the port was lost: {said}"));
+    assert!(line.contains(&path), "names the port: {line}");
+    assert!(
+        line.contains(&format!("{path} is gone: unplugged")),
+        "says the likely cause: {line}"
+    );
+}
