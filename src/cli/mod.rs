@@ -204,8 +204,15 @@ where
     I: IntoIterator<Item = T>,
     T: Into<std::ffi::OsString> + Clone,
 {
+    let args: Vec<std::ffi::OsString> = args.into_iter().map(Into::into).collect();
+    let json = wants_json(&args);
     let cli = match Cli::try_parse_from(args) {
         Ok(c) => c,
+        Err(e) if json && e.use_stderr() => {
+            let text = e.to_string();
+            let message = text.trim().trim_start_matches("error: ");
+            return json_failure(&CliError::input(message));
+        }
         Err(e) => {
             if console::is_process() {
                 let _ = e.print();
@@ -225,11 +232,32 @@ where
     };
     match result {
         Ok(code) => code,
+        Err(e) if json => json_failure(&e),
         Err(e) => {
             errln!("botbench: {}", bounded(&e.message));
             e.code
         }
     }
+}
+
+/// Whether the command line asks for `--json` (before a `--`, which ends the options).
+fn wants_json(args: &[std::ffi::OsString]) -> bool {
+    args.iter()
+        .skip(1)
+        .take_while(|a| *a != "--")
+        .any(|a| a == "--json")
+}
+
+/// A failure of a `--json` command: the message on stderr as ever, and on stdout the document
+/// `{"error": MESSAGE, "exit": CODE}` (1 the device failed, 2 bad input), so that a script
+/// reading stdout always gets JSON. Returns the exit code.
+fn json_failure(e: &CliError) -> u8 {
+    errln!("botbench: {}", bounded(&e.message));
+    outln!(
+        "{}",
+        serde_json::json!({ "error": bounded(&e.message), "exit": e.code })
+    );
+    e.code
 }
 
 /// The most lines of one error message (a document's problems, one a line).

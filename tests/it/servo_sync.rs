@@ -296,3 +296,25 @@ fn a_monitor_answer_without_data_is_shown_as_no_data_not_as_an_angle() {
     assert_eq!(doc["servos"][0]["answer"], "no_data", "{}", json.out);
     assert!(doc["servos"][0].get("angle_deg").is_none(), "{}", json.out);
 }
+
+#[test]
+fn a_json_command_that_fails_prints_a_json_document_too() {
+    let sim = Sim::start(&["servo-bus", "--servos", "1"]);
+    // The device fails: nobody answers at id 9. Bad input: id 300 is not an id.
+    let device = sim.run(&["servo", "--port", &sim.path, "read", "9", "--json"]);
+    let input = sim.run(&["servo", "--port", &sim.path, "read", "300", "--json"]);
+    drop(sim);
+    for (ran, code) in [(&device, 1), (&input, 2)] {
+        assert_eq!(ran.code, code, "{}", ran.text());
+        let doc: serde_json::Value = serde_json::from_str(ran.out.trim())
+            .unwrap_or_else(|e| panic!("stdout is one JSON document ({e}): {}", ran.text()));
+        assert_eq!(doc["exit"], code, "{}", ran.out);
+        let error = doc["error"].as_str().unwrap_or_default();
+        assert!(!error.is_empty(), "{}", ran.out);
+        assert!(
+            ran.err.contains(error.lines().next().unwrap_or("-")),
+            "{}",
+            ran.text()
+        );
+    }
+}
