@@ -246,7 +246,8 @@ const HOLDERS_EVERY: Duration = Duration::from_secs(1);
 /// another reader of the same port took them. Reads still wait, in the poll, until their
 /// deadline. Elsewhere (Windows: reads end at the port's timeout) nothing is needed.
 ///
-/// The one `unsafe` of the crate: serialport gives the descriptor only as a raw one.
+/// One of the crate's two `unsafe` blocks (with [`close_on_exec`]): serialport gives the
+/// descriptor only as a raw one.
 #[cfg(unix)]
 #[allow(unsafe_code)]
 fn non_blocking(port: &serialport::TTYPort) -> std::io::Result<()> {
@@ -260,6 +261,27 @@ fn non_blocking(port: &serialport::TTYPort) -> std::io::Result<()> {
     }
     // SAFETY: as above.
     if unsafe { libc::fcntl(fd, libc::F_SETFL, flags | libc::O_NONBLOCK) } < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    Ok(())
+}
+
+/// Marks descriptor `fd` close-on-exec, so that no program this process starts inherits it.
+/// serialport opens a port so, but not the two sides of a pseudo-terminal pair
+/// (`TTYPort::pair`): without this, every child process started while a simulator serves (a
+/// test's `botbench` run, any program a user starts from a host with a simulator) holds the
+/// simulator's pty open and looks like another reader of the port.
+#[cfg(unix)]
+#[allow(unsafe_code)]
+pub fn close_on_exec(fd: std::os::fd::RawFd) -> std::io::Result<()> {
+    // SAFETY: the caller passes a descriptor it owns and keeps open for this call; F_GETFD and
+    // F_SETFD read and set its descriptor flags only.
+    let flags = unsafe { libc::fcntl(fd, libc::F_GETFD) };
+    if flags < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    // SAFETY: as above.
+    if unsafe { libc::fcntl(fd, libc::F_SETFD, flags | libc::FD_CLOEXEC) } < 0 {
         return Err(std::io::Error::last_os_error());
     }
     Ok(())

@@ -71,6 +71,11 @@ impl PtyServer {
         };
         faults.check().map_err(open_err)?;
         let (master, slave) = TTYPort::pair().map_err(|e| open_err(e.to_string()))?;
+        for side in [&master, &slave] {
+            use std::os::fd::AsRawFd;
+            crate::link::serial::close_on_exec(side.as_raw_fd())
+                .map_err(|e| open_err(format!("close-on-exec: {e}")))?;
+        }
         let path = slave
             .name()
             .ok_or_else(|| open_err("the pseudo-terminal has no path".into()))?;

@@ -47,6 +47,7 @@ mod preset;
 mod profile_codec;
 mod profile_load;
 mod provision;
+mod readme;
 mod records;
 mod records_pg;
 mod repaint;
