@@ -248,6 +248,24 @@ fn list(head: &str, items: &[String]) -> String {
 }
 
 impl OpError {
+    /// A batch of `items` (of kind `what`, e.g. `commands`) cancelled before item `done`: the
+    /// first `done` were carried out, the rest were not, each said by `name`.
+    pub fn cancelled_after<T>(
+        items: &[T],
+        done: usize,
+        what: &'static str,
+        name: impl Fn(&T) -> String,
+    ) -> Self {
+        let done = done.min(items.len());
+        OpError::CancelledAfter {
+            done,
+            total: items.len(),
+            what,
+            done_items: items[..done].iter().map(&name).collect(),
+            not_done: items[done..].iter().map(&name).collect(),
+        }
+    }
+
     /// Whether the operator cancelled it ([`OpError::Cancelled`], [`OpError::CancelledAfter`]).
     pub fn is_cancel(&self) -> bool {
         matches!(self, OpError::Cancelled | OpError::CancelledAfter { .. })

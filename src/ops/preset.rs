@@ -90,13 +90,7 @@ pub fn apply_each(
     for (i, w) in writes.iter().enumerate() {
         if run.is_cancelled() {
             let name = |w: &crate::preset::SetWrite| w.command.clone();
-            return Err(OpError::CancelledAfter {
-                done: i,
-                total: writes.len(),
-                what: "commands",
-                done_items: writes[..i].iter().map(name).collect(),
-                not_done: writes[i..].iter().map(name).collect(),
-            });
+            return Err(OpError::cancelled_after(&writes, i, "commands", name));
         }
         let set = profile
             .command(&w.command)

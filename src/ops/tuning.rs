@@ -77,13 +77,7 @@ pub fn write_commands(
     };
     for (i, (set, inputs)) in writes.iter().enumerate() {
         if run.is_cancelled() {
-            return Err(OpError::CancelledAfter {
-                done: i,
-                total: writes.len(),
-                what: "commands",
-                done_items: writes[..i].iter().map(name).collect(),
-                not_done: writes[i..].iter().map(name).collect(),
-            });
+            return Err(OpError::cancelled_after(writes, i, "commands", name));
         }
         let Some(cmd) = profile.command_by_id(*set) else {
             continue;
