@@ -8,7 +8,6 @@ use super::Figure;
 use crate::ops::records::{Recorder, RunContext, SqliteStore};
 use crate::ops::station::{self, LoadContext, What};
 use crate::sim::SimKind;
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// The most a station run may take before the bench gives up on it.
@@ -54,16 +53,8 @@ fn run_slots(kind: SimKind, steps: &str, slots: usize) -> Result<(Vec<f64>, f64)
     };
     let bundle = station::load(&path, &cx).map_err(|e| e.to_string())?;
     let store = SqliteStore::open(&dir.path().join("records.sqlite")).map_err(|e| e.to_string())?;
-    let context = station::StationContext {
-        id: bundle.id.clone(),
-        bundle_sha256: bundle.sha256.clone(),
-        operator: None,
-        recorder: Arc::new(Mutex::new(Recorder::with_store(
-            Box::new(store),
-            RunContext::default(),
-            None,
-        ))),
-    };
+    let recorder = Recorder::with_store(Box::new(store), RunContext::default(), None);
+    let context = station::StationContext::new(&bundle, None, recorder);
     let (tx, rx) = crossbeam_channel::unbounded();
     let started = Instant::now();
     let mut handles = Vec::new();

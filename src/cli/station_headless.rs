@@ -41,12 +41,7 @@ pub(crate) fn start(
         ..RunContext::default()
     };
     let recorder = Recorder::open(&location, context).map_err(CliError::input)?;
-    let station_cx = station::StationContext {
-        id: bundle.id.clone(),
-        bundle_sha256: bundle.sha256.clone(),
-        operator,
-        recorder: Arc::new(Mutex::new(recorder)),
-    };
+    let station_cx = station::StationContext::new(bundle, operator, recorder);
     let (tx, rx) = crossbeam_channel::bounded::<Event>(1024);
     let mut slots = Vec::new();
     for slot in &bundle.slots {

@@ -13,7 +13,6 @@ use eframe::egui;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use std::path::Path;
-use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 /// The demo station's slots started, in a window of `size` showing `lang`.
@@ -40,16 +39,8 @@ fn window_of(
     };
     let bundle = station::load(path, &cx).unwrap();
     let store = SqliteStore::open(&dir.join("records.sqlite")).unwrap();
-    let context = station::StationContext {
-        id: bundle.id.clone(),
-        bundle_sha256: bundle.sha256.clone(),
-        operator: None,
-        recorder: Arc::new(Mutex::new(Recorder::with_store(
-            Box::new(store),
-            RunContext::default(),
-            None,
-        ))),
-    };
+    let recorder = Recorder::with_store(Box::new(store), RunContext::default(), None);
+    let context = station::StationContext::new(&bundle, None, recorder);
     let (tx, rx) = crossbeam_channel::unbounded();
     let mut slots = Vec::new();
     for slot in &bundle.slots {

@@ -89,12 +89,7 @@ fn an_unplugged_slot_says_link_lost_during_its_step_and_comes_back_under_the_sam
     let bundle = station::load(&bundle_path, &cx).unwrap();
     let store = SqliteStore::open(&dir.path().join("records.sqlite")).unwrap();
     let recorder = Recorder::with_store(Box::new(store), RunContext::default(), None);
-    let context = station::StationContext {
-        id: bundle.id.clone(),
-        bundle_sha256: bundle.sha256.clone(),
-        operator: None,
-        recorder: Arc::new(Mutex::new(recorder)),
-    };
+    let context = station::StationContext::new(&bundle, None, recorder);
     let (tx, rx) = crossbeam_channel::unbounded();
     let slot = bundle.slots[0].clone();
     let handle = station::spawn(

@@ -34,6 +34,19 @@ pub struct StationContext {
     pub recorder: Arc<Mutex<Recorder>>,
 }
 
+impl StationContext {
+    /// The context of `bundle`'s slots: its id and hash in every record, `operator` when known,
+    /// and `recorder` shared by the slots.
+    pub fn new(bundle: &super::load::Bundle, operator: Option<String>, recorder: Recorder) -> Self {
+        Self {
+            id: bundle.id.clone(),
+            bundle_sha256: bundle.sha256.clone(),
+            operator,
+            recorder: Arc::new(Mutex::new(recorder)),
+        }
+    }
+}
+
 /// A fixture's hands: what a simulated fixture does where the operator's would (the corner
 /// switches), and its next unit after a verdict. A real fixture's do nothing.
 pub trait Hands: Send {
