@@ -484,7 +484,10 @@ impl Operator for Console {
         let mut line = String::new();
         match super::console::read_line(&mut line) {
             Ok(0) | Err(_) => {
-                errln!("\nno operator (stdin closed): aborting; use --yes for unattended runs");
+                errln!(
+                    "\nbotbench: stdin is closed: no operator to press Enter, so the self-test \
+                     stops here; --yes runs it unattended"
+                );
                 false
             }
             Ok(_) => !line.trim().eq_ignore_ascii_case("q"),
