@@ -84,14 +84,9 @@ enum MspCmd {
 }
 
 fn command<'p>(profile: &'p Profile, name: &str) -> Result<&'p Command, CliError> {
-    profile.command(name).ok_or_else(|| {
-        CliError::input(format!(
-            "{} has no command '{}' (`botbench frame decode` and the profile list them; names \
-             such as MSP_GET_PWMVALUE, or numbers)",
-            profile.id,
-            crate::document::quote(name)
-        ))
-    })
+    profile
+        .command(name)
+        .ok_or_else(|| super::profiles::unknown_command(profile, name))
 }
 
 /// An `msp` subcommand with everything it was given checked, before the port is opened.

@@ -1,5 +1,6 @@
 //! The command line explains itself (issue 29, items 5-12): a command the device does not
-//! answer says so and checks first that the device is there; errors name commands by name.
+//! answer says so and checks first that the device is there; errors name commands by name;
+//! a profile can be looked at from the command line, and an unknown name gets the nearest ones.
 
 use crate::support::cli::Sim;
 
@@ -79,4 +80,82 @@ fn a_closed_stdin_at_the_self_tests_prompt_is_said_as_such() {
         ),
         "{ran:?}"
     );
+}
+
+#[test]
+fn profiles_show_lists_commands_fields_and_data_points() {
+    let ran = crate::support::cli::run(&["profiles", "show", "window-cleaner"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    let line = |needle: &str| {
+        ran.out
+            .lines()
+            .find(|l| l.contains(needle))
+            .unwrap_or_else(|| panic!("no line with {needle}: {}", ran.out))
+            .to_string()
+    };
+    let get = line("MSP_GET_PWMVALUE");
+    assert!(get.trim_start().starts_with("130"), "{get}");
+    assert!(
+        get.contains("Get") && get.contains("its Set: MSP_SET_PWMVALUE"),
+        "{get}"
+    );
+    let field = line("pwmValue");
+    assert!(
+        field.contains("U8") && field.contains("%"),
+        "type and unit: {field}"
+    );
+
+    let ran = crate::support::cli::run(&["profiles", "show", "tuya-vacuum", "--json"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    let doc = ran.json();
+    let dps = doc["data_points"].as_array().unwrap();
+    assert!(!dps.is_empty(), "{doc}");
+    let power = dps.iter().find(|d| d["dpid"] == 1).unwrap();
+    assert_eq!(power["type"], "Bool", "{power}");
+    assert!(doc["commands"].as_array().unwrap().len() > 3, "{doc}");
+
+    let ran = crate::support::cli::run(&["profiles", "show", "servo", "--json"]);
+    let doc = ran.json();
+    let params = doc["params"].as_array().unwrap();
+    assert!(
+        params.iter().any(|p| p["field"]["ident"] == "voltage"),
+        "{doc}"
+    );
+
+    let ran = crate::support::cli::run(&["profiles", "show", "no-such"]);
+    assert_eq!(ran.code, 2, "{ran:?}");
+    assert!(ran.err.contains("no profile 'no-such'"), "{ran:?}");
+}
+
+#[test]
+fn an_unknown_command_suggests_the_nearest_names_and_points_to_profiles_show() {
+    let ran = crate::support::cli::run(&[
+        "msp",
+        "--port",
+        "/nonexistent/botbench-tty",
+        "get",
+        "MSP_GET_PWMVALU",
+    ]);
+    assert_eq!(ran.code, 2, "{ran:?}");
+    assert!(
+        ran.err
+            .contains("has no command 'MSP_GET_PWMVALU'; did you mean MSP_GET_PWMVALUE?"),
+        "{ran:?}"
+    );
+    assert!(
+        ran.err
+            .contains("`botbench profiles show window-cleaner` lists its commands"),
+        "{ran:?}"
+    );
+    // A part of a name: every command holding it.
+    let ran = crate::support::cli::run(&["frame", "encode", "msp", "pwmvalue"]);
+    assert_eq!(ran.code, 2, "{ran:?}");
+    assert!(
+        ran.err
+            .contains("did you mean MSP_GET_PWMVALUE or MSP_SET_PWMVALUE?"),
+        "{ran:?}"
+    );
+    // Nothing near: no guess.
+    let ran = crate::support::cli::run(&["frame", "encode", "msp", "XYZZY_QUUX_FROB"]);
+    assert!(!ran.err.contains("did you mean"), "{ran:?}");
 }
