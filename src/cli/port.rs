@@ -2,7 +2,7 @@
 
 use super::{CliError, checks, registry};
 use crate::capture::{Capture, CaptureInfo};
-use crate::link::{ExchangeError, Link, LinkOptions, PortOpener};
+use crate::link::{DeviceInfo, ExchangeError, Link, LinkOptions, PortOpener};
 use crate::ops::{Check, OpError};
 use crate::profile::{Field, Profile, Protocol};
 use clap::Args;
@@ -124,16 +124,36 @@ impl PortArgs {
         Ok(profile)
     }
 
-    /// Opens the port with a profile already loaded.
-    pub fn open_with(&self, profile: Arc<Profile>, start_session: bool) -> Result<Link, CliError> {
-        let baud = self.baud.unwrap_or(profile.baud);
-        let options = LinkOptions {
+    /// The link's options: the margin given, no reconnect, the session started or not.
+    fn link_options(&self, start_session: bool) -> LinkOptions {
+        LinkOptions {
             margin: self.margin_ms.map(std::time::Duration::from_millis),
             reconnect: false,
             start_session,
             poll_pipeline: usize::from(self.poll_pipeline),
             ..LinkOptions::default()
-        };
+        }
+    }
+
+    /// Opens the port with `profile`, without a capture, and asks what the MSP device on it
+    /// says it is (CMD_VERSION, CMD_BUILD_INFO): the identification (`None` when the device
+    /// does not identify itself: silent, garbled) and the link, to be used on when `profile`
+    /// fits the device and nothing is captured, else closed before the command's own link is
+    /// opened with the profile that fits ([`Self::open_with`]). Errors: the port cannot be
+    /// opened (exit 2).
+    pub fn identify(&self, profile: Arc<Profile>) -> Result<(Option<DeviceInfo>, Link), CliError> {
+        let baud = self.baud.unwrap_or(profile.baud);
+        let opener = self.ports.open(self.path()?, baud);
+        let link = Link::open(opener, profile, self.link_options(true), None)
+            .map_err(|e| CliError::input(e.to_string()))?;
+        let info = link.client().device_info().ok();
+        Ok((info, link))
+    }
+
+    /// Opens the port with a profile already loaded.
+    pub fn open_with(&self, profile: Arc<Profile>, start_session: bool) -> Result<Link, CliError> {
+        let baud = self.baud.unwrap_or(profile.baud);
+        let options = self.link_options(start_session);
         let port = self.path()?;
         let mut opener = self.ports.open(port, baud);
         if let Some(path) = &self.capture {

@@ -159,3 +159,53 @@ fn an_unknown_command_suggests_the_nearest_names_and_points_to_profiles_show() {
     let ran = crate::support::cli::run(&["frame", "encode", "msp", "XYZZY_QUUX_FROB"]);
     assert!(!ran.err.contains("did you mean"), "{ran:?}");
 }
+
+#[test]
+fn msp_follows_the_device_it_meets_without_a_profile() {
+    let sim = Sim::start(&["solar-cleanbot"]);
+    // A solar name, and no --profile: the default window cleaner's names do not hold it, the
+    // device says it is 0x04, the solar profile takes it.
+    let ran = sim.cli("msp", &["get", "CMD_BATTERY_STATE"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    assert!(
+        ran.err.contains(
+            "botbench: the device identifies as hardware 0x04: using profile solar-cleanbot"
+        ),
+        "{ran:?}"
+    );
+    assert!(ran.out.contains("BATTERY_OK"), "{ran:?}");
+    let ran = sim.cli("msp", &["version"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    assert!(ran.err.contains("using profile solar-cleanbot"), "{ran:?}");
+
+    // The window cleaner is the default's own device: nothing said.
+    let wc = Sim::start(&["window-cleaner"]);
+    let ran = wc.cli("msp", &["get", "MSP_GET_PWMVALUE"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    assert!(!ran.err.contains("using profile"), "{ran:?}");
+
+    // A name no MSP profile has is refused before the port is opened.
+    let ran = crate::support::cli::run(&[
+        "msp",
+        "--port",
+        "/nonexistent/botbench-tty",
+        "get",
+        "CMD_BATTERY_STATEX",
+    ]);
+    assert_eq!(ran.code, 2, "{ran:?}");
+    assert!(!ran.err.contains("/nonexistent"), "{ran:?}");
+
+    // A board no profile claims: said with the profiles and their codes.
+    let odd = Sim::start(&["window-cleaner", "--hardware-code", "0x09"]);
+    let ran = odd.cli("msp", &["version"]);
+    assert_eq!(ran.code, 1, "{ran:?}");
+    assert!(
+        ran.err
+            .contains("the device identifies as hardware 0x09, which no profile claims"),
+        "{ran:?}"
+    );
+    assert!(
+        ran.err.contains("window-cleaner 0x03") && ran.err.contains("solar-cleanbot 0x04"),
+        "{ran:?}"
+    );
+}
