@@ -431,7 +431,26 @@ fn gui(
     if let Some(p) = &profile {
         registry()?.get(p).map_err(CliError::input)?;
     }
-    crate::ui::run(target, baud, profile, panel, screenshots, ports.clone())
-        .map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
+    if let Some(why) = crate::system::display::missing() {
+        return Err(no_display(why));
+    }
+    crate::ui::run(target, baud, profile, panel, screenshots, ports.clone()).map_err(|e| {
+        let e = e.to_string();
+        if crate::system::display::is_unreachable(&e) {
+            // The window system's own words name its source files: said in ours.
+            no_display("the display named could not be reached")
+        } else {
+            CliError::device(format!("cannot open the window: {e}"))
+        }
+    })?;
     Ok(0)
+}
+
+/// The window cannot be shown here (`why`): exit 2, a bad environment rather than a device
+/// failure, with where the command line is.
+fn no_display(why: &str) -> CliError {
+    CliError::input(format!(
+        "no display: the window needs X11 or Wayland; the command line works without one \
+         (botbench --help). Here {why}."
+    ))
 }

@@ -209,3 +209,26 @@ fn msp_follows_the_device_it_meets_without_a_profile() {
         "{ran:?}"
     );
 }
+
+#[test]
+fn without_a_display_the_window_says_so_and_exits_2() {
+    for args in [&[][..], &["gui", "--demo", "solar-cleanbot"][..]] {
+        let mut c = crate::support::cli::botbench(args);
+        c.env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .env_remove("WAYLAND_SOCKET");
+        let ran = crate::support::cli::output(&mut c);
+        assert_eq!(ran.code, 2, "{args:?}: {ran:?}");
+        assert!(
+            ran.err.starts_with(
+                "botbench: no display: the window needs X11 or Wayland; the command line works \
+                 without one (botbench --help)"
+            ),
+            "{args:?}: {ran:?}"
+        );
+        assert!(
+            !ran.err.contains(".cargo"),
+            "no dependency's source path: {ran:?}"
+        );
+    }
+}
