@@ -598,7 +598,12 @@ fn selftest_run(
         plan,
         given,
         &mut operator,
-        &mut Run::quiet(&cancel),
+        &mut Run::new(&cancel, |p: crate::ops::Progress| {
+            // The safe state is said as it is reached, before the first step's line.
+            if !json && p.message.en.starts_with(crate::ops::selftest::SAFE_STATE) {
+                outln!("{}", p.message.en);
+            }
+        }),
         &mut |r| {
             if !json {
                 outln!(
@@ -626,12 +631,6 @@ fn selftest_run(
         outln!("{}", serde_json::to_string(&report).unwrap_or_default());
     } else {
         let device = report.device.as_deref().unwrap_or("unknown device");
-        if !report.safe_state.is_empty() {
-            outln!(
-                "safe state before the first step: {}",
-                report.safe_state.join("; ")
-            );
-        }
         let failed: Vec<&str> = report.failed().map(|r| r.name.as_str()).collect();
         if report.pass {
             outln!("PASS: all {} steps passed ({device})", report.results.len());

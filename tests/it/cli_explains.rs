@@ -232,3 +232,100 @@ fn without_a_display_the_window_says_so_and_exits_2() {
         );
     }
 }
+
+#[test]
+fn a_capture_is_not_written_over_unless_forced() {
+    let dir = crate::support::temp_dir();
+    let file = dir.path().join("session.pcapng");
+    let file = file.to_str().unwrap();
+    let sim = Sim::start(&["window-cleaner"]);
+    let ran = sim.cli("msp", &["--capture", file, "version"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    let first = std::fs::read(file).unwrap();
+    let ran = sim.cli("msp", &["--capture", file, "ping"]);
+    assert_eq!(ran.code, 2, "{ran:?}");
+    assert!(
+        ran.err.contains("the file exists; --force writes over it"),
+        "{ran:?}"
+    );
+    assert_eq!(
+        std::fs::read(file).unwrap(),
+        first,
+        "the earlier capture is kept"
+    );
+    let ran = sim.cli("msp", &["--capture", file, "--force", "ping"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    assert_ne!(
+        std::fs::read(file).unwrap(),
+        first,
+        "written over when forced"
+    );
+}
+
+#[test]
+fn the_self_test_says_its_safe_state_before_the_first_step() {
+    let sim = Sim::start(&["window-cleaner"]);
+    let ran = sim.cli(
+        "msp",
+        &["selftest", "presets/window-cleaner-selftest.ron", "--yes"],
+    );
+    let lines: Vec<&str> = ran.out.lines().collect();
+    let safe = lines
+        .iter()
+        .position(|l| l.starts_with("safe state before the first step: "))
+        .unwrap_or_else(|| panic!("no safe state line: {ran:?}"));
+    let first_step = lines
+        .iter()
+        .position(|l| l.starts_with("PASS ") || l.starts_with("FAIL "))
+        .unwrap_or_else(|| panic!("no step line: {ran:?}"));
+    assert!(safe < first_step, "{ran:?}");
+}
+
+#[test]
+fn tuya_status_columns_stay_aligned_for_long_names() {
+    let sim = Sim::start(&[
+        "tuya-vacuum",
+        "--report-unknown-dp",
+        "99:value:50",
+        "--report-unknown-dp",
+        "101:bool:1",
+    ]);
+    let ran = sim.cli("tuya", &["status"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    let column = |needle: &str, value: &str| {
+        let line = ran.out.lines().find(|l| l.contains(needle)).unwrap();
+        line.find(value).unwrap_or_else(|| panic!("{line}"))
+    };
+    assert_eq!(
+        column("dp 99 (not", "value 50"),
+        column("dp 101 (not", "bool 1"),
+        "{}",
+        ran.out
+    );
+    let lines: Vec<&str> = ran
+        .out
+        .lines()
+        .take_while(|l| !l.starts_with("not in"))
+        .collect();
+    let starts: std::collections::BTreeSet<usize> = lines
+        .iter()
+        .filter(|l| l.contains(") "))
+        .filter_map(|l| {
+            l.find(") ")
+                .map(|i| i + 2 + l[i + 2..].len() - l[i + 2..].trim_start().len())
+        })
+        .collect();
+    assert_eq!(starts.len(), 1, "one column of values: {}", ran.out);
+}
+
+#[test]
+fn bench_says_times_in_ms_and_speed_as_a_share_of_the_wire_limit() {
+    let ran = crate::support::cli::run(&["bench", "--only", "tuya-handshake"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    for line in ran.out.lines() {
+        assert!(line.contains(" ms  wire "), "{line}");
+        assert!(line.contains(" of the wire limit "), "{line}");
+        assert!(!line.contains(" s ") && !line.contains("ratio"), "{line}");
+    }
+    assert!(ran.out.lines().count() >= 2, "{ran:?}");
+}
