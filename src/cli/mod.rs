@@ -61,7 +61,16 @@ pub type CliResult = Result<u8, CliError>;
 
 /// botbench: tune, provision and test serial-connected robots.
 #[derive(Debug, Parser)]
-#[command(name = "botbench", version = crate::VERSION, about, long_about = None)]
+#[command(
+    name = "botbench",
+    version = crate::VERSION,
+    about,
+    long_about = None,
+    after_help = "Environment: BOTBENCH_PORT is the --port of the device commands (msp, servo, \
+                  tuya, preset) when none is given; BOTBENCH_PROFILE_DIR holds your own profiles; \
+                  BOTBENCH_RECORDS the records' file. `botbench completions bash` and `botbench \
+                  manpage` print shell completions and the manual page."
+)]
 pub struct Cli {
     #[command(subcommand)]
     command: Option<Cmd>,
@@ -157,6 +166,15 @@ enum Cmd {
     /// Yield per shift, station, slot and plan; failing steps; each measurement's histogram,
     /// Cpk and drift (--html FILE for one self-contained page).
     Report(report::ReportArgs),
+    /// Print a completion script for SHELL: bash, zsh, fish or powershell (e.g. `botbench
+    /// completions bash > ~/.local/share/bash-completion/completions/botbench`; the .deb
+    /// installs bash's, zsh's and fish's).
+    Completions {
+        /// bash, zsh, fish, powershell or elvish.
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff, for `man -l -`; the .deb installs it as botbench(1)).
+    Manpage,
 }
 
 /// Runs the command line with the process's arguments; `--port` is opened with `ports` (the
@@ -302,6 +320,8 @@ fn run(cli: Cli, opener: &PortOpener) -> CliResult {
         Some(Cmd::Report(args)) => report::run(args),
         Some(Cmd::Station(args)) => station::run(args, opener),
         Some(Cmd::Sim(args)) => sim::run(args),
+        Some(Cmd::Completions { shell }) => completions(shell),
+        Some(Cmd::Manpage) => manpage(),
         Some(Cmd::Gui {
             port,
             baud,
@@ -402,6 +422,29 @@ fn bench(long: bool, field: bool, json: bool, only: Option<&str>) -> CliResult {
         );
         Ok(1)
     }
+}
+
+/// `botbench completions SHELL`: the completion script on stdout.
+fn completions(shell: clap_complete::Shell) -> CliResult {
+    let mut script = Vec::new();
+    clap_complete::generate(
+        shell,
+        &mut <Cli as clap::CommandFactory>::command(),
+        "botbench",
+        &mut script,
+    );
+    out!("{}", String::from_utf8_lossy(&script));
+    Ok(0)
+}
+
+/// `botbench manpage`: botbench(1) in roff on stdout.
+fn manpage() -> CliResult {
+    let mut page = Vec::new();
+    clap_mangen::Man::new(<Cli as clap::CommandFactory>::command())
+        .render(&mut page)
+        .map_err(|e| CliError::device(format!("cannot render the manual page: {e}")))?;
+    out!("{}", String::from_utf8_lossy(&page));
+    Ok(0)
 }
 
 /// A panel by its name, as in the saved settings.

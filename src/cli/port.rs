@@ -12,8 +12,10 @@ use std::sync::Arc;
 /// (`botbench servo --port P scan` and `botbench servo scan --port P` are the same).
 #[derive(Debug, Args)]
 pub(crate) struct PortArgs {
-    /// The serial port (e.g. /dev/ttyUSB0, or a /dev/pts path from `botbench sim`). Required.
-    #[arg(long, short, global = true, value_parser = checks::port_path)]
+    /// The serial port (e.g. /dev/ttyUSB0, or a /dev/pts path from `botbench sim`). Required,
+    /// unless BOTBENCH_PORT names one (the bench's usual port: `export
+    /// BOTBENCH_PORT=/dev/ttyUSB0`).
+    #[arg(long, short, global = true, env = "BOTBENCH_PORT", value_parser = checks::port_path)]
     pub port: Option<String>,
     /// Baud rate, 300 to 4000000 (default: the profile's).
     #[arg(long, short, global = true, value_parser = checks::baud)]
@@ -103,7 +105,8 @@ impl PortArgs {
         self.port.as_deref().ok_or_else(|| {
             CliError::input(
                 "no port given: add --port PORT (e.g. /dev/ttyUSB0, or the /dev/pts path \
-                 `botbench sim` prints; `botbench ports` lists this machine's ports)",
+                 `botbench sim` prints; `botbench ports` lists this machine's ports), or set \
+                 BOTBENCH_PORT",
             )
         })
     }

@@ -329,3 +329,35 @@ fn bench_says_times_in_ms_and_speed_as_a_share_of_the_wire_limit() {
     }
     assert!(ran.out.lines().count() >= 2, "{ran:?}");
 }
+
+#[test]
+fn completions_manpage_and_a_default_port_from_botbench_port() {
+    for shell in ["bash", "zsh", "fish", "powershell"] {
+        let ran = crate::support::cli::run(&["completions", shell]);
+        assert_eq!(ran.code, 0, "{shell}: {ran:?}");
+        assert!(ran.out.contains("botbench"), "{shell}: {ran:?}");
+        assert!(
+            ran.out.contains("profiles"),
+            "{shell}: subcommands: {ran:?}"
+        );
+    }
+    let ran = crate::support::cli::run(&["manpage"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    assert!(
+        ran.out.starts_with(".ie") || ran.out.contains(".TH botbench"),
+        "{ran:?}"
+    );
+    let ran = crate::support::cli::run(&["--help"]);
+    assert!(ran.out.contains("BOTBENCH_PORT"), "said in --help: {ran:?}");
+
+    // The port from the environment (a child process: the variable is its own).
+    let sim = crate::support::cli::SimProcess::start(&["window-cleaner"]);
+    let mut c = crate::support::cli::botbench(["msp", "ping"]);
+    c.env("BOTBENCH_PORT", &sim.path);
+    let ran = crate::support::cli::output(&mut c);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    assert!(ran.out.contains("answered in"), "{ran:?}");
+    let ran = crate::support::cli::run(&["msp", "ping"]);
+    assert_eq!(ran.code, 2, "{ran:?}");
+    assert!(ran.err.contains("or set BOTBENCH_PORT"), "{ran:?}");
+}
