@@ -68,9 +68,8 @@ pub(crate) fn run(args: StationArgs, opener: &crate::link::PortOpener) -> CliRes
             if args.headless {
                 super::station_headless::run(&bundle, &args, opener)
             } else {
-                let (slots, events) =
-                    super::station_headless::start(&bundle, &args, opener, false)?;
-                crate::ui::line::run(&bundle, slots, events)
+                let started = super::station_headless::start(&bundle, &args, opener, false)?;
+                crate::ui::line::run(&bundle, started)
                     .map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
                 Ok(0)
             }

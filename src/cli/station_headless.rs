@@ -15,19 +15,20 @@ use super::station::StationArgs;
 use super::{CliError, CliResult};
 use crate::link::PortOpener;
 use crate::ops::records::{Recorder, RunContext};
-use crate::ops::station::{self, Answer, Bundle, Command, Event, SlotHandle, What};
+use crate::ops::station::{Answer, Bundle, Command, Event, SlotHandle, What};
+use crate::sim::fixture::StartedStation;
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 
-/// Starts every slot of `bundle` (a simulated slot on its own [`crate::sim::SimFixture`], the
-/// others on `ports`), recording where `--records`, else the bundle, says; the slots' handles
-/// and their events. With `once`, each slot ends after one unit.
+/// Starts every slot of `bundle` ([`crate::sim::fixture::start_station`]), recording where
+/// `--records`, else the bundle, says, as the operator `--operator` or `BOTBENCH_OPERATOR`.
+/// With `once`, each slot ends after one unit.
 pub(crate) fn start(
     bundle: &Bundle,
     args: &StationArgs,
     ports: &PortOpener,
     once: bool,
-) -> Result<(Vec<SlotHandle>, crossbeam_channel::Receiver<Event>), CliError> {
+) -> Result<StartedStation, CliError> {
     let records = args.records.as_deref().or(bundle.records.as_deref());
     let location = super::records::location(records)?;
     let operator = args
@@ -41,20 +42,16 @@ pub(crate) fn start(
         ..RunContext::default()
     };
     let recorder = Recorder::open(&location, context).map_err(CliError::input)?;
-    let station_cx = station::StationContext::new(bundle, operator, recorder);
-    let (tx, rx) = crossbeam_channel::bounded::<Event>(1024);
-    let mut slots = Vec::new();
-    for slot in &bundle.slots {
-        let handle =
-            crate::sim::fixture::start_slot(slot, station_cx.clone(), ports, tx.clone(), once)
-                .map_err(CliError::device)?;
-        slots.push(handle);
-    }
-    Ok((slots, rx))
+    crate::sim::fixture::start_station(bundle, recorder, operator, ports, once)
+        .map_err(CliError::device)
 }
 
 pub(crate) fn run(bundle: &Bundle, args: &StationArgs, ports: &PortOpener) -> CliResult {
-    let (slots, rx) = start(bundle, args, ports, args.once)?;
+    let StartedStation {
+        slots,
+        events: rx,
+        forwarder,
+    } = start(bundle, args, ports, args.once)?;
     say_start(bundle, args.json);
     let slots = Arc::new(slots);
     let routing: Arc<Mutex<Routing>> = Arc::default();
@@ -78,6 +75,7 @@ pub(crate) fn run(bundle: &Bundle, args: &StationArgs, ports: &PortOpener) -> Cl
         }
         print_event(&ev, args.json);
     }
+    forwarder.stop();
     let verdicts = passed + failed;
     if !args.json {
         outln!("{passed} PASS, {failed} FAIL");
@@ -170,12 +168,15 @@ fn print_event(ev: &Event, json: bool) {
             of,
             name,
             attempt,
+            ..
         } => {
             let retry = if *attempt > 1 { " (retry)" } else { "" };
             outln!("slot {s}: step {index}/{of} {name}{retry}")
         }
         What::Ask { kind, text, .. } => outln!("slot {s}: {kind}? {text}"),
-        What::StepDone { name, pass, detail } => outln!(
+        What::StepDone {
+            name, pass, detail, ..
+        } => outln!(
             "slot {s}: {name}: {} {detail}",
             if *pass { "PASS" } else { "FAIL" }
         ),
@@ -204,6 +205,17 @@ fn print_event(ev: &Event, json: bool) {
             outln!("slot {s}: {kept}");
         }
         What::Stopped { why } => outln!("slot {s}: stopped: {why}"),
+        What::Records {
+            waiting: 0, store, ..
+        } => outln!("records: none waiting, every record is in {store}"),
+        What::Records {
+            waiting,
+            store,
+            why,
+        } => outln!(
+            "records: {waiting} waiting to be forwarded to {store}: {}",
+            why.as_deref().unwrap_or("not yet sent")
+        ),
     }
 }
 

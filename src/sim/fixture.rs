@@ -173,3 +173,48 @@ pub fn start_slot(
     station::spawn(slot.clone(), context, opener, hands, events, once)
         .map_err(|e| format!("slot {}: cannot start its thread: {e}", slot.name))
 }
+
+/// A station started: its slots, their events (on one channel), and the forwarder of the
+/// records that wait in a spool.
+pub struct StartedStation {
+    /// The slots' handles, in the bundle's order.
+    pub slots: Vec<crate::ops::station::SlotHandle>,
+    /// Every slot's events, and the forwarder's.
+    pub events: crossbeam_channel::Receiver<crate::ops::station::Event>,
+    /// Sends the records that wait on to their store; stops when dropped.
+    pub forwarder: crate::ops::station::Forwarder,
+}
+
+/// Starts every slot of `bundle` ([`start_slot`]: simulated slots on fixtures of their own,
+/// the others on `ports`), recording through `recorder` (its store, its context), and the
+/// forwarder of waiting records. With `once`, each slot ends after one unit. Errors: a slot
+/// that cannot be started (said with its name), the forwarder's thread.
+pub fn start_station(
+    bundle: &crate::ops::station::Bundle,
+    recorder: crate::ops::records::Recorder,
+    operator: Option<String>,
+    ports: &crate::link::PortOpener,
+    once: bool,
+) -> Result<StartedStation, String> {
+    use crate::ops::station::{Event, Forwarder, StationContext};
+    let context = StationContext::new(bundle, operator, recorder);
+    let (tx, rx) = crossbeam_channel::bounded::<Event>(1024);
+    let mut slots = Vec::new();
+    for slot in &bundle.slots {
+        match start_slot(slot, context.clone(), ports, tx.clone(), once) {
+            Ok(handle) => slots.push(handle),
+            Err(e) => {
+                // The slots already running stop: a station starts whole or not at all.
+                slots.iter().for_each(|s| s.cancel.cancel());
+                return Err(e);
+            }
+        }
+    }
+    let forwarder = Forwarder::spawn(&context, tx)
+        .map_err(|e| format!("the station's records forwarder cannot start: {e}"))?;
+    Ok(StartedStation {
+        slots,
+        events: rx,
+        forwarder,
+    })
+}

@@ -98,6 +98,35 @@ fn the_demo_station_runs_headless_to_three_verdicts_with_no_hardware() {
             .starts_with("record saved to"),
         "{servo}"
     );
+    // Steps named for people, in both languages, as the records keep them.
+    let names: Vec<(&str, &str)> = docs
+        .iter()
+        .filter(|d| d["event"] == "step")
+        .map(|d| (d["name"].as_str().unwrap(), d["name_zh"].as_str().unwrap()))
+        .collect();
+    for want in [
+        (
+            "Self-test (window-cleaner-selftest)",
+            "自检(window-cleaner-selftest)",
+        ),
+        (
+            "Provision (servo-provision-plan)",
+            "舵机配置(servo-provision-plan)",
+        ),
+        ("Tuya handshake", "涂鸦握手"),
+        ("Write result", "写入测试结果"),
+    ] {
+        assert!(names.contains(&want), "{want:?} not in {names:?}");
+    }
+    let db = rusqlite::Connection::open(&records).unwrap();
+    let recorded: i64 = db
+        .query_row(
+            "SELECT COUNT(*) FROM steps WHERE name = 'Write result'",
+            [],
+            |r| r.get(0),
+        )
+        .unwrap();
+    assert_eq!(recorded, 1);
 }
 
 /// A bundle of three slots on the simulators' ptys, with a short self-test plan (no operator
@@ -191,7 +220,7 @@ fn three_slots_on_ptys_run_headless_to_their_verdicts() {
         .collect();
     assert!(
         done.iter()
-            .any(|d| d["name"] == "WriteResult" && d["pass"] == true),
+            .any(|d| d["name"] == "Write result" && d["pass"] == true),
         "{}",
         ran.text()
     );
@@ -228,7 +257,7 @@ fn an_operator_no_fails_the_unit_and_the_robot_is_told_it_failed() {
     // WriteResult still ran after the failure: 0 written, read back 0.
     let write = docs
         .iter()
-        .find(|d| d["event"] == "step-done" && d["name"] == "WriteResult")
+        .find(|d| d["event"] == "step-done" && d["name"] == "Write result")
         .expect("WriteResult ran after the failure");
     assert_eq!(write["pass"], true, "{write}");
     assert_eq!(auto_test_result(&wc), 0);
@@ -246,7 +275,7 @@ fn a_scan_that_does_not_match_the_plan_s_pattern_fails_before_the_robot_is_touch
         .iter()
         .find(|d| d["event"] == "verdict" && d["slot"] == "1")
         .unwrap();
-    assert_eq!(v["failed_step"], "Scan", "{v}");
+    assert_eq!(v["failed_step"], "Scan serial", "{v}");
     assert_eq!(v["reason"], "serial does not match the pattern", "{v}");
     // Nothing after the scan ran but the result written into the robot.
     let ran_after: Vec<&str> = docs
@@ -254,7 +283,7 @@ fn a_scan_that_does_not_match_the_plan_s_pattern_fails_before_the_robot_is_touch
         .filter(|d| d["event"] == "step" && d["slot"] == "1")
         .map(|d| d["name"].as_str().unwrap())
         .collect();
-    assert_eq!(ran_after, ["Scan", "WriteResult"], "{}", ran.text());
+    assert_eq!(ran_after, ["Scan serial", "Write result"], "{}", ran.text());
 }
 
 /// Runs a one-slot station of a simulated window cleaner with `plan` (RON steps and options),

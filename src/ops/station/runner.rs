@@ -392,6 +392,7 @@ impl SlotRunner {
                     index: i + 1,
                     of,
                     name: step.name.clone(),
+                    name_zh: step.name_zh.clone(),
                     attempt,
                 });
                 let done = run_step(u, &step.name, &step.op, &mut SlotDesk { runner: self });
@@ -402,6 +403,7 @@ impl SlotRunner {
                     .unwrap_or_default();
                 self.tell(What::StepDone {
                     name: step.name.clone(),
+                    name_zh: step.name_zh.clone(),
                     pass: done.failure.is_none(),
                     detail: match &done.failure {
                         Some(reason) if seen.is_empty() || &seen == reason => reason.clone(),
@@ -450,7 +452,7 @@ impl SlotRunner {
     /// Keeps `record` (before the verdict is said) and says the verdict with the unit's
     /// earlier runs.
     fn keep(&mut self, record: &mut Record) {
-        let (kept, earlier) = {
+        let (kept, earlier, waiting) = {
             let mut recorder = self
                 .station
                 .recorder
@@ -464,17 +466,32 @@ impl SlotRunner {
                 });
                 found.map(|h| h.runs as i64)
             });
-            (recorder.save(record), earlier)
+            let kept = recorder.save(record);
+            if !kept.stored() {
+                log::warn!("slot {}: {}", self.slot.name, kept.line());
+            }
+            let waiting = super::forward::waiting(&mut recorder, &kept);
+            (kept, earlier, waiting)
         };
         self.tell(What::Verdict {
             pass: record.verdict == Verdict::Pass,
             serial: record.unit.serial.clone(),
             failed_step: record.failed_step.clone(),
+            failed_step_zh: record.failed_step.as_ref().and_then(|f| {
+                self.slot
+                    .plan
+                    .steps
+                    .iter()
+                    .find(|s| &s.name == f)
+                    .map(|s| s.name_zh.clone())
+            }),
             reason: record.reason.clone(),
             earlier_runs: earlier,
             record: record.uuid.clone(),
             kept: kept.line(),
+            stored: kept.stored(),
         });
+        self.tell(waiting);
     }
 }
 

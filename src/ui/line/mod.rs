@@ -12,7 +12,7 @@ mod tile;
 
 pub use engineer::Engineer;
 
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Text};
 use crate::ops::station::{Answer, Command, Event, SlotHandle, What};
 use crossbeam_channel::Receiver;
 use eframe::egui;
@@ -34,12 +34,12 @@ pub struct TileState {
     pub waiting: Option<&'static str>,
     /// The unit's serial, when known.
     pub serial: Option<String>,
-    /// The step running: index (1-based), of, name.
-    pub step: Option<(usize, usize, String)>,
+    /// The step running: index (1-based), of, name in both languages.
+    pub step: Option<(usize, usize, Text)>,
     /// The question waiting: kind and text in both languages.
     pub asking: Option<(&'static str, String, String)>,
-    /// The last verdict: pass, failed step, reason.
-    pub verdict: Option<(bool, Option<String>, Option<String>)>,
+    /// The last verdict: pass, failed step (both languages), reason.
+    pub verdict: Option<(bool, Option<Text>, Option<String>)>,
     /// Recent verdicts, newest first: (pass, serial or `unit`).
     pub history: VecDeque<(bool, String)>,
     /// What the operator types into the answer field.
@@ -48,6 +48,9 @@ pub struct TileState {
     pub stopped: Option<String>,
     /// How many runs the records held of this unit before its last run.
     pub earlier_runs: Option<i64>,
+    /// Where the last record went when it did not reach its store (spool or memory, and
+    /// why); `None` when it was stored.
+    pub kept_elsewhere: Option<String>,
     /// The slot's configuration, shown in the engineer view: port, profile, plan and steps.
     pub details: String,
 }
@@ -64,8 +67,22 @@ pub struct LineStation {
     pub tiles: Vec<TileState>,
     /// The engineer's unlock.
     pub engineer: Engineer,
+    /// The records waiting in a spool: how many, the store, why (from [`What::Records`]).
+    pub records: Option<RecordsWaiting>,
     slots: Vec<SlotHandle>,
     events: Receiver<Event>,
+    forwarder: Option<crate::ops::station::Forwarder>,
+}
+
+/// The station's records not yet in their store.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordsWaiting {
+    /// How many wait (0: none).
+    pub waiting: u64,
+    /// The store (file or server).
+    pub store: String,
+    /// Why they wait.
+    pub why: Option<String>,
 }
 
 impl LineStation {
@@ -100,9 +117,21 @@ impl LineStation {
                 password_sha256: bundle.engineer_password_sha256.clone(),
                 ..Engineer::default()
             },
+            records: None,
             slots,
             events,
+            forwarder: None,
         }
+    }
+
+    /// The window over a started station (its slots, events and records forwarder).
+    pub fn started(
+        bundle: &crate::ops::station::Bundle,
+        started: crate::sim::fixture::StartedStation,
+    ) -> Self {
+        let mut st = Self::new(bundle, started.slots, started.events);
+        st.forwarder = Some(started.forwarder);
+        st
     }
 
     /// Takes every event waiting; asks for the next frame soon while slots run.
@@ -114,6 +143,19 @@ impl LineStation {
     }
 
     fn on_event(&mut self, ev: Event) {
+        if let What::Records {
+            waiting,
+            store,
+            why,
+        } = ev.what
+        {
+            self.records = Some(RecordsWaiting {
+                waiting,
+                store,
+                why,
+            });
+            return;
+        }
         let Some(t) = self.tiles.iter_mut().find(|t| t.slot == ev.slot) else {
             return;
         };
@@ -130,8 +172,12 @@ impl LineStation {
                 t.step = None;
             }
             What::Step {
-                index, of, name, ..
-            } => t.step = Some((index, of, name)),
+                index,
+                of,
+                name,
+                name_zh,
+                ..
+            } => t.step = Some((index, of, Text::new(name, name_zh))),
             What::Ask {
                 kind,
                 text,
@@ -142,13 +188,21 @@ impl LineStation {
                 pass,
                 serial,
                 failed_step,
+                failed_step_zh,
                 reason,
                 earlier_runs,
+                kept,
+                stored,
                 ..
             } => {
                 t.asking = None;
+                t.kept_elsewhere = (!stored).then_some(kept);
                 t.earlier_runs = earlier_runs;
                 t.serial.clone_from(&serial);
+                let failed_step = failed_step.map(|en| {
+                    let zh = failed_step_zh.unwrap_or_else(|| en.clone());
+                    Text::new(en, zh)
+                });
                 t.verdict = Some((pass, failed_step, reason));
                 t.history
                     .push_front((pass, serial.unwrap_or_else(|| "unit".into())));
@@ -158,6 +212,7 @@ impl LineStation {
                 t.asking = None;
                 t.stopped = Some(why);
             }
+            What::Records { .. } => {}
         }
     }
 
@@ -197,6 +252,31 @@ impl LineStation {
         }
     }
 
+    /// The header's records line, while any wait: how many, where to, and why, in red.
+    fn records_line(&self, ui: &mut egui::Ui, zh: bool) {
+        let Some(r) = self.records.as_ref().filter(|r| r.waiting > 0) else {
+            return;
+        };
+        let why = r.why.as_deref().unwrap_or_default();
+        let text = if zh {
+            format!(
+                "记录:{} 条在本机暂存,等待发送到 {}:{why}",
+                r.waiting, r.store
+            )
+        } else {
+            format!(
+                "Records: {} waiting on this PC to be forwarded to {}: {why}",
+                r.waiting, r.store
+            )
+        };
+        ui.label(
+            egui::RichText::new(text)
+                .size(18.0)
+                .strong()
+                .color(egui::Color32::from_rgb(200, 30, 30)),
+        );
+    }
+
     /// Draws the station: the title bar with STOP ALL, then the tiles.
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         self.keys(ui.ctx());
@@ -229,6 +309,7 @@ impl LineStation {
                 }
                 self.engineer.show(ui, &self.id, zh);
             });
+            self.records_line(ui, zh);
         });
         egui::CentralPanel::default().show(ui, |ui| {
             let n = self.tiles.len().max(1);
@@ -257,14 +338,13 @@ impl LineStation {
     }
 }
 
-/// Opens the station window over running slots; returns when it is closed (every slot is
-/// stopped then). Errors: the window could not be opened.
+/// Opens the station window over a started station; returns when it is closed (every slot
+/// is stopped then). Errors: the window could not be opened.
 pub fn run(
     bundle: &crate::ops::station::Bundle,
-    slots: Vec<SlotHandle>,
-    events: Receiver<Event>,
+    started: crate::sim::fixture::StartedStation,
 ) -> Result<(), String> {
-    let station = LineStation::new(bundle, slots, events);
+    let station = LineStation::started(bundle, started);
     // `BOTBENCH_WINDOW_SIZE=1024x600`: the window's size where no window manager maximises it
     // (the screenshots under Xvfb).
     let size = std::env::var("BOTBENCH_WINDOW_SIZE")
