@@ -181,3 +181,185 @@ fn the_station_window_shows_the_records_waiting_in_its_header_and_on_the_tiles()
     assert!(h.query_by_label_contains("记录:3 条在本机暂存").is_some());
     h.state().stop_all();
 }
+
+/// A tmpfs of `kib` KiB mounted at a fresh folder (root only), unmounted when dropped.
+struct TinyDisk {
+    dir: tempfile::TempDir,
+}
+
+impl TinyDisk {
+    /// `None` (said on the terminal) where this process may not mount.
+    fn mount(kib: u64, test: &str) -> Option<TinyDisk> {
+        let dir = crate::support::temp_dir();
+        let ok = std::process::Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={kib}k"), "tmpfs"])
+            .arg(dir.path())
+            .stderr(std::process::Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+        if !ok {
+            use std::io::Write;
+            let _ = writeln!(
+                std::io::stderr(),
+                "SKIPPED {test}: cannot mount a tiny tmpfs here (needs root)"
+            );
+            return None;
+        }
+        Some(TinyDisk { dir })
+    }
+
+    fn path(&self) -> &Path {
+        self.dir.path()
+    }
+
+    /// Fills it to the last byte.
+    fn fill(&self) {
+        use std::io::Write;
+        let mut f = std::fs::File::create(self.path().join("filler")).unwrap();
+        let block = vec![0u8; 4096];
+        loop {
+            match f.write(&block) {
+                Ok(0) => break,
+                Ok(_) => {}
+                Err(e) if e.raw_os_error() == Some(28) => break,
+                Err(e) => panic!("filling: {e}"),
+            }
+        }
+        let _ = f.sync_all();
+    }
+
+    /// Room again.
+    fn free(&self) {
+        std::fs::remove_file(self.path().join("filler")).unwrap();
+    }
+}
+
+impl Drop for TinyDisk {
+    fn drop(&mut self) {
+        let _ = std::process::Command::new("umount")
+            .arg("-l")
+            .arg(self.dir.path())
+            .status();
+    }
+}
+
+#[test]
+fn a_records_file_on_a_full_disk_says_so_naming_it_and_every_verdict_and_record_is_kept() {
+    let Some(disk) = TinyDisk::mount(512, "a_records_file_on_a_full_disk") else {
+        return;
+    };
+    let records = disk.path().join("records.sqlite");
+    let mut store = botbench::ops::records::SqliteStore::open(&records).unwrap();
+    // Nothing of the write-ahead log is left to reuse: every record needs new room on the disk.
+    store
+        .connection()
+        .execute_batch("PRAGMA wal_checkpoint(TRUNCATE)")
+        .unwrap();
+    disk.fill();
+    let elsewhere = crate::support::temp_dir();
+    let fallback = elsewhere.path().join("unsaved.sqlite");
+    let recorder = Recorder::with_store(
+        Box::new(store),
+        RunContext::default(),
+        Some(fallback.clone()),
+    );
+    let bundle = demo_bundle();
+    let started = start_station(&bundle, recorder, None, &PortOpener::system(), true).unwrap();
+    let events = run_to_the_end(&started);
+    // Every verdict said (PASS), its record not in the full file but in the fallback spool,
+    // the file named and the disk said full.
+    let mut verdicts = 0;
+    for e in &events {
+        if let What::Verdict {
+            pass, stored, kept, ..
+        } = &e.what
+        {
+            verdicts += 1;
+            assert!(*pass && !*stored, "{e:?}");
+            assert!(
+                kept.contains(&format!("{}: the disk is full", records.display()))
+                    && kept.contains("unsaved.sqlite"),
+                "{kept}"
+            );
+        }
+    }
+    assert_eq!(verdicts, 3, "{events:#?}");
+    let fallback_runs = || {
+        rusqlite::Connection::open(&fallback)
+            .unwrap()
+            .query_row("SELECT COUNT(*) FROM runs", [], |r| r.get::<_, i64>(0))
+            .unwrap()
+    };
+    assert_eq!(fallback_runs(), 3);
+    // Room again: the station's forwarder moves them into the records file, each once.
+    disk.free();
+    let deadline = Instant::now() + PATIENCE;
+    loop {
+        assert!(Instant::now() < deadline, "never forwarded");
+        match started
+            .events
+            .recv_timeout(std::time::Duration::from_millis(200))
+        {
+            Ok(Event {
+                what: What::Records { waiting: 0, .. },
+                slot,
+            }) if slot.is_empty() => break,
+            _ => {}
+        }
+    }
+    started.forwarder.stop();
+    let db = rusqlite::Connection::open(&records).unwrap();
+    let (runs, distinct, half): (i64, i64, i64) = db
+        .query_row(
+            "SELECT COUNT(*), COUNT(DISTINCT uuid), \
+             SUM(steps <> (SELECT COUNT(*) FROM steps s WHERE s.run = r.id)) FROM runs r",
+            [],
+            |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)),
+        )
+        .unwrap();
+    assert_eq!((runs, distinct, half), (3, 3, 0));
+    assert_eq!(fallback_runs(), 0);
+}
+
+#[test]
+fn with_the_fallback_spool_on_the_same_full_disk_the_record_is_kept_in_memory_and_said_whole() {
+    let Some(disk) = TinyDisk::mount(512, "with_the_fallback_spool_on_the_same_full_disk") else {
+        return;
+    };
+    let records = disk.path().join("records.sqlite");
+    let mut store = botbench::ops::records::SqliteStore::open(&records).unwrap();
+    store
+        .connection()
+        .execute_batch("PRAGMA wal_checkpoint(TRUNCATE)")
+        .unwrap();
+    disk.fill();
+    let fallback = disk.path().join("unsaved.sqlite");
+    let mut recorder = Recorder::with_store(Box::new(store), RunContext::default(), Some(fallback));
+    let mut record = crate::records::hand_set().remove(0);
+    let kept = recorder.save(&mut record);
+    let line = kept.line();
+    match &kept {
+        botbench::ops::records::Kept::InMemory { json, .. } => {
+            // The record itself is in the message, whole: nothing of it is lost.
+            let back: botbench::ops::records::Record = serde_json::from_str(json).unwrap();
+            assert_eq!(back, record);
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(line.starts_with("RECORD NOT WRITTEN"), "{line}");
+    assert!(
+        line.contains(&records.display().to_string()) && line.contains("disk is full"),
+        "{line}"
+    );
+    assert!(
+        line.contains("unsaved.sqlite"),
+        "the fallback not named: {line}"
+    );
+    assert_eq!(recorder.waiting(), 1);
+    // Room again: the next save sends the one kept in memory first, then its own.
+    disk.free();
+    let mut next = crate::records::hand_set().remove(1);
+    assert!(recorder.save(&mut next).stored());
+    assert_eq!(recorder.waiting(), 0);
+    assert_eq!(crate::records::whole_records(&records), 2);
+}
