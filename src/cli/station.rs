@@ -37,6 +37,12 @@ pub(crate) struct StationArgs {
     /// Where records go, over the bundle's `records` (a SQLite file or postgres://...).
     #[arg(long, value_name = "FILE|URL")]
     pub records: Option<String>,
+    /// Headless: a barcode scanner that is its own device (a serial scanner's tty, e.g.
+    /// /dev/ttyACM0): each code it sends, ended by Enter, is taken as a line typed on stdin
+    /// (a serial to start a slot, an answer, `PASS`/`FAIL`). A scanner that types as a
+    /// keyboard needs nothing: it types into stdin.
+    #[arg(long, value_name = "DEVICE", requires = "headless")]
+    pub scanner: Option<PathBuf>,
 }
 
 pub(crate) fn run(args: StationArgs, opener: &crate::link::PortOpener) -> CliResult {

@@ -8,7 +8,10 @@
 //!   scan waits starts it;
 //! - `stop [SLOT]`: STOP that slot, or every slot.
 //!
-//! Ctrl-C stops every slot safely. `--once` runs one unit per slot and exits 0 when every slot
+//! A scanner that is its own device (`--scanner /dev/ttyACM0`) is read the same way, each
+//! code a line.
+//!
+//! Ctrl-C stops every slot safely (exit 130, once each has said it stopped). `--once` runs one unit per slot and exits 0 when every slot
 //! passed, 1 otherwise.
 
 use super::station::StationArgs;
@@ -56,6 +59,9 @@ pub(crate) fn run(bundle: &Bundle, args: &StationArgs, ports: &PortOpener) -> Cl
     let slots = Arc::new(slots);
     let routing: Arc<Mutex<Routing>> = Arc::default();
     spawn_stdin(slots.clone(), routing.clone(), bundle);
+    if let Some(device) = &args.scanner {
+        spawn_scanner(device, slots.clone(), routing.clone(), bundle)?;
+    }
     let ctrl_c = super::port::cancel_on_ctrl_c();
     let (mut passed, mut failed) = (0usize, 0usize);
     let mut stopped = 0usize;
@@ -79,6 +85,11 @@ pub(crate) fn run(bundle: &Bundle, args: &StationArgs, ports: &PortOpener) -> Cl
     let verdicts = passed + failed;
     if !args.json {
         outln!("{passed} PASS, {failed} FAIL");
+    }
+    if ctrl_c.is_cancelled() {
+        // Every slot has stopped (each said so): a stop by Ctrl-C is never a success.
+        errln!("botbench: station stopped by Ctrl-C; every slot stopped safely");
+        return Ok(super::port::EXIT_CANCELLED);
     }
     Ok(u8::from(
         failed > 0 || (args.once && verdicts < slots.len()),
@@ -111,7 +122,17 @@ fn track(ev: &Event, routing: &Mutex<Routing>, slots: &[SlotHandle]) {
                 None => r.asking.push_back(ev.slot.clone()),
             }
         }
-        What::Waiting { how: "scan" } => r.scan_idle.push(ev.slot.clone()),
+        What::Waiting { how: "scan" } => {
+            // A code scanned before the slot was ready for it starts it now.
+            let mine = r
+                .typed_ahead
+                .iter()
+                .position(|(to, _)| to.as_ref().is_none_or(|to| to == &ev.slot));
+            match mine.and_then(|i| r.typed_ahead.remove(i)) {
+                Some((_, line)) => send_answer(slots, &ev.slot, &line),
+                None => r.scan_idle.push(ev.slot.clone()),
+            }
+        }
         What::Unit { .. } | What::StepDone { .. } | What::Verdict { .. } | What::Stopped { .. } => {
             r.asking.retain(|s| s != &ev.slot);
             r.scan_idle.retain(|s| s != &ev.slot);
@@ -237,6 +258,49 @@ fn spawn_stdin(slots: Arc<Vec<SlotHandle>>, routing: Arc<Mutex<Routing>>, bundle
                 }
             });
         });
+}
+
+/// Reads the codes of a scanner that is its own device (`--scanner`) on a thread of its own:
+/// each line (ended by CR or LF) as if typed on stdin. Errors: the device cannot be opened
+/// (said with its path; the slots, started already, are stopped).
+fn spawn_scanner(
+    device: &std::path::Path,
+    slots: Arc<Vec<SlotHandle>>,
+    routing: Arc<Mutex<Routing>>,
+    bundle: &Bundle,
+) -> Result<(), CliError> {
+    use std::io::BufRead;
+    let file = std::fs::File::open(device).map_err(|e| {
+        slots.iter().for_each(|s| s.cancel.cancel());
+        CliError::input(format!("--scanner {}: {e}", device.display()))
+    })?;
+    let names: Vec<String> = bundle.slots.iter().map(|s| s.name.clone()).collect();
+    let shown = device.display().to_string();
+    std::thread::Builder::new()
+        .name("station-scanner".into())
+        .spawn(move || {
+            let mut reader = std::io::BufReader::new(file);
+            let mut code = Vec::new();
+            loop {
+                code.clear();
+                match reader.read_until(b'\n', &mut code) {
+                    Ok(0) => return,
+                    Ok(_) => {
+                        // A scanner may end a code with CR, LF or both.
+                        for part in code.split(|b| *b == b'\r') {
+                            let line = String::from_utf8_lossy(part);
+                            operator_line(line.trim(), &slots, &routing, &names);
+                        }
+                    }
+                    Err(e) => {
+                        log::warn!("scanner {shown}: {e}; its codes are no longer read");
+                        return;
+                    }
+                }
+            }
+        })
+        .map_err(|e| CliError::device(format!("the scanner's thread cannot start: {e}")))?;
+    Ok(())
 }
 
 /// One line the operator typed or scanned.

@@ -218,3 +218,86 @@ pub fn start_station(
         forwarder,
     })
 }
+
+/// How long a unit is off the fixture when `botbench sim ... next` swaps it: silent, as a real
+/// fixture is between one unit lifted off and the next placed (three of a station's 0.5 s
+/// identity polls).
+pub const SWAP_GAP: Duration = Duration::from_millis(1500);
+
+/// A fixture's device that can be lifted off: while lifted it hears nothing and says nothing
+/// (the wire stays, as the fixture's cable does). `botbench sim` serves its device through
+/// one, so that `next` on its stdin presents a fresh unit after a silence.
+pub struct Lift {
+    device: SharedDevice,
+    lifted_until: Arc<Mutex<Option<std::time::Instant>>>,
+}
+
+/// Lifts a [`Lift`]'s device off for a while.
+#[derive(Clone)]
+pub struct LiftHandle {
+    lifted_until: Arc<Mutex<Option<std::time::Instant>>>,
+}
+
+impl Lift {
+    /// `device` on a fixture, and the handle that lifts it.
+    pub fn new(device: SharedDevice) -> (Lift, LiftHandle) {
+        let lifted_until = Arc::new(Mutex::new(None));
+        let handle = LiftHandle {
+            lifted_until: lifted_until.clone(),
+        };
+        (
+            Lift {
+                device,
+                lifted_until,
+            },
+            handle,
+        )
+    }
+
+    fn lifted(&self, now: std::time::Instant) -> bool {
+        let mut until = self.lifted_until.lock().unwrap_or_else(|e| e.into_inner());
+        match *until {
+            Some(t) if now < t => true,
+            Some(_) => {
+                *until = None;
+                false
+            }
+            None => false,
+        }
+    }
+}
+
+impl LiftHandle {
+    /// Silent from now for `gap`.
+    pub fn lift_for(&self, gap: Duration) {
+        *self.lifted_until.lock().unwrap_or_else(|e| e.into_inner()) =
+            Some(std::time::Instant::now() + gap);
+    }
+}
+
+impl super::Device for Lift {
+    fn receive(
+        &mut self,
+        bytes: &[u8],
+        baud: u32,
+        now: std::time::Instant,
+    ) -> Vec<super::Outgoing> {
+        if self.lifted(now) {
+            return Vec::new();
+        }
+        self.device
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .receive(bytes, baud, now)
+    }
+
+    fn tick(&mut self, now: std::time::Instant) -> Vec<super::Outgoing> {
+        if self.lifted(now) {
+            return Vec::new();
+        }
+        self.device
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .tick(now)
+    }
+}

@@ -55,11 +55,21 @@ impl LineStep {
     }
 }
 
-/// The file a step works with as people name it: its name without folders and `.ron`
-/// (`presets/window-cleaner-selftest.ron` → `window-cleaner-selftest`).
+/// The file a step works with as people name it: its name without folders and its extension
+/// (`presets/window-cleaner-selftest.ron` → `window-cleaner-selftest`, `vacuum-1.2.3.bin` →
+/// `vacuum-1.2.3`; a last part of digits is a version, not an extension).
 fn stem(file: &str) -> &str {
     let name = file.rsplit(['/', '\\']).next().unwrap_or(file);
-    name.strip_suffix(".ron").unwrap_or(name)
+    match name.rsplit_once('.') {
+        Some((base, ext))
+            if !base.is_empty()
+                && !ext.is_empty()
+                && ext.chars().all(|c| c.is_ascii_alphabetic()) =>
+        {
+            base
+        }
+        _ => name,
+    }
 }
 
 /// The English and 中文 names of the steps that have a fixed name, or a name around a file:

@@ -69,6 +69,8 @@ pub struct LineStation {
     pub engineer: Engineer,
     /// The records waiting in a spool: how many, the store, why (from [`What::Records`]).
     pub records: Option<RecordsWaiting>,
+    /// A slot's number typed, waiting for its Y or N.
+    pub slot_typed: Option<String>,
     slots: Vec<SlotHandle>,
     events: Receiver<Event>,
     forwarder: Option<crate::ops::station::Forwarder>,
@@ -118,6 +120,7 @@ impl LineStation {
                 ..Engineer::default()
             },
             records: None,
+            slot_typed: None,
             slots,
             events,
             forwarder: None,
@@ -235,20 +238,52 @@ impl LineStation {
         self.slots.iter().for_each(|s| s.cancel.cancel());
     }
 
-    /// Y or N typed: the answer to the oldest yes/no question waiting.
+    /// Y or N typed (a key, a pedal seen as a key): the answer to the oldest yes/no question
+    /// waiting; a slot's number first (`2` then `Y`) answers that slot's question. A number
+    /// not followed by Y or N is forgotten at the next other key.
     fn keys(&mut self, ctx: &egui::Context) {
-        let (yes, no) = ctx.input(|i| (i.key_pressed(egui::Key::Y), i.key_pressed(egui::Key::N)));
-        if !(yes || no) || ctx.egui_wants_keyboard_input() {
+        if ctx.egui_wants_keyboard_input() {
             return;
         }
-        let asking = self
-            .tiles
-            .iter()
-            .find(|t| matches!(t.asking, Some(("confirm" | "retry", _, _))))
-            .map(|t| t.slot.clone());
-        if let Some(slot) = asking {
-            let answer = if yes { Answer::Yes } else { Answer::No };
-            self.send(&slot, Command::Answer(answer));
+        let pressed: Vec<egui::Key> = ctx.input(|i| {
+            i.events
+                .iter()
+                .filter_map(|e| match e {
+                    egui::Event::Key {
+                        key, pressed: true, ..
+                    } => Some(*key),
+                    _ => None,
+                })
+                .collect()
+        });
+        for key in pressed {
+            let answer = match key {
+                egui::Key::Y => Answer::Yes,
+                egui::Key::N => Answer::No,
+                other => {
+                    // A slot's number: its name, typed with the digit keys.
+                    self.slot_typed = other
+                        .name()
+                        .parse::<u32>()
+                        .ok()
+                        .map(|n| n.to_string())
+                        .filter(|n| self.tiles.iter().any(|t| &t.slot == n));
+                    continue;
+                }
+            };
+            let yes_no = |t: &&TileState| matches!(t.asking, Some(("confirm" | "retry", _, _)));
+            let slot = match self.slot_typed.take() {
+                Some(named) => self
+                    .tiles
+                    .iter()
+                    .filter(yes_no)
+                    .find(|t| t.slot == named)
+                    .map(|t| t.slot.clone()),
+                None => self.tiles.iter().find(yes_no).map(|t| t.slot.clone()),
+            };
+            if let Some(slot) = slot {
+                self.send(&slot, Command::Answer(answer));
+            }
         }
     }
 
