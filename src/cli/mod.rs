@@ -11,6 +11,7 @@ mod msp;
 mod port;
 mod preset;
 mod profile;
+mod profiles;
 mod provision;
 mod records;
 mod replay;
@@ -101,12 +102,9 @@ enum Cmd {
     /// Make a device profile from a vendor's data-point schema.
     #[command(subcommand)]
     Profile(profile::ProfileCmd),
-    /// List the device profiles and where each comes from.
-    Profiles {
-        /// Print JSON.
-        #[arg(long)]
-        json: bool,
-    },
+    /// List the device profiles and where each comes from; `profiles show NAME` shows one
+    /// whole (its commands, fields, servo parameters and data points).
+    Profiles(profiles::ProfilesArgs),
     /// List the serial ports (USB VID:PID, serial number, product, and the adapter's driver and
     /// latency timer where the system tells them).
     Ports {
@@ -284,7 +282,7 @@ fn bounded(message: &str) -> String {
 fn run(cli: Cli, opener: &PortOpener) -> CliResult {
     match cli.command {
         Some(Cmd::Frame(cmd)) => frame::run(cmd),
-        Some(Cmd::Profiles { json }) => profiles(json),
+        Some(Cmd::Profiles(args)) => profiles::run(args),
         Some(Cmd::Profile(cmd)) => profile::run(cmd),
         Some(Cmd::Ports {
             json,
@@ -318,35 +316,6 @@ fn run(cli: Cli, opener: &PortOpener) -> CliResult {
 
 fn registry() -> Result<crate::profile::Registry, CliError> {
     crate::profile::Registry::load().map_err(CliError::input)
-}
-
-fn profiles(json: bool) -> CliResult {
-    let reg = registry()?;
-    for (p, source) in reg.iter() {
-        let source = match source {
-            crate::profile::Source::Builtin => "built-in".to_string(),
-            crate::profile::Source::File(path) => path.display().to_string(),
-        };
-        if json {
-            let doc = serde_json::json!({
-                "id": p.id, "name": p.name.en, "name_zh": p.name.zh,
-                "protocol": p.protocol.name(), "baud": p.baud,
-                "commands": p.commands.len(), "source": source,
-            });
-            outln!("{doc}");
-        } else {
-            outln!(
-                "{:<28} {:<6} {:>7} baud  {:>3} commands  {} / {}  ({source})",
-                p.id,
-                p.protocol.name(),
-                p.baud,
-                p.commands.len(),
-                p.name.en,
-                p.name.zh
-            );
-        }
-    }
-    Ok(0)
 }
 
 fn ports(json: bool, set_latency_timer: Option<Vec<String>>) -> CliResult {
@@ -404,11 +373,13 @@ fn bench(long: bool, field: bool, json: bool, only: Option<&str>) -> CliResult {
         if json {
             outln!("{}", serde_json::to_string(f).unwrap_or_default());
         } else {
+            // One convention: times in ms, speed as the share of the wire limit reached
+            // (the wire's own time over the time taken: 1.00 is the limit).
             outln!(
-                "{:<48} {:>8.3} s  wire {:>8.3} s  ratio {:>5.2}  {}",
+                "{:<56} {:>10.2} ms  wire {:>10.2} ms  {:>5.2} of the wire limit  {}",
                 f.name,
-                f.seconds,
-                f.wire_seconds,
+                f.seconds * 1e3,
+                f.wire_seconds * 1e3,
                 f.wire_ratio,
                 f.notes
             );
@@ -462,7 +433,26 @@ fn gui(
     if let Some(p) = &profile {
         registry()?.get(p).map_err(CliError::input)?;
     }
-    crate::ui::run(target, baud, profile, panel, screenshots, ports.clone())
-        .map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
+    if let Some(why) = crate::system::display::missing() {
+        return Err(no_display(why));
+    }
+    crate::ui::run(target, baud, profile, panel, screenshots, ports.clone()).map_err(|e| {
+        let e = e.to_string();
+        if crate::system::display::is_unreachable(&e) {
+            // The window system's own words name its source files: said in ours.
+            no_display("the display named could not be reached")
+        } else {
+            CliError::device(format!("cannot open the window: {e}"))
+        }
+    })?;
     Ok(0)
+}
+
+/// The window cannot be shown here (`why`): exit 2, a bad environment rather than a device
+/// failure, with where the command line is.
+fn no_display(why: &str) -> CliError {
+    CliError::input(format!(
+        "no display: the window needs X11 or Wayland; the command line works without one \
+         (botbench --help). Here {why}."
+    ))
 }
