@@ -8,6 +8,7 @@
 //! slot's history; nothing of ports, plans or settings can be changed from it.
 
 mod engineer;
+pub mod shots;
 mod tile;
 
 pub use engineer::Engineer;
@@ -40,7 +41,8 @@ pub struct TileState {
     pub asking: Option<(&'static str, String, String)>,
     /// The last verdict: pass, failed step (both languages), reason.
     pub verdict: Option<(bool, Option<Text>, Option<String>)>,
-    /// Recent verdicts, newest first: (pass, serial or `unit`).
+    /// Recent verdicts, newest first: (pass, the serial, or the verdict's local time
+    /// `HH:MM:SS` for a unit without one).
     pub history: VecDeque<(bool, String)>,
     /// What the operator types into the answer field.
     pub typed: String,
@@ -71,6 +73,8 @@ pub struct LineStation {
     pub records: Option<RecordsWaiting>,
     /// A slot's number typed, waiting for its Y or N.
     pub slot_typed: Option<String>,
+    /// The screenshot tour, when asked for (`--screenshots DIR`).
+    pub shots: Option<shots::StationShots>,
     slots: Vec<SlotHandle>,
     events: Receiver<Event>,
     forwarder: Option<crate::ops::station::Forwarder>,
@@ -121,6 +125,7 @@ impl LineStation {
             },
             records: None,
             slot_typed: None,
+            shots: None,
             slots,
             events,
             forwarder: None,
@@ -141,6 +146,10 @@ impl LineStation {
     pub fn logic(&mut self, ctx: &egui::Context) {
         while let Ok(ev) = self.events.try_recv() {
             self.on_event(ev);
+        }
+        if let Some(mut tour) = self.shots.take() {
+            tour.step(ctx, self);
+            self.shots = Some(tour);
         }
         ctx.request_repaint_after(std::time::Duration::from_millis(100));
     }
@@ -207,8 +216,10 @@ impl LineStation {
                     Text::new(en, zh)
                 });
                 t.verdict = Some((pass, failed_step, reason));
-                t.history
-                    .push_front((pass, serial.unwrap_or_else(|| "unit".into())));
+                // A unit without a serial is told by the time of its verdict.
+                let unit =
+                    serial.unwrap_or_else(|| chrono::Local::now().format("%H:%M:%S").to_string());
+                t.history.push_front((pass, unit));
                 t.history.truncate(HISTORY);
             }
             What::Stopped { why } => {
@@ -373,13 +384,16 @@ impl LineStation {
     }
 }
 
-/// Opens the station window over a started station; returns when it is closed (every slot
-/// is stopped then). Errors: the window could not be opened.
+/// Opens the station window over a started station (with `screenshots`, its screenshot tour
+/// into that folder); returns when it is closed (every slot is stopped then). Errors: the
+/// window could not be opened.
 pub fn run(
     bundle: &crate::ops::station::Bundle,
     started: crate::sim::fixture::StartedStation,
+    screenshots: Option<std::path::PathBuf>,
 ) -> Result<(), String> {
-    let station = LineStation::started(bundle, started);
+    let mut station = LineStation::started(bundle, started);
+    station.shots = screenshots.map(shots::StationShots::new);
     // `BOTBENCH_WINDOW_SIZE=1024x600`: the window's size where no window manager maximises it
     // (the screenshots under Xvfb).
     let size = std::env::var("BOTBENCH_WINDOW_SIZE")
