@@ -3,7 +3,8 @@
 # --screenshots DIR`): each built-in demo device in turn, every view it has (each panel, each
 # tab, each tuning group), at 1280×800 and 1024×600, in English and 中文. Fails if the window
 # did not come up, the tour reported a failure (a device that did not answer, a label split
-# over two lines), a view lacks one of its four shots, or a shot is blank.
+# over two lines), a view lacks one of its four shots, or a shot is blank. Then the line
+# station's window (`botbench station presets/demo-station.ron --screenshots DIR`): 8 shots.
 # Usage: .ci/screenshot.sh [DIR] [BINARY]
 #   DIR     default target/screenshots (emptied of old shots first)
 #   BINARY  default target/debug/botbench: the one `cargo test` builds, so CI builds once
@@ -45,7 +46,11 @@ echo "X display \$DISPLAY: \$(xdotool getdisplaygeometry 2>&1)"
 # Now and then the app cannot open its X connection at start, though the server answers (about
 # one launch in ten under Xvfb here): three launches.
 for attempt in 1 2 3; do
-    "$bin" gui --screenshots "$dir" > "$home/app.log" 2>&1 && exit 0
+    # Then the line station (the demo bundle, one unit per slot): a question waiting, then
+    # the verdicts, each at both sizes in both languages.
+    "$bin" gui --screenshots "$dir" > "$home/app.log" 2>&1 \
+        && "$bin" station "$PWD/presets/demo-station.ron" --screenshots "$dir" \
+            --records "$home/station-records.sqlite" >> "$home/app.log" 2>&1 && exit 0
     grep -q "Failed to open connection to X server" "$home/app.log" || break
     echo "launch \$attempt could not open its X connection; again"
     sleep 1
@@ -64,6 +69,11 @@ xvfb-run -a -s "-screen 0 1280x800x24" "$home/run.sh" || {
 grep "^tour: .* shots in" "$home/app.log" || true
 grep "^tour: done" "$home/app.log"
 echo "== the tour took $((SECONDS - tour_start)) s (X server and launches included)"
+grep "^station tour: done" "$home/app.log" || true
+if ! grep -q "^station tour: done, 8 shots, 0 failures" "$home/app.log"; then
+    grep "^station tour:" "$home/app.log" || echo "the station's tour did not finish"
+    exit 1
+fi
 if ! grep -q "^tour: done, 0 failure" "$home/app.log"; then
     grep "^tour:" "$home/app.log" | grep -v "\.png$"
     exit 1

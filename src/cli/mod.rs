@@ -212,7 +212,7 @@ where
 }
 
 pub use console::Captured;
-pub use sim::{SimControl, Simulated, simulated};
+pub use sim::{Controlled, FreshWindowCleaner, SimControl, Simulated, simulated};
 
 /// The command line's run, on this thread's console.
 fn run_in_console<I, T>(args: I, ports: &PortOpener) -> u8

@@ -272,7 +272,11 @@ fn build_sim(args: &SimArgs) -> Result<(SimKind, Simulated), CliError> {
         monitor_no_data: args.field.monitor_no_data(kind)?,
     };
     let firmware = firmware(args, kind)?;
-    let (device, control) = device(args, kind, firmware, &opts)?;
+    let (device, controlled) = device(args, kind, firmware, &opts)?;
+    // Served through a lift, so that `next` presents a fresh unit after a silence.
+    let (lift, handle) = crate::sim::fixture::Lift::new(device);
+    let device: SharedDevice = Arc::new(Mutex::new(lift));
+    let control = controlled.map(|c| SimControl::new(c, Some(handle)));
     let sim = Simulated {
         kind: Some(kind),
         device,
@@ -308,12 +312,15 @@ fn device(
     kind: SimKind,
     firmware: Option<Arc<Profile>>,
     opts: &SimOptions,
-) -> Result<(SharedDevice, Option<SimControl>), CliError> {
+) -> Result<(SharedDevice, Option<Controlled>), CliError> {
     Ok(match (kind, firmware) {
         (SimKind::WindowCleaner, Some(p)) => {
-            let core = MspCore::with_options(p, crate::sim::window_cleaner::DEVICE_CODE, opts);
+            let core =
+                MspCore::with_options(p.clone(), crate::sim::window_cleaner::DEVICE_CODE, opts);
             let wc = Arc::new(Mutex::new(WindowCleaner::with_core(core, opts.seed)));
-            (wc.clone(), Some(SimControl::WindowCleaner(wc)))
+            let fresh: FreshWindowCleaner =
+                Arc::new(Mutex::new(fresh_window_cleaner(Some(p), opts.clone())));
+            (wc.clone(), Some(Controlled::WindowCleaner(wc, fresh)))
         }
         (SimKind::ServoBus, Some(p)) => {
             let ids: &[u8] = if opts.servos.is_empty() {
@@ -322,12 +329,13 @@ fn device(
                 &opts.servos
             };
             let baud = opts.baud.unwrap_or_else(|| kind.default_baud());
-            let bus = crate::sim::servo_bus::ServoBus::with_profile_ids(p, ids, baud)
+            let bus = crate::sim::servo_bus::ServoBus::with_profile_ids(p.clone(), ids, baud)
                 .map_err(CliError::input)?
                 .with_seed(opts.seed)
                 .with_baud_change_ignored(opts.ignore_baud_change)
                 .with_monitor_no_data(opts.monitor_no_data);
-            (Arc::new(Mutex::new(bus)), None)
+            let bus = Arc::new(Mutex::new(bus));
+            (bus.clone(), Some(Controlled::Servos(bus, p, baud)))
         }
         (_, Some(_)) => {
             return Err(CliError::input(
@@ -336,16 +344,48 @@ fn device(
         }
         (SimKind::TuyaVacuum, None) => {
             let mcu = tuya_vacuum(args, opts)?;
-            (mcu.clone(), Some(SimControl::Tuya(mcu)))
+            (mcu.clone(), Some(Controlled::Tuya(mcu)))
         }
         (SimKind::WindowCleaner, None) => {
             let wc = Arc::new(Mutex::new(
                 WindowCleaner::new(opts).map_err(CliError::input)?,
             ));
-            (wc.clone(), Some(SimControl::WindowCleaner(wc)))
+            let fresh: FreshWindowCleaner =
+                Arc::new(Mutex::new(fresh_window_cleaner(None, opts.clone())));
+            (wc.clone(), Some(Controlled::WindowCleaner(wc, fresh)))
+        }
+        (SimKind::ServoBus, None) => {
+            let p = crate::sim::servo_bus::builtin_servo_profile();
+            device(args, kind, Some(p), opts)?
         }
         (kind, None) => (build(kind, opts).map_err(CliError::input)?, None),
     })
+}
+
+/// Makes unit `n` of a window cleaner as `sim` was asked for it: seed `n`, factory settings.
+pub type FreshWindowCleaner = Arc<Mutex<dyn FnMut(u64) -> Result<WindowCleaner, String> + Send>>;
+
+fn fresh_window_cleaner(
+    firmware: Option<Arc<Profile>>,
+    opts: SimOptions,
+) -> impl FnMut(u64) -> Result<WindowCleaner, String> + Send {
+    move |seed| {
+        let opts = SimOptions {
+            seed,
+            ..opts.clone()
+        };
+        match &firmware {
+            Some(p) => {
+                let core = MspCore::with_options(
+                    p.clone(),
+                    crate::sim::window_cleaner::DEVICE_CODE,
+                    &opts,
+                );
+                Ok(WindowCleaner::with_core(core, seed))
+            }
+            None => WindowCleaner::new(&opts),
+        }
+    }
 }
 
 /// The simulated Tuya vacuum MCU, with the options of `sim tuya-vacuum` (a data point reported
@@ -413,25 +453,84 @@ fn serve(
     }))
 }
 
-/// Commands typed on the simulator's stdin, for what a device does on its own.
-pub enum SimControl {
+/// Commands typed on the simulator's stdin, for what a device does on its own, and `next`: the
+/// unit lifted off the fixture for [`crate::sim::fixture::SWAP_GAP`] and a fresh one placed
+/// (a new seed, factory settings; a servo bus: one fresh servo at id 0 with a new serial
+/// number), as a line operator swaps units.
+pub struct SimControl {
+    device: Controlled,
+    lift: Option<crate::sim::fixture::LiftHandle>,
+    /// Units presented so far (1: the first).
+    units: std::sync::atomic::AtomicU32,
+}
+
+/// The simulated device `sim` controls, typed.
+pub enum Controlled {
     /// The Tuya vacuum's MCU: its own requests, a restart.
     Tuya(Arc<Mutex<TuyaMcu>>),
-    /// The window cleaner: faults, corners, battery.
-    WindowCleaner(Arc<Mutex<WindowCleaner>>),
+    /// The window cleaner: faults, corners, battery; and how a fresh one is made.
+    WindowCleaner(Arc<Mutex<WindowCleaner>>, FreshWindowCleaner),
+    /// A servo bus: its profile and baud rate, for a fresh servo.
+    Servos(
+        Arc<Mutex<crate::sim::servo_bus::ServoBus>>,
+        Arc<Profile>,
+        u32,
+    ),
 }
 
 impl SimControl {
+    /// Control of `device`, served through a [`crate::sim::fixture::Lift`] whose handle is
+    /// `lift` (`None`: `next` swaps at once, with no silence).
+    pub fn new(device: Controlled, lift: Option<crate::sim::fixture::LiftHandle>) -> Self {
+        Self {
+            device,
+            lift,
+            units: std::sync::atomic::AtomicU32::new(1),
+        }
+    }
+
     /// The commands it takes, as `sim` says them.
     pub fn help(&self) -> &'static str {
-        match self {
-            SimControl::Tuya(_) => {
-                "stdin commands: time | utc-time | wifi-test | reset-wifi | reset-wifi-mode 0|1 | net-status | mac | rssi | stop-heartbeat | extended SUB | send CMD [HEX] | oversize BYTES | dp ID VALUE | restart"
+        match self.device {
+            Controlled::Tuya(_) => {
+                "stdin commands: time | utc-time | wifi-test | reset-wifi | reset-wifi-mode 0|1 | net-status | mac | rssi | stop-heartbeat | extended SUB | send CMD [HEX] | oversize BYTES | dp ID VALUE | restart | next"
             }
-            SimControl::WindowCleaner(_) => {
-                "stdin commands: fault NAME | clear | corners BITS | battery VOLTS"
+            Controlled::WindowCleaner(..) => {
+                "stdin commands: fault NAME | clear | corners BITS | battery VOLTS | next"
+            }
+            Controlled::Servos(..) => "stdin commands: next",
+        }
+    }
+
+    /// `next`: lifts the unit off (silent for [`crate::sim::fixture::SWAP_GAP`]) and puts a
+    /// fresh one in its place. Errors: a fresh unit could not be made.
+    fn next_unit(&self) -> Result<(), String> {
+        use std::sync::atomic::Ordering;
+        if let Some(lift) = &self.lift {
+            lift.lift_for(crate::sim::fixture::SWAP_GAP);
+        }
+        let n = self.units.fetch_add(1, Ordering::SeqCst) + 1;
+        match &self.device {
+            Controlled::Tuya(m) => {
+                let mut m = m.lock().map_err(|_| "simulator poisoned")?;
+                let fresh = TuyaMcu::new(m.config().clone());
+                *m = fresh;
+            }
+            Controlled::WindowCleaner(w, fresh) => {
+                let unit = (fresh.lock().map_err(|_| "simulator poisoned")?)(u64::from(n))?;
+                *w.lock().map_err(|_| "simulator poisoned")? = unit;
+            }
+            Controlled::Servos(bus, profile, baud) => {
+                let servo = crate::sim::servo_bus::SimServo::fresh_with(profile, 1000 + n)
+                    .with_id(0)
+                    .with_baud(*baud);
+                let fresh =
+                    crate::sim::servo_bus::ServoBus::with_profile(profile.clone(), vec![servo])
+                        .with_seed(u64::from(n));
+                *bus.lock().map_err(|_| "simulator poisoned")? = fresh;
             }
         }
+        Ok(())
     }
 
     fn serve_stdin(self) {
@@ -460,8 +559,12 @@ impl SimControl {
 
     fn apply(&self, words: &[&str]) -> Result<(), String> {
         let arg = |i: usize| words.get(i).copied().ok_or("missing argument");
-        match self {
-            SimControl::Tuya(m) => {
+        if words[0] == "next" {
+            return self.next_unit();
+        }
+        match &self.device {
+            Controlled::Servos(..) => return Err(format!("unknown command '{}'", words[0])),
+            Controlled::Tuya(m) => {
                 let mut m = m.lock().map_err(|_| "simulator poisoned")?;
                 match words[0] {
                     "restart" => m.restart(),
@@ -490,7 +593,7 @@ impl SimControl {
                     word => m.request(McuRequest::parse(word, words.get(1).copied())?),
                 }
             }
-            SimControl::WindowCleaner(w) => {
+            Controlled::WindowCleaner(w, _) => {
                 let mut w = w.lock().map_err(|_| "simulator poisoned")?;
                 match words[0] {
                     "fault" => w.inject_named(arg(1)?)?,

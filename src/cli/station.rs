@@ -37,6 +37,17 @@ pub(crate) struct StationArgs {
     /// Where records go, over the bundle's `records` (a SQLite file or postgres://...).
     #[arg(long, value_name = "FILE|URL")]
     pub records: Option<String>,
+    /// Headless: a barcode scanner that is its own device (a serial scanner's tty, e.g.
+    /// /dev/ttyACM0): each code it sends, ended by Enter, is taken as a line typed on stdin
+    /// (a serial to start a slot, an answer, `PASS`/`FAIL`). A scanner that types as a
+    /// keyboard needs nothing: it types into stdin.
+    #[arg(long, value_name = "DEVICE", requires = "headless")]
+    pub scanner: Option<PathBuf>,
+    /// The window's screenshot tour (`.ci/screenshot.sh`): one unit per slot, the window shot
+    /// at 1280x800 and 1024x600 in English and 中文 with a question waiting and with the
+    /// verdicts, as PNGs in DIR; then it closes.
+    #[arg(long, value_name = "DIR", conflicts_with = "headless")]
+    pub screenshots: Option<PathBuf>,
 }
 
 pub(crate) fn run(args: StationArgs, opener: &crate::link::PortOpener) -> CliResult {
@@ -68,9 +79,9 @@ pub(crate) fn run(args: StationArgs, opener: &crate::link::PortOpener) -> CliRes
             if args.headless {
                 super::station_headless::run(&bundle, &args, opener)
             } else {
-                let (slots, events) =
-                    super::station_headless::start(&bundle, &args, opener, false)?;
-                crate::ui::line::run(&bundle, slots, events)
+                let once = args.screenshots.is_some();
+                let started = super::station_headless::start(&bundle, &args, opener, once)?;
+                crate::ui::line::run(&bundle, started, args.screenshots.clone())
                     .map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
                 Ok(0)
             }

@@ -8,26 +8,30 @@
 //!   scan waits starts it;
 //! - `stop [SLOT]`: STOP that slot, or every slot.
 //!
-//! Ctrl-C stops every slot safely. `--once` runs one unit per slot and exits 0 when every slot
+//! A scanner that is its own device (`--scanner /dev/ttyACM0`) is read the same way, each
+//! code a line.
+//!
+//! Ctrl-C stops every slot safely (exit 130, once each has said it stopped). `--once` runs one unit per slot and exits 0 when every slot
 //! passed, 1 otherwise.
 
 use super::station::StationArgs;
 use super::{CliError, CliResult};
 use crate::link::PortOpener;
 use crate::ops::records::{Recorder, RunContext};
-use crate::ops::station::{self, Answer, Bundle, Command, Event, SlotHandle, What};
+use crate::ops::station::{Answer, Bundle, Command, Event, SlotHandle, What};
+use crate::sim::fixture::StartedStation;
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 
-/// Starts every slot of `bundle` (a simulated slot on its own [`crate::sim::SimFixture`], the
-/// others on `ports`), recording where `--records`, else the bundle, says; the slots' handles
-/// and their events. With `once`, each slot ends after one unit.
+/// Starts every slot of `bundle` ([`crate::sim::fixture::start_station`]), recording where
+/// `--records`, else the bundle, says, as the operator `--operator` or `BOTBENCH_OPERATOR`.
+/// With `once`, each slot ends after one unit.
 pub(crate) fn start(
     bundle: &Bundle,
     args: &StationArgs,
     ports: &PortOpener,
     once: bool,
-) -> Result<(Vec<SlotHandle>, crossbeam_channel::Receiver<Event>), CliError> {
+) -> Result<StartedStation, CliError> {
     let records = args.records.as_deref().or(bundle.records.as_deref());
     let location = super::records::location(records)?;
     let operator = args
@@ -41,24 +45,23 @@ pub(crate) fn start(
         ..RunContext::default()
     };
     let recorder = Recorder::open(&location, context).map_err(CliError::input)?;
-    let station_cx = station::StationContext::new(bundle, operator, recorder);
-    let (tx, rx) = crossbeam_channel::bounded::<Event>(1024);
-    let mut slots = Vec::new();
-    for slot in &bundle.slots {
-        let handle =
-            crate::sim::fixture::start_slot(slot, station_cx.clone(), ports, tx.clone(), once)
-                .map_err(CliError::device)?;
-        slots.push(handle);
-    }
-    Ok((slots, rx))
+    crate::sim::fixture::start_station(bundle, recorder, operator, ports, once)
+        .map_err(CliError::device)
 }
 
 pub(crate) fn run(bundle: &Bundle, args: &StationArgs, ports: &PortOpener) -> CliResult {
-    let (slots, rx) = start(bundle, args, ports, args.once)?;
+    let StartedStation {
+        slots,
+        events: rx,
+        forwarder,
+    } = start(bundle, args, ports, args.once)?;
     say_start(bundle, args.json);
     let slots = Arc::new(slots);
     let routing: Arc<Mutex<Routing>> = Arc::default();
     spawn_stdin(slots.clone(), routing.clone(), bundle);
+    if let Some(device) = &args.scanner {
+        spawn_scanner(device, slots.clone(), routing.clone(), bundle)?;
+    }
     let ctrl_c = super::port::cancel_on_ctrl_c();
     let (mut passed, mut failed) = (0usize, 0usize);
     let mut stopped = 0usize;
@@ -78,9 +81,15 @@ pub(crate) fn run(bundle: &Bundle, args: &StationArgs, ports: &PortOpener) -> Cl
         }
         print_event(&ev, args.json);
     }
+    forwarder.stop();
     let verdicts = passed + failed;
     if !args.json {
         outln!("{passed} PASS, {failed} FAIL");
+    }
+    if ctrl_c.is_cancelled() {
+        // Every slot has stopped (each said so): a stop by Ctrl-C is never a success.
+        errln!("botbench: station stopped by Ctrl-C; every slot stopped safely");
+        return Ok(super::port::EXIT_CANCELLED);
     }
     Ok(u8::from(
         failed > 0 || (args.once && verdicts < slots.len()),
@@ -113,7 +122,17 @@ fn track(ev: &Event, routing: &Mutex<Routing>, slots: &[SlotHandle]) {
                 None => r.asking.push_back(ev.slot.clone()),
             }
         }
-        What::Waiting { how: "scan" } => r.scan_idle.push(ev.slot.clone()),
+        What::Waiting { how: "scan" } => {
+            // A code scanned before the slot was ready for it starts it now.
+            let mine = r
+                .typed_ahead
+                .iter()
+                .position(|(to, _)| to.as_ref().is_none_or(|to| to == &ev.slot));
+            match mine.and_then(|i| r.typed_ahead.remove(i)) {
+                Some((_, line)) => send_answer(slots, &ev.slot, &line),
+                None => r.scan_idle.push(ev.slot.clone()),
+            }
+        }
         What::Unit { .. } | What::StepDone { .. } | What::Verdict { .. } | What::Stopped { .. } => {
             r.asking.retain(|s| s != &ev.slot);
             r.scan_idle.retain(|s| s != &ev.slot);
@@ -170,12 +189,15 @@ fn print_event(ev: &Event, json: bool) {
             of,
             name,
             attempt,
+            ..
         } => {
             let retry = if *attempt > 1 { " (retry)" } else { "" };
             outln!("slot {s}: step {index}/{of} {name}{retry}")
         }
         What::Ask { kind, text, .. } => outln!("slot {s}: {kind}? {text}"),
-        What::StepDone { name, pass, detail } => outln!(
+        What::StepDone {
+            name, pass, detail, ..
+        } => outln!(
             "slot {s}: {name}: {} {detail}",
             if *pass { "PASS" } else { "FAIL" }
         ),
@@ -204,6 +226,17 @@ fn print_event(ev: &Event, json: bool) {
             outln!("slot {s}: {kept}");
         }
         What::Stopped { why } => outln!("slot {s}: stopped: {why}"),
+        What::Records {
+            waiting: 0, store, ..
+        } => outln!("records: none waiting, every record is in {store}"),
+        What::Records {
+            waiting,
+            store,
+            why,
+        } => outln!(
+            "records: {waiting} waiting to be forwarded to {store}: {}",
+            why.as_deref().unwrap_or("not yet sent")
+        ),
     }
 }
 
@@ -225,6 +258,49 @@ fn spawn_stdin(slots: Arc<Vec<SlotHandle>>, routing: Arc<Mutex<Routing>>, bundle
                 }
             });
         });
+}
+
+/// Reads the codes of a scanner that is its own device (`--scanner`) on a thread of its own:
+/// each line (ended by CR or LF) as if typed on stdin. Errors: the device cannot be opened
+/// (said with its path; the slots, started already, are stopped).
+fn spawn_scanner(
+    device: &std::path::Path,
+    slots: Arc<Vec<SlotHandle>>,
+    routing: Arc<Mutex<Routing>>,
+    bundle: &Bundle,
+) -> Result<(), CliError> {
+    use std::io::BufRead;
+    let file = std::fs::File::open(device).map_err(|e| {
+        slots.iter().for_each(|s| s.cancel.cancel());
+        CliError::input(format!("--scanner {}: {e}", device.display()))
+    })?;
+    let names: Vec<String> = bundle.slots.iter().map(|s| s.name.clone()).collect();
+    let shown = device.display().to_string();
+    std::thread::Builder::new()
+        .name("station-scanner".into())
+        .spawn(move || {
+            let mut reader = std::io::BufReader::new(file);
+            let mut code = Vec::new();
+            loop {
+                code.clear();
+                match reader.read_until(b'\n', &mut code) {
+                    Ok(0) => return,
+                    Ok(_) => {
+                        // A scanner may end a code with CR, LF or both.
+                        for part in code.split(|b| *b == b'\r') {
+                            let line = String::from_utf8_lossy(part);
+                            operator_line(line.trim(), &slots, &routing, &names);
+                        }
+                    }
+                    Err(e) => {
+                        log::warn!("scanner {shown}: {e}; its codes are no longer read");
+                        return;
+                    }
+                }
+            }
+        })
+        .map_err(|e| CliError::device(format!("the scanner's thread cannot start: {e}")))?;
+    Ok(())
 }
 
 /// One line the operator typed or scanned.

@@ -173,3 +173,131 @@ pub fn start_slot(
     station::spawn(slot.clone(), context, opener, hands, events, once)
         .map_err(|e| format!("slot {}: cannot start its thread: {e}", slot.name))
 }
+
+/// A station started: its slots, their events (on one channel), and the forwarder of the
+/// records that wait in a spool.
+pub struct StartedStation {
+    /// The slots' handles, in the bundle's order.
+    pub slots: Vec<crate::ops::station::SlotHandle>,
+    /// Every slot's events, and the forwarder's.
+    pub events: crossbeam_channel::Receiver<crate::ops::station::Event>,
+    /// Sends the records that wait on to their store; stops when dropped.
+    pub forwarder: crate::ops::station::Forwarder,
+}
+
+/// Starts every slot of `bundle` ([`start_slot`]: simulated slots on fixtures of their own,
+/// the others on `ports`), recording through `recorder` (its store, its context), and the
+/// forwarder of waiting records. With `once`, each slot ends after one unit. Errors: a slot
+/// that cannot be started (said with its name), the forwarder's thread.
+pub fn start_station(
+    bundle: &crate::ops::station::Bundle,
+    recorder: crate::ops::records::Recorder,
+    operator: Option<String>,
+    ports: &crate::link::PortOpener,
+    once: bool,
+) -> Result<StartedStation, String> {
+    use crate::ops::station::{Event, Forwarder, StationContext};
+    let context = StationContext::new(bundle, operator, recorder);
+    let (tx, rx) = crossbeam_channel::bounded::<Event>(1024);
+    let mut slots = Vec::new();
+    for slot in &bundle.slots {
+        match start_slot(slot, context.clone(), ports, tx.clone(), once) {
+            Ok(handle) => slots.push(handle),
+            Err(e) => {
+                // The slots already running stop: a station starts whole or not at all.
+                slots.iter().for_each(|s| s.cancel.cancel());
+                return Err(e);
+            }
+        }
+    }
+    let forwarder = Forwarder::spawn(&context, tx)
+        .map_err(|e| format!("the station's records forwarder cannot start: {e}"))?;
+    Ok(StartedStation {
+        slots,
+        events: rx,
+        forwarder,
+    })
+}
+
+/// How long a unit is off the fixture when `botbench sim ... next` swaps it: silent, as a real
+/// fixture is between one unit lifted off and the next placed (three of a station's 0.5 s
+/// identity polls).
+pub const SWAP_GAP: Duration = Duration::from_millis(1500);
+
+/// A fixture's device that can be lifted off: while lifted it hears nothing and says nothing
+/// (the wire stays, as the fixture's cable does). `botbench sim` serves its device through
+/// one, so that `next` on its stdin presents a fresh unit after a silence.
+pub struct Lift {
+    device: SharedDevice,
+    lifted_until: Arc<Mutex<Option<std::time::Instant>>>,
+}
+
+/// Lifts a [`Lift`]'s device off for a while.
+#[derive(Clone)]
+pub struct LiftHandle {
+    lifted_until: Arc<Mutex<Option<std::time::Instant>>>,
+}
+
+impl Lift {
+    /// `device` on a fixture, and the handle that lifts it.
+    pub fn new(device: SharedDevice) -> (Lift, LiftHandle) {
+        let lifted_until = Arc::new(Mutex::new(None));
+        let handle = LiftHandle {
+            lifted_until: lifted_until.clone(),
+        };
+        (
+            Lift {
+                device,
+                lifted_until,
+            },
+            handle,
+        )
+    }
+
+    fn lifted(&self, now: std::time::Instant) -> bool {
+        let mut until = self.lifted_until.lock().unwrap_or_else(|e| e.into_inner());
+        match *until {
+            Some(t) if now < t => true,
+            Some(_) => {
+                *until = None;
+                false
+            }
+            None => false,
+        }
+    }
+}
+
+impl LiftHandle {
+    /// Silent from now for `gap`.
+    pub fn lift_for(&self, gap: Duration) {
+        *self.lifted_until.lock().unwrap_or_else(|e| e.into_inner()) =
+            Some(std::time::Instant::now() + gap);
+    }
+}
+
+impl super::Device for Lift {
+    fn receive(
+        &mut self,
+        bytes: &[u8],
+        baud: u32,
+        now: std::time::Instant,
+    ) -> Vec<super::Outgoing> {
+        if self.lifted(now) {
+            return Vec::new();
+        }
+        self.device
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .receive(bytes, baud, now)
+    }
+
+    fn tick(&mut self, now: std::time::Instant) -> Vec<super::Outgoing> {
+        if self.lifted(now) {
+            return Vec::new();
+        }
+        self.device
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .tick(now)
+    }
+}

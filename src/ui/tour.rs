@@ -486,7 +486,7 @@ fn settled(rt: &Station) -> bool {
 }
 
 /// Writes `image` to `path` as PNG (the folder is created if missing).
-fn save_png(image: &egui::ColorImage, path: &std::path::Path) -> Result<(), String> {
+pub(crate) fn save_png(image: &egui::ColorImage, path: &std::path::Path) -> Result<(), String> {
     let [w, h] = image.size;
     let (w, h) = (
         u32::try_from(w).map_err(|e| e.to_string())?,

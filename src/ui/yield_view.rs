@@ -388,6 +388,43 @@ const GOOD: egui::Color32 = egui::Color32::from_rgb(46, 125, 50);
 const BAD: egui::Color32 = egui::Color32::from_rgb(198, 40, 40);
 const BARS: egui::Color32 = egui::Color32::from_rgb(84, 110, 122);
 
+/// A recorded step's name as `lang` shows it: in 中文 where the step is known ([`step_zh`]),
+/// else as recorded.
+pub fn step_name(lang: Lang, recorded: &str) -> String {
+    match lang {
+        Lang::Zh => step_zh(recorded).unwrap_or_else(|| recorded.to_string()),
+        Lang::En => recorded.to_string(),
+    }
+}
+
+/// The 中文 name of a step the records keep in English, where botbench knows it: the line
+/// station's steps ([`crate::ops::station::plan::title_zh`]), the shipped self-test plan's
+/// steps (its `zh` map), the generated records' steps; `None` for another plan's step.
+pub fn step_zh(recorded: &str) -> Option<String> {
+    static KNOWN: std::sync::OnceLock<std::collections::BTreeMap<String, String>> =
+        std::sync::OnceLock::new();
+    let known = KNOWN.get_or_init(|| {
+        let mut known: std::collections::BTreeMap<String, String> =
+            crate::ops::records::demo::STEP_NAMES_ZH
+                .iter()
+                .map(|(en, zh)| ((*en).to_string(), (*zh).to_string()))
+                .collect();
+        let profile = crate::profile::Registry::builtin().and_then(|r| r.get("window-cleaner"));
+        for (file, text) in crate::ui::files::SHIPPED {
+            if let Ok(profile) = &profile
+                && let Ok(plan) = crate::ops::selftest::Plan::parse(file, text, profile)
+            {
+                known.extend(plan.zh);
+            }
+        }
+        known
+    });
+    known
+        .get(recorded)
+        .cloned()
+        .or_else(|| crate::ops::station::plan::title_zh(recorded))
+}
+
 /// The failing steps as horizontal bars, the most failures on top, each step named on the
 /// axis and its count and share on hover.
 fn pareto_plot(ui: &mut egui::Ui, lang: Lang, steps: &[ParetoStep]) {
@@ -398,7 +435,7 @@ fn pareto_plot(ui: &mut egui::Ui, lang: Lang, steps: &[ParetoStep]) {
     let shown: Vec<ParetoStep> = steps.iter().take(8).cloned().collect();
     let n = shown.len();
     // The most failures on top: the first step at the highest position.
-    let labels: Vec<String> = shown.iter().rev().map(|p| p.step.clone()).collect();
+    let labels: Vec<String> = shown.iter().rev().map(|p| step_name(lang, &p.step)).collect();
     let bars: Vec<Bar> = shown
         .iter()
         .enumerate()
@@ -407,7 +444,7 @@ fn pareto_plot(ui: &mut egui::Ui, lang: Lang, steps: &[ParetoStep]) {
                 .width(0.7)
                 .name(format!(
                     "{}: {} ({}, {} {})",
-                    p.step,
+                    step_name(lang, &p.step),
                     p.count,
                     pct(p.share),
                     lang.tr("cumulative", "累计"),

@@ -165,3 +165,29 @@ fn the_operator_view_is_locked_until_the_engineer_s_password_unlocks_it() {
     );
     h.state().stop_all();
 }
+
+#[test]
+fn a_slot_s_number_then_y_or_n_answers_that_slot_s_question() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = demo_window(dir.path(), egui::vec2(1280.0, 800.0), Lang::En);
+    step_until(&mut h, "the spray question", |st| {
+        st.tiles[0]
+            .asking
+            .as_ref()
+            .is_some_and(|(k, _, _)| *k == "confirm")
+    });
+    // "2 N": slot 2 asks nothing, so the N goes nowhere (to the oldest question it would
+    // fail slot 1); then "1 Y" answers slot 1's.
+    h.key_press(egui::Key::Num2);
+    h.key_press(egui::Key::N);
+    h.step();
+    h.key_press(egui::Key::Num1);
+    h.key_press(egui::Key::Y);
+    h.step();
+    step_until(&mut h, "three verdicts", |st| {
+        st.tiles.iter().all(|t| t.verdict.is_some())
+    });
+    for t in &h.state().tiles {
+        assert_eq!(t.verdict.as_ref().map(|v| v.0), Some(true), "{t:?}");
+    }
+}

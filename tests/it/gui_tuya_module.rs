@@ -11,7 +11,7 @@ use egui_kittest::kittest::Queryable;
 use std::collections::BTreeMap;
 
 use crate::gui_tuya::{handshake, harness, tab};
-use crate::support::gui::{H, app, has_label, step_until, type_into};
+use crate::support::gui::{H, app, has_label, settings, step_until, type_into};
 use crate::support::{Served, serve_with, temp_dir};
 
 fn mcu(cfg: TuyaConfig) -> Served<TuyaMcu> {
@@ -76,7 +76,22 @@ fn grade(h: &mut H) {
 #[test]
 fn the_conformance_tab_grades_the_mcu_and_saves_its_report() {
     let b = mcu(TuyaConfig::default());
-    let mut h = console(&b);
+    // Its own records file: the grade is recorded as `tuya conform` records it.
+    let dir = temp_dir();
+    let records = dir.path().join("records.sqlite");
+    let mut saved = settings(
+        b.path(),
+        "tuya-vacuum",
+        botbench::ui::PanelId::TUYA_CONSOLE,
+        botbench::i18n::Lang::En,
+    );
+    saved.port_mut().baud = Some(115_200);
+    saved.files.insert(
+        botbench::ui::settings::FileKind::Records,
+        records.display().to_string(),
+    );
+    let mut h = crate::support::gui::harness(saved, b.ports());
+    handshake(&mut h);
     grade(&mut h);
     let grade = app(&h)
         .panel::<TuyaConsolePanel>()
@@ -89,7 +104,22 @@ fn the_conformance_tab_grades_the_mcu_and_saves_its_report() {
     assert!(has_label(&h, "CONFORMS"));
     assert!(has_label(&h, "heartbeat"));
     assert!(has_label(&h, "read_only_refused"));
-    let dir = temp_dir();
+    // One record, kept before the verdict was shown: kind tuya-conform, PASS, a step per check
+    // graded, the MCU's product id as the unit's hardware.
+    let db = rusqlite::Connection::open(&records).unwrap();
+    let (kind, verdict, steps, hardware): (String, String, i64, Option<String>) = db
+        .query_row("SELECT kind, verdict, steps, hardware FROM runs", [], |r| {
+            Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?))
+        })
+        .unwrap();
+    assert_eq!((kind.as_str(), verdict.as_str()), ("tuya-conform", "PASS"));
+    let graded = grade
+        .checks
+        .iter()
+        .filter(|c| c.grade != botbench::ops::tuya::conform::Grade::Skip)
+        .count();
+    assert_eq!(steps as usize, graded);
+    assert_eq!(hardware.as_deref(), grade.pid.as_deref());
     let file = dir.path().join("grade.json");
     type_into(&mut h, "Report file", &file.display().to_string());
     h.get_by_label("Save report").click();

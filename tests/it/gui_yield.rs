@@ -58,3 +58,23 @@ fn the_yield_view_shows_the_hand_sets_yields_in_both_languages() {
         assert!(app(&h).station().records.error().is_none());
     }
 }
+
+#[test]
+fn the_pareto_in_chinese_names_the_steps_botbench_knows_in_chinese() {
+    use botbench::ui::yield_view::step_name;
+    let zh = |s: &str| step_name(Lang::Zh, s);
+    // The shipped self-test plan's steps (its zh map), the generated records' steps.
+    assert_eq!(zh("Battery voltage"), "电池电压");
+    assert_eq!(zh("Corner switches"), "四角开关");
+    assert_eq!(zh("Spray pump"), "喷水泵");
+    // The line station's steps, as their records name them.
+    assert_eq!(
+        zh("Self-test (window-cleaner-selftest)"),
+        "自检(window-cleaner-selftest)"
+    );
+    assert_eq!(zh("Write result"), "写入测试结果");
+    assert_eq!(zh("Measure Suction"), "测量 Suction");
+    // Another plan's step stays as recorded; English is always as recorded.
+    assert_eq!(zh("Lid closes"), "Lid closes");
+    assert_eq!(step_name(Lang::En, "Battery voltage"), "Battery voltage");
+}

@@ -62,6 +62,7 @@ mod sim_devices;
 mod sim_msp;
 mod station_bundle;
 mod station_headless;
+mod station_records;
 mod station_runner;
 mod stations;
 mod tuya_conform;

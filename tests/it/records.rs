@@ -331,6 +331,54 @@ fn a_measurement_walking_toward_its_limit_is_a_drift_and_a_steady_one_is_not() {
 }
 
 #[test]
+fn drift_follows_the_order_units_were_tested_not_the_order_their_records_arrived() {
+    // The same 1200 units as above, but the last 300 (the fan current walking up) were stored
+    // first and the 900 before them arrived afterwards, forwarded from a station's spool: in
+    // arrival order the newest 150 values are steady units, in test order the walk.
+    let dir = temp();
+    let mut store = SqliteStore::open(&dir.path().join("r.sqlite")).unwrap();
+    let mut all = Vec::new();
+    botbench::ops::records::demo::generate(1200, DAY, DAY + 86_400_000, 3, &mut |r| all.push(r));
+    let cut = DAY + 86_400_000 * 900 / 1200;
+    let (late, early): (Vec<Record>, Vec<Record>) =
+        all.into_iter().partition(|r| r.started_ms >= cut);
+    assert!(late.len() >= 300 && early.len() >= 900);
+    let tx = store.connection().transaction().unwrap();
+    for r in late.iter().chain(&early) {
+        write::insert(&mut Lite(&tx), r).unwrap();
+    }
+    tx.commit().unwrap();
+    let r = report_of(&mut store, &Query::default());
+    let fan = r
+        .measurements
+        .iter()
+        .find(|m| m.name == "fanCurrent")
+        .unwrap();
+    let drift = fan
+        .drift
+        .as_ref()
+        .unwrap_or_else(|| panic!("no drift: {:?}", fan.recent_means));
+    assert_eq!((drift.toward, drift.limit), ("high", 1.6));
+    let drifting = r.measurements.iter().filter(|m| m.drift.is_some()).count();
+    assert_eq!(drifting, 1);
+    // A period filter reads the runs the same way.
+    let q = Query {
+        filter: botbench::ops::records::Filter {
+            since_ms: Some(DAY),
+            ..Default::default()
+        },
+        ..Query::default()
+    };
+    let r = report_of(&mut store, &q);
+    let fan = r
+        .measurements
+        .iter()
+        .find(|m| m.name == "fanCurrent")
+        .unwrap();
+    assert!(fan.drift.is_some(), "{:?}", fan.recent_means);
+}
+
+#[test]
 fn a_file_that_is_not_botbenchs_or_is_newer_is_refused_naming_it() {
     let dir = temp();
     let text = dir.path().join("notes.txt");

@@ -234,3 +234,67 @@ fn the_server_killed_and_restarted_during_200_records_has_all_200_once_each() {
         .collect();
     assert_eq!(order, uuids);
 }
+
+#[test]
+fn a_station_s_records_spooled_while_the_server_was_away_are_forwarded_once_it_is_back() {
+    use botbench::ops::station::What;
+    let _turn = SERVER.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(url) = server("a_station_s_records_spooled") else {
+        return;
+    };
+    let Ok(ctl) = std::env::var("BOTBENCH_TEST_PG_CTL") else {
+        assert!(std::env::var("CI").as_deref() != Ok("true"));
+        let _ = writeln!(
+            std::io::stderr(),
+            "SKIPPED the station spool test: BOTBENCH_TEST_PG_CTL (stop/start) not set"
+        );
+        return;
+    };
+    let pg_ctl = |what: &str| {
+        let ok = std::process::Command::new(&ctl)
+            .arg(what)
+            .stdout(std::process::Stdio::null())
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok, "{ctl} {what}");
+    };
+    let url = schema(&url, "t_station_spool");
+    let dir = crate::support::temp_dir();
+    pg_ctl("stop");
+    let (_, started) = super::station_records::demo_station(&url, &dir.path().join("spool.sqlite"));
+    let events = super::station_records::run_to_the_end(&started);
+    let waiting = |e: &botbench::ops::station::Event| match e.what {
+        What::Records { waiting, .. } => Some(waiting),
+        _ => None,
+    };
+    assert_eq!(
+        events.iter().filter_map(waiting).max(),
+        Some(3),
+        "{events:#?}"
+    );
+    pg_ctl("start");
+    // The forwarder (slot "") sends them on by itself: no unit runs after the server is back.
+    let deadline = std::time::Instant::now() + crate::support::cli::WATCHDOG;
+    let mut seen = Vec::new();
+    loop {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "never forwarded; seen since the server started: {seen:#?}"
+        );
+        let Ok(ev) = started
+            .events
+            .recv_timeout(std::time::Duration::from_millis(200))
+        else {
+            continue;
+        };
+        let done = ev.slot.is_empty() && waiting(&ev) == Some(0);
+        seen.push(ev);
+        if done {
+            break;
+        }
+    }
+    started.forwarder.stop();
+    assert_eq!(count(&url, "SELECT COUNT(DISTINCT uuid) FROM runs"), 3);
+    assert_eq!(count(&url, "SELECT COUNT(*) FROM runs"), 3);
+}

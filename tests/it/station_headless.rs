@@ -98,6 +98,35 @@ fn the_demo_station_runs_headless_to_three_verdicts_with_no_hardware() {
             .starts_with("record saved to"),
         "{servo}"
     );
+    // Steps named for people, in both languages, as the records keep them.
+    let names: Vec<(&str, &str)> = docs
+        .iter()
+        .filter(|d| d["event"] == "step")
+        .map(|d| (d["name"].as_str().unwrap(), d["name_zh"].as_str().unwrap()))
+        .collect();
+    for want in [
+        (
+            "Self-test (window-cleaner-selftest)",
+            "自检(window-cleaner-selftest)",
+        ),
+        (
+            "Provision (servo-provision-plan)",
+            "舵机配置(servo-provision-plan)",
+        ),
+        ("Tuya handshake", "涂鸦握手"),
+        ("Write result", "写入测试结果"),
+    ] {
+        assert!(names.contains(&want), "{want:?} not in {names:?}");
+    }
+    let db = rusqlite::Connection::open(&records).unwrap();
+    let recorded: i64 = db
+        .query_row(
+            "SELECT COUNT(*) FROM steps WHERE name = 'Write result'",
+            [],
+            |r| r.get(0),
+        )
+        .unwrap();
+    assert_eq!(recorded, 1);
 }
 
 /// A bundle of three slots on the simulators' ptys, with a short self-test plan (no operator
@@ -191,7 +220,7 @@ fn three_slots_on_ptys_run_headless_to_their_verdicts() {
         .collect();
     assert!(
         done.iter()
-            .any(|d| d["name"] == "WriteResult" && d["pass"] == true),
+            .any(|d| d["name"] == "Write result" && d["pass"] == true),
         "{}",
         ran.text()
     );
@@ -228,7 +257,7 @@ fn an_operator_no_fails_the_unit_and_the_robot_is_told_it_failed() {
     // WriteResult still ran after the failure: 0 written, read back 0.
     let write = docs
         .iter()
-        .find(|d| d["event"] == "step-done" && d["name"] == "WriteResult")
+        .find(|d| d["event"] == "step-done" && d["name"] == "Write result")
         .expect("WriteResult ran after the failure");
     assert_eq!(write["pass"], true, "{write}");
     assert_eq!(auto_test_result(&wc), 0);
@@ -246,7 +275,7 @@ fn a_scan_that_does_not_match_the_plan_s_pattern_fails_before_the_robot_is_touch
         .iter()
         .find(|d| d["event"] == "verdict" && d["slot"] == "1")
         .unwrap();
-    assert_eq!(v["failed_step"], "Scan", "{v}");
+    assert_eq!(v["failed_step"], "Scan serial", "{v}");
     assert_eq!(v["reason"], "serial does not match the pattern", "{v}");
     // Nothing after the scan ran but the result written into the robot.
     let ran_after: Vec<&str> = docs
@@ -254,7 +283,7 @@ fn a_scan_that_does_not_match_the_plan_s_pattern_fails_before_the_robot_is_touch
         .filter(|d| d["event"] == "step" && d["slot"] == "1")
         .map(|d| d["name"].as_str().unwrap())
         .collect();
-    assert_eq!(ran_after, ["Scan", "WriteResult"], "{}", ran.text());
+    assert_eq!(ran_after, ["Scan serial", "Write result"], "{}", ran.text());
 }
 
 /// Runs a one-slot station of a simulated window cleaner with `plan` (RON steps and options),
@@ -336,4 +365,328 @@ fn a_retry_refused_leaves_the_unit_failed_at_that_step() {
     let v = docs.iter().find(|d| d["event"] == "verdict").unwrap();
     assert_eq!(v["failed_step"], "Measure Suction", "{v}");
     assert_eq!(v["reason"], "out of limits: Suction", "{v}");
+}
+
+#[test]
+fn ctrl_c_stops_every_slot_safely_and_exits_130() {
+    let dir = tempfile::tempdir().unwrap();
+    let records = dir.path().join("records.sqlite");
+    let bundle = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/demo-station.ron");
+    let bundle = bundle.display().to_string();
+    let args = [
+        "station",
+        &bundle,
+        "--headless",
+        "--json",
+        "--records",
+        &records.display().to_string(),
+    ];
+    // No --once: the slots run unit after unit until stopped; nobody answers the Confirm.
+    let captured = Captured::default();
+    let ports = PortOpener::system();
+    let run = crate::support::cli::start_in_process(&args, &ports, &captured);
+    let deadline = std::time::Instant::now() + crate::support::PATIENCE;
+    // Every slot busy with a unit: slot 1 asking about the spray, 2 and 3 past a step.
+    let busy = |out: &str| {
+        let docs: Vec<Value> = out
+            .lines()
+            .filter_map(|l| serde_json::from_str(l).ok())
+            .collect();
+        ["1", "2", "3"].iter().all(|s| {
+            docs.iter()
+                .any(|d| d["slot"] == *s && (d["event"] == "step" || d["event"] == "ask"))
+        })
+    };
+    while !busy(&captured.out()) {
+        assert!(
+            !run.is_finished() && std::time::Instant::now() < deadline,
+            "{}{}",
+            captured.out(),
+            captured.err()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    captured.interrupt();
+    let code = crate::support::cli::finish_in_process(run, &captured, "the station");
+    let out = captured.out();
+    let text = format!("exit {code}\n{out}{}", captured.err());
+    assert_eq!(code, 130, "{text}");
+    let docs: Vec<Value> = out
+        .lines()
+        .filter_map(|l| serde_json::from_str(l).ok())
+        .collect();
+    let mut stopped: Vec<&str> = docs
+        .iter()
+        .filter(|d| d["event"] == "stopped")
+        .map(|d| d["slot"].as_str().unwrap())
+        .collect();
+    stopped.sort_unstable();
+    assert_eq!(stopped, ["1", "2", "3"], "{text}");
+    assert!(
+        captured.err().contains("every slot stopped safely"),
+        "{text}"
+    );
+    // A unit cut short is never a PASS: its record, if any, says FAIL.
+    let db = rusqlite::Connection::open(&records).unwrap();
+    let cut_short_passed: i64 = db
+        .query_row(
+            "SELECT COUNT(*) FROM runs WHERE verdict = 'PASS' AND reason = 'cancelled'",
+            [],
+            |r| r.get(0),
+        )
+        .unwrap_or(0);
+    assert_eq!(cut_short_passed, 0);
+}
+
+#[test]
+fn preset_conformance_and_firmware_update_steps_run_in_a_station_and_are_recorded() {
+    let wc = Sim::start(&["window-cleaner"]);
+    let tuya = Sim::start(&["tuya-vacuum", "--ota-restart-ms", "300"]);
+    let dir = tempfile::tempdir().unwrap();
+    let presets = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets");
+    std::fs::copy(
+        presets.join("window-cleaner-factory.ron"),
+        dir.path().join("window-cleaner-factory.ron"),
+    )
+    .unwrap();
+    // A 4 KiB image whose MCU_VER string is 1.2.3, as an SDK build holds it.
+    let mut image: Vec<u8> = (0..4096u32).map(|i| (i * 13 % 251) as u8 | 0x80).collect();
+    image[100..106].copy_from_slice(b"1.2.3\0");
+    std::fs::write(dir.path().join("vacuum-1.2.3.bin"), &image).unwrap();
+    let text = format!(
+        r#"(version: 1, id: "steps-station",
+    plans: {{
+        "wc": (start: Auto, steps: [Identify(hardware: [3]), Preset("window-cleaner-factory.ron"), WriteResult]),
+        "tuya": (start: Auto, steps: [TuyaHandshake, TuyaConform, FirmwareUpdate(image: "vacuum-1.2.3.bin")]),
+    }},
+    slots: [
+        (name: "1", fixture: "WC", port: Path("{}"), profile: "window-cleaner", plan: "wc"),
+        (name: "2", fixture: "MCU", port: Path("{}"), profile: "tuya-vacuum", plan: "tuya"),
+    ],
+)"#,
+        wc.path, tuya.path
+    );
+    let bundle = dir.path().join("steps.ron");
+    std::fs::write(&bundle, text).unwrap();
+    let records = dir.path().join("records.sqlite");
+    let ports = tuya.serve_in(wc.ports().clone());
+    let ran = run_in_process_into(
+        &[
+            "station",
+            &bundle.display().to_string(),
+            "--headless",
+            "--json",
+            "--once",
+            "--records",
+            &records.display().to_string(),
+        ],
+        &ports,
+        Captured::default(),
+    );
+    assert_eq!(ran.code, 0, "{}", ran.text());
+    let docs = ran.json_lines();
+    assert_eq!(
+        verdicts(&docs),
+        [("1".into(), true), ("2".into(), true)],
+        "{}",
+        ran.text()
+    );
+    let done: Vec<(&str, &str, bool)> = docs
+        .iter()
+        .filter(|d| d["event"] == "step-done")
+        .map(|d| {
+            (
+                d["slot"].as_str().unwrap(),
+                d["name"].as_str().unwrap(),
+                d["pass"].as_bool().unwrap(),
+            )
+        })
+        .collect();
+    for want in [
+        ("1", "Preset (window-cleaner-factory)", true),
+        ("1", "Write result", true),
+        ("2", "Tuya conformance", true),
+        ("2", "Firmware update (vacuum-1.2.3)", true),
+    ] {
+        assert!(done.contains(&want), "{want:?} not in {done:?}");
+    }
+    let db = rusqlite::Connection::open(&records).unwrap();
+    // The preset's writes, each with the value before and after (read back).
+    let writes: i64 = db
+        .query_row(
+            "SELECT COUNT(*) FROM writes w JOIN runs r ON r.id = w.run \
+             WHERE r.slot = '1' AND w.after IS NOT NULL",
+            [],
+            |r| r.get(0),
+        )
+        .unwrap();
+    assert!(writes > 0, "no preset writes recorded");
+    // The conformance checks as steps, and the MCU on the image's version after the update.
+    let (checks, firmware): (i64, Option<String>) = db
+        .query_row(
+            "SELECT (SELECT COUNT(*) FROM steps s WHERE s.run = r.id AND s.name = 'heartbeat'), \
+             r.firmware FROM runs r WHERE r.slot = '2'",
+            [],
+            |r| Ok((r.get(0)?, r.get(1)?)),
+        )
+        .unwrap();
+    assert_eq!((checks, firmware.as_deref()), (1, Some("1.2.3")));
+}
+
+#[test]
+fn an_auto_slot_starts_when_the_simulator_presents_the_next_unit_after_a_silence() {
+    // `botbench sim ... next`: the unit lifted off (silent for 1.5 s), a fresh one placed.
+    let mut wc = Sim::start(&["window-cleaner"]);
+    let mut servo = Sim::start(&["servo-bus", "--servos", "0"]);
+    let dir = tempfile::tempdir().unwrap();
+    let presets = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets");
+    std::fs::copy(
+        presets.join("servo-provision-plan.ron"),
+        dir.path().join("servo-provision-plan.ron"),
+    )
+    .unwrap();
+    let text = format!(
+        r#"(version: 1, id: "auto-station",
+    plans: {{
+        "wc": (start: Auto, steps: [Identify(hardware: [3]), WriteResult]),
+        "servo": (start: Auto, steps: [Provision(plan: "servo-provision-plan.ron")]),
+    }},
+    slots: [
+        (name: "1", fixture: "WC", port: Path("{}"), profile: "window-cleaner", plan: "wc"),
+        (name: "2", fixture: "Servos", port: Path("{}"), profile: "servo", plan: "servo"),
+    ],
+)"#,
+        wc.path, servo.path
+    );
+    let bundle = dir.path().join("auto.ron");
+    std::fs::write(&bundle, text).unwrap();
+    let records = dir.path().join("records.sqlite");
+    let bundle = bundle.display().to_string();
+    let records = records.display().to_string();
+    let args = [
+        "station",
+        &bundle,
+        "--headless",
+        "--json",
+        "--records",
+        &records,
+    ];
+    let ports = servo.serve_in(wc.ports().clone());
+    let captured = Captured::default();
+    let run = crate::support::cli::start_in_process(&args, &ports, &captured);
+    let verdicts_of = |slot: &str| {
+        captured
+            .out()
+            .lines()
+            .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+            .filter(|d| d["event"] == "verdict" && d["slot"] == slot)
+            .count()
+    };
+    let wait_for = |what: &str, done: &dyn Fn() -> bool| {
+        let deadline = std::time::Instant::now() + crate::support::PATIENCE;
+        while !done() {
+            assert!(
+                !run.is_finished() && std::time::Instant::now() < deadline,
+                "{what}: {}{}",
+                captured.out(),
+                captured.err()
+            );
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+    };
+    // The first units start at once (Auto: a unit answers).
+    wait_for("the first verdicts", &|| {
+        verdicts_of("1") == 1 && verdicts_of("2") == 1
+    });
+    // The same unit still on the fixture is not tested again; the next one is.
+    wc.type_line("next");
+    servo.type_line("next");
+    wait_for("the second units' verdicts", &|| {
+        verdicts_of("1") == 2 && verdicts_of("2") == 2
+    });
+    captured.interrupt();
+    let code = crate::support::cli::finish_in_process(run, &captured, "the station");
+    assert_eq!(code, 130, "{}{}", captured.out(), captured.err());
+    // Two units per slot, each PASS; the servos with their own serial numbers.
+    let db = rusqlite::Connection::open(&records).unwrap();
+    let servos: Vec<String> = db
+        .prepare("SELECT serial FROM runs WHERE slot = '2' AND verdict = 'PASS' ORDER BY id")
+        .unwrap()
+        .query_map([], |r| r.get(0))
+        .unwrap()
+        .map(Result::unwrap)
+        .collect();
+    assert_eq!(servos.len(), 2, "{servos:?}");
+    assert_ne!(servos[0], servos[1]);
+    let wc_passed: i64 = db
+        .query_row(
+            "SELECT COUNT(*) FROM runs WHERE slot = '1' AND verdict = 'PASS'",
+            [],
+            |r| r.get(0),
+        )
+        .unwrap();
+    assert_eq!(wc_passed, 2);
+}
+
+#[test]
+fn a_scanner_that_is_its_own_device_starts_a_slot_with_the_code_it_sends() {
+    let wc = Sim::start(&["window-cleaner"]);
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!(
+        r#"(version: 1, id: "scan-station",
+    plans: {{ "wc": (start: Scan, steps: [Scan(pattern: "WC[0-9]{{6}}"), WriteResult]) }},
+    slots: [(name: "1", fixture: "WC", port: Path("{}"), profile: "window-cleaner", plan: "wc")],
+)"#,
+        wc.path
+    );
+    let bundle = dir.path().join("scan.ron");
+    std::fs::write(&bundle, text).unwrap();
+    // What a serial barcode scanner sends: the code and a carriage return.
+    let scanner = dir.path().join("scanner");
+    std::fs::write(&scanner, "WC004711\r").unwrap();
+    let records = dir.path().join("records.sqlite");
+    let ran = run_in_process_into(
+        &[
+            "station",
+            &bundle.display().to_string(),
+            "--headless",
+            "--json",
+            "--once",
+            "--records",
+            &records.display().to_string(),
+            "--scanner",
+            &scanner.display().to_string(),
+        ],
+        wc.ports(),
+        Captured::default(),
+    );
+    assert_eq!(ran.code, 0, "{}", ran.text());
+    let docs = ran.json_lines();
+    let v = docs.iter().find(|d| d["event"] == "verdict").unwrap();
+    assert_eq!(
+        (v["pass"].as_bool(), v["serial"].as_str()),
+        (Some(true), Some("WC004711")),
+        "{v}"
+    );
+    // A scanner that is not there is refused, naming it.
+    let ran = run_in_process_into(
+        &[
+            "station",
+            &bundle.display().to_string(),
+            "--headless",
+            "--once",
+            "--records",
+            &records.display().to_string(),
+            "--scanner",
+            "/dev/no-such-scanner",
+        ],
+        wc.ports(),
+        Captured::default(),
+    );
+    assert_eq!(ran.code, 2, "{}", ran.text());
+    assert!(
+        ran.err.contains("--scanner /dev/no-such-scanner"),
+        "{}",
+        ran.text()
+    );
 }

@@ -18,6 +18,20 @@ type StepSpec = (
     f64,
 );
 
+/// The generated steps' names in 中文 (the records keep the English; the Yield view shows these).
+pub const STEP_NAMES_ZH: [(&str, &str); 10] = [
+    ("Battery voltage", "电池电压"),
+    ("Adapter voltage", "适配器电压"),
+    ("Gyro at rest", "静止时陀螺仪"),
+    ("Accelerometer at rest", "静止时加速度计"),
+    ("Wheels forward", "轮子正转"),
+    ("Wheels backward", "轮子反转"),
+    ("Fan current", "风机电流"),
+    ("Spray pump", "喷水泵"),
+    ("Pressure sensor", "压力传感器"),
+    ("Water box", "水箱"),
+];
+
 /// The steps every generated unit runs.
 const STEPS: [StepSpec; 10] = [
     (

@@ -6,7 +6,8 @@ use serde::Serialize;
 /// One thing that happened at a slot.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Event {
-    /// The slot's name.
+    /// The slot's name; empty for the station's own events ([`What::Records`] from the
+    /// forwarder).
     pub slot: String,
     /// What happened.
     #[serde(flatten)]
@@ -40,8 +41,10 @@ pub enum What {
         index: usize,
         /// How many steps.
         of: usize,
-        /// Its name.
+        /// Its name (`Self-test (window-cleaner-selftest)`), as the records keep it.
         name: String,
+        /// Its name in 中文.
+        name_zh: String,
         /// 1 the first try, 2 the retry.
         attempt: u8,
     },
@@ -60,6 +63,8 @@ pub enum What {
     StepDone {
         /// Its name.
         name: String,
+        /// Its name in 中文.
+        name_zh: String,
         /// PASS or FAIL.
         pass: bool,
         /// What was seen.
@@ -73,14 +78,30 @@ pub enum What {
         serial: Option<String>,
         /// The first failed step.
         failed_step: Option<String>,
+        /// Its name in 中文.
+        failed_step_zh: Option<String>,
         /// Why it failed.
         reason: Option<String>,
         /// How many earlier runs of this serial the records hold.
         earlier_runs: Option<i64>,
         /// The record's UUID.
         record: String,
-        /// Where the record went (`record saved to ...`).
+        /// Where the record went (`record saved to ...`, or the spool or memory and why).
         kept: String,
+        /// Whether the record reached its store (`false`: kept in a spool or in memory, as
+        /// `kept` says; the verdict stands either way).
+        stored: bool,
+    },
+    /// The station's records not yet in their store (a line server away, a full disk): how
+    /// many wait, where, and why. Said by a slot after each record and by the station's
+    /// forwarder (`slot` empty) when the count changes.
+    Records {
+        /// Records waiting to be forwarded (0: everything is in the store).
+        waiting: u64,
+        /// The store (file or server, password hidden).
+        store: String,
+        /// Why they wait: the store's last error.
+        why: Option<String>,
     },
     /// The slot stopped (STOP, STOP ALL, end of `--once`): the device left in its safe state.
     Stopped {

@@ -6,6 +6,7 @@
 //!
 //! - [`doc`]: the RON shapes; [`example`]: the commented bundle `botbench station new` writes.
 //! - [`load`]: read, hash, check; [`plan`]: a plan's steps with their files parsed.
+//! - [`forward`]: the records waiting in a spool, counted and forwarded while the station runs.
 //! - [`port`]: finding a slot's port by what stays true when its adapter is replugged.
 
 pub mod doc;
@@ -18,8 +19,10 @@ pub use doc::{PortLocator, StartMode};
 pub use load::{Bundle, HashedFile, LoadContext, Slot, bundle_sha256, load};
 pub use plan::{LinePlan, LineStep, Op};
 pub mod event;
+pub mod forward;
 pub mod runner;
 pub mod steps;
 
 pub use event::{Answer, Command, Event, What};
+pub use forward::Forwarder;
 pub use runner::{Hands, OperatorHands, SlotHandle, StationContext, spawn};

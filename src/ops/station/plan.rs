@@ -20,7 +20,7 @@ pub struct LinePlan {
 }
 
 impl LinePlan {
-    /// The steps' names, joined: `Identify, SelfTest window-cleaner-selftest.ron, WriteResult`.
+    /// The steps' names, joined: `Identify, Self-test (window-cleaner-selftest), Write result`.
     pub fn step_names(&self) -> String {
         self.steps
             .iter()
@@ -30,23 +30,81 @@ impl LinePlan {
     }
 }
 
-/// One step: its name as shown and recorded, and its operation.
+/// One step: its name as shown and recorded (in English; 中文 for the window and the events),
+/// and its operation.
 #[derive(Debug, Clone)]
 pub struct LineStep {
-    /// `Identify`, `SelfTest window-cleaner-selftest.ron`, `Confirm Did it spray?`.
+    /// `Identify`, `Self-test (window-cleaner-selftest)`, `Confirm: Did it spray?`: the
+    /// records keep this name.
     pub name: String,
+    /// The same in 中文: `识别`, `自检(window-cleaner-selftest)`, `确认:喷水了吗?`.
+    pub name_zh: String,
     /// What it does.
     pub op: Op,
 }
 
 impl LineStep {
-    /// The step doing `op`, named after it.
+    /// The step doing `op`, named after it ([`Op::title`]).
     pub fn new(op: Op) -> Self {
+        let title = op.title();
         Self {
-            name: op.name(),
+            name: title.en,
+            name_zh: title.zh,
             op,
         }
     }
+}
+
+/// The file a step works with as people name it: its name without folders and its extension
+/// (`presets/window-cleaner-selftest.ron` → `window-cleaner-selftest`, `vacuum-1.2.3.bin` →
+/// `vacuum-1.2.3`; a last part of digits is a version, not an extension).
+fn stem(file: &str) -> &str {
+    let name = file.rsplit(['/', '\\']).next().unwrap_or(file);
+    match name.rsplit_once('.') {
+        Some((base, ext))
+            if !base.is_empty()
+                && !ext.is_empty()
+                && ext.chars().all(|c| c.is_ascii_alphabetic()) =>
+        {
+            base
+        }
+        _ => name,
+    }
+}
+
+/// The English and 中文 names of the steps that have a fixed name, or a name around a file:
+/// `(English, 中文, takes a file)`. [`Op::title`] and [`title_zh`] read it.
+const TITLES: [(&str, &str, bool); 10] = [
+    ("Identify", "识别设备", false),
+    ("Scan serial", "扫描序列号", false),
+    ("Preset", "预设", true),
+    ("Self-test", "自检", true),
+    ("Provision", "舵机配置", true),
+    ("Tuya handshake", "涂鸦握手", false),
+    ("Tuya status", "涂鸦状态查询", false),
+    ("Tuya conformance", "涂鸦协议一致性", false),
+    ("Firmware update", "固件升级", true),
+    ("Write result", "写入测试结果", false),
+];
+
+/// The 中文 name of a line step from its English name as the records keep it (for the
+/// report's Pareto): `Self-test (wc)` → `自检(wc)`, `Measure Suction` → `测量 Suction`;
+/// `None` for a name no line step has (a Confirm's question is known in English only).
+pub fn title_zh(en: &str) -> Option<String> {
+    for (e, z, file) in TITLES {
+        if !file && en == e {
+            return Some(z.to_string());
+        }
+        if file
+            && let Some(inner) = en
+                .strip_prefix(e)
+                .and_then(|r| r.strip_prefix(" ("))
+                .and_then(|r| r.strip_suffix(')'))
+        {
+            return Some(format!("{z}({inner})"));
+        }
+    }
+    en.strip_prefix("Measure ").map(|m| format!("测量 {m}"))
 }
 
 /// A step's operation, with what it needs.
@@ -148,16 +206,35 @@ impl Op {
         }
     }
 
-    /// The step's name: its kind, and the file or question it works with.
-    pub fn name(&self) -> String {
+    /// The step's name for people, in English and 中文: what it does, and the file (without
+    /// folders and `.ron`) or question it works with: `Self-test (window-cleaner-selftest)`,
+    /// `自检(window-cleaner-selftest)`; `Confirm: Did it spray?`; `Measure Suction`.
+    pub fn title(&self) -> Text {
+        let fixed = |i: usize| Text::new(TITLES[i].0, TITLES[i].1);
+        let with_file = |i: usize, file: &str| {
+            Text::new(
+                format!("{} ({})", TITLES[i].0, stem(file)),
+                format!("{}({})", TITLES[i].1, stem(file)),
+            )
+        };
         match self {
-            Op::Preset { file, .. }
-            | Op::SelfTest { file, .. }
-            | Op::Provision { file, .. }
-            | Op::FirmwareUpdate { file, .. } => format!("{} {file}", self.kind()),
-            Op::Confirm { question, .. } => format!("Confirm: {}", question.en),
-            Op::Measure { name, .. } => format!("Measure {name}"),
-            _ => self.kind().to_string(),
+            Op::Identify { .. } => fixed(0),
+            Op::Scan { .. } => fixed(1),
+            Op::Preset { file, .. } => with_file(2, file),
+            Op::SelfTest { file, .. } => with_file(3, file),
+            Op::Provision { file, .. } => with_file(4, file),
+            Op::TuyaHandshake => fixed(5),
+            Op::TuyaStatus => fixed(6),
+            Op::TuyaConform => fixed(7),
+            Op::FirmwareUpdate { file, .. } => with_file(8, file),
+            Op::WriteResult => fixed(9),
+            Op::Confirm { question, .. } => Text::new(
+                format!("Confirm: {}", question.en),
+                format!("确认:{}", question.zh),
+            ),
+            Op::Measure { name, .. } => {
+                Text::new(format!("Measure {name}"), format!("测量 {name}"))
+            }
         }
     }
 

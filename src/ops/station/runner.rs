@@ -105,6 +105,7 @@ pub fn spawn(
         commands: rx,
         cancel: cancel.clone(),
         once,
+        last_identity: None,
     };
     let thread = std::thread::Builder::new()
         .name(format!("slot-{name}"))
@@ -126,6 +127,8 @@ struct SlotRunner {
     commands: Receiver<Command>,
     cancel: Cancel,
     once: bool,
+    /// The identity of the unit last tested here, read after its verdict (Auto start).
+    last_identity: Option<String>,
 }
 
 impl SlotRunner {
@@ -168,6 +171,14 @@ impl SlotRunner {
                     Start::Lost => break,
                 };
                 let record = self.unit(&client, serial);
+                // Who is on the fixture now (a firmware update may have changed it): the next
+                // unit is one that answers after a silence, or with another identity.
+                if self.slot.plan.start == StartMode::Auto {
+                    self.last_identity = match self.probe(&client) {
+                        Probe::Present(id) => id,
+                        _ => None,
+                    };
+                }
                 let lost = record
                     .reason
                     .as_deref()
@@ -275,8 +286,15 @@ impl SlotRunner {
             }
             if plan.start == StartMode::Auto {
                 match self.probe(client) {
-                    Probe::Present if absent_seen => return Start::Go(None),
-                    Probe::Present => {}
+                    Probe::Present(_) if absent_seen => return Start::Go(None),
+                    // Another unit answering without a silence between (swapped quickly): its
+                    // identity differs from the one last tested here.
+                    Probe::Present(Some(id))
+                        if self.last_identity.as_ref().is_some_and(|l| *l != id) =>
+                    {
+                        return Start::Go(None);
+                    }
+                    Probe::Present(_) => {}
                     Probe::Absent => absent_seen = true,
                     Probe::Lost => return Start::Lost,
                 }
@@ -284,26 +302,33 @@ impl SlotRunner {
         }
     }
 
-    /// Whether a unit answers on the port now: its identity (MSP), a fresh servo (id 0), the
-    /// MCU's product info (Tuya).
+    /// Whether a unit answers on the port now, read afresh (never a cached identity, which
+    /// would hide a fixture left empty), and who it says it is: its identity (MSP: CMD_VERSION
+    /// and CMD_BUILD_INFO), a fresh servo (id 0; no identity: every fresh servo is a new unit),
+    /// the MCU's product info (Tuya).
     fn probe(&self, client: &Client) -> Probe {
         use crate::profile::Protocol;
         let profile = &self.slot.profile;
         let dev = Device::new(client, profile);
-        let answered: Result<bool, crate::ops::OpError> = match profile.protocol {
-            Protocol::Msp => crate::ops::device::identify(client).map(|_| true),
+        let answered: Result<Option<Option<String>>, crate::ops::OpError> = match profile.protocol {
+            Protocol::Msp => client
+                .identify()
+                .map(|info| Some(Some(crate::ops::device::description(&info))))
+                .map_err(crate::ops::OpError::from),
             Protocol::Servo => {
                 crate::ops::servo::provision::find_fresh(dev, &profile.servo_bauds()).map(|found| {
                     found
                         .iter()
                         .any(|(_, p)| *p == crate::ops::servo::Presence::Present)
+                        .then_some(None)
                 })
             }
-            Protocol::Tuya => Ok(crate::ops::tuya::product_info(client).is_some()),
+            Protocol::Tuya => Ok(crate::ops::tuya::product_info(client)
+                .map(|info| Some(format!("{:?} {:?}", info.pid, info.version)))),
         };
         match answered {
-            Ok(true) => Probe::Present,
-            Ok(false) => Probe::Absent,
+            Ok(Some(identity)) => Probe::Present(identity),
+            Ok(None) => Probe::Absent,
             Err(crate::ops::OpError::Exchange(crate::link::ExchangeError::Disconnected(_))) => {
                 Probe::Lost
             }
@@ -314,7 +339,8 @@ impl SlotRunner {
 
 /// What a look at the idle fixture found.
 enum Probe {
-    Present,
+    /// A unit answers, with its identity where the device has one.
+    Present(Option<String>),
     Absent,
     Lost,
 }
@@ -392,6 +418,7 @@ impl SlotRunner {
                     index: i + 1,
                     of,
                     name: step.name.clone(),
+                    name_zh: step.name_zh.clone(),
                     attempt,
                 });
                 let done = run_step(u, &step.name, &step.op, &mut SlotDesk { runner: self });
@@ -402,6 +429,7 @@ impl SlotRunner {
                     .unwrap_or_default();
                 self.tell(What::StepDone {
                     name: step.name.clone(),
+                    name_zh: step.name_zh.clone(),
                     pass: done.failure.is_none(),
                     detail: match &done.failure {
                         Some(reason) if seen.is_empty() || &seen == reason => reason.clone(),
@@ -450,7 +478,7 @@ impl SlotRunner {
     /// Keeps `record` (before the verdict is said) and says the verdict with the unit's
     /// earlier runs.
     fn keep(&mut self, record: &mut Record) {
-        let (kept, earlier) = {
+        let (kept, earlier, waiting) = {
             let mut recorder = self
                 .station
                 .recorder
@@ -464,17 +492,32 @@ impl SlotRunner {
                 });
                 found.map(|h| h.runs as i64)
             });
-            (recorder.save(record), earlier)
+            let kept = recorder.save(record);
+            if !kept.stored() {
+                log::warn!("slot {}: {}", self.slot.name, kept.line());
+            }
+            let waiting = super::forward::waiting(&mut recorder, &kept);
+            (kept, earlier, waiting)
         };
         self.tell(What::Verdict {
             pass: record.verdict == Verdict::Pass,
             serial: record.unit.serial.clone(),
             failed_step: record.failed_step.clone(),
+            failed_step_zh: record.failed_step.as_ref().and_then(|f| {
+                self.slot
+                    .plan
+                    .steps
+                    .iter()
+                    .find(|s| &s.name == f)
+                    .map(|s| s.name_zh.clone())
+            }),
             reason: record.reason.clone(),
             earlier_runs: earlier,
             record: record.uuid.clone(),
             kept: kept.line(),
+            stored: kept.stored(),
         });
+        self.tell(waiting);
     }
 }
 

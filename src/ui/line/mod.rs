@@ -8,11 +8,12 @@
 //! slot's history; nothing of ports, plans or settings can be changed from it.
 
 mod engineer;
+pub mod shots;
 mod tile;
 
 pub use engineer::Engineer;
 
-use crate::i18n::Lang;
+use crate::i18n::{Lang, Text};
 use crate::ops::station::{Answer, Command, Event, SlotHandle, What};
 use crossbeam_channel::Receiver;
 use eframe::egui;
@@ -34,13 +35,14 @@ pub struct TileState {
     pub waiting: Option<&'static str>,
     /// The unit's serial, when known.
     pub serial: Option<String>,
-    /// The step running: index (1-based), of, name.
-    pub step: Option<(usize, usize, String)>,
+    /// The step running: index (1-based), of, name in both languages.
+    pub step: Option<(usize, usize, Text)>,
     /// The question waiting: kind and text in both languages.
     pub asking: Option<(&'static str, String, String)>,
-    /// The last verdict: pass, failed step, reason.
-    pub verdict: Option<(bool, Option<String>, Option<String>)>,
-    /// Recent verdicts, newest first: (pass, serial or `unit`).
+    /// The last verdict: pass, failed step (both languages), reason.
+    pub verdict: Option<(bool, Option<Text>, Option<String>)>,
+    /// Recent verdicts, newest first: (pass, the serial, or the verdict's local time
+    /// `HH:MM:SS` for a unit without one).
     pub history: VecDeque<(bool, String)>,
     /// What the operator types into the answer field.
     pub typed: String,
@@ -48,6 +50,9 @@ pub struct TileState {
     pub stopped: Option<String>,
     /// How many runs the records held of this unit before its last run.
     pub earlier_runs: Option<i64>,
+    /// Where the last record went when it did not reach its store (spool or memory, and
+    /// why); `None` when it was stored.
+    pub kept_elsewhere: Option<String>,
     /// The slot's configuration, shown in the engineer view: port, profile, plan and steps.
     pub details: String,
 }
@@ -64,8 +69,26 @@ pub struct LineStation {
     pub tiles: Vec<TileState>,
     /// The engineer's unlock.
     pub engineer: Engineer,
+    /// The records waiting in a spool: how many, the store, why (from [`What::Records`]).
+    pub records: Option<RecordsWaiting>,
+    /// A slot's number typed, waiting for its Y or N.
+    pub slot_typed: Option<String>,
+    /// The screenshot tour, when asked for (`--screenshots DIR`).
+    pub shots: Option<shots::StationShots>,
     slots: Vec<SlotHandle>,
     events: Receiver<Event>,
+    forwarder: Option<crate::ops::station::Forwarder>,
+}
+
+/// The station's records not yet in their store.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordsWaiting {
+    /// How many wait (0: none).
+    pub waiting: u64,
+    /// The store (file or server).
+    pub store: String,
+    /// Why they wait.
+    pub why: Option<String>,
 }
 
 impl LineStation {
@@ -100,9 +123,23 @@ impl LineStation {
                 password_sha256: bundle.engineer_password_sha256.clone(),
                 ..Engineer::default()
             },
+            records: None,
+            slot_typed: None,
+            shots: None,
             slots,
             events,
+            forwarder: None,
         }
+    }
+
+    /// The window over a started station (its slots, events and records forwarder).
+    pub fn started(
+        bundle: &crate::ops::station::Bundle,
+        started: crate::sim::fixture::StartedStation,
+    ) -> Self {
+        let mut st = Self::new(bundle, started.slots, started.events);
+        st.forwarder = Some(started.forwarder);
+        st
     }
 
     /// Takes every event waiting; asks for the next frame soon while slots run.
@@ -110,10 +147,27 @@ impl LineStation {
         while let Ok(ev) = self.events.try_recv() {
             self.on_event(ev);
         }
+        if let Some(mut tour) = self.shots.take() {
+            tour.step(ctx, self);
+            self.shots = Some(tour);
+        }
         ctx.request_repaint_after(std::time::Duration::from_millis(100));
     }
 
     fn on_event(&mut self, ev: Event) {
+        if let What::Records {
+            waiting,
+            store,
+            why,
+        } = ev.what
+        {
+            self.records = Some(RecordsWaiting {
+                waiting,
+                store,
+                why,
+            });
+            return;
+        }
         let Some(t) = self.tiles.iter_mut().find(|t| t.slot == ev.slot) else {
             return;
         };
@@ -130,8 +184,12 @@ impl LineStation {
                 t.step = None;
             }
             What::Step {
-                index, of, name, ..
-            } => t.step = Some((index, of, name)),
+                index,
+                of,
+                name,
+                name_zh,
+                ..
+            } => t.step = Some((index, of, Text::new(name, name_zh))),
             What::Ask {
                 kind,
                 text,
@@ -142,22 +200,33 @@ impl LineStation {
                 pass,
                 serial,
                 failed_step,
+                failed_step_zh,
                 reason,
                 earlier_runs,
+                kept,
+                stored,
                 ..
             } => {
                 t.asking = None;
+                t.kept_elsewhere = (!stored).then_some(kept);
                 t.earlier_runs = earlier_runs;
                 t.serial.clone_from(&serial);
+                let failed_step = failed_step.map(|en| {
+                    let zh = failed_step_zh.unwrap_or_else(|| en.clone());
+                    Text::new(en, zh)
+                });
                 t.verdict = Some((pass, failed_step, reason));
-                t.history
-                    .push_front((pass, serial.unwrap_or_else(|| "unit".into())));
+                // A unit without a serial is told by the time of its verdict.
+                let unit =
+                    serial.unwrap_or_else(|| chrono::Local::now().format("%H:%M:%S").to_string());
+                t.history.push_front((pass, unit));
                 t.history.truncate(HISTORY);
             }
             What::Stopped { why } => {
                 t.asking = None;
                 t.stopped = Some(why);
             }
+            What::Records { .. } => {}
         }
     }
 
@@ -180,21 +249,78 @@ impl LineStation {
         self.slots.iter().for_each(|s| s.cancel.cancel());
     }
 
-    /// Y or N typed: the answer to the oldest yes/no question waiting.
+    /// Y or N typed (a key, a pedal seen as a key): the answer to the oldest yes/no question
+    /// waiting; a slot's number first (`2` then `Y`) answers that slot's question. A number
+    /// not followed by Y or N is forgotten at the next other key.
     fn keys(&mut self, ctx: &egui::Context) {
-        let (yes, no) = ctx.input(|i| (i.key_pressed(egui::Key::Y), i.key_pressed(egui::Key::N)));
-        if !(yes || no) || ctx.egui_wants_keyboard_input() {
+        if ctx.egui_wants_keyboard_input() {
             return;
         }
-        let asking = self
-            .tiles
-            .iter()
-            .find(|t| matches!(t.asking, Some(("confirm" | "retry", _, _))))
-            .map(|t| t.slot.clone());
-        if let Some(slot) = asking {
-            let answer = if yes { Answer::Yes } else { Answer::No };
-            self.send(&slot, Command::Answer(answer));
+        let pressed: Vec<egui::Key> = ctx.input(|i| {
+            i.events
+                .iter()
+                .filter_map(|e| match e {
+                    egui::Event::Key {
+                        key, pressed: true, ..
+                    } => Some(*key),
+                    _ => None,
+                })
+                .collect()
+        });
+        for key in pressed {
+            let answer = match key {
+                egui::Key::Y => Answer::Yes,
+                egui::Key::N => Answer::No,
+                other => {
+                    // A slot's number: its name, typed with the digit keys.
+                    self.slot_typed = other
+                        .name()
+                        .parse::<u32>()
+                        .ok()
+                        .map(|n| n.to_string())
+                        .filter(|n| self.tiles.iter().any(|t| &t.slot == n));
+                    continue;
+                }
+            };
+            let yes_no = |t: &&TileState| matches!(t.asking, Some(("confirm" | "retry", _, _)));
+            let slot = match self.slot_typed.take() {
+                Some(named) => self
+                    .tiles
+                    .iter()
+                    .filter(yes_no)
+                    .find(|t| t.slot == named)
+                    .map(|t| t.slot.clone()),
+                None => self.tiles.iter().find(yes_no).map(|t| t.slot.clone()),
+            };
+            if let Some(slot) = slot {
+                self.send(&slot, Command::Answer(answer));
+            }
         }
+    }
+
+    /// The header's records line, while any wait: how many, where to, and why, in red.
+    fn records_line(&self, ui: &mut egui::Ui, zh: bool) {
+        let Some(r) = self.records.as_ref().filter(|r| r.waiting > 0) else {
+            return;
+        };
+        let why = r.why.as_deref().unwrap_or_default();
+        let text = if zh {
+            format!(
+                "记录:{} 条在本机暂存,等待发送到 {}:{why}",
+                r.waiting, r.store
+            )
+        } else {
+            format!(
+                "Records: {} waiting on this PC to be forwarded to {}: {why}",
+                r.waiting, r.store
+            )
+        };
+        ui.label(
+            egui::RichText::new(text)
+                .size(18.0)
+                .strong()
+                .color(egui::Color32::from_rgb(200, 30, 30)),
+        );
     }
 
     /// Draws the station: the title bar with STOP ALL, then the tiles.
@@ -229,6 +355,7 @@ impl LineStation {
                 }
                 self.engineer.show(ui, &self.id, zh);
             });
+            self.records_line(ui, zh);
         });
         egui::CentralPanel::default().show(ui, |ui| {
             let n = self.tiles.len().max(1);
@@ -257,14 +384,16 @@ impl LineStation {
     }
 }
 
-/// Opens the station window over running slots; returns when it is closed (every slot is
-/// stopped then). Errors: the window could not be opened.
+/// Opens the station window over a started station (with `screenshots`, its screenshot tour
+/// into that folder); returns when it is closed (every slot is stopped then). Errors: the
+/// window could not be opened.
 pub fn run(
     bundle: &crate::ops::station::Bundle,
-    slots: Vec<SlotHandle>,
-    events: Receiver<Event>,
+    started: crate::sim::fixture::StartedStation,
+    screenshots: Option<std::path::PathBuf>,
 ) -> Result<(), String> {
-    let station = LineStation::new(bundle, slots, events);
+    let mut station = LineStation::started(bundle, started);
+    station.shots = screenshots.map(shots::StationShots::new);
     // `BOTBENCH_WINDOW_SIZE=1024x600`: the window's size where no window manager maximises it
     // (the screenshots under Xvfb).
     let size = std::env::var("BOTBENCH_WINDOW_SIZE")

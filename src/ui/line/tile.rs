@@ -49,6 +49,19 @@ pub fn show(
         );
         step_line(ui, t, zh);
         banner(ui, t, zh);
+        if let Some(kept) = &t.kept_elsewhere {
+            // The verdict stands; where its record went is said beside it.
+            let head = if zh {
+                "记录未写入存储,已另存:"
+            } else {
+                "Record not in its store:"
+            };
+            ui.label(
+                RichText::new(format!("{head} {kept}"))
+                    .size(16.0)
+                    .color(FAIL_RED),
+            );
+        }
         if let Some(n) = t.earlier_runs.filter(|n| *n > 0) {
             ui.label(
                 RichText::new(if zh {
@@ -109,6 +122,7 @@ fn port_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {
 fn step_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {
     match (&t.step, t.waiting) {
         (Some((i, of, name)), _) if t.verdict.is_none() => {
+            let name = if zh { &name.zh } else { &name.en };
             let step = format!("{} {i}/{of}: {name}", if zh { "步骤" } else { "Step" });
             ui.label(RichText::new(step).size(18.0));
             ui.add(egui::ProgressBar::new(*i as f32 / (*of).max(1) as f32).show_percentage());
@@ -152,6 +166,7 @@ fn banner(ui: &mut egui::Ui, t: &TileState, zh: bool) {
                         .color(Color32::WHITE),
                 );
                 if let Some(step) = step {
+                    let step = if zh { &step.zh } else { &step.en };
                     let why = reason.as_deref().unwrap_or_default();
                     ui.label(
                         RichText::new(format!("{step}: {why}"))

@@ -1,6 +1,7 @@
 //! The conformance grade (issue 26, item 9): Run conformance grades the MCU's firmware against
 //! the protocol ([`crate::ops::tuya::conform`]) as a job; the table of checks with PASS/FAIL and
-//! the bytes that show each; the verdict; and Save report (JSON) to a file.
+//! the bytes that show each; the verdict; and Save report (JSON) to a file. Every grade is
+//! recorded as `tuya conform` records it (run, then record).
 
 use super::{Action, Output, Station};
 use crate::i18n::{Lang, Text};
@@ -32,8 +33,11 @@ pub struct ConformView {
     pub saved: Option<Result<PathBuf, String>>,
 }
 
-/// The job: grades the MCU, each check sent to the panel as it ends.
-fn work(profile: Arc<crate::profile::Profile>) -> Job {
+/// The job: grades the MCU, each check sent to the panel as it ends, then records the run as
+/// `tuya conform` does (kind `tuya_conform`, one step per check; kept before the verdict is
+/// shown, in the spool when its store is away, as the verdict's note says).
+fn work(profile: Arc<crate::profile::Profile>, records: crate::ui::records::RecordsHandle) -> Job {
+    let mut records = records;
     Job::new(
         Text::new("Tuya conformance", "涂鸦协议一致性"),
         move |client, cancel, sink| {
@@ -42,9 +46,10 @@ fn work(profile: Arc<crate::profile::Profile>) -> Job {
                 ota_max: profile.ota_max_bytes(),
             };
             let mut n = 0u64;
-            let result = conform::conform(
+            let recorded = crate::ops::records::runs::tuya_conform(
                 Device::new(client, &profile),
                 &options,
+                &crate::ops::records::runs::Given::default(),
                 &mut Run::quiet(cancel),
                 &mut |c| {
                     n += 1;
@@ -58,16 +63,24 @@ fn work(profile: Arc<crate::profile::Profile>) -> Job {
                         ),
                     });
                 },
-            )
-            .map_err(JobError::from);
+                &mut records,
+            );
+            let result = recorded.outcome.map_err(JobError::from);
             sink.panel(Output::ConformDone(result.clone()));
-            result.map(|c| {
-                let verdict = if c.pass() { "CONFORMS" } else { "DOES NOT CONFORM" };
-                Text::new(
-                    format!("{verdict} ({} checks, {:.1} s)", c.checks.len(), c.seconds),
-                    format!("{verdict}({} 项检查,{:.1} 秒)", c.checks.len(), c.seconds),
-                )
-            })
+            let kept = recorded.kept;
+            result
+                .map(|c| {
+                    let verdict = if c.pass() { "CONFORMS" } else { "DOES NOT CONFORM" };
+                    let summary = Text::new(
+                        format!("{verdict} ({} checks, {:.1} s)", c.checks.len(), c.seconds),
+                        format!("{verdict}({} 项检查,{:.1} 秒)", c.checks.len(), c.seconds),
+                    );
+                    crate::ui::records::with_note(summary, &kept)
+                })
+                .map_err(|e| match crate::ui::records::note_en(&kept) {
+                    note if note.is_empty() => e,
+                    note => JobError::Failed(format!("{e}{note}")),
+                })
         },
     )
 }
@@ -103,7 +116,10 @@ impl ConformView {
                 self.checks.clear();
                 self.result = None;
                 self.saved = None;
-                actions.push(Action::StartJob(work(rt.device.profile.clone())));
+                actions.push(Action::StartJob(work(
+                    rt.device.profile.clone(),
+                    rt.records.clone(),
+                )));
             }
             if self.running && busy && ui.button(lang.tr("Cancel", "取消")).clicked() {
                 actions.push(Action::CancelJob);

@@ -14,7 +14,8 @@
 //!   unit can fail several), by step and by reason;
 //! - each **measurement** (same name, unit and limits) gets its count, mean, sample sigma, Cpk
 //!   and a histogram, and a **drift** warning when the means of its last three windows of N
-//!   units each (in the order recorded) move the same way toward a limit by at least half a
+//!   units each (in the order the units were tested: their runs' start, not the order the
+//!   records arrived in from a spool) move the same way toward a limit by at least half a
 //!   sigma in all.
 
 pub mod html;
@@ -599,9 +600,11 @@ fn measurements(
 }
 
 /// The last `n` values of the measurement keyed by `p[k..k + 4]` (name, unit, low, high), in
-/// the order recorded, newest first: read backwards along the runs (the primary key) from the
-/// newest, over a span of runs that doubles until it holds `n` values or every run, so that
-/// the measurement's index (ordered by value) is not walked whole.
+/// the order the units were tested (their runs' start, then the order recorded), newest first.
+/// Not the order the records arrived in: a station's records forwarded from its spool an hour
+/// late are older units than those stored meanwhile. Read backwards along the runs' start
+/// index from the newest, over a span of runs that quadruples until it holds `n` values or
+/// every run, so that the measurement's index (ordered by value) is not walked whole.
 fn last_values(
     db: &mut dyn Db,
     from: &str,
@@ -620,29 +623,45 @@ fn last_values(
         same(d, &format!("{plus}m.low"), k + 3),
         same(d, &format!("{plus}m.high"), k + 4)
     );
-    let newest = db
-        .rows("SELECT MAX(run) FROM measurements", &[])?
-        .first()
-        .and_then(|r| r.first())
-        .and_then(Val::int)
-        .unwrap_or(0);
+    // The filtered `from` joins the runs already; the unfiltered one is joined to them here.
+    let from = if filtered {
+        from.to_string()
+    } else {
+        "measurements m JOIN runs r ON r.id = m.run WHERE 1 = 1".to_string()
+    };
     let mut span = (2 * n as i64).max(64);
     loop {
-        let whole = span > newest || filtered;
-        let mut q = p.to_vec();
-        let bound = if whole {
-            String::new()
+        // The start of the `span`-th newest run: every run from it on is read.
+        let since = if filtered {
+            None
         } else {
-            q.push(Val::Int(Some(newest - span)));
-            format!(" AND m.run > ?{}", q.len())
+            db.rows(
+                &format!(
+                    "SELECT started_ms FROM runs ORDER BY started_ms DESC LIMIT 1 OFFSET {}",
+                    span - 1
+                ),
+                &[],
+            )?
+            .first()
+            .and_then(|r| r.first())
+            .and_then(Val::int)
+        };
+        let mut q = p.to_vec();
+        let bound = match since {
+            Some(t) => {
+                q.push(Val::Int(Some(t)));
+                format!(" AND r.started_ms >= ?{}", q.len())
+            }
+            None => String::new(),
         };
         let rows = db.rows(
             &format!(
-                "SELECT m.value FROM {from} AND {key}{bound} ORDER BY m.run DESC, m.step DESC, m.idx DESC LIMIT {n}"
+                "SELECT m.value FROM {from} AND {key}{bound} \
+                 ORDER BY r.started_ms DESC, m.run DESC, m.step DESC, m.idx DESC LIMIT {n}"
             ),
             &q,
         )?;
-        if rows.len() >= n || whole {
+        if rows.len() >= n || since.is_none() {
             return Ok(rows.iter().filter_map(|r| real(r, 0)).collect());
         }
         span *= 4;

@@ -152,7 +152,7 @@ pub struct Drift {
 /// The smallest move, in sigmas, that the drift rule reports.
 pub const DRIFT_MIN_SIGMA: f64 = 0.5;
 
-/// The drift rule: over `newest_last` (values in the order recorded, the last `3 * window`
+/// The drift rule: over `newest_last` (values in the order the units were tested, the last `3 * window`
 /// at least), the means of the last three windows of `window` units each move the same way,
 /// toward a limit on that side, by at least [`DRIFT_MIN_SIGMA`] sigmas in all. `None` when they
 /// do not, or when there are fewer than `3 * window` values or no limit on that side.
