@@ -17,6 +17,7 @@ mod records;
 mod replay;
 mod report;
 mod servo;
+mod servo_scan;
 mod sim;
 mod sim_field;
 mod station;

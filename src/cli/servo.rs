@@ -4,8 +4,8 @@ use super::checks;
 use super::port::{PortArgs, op_error, print_checks};
 use super::{CliError, CliResult};
 use crate::link::PortOpener;
+use crate::ops::Device;
 use crate::ops::servo::{self as ops, Presence};
-use crate::ops::{Device, Run};
 use crate::profile::{Input, Param, Profile, Protocol, Value};
 use clap::Subcommand;
 use std::path::PathBuf;
@@ -422,21 +422,8 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
     let dev = Device::new(&client, &profile);
     match checked {
         Checked::Scan(plan, allow_empty) => {
-            let started = std::time::Instant::now();
-            let report =
-                ops::scan(dev, &plan, &mut Run::quiet(&cancel), &mut |_| {}).map_err(op_error)?;
-            print_scan(&profile, &report, started.elapsed().as_secs_f64(), json);
-            if report.rows.is_empty() && !allow_empty {
-                errln!(
-                    "botbench: no servo answered on {} (ids {}-{}){}",
-                    args.port.port.as_deref().unwrap_or("the port"),
-                    plan.ids.start(),
-                    plan.ids.end(),
-                    super::port::SILENT_HINT
-                );
-                return Ok(1);
-            }
-            Ok(0)
+            let port = args.port.port.as_deref().unwrap_or("the port");
+            super::servo_scan::run(dev, &plan, &cancel, port, allow_empty, json)
         }
         Checked::Monitor(ids) => monitor(&client, &profile, &ids, json),
         Checked::Ping(id) => {
@@ -602,72 +589,6 @@ fn write_broadcast(dev: Device<'_>, id: u8, p: &Param, value: Value, json: bool)
         );
     }
     Ok(0)
-}
-
-/// The scan's table (or JSON), with how it adapted: ids asked again, late answers and the
-/// margin it ended with.
-fn print_scan(profile: &Profile, report: &ops::ScanReport, seconds: f64, json: bool) {
-    let rows = &report.rows;
-    if json {
-        // Each row as the scan has it (raw values), with its temperature as the text view shows
-        // it (`temperature` is the raw reading: a thermistor's count on some servos).
-        let servos: Vec<serde_json::Value> = rows
-            .iter()
-            .map(|r| {
-                let mut row = serde_json::json!(r);
-                row["temperature_text"] = serde_json::json!(r.temperature_text(profile));
-                row
-            })
-            .collect();
-        outln!(
-            "{}",
-            serde_json::json!({
-                "servos": servos,
-                "seconds": seconds,
-                "asked_again": report.asked_again,
-                "late_answers": report.late_answers,
-                "margin_ms": report.margin_ms,
-            })
-        );
-        return;
-    }
-    outln!(
-        "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>18} {:>6}  presence",
-        "id",
-        "baud",
-        "type",
-        "firmware",
-        "serial",
-        "mV",
-        "temp",
-        "status"
-    );
-    for r in rows {
-        let o = |v: Option<i64>| v.map_or("-".to_string(), |v| v.to_string());
-        let presence = match &r.presence {
-            Presence::Present => "ok".to_string(),
-            Presence::PossibleDuplicate(e) => format!("possible duplicate id ({e})"),
-            Presence::Absent => "absent".to_string(),
-        };
-        outln!(
-            "{:>3} {:>7} {:>6} {:>8} {:>10} {:>8} {:>18} {:>6}  {presence}",
-            r.id,
-            r.baud,
-            o(r.servo_type),
-            o(r.firmware),
-            o(r.serial),
-            o(r.voltage_mv),
-            r.temperature_text(profile),
-            r.status_hex()
-        );
-    }
-    outln!(
-        "{} found in {seconds:.2} s; {} id(s) asked again, {} late answer(s), margin {:.1} ms",
-        rows.len(),
-        report.asked_again,
-        report.late_answers,
-        report.margin_ms
-    );
 }
 
 fn monitor(client: &crate::link::Client, profile: &Profile, ids: &[u8], json: bool) -> CliResult {

@@ -177,3 +177,61 @@ fn a_device_of_another_kind_than_its_profile_is_refused_before_any_write() {
     let version = sim.cli("msp", &["version"]);
     assert_eq!(version.code, 0, "{}", version.text());
 }
+
+/// Issue 29, item 9: a scan hands out each servo once its details are read, not when its baud
+/// rate is done, so Ctrl-C part way prints the servos found before it, says how far the scan
+/// got, and exits 130. Servo 1 answers cleanly; ids 6 to 9 each have two servos on them, whose
+/// answers collide and are asked again one by one (each answer waiting for the adapter's 20 ms
+/// latency timer): Ctrl-C comes while those are asked, after servo 1's row.
+#[test]
+fn a_servo_scan_cancelled_part_way_prints_the_servos_found_and_exits_130() {
+    let sim = Sim::start(&[
+        "servo-bus",
+        "--servos",
+        "1,6,6,7,7,8,8,9,9",
+        "--latency-timer-ms",
+        "20",
+    ]);
+    let args = ["servo", "--port", &sim.path, "scan", "--ids", "0-20"];
+    let (code, out, err) = (0..5)
+        // The table's header and servo 1's row: cancel then.
+        .filter_map(|_| interrupted(&sim, &args, 2))
+        // A Ctrl-C that came after the last step that looks at it proves nothing: again.
+        .find(|(code, out, _)| *code != 0 || !out.contains(" found in "))
+        .expect("a scan still under way when Ctrl-C came, in 5 tries");
+    let text = format!("exit {code}\n--- stdout\n{out}--- stderr\n{err}");
+    assert_eq!(code, 130, "{text}");
+    let row_1 = out
+        .lines()
+        .find(|l| l.split_whitespace().next() == Some("1"))
+        .unwrap_or_else(|| panic!("servo 1's row: {text}"));
+    assert!(row_1.ends_with("ok"), "{text}");
+    assert!(
+        !out.contains(" found in "),
+        "no summary of a whole scan: {text}"
+    );
+    assert!(
+        err.contains("scan cancelled after ") && err.contains(" of 21 ids: 1 servo(s) found"),
+        "{text}"
+    );
+}
+
+/// Issue 29, item 9: the scan's progress bar is for a person at a terminal: a run whose stderr
+/// is a pipe (a script, a log) gets none of it, neither drawn nor as escape codes, in text or
+/// with `--json`.
+#[test]
+fn a_piped_servo_scan_prints_no_progress_bar() {
+    let sim = crate::support::cli::SimProcess::start(&["servo-bus", "--servos", "1,2"]);
+    for json in [false, true] {
+        let mut args = vec!["scan", "--ids", "0-253", "--bauds", "1000000,115200"];
+        if json {
+            args.insert(0, "--json");
+        }
+        let run = sim.cli("servo", &args);
+        assert_eq!(run.code, 0, "{}", run.text());
+        assert!(run.out.contains('2'), "{}", run.text());
+        for bar in ["\u{1b}", "\r", "=>", " ids, ", " left"] {
+            assert!(!run.err.contains(bar), "{bar:?} on a pipe: {}", run.text());
+        }
+    }
+}

@@ -126,6 +126,9 @@ pub(super) fn find_ids(
     run: &mut Run<'_, (usize, u8)>,
 ) -> Result<(Vec<(u8, Presence)>, ScanReport), OpError> {
     let mut found = Found::sweep(client, ids, run)?;
+    if found.cancelled {
+        return Err(OpError::Cancelled);
+    }
     // Answers still on their way after the last sweep.
     let tail = client.sweep(ping_sweep(&[]))?;
     found.take(&tail, &[]);
@@ -144,10 +147,13 @@ struct Found<'a> {
     /// The ids pinged so far, in order.
     swept: Vec<u8>,
     report: ScanReport,
+    /// Whether the sweeps stopped part way, cancelled: what they found so far is kept.
+    cancelled: bool,
 }
 
 impl<'a> Found<'a> {
-    /// Pings `ids` in sweeps of [`SWEEP_IDS`], with progress and cancel between them.
+    /// Pings `ids` in sweeps of [`SWEEP_IDS`], with progress and cancel between them (a
+    /// cancel stops the sweeps and sets [`Found::cancelled`], keeping what they found).
     fn sweep(
         client: &Client,
         ids: &'a [u8],
@@ -164,9 +170,13 @@ impl<'a> Found<'a> {
                 late_answers: 0,
                 margin_ms: 0.0,
             },
+            cancelled: false,
         };
         for (k, chunk) in ids.chunks(SWEEP_IDS).enumerate() {
-            run.go_on()?;
+            if run.is_cancelled() {
+                found.cancelled = true;
+                break;
+            }
             let reply = client.sweep(ping_sweep(chunk))?;
             found.take(&reply, chunk);
             run.report((k * SWEEP_IDS + chunk.len(), *chunk.last().unwrap_or(&0)));
@@ -405,12 +415,15 @@ fn row(id: u8, baud: u32, presence: Presence) -> ScanRow {
 
 /// Finds the servos at the port's rate, `baud` ([`find_ids`]), with each one's details: the
 /// servos that answered cleanly have theirs read while the answers still on their way come in
-/// (that sweep is the scan's last listen), those asked again after it.
+/// (that sweep is the scan's last listen), those asked again after it. `found` sees each row
+/// once its details are read; a cancel during the sweeps gives it the servos that answered
+/// cleanly so far (details not read) before [`OpError::Cancelled`].
 fn scan_at(
     dev: Device<'_>,
     ids: &[u8],
     baud: u32,
     run: &mut Run<'_, (usize, u8)>,
+    found_row: &mut dyn FnMut(&ScanRow),
 ) -> Result<ScanReport, OpError> {
     let client = dev.client;
     let mut found = Found::sweep(client, ids, run)?;
@@ -418,9 +431,14 @@ fn scan_at(
         .sure()
         .map(|id| row(id, baud, Presence::Present))
         .collect();
+    if found.cancelled {
+        rows.iter().for_each(&mut *found_row);
+        return Err(OpError::Cancelled);
+    }
     if let Some(reply) = details(dev, &mut rows, true)? {
         found.take_late(&reply);
     }
+    rows.iter().for_each(&mut *found_row);
     let (answered, mut report) = found.resolve(client, run.cancel_flag())?;
     let mut more: Vec<ScanRow> = answered
         .into_iter()
@@ -428,6 +446,7 @@ fn scan_at(
         .map(|(id, presence)| row(id, baud, presence))
         .collect();
     details(dev, &mut more, false)?;
+    more.iter().for_each(&mut *found_row);
     rows.extend(more);
     rows.sort_by_key(|r| r.id);
     report.rows = rows;
@@ -446,7 +465,9 @@ pub struct ScanPlan {
 }
 
 /// Scans the plan's ids at each of its bauds ([`find_ids`]), reading each found servo's
-/// details, then returns the port to the plan's home rate. `found` sees each row as it is found.
+/// details, then returns the port to the plan's home rate. `found` sees each row as it is found
+/// (at once, not when its baud rate is done), so a run cancelled part way ([`OpError::Cancelled`])
+/// has already handed out every servo found before the cancel.
 pub fn scan(
     dev: Device<'_>,
     plan: &ScanPlan,
@@ -482,13 +503,10 @@ pub fn scan(
                     ),
                 })
             });
-            let at_baud = scan_at(dev, &ids, baud, &mut at)?;
+            let at_baud = scan_at(dev, &ids, baud, &mut at, &mut *found)?;
             report.asked_again += at_baud.asked_again;
             report.late_answers += at_baud.late_answers;
             report.margin_ms = at_baud.margin_ms;
-            for row in &at_baud.rows {
-                found(row);
-            }
             report.rows.extend(at_baud.rows);
         }
         Ok(())
