@@ -317,7 +317,8 @@ fn run(cli: Cli, opener: &PortOpener) -> CliResult {
 }
 
 fn registry() -> Result<crate::profile::Registry, CliError> {
-    crate::profile::Registry::load().map_err(CliError::input)
+    crate::profile::Registry::load_from(console::user_profiles().as_deref())
+        .map_err(CliError::input)
 }
 
 fn profiles(json: bool) -> CliResult {

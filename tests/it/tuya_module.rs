@@ -16,7 +16,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::support::cli::{SimProcess, run};
+use crate::support::cli::{SimProcess, run, run_in_process};
 use crate::support::{Served, next_event, open_link, profile, serve, wait_until};
 
 const BAUD: u32 = 115_200;
@@ -70,19 +70,13 @@ impl Bench {
     }
 
     /// `botbench tuya --port PTY --baud 115200 ARGS` in this process, handed the simulator's
-    /// port (the link closed first): its exit code.
+    /// port (the link closed first), watched ([`run_in_process`]): its exit code.
     fn cli(&mut self, args: &[&str]) -> u8 {
         self.link = None;
-        let mut all = vec![
-            "botbench",
-            "tuya",
-            "--port",
-            self.mcu.path(),
-            "--baud",
-            "115200",
-        ];
+        let mut all = vec!["tuya", "--port", self.mcu.path(), "--baud", "115200"];
         all.extend_from_slice(args);
-        botbench::cli::run_args(all, &self.mcu.ports())
+        let ran = run_in_process(&all, &self.mcu.ports());
+        u8::try_from(ran.code).unwrap_or_else(|_| panic!("{}", ran.text()))
     }
 }
 
