@@ -74,7 +74,11 @@ impl ReplayDevice {
         }
         let mut by_request: HashMap<Vec<u8>, Answers> = HashMap::new();
         let mut prelude = Vec::new();
-        let first_at = capture.chunks.first().map_or(0, |c| c.at_us);
+        // In the order the bytes crossed: an answer that a loaded host read only after writing
+        // its next request was stamped when it arrived, before that request.
+        let mut chunks: Vec<&Chunk> = capture.chunks.iter().collect();
+        chunks.sort_by_key(|c| c.at_us);
+        let first_at = chunks.first().map_or(0, |c| c.at_us);
         // (the request's bytes, when it was written, its answer so far)
         let mut open: Option<(Vec<u8>, u64, Vec<AnswerChunk>)> = None;
         let mut close = |open: Option<(Vec<u8>, u64, Vec<AnswerChunk>)>| {
@@ -87,7 +91,7 @@ impl ReplayDevice {
             direction,
             bytes,
             ..
-        } in &capture.chunks
+        } in chunks
         {
             match direction {
                 Direction::HostToDevice => {

@@ -47,6 +47,9 @@ pub(crate) struct State {
     /// Batches of bytes the simulator has written to the pty: the running total after each, and
     /// when the batch's first byte was due at the host.
     written: VecDeque<(u64, Instant)>,
+    /// When the host saw the last byte of each batch in `written` (behind an adapter's latency
+    /// timer, later than it crossed), in the same order.
+    seen: VecDeque<Instant>,
     written_total: u64,
     /// Bytes the host has read (or cleared) from the pty, in total.
     read_total: u64,
@@ -65,6 +68,7 @@ impl Lockstep {
             state: Mutex::new(State {
                 actions: VecDeque::new(),
                 written: VecDeque::new(),
+                seen: VecDeque::new(),
                 written_total: 0,
                 read_total: 0,
                 next_due: None,
@@ -86,29 +90,32 @@ impl Lockstep {
     /// The host does `action` at `at` (now when `None`, taken under the lock so that the
     /// simulator, which takes its own time under the lock too, cannot have gone past it). Stamps
     /// never go back.
-    fn host(&self, action: HostAction, at: Option<Instant>) {
+    fn host(&self, action: HostAction, at: Option<Instant>) -> Instant {
         let mut s = self.lock();
         let at = at.unwrap_or_else(Instant::now);
         let at = s.actions.back().map_or(at, |(last, _)| at.max(*last));
         s.actions.push_back((at, action));
+        at
     }
 
     /// How many of the bytes after the first `taken` the host may read by `deadline`: those of
     /// the simulator's batches due by then (a batch whose first byte was due later is not yet
-    /// there for a host that reads by `deadline`, however late the host's thread runs).
-    fn due_by(&self, taken: u64, deadline: Instant) -> u64 {
+    /// there for a host that reads by `deadline`, however late the host's thread runs); and when
+    /// the host saw the last of them (`None`: none).
+    fn due_by(&self, taken: u64, deadline: Instant) -> (u64, Option<Instant>) {
         let s = self.lock();
-        let mut upto = taken;
-        for &(total, due) in &s.written {
+        let (mut upto, mut last) = (taken, None);
+        for (&(total, due), &seen) in s.written.iter().zip(&s.seen) {
             if total <= taken {
                 continue;
             }
             if due > deadline {
                 break;
             }
+            last = Some(seen);
             upto = total;
         }
-        upto - taken
+        (upto - taken, last)
     }
 
     /// Whether the device side still owes the host a byte due by `deadline`: the simulator has not
@@ -121,6 +128,7 @@ impl Lockstep {
         let read = s.read_total;
         while s.written.front().is_some_and(|(total, _)| *total <= read) {
             s.written.pop_front();
+            s.seen.pop_front();
         }
         s.actions
             .iter()
@@ -131,11 +139,13 @@ impl Lockstep {
 }
 
 impl State {
-    /// The simulator has written `n` bytes, the first of them due at `due`.
-    pub(crate) fn wrote(&mut self, n: usize, due: Instant) {
+    /// The simulator has written `n` bytes, the first of them due at `due`, the last seen by the
+    /// host at `seen`.
+    pub(crate) fn wrote(&mut self, n: usize, due: Instant, seen: Instant) {
         if n > 0 {
             self.written_total += n as u64;
             self.written.push_back((self.written_total, due));
+            self.seen.push_back(seen);
         }
     }
 
@@ -185,6 +195,8 @@ pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener
             lockstep: lockstep.clone(),
             last_return: Instant::now(),
             held: VecDeque::new(),
+            arrived: None,
+            sent: None,
         }) as Box<dyn Transport>)
     })
 }
@@ -210,6 +222,10 @@ pub struct LockstepPort {
     last_return: Instant,
     /// Bytes read from the pty that were due after the deadline of the read that found them.
     held: VecDeque<u8>,
+    /// When the last byte the last read handed over had arrived ([`Transport::arrived_at`]).
+    arrived: Option<Instant>,
+    /// The stamp of the last write ([`Transport::sent_at`]).
+    sent: Option<Instant>,
 }
 
 impl LockstepPort {
@@ -248,8 +264,10 @@ impl LockstepPort {
             return 0;
         }
         let taken = self.lockstep.lock().read_total;
-        let due = usize::try_from(self.lockstep.due_by(taken, deadline)).unwrap_or(usize::MAX);
+        let (due, last_seen) = self.lockstep.due_by(taken, deadline);
+        let due = usize::try_from(due).unwrap_or(usize::MAX);
         let n = due.min(self.held.len()).min(buf.len());
+        self.arrived = last_seen;
         for (slot, byte) in buf.iter_mut().zip(self.held.drain(..n)) {
             *slot = byte;
         }
@@ -261,8 +279,10 @@ impl LockstepPort {
 impl Transport for LockstepPort {
     fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
         if !bytes.is_empty() {
-            self.lockstep
+            let at = self
+                .lockstep
                 .host(HostAction::Wrote(bytes.len()), Some(self.last_return));
+            self.sent = Some(at);
         }
         let result = self.port.write(bytes);
         self.returns(result)
@@ -308,5 +328,13 @@ impl Transport for LockstepPort {
     fn check(&mut self) -> Result<(), LinkError> {
         let result = self.port.check();
         self.returns(result)
+    }
+
+    fn arrived_at(&self) -> Option<Instant> {
+        self.arrived
+    }
+
+    fn sent_at(&self) -> Option<Instant> {
+        self.sent
     }
 }

@@ -443,10 +443,17 @@ fn the_simulators_field_options_are_taken_and_bad_ones_refused() {
         "19",
     ]);
     let profile = profile("tuya-vacuum");
+    // The simulator is the process under test (real-time where it may be), this link is not in
+    // lockstep with it: its margin is explicit and generous, a loaded test process's threads
+    // may wake late.
+    let options = LinkOptions {
+        margin: Some(Duration::from_secs(1)),
+        ..LinkOptions::default()
+    };
     let link = Link::open(
         botbench::link::serial::opener(&sim.path, BAUD),
         profile.clone(),
-        LinkOptions::default(),
+        options,
         None,
     )
     .expect("opens the simulator's pty");

@@ -23,6 +23,14 @@ use std::process::{Command, Stdio};
 /// margin: provisioning a fresh servo pings all 254 ids once.
 pub const MARGIN_MS: &str = "100";
 
+/// The answer margin, as `--margin-ms`, of a test whose command line must run in a process of
+/// its own because the process is what it tests (an environment variable of the whole process):
+/// its device is a `botbench sim` process under real-time scheduling where this process may,
+/// but the command itself keeps ordinary scheduling and a loaded machine can hold its thread
+/// up for tens of milliseconds between a request and its answer's deadline. One second is far
+/// beyond that, and costs nothing when the device answers (only an absent one waits it out).
+pub const PROCESS_MARGIN_MS: &str = "1000";
+
 /// Where the children and the runs in this process look for user profiles: a folder that does
 /// not exist, so that the profiles of whoever runs the tests do not change them.
 pub fn no_user_profiles() -> PathBuf {
