@@ -173,9 +173,9 @@ impl Capture {
 
     /// Records one chunk that crossed at `at` (bytes read: when they arrived, where the port
     /// knows it, [`Transport::arrived_at`]; an instant before the capture began counts as its
-    /// beginning). As [`Self::record`] otherwise. Chunks stay in the order they were recorded;
-    /// an answer a late host read after its next request was written is stamped before that
-    /// request (the replay orders them by time).
+    /// beginning). As [`Self::record`] otherwise. Chunks stay in the order they were recorded
+    /// (an answer read after its request was written is after it in the file, whatever its
+    /// stamp).
     pub fn record_at(&self, direction: Direction, bytes: &[u8], at: Instant) {
         let inner = &*self.0;
         if bytes.is_empty() || inner.stopped.load(Ordering::Relaxed) {
@@ -334,11 +334,9 @@ struct RecordingTransport {
 
 impl Transport for RecordingTransport {
     fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
-        let called = Instant::now();
-        let result = self.inner.write(bytes);
-        let at = self.inner.sent_at().unwrap_or(called);
-        self.tap.record(Direction::HostToDevice, bytes, at);
-        result
+        self.tap
+            .record(Direction::HostToDevice, bytes, Instant::now());
+        self.inner.write(bytes)
     }
 
     fn read(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
@@ -392,10 +390,6 @@ impl Transport for RecordingTransport {
 
     fn arrived_at(&self) -> Option<Instant> {
         self.inner.arrived_at()
-    }
-
-    fn sent_at(&self) -> Option<Instant> {
-        self.inner.sent_at()
     }
 }
 

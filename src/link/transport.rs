@@ -65,13 +65,6 @@ pub trait Transport: Send {
     fn arrived_at(&self) -> Option<Instant> {
         None
     }
-    /// When the bytes of the last write started across, where the port knows it (a pty served
-    /// in lockstep: the instant the simulator heard them from); `None`: when the write was
-    /// called. A capture stamps a request with it, so that requests and answers keep the order
-    /// in which they crossed.
-    fn sent_at(&self) -> Option<Instant> {
-        None
-    }
 }
 
 /// How long `bytes` bytes take on the wire at `baud` (8N1: 10 bits a byte).

@@ -90,12 +90,11 @@ impl Lockstep {
     /// The host does `action` at `at` (now when `None`, taken under the lock so that the
     /// simulator, which takes its own time under the lock too, cannot have gone past it). Stamps
     /// never go back.
-    fn host(&self, action: HostAction, at: Option<Instant>) -> Instant {
+    fn host(&self, action: HostAction, at: Option<Instant>) {
         let mut s = self.lock();
         let at = at.unwrap_or_else(Instant::now);
         let at = s.actions.back().map_or(at, |(last, _)| at.max(*last));
         s.actions.push_back((at, action));
-        at
     }
 
     /// How many of the bytes after the first `taken` the host may read by `deadline`: those of
@@ -196,7 +195,6 @@ pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener
             last_return: Instant::now(),
             held: VecDeque::new(),
             arrived: None,
-            sent: None,
         }) as Box<dyn Transport>)
     })
 }
@@ -224,8 +222,6 @@ pub struct LockstepPort {
     held: VecDeque<u8>,
     /// When the last byte the last read handed over had arrived ([`Transport::arrived_at`]).
     arrived: Option<Instant>,
-    /// The stamp of the last write ([`Transport::sent_at`]).
-    sent: Option<Instant>,
 }
 
 impl LockstepPort {
@@ -279,10 +275,8 @@ impl LockstepPort {
 impl Transport for LockstepPort {
     fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
         if !bytes.is_empty() {
-            let at = self
-                .lockstep
+            self.lockstep
                 .host(HostAction::Wrote(bytes.len()), Some(self.last_return));
-            self.sent = Some(at);
         }
         let result = self.port.write(bytes);
         self.returns(result)
@@ -332,9 +326,5 @@ impl Transport for LockstepPort {
 
     fn arrived_at(&self) -> Option<Instant> {
         self.arrived
-    }
-
-    fn sent_at(&self) -> Option<Instant> {
-        self.sent
     }
 }
