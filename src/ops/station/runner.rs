@@ -304,9 +304,7 @@ impl SlotRunner {
         match answered {
             Ok(true) => Probe::Present,
             Ok(false) => Probe::Absent,
-            Err(crate::ops::OpError::Exchange(crate::link::ExchangeError::Disconnected(_))) => {
-                Probe::Lost
-            }
+            Err(e) if e.lost_port().is_some() => Probe::Lost,
             Err(_) => Probe::Absent,
         }
     }
