@@ -17,6 +17,16 @@ if ! command -v cargo-deb >/dev/null 2>&1; then
     cargo install cargo-deb --locked --version 3.8.0
 fi
 rm -f target/debian/botbench_*.deb
+# The shell completions and the manual page, written by the binary that is packaged (Cargo.toml's
+# [package.metadata.deb] assets install them from target/deb-assets/).
+packaged=${BOTBENCH_DEB_FROM:-target/release/botbench}
+[ -x "$packaged" ] || cargo build --release
+step "completions and the manual page ($packaged)"
+mkdir -p target/deb-assets
+"$packaged" completions bash > target/deb-assets/botbench.bash
+"$packaged" completions zsh > target/deb-assets/_botbench
+"$packaged" completions fish > target/deb-assets/botbench.fish
+"$packaged" manpage | gzip -9n > target/deb-assets/botbench.1.gz
 if [ -n "${BOTBENCH_DEB_FROM:-}" ]; then
     # CI packages the debug binary its tests ran (one build). cargo-deb takes no dev profile (3.8
     # warns, later versions refuse), so the binary goes where the `ci` profile puts its own:
@@ -59,6 +69,12 @@ step "botbench --version"
 version=$(run botbench --version)
 echo "$version"
 echo "$version" | grep -Eq '^botbench [0-9]+\.[0-9]+\.[0-9]+ \(([0-9a-f]{7,}|unknown)\)$'
+
+step "the completions and the manual page installed"
+test -s /usr/share/bash-completion/completions/botbench
+test -s /usr/share/zsh/vendor-completions/_botbench
+test -s /usr/share/fish/vendor_completions.d/botbench.fish
+zcat /usr/share/man/man1/botbench.1.gz | grep -q '^\.TH botbench'
 
 step "botbench profiles"
 run botbench profiles | tee profiles.txt

@@ -190,8 +190,8 @@ fn field_scan(bin: &Path, case: &Case, cancel: &Cancel) -> Result<Figure, String
     };
     let n = case.runs;
     let target = match (runs.target_seconds, runs.target_met) {
-        (Some(t), Some(true)) => format!("target {n} of {n}, each ≤ {t} s: met"),
-        (Some(t), _) => format!("target {n} of {n}, each ≤ {t} s: NOT met"),
+        (Some(t), Some(true)) => format!("target {n} of {n}, each ≤ {}: met", super::ms(t)),
+        (Some(t), _) => format!("target {n} of {n}, each ≤ {}: NOT met", super::ms(t)),
         _ if runs.missed == 0 && runs.found_all + runs.failed == n => {
             "target 0 missed: met".to_string()
         }
@@ -199,7 +199,7 @@ fn field_scan(bin: &Path, case: &Case, cancel: &Cancel) -> Result<Figure, String
     };
     let notes = format!(
         "{}/{n} found 0, 1, 5; {} missed (exit 0 without them); {} failed saying why{}; \
-         median {:.3} s, max {:.3} s; margin {:.1}-{:.1} ms; asked again {} (≤ {} a run); \
+         median {}, max {}; margin {:.1}-{:.1} ms; asked again {} (≤ {} a run); \
          late answers {} (≤ {} a run); simulator {}; {target}",
         runs.found_all,
         runs.missed,
@@ -207,8 +207,8 @@ fn field_scan(bin: &Path, case: &Case, cancel: &Cancel) -> Result<Figure, String
         runs.failed_said
             .as_deref()
             .map_or(String::new(), |s| format!(" (first: {s})")),
-        runs.median_seconds,
-        runs.max_seconds,
+        super::ms(runs.median_seconds),
+        super::ms(runs.max_seconds),
         runs.margin_ms_min,
         runs.margin_ms_max,
         runs.asked_again_total,

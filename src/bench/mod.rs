@@ -75,15 +75,10 @@ impl Figure {
         f
     }
 
-    /// Held to at most `max` seconds: says `target ≤ max s: met` (or `NOT met`) in the notes.
+    /// Held to at most `max` seconds: says `target ≤ MAX ms: met` (or `NOT met`) in the notes.
     fn at_most_seconds(self, max: f64) -> Self {
         let met = self.seconds <= max;
-        let max = if max < 1.0 {
-            format!("{:.2} ms", max * 1e3)
-        } else {
-            format!("{max} s")
-        };
-        self.judged(format!("target ≤ {max}"), met)
+        self.judged(format!("target ≤ {}", ms(max)), met)
     }
 
     /// Held to at least `min` of the wire limit (wire seconds / seconds).
@@ -100,6 +95,17 @@ impl Figure {
             if met { "met" } else { "NOT met" }
         );
         self
+    }
+}
+
+/// A time in seconds as every figure says it: in ms (`12.34 ms`, `2044 ms`), the same
+/// convention as the bench's columns.
+pub fn ms(seconds: f64) -> String {
+    let ms = seconds * 1e3;
+    if ms < 100.0 {
+        format!("{ms:.2} ms")
+    } else {
+        format!("{ms:.0} ms")
     }
 }
 
@@ -204,8 +210,9 @@ fn servo_scan(
         secs,
         scan_wire(&plan, rows.len()),
         format!(
-            "{} found; vendor SDK {sdk:.1} s ({:.0}× faster)",
+            "{} found; vendor SDK {} ({:.0}× faster)",
             rows.len(),
+            ms(sdk),
             sdk / secs.max(1e-9)
         ),
     )
@@ -383,12 +390,12 @@ impl StepTimes {
         }
     }
 
-    /// `detect 0.412 s, read serial 0.004 s, …`.
+    /// `detect 412 ms, read serial 4.00 ms, …`.
     fn said(&self) -> String {
         let each: Vec<String> = self
             .took
             .iter()
-            .map(|(s, secs)| format!("{s} {secs:.3} s"))
+            .map(|(s, secs)| format!("{s} {}", ms(*secs)))
             .collect();
         each.join(", ")
     }
@@ -495,7 +502,7 @@ mod tests {
         let fast = Figure::new("scan", 0.68, 0.13, "0 found".into()).at_most_seconds(1.0);
         assert_eq!(fast.target_met, Some(true));
         assert!(
-            fast.notes.ends_with("0 found; target ≤ 1 s: met"),
+            fast.notes.ends_with("0 found; target ≤ 1000 ms: met"),
             "{}",
             fast.notes
         );

@@ -114,9 +114,14 @@ fn sqlite() -> Result<Figure, String> {
         median(times.clone()),
         0.0,
         format!(
-            "{steps} step records ({} MB file, loaded in {load:.1} s); {RUNS} reports: {}; {summary}",
+            "{steps} step records ({} MB file, loaded in {}); {RUNS} reports: {}; {summary}",
             size >> 20,
-            times.iter().map(|t| format!("{t:.3}")).collect::<Vec<_>>().join(", ")
+            super::ms(load),
+            times
+                .iter()
+                .map(|t| super::ms(*t))
+                .collect::<Vec<_>>()
+                .join(", ")
         ),
     )
     .at_most_seconds(2.0))
@@ -322,8 +327,13 @@ fn postgres(url: &str) -> Result<Figure, String> {
             median(times.clone()),
             0.0,
             format!(
-                "{steps} step records (loaded by COPY in {load:.1} s); {RUNS} reports: {}; {summary}",
-                times.iter().map(|t| format!("{t:.3}")).collect::<Vec<_>>().join(", ")
+                "{steps} step records (loaded by COPY in {}); {RUNS} reports: {}; {summary}",
+                super::ms(load),
+                times
+                    .iter()
+                    .map(|t| super::ms(*t))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ),
         )
         .at_most_seconds(5.0))

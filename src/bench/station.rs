@@ -1,7 +1,7 @@
 //! The line station's figures (issue 27): slots run side by side as they do on a line PC, each
 //! on its own thread and link, against simulated fixtures on the simulated wire (its bytes
 //! timed at the baud rate). Four servo slots provisioning a fresh servo each at once, against
-//! one slot alone (target: the whole at most 1.5x); four window-cleaner slots running the
+//! one slot alone (target: the whole at most 1.5×); four window-cleaner slots running the
 //! shipped self-test at once, each slot's time against one alone (target: within 10 %).
 
 use super::Figure;
@@ -106,11 +106,12 @@ pub fn station_figures() -> Result<Vec<Figure>, String> {
         four,
         0.0,
         format!(
-            "one slot alone {alone:.3} s; 4 slots at once {:.2}x",
+            "one slot alone {}; 4 slots at once {:.2}× that",
+            super::ms(alone),
             four / alone
         ),
     )
-    .judged("target ≤ 1.5x one slot alone".into(), four <= 1.5 * alone);
+    .judged("target ≤ 1.5× one slot alone".into(), four <= 1.5 * alone);
     let selftest = r#"SelfTest("window-cleaner-selftest.ron")"#;
     let (one, _) = run_slots(SimKind::WindowCleaner, selftest, 1)?;
     let alone = one.first().copied().unwrap_or_default();
@@ -121,9 +122,10 @@ pub fn station_figures() -> Result<Vec<Figure>, String> {
         whole,
         0.0,
         format!(
-            "one slot alone {alone:.3} s; each of 4 at once {}; worst {:+.1} %",
+            "one slot alone {}; each of 4 at once {}; worst {:+.1} %",
+            super::ms(alone),
             each.iter()
-                .map(|t| format!("{t:.3}"))
+                .map(|t| super::ms(*t))
                 .collect::<Vec<_>>()
                 .join(", "),
             (worst / alone - 1.0) * 100.0

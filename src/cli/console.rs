@@ -229,6 +229,13 @@ pub(crate) fn is_process() -> bool {
     with(|c| matches!(c.sink, Sink::Process))
 }
 
+/// Whether this run's stdout is a terminal a person reads (never for a captured run, nor a
+/// pipe or a file): hints and progress are for them, not for a script.
+pub(crate) fn stdout_is_terminal() -> bool {
+    use std::io::IsTerminal;
+    is_process() && std::io::stdout().is_terminal()
+}
+
 /// The Ctrl-C of a run in another program's process ([`Captured::interrupt`]); `None` for the
 /// process's own run.
 pub(crate) fn captured_ctrl_c() -> Option<crate::ops::Cancel> {

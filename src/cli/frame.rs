@@ -306,11 +306,7 @@ fn encode<'p>(
             Initiator::Host,
         ),
         (None, None) => {
-            return Err(CliError::input(format!(
-                "{} has no command '{command}' (use a name such as {}, or a number with --payload)",
-                profile.id,
-                profile.commands.first().map_or("", |c| c.ident.as_str())
-            )));
+            return Err(super::profiles::unknown_command(profile, command));
         }
     };
     let forward = match initiator {

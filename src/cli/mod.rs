@@ -11,6 +11,7 @@ mod msp;
 mod port;
 mod preset;
 mod profile;
+mod profiles;
 mod provision;
 mod records;
 mod replay;
@@ -60,7 +61,16 @@ pub type CliResult = Result<u8, CliError>;
 
 /// botbench: tune, provision and test serial-connected robots.
 #[derive(Debug, Parser)]
-#[command(name = "botbench", version = crate::VERSION, about, long_about = None)]
+#[command(
+    name = "botbench",
+    version = crate::VERSION,
+    about,
+    long_about = None,
+    after_help = "Environment: BOTBENCH_PORT is the --port of the device commands (msp, servo, \
+                  tuya, preset) when none is given; BOTBENCH_PROFILE_DIR holds your own profiles; \
+                  BOTBENCH_RECORDS the records' file. `botbench completions bash` and `botbench \
+                  manpage` print shell completions and the manual page."
+)]
 pub struct Cli {
     #[command(subcommand)]
     command: Option<Cmd>,
@@ -101,12 +111,9 @@ enum Cmd {
     /// Make a device profile from a vendor's data-point schema.
     #[command(subcommand)]
     Profile(profile::ProfileCmd),
-    /// List the device profiles and where each comes from.
-    Profiles {
-        /// Print JSON.
-        #[arg(long)]
-        json: bool,
-    },
+    /// List the device profiles and where each comes from; `profiles show NAME` shows one
+    /// whole (its commands, fields, servo parameters and data points).
+    Profiles(profiles::ProfilesArgs),
     /// List the serial ports (USB VID:PID, serial number, product, and the adapter's driver and
     /// latency timer where the system tells them).
     Ports {
@@ -159,6 +166,15 @@ enum Cmd {
     /// Yield per shift, station, slot and plan; failing steps; each measurement's histogram,
     /// Cpk and drift (--html FILE for one self-contained page).
     Report(report::ReportArgs),
+    /// Print a completion script for SHELL: bash, zsh, fish or powershell (e.g. `botbench
+    /// completions bash > ~/.local/share/bash-completion/completions/botbench`; the .deb
+    /// installs bash's, zsh's and fish's).
+    Completions {
+        /// bash, zsh, fish, powershell or elvish.
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff, for `man -l -`; the .deb installs it as botbench(1)).
+    Manpage,
 }
 
 /// Runs the command line with the process's arguments; `--port` is opened with `ports` (the
@@ -284,7 +300,7 @@ fn bounded(message: &str) -> String {
 fn run(cli: Cli, opener: &PortOpener) -> CliResult {
     match cli.command {
         Some(Cmd::Frame(cmd)) => frame::run(cmd),
-        Some(Cmd::Profiles { json }) => profiles(json),
+        Some(Cmd::Profiles(args)) => profiles::run(args),
         Some(Cmd::Profile(cmd)) => profile::run(cmd),
         Some(Cmd::Ports {
             json,
@@ -304,6 +320,8 @@ fn run(cli: Cli, opener: &PortOpener) -> CliResult {
         Some(Cmd::Report(args)) => report::run(args),
         Some(Cmd::Station(args)) => station::run(args, opener),
         Some(Cmd::Sim(args)) => sim::run(args),
+        Some(Cmd::Completions { shell }) => completions(shell),
+        Some(Cmd::Manpage) => manpage(),
         Some(Cmd::Gui {
             port,
             baud,
@@ -319,35 +337,6 @@ fn run(cli: Cli, opener: &PortOpener) -> CliResult {
 fn registry() -> Result<crate::profile::Registry, CliError> {
     crate::profile::Registry::load_from(console::user_profiles().as_deref())
         .map_err(CliError::input)
-}
-
-fn profiles(json: bool) -> CliResult {
-    let reg = registry()?;
-    for (p, source) in reg.iter() {
-        let source = match source {
-            crate::profile::Source::Builtin => "built-in".to_string(),
-            crate::profile::Source::File(path) => path.display().to_string(),
-        };
-        if json {
-            let doc = serde_json::json!({
-                "id": p.id, "name": p.name.en, "name_zh": p.name.zh,
-                "protocol": p.protocol.name(), "baud": p.baud,
-                "commands": p.commands.len(), "source": source,
-            });
-            outln!("{doc}");
-        } else {
-            outln!(
-                "{:<28} {:<6} {:>7} baud  {:>3} commands  {} / {}  ({source})",
-                p.id,
-                p.protocol.name(),
-                p.baud,
-                p.commands.len(),
-                p.name.en,
-                p.name.zh
-            );
-        }
-    }
-    Ok(0)
 }
 
 fn ports(json: bool, set_latency_timer: Option<Vec<String>>) -> CliResult {
@@ -405,11 +394,13 @@ fn bench(long: bool, field: bool, json: bool, only: Option<&str>) -> CliResult {
         if json {
             outln!("{}", serde_json::to_string(f).unwrap_or_default());
         } else {
+            // One convention: times in ms, speed as the share of the wire limit reached
+            // (the wire's own time over the time taken: 1.00 is the limit).
             outln!(
-                "{:<48} {:>8.3} s  wire {:>8.3} s  ratio {:>5.2}  {}",
+                "{:<56} {:>10.2} ms  wire {:>10.2} ms  {:>5.2} of the wire limit  {}",
                 f.name,
-                f.seconds,
-                f.wire_seconds,
+                f.seconds * 1e3,
+                f.wire_seconds * 1e3,
                 f.wire_ratio,
                 f.notes
             );
@@ -432,6 +423,29 @@ fn bench(long: bool, field: bool, json: bool, only: Option<&str>) -> CliResult {
         );
         Ok(1)
     }
+}
+
+/// `botbench completions SHELL`: the completion script on stdout.
+fn completions(shell: clap_complete::Shell) -> CliResult {
+    let mut script = Vec::new();
+    clap_complete::generate(
+        shell,
+        &mut <Cli as clap::CommandFactory>::command(),
+        "botbench",
+        &mut script,
+    );
+    out!("{}", String::from_utf8_lossy(&script));
+    Ok(0)
+}
+
+/// `botbench manpage`: botbench(1) in roff on stdout.
+fn manpage() -> CliResult {
+    let mut page = Vec::new();
+    clap_mangen::Man::new(<Cli as clap::CommandFactory>::command())
+        .render(&mut page)
+        .map_err(|e| CliError::device(format!("cannot render the manual page: {e}")))?;
+    out!("{}", String::from_utf8_lossy(&page));
+    Ok(0)
 }
 
 /// A panel by its name, as in the saved settings.
@@ -463,7 +477,26 @@ fn gui(
     if let Some(p) = &profile {
         registry()?.get(p).map_err(CliError::input)?;
     }
-    crate::ui::run(target, baud, profile, panel, screenshots, ports.clone())
-        .map_err(|e| CliError::device(format!("cannot open the window: {e}")))?;
+    if let Some(why) = crate::system::display::missing() {
+        return Err(no_display(why));
+    }
+    crate::ui::run(target, baud, profile, panel, screenshots, ports.clone()).map_err(|e| {
+        let e = e.to_string();
+        if crate::system::display::is_unreachable(&e) {
+            // The window system's own words name its source files: said in ours.
+            no_display("the display named could not be reached")
+        } else {
+            CliError::device(format!("cannot open the window: {e}"))
+        }
+    })?;
     Ok(0)
+}
+
+/// The window cannot be shown here (`why`): exit 2, a bad environment rather than a device
+/// failure, with where the command line is.
+fn no_display(why: &str) -> CliError {
+    CliError::input(format!(
+        "no display: the window needs X11 or Wayland; the command line works without one \
+         (botbench --help). Here {why}."
+    ))
 }

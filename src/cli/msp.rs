@@ -13,6 +13,7 @@ use crate::profile::{Command, Input, Profile, Protocol};
 use crate::protocol::Direction;
 use clap::Subcommand;
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 #[derive(Debug, clap::Args)]
@@ -84,14 +85,9 @@ enum MspCmd {
 }
 
 fn command<'p>(profile: &'p Profile, name: &str) -> Result<&'p Command, CliError> {
-    profile.command(name).ok_or_else(|| {
-        CliError::input(format!(
-            "{} has no command '{}' (`botbench frame decode` and the profile list them; names \
-             such as MSP_GET_PWMVALUE, or numbers)",
-            profile.id,
-            crate::document::quote(name)
-        ))
-    })
+    profile
+        .command(name)
+        .ok_or_else(|| super::profiles::unknown_command(profile, name))
 }
 
 /// An `msp` subcommand with everything it was given checked, before the port is opened.
@@ -283,14 +279,89 @@ fn print_fields(
     u8::from(misfit.is_some() || out_of_range)
 }
 
+/// The profile of the MSP device on the port, when `--profile` does not name one: the device
+/// identifies itself (CMD_VERSION's hardware code: 0x03 the window cleaner, 0x04 the solar
+/// cleanbot), and the first profile claiming that code is used, said on stderr. What was given
+/// is checked first against `default` and, where it does not fit, against every MSP profile:
+/// input no MSP profile takes is refused before the port is opened. A device that does not
+/// identify keeps `default`. Returns the profile, and the link it was identified on when that
+/// is `default`'s. Errors: bad input (2); a hardware code no profile claims (1, with the
+/// profiles and their codes).
+fn following_the_device(
+    args: &MspArgs,
+    default: Arc<Profile>,
+) -> Result<(Arc<Profile>, Option<Link>), CliError> {
+    let reg = super::registry()?;
+    let msp: Vec<&Arc<Profile>> = reg
+        .iter()
+        .map(|(p, _)| p)
+        .filter(|p| p.protocol == Protocol::Msp)
+        .collect();
+    if let Err(e) = check(&args.cmd, &default)
+        && !msp.iter().any(|p| check(&args.cmd, p).is_ok())
+    {
+        return Err(e);
+    }
+    let (Some(info), link) = args.port.identify(default.clone())? else {
+        return Ok((default, None));
+    };
+    let claims = |p: &Profile| p.device_code.map(crate::profile::DeviceCode::initial);
+    if claims(&default) == Some(info.hw) {
+        return Ok((default, Some(link)));
+    }
+    match msp.iter().find(|p| claims(p) == Some(info.hw)) {
+        // What was given is for the default's device: the link refuses to send it to another
+        // kind, and says why (issue 25, 4d).
+        Some(p) if check(&args.cmd, p).is_err() && check(&args.cmd, &default).is_ok() => {
+            Ok((default, Some(link)))
+        }
+        Some(p) => {
+            errln!(
+                "botbench: the device identifies as hardware {:#04x}: using profile {} ({}; \
+                 --profile chooses another)",
+                info.hw,
+                p.id,
+                p.name.en
+            );
+            drop(link);
+            Ok((Arc::clone(p), None))
+        }
+        None => {
+            let known: Vec<String> = msp
+                .iter()
+                .filter_map(|p| claims(p).map(|c| format!("{} {c:#04x}", p.id)))
+                .collect();
+            Err(CliError::device(format!(
+                "the device identifies as hardware {:#04x}, which no profile claims (profiles \
+                 and their hardware codes: {}); give its profile with --profile FILE.ron \
+                 (`botbench profiles show window-cleaner` shows what a profile holds)",
+                info.hw,
+                known.join(", ")
+            )))
+        }
+    }
+}
+
 pub(crate) fn run(mut args: MspArgs, ports: &PortOpener) -> CliResult {
     args.port = args.port.with_ports(ports);
     args.port.poll_pipeline = args.poll_pipeline;
     let json = args.port.json;
     // Everything given is checked before the port is opened.
     let profile = args.port.profile("window-cleaner", Protocol::Msp)?;
+    let (profile, probe) = if args.port.profile.is_none() {
+        following_the_device(&args, profile)?
+    } else {
+        (profile, None)
+    };
     let checked = check(&args.cmd, &profile)?;
-    let link = args.port.open_with(profile.clone(), true)?;
+    let link = match probe {
+        Some(link) if args.port.capture.is_none() => link,
+        probe => {
+            // The port is closed before it is opened again, with the capture.
+            drop(probe);
+            args.port.open_with(profile.clone(), true)?
+        }
+    };
     // The session asks CMD_VERSION first, to learn the device code; later requests wait for it.
     let client = link.client();
     let identified = client.device_info();
@@ -484,7 +555,10 @@ impl Operator for Console {
         let mut line = String::new();
         match super::console::read_line(&mut line) {
             Ok(0) | Err(_) => {
-                errln!("\nno operator (stdin closed): aborting; use --yes for unattended runs");
+                errln!(
+                    "\nbotbench: stdin is closed: no operator to press Enter, so the self-test \
+                     stops here; --yes runs it unattended"
+                );
                 false
             }
             Ok(_) => !line.trim().eq_ignore_ascii_case("q"),
@@ -524,7 +598,12 @@ fn selftest_run(
         plan,
         given,
         &mut operator,
-        &mut Run::quiet(&cancel),
+        &mut Run::new(&cancel, |p: crate::ops::Progress| {
+            // The safe state is said as it is reached, before the first step's line.
+            if !json && p.message.en.starts_with(crate::ops::selftest::SAFE_STATE) {
+                outln!("{}", p.message.en);
+            }
+        }),
         &mut |r| {
             if !json {
                 outln!(
@@ -552,12 +631,6 @@ fn selftest_run(
         outln!("{}", serde_json::to_string(&report).unwrap_or_default());
     } else {
         let device = report.device.as_deref().unwrap_or("unknown device");
-        if !report.safe_state.is_empty() {
-            outln!(
-                "safe state before the first step: {}",
-                report.safe_state.join("; ")
-            );
-        }
         let failed: Vec<&str> = report.failed().map(|r| r.name.as_str()).collect();
         if report.pass {
             outln!("PASS: all {} steps passed ({device})", report.results.len());

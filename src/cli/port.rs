@@ -2,7 +2,7 @@
 
 use super::{CliError, checks, registry};
 use crate::capture::{Capture, CaptureInfo};
-use crate::link::{ExchangeError, Link, LinkOptions, PortOpener};
+use crate::link::{DeviceInfo, ExchangeError, Link, LinkOptions, PortOpener};
 use crate::ops::{Check, OpError};
 use crate::profile::{Field, Profile, Protocol};
 use clap::Args;
@@ -12,8 +12,10 @@ use std::sync::Arc;
 /// (`botbench servo --port P scan` and `botbench servo scan --port P` are the same).
 #[derive(Debug, Args)]
 pub(crate) struct PortArgs {
-    /// The serial port (e.g. /dev/ttyUSB0, or a /dev/pts path from `botbench sim`). Required.
-    #[arg(long, short, global = true, value_parser = checks::port_path)]
+    /// The serial port (e.g. /dev/ttyUSB0, or a /dev/pts path from `botbench sim`). Required,
+    /// unless BOTBENCH_PORT names one (the bench's usual port: `export
+    /// BOTBENCH_PORT=/dev/ttyUSB0`).
+    #[arg(long, short, global = true, env = "BOTBENCH_PORT", value_parser = checks::port_path)]
     pub port: Option<String>,
     /// Baud rate, 300 to 4000000 (default: the profile's).
     #[arg(long, short, global = true, value_parser = checks::baud)]
@@ -33,6 +35,10 @@ pub(crate) struct PortArgs {
     /// serves it back; `botbench frame decode --capture` prints it).
     #[arg(long, global = true, value_name = "FILE")]
     pub capture: Option<std::path::PathBuf>,
+    /// With --capture: write over the capture file if it exists (without it, an existing file
+    /// is refused, so that no earlier capture is lost).
+    #[arg(long, global = true, requires = "capture")]
+    pub force: bool,
     /// Print JSON.
     #[arg(long, global = true)]
     pub json: bool,
@@ -99,7 +105,8 @@ impl PortArgs {
         self.port.as_deref().ok_or_else(|| {
             CliError::input(
                 "no port given: add --port PORT (e.g. /dev/ttyUSB0, or the /dev/pts path \
-                 `botbench sim` prints; `botbench ports` lists this machine's ports)",
+                 `botbench sim` prints; `botbench ports` lists this machine's ports), or set \
+                 BOTBENCH_PORT",
             )
         })
     }
@@ -124,16 +131,54 @@ impl PortArgs {
         Ok(profile)
     }
 
-    /// Opens the port with a profile already loaded.
-    pub fn open_with(&self, profile: Arc<Profile>, start_session: bool) -> Result<Link, CliError> {
-        let baud = self.baud.unwrap_or(profile.baud);
-        let options = LinkOptions {
+    /// The link's options: the margin given, no reconnect, the session started or not.
+    fn link_options(&self, start_session: bool) -> LinkOptions {
+        LinkOptions {
             margin: self.margin_ms.map(std::time::Duration::from_millis),
             reconnect: false,
             start_session,
             poll_pipeline: usize::from(self.poll_pipeline),
             ..LinkOptions::default()
-        };
+        }
+    }
+
+    /// The capture file to write, refused when a file is there already and `--force` was not
+    /// given (exit 2, before the port is opened; what is not a file, such as a named pipe, is
+    /// refused by [`Capture::create`]).
+    fn check_capture(&self) -> Result<(), CliError> {
+        match &self.capture {
+            Some(path) if !self.force && std::fs::metadata(path).is_ok_and(|m| m.is_file()) => {
+                Err(CliError::input(format!(
+                    "--capture {}: the file exists; --force writes over it (an earlier capture \
+                     is not lost unasked)",
+                    path.display()
+                )))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Opens the port with `profile`, without a capture, and asks what the MSP device on it
+    /// says it is (CMD_VERSION, CMD_BUILD_INFO): the identification (`None` when the device
+    /// does not identify itself: silent, garbled) and the link, to be used on when `profile`
+    /// fits the device and nothing is captured, else closed before the command's own link is
+    /// opened with the profile that fits ([`Self::open_with`]). Errors: the port cannot be
+    /// opened (exit 2).
+    pub fn identify(&self, profile: Arc<Profile>) -> Result<(Option<DeviceInfo>, Link), CliError> {
+        self.check_capture()?;
+        let baud = self.baud.unwrap_or(profile.baud);
+        let opener = self.ports.open(self.path()?, baud);
+        let link = Link::open(opener, profile, self.link_options(true), None)
+            .map_err(|e| CliError::input(e.to_string()))?;
+        let info = link.client().device_info().ok();
+        Ok((info, link))
+    }
+
+    /// Opens the port with a profile already loaded.
+    pub fn open_with(&self, profile: Arc<Profile>, start_session: bool) -> Result<Link, CliError> {
+        self.check_capture()?;
+        let baud = self.baud.unwrap_or(profile.baud);
+        let options = self.link_options(start_session);
         let port = self.path()?;
         let mut opener = self.ports.open(port, baud);
         if let Some(path) = &self.capture {

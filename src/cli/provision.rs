@@ -36,40 +36,15 @@ pub(crate) fn run(
     let mut last: Option<Record> = None;
     for n in 1..=count {
         if let Some(prev) = &last {
-            let go_on = match wait_ms {
-                Some(ms) => {
-                    errln!(
-                        "Swap the servo: waiting for a new fresh servo (id 0) for servo {n} of {count}…"
-                    );
-                    match wait_for_new(
-                        &client,
-                        &profile,
-                        prev.serial,
-                        Duration::from_millis(ms),
-                        &cancel,
-                    ) {
-                        Waited::New => true,
-                        Waited::Cancelled => {
-                            return Err(CliError {
-                                code: super::port::EXIT_CANCELLED,
-                                message: format!(
-                                    "cancelled while waiting for servo {n} of {count}: \
-                                     {passed} PASS, {failed} FAIL; servos {n} to {count} not provisioned"
-                                ),
-                            });
-                        }
-                        Waited::Lost(reason) => {
-                            return Err(CliError::device(format!(
-                                "link lost while waiting for servo {n} of {count}: {reason}; \
-                                 {passed} PASS, {failed} FAIL"
-                            )));
-                        }
-                    }
-                }
-                None => prompt(n, count),
+            let tally = Tally {
+                n,
+                count,
+                passed,
+                failed,
             };
+            let go_on = next_servo(&client, &profile, prev, wait_ms, &cancel, &tally)?;
             if !go_on {
-                errln!("stopped by the operator before servo {n} of {count}");
+                errln!("botbench: stopped by the operator (q) before servo {n} of {count}");
                 break;
             }
         }
@@ -153,15 +128,86 @@ fn say_earlier(
     }
 }
 
-/// Asks the operator to swap the servo; false when they stop (q, or end of input).
-fn prompt(n: u32, count: u32) -> bool {
+/// Where a run of `count` servos stands before servo `n`.
+#[derive(Clone, Copy)]
+struct Tally {
+    n: u32,
+    count: u32,
+    passed: u32,
+    failed: u32,
+}
+
+/// Waits for servo `n` after `prev`: a new fresh servo looked for every `wait_ms`, or the
+/// operator's Enter. False when the operator stops (q); an error when the wait is cancelled
+/// (exit 130), the link is lost (1) or nobody can answer (stdin closed: 2).
+fn next_servo(
+    client: &Client,
+    profile: &Profile,
+    prev: &Record,
+    wait_ms: Option<u64>,
+    cancel: &crate::ops::Cancel,
+    tally: &Tally,
+) -> Result<bool, CliError> {
+    let Tally {
+        n,
+        count,
+        passed,
+        failed,
+    } = *tally;
+    let Some(ms) = wait_ms else {
+        return match prompt(n, count) {
+            Swap::Go => Ok(true),
+            Swap::Quit => Ok(false),
+            Swap::Closed => Err(CliError::input(format!(
+                "stdin is closed before servo {n} of {count}: no operator to press Enter; \
+                 {passed} PASS, {failed} FAIL, servos {n} to {count} not provisioned (--wait-ms \
+                 MS looks for each new servo without an operator)"
+            ))),
+        };
+    };
+    errln!("Swap the servo: waiting for a new fresh servo (id 0) for servo {n} of {count}…");
+    match wait_for_new(
+        client,
+        profile,
+        prev.serial,
+        Duration::from_millis(ms),
+        cancel,
+    ) {
+        Waited::New => Ok(true),
+        Waited::Cancelled => Err(CliError {
+            code: super::port::EXIT_CANCELLED,
+            message: format!(
+                "cancelled while waiting for servo {n} of {count}: {passed} PASS, {failed} FAIL; \
+                 servos {n} to {count} not provisioned"
+            ),
+        }),
+        Waited::Lost(reason) => Err(CliError::device(format!(
+            "link lost while waiting for servo {n} of {count}: {reason}; {passed} PASS, \
+             {failed} FAIL"
+        ))),
+    }
+}
+
+/// What the operator answered when asked to swap the servo.
+enum Swap {
+    /// Enter: the next servo is plugged in.
+    Go,
+    /// q: stop here.
+    Quit,
+    /// Nobody can answer: stdin is closed (or unreadable).
+    Closed,
+}
+
+/// Asks the operator to swap the servo.
+fn prompt(n: u32, count: u32) -> Swap {
     errln!(
         "Swap the servo: plug in servo {n} of {count} (fresh, id 0), then press Enter (q then Enter to stop)."
     );
     let mut line = String::new();
     match super::console::read_line(&mut line) {
-        Ok(0) | Err(_) => false,
-        Ok(_) => !line.trim().eq_ignore_ascii_case("q"),
+        Ok(0) | Err(_) => Swap::Closed,
+        Ok(_) if line.trim().eq_ignore_ascii_case("q") => Swap::Quit,
+        Ok(_) => Swap::Go,
     }
 }
 

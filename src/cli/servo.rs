@@ -107,6 +107,10 @@ enum ServoCmd {
         /// With id 255: turn every servo at this rate.
         #[arg(long)]
         broadcast: bool,
+        /// Send the angle without first checking that the servo answers a ping (the servo
+        /// sends no answer to the angle itself, so without the ping nothing says it is there).
+        #[arg(long)]
+        no_check: bool,
     },
     /// Provision fresh servos by a plan: find each (id 0, at any baud rate), give it the next
     /// free id, the plan's baud rate and parameters, verify everything, and log it.
@@ -246,7 +250,22 @@ enum Checked<'p> {
     Write(u8, &'p crate::profile::Param, Value, bool),
     SetId(u8, u8),
     SetBaud(u8, u8),
-    Angle(u8, Vec<(String, Input)>, u16),
+    /// `servo angle`.
+    Angle(Angle),
+}
+
+/// `servo angle`, checked: what ROTATE is sent with.
+struct Angle {
+    /// The servo id (255: every servo, a broadcast).
+    id: u8,
+    /// ROTATE's inputs.
+    inputs: Vec<(String, Input)>,
+    /// The target angle as given, in degrees.
+    deg: String,
+    /// The time to get there, ms.
+    ms: u16,
+    /// Ping the servo first (not with --no-check, nor a broadcast).
+    ping_first: bool,
 }
 
 /// Checks every id, name and value of `cmd` against `profile`; `home` is the port's baud rate.
@@ -296,7 +315,12 @@ fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<
         }
         ServoCmd::SetBaud { id, baud } => Checked::SetBaud(*id, servo_baud(profile, baud)?),
         ServoCmd::Angle {
-            id, deg, ms, power, ..
+            id,
+            deg,
+            ms,
+            power,
+            no_check,
+            ..
         } => {
             let rotate = profile.command("ROTATE").ok_or_else(|| {
                 CliError::input(format!("profile '{}' has no ROTATE", profile.id))
@@ -308,7 +332,13 @@ fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<
                 ("power".to_string(), Input::Raw(Value::Int((*power).into()))),
             ];
             crate::ops::exchange::request(profile, rotate, &inputs, 1).map_err(op_error)?;
-            Checked::Angle(*id, inputs, *ms)
+            Checked::Angle(Angle {
+                id: *id,
+                inputs,
+                deg: deg.trim().to_string(),
+                ms: *ms,
+                ping_first: !*no_check && *id != crate::protocol::servo::BROADCAST_ID,
+            })
         }
         ServoCmd::Provision { .. } => {
             return Err(CliError::input("provision is checked by its own plan"));
@@ -398,7 +428,7 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
             print_scan(&profile, &report, started.elapsed().as_secs_f64(), json);
             if report.rows.is_empty() && !allow_empty {
                 errln!(
-                    "no servo answered on {} (ids {}-{}){}",
+                    "botbench: no servo answered on {} (ids {}-{}){}",
                     args.port.port.as_deref().unwrap_or("the port"),
                     plan.ids.start(),
                     plan.ids.end(),
@@ -443,17 +473,79 @@ pub(crate) fn run(mut args: ServoArgs, ports: &PortOpener) -> CliResult {
                 &said,
             )
         }
-        Checked::Angle(id, inputs, ms) => {
-            let rotate = profile
-                .command("ROTATE")
-                .ok_or_else(|| CliError::input("the profile has no ROTATE"))?;
-            crate::ops::exchange::send(dev, rotate, &inputs).map_err(op_error)?;
-            if !json {
-                outln!("servo {id}: turning over {ms} ms");
+        Checked::Angle(angle) => turn(dev, &angle, json),
+    }
+}
+
+/// `servo angle`: pings the servo first (unless told not to: the servo sends no answer to
+/// ROTATE, so the ping is what says it is there), sends ROTATE, and says what is known: the
+/// servo answered its ping, and acknowledged the angle only when its response switch is on.
+/// Exit 1, with the wiring checklist, when the servo does not answer the ping.
+fn turn(dev: Device<'_>, angle: &Angle, json: bool) -> CliResult {
+    let id = angle.id;
+    if angle.ping_first {
+        match ops::ping(dev.client, id, 3).map_err(op_error)? {
+            Presence::Present => {}
+            Presence::Absent => {
+                return Err(CliError::device(format!(
+                    "servo {id} does not answer a ping, so the angle was not sent (the servo \
+                     sends no answer to an angle: nothing else would tell that it is not there)\
+                     {}; `--no-check` sends it anyway",
+                    super::port::SILENT_HINT
+                )));
             }
-            Ok(0)
+            Presence::PossibleDuplicate(e) => super::port::warn(&format!(
+                "servo {id}'s ping came back damaged ({e}): two servos may share id {id}, and \
+                 both will turn"
+            )),
         }
     }
+    let rotate = dev
+        .profile
+        .command("ROTATE")
+        .ok_or_else(|| CliError::input(format!("profile '{}' has no ROTATE", dev.profile.id)))?;
+    let reply = crate::ops::exchange::send(dev, rotate, &angle.inputs).map_err(op_error)?;
+    // An answer comes only with the servo's response switch on.
+    let acknowledged = match reply.payload() {
+        None => false,
+        Some(payload) => {
+            let answer = crate::ops::exchange::decode_answer(dev.profile, rotate, payload)
+                .map_err(op_error)?;
+            if answer.int("result") == Some(0) {
+                return Err(CliError::device(format!(
+                    "servo {id} answered ROTATE with result 0 (failed): the angle was refused"
+                )));
+            }
+            true
+        }
+    };
+    let (deg, ms) = (&angle.deg, angle.ms);
+    if json {
+        let doc = serde_json::json!({
+            "servo": id, "angle": deg, "ms": ms, "broadcast": id == crate::protocol::servo::BROADCAST_ID,
+            "pinged": angle.ping_first, "acknowledged": acknowledged,
+        });
+        outln!("{}", super::port::with_warnings(doc));
+    } else if id == crate::protocol::servo::BROADCAST_ID {
+        outln!(
+            "every servo at this rate: turning to {deg}° over {ms} ms (a broadcast: no servo \
+             answers it, nothing confirms the move)"
+        );
+    } else if acknowledged {
+        outln!("servo {id}: turning to {deg}° over {ms} ms, acknowledged");
+    } else {
+        let pinged = if angle.ping_first {
+            "it answered a ping just before"
+        } else {
+            "not pinged first (--no-check): nothing says it is there"
+        };
+        outln!(
+            "servo {id}: turning to {deg}° over {ms} ms; the servo sends no answer to an angle \
+             ({}), so nothing confirms the move; {pinged}",
+            rotate.ident
+        );
+    }
+    Ok(0)
 }
 
 /// Prints `doc` with `--json`, else `said`; exit code 0.

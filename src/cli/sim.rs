@@ -175,7 +175,7 @@ impl TuyaSimArgs {
     }
 }
 
-fn parse_byte(text: &str) -> Result<u8, String> {
+pub(super) fn parse_byte(text: &str) -> Result<u8, String> {
     let t = text.trim();
     match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
         Some(h) => u8::from_str_radix(h, 16),

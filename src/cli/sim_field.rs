@@ -45,6 +45,10 @@ pub(crate) struct FieldArgs {
     /// MSP: replies to this command, 0 to 255, fail their checksum (repeat for several).
     #[arg(long, value_name = "COMMAND")]
     garble_command: Vec<u8>,
+    /// MSP: answer CMD_VERSION with this hardware code (and take requests to it as the
+    /// board's device code), 0 to 255 or 0x00 to 0xff: a board no profile claims.
+    #[arg(long, value_name = "BYTE", value_parser = super::sim::parse_byte)]
+    hardware_code: Option<u8>,
     /// Servo bus: every servo acknowledges a baud change and keeps talking at its old rate.
     #[arg(long)]
     ignore_baud_change: bool,
@@ -90,12 +94,13 @@ impl FieldArgs {
                 Some(ms) => Some((Duration::from_millis(ms), self.async_frame()?)),
             },
             garble: self.garble_command.clone(),
+            hardware_code: self.hardware_code,
         };
         if quirks != MspQuirks::default()
             && kind.profile_protocol() != crate::profile::Protocol::Msp
         {
             return Err(CliError::input(format!(
-                "--async-before-reply, --async-every-ms and --garble-command are for MSP devices, not a {kind}"
+                "--async-before-reply, --async-every-ms, --garble-command and --hardware-code are for MSP devices, not a {kind}"
             )));
         }
         Ok(quirks)

@@ -349,7 +349,7 @@ mod tests {
             StepResult::WifiStateNotNeeded
         } else {
             StepResult::Failed(crate::link::ExchangeError::Timeout {
-                command: step.command(),
+                command: step.command().into(),
                 attempts: 1,
                 waited_ms: 300,
             })

@@ -72,10 +72,18 @@ pub(super) fn print_status(profile: &Profile, status: &Status, version: Option<u
     if let Some(v) = version {
         outln!("{}", version_text(v));
     }
+    // One column for the values, however long the names (`clean_area_total_lifetime (31)`).
+    let width = status
+        .data_points
+        .iter()
+        .map(|d| d.name().chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(24);
     for d in status.data_points.iter().filter(|d| d.in_profile()) {
         match &d.misfit {
-            None => outln!("{:<24} {}", d.name(), d.shown(profile)),
-            Some(_) => outln!("{:<24} MISFIT {}", d.name(), d.shown(profile)),
+            None => outln!("{:<width$} {}", d.name(), d.shown(profile)),
+            Some(_) => outln!("{:<width$} MISFIT {}", d.name(), d.shown(profile)),
         }
     }
     print_status_notes(profile, status);
@@ -87,8 +95,14 @@ pub(super) fn print_status_notes(profile: &Profile, status: &Status) {
     let unknown = status.unknown();
     if !unknown.is_empty() {
         outln!("not in the profile (read by their own type and length):");
+        let width = unknown
+            .iter()
+            .map(|d| d.name().chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(22);
         for d in unknown {
-            outln!("  {:<22} {}", d.name(), d.shown(profile));
+            outln!("  {:<width$} {}", d.name(), d.shown(profile));
         }
     }
     if !status.missing.is_empty() {

@@ -12,7 +12,7 @@ pub mod watch;
 mod worker;
 pub use worker::default_margin;
 
-pub use request::{ExchangeError, Match, Reply, ReplySpec, Request};
+pub use request::{CommandName, ExchangeError, Match, Reply, ReplySpec, Request};
 pub use serial::PortOpener;
 pub use session::tuya::{HandshakeStep, ProductInfo, StepResult, TuyaEvent, TuyaModuleOptions};
 pub use session::{Capability, DeviceInfo, capabilities};
@@ -337,6 +337,8 @@ impl Default for LinkOptions {
 /// An open link: the worker thread and its channels. Dropping it closes the port.
 pub struct Link {
     commands: Sender<LinkCommand>,
+    /// Names the commands of the errors its clients hand on.
+    profile: Arc<Profile>,
     events: Receiver<LinkEvent>,
     thread: Option<JoinHandle<()>>,
 }
@@ -359,13 +361,22 @@ impl Link {
         let transport = opener()?;
         let (cmd_tx, cmd_rx) = crossbeam_channel::unbounded();
         let (ev_tx, ev_rx) = crossbeam_channel::bounded(options.event_capacity.max(16));
-        let worker = worker::Worker::new(transport, opener, profile, options, cmd_rx, ev_tx, waker);
+        let worker = worker::Worker::new(
+            transport,
+            opener,
+            profile.clone(),
+            options,
+            cmd_rx,
+            ev_tx,
+            waker,
+        );
         let thread = std::thread::Builder::new()
             .name("botbench-link".into())
             .spawn(move || worker.run())
             .map_err(|e| LinkError::Setting(format!("cannot start the link thread: {e}")))?;
         Ok(Self {
             commands: cmd_tx,
+            profile,
             events: ev_rx,
             thread: Some(thread),
         })
@@ -385,6 +396,7 @@ impl Link {
     pub fn client(&self) -> Client {
         Client {
             commands: self.commands.clone(),
+            profile: self.profile.clone(),
         }
     }
 }
@@ -402,6 +414,8 @@ impl Drop for Link {
 #[derive(Debug, Clone)]
 pub struct Client {
     commands: Sender<LinkCommand>,
+    /// The link's profile: the errors handed on name their commands by it.
+    profile: Arc<Profile>,
 }
 
 impl Client {
@@ -414,7 +428,9 @@ impl Client {
                 reply_to: ReplyTo::Channel(tx),
             })
             .map_err(|_| ExchangeError::Cancelled)?;
-        rx.recv().unwrap_or(Err(ExchangeError::Cancelled))
+        rx.recv()
+            .unwrap_or(Err(ExchangeError::Cancelled))
+            .map_err(|e| e.named(&self.profile))
     }
 
     /// MSP: this connection's identification (hardware code, firmware, API, build, flags, build
@@ -431,7 +447,9 @@ impl Client {
         self.commands
             .send(LinkCommand::DeviceInfo { reply: tx })
             .map_err(|_| ExchangeError::Cancelled)?;
-        rx.recv().unwrap_or(Err(ExchangeError::Cancelled))
+        rx.recv()
+            .unwrap_or(Err(ExchangeError::Cancelled))
+            .map_err(|e| e.named(&self.profile))
     }
 
     /// MSP: identifies the device again (CMD_VERSION, then CMD_BUILD_INFO; before any request
@@ -448,7 +466,9 @@ impl Client {
         self.commands
             .send(LinkCommand::Sweep { sweep, reply: tx })
             .map_err(|_| ExchangeError::Cancelled)?;
-        rx.recv().unwrap_or(Err(ExchangeError::Cancelled))
+        rx.recv()
+            .unwrap_or(Err(ExchangeError::Cancelled))
+            .map_err(|e| e.named(&self.profile))
     }
 
     /// Switches the port's baud rate after the requests before it, and waits until it has.

@@ -212,14 +212,55 @@ impl Reply {
     }
 }
 
+/// A command as an error names it: its number on the wire and, when the link's profile has
+/// the command, its identifier from the protocol document. Shown as `CMD_VERSION (2)`, or
+/// `command 2` when the profile does not name it. Made from the number alone (`2.into()`) where
+/// an error is found (the link's worker), and named by the [`Client`](super::Client) that hands
+/// it on ([`ExchangeError::named`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CommandName {
+    /// The command number.
+    pub id: u8,
+    /// The profile's identifier for it, e.g. `CMD_VERSION`.
+    pub ident: Option<String>,
+}
+
+impl From<u8> for CommandName {
+    fn from(id: u8) -> Self {
+        Self { id, ident: None }
+    }
+}
+
+impl CommandName {
+    /// `self`, named by `profile` when it has the command and no name was given yet.
+    pub fn named(self, profile: &crate::profile::Profile) -> Self {
+        match self.ident {
+            Some(_) => self,
+            None => Self {
+                ident: profile.command_by_id(self.id).map(|c| c.ident.clone()),
+                id: self.id,
+            },
+        }
+    }
+}
+
+impl std::fmt::Display for CommandName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.ident {
+            Some(ident) => write!(f, "{ident} ({})", self.id),
+            None => write!(f, "command {}", self.id),
+        }
+    }
+}
+
 /// Why an exchange failed. Nothing stale is ever returned in place of an answer.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum ExchangeError {
     /// No answer within the deadline, after every attempt.
-    #[error("no answer to command {command} after {attempts} attempt(s) of {waited_ms} ms")]
+    #[error("no answer to {command} after {attempts} attempt(s) of {waited_ms} ms")]
     Timeout {
         /// The command.
-        command: u8,
+        command: CommandName,
         /// Attempts made.
         attempts: u8,
         /// How long each attempt waited, in ms.
@@ -227,30 +268,30 @@ pub enum ExchangeError {
     },
     /// Answers came back damaged (bad checksum, junk, cut short) on every attempt. On a servo bus,
     /// the sign of two servos sharing an id.
-    #[error("garbled answer to command {command}: {error}")]
+    #[error("garbled answer to {command}: {error}")]
     Garbled {
         /// The command.
-        command: u8,
+        command: CommandName,
         /// The last frame error seen.
         error: FrameError,
     },
     /// Only frames that answer something else came back (a late answer to an earlier request,
     /// or a servo answering from another id).
-    #[error("expected an answer to command {expected}, got command {got}{}", from.map_or(String::new(), |id| format!(" from servo {id}")))]
+    #[error("expected an answer to {expected}, got {got}{}", from.map_or(String::new(), |id| format!(" from servo {id}")))]
     Mismatch {
         /// The command asked.
-        expected: u8,
+        expected: CommandName,
         /// The command that answered.
-        got: u8,
+        got: CommandName,
         /// Servo: the id it came from.
         from: Option<u8>,
     },
     /// An answer came but does not read as its command's layout (a CMD_VERSION answer too
     /// short for the profile's fields).
-    #[error("the answer to command {command} does not read: {reason}")]
+    #[error("the answer to {command} does not read: {reason}")]
     Unreadable {
         /// The command answered.
-        command: u8,
+        command: CommandName,
         /// What is wrong with it.
         reason: String,
     },
@@ -270,11 +311,11 @@ pub enum ExchangeError {
     /// arrived and they were gone when read, or another program has the port open (a second
     /// botbench, a terminal program, ModemManager). Not the device's silence nor the wiring.
     #[error(
-        "no answer to command {command}: bytes are being taken by someone else reading {port} ({by}); close it and try again"
+        "no answer to {command}: bytes are being taken by someone else reading {port} ({by}); close it and try again"
     )]
     Taken {
         /// The command.
-        command: u8,
+        command: CommandName,
         /// The port.
         port: String,
         /// Who: the programs that have it open (`cat (pid 4711)`), or that the port said bytes
@@ -284,12 +325,12 @@ pub enum ExchangeError {
     /// The device identified as another kind than its profile is for (CMD_VERSION's `hw`):
     /// nothing but identification is sent to it, whatever `--strict` says.
     #[error(
-        "command {command} not sent: the device identifies as hardware {hw:#04x}, and profile \
+        "{command} not sent: the device identifies as hardware {hw:#04x}, and profile \
          {profile} is for hardware {claimed:#04x}; choose this device's profile (--profile)"
     )]
     NotThisDevice {
         /// The command refused.
-        command: u8,
+        command: CommandName,
         /// The hardware code the device gave.
         hw: u8,
         /// The hardware code the profile is for.
@@ -303,6 +344,59 @@ pub enum ExchangeError {
     /// The link was closed or the request cancelled.
     #[error("cancelled")]
     Cancelled,
+}
+
+impl ExchangeError {
+    /// `self` with every command it speaks of named by `profile` (`no answer to CMD_VERSION
+    /// (2)`, not `command 2`); the numbers stay as they were.
+    pub fn named(self, profile: &crate::profile::Profile) -> Self {
+        use ExchangeError as E;
+        match self {
+            E::Timeout {
+                command,
+                attempts,
+                waited_ms,
+            } => E::Timeout {
+                command: command.named(profile),
+                attempts,
+                waited_ms,
+            },
+            E::Garbled { command, error } => E::Garbled {
+                command: command.named(profile),
+                error,
+            },
+            E::Mismatch {
+                expected,
+                got,
+                from,
+            } => E::Mismatch {
+                expected: expected.named(profile),
+                got: got.named(profile),
+                from,
+            },
+            E::Unreadable { command, reason } => E::Unreadable {
+                command: command.named(profile),
+                reason,
+            },
+            E::Taken { command, port, by } => E::Taken {
+                command: command.named(profile),
+                port,
+                by,
+            },
+            E::NotThisDevice {
+                command,
+                hw,
+                claimed,
+                profile: id,
+            } => E::NotThisDevice {
+                command: command.named(profile),
+                hw,
+                claimed,
+                profile: id,
+            },
+            other => other,
+        }
+    }
 }
 
 impl Request {

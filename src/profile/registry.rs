@@ -382,4 +382,40 @@ impl Profile {
     pub fn command_by_id(&self, id: u8) -> Option<&Command> {
         self.commands.iter().find(|c| c.id == id)
     }
+
+    /// The identifiers of the commands nearest to `name`, a name this profile does not have,
+    /// at most three: those fewest edits from it (case aside; Levenshtein distance, at most a
+    /// third of its length and at least 2: `MSP_GET_PWMVALU` gives `MSP_GET_PWMVALUE` only),
+    /// else those that hold it whole (`PWMVALUE`: `MSP_GET_PWMVALUE` and `MSP_SET_PWMVALUE`).
+    /// Empty when none is near.
+    pub fn nearest_commands(&self, name: &str) -> Vec<&str> {
+        let wanted = name.trim().to_ascii_uppercase();
+        if wanted.is_empty() {
+            return Vec::new();
+        }
+        let most = (wanted.chars().count() / 3).max(2);
+        let distance = |c: &Command| strsim::levenshtein(&wanted, &c.ident.to_ascii_uppercase());
+        let best = self
+            .commands
+            .iter()
+            .map(distance)
+            .min()
+            .unwrap_or(usize::MAX);
+        let near: Vec<&str> = if best <= most {
+            self.commands
+                .iter()
+                .filter(|c| distance(c) == best)
+                .map(|c| c.ident.as_str())
+                .collect()
+        } else if wanted.chars().count() >= 3 {
+            self.commands
+                .iter()
+                .filter(|c| c.ident.to_ascii_uppercase().contains(&wanted))
+                .map(|c| c.ident.as_str())
+                .collect()
+        } else {
+            Vec::new()
+        };
+        near.into_iter().take(3).collect()
+    }
 }

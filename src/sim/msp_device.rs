@@ -101,6 +101,9 @@ pub struct MspQuirks {
     pub async_every: Option<(Duration, AsyncFrame)>,
     /// Replies to these commands fail their checksum (a firmware bug, a noisy line).
     pub garble: Vec<u8>,
+    /// The hardware code CMD_VERSION gives, which is also the device code the board answers,
+    /// instead of the board's own: another board on the same framing (one no profile claims).
+    pub hardware_code: Option<u8>,
 }
 
 impl MspQuirks {
@@ -141,6 +144,7 @@ impl MspCore {
     /// profile's), reply latency and the field's quirks.
     pub fn with_options(profile: Arc<Profile>, code: u8, opts: &super::SimOptions) -> Self {
         let baud = opts.baud.unwrap_or(profile.baud);
+        let code = opts.msp.hardware_code.unwrap_or(code);
         let mut core = Self::new(profile, code, baud);
         if let Some(l) = opts.latency {
             core.latency = l;

@@ -372,7 +372,7 @@ mod tests {
         rt.device.replies.insert(
             id,
             Err(ExchangeError::Timeout {
-                command: drive,
+                command: drive.into(),
                 attempts: 3,
                 waited_ms: 50,
             }),

@@ -294,12 +294,17 @@ fn a_silent_device_gives_a_typed_timeout_after_bounded_attempts() {
         matches!(
             err,
             ExchangeError::Timeout {
-                command: 130,
+                command: botbench::link::CommandName { id: 130, .. },
                 attempts: 3,
                 ..
             }
         ),
         "{err}"
+    );
+    assert!(
+        err.to_string()
+            .starts_with("no answer to MSP_GET_PWMVALUE (130) after 3 attempt(s)"),
+        "named by the profile: {err}"
     );
     assert!(
         t0.elapsed() >= Duration::from_millis(60),

@@ -12,6 +12,7 @@ mod cancel_truth;
 mod capture_faults;
 mod capture_record;
 mod cli_edges;
+mod cli_explains;
 mod cli_frame;
 mod cli_in_process;
 mod cli_ranges;

@@ -522,12 +522,38 @@ fn the_cli_asks_for_the_next_servo_and_stops_when_told() {
     assert_eq!(out.code, 1, "{stdout}{stderr}");
     assert!(stderr.contains("plug in servo 2 of 3"), "{stderr}");
     assert!(
-        stderr.contains("stopped by the operator before servo 2 of 3"),
+        stderr.contains("botbench: stopped by the operator (q) before servo 2 of 3"),
         "{stderr}"
     );
     assert_eq!(stdout.matches("FAIL ####").count(), 1, "{stdout}");
     assert!(stdout.contains("at step \"detect\""), "{stdout}");
     assert!(stdout.contains("0 PASS, 1 FAIL"), "{stdout}");
+}
+
+#[test]
+fn a_closed_stdin_at_the_swap_prompt_is_said_as_such_not_as_the_operator_stopping() {
+    let sim = Sim::start(&["servo-bus", "--servos", "7"]);
+    let args = [
+        "servo",
+        "--port",
+        &sim.path,
+        "provision",
+        PLAN_FILE,
+        "--count",
+        "3",
+    ];
+    // Nothing typed: stdin is closed at the prompt (a script, `< /dev/null`).
+    let out = sim.run_typing(&args, "");
+    drop(sim);
+    assert_eq!(out.code, 2, "{out:?}");
+    assert!(!out.err.contains("stopped by the operator"), "{out:?}");
+    assert!(
+        out.err.contains(
+            "botbench: stdin is closed before servo 2 of 3: no operator to press Enter; \
+             0 PASS, 1 FAIL, servos 2 to 3 not provisioned (--wait-ms MS"
+        ),
+        "{out:?}"
+    );
 }
 
 #[test]

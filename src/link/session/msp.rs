@@ -210,7 +210,7 @@ impl MspSession {
             return None;
         }
         Some(ExchangeError::NotThisDevice {
-            command,
+            command: command.into(),
             hw,
             claimed: self.profile.device_code.map_or(0, DeviceCode::initial),
             profile: self.profile.id.clone(),
@@ -310,7 +310,7 @@ impl MspSession {
                 let info = result.and_then(|r| {
                     DeviceInfo::from_version(&self.profile, r.payload().unwrap_or_default())
                         .map_err(|reason| ExchangeError::Unreadable {
-                            command: msp::CMD_VERSION,
+                            command: msp::CMD_VERSION.into(),
                             reason,
                         })
                 });
@@ -344,6 +344,7 @@ impl MspSession {
     }
 
     fn finish(&mut self, result: Result<DeviceInfo, ExchangeError>, events: &mut Vec<LinkEvent>) {
+        let result = result.map_err(|e| e.named(&self.profile));
         self.answer_waiters(&result);
         events.push(LinkEvent::Identified(result.clone()));
         self.state = Identify::Done(result);

@@ -80,7 +80,7 @@ fn mcu(command: u8, data: &[u8]) -> Result<Reply, ExchangeError> {
 
 fn timeout(command: u8) -> Result<Reply, ExchangeError> {
     Err(ExchangeError::Timeout {
-        command,
+        command: command.into(),
         attempts: 2,
         waited_ms: 20,
     })
@@ -133,7 +133,7 @@ fn msp_identifies_before_requests_and_learns_the_device_code() {
         matches!(
             refused,
             Err(ExchangeError::NotThisDevice {
-                command: 0x20,
+                command: crate::link::CommandName { id: 0x20, .. },
                 hw: 7,
                 claimed: 3,
                 ..
@@ -159,11 +159,19 @@ fn an_msp_identify_without_build_info_still_identifies_and_a_failed_one_says_why
     let unreadable = matches!(
         &d.events[..],
         [LinkEvent::Identified(Err(ExchangeError::Unreadable {
-            command: CMD_VERSION,
+            command: crate::link::CommandName {
+                id: CMD_VERSION,
+                ..
+            },
             ..
         }))]
     );
     assert!(unreadable, "{:?}", d.events);
+    assert!(
+        format!("{:?}", d.events).contains("\"CMD_VERSION\""),
+        "named by the profile: {:?}",
+        d.events
+    );
     assert_eq!(d.s.next_request(d.now), None);
 }
 

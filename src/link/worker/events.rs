@@ -22,6 +22,8 @@ pub(super) struct Events {
     pub(super) watchers: Watchers,
     /// The link's protocol (only Tuya reports are watched).
     protocol: crate::profile::Protocol,
+    /// The link's profile: a polled command's error names its command by it.
+    profile: std::sync::Arc<crate::profile::Profile>,
 }
 
 impl Events {
@@ -29,7 +31,7 @@ impl Events {
     pub(super) fn new(
         tx: Sender<LinkEvent>,
         waker: Option<Waker>,
-        protocol: crate::profile::Protocol,
+        profile: std::sync::Arc<crate::profile::Profile>,
     ) -> Self {
         Self {
             tx,
@@ -37,13 +39,40 @@ impl Events {
             wake: false,
             dropped: 0,
             watchers: Watchers::default(),
-            protocol,
+            protocol: profile.protocol,
+            profile,
+        }
+    }
+
+    /// `ev` with the command of the error it carries (a poll's, a handshake step's) named by
+    /// the link's profile ([`ExchangeError::named`]).
+    fn named(&self, ev: LinkEvent) -> LinkEvent {
+        use crate::link::session::tuya::{StepResult, TuyaEvent};
+        match ev {
+            LinkEvent::Telemetry {
+                command,
+                at,
+                result: Err(e),
+            } => LinkEvent::Telemetry {
+                command,
+                at,
+                result: Err(e.named(&self.profile)),
+            },
+            LinkEvent::Tuya(TuyaEvent::Step {
+                step,
+                result: StepResult::Failed(e),
+            }) => LinkEvent::Tuya(TuyaEvent::Step {
+                step,
+                result: StepResult::Failed(e.named(&self.profile)),
+            }),
+            ev => ev,
         }
     }
 
     /// Sends `ev`, or drops and counts it when the channel is full (nobody reads it). What the
     /// Tuya session says goes to the watches too.
     pub(super) fn emit(&mut self, ev: LinkEvent) {
+        let ev = self.named(ev);
         if let LinkEvent::Tuya(t) = &ev {
             self.watchers.tuya(t);
         }

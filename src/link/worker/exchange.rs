@@ -242,7 +242,7 @@ impl Worker {
         };
         let attempts = req.attempts.max(1);
         let mut last = ExchangeError::Timeout {
-            command: req.command,
+            command: req.command.into(),
             attempts,
             waited_ms: 0,
         };
@@ -419,25 +419,36 @@ impl Worker {
         if let Some(error) = frame_err {
             // Part of an answer taken by another reader reads as a damaged frame.
             match self.wire.taken_by() {
-                Some((port, by)) => ExchangeError::Taken { command, port, by },
-                None => ExchangeError::Garbled { command, error },
+                Some((port, by)) => ExchangeError::Taken {
+                    command: command.into(),
+                    port,
+                    by,
+                },
+                None => ExchangeError::Garbled {
+                    command: command.into(),
+                    error,
+                },
             }
         } else if let Some((got, from)) = mismatch {
             ExchangeError::Mismatch {
-                expected,
-                got,
+                expected: expected.into(),
+                got: got.into(),
                 from,
             }
         } else if let Some((port, by)) = self.wire.taken_by() {
             self.wire.stats.timeouts += 1;
-            ExchangeError::Taken { command, port, by }
+            ExchangeError::Taken {
+                command: command.into(),
+                port,
+                by,
+            }
         } else {
             self.wire.stats.timeouts += 1;
             if let Some(ev) = self.liveness.unanswered() {
                 self.events.emit(LinkEvent::Device(ev));
             }
             ExchangeError::Timeout {
-                command,
+                command: command.into(),
                 attempts,
                 waited_ms: sent.elapsed().as_millis() as u64,
             }

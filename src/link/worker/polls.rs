@@ -214,7 +214,7 @@ impl Worker {
                 self.timing
                     .observe(rtt.saturating_sub(f.on_wire + wire_time(answer, baud)));
                 packets.into_iter().next().ok_or(ExchangeError::Timeout {
-                    command: f.request.command,
+                    command: f.request.command.into(),
                     attempts: 1,
                     waited_ms: 0,
                 })
@@ -244,7 +244,7 @@ impl Worker {
                 command: f.request.command,
                 at: Instant::now(),
                 result: Err(ExchangeError::Timeout {
-                    command: f.request.command,
+                    command: f.request.command.into(),
                     attempts: 1,
                     waited_ms,
                 }),
@@ -261,7 +261,7 @@ impl Worker {
         self.polls.done(i, &poll.request, at);
         let result = result.and_then(|r| {
             r.packets.into_iter().next().ok_or(ExchangeError::Timeout {
-                command: poll.request.command,
+                command: poll.request.command.into(),
                 attempts: 1,
                 waited_ms: 0,
             })

@@ -137,7 +137,7 @@ impl Worker {
         if let (Some(i), Some((port, by))) = (unanswered, self.wire.taken_by()) {
             // What is missing may have been taken: no request of it can count as unanswered.
             return Err(ExchangeError::Taken {
-                command: sweep.requests[i].command,
+                command: sweep.requests[i].command.into(),
                 port,
                 by,
             });

@@ -44,4 +44,4 @@ mod steps;
 
 pub use plan::{Action, Plan, Step, StepKind, VERSION};
 pub use record::{Report, StepResult, append_log};
-pub use run::{Operator, run, run_each};
+pub use run::{Operator, SAFE_STATE, run, run_each};

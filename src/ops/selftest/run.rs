@@ -52,6 +52,11 @@ impl From<OpError> for Halt {
     }
 }
 
+/// How the progress message that says the safe state set before the first step begins (then
+/// `: ` and one `COMMAND fields: acknowledged` a command, joined by `; `): reported once the
+/// safe state is reached, before the first step, so that a command line can say it first.
+pub const SAFE_STATE: &str = "safe state before the first step";
+
 /// Runs the plan. Never returns PASS unless every step ran and passed.
 pub fn run(dev: Device<'_>, plan: &Plan, operator: &mut dyn Operator, run: &mut Run<'_>) -> Report {
     run_each(dev, plan, operator, run, &mut |_| {})
@@ -89,6 +94,14 @@ pub fn run_each(
     if report.aborted.is_none() {
         run.report(said("setting the safe state", "正在设为安全状态", 0));
         report.aborted = safe_state(dev, plan, run.cancel_flag(), &mut report.safe_state);
+        if report.aborted.is_none() && !report.safe_state.is_empty() {
+            let lines = report.safe_state.join("; ");
+            run.report(said(
+                &format!("{SAFE_STATE}: {lines}"),
+                &format!("第一步之前的安全状态:{lines}"),
+                0,
+            ));
+        }
     }
     if report.aborted.is_none() {
         run_steps(dev, plan, operator, run, each, &mut report);

@@ -96,13 +96,13 @@ pub fn ping(client: &Client, id: u8, attempts: u8) -> Result<Presence, OpError> 
             Ok(Presence::PossibleDuplicate(error.to_string()))
         }
         Err(ExchangeError::Mismatch {
-            got: cmd::PING,
+            got,
             from: Some(other),
             ..
-        }) if other != id => Ok(Presence::Absent),
-        Err(ExchangeError::Mismatch { got, .. }) => Ok(Presence::PossibleDuplicate(format!(
-            "answered with command {got}"
-        ))),
+        }) if got.id == cmd::PING && other != id => Ok(Presence::Absent),
+        Err(ExchangeError::Mismatch { got, .. }) => {
+            Ok(Presence::PossibleDuplicate(format!("answered with {got}")))
+        }
         Err(e) => Err(e.into()),
     }
 }
