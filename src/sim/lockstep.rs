@@ -201,6 +201,10 @@ pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener
 
 /// How long a read that waits for the simulator blocks before it looks again.
 const CATCH_UP_POLL: Duration = Duration::from_millis(1);
+/// How long past its deadline a read waits at most for the simulator to catch up: far beyond a
+/// loaded machine's scheduling delays (the simulator's thread only has to run), so that a
+/// read never blocks for ever (seen: `tuya init`'s link, closing, read for over 5 minutes).
+const CATCH_UP_LIMIT: Duration = Duration::from_secs(10);
 
 /// The host's side of a pty served in lockstep: the real serial port, with each write and baud
 /// switch stamped for the simulator, and reads that time out only once nothing more is due, and
@@ -247,7 +251,10 @@ impl LockstepPort {
             if now < deadline {
                 continue;
             }
-            if !self.lockstep.owes(deadline) {
+            // Past CATCH_UP_LIMIT the host reads as from a real port: nothing came in time. A
+            // simulator that never catches up (or bytes the accounting lost) must not hold the
+            // host's thread for ever (a link whose read never returned could not be closed).
+            if !self.lockstep.owes(deadline) || now >= deadline + CATCH_UP_LIMIT {
                 return Ok(0);
             }
             until = now + CATCH_UP_POLL;
