@@ -168,11 +168,21 @@ impl Capture {
     /// Records one chunk, now. Never blocks: when the queue is full the chunk is dropped and
     /// counted. Nothing is recorded after [`Self::stop`].
     pub fn record(&self, direction: Direction, bytes: &[u8]) {
+        self.record_at(direction, bytes, Instant::now());
+    }
+
+    /// Records one chunk that crossed at `at` (bytes read: when they arrived, where the port
+    /// knows it, [`Transport::arrived_at`]; an instant before the capture began counts as its
+    /// beginning). As [`Self::record`] otherwise. Chunks stay in the order they were recorded
+    /// (an answer read after its request was written is after it in the file, whatever its
+    /// stamp).
+    pub fn record_at(&self, direction: Direction, bytes: &[u8], at: Instant) {
         let inner = &*self.0;
         if bytes.is_empty() || inner.stopped.load(Ordering::Relaxed) {
             return;
         }
-        let at_us = inner.base_us + inner.base.elapsed().as_micros() as u64;
+        let since = at.saturating_duration_since(inner.base);
+        let at_us = inner.base_us + since.as_micros() as u64;
         let c = &inner.counters;
         let dropped_before = c.pending_drops.swap(0, Ordering::Relaxed);
         let rec = Record::Chunk {
@@ -309,9 +319,9 @@ impl Tap {
         })
     }
 
-    fn record(&self, direction: Direction, bytes: &[u8]) {
+    fn record(&self, direction: Direction, bytes: &[u8], at: Instant) {
         if let Some(c) = self.slot().as_ref() {
-            c.record(direction, bytes);
+            c.record_at(direction, bytes, at);
         }
     }
 }
@@ -324,7 +334,8 @@ struct RecordingTransport {
 
 impl Transport for RecordingTransport {
     fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
-        self.tap.record(Direction::HostToDevice, bytes);
+        self.tap
+            .record(Direction::HostToDevice, bytes, Instant::now());
         self.inner.write(bytes)
     }
 
@@ -333,7 +344,10 @@ impl Transport for RecordingTransport {
         if n > 0
             && let Some(got) = buf.get(..n)
         {
-            self.tap.record(Direction::DeviceToHost, got);
+            // When the bytes arrived, not when this thread got to read them (a loaded host
+            // would otherwise record its own delay as the device's, and a replay answer late).
+            let at = self.inner.arrived_at().unwrap_or_else(Instant::now);
+            self.tap.record(Direction::DeviceToHost, got, at);
         }
         Ok(n)
     }
@@ -372,6 +386,10 @@ impl Transport for RecordingTransport {
 
     fn check(&mut self) -> Result<(), LinkError> {
         self.inner.check()
+    }
+
+    fn arrived_at(&self) -> Option<Instant> {
+        self.inner.arrived_at()
     }
 }
 

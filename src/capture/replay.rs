@@ -5,7 +5,9 @@
 //! The capture is cut into exchanges: each chunk botbench wrote is a request, and the chunks the
 //! device sent until botbench's next write are its answer. When the host writes a request that
 //! the capture holds, the device answers what it answered to that request the n-th time it was
-//! sent (then the last answer again once the capture's run out), chunk by chunk, each chunk
+//! sent (then the last answer again once the capture's run out; requests written after the
+//! device's last bytes were cut by the end of the recording and are not taken for a device's
+//! silence), chunk by chunk, each chunk
 //! leaving so that its last byte arrives as long after the request as it did in the capture
 //! (wire time at the capture's baud subtracted: the simulator's wire adds it back).
 //! What the device sent before botbench's first write is sent once, when serving starts.
@@ -72,14 +74,14 @@ impl ReplayDevice {
                 "the capture holds no bytes: nothing to replay".into(),
             ));
         }
-        let mut by_request: HashMap<Vec<u8>, Answers> = HashMap::new();
+        let mut exchanges: Vec<(Vec<u8>, Vec<AnswerChunk>)> = Vec::new();
         let mut prelude = Vec::new();
         let first_at = capture.chunks.first().map_or(0, |c| c.at_us);
         // (the request's bytes, when it was written, its answer so far)
         let mut open: Option<(Vec<u8>, u64, Vec<AnswerChunk>)> = None;
         let mut close = |open: Option<(Vec<u8>, u64, Vec<AnswerChunk>)>| {
             if let Some((req, _, answer)) = open {
-                by_request.entry(req).or_default().list.push(answer);
+                exchanges.push((req, answer));
             }
         };
         for Chunk {
@@ -107,6 +109,18 @@ impl ReplayDevice {
             }
         }
         close(open.take());
+        // The requests after the device's last bytes were cut by the end of the recording (it
+        // stopped before their answers could come): no answer of the device's, not silence.
+        while exchanges
+            .last()
+            .is_some_and(|(_, answer)| answer.is_empty())
+        {
+            exchanges.pop();
+        }
+        let mut by_request: HashMap<Vec<u8>, Answers> = HashMap::new();
+        for (req, answer) in exchanges {
+            by_request.entry(req).or_default().list.push(answer);
+        }
         let longest = by_request.keys().map(Vec::len).max().unwrap_or(0);
         Ok(Self {
             baud: capture.info.baud.max(1),
@@ -235,6 +249,8 @@ mod tests {
             chunk(30_000, HostToDevice, b"AB"),
             chunk(31_000, DeviceToHost, b"x"),
             chunk(40_000, HostToDevice, b"CD"),
+            // The recording stopped before these were answered (a window's Stop mid-poll).
+            chunk(45_000, HostToDevice, b"AB"),
         ]);
         let mut d = ReplayDevice::new(&cap).expect("replay");
         let now = Instant::now();
@@ -253,19 +269,21 @@ mod tests {
         assert_eq!(first[1].after, Duration::from_millis(18) - w(2) - w(2));
         let second = d.receive(b"AB", 115_200, now);
         assert_eq!(second[0].bytes, b"x");
+        // Not the cut request's silence: the last answer the device gave, again.
         let third = d.receive(b"AB", 115_200, now);
+        assert_eq!(third.len(), 1, "{third:?}");
         assert_eq!(third[0].bytes, b"x", "the last answer is repeated");
         assert!(
             d.receive(b"CD", 115_200, now).is_empty(),
-            "no answer recorded"
+            "no answer recorded: the recording ended before it"
         );
         assert!(d.receive(b"EF", 115_200, now).is_empty());
         assert_eq!(
             d.stats(),
             ReplayStats {
-                answered: 4,
+                answered: 3,
                 repeated: 1,
-                unknown_bytes: 3,
+                unknown_bytes: 5,
             }
         );
     }

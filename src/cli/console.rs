@@ -41,6 +41,9 @@ pub struct Captured {
     input: std::sync::Arc<std::sync::Mutex<std::io::Cursor<Vec<u8>>>>,
     /// The run's Ctrl-C: raised by [`Captured::interrupt`].
     ctrl_c: crate::ops::Cancel,
+    /// The folder of the user's profiles for this run ([`Captured::with_profiles`]); `None`:
+    /// the process's ([`crate::profile::registry::user_dir`]).
+    profiles: Option<std::path::PathBuf>,
 }
 
 impl Captured {
@@ -50,6 +53,19 @@ impl Captured {
         *c.input.lock().unwrap_or_else(|e| e.into_inner()) =
             std::io::Cursor::new(input.as_bytes().to_vec());
         c
+    }
+
+    /// The same run, whose user profiles (built-ins overridden, `profile import`'s default
+    /// folder) are read from `dir` instead of the process's folder: a test's run never reads
+    /// the profiles of whoever runs the tests. A missing folder is an empty one.
+    pub fn with_profiles(mut self, dir: impl Into<std::path::PathBuf>) -> Self {
+        self.profiles = Some(dir.into());
+        self
+    }
+
+    /// The folder given by [`Self::with_profiles`], if any.
+    pub fn profiles(&self) -> Option<&std::path::Path> {
+        self.profiles.as_deref()
     }
 
     /// The operator presses Ctrl-C: the run's long operation stops safely, as the process's
@@ -183,6 +199,16 @@ pub(crate) fn flush() -> std::io::Result<()> {
         Sink::Process => std::io::stdout().flush(),
         Sink::Buffers(_) => Ok(()),
     })
+}
+
+/// The folder of the run's user profiles: the one its [`Captured`] names, else the process's
+/// ([`crate::profile::registry::user_dir`]; `None` without a home folder).
+pub(crate) fn user_profiles() -> Option<std::path::PathBuf> {
+    let given = with(|c| match &c.sink {
+        Sink::Process => None,
+        Sink::Buffers(b) => b.profiles.clone(),
+    });
+    given.or_else(crate::profile::registry::user_dir)
 }
 
 /// Reads a line the operator typed into `line`; `Ok(0)` when stdin is closed (for a captured

@@ -336,7 +336,8 @@ fn run(cli: Cli, opener: &PortOpener) -> CliResult {
 }
 
 fn registry() -> Result<crate::profile::Registry, CliError> {
-    crate::profile::Registry::load().map_err(CliError::input)
+    crate::profile::Registry::load_from(console::user_profiles().as_deref())
+        .map_err(CliError::input)
 }
 
 fn ports(json: bool, set_latency_timer: Option<Vec<String>>) -> CliResult {

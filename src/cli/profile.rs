@@ -83,7 +83,7 @@ pub(crate) fn run(cmd: ProfileCmd) -> CliResult {
         .map_err(|e| CliError::input(format!("{}: {e}", schema.display())))?;
     let path = match out {
         Some(p) => p,
-        None => crate::profile::registry::user_dir()
+        None => super::console::user_profiles()
             .ok_or_else(|| CliError::input("no profile folder (no HOME); give --out FILE"))?
             .join(format!("{name}.ron")),
     };

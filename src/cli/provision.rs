@@ -258,11 +258,12 @@ fn wait_for_new(
         }
         let found = match ops::find_fresh(Device::new(client, profile), &bauds) {
             Ok(found) => found,
-            Err(crate::ops::OpError::Exchange(crate::link::ExchangeError::Disconnected(r))) => {
-                return Waited::Lost(r);
-            }
-            Err(e) if e.is_cancel() => return Waited::Cancelled,
-            Err(_) => continue,
+            // A port that went (in the exchange or at a baud switch) ends the wait at once.
+            Err(e) => match e.lost_port() {
+                Some(why) => return Waited::Lost(why.to_string()),
+                None if e.is_cancel() => return Waited::Cancelled,
+                None => continue,
+            },
         };
         match found.as_slice() {
             [] => emptied = true,

@@ -57,6 +57,14 @@ pub trait Transport: Send {
     fn check(&mut self) -> Result<(), LinkError> {
         Ok(())
     }
+    /// When the last byte the last read returned had arrived, where the port knows it (a pty
+    /// served in lockstep knows when each byte was due); `None`: when the read returned, all a
+    /// real port can say. The link measures an answer's latency to this instant, so that a
+    /// host thread that gets to its read late (a loaded machine) does not count its own delay
+    /// as the device's, where that can be known.
+    fn arrived_at(&self) -> Option<Instant> {
+        None
+    }
 }
 
 /// How long `bytes` bytes take on the wire at `baud` (8N1: 10 bits a byte).

@@ -266,6 +266,21 @@ impl OpError {
         }
     }
 
+    /// Why the port was lost, when that is what failed: an exchange whose port went
+    /// ([`ExchangeError::Disconnected`](crate::link::ExchangeError::Disconnected)) or a baud
+    /// switch on a port that went ([`OpError::Port`] with [`LinkError::Disconnected`]; a
+    /// search across rates meets the loss there first). `None` for every other failure.
+    pub fn lost_port(&self) -> Option<&str> {
+        match self {
+            OpError::Exchange(ExchangeError::Disconnected(why))
+            | OpError::Port {
+                error: LinkError::Disconnected(why),
+                ..
+            } => Some(why),
+            _ => None,
+        }
+    }
+
     /// Whether the operator cancelled it ([`OpError::Cancelled`], [`OpError::CancelledAfter`]).
     pub fn is_cancel(&self) -> bool {
         matches!(self, OpError::Cancelled | OpError::CancelledAfter { .. })

@@ -286,9 +286,15 @@ impl Registry {
     /// named by `BOTBENCH_PROFILE_DIR`, else `$XDG_CONFIG_HOME/botbench/profiles` or
     /// `~/.config/botbench/profiles`. A user's file that is malformed is an error, not skipped.
     pub fn load() -> Result<Self, ProfileError> {
+        Self::load_from(user_dir().as_deref())
+    }
+
+    /// The built-in profiles, each overridden by a file of the same name in `dir` (none: the
+    /// built-ins alone; a missing folder is an empty one). Errors as [`Self::load`].
+    pub fn load_from(dir: Option<&Path>) -> Result<Self, ProfileError> {
         let mut reg = Self::builtin()?;
-        if let Some(dir) = user_dir() {
-            reg.add_dir(&dir)?;
+        if let Some(dir) = dir {
+            reg.add_dir(dir)?;
         }
         Ok(reg)
     }

@@ -47,6 +47,9 @@ pub(crate) struct State {
     /// Batches of bytes the simulator has written to the pty: the running total after each, and
     /// when the batch's first byte was due at the host.
     written: VecDeque<(u64, Instant)>,
+    /// When the host saw the last byte of each batch in `written` (behind an adapter's latency
+    /// timer, later than it crossed), in the same order.
+    seen: VecDeque<Instant>,
     written_total: u64,
     /// Bytes the host has read (or cleared) from the pty, in total.
     read_total: u64,
@@ -65,6 +68,7 @@ impl Lockstep {
             state: Mutex::new(State {
                 actions: VecDeque::new(),
                 written: VecDeque::new(),
+                seen: VecDeque::new(),
                 written_total: 0,
                 read_total: 0,
                 next_due: None,
@@ -95,20 +99,22 @@ impl Lockstep {
 
     /// How many of the bytes after the first `taken` the host may read by `deadline`: those of
     /// the simulator's batches due by then (a batch whose first byte was due later is not yet
-    /// there for a host that reads by `deadline`, however late the host's thread runs).
-    fn due_by(&self, taken: u64, deadline: Instant) -> u64 {
+    /// there for a host that reads by `deadline`, however late the host's thread runs); and when
+    /// the host saw the last of them (`None`: none).
+    fn due_by(&self, taken: u64, deadline: Instant) -> (u64, Option<Instant>) {
         let s = self.lock();
-        let mut upto = taken;
-        for &(total, due) in &s.written {
+        let (mut upto, mut last) = (taken, None);
+        for (&(total, due), &seen) in s.written.iter().zip(&s.seen) {
             if total <= taken {
                 continue;
             }
             if due > deadline {
                 break;
             }
+            last = Some(seen);
             upto = total;
         }
-        upto - taken
+        (upto - taken, last)
     }
 
     /// Whether the device side still owes the host a byte due by `deadline`: the simulator has not
@@ -121,6 +127,7 @@ impl Lockstep {
         let read = s.read_total;
         while s.written.front().is_some_and(|(total, _)| *total <= read) {
             s.written.pop_front();
+            s.seen.pop_front();
         }
         s.actions
             .iter()
@@ -131,11 +138,13 @@ impl Lockstep {
 }
 
 impl State {
-    /// The simulator has written `n` bytes, the first of them due at `due`.
-    pub(crate) fn wrote(&mut self, n: usize, due: Instant) {
+    /// The simulator has written `n` bytes, the first of them due at `due`, the last seen by the
+    /// host at `seen`.
+    pub(crate) fn wrote(&mut self, n: usize, due: Instant, seen: Instant) {
         if n > 0 {
             self.written_total += n as u64;
             self.written.push_back((self.written_total, due));
+            self.seen.push_back(seen);
         }
     }
 
@@ -185,12 +194,17 @@ pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener
             lockstep: lockstep.clone(),
             last_return: Instant::now(),
             held: VecDeque::new(),
+            arrived: None,
         }) as Box<dyn Transport>)
     })
 }
 
 /// How long a read that waits for the simulator blocks before it looks again.
 const CATCH_UP_POLL: Duration = Duration::from_millis(1);
+/// How long past its deadline a read waits at most for the simulator to catch up: far beyond a
+/// loaded machine's scheduling delays (the simulator's thread only has to run), so that a
+/// read never blocks for ever (seen: `tuya init`'s link, closing, read for over 5 minutes).
+const CATCH_UP_LIMIT: Duration = Duration::from_secs(10);
 
 /// The host's side of a pty served in lockstep: the real serial port, with each write and baud
 /// switch stamped for the simulator, and reads that time out only once nothing more is due, and
@@ -210,6 +224,8 @@ pub struct LockstepPort {
     last_return: Instant,
     /// Bytes read from the pty that were due after the deadline of the read that found them.
     held: VecDeque<u8>,
+    /// When the last byte the last read handed over had arrived ([`Transport::arrived_at`]).
+    arrived: Option<Instant>,
 }
 
 impl LockstepPort {
@@ -235,7 +251,10 @@ impl LockstepPort {
             if now < deadline {
                 continue;
             }
-            if !self.lockstep.owes(deadline) {
+            // Past CATCH_UP_LIMIT the host reads as from a real port: nothing came in time. A
+            // simulator that never catches up (or bytes the accounting lost) must not hold the
+            // host's thread for ever (a link whose read never returned could not be closed).
+            if !self.lockstep.owes(deadline) || now >= deadline + CATCH_UP_LIMIT {
                 return Ok(0);
             }
             until = now + CATCH_UP_POLL;
@@ -248,8 +267,10 @@ impl LockstepPort {
             return 0;
         }
         let taken = self.lockstep.lock().read_total;
-        let due = usize::try_from(self.lockstep.due_by(taken, deadline)).unwrap_or(usize::MAX);
+        let (due, last_seen) = self.lockstep.due_by(taken, deadline);
+        let due = usize::try_from(due).unwrap_or(usize::MAX);
         let n = due.min(self.held.len()).min(buf.len());
+        self.arrived = last_seen;
         for (slot, byte) in buf.iter_mut().zip(self.held.drain(..n)) {
             *slot = byte;
         }
@@ -308,5 +329,9 @@ impl Transport for LockstepPort {
     fn check(&mut self) -> Result<(), LinkError> {
         let result = self.port.check();
         self.returns(result)
+    }
+
+    fn arrived_at(&self) -> Option<Instant> {
+        self.arrived
     }
 }

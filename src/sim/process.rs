@@ -4,8 +4,9 @@
 
 use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, ChildStdout, Command, Stdio};
 use std::sync::OnceLock;
+use std::time::Duration;
 
 /// The real-time priority a simulator process runs at where it may (`chrt --fifo`, 1-99; low:
 /// it only has to come before the ordinary processes of a loaded machine).
@@ -52,8 +53,15 @@ pub struct SimProcess {
 
 impl SimProcess {
     /// Starts `command` (from [`sim_command`]) with its stdout piped and reads the pty path it
-    /// prints first. Errors (the process killed) when it cannot start or prints no `/dev/` path.
-    pub fn start(mut command: Command) -> Result<Self, String> {
+    /// prints first, waiting at most [`START_LIMIT`]. Errors (the process killed) when it cannot
+    /// start, prints no `/dev/` path, or prints nothing within the limit (a simulator that hangs
+    /// before serving fails its caller instead of hanging it).
+    pub fn start(command: Command) -> Result<Self, String> {
+        Self::start_within(command, START_LIMIT)
+    }
+
+    /// As [`Self::start`], waiting at most `limit` for the pty path.
+    pub fn start_within(mut command: Command, limit: Duration) -> Result<Self, String> {
         let child = command
             .stdout(Stdio::piped())
             .spawn()
@@ -67,10 +75,7 @@ impl SimProcess {
             .stdout
             .take()
             .ok_or("the simulator's stdout is not piped")?;
-        let mut line = String::new();
-        BufReader::new(stdout)
-            .read_line(&mut line)
-            .map_err(|e| format!("cannot read the simulator's pty path: {e}"))?;
+        let line = first_line(stdout, limit)?;
         let path = line.trim();
         if !path.starts_with("/dev/") {
             return Err(format!(
@@ -87,9 +92,52 @@ impl SimProcess {
     }
 }
 
+/// How long [`SimProcess::start`] waits for the simulator's pty path: far beyond what a loaded
+/// machine needs to start a process (a simulator prints its path before it serves anything).
+pub const START_LIMIT: Duration = Duration::from_secs(60);
+
+/// The first line `pipe` gives within `limit`, read on a thread of its own (named
+/// `sim-stdout`), so that a process that never prints is an error, not a hang. The thread ends
+/// when the line comes or the pipe closes (the process is killed on error by its owner).
+fn first_line(pipe: ChildStdout, limit: Duration) -> Result<String, String> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .name("sim-stdout".into())
+        .spawn(move || {
+            let mut line = String::new();
+            let read = BufReader::new(pipe).read_line(&mut line).map(|_| line);
+            let _ = tx.send(read);
+        })
+        .map_err(|e| format!("cannot read the simulator's pty path: {e}"))?;
+    match rx.recv_timeout(limit) {
+        Ok(read) => read.map_err(|e| format!("cannot read the simulator's pty path: {e}")),
+        Err(_) => Err(format!(
+            "the simulator printed no pty path within {} s",
+            limit.as_secs()
+        )),
+    }
+}
+
 impl Drop for SimProcess {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_simulator_that_prints_no_path_is_an_error_not_a_hang() {
+        let mut silent = Command::new("sleep");
+        silent.arg("600");
+        let e = SimProcess::start_within(silent, Duration::from_millis(200)).unwrap_err();
+        assert!(e.contains("printed no pty path within"), "{e}");
+        let mut wrong = Command::new("echo");
+        wrong.arg("hello");
+        let e = SimProcess::start(wrong).unwrap_err();
+        assert!(e.contains("where its pty path was expected"), "{e}");
     }
 }

@@ -298,7 +298,7 @@ fn serve_lockstep(mut master: TTYPort, mut wire: Wire, flags: &Flags, lockstep: 
                 }
                 due.extend_from_slice(&out[..n]);
             }
-            s.wrote(due.len(), first);
+            s.wrote(due.len(), first, wire.last_seen().unwrap_or(now));
             s.next_due = wire.next_due();
             now
         };

@@ -128,6 +128,9 @@ pub(crate) struct Wire {
     host_bytes: u64,
     /// The port has vanished ([`Line::vanish_after_bytes`]).
     vanished: bool,
+    /// When the host saw the last byte [`Self::take_due`] handed over (behind an adapter's latency
+    /// timer, later than it crossed the wire).
+    last_seen: Option<Instant>,
     /// The host's writes are stamped with when the host made them (in process, in lockstep),
     /// rather than with when the simulator read them (a plain pty): only then is a request known
     /// to overlap a reply on a half-duplex line (see [`Wire::host_times_uncertain`]).
@@ -152,6 +155,7 @@ impl Wire {
             seen_until: now,
             host_bytes: 0,
             vanished: false,
+            last_seen: None,
             host_times_exact: true,
         }
     }
@@ -354,6 +358,7 @@ impl Wire {
             }
             let k = (due - self.taken).min(buf.len() - n);
             buf[n..n + k].copy_from_slice(&front.bytes[self.taken..self.taken + k]);
+            self.last_seen = Some(front.seen_at(self.taken + k - 1));
             n += k;
             self.taken += k;
             if self.taken == front.bytes.len() {
@@ -362,6 +367,11 @@ impl Wire {
             }
         }
         n
+    }
+
+    /// When the host saw the last byte [`Self::take_due`] handed over (`None` before any).
+    pub(crate) fn last_seen(&self) -> Option<Instant> {
+        self.last_seen
     }
 
     /// Drops the bytes that have reached the host and not been read.
@@ -571,6 +581,10 @@ impl Transport for SimTransport {
 
     fn describe(&self) -> String {
         self.name.clone()
+    }
+
+    fn arrived_at(&self) -> Option<Instant> {
+        self.wire.last_seen()
     }
 }
 

@@ -235,3 +235,46 @@ fn a_piped_servo_scan_prints_no_progress_bar() {
         }
     }
 }
+
+#[test]
+fn a_port_that_vanishes_during_the_wait_between_servos_ends_it_saying_so() {
+    // One fresh servo, never swapped: the wait for the second one would last for ever; the
+    // adapter is pulled during it.
+    let mut sim = Sim::start(&["servo-bus", "--servos", "0"]);
+    let plan = preset("servo-provision-plan.ron");
+    let path = sim.path.clone();
+    let args = [
+        "servo",
+        "--port",
+        &path,
+        "provision",
+        &plan,
+        "--count",
+        "2",
+        "--wait-ms",
+        "50",
+    ];
+    let captured = botbench::cli::Captured::default();
+    let run = start_in_process(&args, sim.ports(), &captured);
+    let deadline = Instant::now() + PATIENCE;
+    while !captured.err().contains("waiting for a new fresh servo") {
+        assert!(
+            !run.is_finished() && Instant::now() < deadline,
+            "the first servo, then the wait: {}{}",
+            captured.out(),
+            captured.err()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    sim.vanish_now();
+    let code = finish_in_process(run, &captured, "provisioning");
+    let text = format!("exit {code}\n{}{}", captured.out(), captured.err());
+    assert_eq!(code, 1, "{text}");
+    assert!(
+        captured
+            .err()
+            .contains("link lost while waiting for servo 2 of 2: "),
+        "{text}"
+    );
+    assert!(captured.err().contains(&path), "names the port: {text}");
+}

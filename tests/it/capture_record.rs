@@ -143,11 +143,13 @@ fn the_file_is_pcapng_as_documented_for_any_reader() {
 
 #[test]
 fn tshark_reads_the_capture_where_it_is_installed() {
-    let Ok(version) = Command::new("tshark").arg("--version").output() else {
+    let mut version = Command::new("tshark");
+    version.arg("--version").stdin(std::process::Stdio::null());
+    let Ok(version) = crate::support::cli::try_watched(&mut version, "tshark --version") else {
         eprintln!("tshark is not installed: the pcap-file reader test stands for it");
         return;
     };
-    assert!(version.status.success());
+    assert_eq!(version.code, 0, "{}", version.text());
     let dir = crate::support::temp_dir();
     let path = dir.path().join("wc.pcapng");
     record_window_cleaner(&path);
@@ -223,7 +225,7 @@ struct StalledDisk(crossbeam_channel::Receiver<()>);
 
 impl Write for StalledDisk {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let _ = self.0.recv();
+        let _ = self.0.recv_timeout(crate::support::PATIENCE);
         Ok(buf.len())
     }
     fn flush(&mut self) -> std::io::Result<()> {
@@ -259,7 +261,7 @@ fn a_drop_is_marked_on_the_next_chunk_written() {
     struct Gated(std::fs::File, crossbeam_channel::Receiver<()>);
     impl Write for Gated {
         fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-            let _ = self.1.recv();
+            let _ = self.1.recv_timeout(crate::support::PATIENCE);
             self.0.write(buf)
         }
         fn flush(&mut self) -> std::io::Result<()> {

@@ -288,9 +288,12 @@ fn late_answers_widen_the_automatic_margin() {
             && let Some(margin) = s.margin
             && margin > Duration::from_millis(35)
         {
+            // Measured to when the answer arrived: the 35 ms, less the microseconds between
+            // the host's previous port call and its request (the device hears the request from
+            // then on, never later than the host reckons).
             assert!(
                 s.answer_latency
-                    .is_some_and(|l| l >= Duration::from_millis(35)),
+                    .is_some_and(|l| l >= Duration::from_millis(34)),
                 "{s:?}"
             );
             break;

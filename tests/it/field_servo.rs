@@ -433,7 +433,12 @@ fn a_scan_paced_by_the_bus_behind_a_16_ms_adapter_collides_with_no_answer_and_le
     // Each ping left the bus to its answer: none collided, so no id had to be asked again.
     assert_eq!(report.asked_again, 0, "{report:?}");
     // The first answers reached the host after their 1.5 ms window, and counted all the same;
-    // the margin the scan ended with is the 16 ms it measured, not the servo's 1.5 ms.
+    // the margin the scan ended with is what it measured, not the servo's 1.5 ms. The adapter
+    // hands bytes over on its own 16 ms clock: a request written just after a tick waits nearly
+    // a whole tick for its answer, one written later in the tick less. A punctual host writes
+    // just after the tick it read on (16 ms measured); a loaded one later (12-13 ms measured
+    // with two CPU loops beside the suite), and the answers are measured to when they arrived,
+    // not to when the host got to read them: so more than four of the servo's margins, not 16.
     assert!(report.late_answers >= 1, "{report:?}");
-    assert!(report.margin_ms >= 16.0, "{report:?}");
+    assert!(report.margin_ms > 4.0 * 1.5, "{report:?}");
 }

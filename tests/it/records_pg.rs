@@ -156,13 +156,13 @@ fn the_server_killed_and_restarted_during_200_records_has_all_200_once_each() {
         return;
     };
     let pg_ctl = |what: &str| {
-        let ok = std::process::Command::new(&ctl)
-            .arg(what)
-            .stdout(std::process::Stdio::null())
-            .status()
-            .unwrap()
-            .success();
-        assert!(ok, "{ctl} {what}");
+        let ran = crate::support::cli::watched(
+            std::process::Command::new(&ctl)
+                .arg(what)
+                .stdin(std::process::Stdio::null()),
+            &format!("{ctl} {what}"),
+        );
+        assert_eq!(ran.code, 0, "{ctl} {what}: {}", ran.text());
     };
     let url = schema(&url, "t_spool");
     let dir = crate::support::temp_dir();

@@ -11,19 +11,18 @@
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
-use crate::support::cli::{SimProcess, watched};
+use crate::support::cli::{SimProcess, try_watched, watched};
 
 /// The SDK's interpreter, if it is installed.
 fn sdk_python() -> Result<PathBuf, String> {
     let python = std::env::var_os("BOTBENCH_SDK_PYTHON")
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from("/work/sdk-venv/bin/python"));
-    let ok = Command::new(&python)
+    let mut check = Command::new(&python);
+    check
         .args(["-c", "import fashionstar_uart_sdk, serial"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
+        .stdin(Stdio::null());
+    let ok = try_watched(&mut check, "the SDK's python").is_ok_and(|r| r.code == 0);
     if ok {
         Ok(python)
     } else {

@@ -148,5 +148,5 @@ fn an_unplugged_slot_says_link_lost_during_its_step_and_comes_back_under_the_sam
     // STOP: the slot ends at once, saying so.
     handle.cancel.cancel();
     next_event(&rx, |w| matches!(w, What::Stopped { .. }));
-    handle.thread.join().unwrap();
+    crate::support::joined(handle.thread, "the slot's thread");
 }

@@ -16,7 +16,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::support::cli::{SimProcess, run};
+use crate::support::cli::{SimProcess, run, run_in_process};
 use crate::support::{Served, next_event, open_link, profile, serve, wait_until};
 
 const BAUD: u32 = 115_200;
@@ -70,19 +70,13 @@ impl Bench {
     }
 
     /// `botbench tuya --port PTY --baud 115200 ARGS` in this process, handed the simulator's
-    /// port (the link closed first): its exit code.
+    /// port (the link closed first), watched ([`run_in_process`]): its exit code.
     fn cli(&mut self, args: &[&str]) -> u8 {
         self.link = None;
-        let mut all = vec![
-            "botbench",
-            "tuya",
-            "--port",
-            self.mcu.path(),
-            "--baud",
-            "115200",
-        ];
+        let mut all = vec!["tuya", "--port", self.mcu.path(), "--baud", "115200"];
         all.extend_from_slice(args);
-        botbench::cli::run_args(all, &self.mcu.ports())
+        let ran = run_in_process(&all, &self.mcu.ports());
+        u8::try_from(ran.code).unwrap_or_else(|_| panic!("{}", ran.text()))
     }
 }
 
@@ -449,10 +443,17 @@ fn the_simulators_field_options_are_taken_and_bad_ones_refused() {
         "19",
     ]);
     let profile = profile("tuya-vacuum");
+    // The simulator is the process under test (real-time where it may be), this link is not in
+    // lockstep with it: its margin is explicit and generous, a loaded test process's threads
+    // may wake late.
+    let options = LinkOptions {
+        margin: Some(Duration::from_secs(1)),
+        ..LinkOptions::default()
+    };
     let link = Link::open(
         botbench::link::serial::opener(&sim.path, BAUD),
         profile.clone(),
-        LinkOptions::default(),
+        options,
         None,
     )
     .expect("opens the simulator's pty");

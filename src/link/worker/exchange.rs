@@ -466,7 +466,12 @@ impl Worker {
         let Some(sent) = self.timing.owed.take(p) else {
             return false;
         };
-        let late = super::timing::Timing::latency_of(sent, p.wire.len(), self.wire.baud());
+        let late = super::timing::Timing::latency_of(
+            self.wire.arrived(),
+            sent,
+            p.wire.len(),
+            self.wire.baud(),
+        );
         self.timing.observe(late);
         self.wire.stats.late_answers += 1;
         debug!(

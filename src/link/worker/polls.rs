@@ -207,7 +207,7 @@ impl Worker {
     ) -> Result<Packet, ExchangeError> {
         match waited.outcome {
             Outcome::Answered { packets, .. } => {
-                let rtt = f.sent.elapsed();
+                let rtt = self.wire.arrived().saturating_duration_since(f.sent);
                 self.wire.stats.rtt = Some(rtt);
                 let answer = packets.first().map_or(0, |p| p.wire.len());
                 let baud = self.wire.baud();

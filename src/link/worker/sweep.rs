@@ -56,7 +56,13 @@ enum Seen {
 
 /// A sweep under way.
 struct Run {
+    /// When each request counts as sent, for its deadlines: when it was asked, or when its
+    /// write returned if the host was held up in it ([`Worker::host_was_late_by`]).
     sent: Vec<Instant>,
+    /// When each request was asked for (its write begun): its answer's latency is learned
+    /// from here, as an exchange's round trip is, so that a write held up never makes the
+    /// device seem quicker than it is.
+    asked: Vec<Instant>,
     answers: Vec<Option<SweepAnswer>>,
     order: Vec<Seen>,
     strays: Vec<Packet>,
@@ -77,6 +83,7 @@ impl Worker {
         let started = Instant::now();
         let mut run = Run {
             sent: Vec::with_capacity(n),
+            asked: Vec::with_capacity(n),
             answers: vec![None; n],
             order: Vec::new(),
             strays: Vec::new(),
@@ -109,6 +116,7 @@ impl Worker {
             let t = self.host_was_late_by(asked, Instant::now(), bytes.len());
             let on_wire = wire_time(bytes.len(), baud);
             run.sent.push(t);
+            run.asked.push(asked);
             run.on_wire.push(on_wire);
             // The request's last byte leaves when the bytes written before it have (`sent_until`);
             // the device may then take its latency, and its answer the answer's wire time.
@@ -205,7 +213,6 @@ impl Worker {
     /// has none yet, a late answer owed to an earlier exchange, an echo, or a stray.
     fn sweep_sort(&mut self, sweep: &Sweep, run: &mut Run) {
         while let Some(item) = self.wire.next_frame() {
-            let now = Instant::now();
             self.count(&item);
             match item {
                 Ok(p) => {
@@ -219,11 +226,15 @@ impl Worker {
                     });
                     match found {
                         Some(i) => {
-                            let latency = now
-                                .saturating_duration_since(run.sent[i] + run.on_wire[i])
-                                .saturating_sub(wire_time(p.wire.len(), self.wire.baud()));
-                            self.timing.observe(latency);
-                            let late = latency > run.margin;
+                            let arrived = self.wire.arrived();
+                            let answer_wire = wire_time(p.wire.len(), self.wire.baud());
+                            let since = |t: Instant| {
+                                arrived
+                                    .saturating_duration_since(t + run.on_wire[i])
+                                    .saturating_sub(answer_wire)
+                            };
+                            self.timing.observe(since(run.asked[i]));
+                            let late = since(run.sent[i]) > run.margin;
                             if late {
                                 self.wire.stats.late_answers += 1;
                             }

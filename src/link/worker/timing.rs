@@ -115,10 +115,16 @@ impl Timing {
         }
     }
 
-    /// The latency of an answer read now to a request whose last byte was on the wire at
-    /// `sent`: the time between, less the answer's own wire time (`answer_bytes` at `baud`).
-    pub(super) fn latency_of(sent: Instant, answer_bytes: usize, baud: u32) -> Duration {
-        Instant::now()
+    /// The latency of an answer that arrived at `arrived` to a request whose last byte was on
+    /// the wire at `sent`: the time between, less the answer's own wire time (`answer_bytes` at
+    /// `baud`).
+    pub(super) fn latency_of(
+        arrived: Instant,
+        sent: Instant,
+        answer_bytes: usize,
+        baud: u32,
+    ) -> Duration {
+        arrived
             .saturating_duration_since(sent)
             .saturating_sub(wire_time(answer_bytes, baud))
     }

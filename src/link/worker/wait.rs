@@ -215,8 +215,9 @@ impl Worker {
             self.events.emit(LinkEvent::Report(p.clone()));
         }
         let now = Instant::now();
-        w.first_at.get_or_insert(now);
-        w.last_at = now;
+        let arrived = self.wire.arrived();
+        w.first_at.get_or_insert(arrived);
+        w.last_at = arrived;
         if let Some(end @ BurstEnd::Reported { gap, hard, .. }) = &w.burst
             && end.brings_news(&w.got, &p)
         {

@@ -35,6 +35,9 @@ pub(super) struct Wire {
     /// The port's count of bytes taken by another reader ([`Transport::taken`]) when last
     /// looked at, and when it last grew.
     taken: (u64, Option<Instant>),
+    /// When the bytes of the last read that brought any had arrived ([`Transport::arrived_at`],
+    /// else when it returned).
+    arrived: Instant,
 }
 
 /// How long after the port last said bytes had been taken by another reader an unanswered
@@ -55,6 +58,7 @@ impl Wire {
             stats: LinkStats::default(),
             lost_because: None,
             taken: (0, None),
+            arrived: now,
         }
     }
 
@@ -137,8 +141,17 @@ impl Wire {
         };
         let mut buf = [0u8; READ_CHUNK];
         let n = t.read(&mut buf, deadline)?;
+        if n > 0 {
+            self.arrived = t.arrived_at().unwrap_or_else(Instant::now);
+        }
         self.decoder.push(&buf[..n]);
         Ok(n)
+    }
+
+    /// When the bytes last read had arrived: the instant an answer decoded now is measured to
+    /// (its latency, its round trip), never later than now.
+    pub(super) fn arrived(&self) -> Instant {
+        self.arrived.min(Instant::now())
     }
 
     /// The next frame (or frame error) decoded, as the decoder read it.

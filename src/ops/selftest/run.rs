@@ -44,10 +44,10 @@ impl From<OpError> for Halt {
     fn from(e: OpError) -> Self {
         match e {
             OpError::Cancelled | OpError::CancelledAfter { .. } => Halt::Cancelled,
-            OpError::Exchange(crate::link::ExchangeError::Disconnected(m)) => {
-                Halt::Device(format!("link lost: {m}"))
-            }
-            other => Halt::Device(other.to_string()),
+            other => match other.lost_port() {
+                Some(m) => Halt::Device(format!("link lost: {m}")),
+                None => Halt::Device(other.to_string()),
+            },
         }
     }
 }

@@ -329,9 +329,7 @@ impl SlotRunner {
         match answered {
             Ok(Some(identity)) => Probe::Present(identity),
             Ok(None) => Probe::Absent,
-            Err(crate::ops::OpError::Exchange(crate::link::ExchangeError::Disconnected(_))) => {
-                Probe::Lost
-            }
+            Err(e) if e.lost_port().is_some() => Probe::Lost,
             Err(_) => Probe::Absent,
         }
     }

@@ -271,7 +271,7 @@ fn link_reason(e: &crate::ops::OpError) -> String {
     use crate::link::ExchangeError;
     match e {
         crate::ops::OpError::Exchange(ExchangeError::Timeout { .. }) => "no answer".into(),
-        crate::ops::OpError::Exchange(ExchangeError::Disconnected(_)) => "link lost".into(),
+        other if other.lost_port().is_some() => "link lost".into(),
         other => other.to_string(),
     }
 }

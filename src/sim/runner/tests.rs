@@ -121,22 +121,12 @@ fn checks_fault_probabilities() {
     assert!(Faults::default().check().is_ok());
 }
 
-/// Reads onto `got` until it holds `n` bytes (a test fails, not hangs, should they never come).
-fn read_until(t: &mut SimTransport, got: &mut Vec<u8>, n: usize) {
-    let mut buf = [0u8; 64];
-    while got.len() < n {
-        let read = t
-            .read(&mut buf, Instant::now() + Duration::from_secs(10))
-            .unwrap();
-        assert!(read > 0, "nothing more after {got:?}");
-        got.extend_from_slice(&buf[..read]);
-    }
-}
-
 #[test]
 fn a_request_that_meets_a_reply_on_a_half_duplex_line_garbles_both() {
-    // 300 baud: a 10-byte reply takes a third of a second on the wire, so the second request
-    // surely starts while it is still crossing.
+    // The wire itself, at instants the test names (never the clock: a loaded machine that held
+    // this thread up between reading the reply's first byte and writing the next request let
+    // the reply end first, and the test failed). 300 baud: a 10-byte request or reply takes
+    // 333 ms on the wire.
     let faults = Faults {
         line: Line {
             half_duplex: true,
@@ -144,19 +134,36 @@ fn a_request_that_meets_a_reply_on_a_half_duplex_line_garbles_both() {
         },
         ..Faults::default()
     };
-    let mut t = SimTransport::new(Arc::new(Mutex::new(Echo(None))), 300, faults, "echo");
+    let mut wire = Wire::new(Arc::new(Mutex::new(Echo(None))), 300, faults);
+    let t0 = Instant::now();
+    let at = |ms: u64| t0 + Duration::from_millis(ms);
     let first: Vec<u8> = (1..=10).collect();
     let second: Vec<u8> = (11..=20).collect();
-    t.write(&first).unwrap();
-    let mut reply = Vec::new();
-    read_until(&mut t, &mut reply, 1);
-    // The reply has started on the wire: the host's next request meets it.
-    t.write(&second).unwrap();
-    read_until(&mut t, &mut reply, first.len());
+    wire.host_wrote(&first, t0);
+    // The request has crossed by 333 ms, the device echoes it 1 ms later: by 400 ms the first
+    // byte of the reply (33 ms a byte) has crossed, the rest is on the wire until ~668 ms.
+    wire.pump(at(400));
+    let mut reply = vec![0u8; 64];
+    let n = wire.take_due(at(400), &mut reply);
+    assert!(
+        (1..10).contains(&n),
+        "the reply has begun, not ended: {n} bytes"
+    );
+    // The host's next request meets it.
+    wire.host_wrote(&second, at(400));
+    wire.pump(at(2_000));
+    let rest = wire.take_due(at(2_000), &mut reply[n..]);
+    let reply = &reply[..n + rest];
     assert_eq!(reply[0], first[0], "what crossed before the request began");
     assert_ne!(reply[9], first[9], "what crossed with it: {reply:?}");
     // The device heard the request garbled where it met the reply, and echoes what it heard.
-    let mut heard = Vec::new();
-    read_until(&mut t, &mut heard, second.len());
+    let mut heard = reply[10..].to_vec();
+    if heard.len() < second.len() {
+        wire.pump(at(4_000));
+        let mut more = [0u8; 64];
+        let k = wire.take_due(at(4_000), &mut more);
+        heard.extend_from_slice(&more[..k]);
+    }
+    assert_eq!(heard.len(), second.len(), "{heard:?}");
     assert_ne!(heard[0], second[0], "{heard:?}");
 }

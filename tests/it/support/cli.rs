@@ -11,9 +11,9 @@
 //!
 //! Every run is watched: a run that does not end within [`WATCHDOG`] fails its test.
 
-use std::io::{BufRead, BufReader, Lines, Write};
+use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
-use std::process::{ChildStderr, Command, Stdio};
+use std::process::{Command, Stdio};
 
 /// The answer margin the tests give a device across processes, as `--margin-ms`. The simulator
 /// runs in another process, which nothing keeps in lockstep with the command: on a loaded
@@ -23,9 +23,17 @@ use std::process::{ChildStderr, Command, Stdio};
 /// margin: provisioning a fresh servo pings all 254 ids once.
 pub const MARGIN_MS: &str = "100";
 
-/// Where the children look for user profiles: a folder that does not exist, so that the
-/// profiles of whoever runs the tests do not change them.
-fn no_user_profiles() -> PathBuf {
+/// The answer margin, as `--margin-ms`, of a test whose command line must run in a process of
+/// its own because the process is what it tests (an environment variable of the whole process):
+/// its device is a `botbench sim` process under real-time scheduling where this process may,
+/// but the command itself keeps ordinary scheduling and a loaded machine can hold its thread
+/// up for tens of milliseconds between a request and its answer's deadline. One second is far
+/// beyond that, and costs nothing when the device answers (only an absent one waits it out).
+pub const PROCESS_MARGIN_MS: &str = "1000";
+
+/// Where the children and the runs in this process look for user profiles: a folder that does
+/// not exist, so that the profiles of whoever runs the tests do not change them.
+pub fn no_user_profiles() -> PathBuf {
     PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("no-user-profiles")
 }
 
@@ -80,8 +88,11 @@ impl Ran {
         out: std::thread::JoinHandle<Vec<u8>>,
         err: std::thread::JoinHandle<Vec<u8>>,
     ) -> Self {
+        // A child that left a grandchild holding its outputs would keep them open: the test
+        // fails after PATIENCE instead of hanging on the reader.
         let text = |h: std::thread::JoinHandle<Vec<u8>>| {
-            String::from_utf8_lossy(&h.join().unwrap_or_default()).into_owned()
+            let bytes = super::joined(h, "the end of a child's output (a grandchild holding it?)");
+            String::from_utf8_lossy(&bytes).into_owned()
         };
         Self {
             code: code.unwrap_or(-1),
@@ -140,11 +151,15 @@ pub fn run_watched(args: &[&str]) -> Ran {
 /// Runs `command` (`what`, for the failure) to its end with its outputs piped; the test fails
 /// once it has run for [`WATCHDOG`] (the process killed), rather than hang.
 pub fn watched(command: &mut Command, what: &str) -> Ran {
+    try_watched(command, what).unwrap_or_else(|e| panic!("cannot run {what}: {e}"))
+}
+
+/// As [`watched`], for a program that may not be installed: the error when it cannot start.
+pub fn try_watched(command: &mut Command, what: &str) -> std::io::Result<Ran> {
     let mut child = command
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
-        .spawn()
-        .unwrap_or_else(|e| panic!("cannot run {what}: {e}"));
+        .spawn()?;
     // The outputs are read as they come, so that a child writing more than a pipe holds never
     // blocks on a full pipe while it is waited for.
     let out = drain(child.stdout.take());
@@ -162,18 +177,29 @@ pub fn watched(command: &mut Command, what: &str) -> Ran {
         }
         std::thread::sleep(std::time::Duration::from_millis(10));
     };
-    Ran::from_parts(status.code(), out, err)
+    Ok(Ran::from_parts(status.code(), out, err))
 }
 
 /// A thread reading `pipe` to its end.
 fn drain<R: std::io::Read + Send + 'static>(pipe: Option<R>) -> std::thread::JoinHandle<Vec<u8>> {
-    std::thread::spawn(move || {
+    spawn_named("child-output", move || {
         let mut bytes = Vec::new();
         if let Some(mut p) = pipe {
             let _ = p.read_to_end(&mut bytes);
         }
         bytes
     })
+}
+
+/// `f` on a thread named `name`.
+fn spawn_named<T: Send + 'static>(
+    name: &str,
+    f: impl FnOnce() -> T + Send + 'static,
+) -> std::thread::JoinHandle<T> {
+    std::thread::Builder::new()
+        .name(name.into())
+        .spawn(f)
+        .expect("starts a thread")
 }
 
 /// Runs `botbench` with `args` to its end (within [`WATCHDOG`], see [`run_watched`]).
@@ -192,7 +218,9 @@ pub struct SimProcess {
     process: botbench::sim::process::SimProcess,
     /// The pty path it printed first.
     pub path: String,
-    stderr: Lines<BufReader<ChildStderr>>,
+    /// Its stderr, a line at a time, read on a thread of its own so that a wait for a line is
+    /// bounded.
+    stderr: std::sync::mpsc::Receiver<std::io::Result<String>>,
 }
 
 impl SimProcess {
@@ -203,7 +231,15 @@ impl SimProcess {
         let mut process =
             botbench::sim::process::SimProcess::start(command).expect("starts the simulator");
         let path = process.path.clone();
-        let stderr = BufReader::new(process.child().stderr.take().expect("piped stderr")).lines();
+        let lines = BufReader::new(process.child().stderr.take().expect("piped stderr")).lines();
+        let (tx, stderr) = std::sync::mpsc::channel();
+        spawn_named("sim-stderr", move || {
+            for line in lines {
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
         Self {
             process,
             path,
@@ -246,12 +282,16 @@ impl SimProcess {
         writeln!(stdin, "{control}").expect("the simulator reads");
         stdin.flush().expect("the simulator reads");
         let want = format!("ok: {control}");
-        for line in self.stderr.by_ref() {
-            if line.expect("the simulator's stderr").contains(&want) {
-                return;
+        let deadline = std::time::Instant::now() + super::PATIENCE;
+        loop {
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            match self.stderr.recv_timeout(left) {
+                Ok(Ok(line)) if line.contains(&want) => return,
+                Ok(Ok(_)) => {}
+                Ok(Err(e)) => panic!("the simulator's stderr: {e}"),
+                Err(e) => panic!("the simulator did not confirm {control}: {e}"),
             }
         }
-        panic!("the simulator did not confirm {control}");
     }
 }
 
@@ -382,7 +422,9 @@ fn records_in_tests(args: &[&str]) -> Vec<String> {
     all
 }
 
-/// Starts `botbench ARGS...` in this process on a thread of its own, writing to `captured`.
+/// Starts `botbench ARGS...` in this process on a thread of its own, writing to `captured`,
+/// with no user profiles unless `captured` names a folder of them
+/// ([`botbench::cli::Captured::with_profiles`]).
 pub fn start_in_process(
     args: &[&str],
     ports: &botbench::link::PortOpener,
@@ -390,7 +432,12 @@ pub fn start_in_process(
 ) -> std::thread::JoinHandle<u8> {
     let mut all = vec!["botbench".to_string()];
     all.extend(records_in_tests(args));
-    let (ports, into) = (ports.clone(), captured.clone());
+    // The user's profiles are not the tests': an empty folder unless the test names one.
+    let into = match captured.profiles() {
+        Some(_) => captured.clone(),
+        None => captured.clone().with_profiles(no_user_profiles()),
+    };
+    let ports = ports.clone();
     std::thread::Builder::new()
         .name("cli-in-process".into())
         .spawn(move || botbench::cli::run_args_captured(all, &ports, &into))
