@@ -68,7 +68,9 @@ pub type CliResult = Result<u8, CliError>;
     about,
     long_about = None,
     after_help = "Environment: BOTBENCH_PORT is the --port of the device commands (msp, servo, \
-                  tuya, preset) when none is given; BOTBENCH_PROFILE_DIR holds your own profiles; \
+                  tuya, preset) when none is given; without either, the port the window last \
+                  connected to (when it was a port, not a built-in simulator, and is still \
+                  there), said on stderr; BOTBENCH_PROFILE_DIR holds your own profiles; \
                   BOTBENCH_RECORDS the records' file. `botbench completions bash` and `botbench \
                   manpage` print shell completions and the manual page."
 )]

@@ -100,15 +100,24 @@ impl PortArgs {
         self
     }
 
-    /// The port given with `--port`; a usage error (exit 2) when none was.
+    /// The port given with `--port` (or BOTBENCH_PORT); without either, in botbench's own
+    /// process, the port the window last connected to ([`remembered_port`]), said on stderr.
+    /// A usage error (exit 2) when there is none.
     pub fn path(&self) -> Result<&str, CliError> {
-        self.port.as_deref().ok_or_else(|| {
-            CliError::input(
-                "no port given: add --port PORT (e.g. /dev/ttyUSB0, or the /dev/pts path \
-                 `botbench sim` prints; `botbench ports` lists this machine's ports), or set \
-                 BOTBENCH_PORT",
-            )
-        })
+        if let Some(port) = self.port.as_deref() {
+            return Ok(port);
+        }
+        if super::console::is_process()
+            && let Some(port) = remembered_port()
+        {
+            errln!("botbench: no --port given: using {port}, the window's last port");
+            return Ok(port);
+        }
+        Err(CliError::input(
+            "no port given: add --port PORT (e.g. /dev/ttyUSB0, or the /dev/pts path \
+             `botbench sim` prints; `botbench ports` lists this machine's ports), or set \
+             BOTBENCH_PORT",
+        ))
     }
 
     /// Loads the profile (`--profile`, else `default_profile`) and checks its protocol.
@@ -333,4 +342,26 @@ pub(crate) fn cancel_on_ctrl_c() -> crate::ops::Cancel {
         errln!("botbench: Ctrl-C will not stop safely: {e}");
     }
     cancel
+}
+
+/// The port the window last connected to, as it saved it (eframe's storage file: on Linux
+/// `$XDG_DATA_HOME/botbench/app.ron`, else `~/.local/share/botbench/app.ron`, the settings under
+/// eframe's app key), when that was a port by path that exists now. `None` for the built-in
+/// simulated devices, a window never run, a port no longer there, or a file that cannot be
+/// read or parsed (the command line then asks for `--port`, as without a window). Read once
+/// per process.
+fn remembered_port() -> Option<&'static str> {
+    static REMEMBERED: std::sync::OnceLock<Option<String>> = std::sync::OnceLock::new();
+    REMEMBERED
+        .get_or_init(|| {
+            let file = eframe::storage_dir("botbench")?.join("app.ron");
+            let text = std::fs::read_to_string(file).ok()?;
+            let kv: std::collections::HashMap<String, String> = ron::from_str(&text).ok()?;
+            let settings: crate::ui::Settings = ron::from_str(kv.get(eframe::APP_KEY)?).ok()?;
+            match settings.target {
+                crate::ui::Target::Port(path) if std::path::Path::new(&path).exists() => Some(path),
+                _ => None,
+            }
+        })
+        .as_deref()
 }

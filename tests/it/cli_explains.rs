@@ -360,4 +360,38 @@ fn completions_manpage_and_a_default_port_from_botbench_port() {
     let ran = crate::support::cli::run(&["msp", "ping"]);
     assert_eq!(ran.code, 2, "{ran:?}");
     assert!(ran.err.contains("or set BOTBENCH_PORT"), "{ran:?}");
+
+    // Without either, the window's last port, when it was a port (a child process with its
+    // own data folder, holding what the window saves).
+    let data = tempfile::tempdir().expect("a temporary folder");
+    let remember = |target: botbench::ui::Target| {
+        let settings = botbench::ui::Settings {
+            target,
+            ..Default::default()
+        };
+        let saved = ron::to_string(&settings).expect("settings as RON");
+        let kv = std::collections::HashMap::from([(eframe::APP_KEY.to_string(), saved)]);
+        std::fs::create_dir_all(data.path().join("botbench")).expect("the data folder");
+        std::fs::write(
+            data.path().join("botbench/app.ron"),
+            ron::to_string(&kv).expect("storage as RON"),
+        )
+        .expect("app.ron written");
+    };
+    let ping = || {
+        let mut c = crate::support::cli::botbench(["msp", "ping"]);
+        c.env_remove("BOTBENCH_PORT")
+            .env("XDG_DATA_HOME", data.path());
+        crate::support::cli::output(&mut c)
+    };
+    remember(botbench::ui::Target::Port(sim.path.clone()));
+    let ran = ping();
+    assert_eq!(ran.code, 0, "{ran:?}");
+    assert!(ran.out.contains("answered in"), "{ran:?}");
+    assert!(ran.err.contains("the window's last port"), "said: {ran:?}");
+    // The built-in simulator is not a port: the command line asks for one.
+    remember(botbench::ui::Target::Demo("window-cleaner".into()));
+    let ran = ping();
+    assert_eq!(ran.code, 2, "{ran:?}");
+    assert!(ran.err.contains("no port given"), "{ran:?}");
 }
