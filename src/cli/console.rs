@@ -236,6 +236,13 @@ pub(crate) fn stdout_is_terminal() -> bool {
     is_process() && std::io::stdout().is_terminal()
 }
 
+/// Whether this run's stderr is a terminal a person reads (never for a captured run, nor a
+/// pipe or a file): where progress lines go, for them and not for a log.
+pub(crate) fn stderr_is_terminal() -> bool {
+    use std::io::IsTerminal;
+    is_process() && std::io::stderr().is_terminal()
+}
+
 /// The Ctrl-C of a run in another program's process ([`Captured::interrupt`]); `None` for the
 /// process's own run.
 pub(crate) fn captured_ctrl_c() -> Option<crate::ops::Cancel> {

@@ -217,6 +217,8 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
                 ops::expected_text(image.len() as u64, link_baud(&args.port, &profile))
             );
             let expect = expect.ok_or_else(|| CliError::input("no expected version"))?;
+            // Progress is for a person at a terminal; a pipe or --json gets the report alone.
+            let show_progress = !json && super::console::stderr_is_terminal();
             let mut last = (0, String::new());
             let report = ops::update(
                 &client,
@@ -226,7 +228,9 @@ pub(crate) fn run(mut args: TuyaArgs, ports: &PortOpener) -> CliResult {
                 ops::OtaTiming::default(),
                 &mut Run::new(&super::port::cancel_on_ctrl_c(), |p: Progress| {
                     let pct = (p.fraction() * 100.0) as u32;
-                    if !json && (pct >= last.0 + 10 || (pct == 100 && p.message.en != last.1)) {
+                    if show_progress
+                        && (pct >= last.0 + 10 || (pct == 100 && p.message.en != last.1))
+                    {
                         last = (pct, p.message.en.clone());
                         errln!("{pct:3}%  {}", p.message.en);
                     }
