@@ -36,8 +36,10 @@ fn server(test: &str) -> Option<String> {
 /// A fresh schema `name` on the server, and the URL that works in it.
 fn schema(url: &str, name: &str) -> String {
     let mut c = postgres::Client::connect(url, postgres::NoTls).unwrap();
+    // Durable at once: the test cluster commits asynchronously and some tests stop it in
+    // immediate mode, which would lose a schema created just before.
     c.batch_execute(&format!(
-        "DROP SCHEMA IF EXISTS {name} CASCADE; CREATE SCHEMA {name}"
+        "SET synchronous_commit TO on; DROP SCHEMA IF EXISTS {name} CASCADE; CREATE SCHEMA {name}"
     ))
     .unwrap();
     let sep = if url.contains('?') { '&' } else { '?' };

@@ -100,6 +100,13 @@ impl LineStore {
             config.connect_timeout(CONNECT_TIMEOUT);
             config.application_name("botbench");
             let mut client = config.connect(postgres::NoTls).map_err(err)?;
+            // A record leaves the spool once its commit returns: that commit must be on the
+            // server's disk, whatever the server's own default (a server with asynchronous
+            // commit loses its last commits in a crash; found with the tests' throw-away
+            // cluster, stopped in immediate mode).
+            client
+                .batch_execute("SET synchronous_commit TO on")
+                .map_err(err)?;
             let mut tx = client.transaction().map_err(err)?;
             // 0x626f7462656e6368 is "botbench": one lock for every botbench migrating.
             tx.execute("SELECT pg_advisory_xact_lock(7093006206163431016)", &[])
