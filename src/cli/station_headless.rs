@@ -107,29 +107,30 @@ struct Routing {
     typed_ahead: VecDeque<(Option<String>, String)>,
 }
 
+impl Routing {
+    /// Takes the oldest line typed ahead for `slot` (named for it, or for whichever asks first).
+    fn take_typed_for(&mut self, slot: &str) -> Option<String> {
+        let i = self
+            .typed_ahead
+            .iter()
+            .position(|(to, _)| to.as_deref().is_none_or(|to| to == slot))?;
+        self.typed_ahead.remove(i).map(|(_, line)| line)
+    }
+}
+
 /// Follows `ev`: a question waiting, answered, or a slot idle for a scan; a question gets
 /// the oldest line typed ahead.
 fn track(ev: &Event, routing: &Mutex<Routing>, slots: &[SlotHandle]) {
     let mut r = routing.lock().unwrap_or_else(|e| e.into_inner());
     match &ev.what {
-        What::Ask { kind, .. } if *kind != "prompt" => {
-            let mine = r
-                .typed_ahead
-                .iter()
-                .position(|(to, _)| to.as_ref().is_none_or(|to| to == &ev.slot));
-            match mine.and_then(|i| r.typed_ahead.remove(i)) {
-                Some((_, line)) => send_answer(slots, &ev.slot, &line),
-                None => r.asking.push_back(ev.slot.clone()),
-            }
-        }
+        What::Ask { kind, .. } if *kind != "prompt" => match r.take_typed_for(&ev.slot) {
+            Some(line) => send_answer(slots, &ev.slot, &line),
+            None => r.asking.push_back(ev.slot.clone()),
+        },
         What::Waiting { how: "scan" } => {
             // A code scanned before the slot was ready for it starts it now.
-            let mine = r
-                .typed_ahead
-                .iter()
-                .position(|(to, _)| to.as_ref().is_none_or(|to| to == &ev.slot));
-            match mine.and_then(|i| r.typed_ahead.remove(i)) {
-                Some((_, line)) => send_answer(slots, &ev.slot, &line),
+            match r.take_typed_for(&ev.slot) {
+                Some(line) => send_answer(slots, &ev.slot, &line),
                 None => r.scan_idle.push(ev.slot.clone()),
             }
         }
