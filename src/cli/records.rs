@@ -189,6 +189,7 @@ impl FilterArgs {
             station: self.station.clone(),
             plan: self.plan.clone(),
             serial: None,
+            access: false,
         }
     }
 
@@ -308,7 +309,13 @@ pub(crate) fn run(args: RecordsCmdArgs) -> CliResult {
             recorder
                 .store()
                 .read(&mut |db| {
-                    lines = query::list(db, &filter.filter(), limit)?;
+                    // The list shows the station's access events too (an engineer's unlock,
+                    // a refused password, a lock) among the units' runs.
+                    let filter = query::Filter {
+                        access: true,
+                        ..filter.filter()
+                    };
+                    lines = query::list(db, &filter, limit)?;
                     Ok(())
                 })
                 .map_err(read_error)?;

@@ -54,6 +54,7 @@ pub(crate) fn run(bundle: &Bundle, args: &StationArgs, ports: &PortOpener) -> Cl
         slots,
         events: rx,
         forwarder,
+        ..
     } = start(bundle, args, ports, args.once)?;
     say_start(bundle, args.json);
     let slots = Arc::new(slots);
@@ -227,6 +228,7 @@ fn print_event(ev: &Event, json: bool) {
             outln!("slot {s}: {kept}");
         }
         What::Stopped { why } => outln!("slot {s}: stopped: {why}"),
+        What::Lent { port } => outln!("slot {s}: {port} lent to the engineer view"),
         What::Records {
             waiting: 0, store, ..
         } => outln!("records: none waiting, every record is in {store}"),

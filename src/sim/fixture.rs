@@ -183,6 +183,9 @@ pub struct StartedStation {
     pub events: crossbeam_channel::Receiver<crate::ops::station::Event>,
     /// Sends the records that wait on to their store; stops when dropped.
     pub forwarder: crate::ops::station::Forwarder,
+    /// What the slots share (the station's id, bundle hash, recorder): the window records
+    /// the engineer's unlocks through it.
+    pub context: crate::ops::station::StationContext,
 }
 
 /// Starts every slot of `bundle` ([`start_slot`]: simulated slots on fixtures of their own,
@@ -216,6 +219,7 @@ pub fn start_station(
         slots,
         events: rx,
         forwarder,
+        context,
     })
 }
 

@@ -110,12 +110,20 @@ impl ConnectionBar {
     /// The port, baud, profile and margin, and Connect / Disconnect / Reconnect.
     fn settings_row(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &Station) -> Vec<Action> {
         let lang = saved.lang;
+        let mut actions = Vec::new();
+        // File > Open station: the line station in this window.
+        ui.menu_button(lang.tr("File", "文件"), |ui| {
+            if ui.button(lang.tr("Open station…", "打开工位…")).clicked() {
+                actions.push(Action::OpenStation(None));
+            }
+        });
         self.port_choice(ui, saved, rt);
         self.path_box(ui, lang);
         self.baud_choice(ui, lang);
         self.profile_choice(ui, saved, rt);
         self.margin_choice(ui, lang, rt);
-        self.connect_buttons(ui, saved, rt)
+        actions.extend(self.connect_buttons(ui, saved, rt));
+        actions
     }
 
     /// The port picker: the demo devices, then the serial ports listed.

@@ -130,6 +130,11 @@ pub enum Action {
     /// Ask the built-in simulated Tuya MCU (the demo device) to send one of its own requests;
     /// nothing happens on a real port.
     DemoMcuRequest(crate::sim::tuya_mcu::McuRequest),
+    /// File > Open station: the station bundle at this path (`None`: ask with a file dialog)
+    /// checked and started, shown in place of the panels ([`line::open`]).
+    OpenStation(Option<std::path::PathBuf>),
+    /// Close the station shown (only while no slot runs a unit): back to the panels.
+    CloseStation,
 }
 
 /// Why the window could not open.

@@ -5,7 +5,8 @@
 use crate::support::cli::WATCHDOG as PATIENCE;
 use botbench::i18n::Lang;
 use botbench::link::PortOpener;
-use botbench::ops::records::{Recorder, RunContext, SqliteStore};
+use botbench::ops::records::record::{Record, RunKind, Verdict};
+use botbench::ops::records::{Recorder, RunContext, SqliteStore, Store};
 use botbench::ops::station::{self, LoadContext};
 use botbench::sim::SimKind;
 use botbench::ui::line::LineStation;
@@ -18,15 +19,17 @@ use std::time::Instant;
 /// The demo station's slots started, in a window of `size` showing `lang`.
 fn demo_window(dir: &Path, size: egui::Vec2, lang: Lang) -> Harness<'static, LineStation> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/demo-station.ron");
-    window_of(&path, dir, size, lang)
+    window_of(&path, dir, size, lang, true)
 }
 
-/// The station of the bundle at `path` started, in a window of `size` showing `lang`.
+/// The station of the bundle at `path` started (with `once`, one unit per slot), its records
+/// in `dir`/records.sqlite, in a window of `size` showing `lang`.
 fn window_of(
     path: &Path,
     dir: &Path,
     size: egui::Vec2,
     lang: Lang,
+    once: bool,
 ) -> Harness<'static, LineStation> {
     let registry = botbench::profile::Registry::builtin().unwrap();
     let sims: Vec<(&str, &str)> = SimKind::ALL
@@ -46,12 +49,13 @@ fn window_of(
     for slot in &bundle.slots {
         let ports = PortOpener::system();
         slots.push(
-            botbench::sim::fixture::start_slot(slot, context.clone(), &ports, tx.clone(), true)
+            botbench::sim::fixture::start_slot(slot, context.clone(), &ports, tx.clone(), once)
                 .unwrap(),
         );
     }
     let mut st = LineStation::new(&bundle, slots, rx);
     st.lang = lang;
+    st.access = Some(context);
     Harness::builder().with_size(size).build_ui_state(
         |ui, st: &mut LineStation| {
             botbench::i18n::install_cjk_font(ui.ctx());
@@ -129,7 +133,13 @@ fn the_operator_view_is_locked_until_the_engineer_s_password_unlocks_it() {
         .replace("// engineer_password_sha256:", "engineer_password_sha256:");
     let bundle = dir.path().join("locked.ron");
     std::fs::write(&bundle, text).unwrap();
-    let mut h = window_of(&bundle, dir.path(), egui::vec2(1280.0, 800.0), Lang::En);
+    let mut h = window_of(
+        &bundle,
+        dir.path(),
+        egui::vec2(1280.0, 800.0),
+        Lang::En,
+        true,
+    );
     h.step();
     // Locked: no slot's configuration is shown.
     assert!(
@@ -190,4 +200,241 @@ fn a_slot_s_number_then_y_or_n_answers_that_slot_s_question() {
     for t in &h.state().tiles {
         assert_eq!(t.verdict.as_ref().map(|v| v.0), Some(true), "{t:?}");
     }
+}
+
+/// The records of `dir`/records.sqlite matching `filter`, oldest first.
+fn records_in(dir: &Path, filter: &botbench::ops::records::Filter) -> Vec<Record> {
+    let mut store = SqliteStore::open(&dir.join("records.sqlite")).unwrap();
+    let mut back = Vec::new();
+    store
+        .read(&mut |db| {
+            botbench::ops::records::query::each_record(db, filter, &mut |r| {
+                back.push(r);
+                Ok(())
+            })
+        })
+        .unwrap();
+    back
+}
+
+/// The demo station with every slot started by its Start button (so that a slot waits idle)
+/// and the example's engineer password (`password`), running unit after unit.
+fn idle_station(dir: &Path) -> Harness<'static, LineStation> {
+    let presets = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets");
+    for f in ["window-cleaner-selftest.ron", "servo-provision-plan.ron"] {
+        std::fs::copy(presets.join(f), dir.join(f)).unwrap();
+    }
+    let text = std::fs::read_to_string(presets.join("demo-station.ron"))
+        .unwrap()
+        .replace("// engineer_password_sha256:", "engineer_password_sha256:")
+        .replace("start: Auto", "start: Button");
+    let bundle = dir.join("engineer.ron");
+    std::fs::write(&bundle, text).unwrap();
+    window_of(&bundle, dir, egui::vec2(1280.0, 800.0), Lang::En, false)
+}
+
+#[test]
+fn the_engineer_view_is_today_s_window_on_a_lent_slot_and_every_unlock_is_recorded() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = idle_station(dir.path());
+    step_until(&mut h, "every slot idle on its port", |st| {
+        st.tiles
+            .iter()
+            .all(|t| t.waiting.is_some() && matches!(t.port, Some((true, _))))
+    });
+    h.step();
+    // Locked: no slot can be opened, no port, baud, profile or margin can be changed.
+    let locked = |h: &Harness<'static, LineStation>| {
+        h.query_by_label("Open in engineer view").is_none()
+            && ["Port", "Baud", "Profile", "Margin", "Connect", "Disconnect"]
+                .iter()
+                .all(|l| h.query_by_label(l).is_none())
+    };
+    assert!(locked(&h), "the operator view offers an engineer's control");
+    h.get_by_label("Engineer unlock").click();
+    h.step();
+    h.step();
+    h.state_mut().engineer.typed = "not it".into();
+    h.get_by_label("Unlock").click();
+    h.step();
+    h.step();
+    h.state_mut().engineer.typed = "password".into();
+    h.get_by_label("Unlock").click();
+    h.step();
+    h.step();
+    assert_eq!(h.query_all_by_label("Open in engineer view").count(), 3);
+    // Slot 3 (the Tuya vacuum) in today's window: its connection bar, connected to the port
+    // the slot gave up.
+    h.query_all_by_label("Open in engineer view")
+        .nth(2)
+        .unwrap()
+        .click();
+    h.step();
+    step_until(&mut h, "the engineer view connected", |st| {
+        st.lent
+            .as_ref()
+            .and_then(|l| l.app.as_ref())
+            .is_some_and(|app| app.station().connected())
+    });
+    h.step();
+    h.step();
+    assert!(h.query_by_label("Margin").is_some());
+    assert!(h.query_by_label("Disconnect").is_some());
+    assert!(h.query_by_label_contains("Engineer view: slot 3").is_some());
+    let app = h.state().lent.as_ref().unwrap().app.as_ref().unwrap();
+    assert_eq!(app.station().device.profile.id, "tuya-vacuum");
+    assert_eq!(
+        app.station().link.target().map(|t| t.label()),
+        Some("simulated:tuya-vacuum:3".to_string())
+    );
+    // Locking returns to the operator view and gives the slot back: it runs a unit again.
+    h.get_by_label("Lock").click();
+    h.step();
+    h.step();
+    assert!(h.state().lent.is_none());
+    assert!(locked(&h), "locked again, an engineer's control is left");
+    h.query_all_by_label("Start").nth(2).unwrap().click();
+    h.step();
+    step_until(&mut h, "slot 3's verdict after the engineer view", |st| {
+        st.tiles[2].verdict.is_some()
+    });
+    assert_eq!(h.state().tiles[2].verdict.as_ref().map(|v| v.0), Some(true));
+    let sha = h.state().bundle_sha256.clone();
+    access_records_hold(dir.path(), &sha);
+    h.state().stop_all();
+}
+
+/// Every unlock, refusal, lent slot and lock of the engineer test is in the records of `dir`
+/// (waited for: each is saved on a thread of its own), with the bundle's hash `sha`; the
+/// reports' filter leaves them out.
+fn access_records_hold(dir: &Path, sha: &str) {
+    let access = botbench::ops::records::Filter {
+        access: true,
+        ..Default::default()
+    };
+    let want = [
+        "engineer lock",
+        "engineer password refused",
+        "engineer unlock",
+        "engineer view of slot 3",
+        "slot 3 back from the engineer view",
+    ];
+    let deadline = Instant::now() + PATIENCE;
+    let mut seen: Vec<Record>;
+    loop {
+        seen = records_in(dir, &access)
+            .into_iter()
+            .filter(|r| r.kind == RunKind::Access)
+            .collect();
+        if seen.len() >= want.len() {
+            break;
+        }
+        assert!(Instant::now() < deadline, "access records: {seen:?}");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let mut plans: Vec<&str> = seen.iter().map(|r| r.plan.as_str()).collect();
+    plans.sort_unstable();
+    assert_eq!(plans, want);
+    for r in &seen {
+        assert_eq!(r.context.bundle_sha256.as_deref(), Some(sha), "{r:?}");
+        assert_eq!(r.context.station.as_deref(), Some("demo-station"));
+        let refused = r.plan == "engineer password refused";
+        assert_eq!(r.verdict == Verdict::Fail, refused, "{r:?}");
+        let slot = r.plan.contains("slot 3");
+        assert_eq!(r.context.slot.as_deref() == Some("3"), slot, "{r:?}");
+    }
+    let units = records_in(dir, &Default::default());
+    assert!(
+        units.iter().all(|r| r.kind == RunKind::Station),
+        "{units:?}"
+    );
+    assert!(!units.is_empty());
+}
+
+/// The ordinary window on the built-in window cleaner, its records in `dir`.
+fn ordinary_window(dir: &Path) -> crate::support::gui::H {
+    let mut saved = botbench::ui::Settings::default();
+    saved.files.insert(
+        botbench::ui::settings::FileKind::Records,
+        dir.join("records.sqlite").display().to_string(),
+    );
+    crate::support::gui::harness(saved, PortOpener::system())
+}
+
+#[test]
+fn file_open_station_shows_a_bundle_refuses_a_bad_one_and_closes_only_when_idle() {
+    use crate::support::gui::{app, app_mut, step_until};
+    use botbench::ui::Action;
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = ordinary_window(dir.path());
+    step_until(&mut h, "the demo connected", |a| a.station().connected());
+    h.step();
+    assert!(h.query_all_by_label("File").count() >= 1);
+    // A bundle naming a profile that does not exist: refused with its place, nothing changed.
+    let presets = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets");
+    for f in ["window-cleaner-selftest.ron", "servo-provision-plan.ron"] {
+        std::fs::copy(presets.join(f), dir.path().join(f)).unwrap();
+    }
+    let demo = std::fs::read_to_string(presets.join("demo-station.ron")).unwrap();
+    let bad = dir.path().join("bad.ron");
+    std::fs::write(
+        &bad,
+        demo.replace("profile: \"servo\"", "profile: \"servoo\""),
+    )
+    .unwrap();
+    app_mut(&mut h).apply(Action::OpenStation(Some(bad.clone())));
+    h.step();
+    assert!(app(&h).line.is_none());
+    let said = app(&h).station().notice.clone().expect("a notice").text;
+    assert!(said.starts_with("station not opened: "), "{said}");
+    assert!(said.contains("bad.ron:"), "{said}");
+    assert!(said.contains("servoo"), "{said}");
+    assert!(app(&h).station().connected());
+    assert!(h.query_by_label("Margin").is_some());
+    // A good one: the station in place of the panels.
+    let good = dir.path().join("good.ron");
+    std::fs::write(&good, demo.replace("start: Auto", "start: Button")).unwrap();
+    app_mut(&mut h).apply(Action::OpenStation(Some(good)));
+    h.step();
+    assert!(app(&h).line.is_some(), "{:?}", app(&h).station().notice);
+    step_until(&mut h, "every slot idle", |a| {
+        a.line.as_ref().is_some_and(|l| {
+            l.tiles
+                .iter()
+                .all(|t| t.waiting.is_some() && matches!(t.port, Some((true, _))))
+        })
+    });
+    h.step();
+    assert!(h.query_by_label("Margin").is_none());
+    assert!(h.query_by_label("STOP ALL").is_some());
+    // A unit running (slot 1 asks whether it sprayed): Close station does nothing.
+    h.query_all_by_label("Start").next().unwrap().click();
+    h.step();
+    step_until(&mut h, "slot 1's question", |a| {
+        a.line.as_ref().is_some_and(|l| l.tiles[0].asking.is_some())
+    });
+    h.step();
+    h.get_by_label("Close station").click();
+    h.step();
+    h.step();
+    assert!(app(&h).line.is_some(), "closed while a unit runs");
+    step_until(&mut h, "the spray question", |a| {
+        a.line
+            .as_ref()
+            .is_some_and(|l| matches!(l.tiles[0].asking, Some(("confirm", _, _))))
+    });
+    h.step();
+    h.get_by_label("Yes (Y)").click();
+    h.step();
+    step_until(&mut h, "slot 1 idle again", |a| {
+        a.line
+            .as_ref()
+            .is_some_and(|l| l.tiles[0].verdict.is_some() && !l.running())
+    });
+    h.step();
+    h.get_by_label("Close station").click();
+    h.step();
+    h.step();
+    assert!(app(&h).line.is_none());
+    assert!(h.query_by_label("Margin").is_some());
 }

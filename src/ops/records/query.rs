@@ -19,6 +19,10 @@ pub struct Filter {
     pub plan: Option<String>,
     /// Runs of the unit with this serial number.
     pub serial: Option<String>,
+    /// Whether the station's access events ([`super::record::RunKind::Access`]: engineer
+    /// unlocks, refused passwords, locks) are included; `false` (the reports, the exports):
+    /// only units' runs.
+    pub access: bool,
 }
 
 impl Filter {
@@ -66,6 +70,10 @@ impl Filter {
         }
         if let Some(s) = &self.serial {
             add(format!("{a}serial = ?N"), Val::text_of(s), &mut params);
+        }
+        if !self.access {
+            let access = super::record::RunKind::Access.name();
+            add(format!("{a}kind <> ?N"), Val::text_of(access), &mut params);
         }
         (conds.join(" AND "), params)
     }

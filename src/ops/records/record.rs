@@ -19,11 +19,16 @@ pub enum RunKind {
     TuyaConform,
     /// A line station's plan (several operations as one run).
     Station,
+    /// Not a unit's run: who reached a line station's engineer view (an unlock, a refused
+    /// password, a lock, a slot opened in the engineer view and given back), kept beside the
+    /// units' records so that a line can tell who changed what, when. No serial, no steps;
+    /// FAIL for a refused password. Reports leave these out ([`super::query::Filter::access`]).
+    Access,
 }
 
 impl RunKind {
     /// The name stored in `runs.kind`: `selftest`, `provision`, `preset-apply`, `tuya-conform`,
-    /// `station`.
+    /// `station`, `station-access`.
     pub fn name(self) -> &'static str {
         match self {
             RunKind::Selftest => "selftest",
@@ -31,6 +36,7 @@ impl RunKind {
             RunKind::PresetApply => "preset-apply",
             RunKind::TuyaConform => "tuya-conform",
             RunKind::Station => "station",
+            RunKind::Access => "station-access",
         }
     }
 
@@ -42,6 +48,7 @@ impl RunKind {
             RunKind::PresetApply,
             RunKind::TuyaConform,
             RunKind::Station,
+            RunKind::Access,
         ]
         .into_iter()
         .find(|k| k.name() == name)

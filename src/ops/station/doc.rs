@@ -45,6 +45,10 @@ pub struct SlotDoc {
     pub name: String,
     /// The fixture's name on its label (`WC fixture 2`).
     pub fixture: String,
+    /// The fixture's name in 中文 (`擦窗机治具 2`), shown when the station is shown in 中文;
+    /// optional (a bundle without it shows `fixture` in both languages).
+    #[serde(default)]
+    pub fixture_zh: Option<String>,
     /// How its port is found.
     pub port: PortLocator,
     /// The device profile: an id (`window-cleaner`) or a `.ron` file.

@@ -103,6 +103,12 @@ pub enum What {
         /// Why they wait: the store's last error.
         why: Option<String>,
     },
+    /// The slot is lent to the engineer view ([`Command::Lend`]): its runner closed its port
+    /// and waits for [`Command::Return`]; the engineer's window opens `port` itself.
+    Lent {
+        /// The port's path as the slot found it (a simulated slot's served name).
+        port: String,
+    },
     /// The slot stopped (STOP, STOP ALL, end of `--once`): the device left in its safe state.
     Stopped {
         /// Why.
@@ -118,6 +124,12 @@ pub enum Command {
     /// An answer: `yes`/`no` to a Confirm or a retry question, a value to a Measure, a code
     /// to a Scan (a code also starts a slot that starts by scan).
     Answer(Answer),
+    /// Lend the slot to the engineer view: taken only while the slot is idle (waiting for a
+    /// unit); its runner closes its port, says [`What::Lent`] and waits for [`Command::Return`].
+    /// Ignored while a unit runs.
+    Lend,
+    /// The engineer view closed: the runner opens its port again and waits for the next unit.
+    Return,
 }
 
 /// The operator's answer.

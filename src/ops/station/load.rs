@@ -38,6 +38,8 @@ pub struct Slot {
     pub name: String,
     /// The fixture's name.
     pub fixture: String,
+    /// The fixture's name in 中文 (`fixture_zh`, else `fixture`).
+    pub fixture_zh: String,
     /// How its port is found.
     pub port: PortLocator,
     /// The device profile.
@@ -402,6 +404,7 @@ impl<'s> Reader<'s> {
         Ok(Slot {
             name: s.name.clone(),
             fixture: s.fixture.clone(),
+            fixture_zh: s.fixture_zh.clone().unwrap_or_else(|| s.fixture.clone()),
             port: s.port.clone(),
             profile,
             plan_name: s.plan.clone(),

@@ -7,6 +7,7 @@
 //! - [`doc`]: the RON shapes; [`example`]: the commented bundle `botbench station new` writes.
 //! - [`load`]: read, hash, check; [`plan`]: a plan's steps with their files parsed.
 //! - [`forward`]: the records waiting in a spool, counted and forwarded while the station runs.
+//! - [`access`]: the engineer's unlocks, refused passwords, locks and lent slots, recorded.
 //! - [`port`]: finding a slot's port by what stays true when its adapter is replugged.
 
 pub mod doc;
@@ -18,11 +19,13 @@ pub mod port;
 pub use doc::{PortLocator, StartMode};
 pub use load::{Bundle, HashedFile, LoadContext, Slot, bundle_sha256, load};
 pub use plan::{LinePlan, LineStep, Op};
+pub mod access;
 pub mod event;
 pub mod forward;
 pub mod runner;
 pub mod steps;
 
+pub use access::Access;
 pub use event::{Answer, Command, Event, What};
 pub use forward::Forwarder;
 pub use runner::{Hands, OperatorHands, SlotHandle, StationContext, spawn};

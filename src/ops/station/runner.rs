@@ -2,6 +2,11 @@
 //! a unit (Start, a scanned serial, or a new unit answering), runs the line plan step by step,
 //! keeps one record per unit run (`RunKind::Station`, the bundle's hash in it) before it says
 //! the verdict, and stops at once on its cancel flag (STOP for the slot, STOP ALL for all).
+//!
+//! The engineer view borrows an idle slot ([`Command::Lend`]): a port has one owner, so the
+//! runner closes its link, says [`What::Lent`] with the port's path, and waits; the engineer's
+//! window opens that port with the ordinary panels; [`Command::Return`] (the view closed) has
+//! the runner open it again and wait for the next unit, as after a replug.
 
 use super::StartMode;
 use super::event::{Answer, Command, Event, What};
@@ -78,6 +83,9 @@ pub struct SlotHandle {
     pub commands: Sender<Command>,
     /// STOP for this slot.
     pub cancel: Cancel,
+    /// How the slot's port is opened (a simulated slot's device served under its name): the
+    /// engineer view opens the lent port with it.
+    pub opener: PortOpener,
     /// The slot's thread (ends after STOP, or after one unit with `once`).
     pub thread: std::thread::JoinHandle<()>,
 }
@@ -99,7 +107,7 @@ pub fn spawn(
     let runner = SlotRunner {
         slot,
         station,
-        opener,
+        opener: opener.clone(),
         hands,
         events,
         commands: rx,
@@ -114,6 +122,7 @@ pub fn spawn(
         name,
         commands: tx,
         cancel,
+        opener,
         thread,
     })
 }
@@ -160,7 +169,7 @@ impl SlotRunner {
     fn serve_units(&mut self) -> String {
         let mut ready = true;
         loop {
-            let Some(link) = self.open() else {
+            let Some((link, path)) = self.open() else {
                 return "stopped".into();
             };
             let client = link.client();
@@ -169,6 +178,16 @@ impl SlotRunner {
                     Start::Go(serial) => serial,
                     Start::Stopped => return "stopped".into(),
                     Start::Lost => break,
+                    Start::Lend => {
+                        drop(client);
+                        drop(link);
+                        if !self.lend(path) {
+                            return "stopped".into();
+                        }
+                        // The unit the engineer had is not a new one.
+                        ready = false;
+                        break;
+                    }
                 };
                 let record = self.unit(&client, serial);
                 // Who is on the fixture now (a firmware update may have changed it): the next
@@ -194,8 +213,25 @@ impl SlotRunner {
         }
     }
 
-    /// The link to the slot's port, once it is there; `None` when stopped first.
-    fn open(&self) -> Option<Link> {
+    /// The port closed (its link dropped): says [`What::Lent`] and waits for
+    /// [`Command::Return`]; `false` when stopped first.
+    fn lend(&self, port: String) -> bool {
+        self.tell(What::Lent { port });
+        loop {
+            if self.cancel.is_cancelled() {
+                return false;
+            }
+            match self.commands.recv_timeout(Duration::from_millis(100)) {
+                Ok(Command::Return) => return true,
+                Ok(_) | Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => return false,
+            }
+        }
+    }
+
+    /// The link to the slot's port and the path opened, once it is there; `None` when stopped
+    /// first.
+    fn open(&self) -> Option<(Link, String)> {
         let mut said = None;
         loop {
             if self.cancel.is_cancelled() {
@@ -226,9 +262,9 @@ impl SlotRunner {
                 Ok((link, path)) => {
                     self.tell(What::Port {
                         present: true,
-                        detail: path,
+                        detail: path.clone(),
                     });
-                    return Some(link);
+                    return Some((link, path));
                 }
                 Err(why) => {
                     if said.as_ref() != Some(&why) {
@@ -255,6 +291,8 @@ enum Start {
     Stopped,
     /// The port went away.
     Lost,
+    /// The engineer view asks for the slot ([`Command::Lend`]).
+    Lend,
 }
 
 impl SlotRunner {
@@ -280,6 +318,7 @@ impl SlotRunner {
                 Ok(Command::Answer(Answer::Text(code))) if plan.start == StartMode::Scan => {
                     return Start::Go(Some(code));
                 }
+                Ok(Command::Lend) => return Start::Lend,
                 Ok(_) => continue,
                 Err(crossbeam_channel::RecvTimeoutError::Disconnected) => return Start::Stopped,
                 Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
@@ -546,7 +585,9 @@ impl Desk for SlotDesk<'_> {
                 .recv_timeout(left.min(Duration::from_millis(100)))
             {
                 Ok(Command::Answer(a)) => return Some(a),
-                Ok(Command::Start) | Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+                // Start, and the engineer view's Lend and Return, mean nothing while a unit runs.
+                Ok(Command::Start | Command::Lend | Command::Return)
+                | Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
                 Err(crossbeam_channel::RecvTimeoutError::Disconnected) => return None,
             }
         }

@@ -64,6 +64,11 @@ impl App {
             Action::RememberFile(kind, path) => {
                 self.settings.files.insert(kind, path);
             }
+            Action::OpenStation(path) => self.open_station(path),
+            // Dropped: every slot stops, its port is closed.
+            Action::CloseStation if self.line.as_ref().is_some_and(|l| !l.running()) => {
+                self.line = None;
+            }
             // The station's own (see `Station::apply`).
             _ => {}
         }
@@ -182,6 +187,53 @@ impl App {
             Err(e) => station.notify(Notice::error(Text::new(
                 format!("{port}: latency timer not set: {e}"),
                 format!("{port}:延迟定时器未设置:{e}"),
+            ))),
+        }
+    }
+
+    /// File > Open station: the bundle at `path` (or one picked in a file dialog) checked and
+    /// started, shown in place of the panels. A bundle refused (its problem at file:line:column,
+    /// a slot's missing port) starts nothing and is said in the status line; the window stays
+    /// as it was. The window's link is left as it is (a slot may need its port: close it first).
+    fn open_station(&mut self, path: Option<std::path::PathBuf>) {
+        if self.line.is_some() {
+            return;
+        }
+        let path = match path {
+            Some(p) => p,
+            None => {
+                if let crate::ui::files::Dialogs::Missing(why) = &self.station().dialogs {
+                    let why = why.clone();
+                    self.station_mut().notify(Notice::error(Text::new(
+                        format!("no file dialog: {why}"),
+                        format!("无法打开文件对话框:{why}"),
+                    )));
+                    return;
+                }
+                let dialog = rfd::FileDialog::new().add_filter("station bundle (ron)", &["ron"]);
+                let dialog = match crate::system::presets_dir() {
+                    Some(dir) => dialog.set_directory(dir),
+                    None => dialog,
+                };
+                match dialog.pick_file() {
+                    Some(p) => p,
+                    None => return,
+                }
+            }
+        };
+        let records = self
+            .settings
+            .file(crate::ui::settings::FileKind::Records)
+            .map(str::to_string);
+        let ports = self.station().link.port_opener.clone();
+        match crate::ui::line::open(&path, &self.state.registry, &ports, records.as_deref()) {
+            Ok(mut line) => {
+                line.lang = self.settings.lang;
+                self.line = Some(Box::new(line));
+            }
+            Err(e) => self.station_mut().notify(Notice::error(Text::new(
+                format!("station not opened: {e}"),
+                format!("工位未打开:{e}"),
             ))),
         }
     }

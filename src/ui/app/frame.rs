@@ -40,6 +40,9 @@ impl App {
             tour.step(ctx, self);
             self.tour = Some(tour);
         }
+        if let Some(line) = &mut self.line {
+            line.logic(ctx);
+        }
     }
 
     /// The title, set only on a change: a viewport command every frame would keep the window
@@ -73,8 +76,13 @@ impl App {
         (live || station.job_progress().is_some()).then_some(repaint::LIVE)
     }
 
-    /// Draws the window and applies what the panels asked for.
+    /// Draws the window and applies what the panels asked for; with a station open, the
+    /// station (and the way back to the panels) instead.
     pub fn ui(&mut self, ui: &mut egui::Ui) {
+        if self.line.is_some() {
+            self.line_ui(ui);
+            return;
+        }
         let lang = self.settings.lang;
         let mut actions = Vec::new();
         let (settings, station) = (&self.settings, self.state.station());
@@ -107,6 +115,36 @@ impl App {
         }
         if let Some(tour) = &mut self.tour {
             tour.after_ui(ui.ctx());
+        }
+    }
+}
+
+impl App {
+    /// The station opened with File > Open station, under a bar with Close station (enabled
+    /// while no slot runs a unit).
+    fn line_ui(&mut self, ui: &mut egui::Ui) {
+        let Some(line) = &mut self.line else {
+            return;
+        };
+        let zh = line.lang == crate::i18n::Lang::Zh;
+        let mut close = false;
+        egui::Panel::top("station-close").show(ui, |ui| {
+            ui.horizontal(|ui| {
+                let idle = !line.running();
+                let button = egui::Button::new(if zh { "关闭工位" } else { "Close station" });
+                close = ui
+                    .add_enabled(idle, button)
+                    .on_disabled_hover_text(if zh {
+                        "有工位正在测试:先停止它们"
+                    } else {
+                        "a slot is running a unit: STOP it first"
+                    })
+                    .clicked();
+            });
+        });
+        line.ui(ui);
+        if close {
+            self.apply(crate::ui::Action::CloseStation);
         }
     }
 }

@@ -90,6 +90,8 @@ pub struct App {
     pub connection: connection::ConnectionBar,
     /// The screenshot tour, when the window was opened for one.
     pub tour: Option<tour::Tour>,
+    /// The line station opened with File > Open station, shown in place of the panels.
+    pub line: Option<Box<crate::ui::line::LineStation>>,
     /// The window title last set.
     title: String,
 }
@@ -117,6 +119,7 @@ impl App {
             settings,
             state,
             tour: None,
+            line: None,
             title: String::new(),
         };
         app.restore_files();

@@ -1,8 +1,11 @@
 //! The engineer's unlock of the station window: the operator view is locked; an engineer types
 //! the password whose SHA-256 the bundle holds (`engineer_password_sha256`) and sees each slot's
-//! configuration (port, profile, plan and its steps) until locking again. Each unlock and each
-//! refused password is logged (`log::warn`, shown with `RUST_LOG=botbench=warn`) with the time.
+//! configuration (port, profile, plan and its steps), and may open any idle slot in the
+//! engineer view ([`super::lent`]), until locking again. Each unlock, refused password and lock
+//! is returned as an [`Access`] for the station to record
+//! ([`crate::ops::station::access`]).
 
+use crate::ops::station::Access;
 use eframe::egui;
 
 /// The lock's state.
@@ -26,31 +29,36 @@ impl Engineer {
         self.unlocked_at.is_some()
     }
 
-    /// Tries `typed` as the password of station `id`.
-    pub fn try_unlock(&mut self, id: &str) {
+    /// Tries `typed` as the engineer's password: [`Access::Unlock`], or [`Access::Refused`]
+    /// (a wrong password, or none in the bundle).
+    pub fn try_unlock(&mut self) -> Access {
         let typed = std::mem::take(&mut self.typed);
         let Some(want) = &self.password_sha256 else {
             self.said = Some((
                 "the bundle holds no engineer password".into(),
                 "配置包未设置工程师密码".into(),
             ));
-            return;
+            return Access::Refused {
+                why: "the bundle holds no engineer password".into(),
+            };
         };
         let got = crate::ops::records::record::sha256_hex(typed.as_bytes());
-        let now = chrono::Local::now().format("%H:%M:%S").to_string();
         if &got == want {
-            log::warn!("station {id}: engineer view unlocked at {now}");
-            self.unlocked_at = Some(now);
+            self.unlocked_at = Some(chrono::Local::now().format("%H:%M:%S").to_string());
             self.asking = false;
             self.said = None;
+            Access::Unlock
         } else {
-            log::warn!("station {id}: wrong engineer password at {now}");
             self.said = Some(("wrong password".into(), "密码错误".into()));
+            Access::Refused {
+                why: "wrong password".into(),
+            }
         }
     }
 
-    /// The title bar's part: the unlock button and field, or the lock button.
-    pub fn show(&mut self, ui: &mut egui::Ui, id: &str, zh: bool) {
+    /// The title bar's part: the unlock button and field, or the lock button. Returns an
+    /// unlock, a refused password or a lock, when one happened.
+    pub fn show(&mut self, ui: &mut egui::Ui, zh: bool) -> Option<Access> {
         if let Some(at) = &self.unlocked_at {
             ui.label(if zh {
                 format!("工程师视图(自 {at})")
@@ -59,8 +67,9 @@ impl Engineer {
             });
             if ui.button(if zh { "锁定" } else { "Lock" }).clicked() {
                 self.unlocked_at = None;
+                return Some(Access::Lock);
             }
-            return;
+            return None;
         }
         if !self.asking {
             if ui
@@ -73,7 +82,7 @@ impl Engineer {
             {
                 self.asking = true;
             }
-            return;
+            return None;
         }
         let field = ui.add(
             egui::TextEdit::singleline(&mut self.typed)
@@ -82,8 +91,9 @@ impl Engineer {
                 .desired_width(140.0),
         );
         let entered = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+        let mut tried = None;
         if ui.button(if zh { "解锁" } else { "Unlock" }).clicked() || entered {
-            self.try_unlock(id);
+            tried = Some(self.try_unlock());
         }
         if let Some((en, zh_text)) = &self.said {
             ui.colored_label(
@@ -91,5 +101,6 @@ impl Engineer {
                 if zh { zh_text } else { en },
             );
         }
+        tried
     }
 }

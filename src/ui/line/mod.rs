@@ -5,13 +5,19 @@
 //! window only shows their events and sends their commands.
 //!
 //! The operator view holds only the scan and answer fields, Start, STOP, the banners and each
-//! slot's history; nothing of ports, plans or settings can be changed from it.
+//! slot's history; nothing of ports, plans or settings can be changed from it. Unlocked, the
+//! engineer sees each slot's configuration and may open an idle slot in today's window
+//! ([`lent`]: the slot lends its port); each unlock, refused password, lock and lent slot is
+//! recorded ([`crate::ops::station::access`]).
 
 mod engineer;
+pub mod lent;
+mod open;
 pub mod shots;
 mod tile;
 
 pub use engineer::Engineer;
+pub use open::open;
 
 use crate::i18n::{Lang, Text};
 use crate::ops::station::{Answer, Command, Event, SlotHandle, What};
@@ -29,6 +35,8 @@ pub struct TileState {
     pub slot: String,
     /// The fixture's name.
     pub fixture: String,
+    /// The fixture's name in 中文 (the English one when the bundle gives none).
+    pub fixture_zh: String,
     /// Whether its port is there, and the path or why not.
     pub port: Option<(bool, String)>,
     /// How it waits for a unit (`button`, `scan`, `auto`), while idle.
@@ -55,6 +63,8 @@ pub struct TileState {
     pub kept_elsewhere: Option<String>,
     /// The slot's configuration, shown in the engineer view: port, profile, plan and steps.
     pub details: String,
+    /// The slot's device profile's id (the engineer view speaks to the device with it).
+    pub profile: String,
 }
 
 /// The station window's state.
@@ -75,6 +85,11 @@ pub struct LineStation {
     pub slot_typed: Option<String>,
     /// The screenshot tour, when asked for (`--screenshots DIR`).
     pub shots: Option<shots::StationShots>,
+    /// The slot open in the engineer view, if any.
+    pub lent: Option<lent::Lent>,
+    /// Where the engineer's unlocks, refused passwords and locks are recorded (the station's
+    /// records); `None`: only logged.
+    pub access: Option<crate::ops::station::StationContext>,
     slots: Vec<SlotHandle>,
     events: Receiver<Event>,
     forwarder: Option<crate::ops::station::Forwarder>,
@@ -104,6 +119,7 @@ impl LineStation {
             .map(|s| TileState {
                 slot: s.name.clone(),
                 fixture: s.fixture.clone(),
+                fixture_zh: s.fixture_zh.clone(),
                 details: format!(
                     "{} · {} · {}: {}",
                     s.port.said(),
@@ -111,6 +127,7 @@ impl LineStation {
                     s.plan_name,
                     s.plan.step_names()
                 ),
+                profile: s.profile.id.clone(),
                 ..TileState::default()
             })
             .collect();
@@ -126,6 +143,8 @@ impl LineStation {
             records: None,
             slot_typed: None,
             shots: None,
+            lent: None,
+            access: None,
             slots,
             events,
             forwarder: None,
@@ -139,6 +158,7 @@ impl LineStation {
     ) -> Self {
         let mut st = Self::new(bundle, started.slots, started.events);
         st.forwarder = Some(started.forwarder);
+        st.access = Some(started.context);
         st
     }
 
@@ -151,7 +171,58 @@ impl LineStation {
             tour.step(ctx, self);
             self.shots = Some(tour);
         }
+        if let Some(lent) = &mut self.lent {
+            let opener = self.slots.iter().find(|s| s.name == lent.slot);
+            let profile = self.tiles.iter().find(|t| t.slot == lent.slot);
+            if let (Some(handle), Some(tile)) = (opener, profile) {
+                lent.logic(ctx, &handle.opener, &tile.profile, self.lang);
+            }
+        }
         ctx.request_repaint_after(std::time::Duration::from_millis(100));
+    }
+
+    /// Records `access` in the station's records (and the log).
+    fn record(&self, access: &crate::ops::station::Access) {
+        match &self.access {
+            Some(station) => crate::ops::station::access::keep(station, access),
+            None => log::warn!("station {}: {} (no records store)", self.id, access.said()),
+        }
+    }
+
+    /// Asks idle slot `slot` for the engineer view (only unlocked, one slot at a time).
+    pub fn open_engineer_view(&mut self, slot: &str) {
+        if self.engineer.unlocked() && self.lent.is_none() {
+            self.send(slot, Command::Lend);
+            self.lent = Some(lent::Lent::asked(slot));
+        }
+    }
+
+    /// Closes the engineer view: its window (and link) first, then the slot is given back.
+    pub fn close_engineer_view(&mut self) {
+        let Some(lent) = self.lent.take() else {
+            return;
+        };
+        let slot = lent.slot.clone();
+        let given_up = lent.port.is_some();
+        // The view's window and its link go first: the port is free when the slot reopens it.
+        drop(lent);
+        // A slot that has not given up its port yet gets it back when it does (`on_lent`).
+        if given_up {
+            self.send(&slot, Command::Return);
+            self.record(&crate::ops::station::Access::SlotReturned { slot });
+        }
+    }
+
+    /// A slot said it gave up its port: to the engineer view if it asked for it, else back.
+    fn on_lent(&mut self, slot: String, port: String) {
+        match &mut self.lent {
+            Some(lent) if lent.slot == slot && lent.port.is_none() => {
+                lent.port = Some(port);
+                self.record(&crate::ops::station::Access::SlotOpened { slot });
+            }
+            // Asked for earlier and no longer wanted.
+            _ => self.send(&slot, Command::Return),
+        }
     }
 
     fn on_event(&mut self, ev: Event) {
@@ -167,6 +238,19 @@ impl LineStation {
                 why,
             });
             return;
+        }
+        if let What::Lent { port } = ev.what {
+            self.on_lent(ev.slot, port);
+            return;
+        }
+        if matches!(ev.what, What::Unit { .. })
+            && self
+                .lent
+                .as_ref()
+                .is_some_and(|l| l.slot == ev.slot && l.port.is_none())
+        {
+            // The slot started a unit before it saw the ask: it is not lent.
+            self.lent = None;
         }
         let Some(t) = self.tiles.iter_mut().find(|t| t.slot == ev.slot) else {
             return;
@@ -226,7 +310,7 @@ impl LineStation {
                 t.asking = None;
                 t.stopped = Some(why);
             }
-            What::Records { .. } => {}
+            What::Records { .. } | What::Lent { .. } => {}
         }
     }
 
@@ -323,6 +407,47 @@ impl LineStation {
         );
     }
 
+    /// The bar's line while a slot is in the engineer view: which, and the way back.
+    fn lent_line(&mut self, ui: &mut egui::Ui, zh: bool) {
+        let Some(lent) = &self.lent else {
+            return;
+        };
+        let fixture = self
+            .tiles
+            .iter()
+            .find(|t| t.slot == lent.slot)
+            .map(|t| if zh { &t.fixture_zh } else { &t.fixture }.clone())
+            .unwrap_or_default();
+        let mut back = false;
+        ui.horizontal(|ui| {
+            ui.label(
+                egui::RichText::new(if zh {
+                    format!("工程师视图:工位 {} {fixture}(该工位暂停)", lent.slot)
+                } else {
+                    format!(
+                        "Engineer view: slot {} {fixture} (the slot waits)",
+                        lent.slot
+                    )
+                })
+                .size(18.0)
+                .strong(),
+            );
+            back = ui
+                .button(
+                    egui::RichText::new(if zh {
+                        "返回工位"
+                    } else {
+                        "Back to the station"
+                    })
+                    .size(18.0),
+                )
+                .clicked();
+        });
+        if back {
+            self.close_engineer_view();
+        }
+    }
+
     /// Draws the station: the title bar with STOP ALL, then the tiles.
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         self.keys(ui.ctx());
@@ -353,10 +478,21 @@ impl LineStation {
                 if ui.button(lang).clicked() {
                     self.lang = if zh { Lang::En } else { Lang::Zh };
                 }
-                self.engineer.show(ui, &self.id, zh);
+                if let Some(access) = self.engineer.show(ui, zh) {
+                    self.record(&access);
+                    if access == crate::ops::station::Access::Lock {
+                        // Locked: back to the operator view; the slot resumes.
+                        self.close_engineer_view();
+                    }
+                }
             });
             self.records_line(ui, zh);
+            self.lent_line(ui, zh);
         });
+        if let Some(lent) = &mut self.lent {
+            lent.ui(ui, zh);
+            return;
+        }
         egui::CentralPanel::default().show(ui, |ui| {
             let n = self.tiles.len().max(1);
             let columns = if ui.available_width() > 1100.0 {
@@ -378,6 +514,7 @@ impl LineStation {
                 match action {
                     tile::Action::Stop => self.stop(&slot),
                     tile::Action::Send(c) => self.send(&slot, c),
+                    tile::Action::Engineer => self.open_engineer_view(&slot),
                 }
             }
         });

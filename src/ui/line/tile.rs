@@ -13,6 +13,8 @@ pub enum Action {
     Stop,
     /// Start, or an answer.
     Send(Command),
+    /// Open this slot in the engineer view (unlocked only).
+    Engineer,
 }
 
 const PASS_GREEN: Color32 = Color32::from_rgb(20, 150, 40);
@@ -35,13 +37,24 @@ pub fn show(
                 "{} {}  {}",
                 if zh { "工位" } else { "Slot" },
                 t.slot,
-                t.fixture
+                if zh { &t.fixture_zh } else { &t.fixture }
             );
             ui.label(RichText::new(title).size(24.0).strong());
         });
         port_line(ui, t, zh);
         if engineer {
             ui.label(RichText::new(&t.details).monospace());
+            // Only an idle slot with its port is lent: a unit running is never interrupted.
+            let idle =
+                t.waiting.is_some() && t.stopped.is_none() && matches!(t.port, Some((true, _)));
+            let open = egui::Button::new(if zh {
+                "在工程师视图中打开"
+            } else {
+                "Open in engineer view"
+            });
+            if ui.add_enabled(idle, open).clicked() {
+                out.push((t.slot.clone(), Action::Engineer));
+            }
         }
         let unit = t.serial.clone().unwrap_or_else(|| "—".into());
         ui.label(
@@ -98,7 +111,8 @@ pub fn show(
 
 fn port_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {
     let text = match (&t.port, &t.stopped) {
-        (_, Some(why)) => format!("{} {why}", if zh { "已停止:" } else { "stopped:" }),
+        (_, Some(why)) if zh => format!("已停止:{}", stopped_zh(why)),
+        (_, Some(why)) => format!("stopped: {why}"),
         (Some((true, path)), _) => format!("{} {path}", if zh { "端口" } else { "port" }),
         (Some((false, why)), _) => {
             format!("{} {why}", if zh { "端口缺失:" } else { "PORT MISSING:" })
@@ -117,6 +131,16 @@ fn port_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {
         ui.visuals().text_color()
     };
     ui.label(RichText::new(text).color(color));
+}
+
+/// Why a slot stopped, in 中文: the runner's words (`stopped`, `one unit run (--once)`)
+/// translated; anything else as it is.
+fn stopped_zh(why: &str) -> String {
+    match why {
+        "stopped" => "已按停止".into(),
+        "one unit run (--once)" => "已测完一个产品(--once)".into(),
+        other => other.to_string(),
+    }
 }
 
 fn step_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {

@@ -1,0 +1,86 @@
+//! A slot lent to the engineer view: today's window (the ordinary panels, [`crate::ui::App`])
+//! on that slot's device, inside the station window.
+//!
+//! Why lending: a slot's link belongs to its runner thread, and a port has one owner. So the
+//! engineer asks for an idle slot ([`crate::ops::station::Command::Lend`]); its runner closes its
+//! port and says where it was ([`crate::ops::station::What::Lent`]); the engineer view then
+//! opens that port with the slot's own opener (a simulated slot's device is the same unit) and
+//! profile, as an ordinary window's station would. Closing the view (Back to the station, or
+//! Lock) drops that window's link first, then gives the slot back
+//! ([`crate::ops::station::Command::Return`]): the runner opens its port again and waits for
+//! the next unit. The other slots run on meanwhile. A slot running a unit is not lent: the
+//! button shows only while the slot waits for a unit.
+
+use crate::ui::App;
+use eframe::egui;
+
+/// The engineer view of one slot.
+pub struct Lent {
+    /// The slot's name.
+    pub slot: String,
+    /// The port the runner gave up; `None` until it has ([`crate::ops::station::What::Lent`]).
+    pub port: Option<String>,
+    /// Today's window on the slot's device, once the port is given up.
+    pub app: Option<Box<App>>,
+    /// Why the window could not be made (its profiles did not load).
+    pub error: Option<String>,
+}
+
+impl Lent {
+    /// Slot `slot` asked for.
+    pub fn asked(slot: &str) -> Self {
+        Self {
+            slot: slot.to_string(),
+            port: None,
+            app: None,
+            error: None,
+        }
+    }
+
+    /// Once the port is given up: today's window on it (`opener` opens it, `profile` speaks to
+    /// it, shown in `lang`), then its frame's work.
+    pub fn logic(
+        &mut self,
+        ctx: &egui::Context,
+        opener: &crate::link::PortOpener,
+        profile: &str,
+        lang: crate::i18n::Lang,
+    ) {
+        if let (Some(port), None, None) = (&self.port, &self.app, &self.error) {
+            let settings = crate::ui::Settings {
+                target: crate::ui::Target::Port(port.clone()),
+                profile: profile.to_string(),
+                lang,
+                ..crate::ui::Settings::default()
+            };
+            match App::new(ctx, settings, opener.clone()) {
+                Ok(app) => self.app = Some(Box::new(app)),
+                Err(e) => self.error = Some(e.to_string()),
+            }
+        }
+        if let Some(app) = &mut self.app {
+            app.logic(ctx);
+        }
+    }
+
+    /// The view under the station's bar: today's window, or why it is not there yet.
+    pub fn ui(&mut self, ui: &mut egui::Ui, zh: bool) {
+        match (&mut self.app, &self.error) {
+            (Some(app), _) => app.ui(ui),
+            (None, Some(e)) => {
+                egui::CentralPanel::default().show(ui, |ui| {
+                    ui.colored_label(egui::Color32::from_rgb(200, 30, 30), e.as_str());
+                });
+            }
+            (None, None) => {
+                egui::CentralPanel::default().show(ui, |ui| {
+                    ui.label(if zh {
+                        format!("等待工位 {} 释放端口…", self.slot)
+                    } else {
+                        format!("waiting for slot {} to give up its port…", self.slot)
+                    });
+                });
+            }
+        }
+    }
+}
