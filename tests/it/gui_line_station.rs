@@ -438,3 +438,40 @@ fn file_open_station_shows_a_bundle_refuses_a_bad_one_and_closes_only_when_idle(
     assert!(app(&h).line.is_none());
     assert!(h.query_by_label("Margin").is_some());
 }
+
+#[test]
+fn the_port_line_and_the_history_are_as_tall_as_the_unit_line_and_fixtures_speak_chinese() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = demo_window(dir.path(), egui::vec2(1280.0, 800.0), Lang::Zh);
+    step_until(&mut h, "slot 3's verdict", |st| {
+        st.tiles[2].verdict.is_some()
+    });
+    h.step();
+    h.step();
+    // Read from two metres: the port line (here: why the slot stopped, in 中文) and a history entry are no smaller than the unit's
+    // serial line (20 points), not egui's body text.
+    let unit = h
+        .query_all_by_label_contains("序列号")
+        .next()
+        .unwrap()
+        .rect();
+    let port = h
+        .query_all_by_label_contains("已测完一个产品(--once)")
+        .next()
+        .unwrap()
+        .rect();
+    let history = h
+        .query_all_by_label_contains(" PASS")
+        .last()
+        .unwrap()
+        .rect();
+    assert!(port.height() >= unit.height() - 0.5, "{port:?} {unit:?}");
+    assert!(
+        history.height() >= unit.height() - 0.5,
+        "{history:?} {unit:?}"
+    );
+    // The bundle's 中文 fixture names.
+    assert!(h.query_by_label_contains("扫地机 MCU 来料检验").is_some());
+    assert!(h.query_by_label_contains("Vacuum MCU incoming").is_none());
+    h.state().stop_all();
+}

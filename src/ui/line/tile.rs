@@ -19,6 +19,9 @@ pub enum Action {
 
 const PASS_GREEN: Color32 = Color32::from_rgb(20, 150, 40);
 const FAIL_RED: Color32 = Color32::from_rgb(200, 30, 30);
+/// The port/state line's and the slot history's text size, points: read from two metres, as
+/// the unit and step lines (20 and 18); egui's body text (14) is not.
+pub const READABLE: f32 = 20.0;
 
 /// Draws `t`; returns what the operator asked, with the slot's name.
 /// With `engineer` (unlocked), the slot's configuration too.
@@ -130,7 +133,7 @@ fn port_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {
     } else {
         ui.visuals().text_color()
     };
-    ui.label(RichText::new(text).color(color));
+    ui.label(RichText::new(text).size(READABLE).color(color));
 }
 
 /// Why a slot stopped, in 中文: the runner's words (`stopped`, `one unit run (--once)`)
@@ -257,14 +260,19 @@ fn history(ui: &mut egui::Ui, t: &TileState, zh: bool) {
         return;
     }
     ui.horizontal_wrapped(|ui| {
-        ui.label(if zh { "记录:" } else { "History:" });
+        ui.label(RichText::new(if zh { "记录:" } else { "History:" }).size(READABLE));
         for (pass, unit) in &t.history {
             let (word, color) = if *pass {
                 ("PASS", PASS_GREEN)
             } else {
                 ("FAIL", FAIL_RED)
             };
-            ui.label(RichText::new(format!("{unit} {word}")).color(color));
+            ui.label(
+                RichText::new(format!("{unit} {word}"))
+                    .size(READABLE)
+                    .strong()
+                    .color(color),
+            );
         }
     });
 }
