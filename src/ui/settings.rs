@@ -41,6 +41,8 @@ pub struct Settings {
     pub nav_open: bool,
     /// The files last used, by purpose ([`FileKind`]).
     pub files: BTreeMap<FileKind, String>,
+    /// The operator's choice of a station's sound on each verdict (`None`: the bundle's).
+    pub station_sound: Option<bool>,
 }
 
 /// What a remembered file is for.
@@ -82,6 +84,7 @@ impl Default for Settings {
             window_secs: 60.0,
             nav_open: true,
             files: BTreeMap::new(),
+            station_sound: None,
         }
     }
 }

@@ -10,6 +10,7 @@ use botbench::ops::records::{Recorder, RunContext, SqliteStore, Store};
 use botbench::ops::station::{self, LoadContext};
 use botbench::sim::SimKind;
 use botbench::ui::line::LineStation;
+use botbench::ui::line::sound::{Tone, VerdictSound};
 use eframe::egui;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
@@ -54,6 +55,7 @@ fn window_of(
         );
     }
     let mut st = LineStation::new(&bundle, slots, rx);
+    st.sounder = Box::new(botbench::ui::line::sound::Silent);
     st.lang = lang;
     st.access = Some(context);
     Harness::builder().with_size(size).build_ui_state(
@@ -443,8 +445,9 @@ fn file_open_station_shows_a_bundle_refuses_a_bad_one_and_closes_only_when_idle(
 fn the_port_line_and_the_history_are_as_tall_as_the_unit_line_and_fixtures_speak_chinese() {
     let dir = tempfile::tempdir().unwrap();
     let mut h = demo_window(dir.path(), egui::vec2(1280.0, 800.0), Lang::Zh);
-    step_until(&mut h, "slot 3's verdict", |st| {
-        st.tiles[2].verdict.is_some()
+    // The verdict, then the slot stops (`--once`): its port line says so.
+    step_until(&mut h, "slot 3's verdict and stop", |st| {
+        st.tiles[2].verdict.is_some() && st.tiles[2].stopped.is_some()
     });
     h.step();
     h.step();
@@ -474,4 +477,135 @@ fn the_port_line_and_the_history_are_as_tall_as_the_unit_line_and_fixtures_speak
     assert!(h.query_by_label_contains("扫地机 MCU 来料检验").is_some());
     assert!(h.query_by_label_contains("Vacuum MCU incoming").is_none());
     h.state().stop_all();
+}
+
+/// The tones a station window asked for.
+#[derive(Clone, Default)]
+struct Heard(std::sync::Arc<std::sync::Mutex<Vec<Tone>>>);
+
+impl VerdictSound for Heard {
+    fn play(&mut self, tone: Tone) {
+        self.0.lock().unwrap().push(tone);
+    }
+}
+
+impl Heard {
+    fn tones(&self) -> Vec<Tone> {
+        self.0.lock().unwrap().clone()
+    }
+}
+
+/// The demo bundle's window with no slots running: its events come from the test.
+fn sounding_window(
+    heard: &Heard,
+) -> (
+    Harness<'static, LineStation>,
+    crossbeam_channel::Sender<station::Event>,
+) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/demo-station.ron");
+    let registry = botbench::profile::Registry::builtin().unwrap();
+    let sims: Vec<(&str, &str)> = SimKind::ALL
+        .iter()
+        .map(|k| (k.name(), k.profile_id()))
+        .collect();
+    let cx = LoadContext {
+        registry: &registry,
+        simulated: &sims,
+    };
+    let bundle = station::load(&path, &cx).unwrap();
+    assert!(bundle.sound, "the demo bundle sounds its verdicts");
+    let (tx, rx) = crossbeam_channel::unbounded();
+    let mut st = LineStation::new(&bundle, Vec::new(), rx);
+    st.sounder = Box::new(heard.clone());
+    let h = Harness::builder()
+        .with_size(egui::vec2(1280.0, 800.0))
+        .build_ui_state(
+            |ui, st: &mut LineStation| {
+                botbench::i18n::install_cjk_font(ui.ctx());
+                st.logic(ui.ctx());
+                st.ui(ui);
+            },
+            st,
+        );
+    (h, tx)
+}
+
+fn verdict(slot: &str, pass: bool) -> station::Event {
+    station::Event {
+        slot: slot.into(),
+        what: station::What::Verdict {
+            pass,
+            serial: Some(format!("SN-{slot}")),
+            failed_step: (!pass).then(|| "identify".into()),
+            failed_step_zh: None,
+            reason: (!pass).then(|| "wrong build".into()),
+            earlier_runs: None,
+            record: "r".into(),
+            kept: "record saved".into(),
+            stored: true,
+        },
+    }
+}
+
+#[test]
+fn each_verdict_asks_once_for_its_sound_and_the_operator_may_mute_it() {
+    let heard = Heard::default();
+    let (mut h, tx) = sounding_window(&heard);
+    tx.send(verdict("1", true)).unwrap();
+    tx.send(verdict("2", false)).unwrap();
+    for _ in 0..5 {
+        h.step();
+    }
+    // Once per verdict, not once per frame while its banner stands.
+    assert_eq!(heard.tones(), vec![Tone::Pass, Tone::Fail]);
+    // The operator mutes it on the bar: the next verdicts are silent, and the choice is kept.
+    h.get_by_label("Sound on verdict").click();
+    h.step();
+    assert!(!h.state().sound);
+    assert_eq!(h.state().sound_chosen, Some(false));
+    tx.send(verdict("1", false)).unwrap();
+    tx.send(verdict("3", true)).unwrap();
+    for _ in 0..5 {
+        h.step();
+    }
+    assert_eq!(heard.tones().len(), 2, "muted: {:?}", heard.tones());
+    assert_eq!(h.state().tiles[2].verdict.as_ref().map(|v| v.0), Some(true));
+    // Turned on again, the next one is heard.
+    h.get_by_label("Sound on verdict").click();
+    h.step();
+    tx.send(verdict("3", false)).unwrap();
+    h.step();
+    h.step();
+    assert_eq!(heard.tones().last(), Some(&Tone::Fail));
+    assert_eq!(heard.tones().len(), 3);
+}
+
+#[test]
+fn a_bundle_may_start_silent_and_a_saved_choice_outranks_it() {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/demo-station.ron"),
+    )
+    .unwrap()
+    .replace("    sound: true,", "    sound: false,");
+    // The files it names are found in the shipped presets folder.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("demo-station.ron");
+    std::fs::write(&path, text).unwrap();
+    let registry = botbench::profile::Registry::builtin().unwrap();
+    let sims: Vec<(&str, &str)> = SimKind::ALL
+        .iter()
+        .map(|k| (k.name(), k.profile_id()))
+        .collect();
+    let cx = LoadContext {
+        registry: &registry,
+        simulated: &sims,
+    };
+    let bundle = station::load(&path, &cx).unwrap();
+    assert!(!bundle.sound);
+    let (_tx, rx) = crossbeam_channel::unbounded();
+    let st = LineStation::new(&bundle, Vec::new(), rx);
+    assert!(!st.sound);
+    let st = st.with_sound_chosen(Some(true));
+    assert!(st.sound);
+    assert_eq!(st.sound_chosen, Some(true));
 }

@@ -27,6 +27,10 @@ pub struct BundleDoc {
     /// operator view (`botbench station password` prints it); none: the settings' one.
     #[serde(default)]
     pub engineer_password_sha256: Option<String>,
+    /// A short sound on each verdict in the window (default `true`); the operator may turn
+    /// it off or on, and the window keeps that choice.
+    #[serde(default)]
+    pub sound: Option<bool>,
     /// Pinned SHA-256 of named files (the path as written in the bundle → 64 hex digits): a
     /// file that no longer matches refuses the bundle.
     #[serde(default)]

@@ -63,6 +63,9 @@ pub struct Bundle {
     pub records: Option<String>,
     /// SHA-256 of the engineer's password (64 lower-case hex digits), if the bundle gives one.
     pub engineer_password_sha256: Option<String>,
+    /// Whether the window sounds each verdict unless its operator chose otherwise (`sound`,
+    /// default `true`).
+    pub sound: bool,
     /// SHA-256 of the bundle file's own bytes.
     pub text_sha256: String,
     /// The bundle's hash: SHA-256 over its text and every file it names (see
@@ -141,6 +144,7 @@ pub fn load(path: &Path, cx: &LoadContext<'_>) -> Result<Bundle, DocumentError> 
         language: doc.language.unwrap_or_default(),
         records: doc.records.clone(),
         engineer_password_sha256: doc.engineer_password_sha256.clone(),
+        sound: doc.sound.unwrap_or(true),
         text_sha256: crate::ops::records::record::sha256_hex(&bytes),
         sha256: bundle_sha256(&bytes, &files),
         files,

@@ -227,7 +227,8 @@ impl App {
             .map(str::to_string);
         let ports = self.station().link.port_opener.clone();
         match crate::ui::line::open(&path, &self.state.registry, &ports, records.as_deref()) {
-            Ok(mut line) => {
+            Ok(line) => {
+                let mut line = line.with_sound_chosen(self.settings.station_sound);
                 line.lang = self.settings.lang;
                 self.line = Some(Box::new(line));
             }

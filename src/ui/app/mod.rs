@@ -233,6 +233,9 @@ impl eframe::App for App {
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
         // A screenshot tour's panels, sizes and languages are not the user's choice.
         if self.tour.is_none() {
+            if let Some(chosen) = self.line.as_ref().and_then(|l| l.sound_chosen) {
+                self.settings.station_sound = Some(chosen);
+            }
             eframe::set_value(storage, eframe::APP_KEY, &self.settings);
         }
     }

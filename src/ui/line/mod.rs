@@ -14,6 +14,7 @@ mod engineer;
 pub mod lent;
 mod open;
 pub mod shots;
+pub mod sound;
 mod tile;
 
 pub use engineer::Engineer;
@@ -90,6 +91,12 @@ pub struct LineStation {
     /// Where the engineer's unlocks, refused passwords and locks are recorded (the station's
     /// records); `None`: only logged.
     pub access: Option<crate::ops::station::StationContext>,
+    /// Whether each verdict is sounded (the bundle's `sound`, else the operator's choice).
+    pub sound: bool,
+    /// The operator's choice of sound, once made on the bar: kept with the window's settings.
+    pub sound_chosen: Option<bool>,
+    /// What plays the verdict's sound ([`sound::SystemPlayer`]; a counter in tests).
+    pub sounder: Box<dyn sound::VerdictSound>,
     slots: Vec<SlotHandle>,
     events: Receiver<Event>,
     forwarder: Option<crate::ops::station::Forwarder>,
@@ -145,6 +152,9 @@ impl LineStation {
             shots: None,
             lent: None,
             access: None,
+            sound: bundle.sound,
+            sound_chosen: None,
+            sounder: Box::new(sound::SystemPlayer),
             slots,
             events,
             forwarder: None,
@@ -305,6 +315,9 @@ impl LineStation {
                     serial.unwrap_or_else(|| chrono::Local::now().format("%H:%M:%S").to_string());
                 t.history.push_front((pass, unit));
                 t.history.truncate(HISTORY);
+                if self.sound {
+                    self.sounder.play(sound::Tone::of(pass));
+                }
             }
             What::Stopped { why } => {
                 t.asking = None;
@@ -407,6 +420,28 @@ impl LineStation {
         );
     }
 
+    /// The bar's sound box: operators may mute the verdict's sound (it changes nothing of a
+    /// unit's test); the choice is kept with the window's settings.
+    fn sound_box(&mut self, ui: &mut egui::Ui, zh: bool) {
+        let label = if zh {
+            "判定提示音"
+        } else {
+            "Sound on verdict"
+        };
+        if ui.checkbox(&mut self.sound, label).changed() {
+            self.sound_chosen = Some(self.sound);
+        }
+    }
+
+    /// Uses the operator's earlier choice of sound (`None`: the bundle's).
+    pub fn with_sound_chosen(mut self, chosen: Option<bool>) -> Self {
+        if let Some(on) = chosen {
+            self.sound = on;
+            self.sound_chosen = Some(on);
+        }
+        self
+    }
+
     /// The bar's line while a slot is in the engineer view: which, and the way back.
     fn lent_line(&mut self, ui: &mut egui::Ui, zh: bool) {
         let Some(lent) = &self.lent else {
@@ -478,6 +513,7 @@ impl LineStation {
                 if ui.button(lang).clicked() {
                     self.lang = if zh { Lang::En } else { Lang::Zh };
                 }
+                self.sound_box(ui, zh);
                 if let Some(access) = self.engineer.show(ui, zh) {
                     self.record(&access);
                     if access == crate::ops::station::Access::Lock {
@@ -530,6 +566,10 @@ pub fn run(
     screenshots: Option<std::path::PathBuf>,
 ) -> Result<(), String> {
     let mut station = LineStation::started(bundle, started);
+    if screenshots.is_some() {
+        // The tour's verdicts are not a line's: the box is shown as the bundle says, unheard.
+        station.sounder = Box::new(sound::Silent);
+    }
     station.shots = screenshots.map(shots::StationShots::new);
     // `BOTBENCH_WINDOW_SIZE=1024x600`: the window's size where no window manager maximises it
     // (the screenshots under Xvfb).
@@ -555,13 +595,35 @@ pub fn run(
         options,
         Box::new(move |cc| {
             crate::i18n::install_cjk_font(&cc.egui_ctx);
+            let saved: Option<Saved> = cc
+                .storage
+                .and_then(|s| eframe::get_value(s, eframe::APP_KEY));
+            let station = station.with_sound_chosen(saved.and_then(|s| s.sound));
             Ok(Box::new(station))
         }),
     )
     .map_err(|e| e.to_string())
 }
 
+/// What the station window keeps between runs (eframe storage).
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+struct Saved {
+    /// The operator's choice of the verdict's sound (`None`: the bundle's).
+    sound: Option<bool>,
+}
+
 impl eframe::App for LineStation {
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        // A screenshot tour's choices are not the operator's.
+        if self.shots.is_none() {
+            let saved = Saved {
+                sound: self.sound_chosen,
+            };
+            eframe::set_value(storage, eframe::APP_KEY, &saved);
+        }
+    }
+
     fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
         LineStation::logic(self, ctx);
     }
