@@ -7,7 +7,7 @@ use super::servo_bus::{ServoBus, SimServo, builtin_servo_profile};
 use super::solar_cleanbot::SolarCleanbot;
 use super::tuya_mcu::TuyaMcu;
 use super::window_cleaner::WindowCleaner;
-use super::{Faults, SharedDevice, SimKind, SimOptions, SimTransport};
+use super::{Faults, SharedDevice, SimKind, SimOptions, SimTransport, VanishHandle};
 use crate::link::Opener;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -32,6 +32,8 @@ pub struct SimFixture {
     unit: Unit,
     /// Units presented so far (1 for the first).
     units: u32,
+    /// The fixture's adapter pulled: every port opened on it vanishes, for good.
+    unplugged: VanishHandle,
 }
 
 impl SimFixture {
@@ -42,6 +44,7 @@ impl SimFixture {
             kind,
             unit: unit(kind, 1)?,
             units: 1,
+            unplugged: VanishHandle::default(),
         })
     }
 
@@ -60,13 +63,22 @@ impl SimFixture {
     pub fn opener(&self) -> impl Fn(u32) -> Opener + Send + Sync + 'static {
         let device = self.shared();
         let kind = self.kind;
+        let unplugged = self.unplugged.clone();
         move |baud| {
             let device = device.clone();
+            let unplugged = unplugged.clone();
             Box::new(move || {
-                let t = SimTransport::new(device.clone(), baud, Faults::default(), kind.describe());
+                let t = SimTransport::new(device.clone(), baud, Faults::default(), kind.describe())
+                    .with_vanish(unplugged.clone());
                 Ok(Box::new(t) as Box<dyn crate::link::Transport>)
             })
         }
+    }
+
+    /// Pulls the fixture's adapter when its `vanish` is called (from any thread): the slot's
+    /// port fails at its next call (link lost), and so does every later open, for good.
+    pub fn unplug_handle(&self) -> VanishHandle {
+        self.unplugged.clone()
     }
 
     /// Units presented so far.

@@ -505,6 +505,13 @@ impl SimTransport {
         self.wire.device()
     }
 
+    /// The same transport, vanishing when `handle` says so (a fixture's adapter unplugged:
+    /// every transport opened on it shares the handle).
+    pub fn with_vanish(mut self, handle: VanishHandle) -> Self {
+        self.vanished = handle;
+        self
+    }
+
     /// A handle that makes this port vanish, usable from another thread.
     pub fn vanish_handle(&self) -> VanishHandle {
         self.vanished.clone()
