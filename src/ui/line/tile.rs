@@ -118,7 +118,11 @@ fn port_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {
         (_, Some(why)) => format!("stopped: {why}"),
         (Some((true, path)), _) => format!("{} {path}", if zh { "端口" } else { "port" }),
         (Some((false, why)), _) => {
-            format!("{} {why}", if zh { "端口缺失:" } else { "PORT MISSING:" })
+            if zh {
+                format!("端口缺失:{}", port_missing_zh(why))
+            } else {
+                format!("PORT MISSING: {why}")
+            }
         }
         (None, _) => (if zh {
             "正在打开端口…"
@@ -143,6 +147,35 @@ fn stopped_zh(why: &str) -> String {
         "stopped" => "已按停止".into(),
         "one unit run (--once)" => "已测完一个产品(--once)".into(),
         other => other.to_string(),
+    }
+}
+
+/// Why a slot's port is missing, in 中文: the port finder's words (`no adapter at P:
+/// unplugged?`, `no adapter with serial number SN: unplugged?`) translated; anything else as
+/// it is.
+fn port_missing_zh(why: &str) -> String {
+    if let Some(path) = why
+        .strip_prefix("no adapter at ")
+        .and_then(|r| r.strip_suffix(": unplugged?"))
+    {
+        format!("{path} 处没有适配器:已拔出?")
+    } else if let Some(sn) = why
+        .strip_prefix("no adapter with serial number ")
+        .and_then(|r| r.strip_suffix(": unplugged?"))
+    {
+        format!("没有序列号为 {sn} 的适配器:已拔出?")
+    } else {
+        why.to_string()
+    }
+}
+
+/// Why a step failed, in 中文, where the runner's words are known (`link lost during <step>`,
+/// with the step's 中文 name `step_zh`); anything else as it is.
+fn reason_zh(why: &str, step_zh: &str) -> String {
+    if why.starts_with("link lost during ") {
+        format!("{step_zh} 中连接中断")
+    } else {
+        why.to_string()
     }
 }
 
@@ -193,8 +226,13 @@ fn banner(ui: &mut egui::Ui, t: &TileState, zh: bool) {
                         .color(Color32::WHITE),
                 );
                 if let Some(step) = step {
-                    let step = if zh { &step.zh } else { &step.en };
                     let why = reason.as_deref().unwrap_or_default();
+                    let why = if zh {
+                        reason_zh(why, &step.zh)
+                    } else {
+                        why.to_string()
+                    };
+                    let step = if zh { &step.zh } else { &step.en };
                     ui.label(
                         RichText::new(format!("{step}: {why}"))
                             .size(20.0)
@@ -275,4 +313,30 @@ fn history(ui: &mut egui::Ui, t: &TileState, zh: bool) {
             );
         }
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_runner_s_port_and_link_reasons_read_in_chinese() {
+        assert_eq!(
+            port_missing_zh("no adapter at /dev/serial/by-path/x: unplugged?"),
+            "/dev/serial/by-path/x 处没有适配器:已拔出?"
+        );
+        assert_eq!(
+            port_missing_zh("no adapter with serial number A1: unplugged?"),
+            "没有序列号为 A1 的适配器:已拔出?"
+        );
+        assert_eq!(
+            reason_zh("link lost during Write result", "写入结果"),
+            "写入结果 中连接中断"
+        );
+        // Words not known stay as they came.
+        assert_eq!(
+            reason_zh("spray current 0.1 A < 0.2 A", "喷水"),
+            "spray current 0.1 A < 0.2 A"
+        );
+    }
 }
