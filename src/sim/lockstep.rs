@@ -77,6 +77,8 @@ pub(crate) struct State {
     /// The simulator's `written_total` when it took the last clear: the host drops every byte
     /// up to it.
     clear_mark: u64,
+    /// The host's bytes that crossed the pty, compared with what it wrote.
+    pub(crate) crossing: super::crossing::Crossing,
 }
 
 impl Lockstep {
@@ -94,6 +96,7 @@ impl Lockstep {
                 clears_asked: 0,
                 clears_done: 0,
                 clear_mark: 0,
+                crossing: super::crossing::Crossing::default(),
             }),
         })
     }
@@ -313,6 +316,9 @@ impl LockstepPort {
     fn read_in_step(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
         let mut chunk = [0u8; 4096];
         loop {
+            if let Some(changed) = self.lockstep.lock().crossing.changed() {
+                return Err(LinkError::Disconnected(changed.to_string()));
+            }
             self.drop_cleared();
             let clearing = self.is_clearing();
             let n = if clearing {
@@ -415,6 +421,9 @@ impl Transport for LockstepPort {
                 .host(HostAction::Wrote(bytes.to_vec()), Some(self.last_return));
         }
         let result = self.port.write(bytes);
+        if result.is_ok() {
+            self.lockstep.lock().crossing.host_wrote(bytes);
+        }
         self.returns(result)
     }
 

@@ -323,7 +323,14 @@ fn serve_lockstep_loop(mut master: TTYPort, mut wire: Wire, flags: &Flags, locks
             return;
         }
         match master.read(&mut drained) {
-            Ok(_) => {}
+            Ok(n) => {
+                let mut s = lockstep.lock();
+                let before = s.crossing.changed().is_some();
+                s.crossing.pty_delivered(&drained[..n]);
+                if let (false, Some(changed)) = (before, s.crossing.changed()) {
+                    eprintln!("lockstep: {changed}");
+                }
+            }
             Err(e)
                 if matches!(
                     e.kind(),
