@@ -654,7 +654,26 @@ fn selftest_run(
         });
     }
     kept?;
+    if cancel.is_cancelled() && !report.pass {
+        return Err(cancelled_selftest(plan, report));
+    }
     Ok(u8::from(!report.pass))
+}
+
+/// A self-test the operator cancelled (Ctrl-C): `cancelled after N of M steps`, the steps that
+/// ran whole and those that did not (the one the cancel cut counts as not run), exit 130.
+fn cancelled_selftest(plan: &Plan, report: &crate::ops::selftest::Report) -> CliError {
+    let done = if report.aborted.is_some() {
+        report.results.len().saturating_sub(1)
+    } else {
+        report.results.len()
+    };
+    op_error(crate::ops::OpError::cancelled_after(
+        &plan.steps,
+        done,
+        "steps",
+        |s| s.name.clone(),
+    ))
 }
 
 fn yes(b: bool) -> &'static str {

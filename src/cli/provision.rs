@@ -86,12 +86,53 @@ pub(crate) fn run(
             });
         }
         kept?;
+        // A cancel that came after the last servo's last step cancelled nothing.
+        if cancel.is_cancelled() && (!record.result.is_pass() || n < count) {
+            return Err(cancelled_provisioning(&record, n, count));
+        }
         last = Some(record);
     }
     if !port.json && count > 1 {
         outln!("{passed} PASS, {failed} FAIL");
     }
     Ok(u8::from(failed > 0))
+}
+
+/// Provisioning the operator cancelled (Ctrl-C) during servo `n` of `count`: `cancelled after
+/// N of M servos`, what was written to servo `n` (each value with what it held before) and
+/// what was not, exit 130.
+fn cancelled_provisioning(record: &Record, n: u32, count: u32) -> CliError {
+    let written: Vec<String> = record
+        .writes
+        .iter()
+        .map(|(_, w)| match &w.before {
+            Some(before) => format!("{} = {} (was {before})", w.name, w.value),
+            None => format!("{} = {}", w.name, w.value),
+        })
+        .collect();
+    let written = if written.is_empty() {
+        "nothing".to_string()
+    } else {
+        written.join(", ")
+    };
+    let (done, this) = match &record.result {
+        Outcome::Pass => (n, format!("servo {n} provisioned whole")),
+        Outcome::Fail { step, .. } => (
+            n - 1,
+            format!(
+                "servo {n} stopped at {step}, written to it: {written}; not done: the rest of its plan"
+            ),
+        ),
+    };
+    let rest = if n < count {
+        format!("; servos {} to {count} not provisioned", n + 1)
+    } else {
+        String::new()
+    };
+    CliError {
+        code: super::port::EXIT_CANCELLED,
+        message: format!("cancelled after {done} of {count} servos: {this}{rest}"),
+    }
 }
 
 /// Says what the records held of this servo before this run (its serial is read during the

@@ -21,6 +21,11 @@ pub(crate) struct RecordArgs {
     // quote a URL's password.
     #[arg(long, value_name = "FILE|URL")]
     pub records: Option<String>,
+    /// The spool a line server's records wait in on this PC while it cannot be reached (a
+    /// SQLite file; records no store took go to FILE.unsaved). Default: BOTBENCH_SPOOL, else
+    /// spool-<hash of the URL>.sqlite in the user's data folder.
+    #[arg(long, value_name = "FILE")]
+    pub spool: Option<PathBuf>,
     /// This station's id in the record (default: BOTBENCH_STATION).
     #[arg(long, value_name = "ID")]
     pub station: Option<String>,
@@ -83,7 +88,8 @@ impl RecordArgs {
     /// be reached is said, and records wait in the spool.
     pub fn open(&self, quiet: bool) -> Result<Recorder, CliError> {
         let location = self.location()?;
-        let mut recorder = Recorder::open(&location, self.context()).map_err(CliError::input)?;
+        let mut recorder = Recorder::open_spooled(&location, self.context(), self.spool.as_deref())
+            .map_err(CliError::input)?;
         let waiting = recorder.waiting();
         if let Some(e) = line_error(&mut recorder) {
             super::port::warn(&format!(

@@ -37,6 +37,11 @@ pub(crate) struct StationArgs {
     /// Where records go, over the bundle's `records` (a SQLite file or postgres://...).
     #[arg(long, value_name = "FILE|URL")]
     pub records: Option<String>,
+    /// The spool a line server's records wait in on this PC while it cannot be reached (a
+    /// SQLite file). Default: BOTBENCH_SPOOL, else spool-<hash of the URL>.sqlite in the
+    /// user's data folder.
+    #[arg(long, value_name = "FILE")]
+    pub spool: Option<PathBuf>,
     /// Headless: a barcode scanner that is its own device (a serial scanner's tty, e.g.
     /// /dev/ttyACM0): each code it sends, ended by Enter, is taken as a line typed on stdin
     /// (a serial to start a slot, an answer, `PASS`/`FAIL`). A scanner that types as a

@@ -44,7 +44,8 @@ pub(crate) fn start(
         bundle_sha256: Some(bundle.sha256.clone()),
         ..RunContext::default()
     };
-    let recorder = Recorder::open(&location, context).map_err(CliError::input)?;
+    let recorder = Recorder::open_spooled(&location, context, args.spool.as_deref())
+        .map_err(CliError::input)?;
     crate::sim::fixture::start_station(bundle, recorder, operator, ports, once)
         .map_err(CliError::device)
 }

@@ -9,7 +9,10 @@
 //! the instant it was made, in order, and the simulator takes them with those stamps, as the
 //! in-process [`SimTransport`](super::SimTransport) does; and a read whose deadline has passed
 //! waits until the simulator has caught up with that deadline and every byte due by then has
-//! crossed the pty. The bytes still travel through the real pty and serial port code.
+//! crossed the pty. The bytes still travel through the real pty and serial port code; the
+//! device hears the host's bytes from its stamped writes (those that crossed the pty are
+//! drained), so that a loaded machine's late hand-over inside the pty never holds the device
+//! up, and a clear of the input is taken in step too ([`HostAction::Clear`]).
 //!
 //! Used by the tests: [`PtyServer::start_lockstep`](super::PtyServer::start_lockstep) serves a
 //! device this way, and the server's own opener
@@ -26,12 +29,20 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 /// What the host did to its port.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) enum HostAction {
-    /// Wrote this many bytes.
-    Wrote(usize),
+    /// Wrote these bytes. The device hears them from here, at the write's stamp, not from the
+    /// pty: what it hears must not wait on the pty handing the host's bytes over to the
+    /// simulator's side (seen under load: a write whose bytes the simulator's side had still
+    /// not read 10 s later, the device waiting for them all that time).
+    Wrote(Vec<u8>),
     /// Switched to this baud rate.
     Baud(u32),
+    /// Dropped what had arrived ([`Transport::clear_input`]): the device side drops what had
+    /// reached the host by the stamp, and says how many bytes it had written by then
+    /// ([`State::cleared`]), so that the host drops exactly those, however late either thread
+    /// runs.
+    Clear,
 }
 
 /// The state a host and the simulator serving it share.
@@ -60,6 +71,14 @@ pub(crate) struct State {
     serving: bool,
     /// The server is gone (dropped): its pty's path may be another server's now.
     closed: bool,
+    /// Clears the host has asked for, and the simulator has taken, in total.
+    clears_asked: u64,
+    clears_done: u64,
+    /// The simulator's `written_total` when it took the last clear: the host drops every byte
+    /// up to it.
+    clear_mark: u64,
+    /// The host's bytes that crossed the pty, compared with what it wrote.
+    pub(crate) crossing: super::crossing::Crossing,
 }
 
 impl Lockstep {
@@ -74,6 +93,10 @@ impl Lockstep {
                 next_due: None,
                 serving: true,
                 closed: false,
+                clears_asked: 0,
+                clears_done: 0,
+                clear_mark: 0,
+                crossing: super::crossing::Crossing::default(),
             }),
         })
     }
@@ -131,9 +154,41 @@ impl Lockstep {
         }
         s.actions
             .iter()
-            .any(|(at, a)| matches!(a, HostAction::Wrote(_)) && *at <= deadline)
+            .any(|(at, a)| matches!(a, HostAction::Wrote(_) | HostAction::Clear) && *at <= deadline)
             || s.next_due.is_some_and(|t| t <= deadline)
             || s.written.iter().any(|(_, due)| *due <= deadline)
+    }
+}
+
+impl Lockstep {
+    /// What the host is owed by `deadline`, for a diagnosis.
+    fn explain(&self, deadline: Instant) -> String {
+        let s = self.lock();
+        let now = Instant::now();
+        let rel = |t: Instant| {
+            if t >= now {
+                format!("+{:?}", t - now)
+            } else {
+                format!("-{:?}", now - t)
+            }
+        };
+        format!(
+            "deadline {}, read {} of {} written, batches {:?}, actions {:?}, next due {:?}, \
+             serving {}",
+            rel(deadline),
+            s.read_total,
+            s.written_total,
+            s.written
+                .iter()
+                .map(|(t, d)| (*t, rel(*d)))
+                .collect::<Vec<_>>(),
+            s.actions
+                .iter()
+                .map(|(t, a)| (rel(*t), a))
+                .collect::<Vec<_>>(),
+            s.next_due.map(rel),
+            s.serving
+        )
     }
 }
 
@@ -146,6 +201,13 @@ impl State {
             self.written.push_back((self.written_total, due));
             self.seen.push_back(seen);
         }
+    }
+
+    /// The simulator has taken the host's clear: every byte it has written so far is the host's
+    /// to drop (those that had not reached the host by the clear's stamp it has dropped itself).
+    pub(crate) fn cleared(&mut self) {
+        self.clears_done += 1;
+        self.clear_mark = self.written_total;
     }
 
     /// Of the bytes last recorded as written, `n` were dropped (nobody made room for them).
@@ -195,6 +257,8 @@ pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener
             last_return: Instant::now(),
             held: VecDeque::new(),
             arrived: None,
+            clearing: None,
+            discard: 0,
         }) as Box<dyn Transport>)
     })
 }
@@ -226,6 +290,21 @@ pub struct LockstepPort {
     held: VecDeque<u8>,
     /// When the last byte the last read handed over had arrived ([`Transport::arrived_at`]).
     arrived: Option<Instant>,
+    /// The clear asked for (its number) that the simulator has not taken yet: nothing is
+    /// handed over until it has said which bytes the clear drops.
+    clearing: Option<u64>,
+    /// Bytes the last clear drops that have not been read from the pty yet.
+    discard: u64,
+}
+
+impl Drop for LockstepPort {
+    fn drop(&mut self) {
+        // Bytes read from the pty and never handed over are gone with this port: counted as
+        // read, or the next port on this pty would wait for them (seen: a link opened after
+        // another closed with a Tuya MCU's report held spun in every read).
+        let mut s = self.lockstep.lock();
+        s.read_total = (s.read_total + self.held.len() as u64).min(s.written_total);
+    }
 }
 
 impl LockstepPort {
@@ -235,30 +314,86 @@ impl LockstepPort {
     }
 
     fn read_in_step(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
-        let mut until = deadline;
         let mut chunk = [0u8; 4096];
         loop {
-            let n = self.hand_over(buf, deadline);
+            if let Some(changed) = self.lockstep.lock().crossing.changed() {
+                return Err(LinkError::Disconnected(changed.to_string()));
+            }
+            self.drop_cleared();
+            let clearing = self.is_clearing();
+            let n = if clearing {
+                0
+            } else {
+                self.hand_over(buf, deadline)
+            };
             if n > 0 || buf.is_empty() {
                 return Ok(n);
             }
-            let got = self.port.read(&mut chunk, until)?;
-            if got > 0 {
-                self.held.extend(&chunk[..got]);
-                continue;
-            }
             let now = Instant::now();
-            if now < deadline {
-                continue;
-            }
-            // Past CATCH_UP_LIMIT the host reads as from a real port: nothing came in time. A
-            // simulator that never catches up (or bytes the accounting lost) must not hold the
-            // host's thread for ever (a link whose read never returned could not be closed).
-            if !self.lockstep.owes(deadline) || now >= deadline + CATCH_UP_LIMIT {
-                return Ok(0);
-            }
-            until = now + CATCH_UP_POLL;
+            let until = if now < deadline {
+                // While a clear waits for the simulator, look again soon: bytes held may be
+                // the host's as soon as it has said which it drops.
+                if clearing {
+                    deadline.min(now + CATCH_UP_POLL)
+                } else {
+                    deadline
+                }
+            } else {
+                // Past CATCH_UP_LIMIT the host reads as from a real port: nothing came in
+                // time. A simulator that never catches up (or bytes the accounting lost) must
+                // not hold the host's thread for ever (a link whose read never returned could
+                // not be closed).
+                let owed = clearing || self.lockstep.owes(deadline);
+                if owed && now >= deadline + CATCH_UP_LIMIT {
+                    // A simulator that never caught up: what the accounting held, to find why.
+                    eprintln!(
+                        "lockstep: a read still owed bytes {CATCH_UP_LIMIT:?} past its deadline \
+                         (held {}, clearing {:?}, discard {}): {}",
+                        self.held.len(),
+                        self.clearing,
+                        self.discard,
+                        self.lockstep.explain(deadline)
+                    );
+                }
+                if !owed || now >= deadline + CATCH_UP_LIMIT {
+                    return Ok(0);
+                }
+                now + CATCH_UP_POLL
+            };
+            let got = self.port.read(&mut chunk, until)?;
+            self.held.extend(&chunk[..got]);
         }
+    }
+
+    /// Whether a clear still has bytes to drop, or has not been taken by the simulator yet.
+    fn is_clearing(&self) -> bool {
+        self.clearing.is_some() || self.discard > 0
+    }
+
+    /// Drops the held bytes the last clear drops, once the simulator has said which; when the
+    /// simulator no longer serves, everything held (nothing more comes).
+    fn drop_cleared(&mut self) {
+        let mut s = self.lockstep.lock();
+        if let Some(asked) = self.clearing {
+            if !s.serving {
+                self.clearing = None;
+                self.discard = 0;
+                self.held.clear();
+                s.read_total = s.written_total;
+                return;
+            }
+            if s.clears_done < asked {
+                return;
+            }
+            self.clearing = None;
+            self.discard = s.clear_mark.saturating_sub(s.read_total);
+        }
+        let k = usize::try_from(self.discard)
+            .unwrap_or(usize::MAX)
+            .min(self.held.len());
+        self.held.drain(..k);
+        self.discard -= k as u64;
+        s.read_total += k as u64;
     }
 
     /// Hands the host the held bytes that were due by `deadline` (as many as `buf` takes).
@@ -283,9 +418,12 @@ impl Transport for LockstepPort {
     fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
         if !bytes.is_empty() {
             self.lockstep
-                .host(HostAction::Wrote(bytes.len()), Some(self.last_return));
+                .host(HostAction::Wrote(bytes.to_vec()), Some(self.last_return));
         }
         let result = self.port.write(bytes);
+        if result.is_ok() {
+            self.lockstep.lock().crossing.host_wrote(bytes);
+        }
         self.returns(result)
     }
 
@@ -304,8 +442,29 @@ impl Transport for LockstepPort {
         self.port.baud()
     }
 
+    /// In step: what had reached the host by now is dropped, whether the simulator's thread
+    /// has written it to the pty yet or not (a starved simulator writes it late), and nothing
+    /// that reaches the host later is (the bytes stay in the pty, counted). The simulator takes
+    /// the clear at its stamp and says how many of its bytes it covers; the reads that follow
+    /// drop those first. With the simulator gone, the pty is flushed.
     fn clear_input(&mut self) -> Result<(), LinkError> {
+        let serving = {
+            let mut s = self.lockstep.lock();
+            if s.serving {
+                let at = Instant::now();
+                let at = s.actions.back().map_or(at, |(last, _)| at.max(*last));
+                s.actions.push_back((at, HostAction::Clear));
+                s.clears_asked += 1;
+                self.clearing = Some(s.clears_asked);
+            }
+            s.serving
+        };
+        if serving {
+            return self.returns(Ok(()));
+        }
         self.held.clear();
+        self.clearing = None;
+        self.discard = 0;
         let result = self.port.clear_input();
         {
             let mut s = self.lockstep.lock();

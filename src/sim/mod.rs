@@ -4,6 +4,7 @@
 
 use std::time::{Duration, Instant};
 
+mod crossing;
 pub mod fixture;
 mod kind;
 pub mod line;

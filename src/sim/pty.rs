@@ -5,7 +5,6 @@ use super::lockstep::{self, HostAction, Lockstep};
 use super::runner::{Faults, SharedDevice, VanishHandle, Wire, sleep_until};
 use crate::link::{LinkError, Opener, PortOpener};
 use serialport::{SerialPort, TTYPort};
-use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -261,12 +260,19 @@ fn write_frame(master: &mut TTYPort, frame: &[u8]) -> Option<usize> {
 /// The server loop in lockstep with the host (see [`super::lockstep`]): the host's writes and
 /// baud switches are taken at the instants the host stamped them, in order; the device's time
 /// never passes the stamp of an action not yet taken.
-fn serve_lockstep(mut master: TTYPort, mut wire: Wire, flags: &Flags, lockstep: &Lockstep) {
-    // However the loop ends (a panicking device too), the host stops waiting for it.
-    let _stopped = lockstep.serving();
-    let mut buf = [0u8; 4096];
-    // Bytes read from the pty whose stamped write has not been taken yet.
-    let mut heard: VecDeque<u8> = VecDeque::new();
+fn serve_lockstep(master: TTYPort, wire: Wire, flags: &Flags, lockstep: &Lockstep) {
+    // However the loop ends (a panicking device too), the host stops waiting for it, and only
+    // once the pty's master side is closed (the loop owns it): a host told that nothing more
+    // comes while the port still looked open would take a vanished port for a silent device.
+    let stopped = lockstep.serving();
+    serve_lockstep_loop(master, wire, flags, lockstep);
+    drop(stopped);
+}
+
+fn serve_lockstep_loop(mut master: TTYPort, mut wire: Wire, flags: &Flags, lockstep: &Lockstep) {
+    // What the host writes crosses the pty too (its writes fail as on a real port), and is
+    // drained here; the device hears it from the host's stamped actions.
+    let mut drained = [0u8; 4096];
     let mut out = [0u8; 4096];
     loop {
         // A port that vanishes after so many bytes from the host vanishes in lockstep too.
@@ -277,16 +283,17 @@ fn serve_lockstep(mut master: TTYPort, mut wire: Wire, flags: &Flags, lockstep: 
         let now = {
             let mut s = lockstep.lock();
             let now = Instant::now();
-            while let Some(&(at, action)) = s.actions.front() {
+            while let Some((at, action)) = s.actions.pop_front() {
                 match action {
-                    HostAction::Wrote(n) if heard.len() >= n => {
-                        let bytes: Vec<u8> = heard.drain(..n).collect();
-                        wire.host_wrote(&bytes, at);
-                    }
-                    HostAction::Wrote(_) => break,
+                    HostAction::Wrote(bytes) => wire.host_wrote(&bytes, at),
                     HostAction::Baud(baud) => wire.set_baud(baud, at),
+                    HostAction::Clear => {
+                        // What had reached the host by the clear is dropped, written or not.
+                        wire.pump(at);
+                        wire.clear_arrived(at);
+                        s.cleared();
+                    }
                 }
-                s.actions.pop_front();
             }
             let horizon = s.actions.front().map_or(now, |(at, _)| now.min(*at));
             wire.pump(horizon);
@@ -315,8 +322,15 @@ fn serve_lockstep(mut master: TTYPort, mut wire: Wire, flags: &Flags, lockstep: 
         if master.set_timeout(wait).is_err() {
             return;
         }
-        match master.read(&mut buf) {
-            Ok(n) => heard.extend(&buf[..n]),
+        match master.read(&mut drained) {
+            Ok(n) => {
+                let mut s = lockstep.lock();
+                let before = s.crossing.changed().is_some();
+                s.crossing.pty_delivered(&drained[..n]);
+                if let (false, Some(changed)) = (before, s.crossing.changed()) {
+                    eprintln!("lockstep: {changed}");
+                }
+            }
             Err(e)
                 if matches!(
                     e.kind(),

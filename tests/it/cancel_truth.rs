@@ -15,10 +15,19 @@ fn preset(name: &str) -> String {
 /// run had ended before (a loaded machine can let a short batch finish first: that run proves
 /// nothing about a cancel, and the caller runs again).
 fn interrupted(sim: &Sim, args: &[&str], after: usize) -> Option<(u8, String, String)> {
+    interrupted_once(sim, args, |c| c.out().lines().count() >= after)
+}
+
+/// As [`interrupted`], pressing Ctrl-C once `ready` holds of what the run has written.
+fn interrupted_once(
+    sim: &Sim,
+    args: &[&str],
+    ready: impl Fn(&botbench::cli::Captured) -> bool,
+) -> Option<(u8, String, String)> {
     let captured = botbench::cli::Captured::default();
     let run = start_in_process(args, sim.ports(), &captured);
     let deadline = Instant::now() + PATIENCE;
-    while captured.out().lines().count() < after {
+    while !ready(&captured) {
         if run.is_finished() {
             let _ = finish_in_process(run, &captured, "the run");
             return None;
@@ -48,6 +57,91 @@ fn a_preset_apply_cancelled_part_way_says_so_and_exits_130() {
     assert!(
         err.contains("of 7 commands") && err.contains("not done: "),
         "says how many of the preset's commands were written, and which were not: {text}"
+    );
+}
+
+#[test]
+fn a_self_test_cancelled_part_way_says_which_steps_ran_and_exits_130() {
+    let dir = crate::support::temp_dir();
+    let plan = dir.path().join("plan.ron");
+    // The corner step waits up to 10 minutes for the corners: the run is still under way
+    // when Ctrl-C comes after the second step's line.
+    std::fs::write(&plan, crate::support::selftest_plan(600_000)).unwrap();
+    let sim = Sim::start(&["window-cleaner"]);
+    let args = [
+        "msp",
+        "--port",
+        &sim.path,
+        "selftest",
+        plan.to_str().unwrap(),
+        "--yes",
+    ];
+    // The plan's line, the safe state's, then two steps.
+    let (code, out, err) = (0..5)
+        .find_map(|_| interrupted(&sim, &args, 4))
+        .expect("a run still under way when Ctrl-C came, in 5 tries");
+    let text = format!("exit {code}\n--- stdout\n{out}--- stderr\n{err}");
+    assert_eq!(code, 130, "{text}");
+    assert!(!out.contains("PASS: all"), "{text}");
+    assert!(
+        err.contains("cancelled after ") && err.contains(" of 9 steps"),
+        "{text}"
+    );
+    assert!(
+        err.contains("done: Gyro at rest") && err.contains("Corner switches"),
+        "says which steps ran and which did not: {text}"
+    );
+}
+
+#[test]
+fn a_firmware_update_cancelled_part_way_says_what_was_sent_and_exits_130() {
+    let dir = crate::support::temp_dir();
+    let image = dir.path().join("fw.bin");
+    // 64 KiB: some hundreds of packets, some seconds at 115200 baud.
+    std::fs::write(&image, crate::support::image(64 * 1024)).unwrap();
+    let sim = Sim::start(&["tuya-vacuum"]);
+    let args = [
+        "tuya",
+        "--port",
+        &sim.path,
+        "ota",
+        "--expect-version",
+        "1.0.1",
+        image.to_str().unwrap(),
+    ];
+    // The update is under way once it has said the firmware's size: Ctrl-C then.
+    let (code, out, err) = interrupted_once(&sim, &args, |c| c.err().contains("firmware: "))
+        .expect("the update still under way when Ctrl-C came");
+    let text = format!("exit {code}\n--- stdout\n{out}--- stderr\n{err}");
+    assert_eq!(code, 130, "{text}");
+    assert!(!out.contains("update done"), "{text}");
+    assert!(
+        err.contains("cancelled after ")
+            && err.contains(" packets")
+            && err.contains("not done: bytes"),
+        "says how far it got: {text}"
+    );
+}
+
+#[test]
+fn a_provisioning_cancelled_part_way_says_what_was_written_and_exits_130() {
+    // Behind a 16 ms latency timer each exchange takes a tick: the parameters take a while.
+    let sim = Sim::start(&["servo-bus", "--servos", "0", "--latency-timer-ms", "16"]);
+    let plan = preset("servo-provision-plan.ron");
+    let args = ["servo", "--port", &sim.path, "provision", &plan];
+    // Its id is set and checked, its rate is being set: Ctrl-C then.
+    let (code, out, err) = (0..5)
+        .find_map(|_| interrupted_once(&sim, &args, |c| c.err().contains("set baud")))
+        .expect("a run still under way when Ctrl-C came, in 5 tries");
+    let text = format!("exit {code}\n--- stdout\n{out}--- stderr\n{err}");
+    assert_eq!(code, 130, "{text}");
+    assert!(
+        err.contains("cancelled after 0 of 1 servos: servo 1 stopped at "),
+        "{text}"
+    );
+    assert!(
+        err.contains("written to it: id = 1") && err.contains("not done: the rest of its plan"),
+        "says what was written and what was not: {text}"
     );
 }
 

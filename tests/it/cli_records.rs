@@ -3,7 +3,7 @@
 //! reported (HTML with inline SVG), and bad records locations refused before anything runs, or,
 //! for a line server away, the verdict shown and the record kept in the spool.
 
-use crate::support::cli::{Sim, SimProcess, botbench, output, run};
+use crate::support::cli::{Sim, run};
 
 /// A short plan: the battery voltage and the water box.
 const PLAN: &str = r#"(
@@ -215,26 +215,23 @@ fn a_line_server_away_still_shows_the_verdict_and_keeps_the_record_in_the_spool(
     let plan = dir.path().join("plan.ron");
     std::fs::write(&plan, PLAN).unwrap();
     let spool = dir.path().join("spool.sqlite");
-    // The spool is named by BOTBENCH_SPOOL, a variable of the whole process: the command line
-    // runs in a process of its own, and so does its simulator (real-time where it may be);
-    // the command's margin is the generous one of such runs (PROCESS_MARGIN_MS).
-    let sim = SimProcess::start(&["window-cleaner"]);
+    // The spool is named by --spool (BOTBENCH_SPOOL would be the whole process's): the command
+    // runs in this process, its simulator in lockstep with it.
+    let sim = Sim::start(&["window-cleaner"]);
     // Port 1 on this machine: nothing listens there.
-    let mut cmd = botbench([
+    let ran = sim.cli(
         "msp",
-        "--port",
-        &sim.path,
-        "--margin-ms",
-        crate::support::cli::PROCESS_MARGIN_MS,
-        "selftest",
-        plan.to_str().unwrap(),
-        "--records",
-        "postgres://botbench@127.0.0.1:1/line",
-        "--serial",
-        "WC-7",
-    ]);
-    cmd.env("BOTBENCH_SPOOL", &spool);
-    let ran = output(&mut cmd);
+        &[
+            "selftest",
+            plan.to_str().unwrap(),
+            "--records",
+            "postgres://botbench@127.0.0.1:1/line",
+            "--spool",
+            spool.to_str().unwrap(),
+            "--serial",
+            "WC-7",
+        ],
+    );
     assert_eq!(ran.code, 0, "{}", ran.text());
     assert!(
         ran.out.contains("PASS: all 2 steps passed"),
@@ -247,6 +244,9 @@ fn a_line_server_away_still_shows_the_verdict_and_keeps_the_record_in_the_spool(
         "{}",
         ran.err
     );
-    let list = run(&["records", "--records", spool.to_str().unwrap(), "list"]);
+    let list = crate::support::cli::run_in_process(
+        &["records", "--records", spool.to_str().unwrap(), "list"],
+        &botbench::link::PortOpener::system(),
+    );
     assert!(list.out.contains("WC-7"), "{}", list.text());
 }

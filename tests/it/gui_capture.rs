@@ -63,6 +63,11 @@ fn a_capture_recorded_from_the_window_replays_with_the_window_showing_the_same_v
         Faults::default(),
     );
     let mut h = harness(&replay, PanelId::TUNING);
+    // The recording began after connecting, and still holds the identification: the replay
+    // identifies as the device did (issue 25, item 4).
+    step_until(&mut h, "the replay to be identified", |a| {
+        matches!(&a.station().device.info, Some(Ok(_)))
+    });
     let replayed = gui::read_all(&mut h);
     assert_eq!(replayed, recorded);
     assert_eq!(

@@ -82,7 +82,7 @@ fn the_simulated_mcu_conforms_and_its_update_is_proven() {
     // Without --ota the update is skipped, not failed.
     let c = grade(TuyaConfig::default(), false);
     assert_eq!(check(&c, "ota").grade, Grade::Skip);
-    assert!(c.pass());
+    assert!(c.pass(), "{c:#?}");
 }
 
 #[test]

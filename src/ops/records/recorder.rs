@@ -5,7 +5,7 @@
 
 use super::record::{Record, RunContext};
 use super::store::{self, Location, RecordsError, Saved, SqliteStore, Store};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Where a record ended up.
 #[derive(Debug, Clone, PartialEq)]
@@ -85,10 +85,25 @@ impl Recorder {
     /// A recorder writing to `location` (see [`store::open`]); the fallback spool is
     /// `BOTBENCH_SPOOL` or `unsaved.sqlite` in botbench's data folder, opened only when needed.
     pub fn open(location: &Location, context: RunContext) -> Result<Recorder, RecordsError> {
+        Recorder::open_spooled(location, context, None)
+    }
+
+    /// [`Recorder::open`] with the spool at `spool` when given (`--spool FILE`): a line
+    /// server's records wait there, and records no store took go to its `.unsaved` sibling;
+    /// else as `BOTBENCH_SPOOL` or the data folder say. Errors: as [`Recorder::open`].
+    pub fn open_spooled(
+        location: &Location,
+        context: RunContext,
+        spool: Option<&Path>,
+    ) -> Result<Recorder, RecordsError> {
+        let fallback = match spool {
+            Some(p) => Some(unsaved_beside(p)),
+            None => fallback_path(),
+        };
         Ok(Recorder::with_store(
-            store::open(location)?,
+            store::open_spooled(location, spool)?,
             context,
-            fallback_path(),
+            fallback,
         ))
     }
 
@@ -241,13 +256,21 @@ fn fill(record: &mut RunContext, from: &RunContext) {
     take(&mut record.bundle_sha256, &from.bundle_sha256);
 }
 
+/// The file beside the spool `spool` that records no store took go to: `spool` with
+/// `.unsaved` added.
+fn unsaved_beside(spool: &Path) -> PathBuf {
+    let mut name = spool.as_os_str().to_os_string();
+    name.push(".unsaved");
+    PathBuf::from(name)
+}
+
 /// The fallback spool: `BOTBENCH_SPOOL` (its `.unsaved` sibling) or `unsaved.sqlite` in
 /// botbench's data folder.
 fn fallback_path() -> Option<PathBuf> {
     if let Ok(p) = std::env::var("BOTBENCH_SPOOL")
         && !p.trim().is_empty()
     {
-        return Some(PathBuf::from(format!("{p}.unsaved")));
+        return Some(unsaved_beside(Path::new(&p)));
     }
     dirs::data_dir().map(|d| d.join("botbench").join("unsaved.sqlite"))
 }

@@ -340,9 +340,23 @@ pub trait Store: Send {
 /// schema, or cannot be created. A server that cannot be reached is not an error here: records
 /// wait in the spool until it is back.
 pub fn open(location: &Location) -> Result<Box<dyn Store>, RecordsError> {
-    match location {
-        Location::Sqlite(path) => Ok(Box::new(SqliteStore::open(path)?)),
-        Location::Postgres { url, shown } => Ok(Box::new(super::LineStore::open(url, shown)?)),
+    open_spooled(location, None)
+}
+
+/// [`open`], a line server's spool at `spool` when given (`--spool`), else where
+/// [`super::line::spool_path`] says. A SQLite file has no spool: `spool` is not used.
+pub fn open_spooled(
+    location: &Location,
+    spool: Option<&Path>,
+) -> Result<Box<dyn Store>, RecordsError> {
+    match (location, spool) {
+        (Location::Sqlite(path), _) => Ok(Box::new(SqliteStore::open(path)?)),
+        (Location::Postgres { url, shown }, Some(spool)) => {
+            Ok(Box::new(super::LineStore::with_spool(url, shown, spool)?))
+        }
+        (Location::Postgres { url, shown }, None) => {
+            Ok(Box::new(super::LineStore::open(url, shown)?))
+        }
     }
 }
 

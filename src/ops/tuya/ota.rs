@@ -266,9 +266,12 @@ pub fn ota(
     let mut retries = 0u32;
     let mut packets = 0usize;
     let total = image.len() as u64;
+    let count = image.len().div_ceil(chunk.max(1));
     for (i, data) in image.chunks(chunk).enumerate() {
-        run.go_on()?;
         let offset = (i * chunk) as u32;
+        if run.is_cancelled() {
+            return Err(cancelled_at(i, count, offset, size));
+        }
         let mut payload = offset.to_be_bytes().to_vec();
         payload.extend_from_slice(data);
         let req = Request::new(cmd::OTA_PACKET, payload)
@@ -368,6 +371,24 @@ pub fn update(
     Ok(report)
 }
 
+/// An update cancelled before packet `done` of `total` (at byte `offset` of `size`): what the
+/// MCU was sent and what not; it keeps running its old firmware, the update not finished.
+fn cancelled_at(done: usize, total: usize, offset: u32, size: u32) -> OpError {
+    let sent = if offset == 0 {
+        Vec::new()
+    } else {
+        vec![format!("bytes 0 to {offset}")]
+    };
+    OpError::CancelledAfter {
+        done,
+        total,
+        what: "packets",
+        done_items: sent,
+        not_done: vec![format!(
+            "bytes {offset} to {size} (the MCU keeps its old firmware: the update was not finished)"
+        )],
+    }
+}
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -31,6 +31,10 @@ impl Station {
                 if let Some(old) = self.packets.tap.start(c) {
                     let _ = old.stop();
                 }
+                // The device is identified again into the recording (MSP: CMD_VERSION, then
+                // CMD_BUILD_INFO; nothing on other protocols), so that a replay of it
+                // identifies as the session did (`botbench sim replay`).
+                self.send(crate::link::LinkCommand::Identify);
                 self.notify(Notice::info(Text::new(
                     format!("recording to {}", path.display()),
                     format!("正在录制到 {}", path.display()),

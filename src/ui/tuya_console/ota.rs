@@ -129,7 +129,7 @@ fn work(path: PathBuf, max: u32, typed: Option<String>) -> Job {
                 }),
             );
             done(result.map_err(|e| match e {
-                OpError::Cancelled => JobError::UpdateCancelled {
+                OpError::Cancelled | OpError::CancelledAfter { .. } => JobError::UpdateCancelled {
                     offset: acked,
                     size: image.len(),
                 },
