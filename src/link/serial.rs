@@ -23,6 +23,22 @@ pub struct SerialTransport {
     /// The USB serial number of the adapter, read when the port was opened: a port that
     /// vanishes is looked for under another name by it.
     usb_serial: Option<String>,
+    /// The port's descriptor, to give up its exclusive use on close (Unix).
+    #[cfg(unix)]
+    fd: std::os::fd::RawFd,
+}
+
+impl Drop for SerialTransport {
+    /// Gives up the exclusive use (TIOCNXCL and the `flock`) before the port closes. serialport's
+    /// close does not, and both stay while any copy of the descriptor is open: a child process
+    /// forked at that moment (by any thread of this program: a verdict's sound player, a test's
+    /// `botbench` run) holds a copy until its exec closes it, and the next open of the same port
+    /// (a reconnect, `msp` opening again with the profile the device called for) failed with
+    /// "busy" (seen under load: capture_record, cli_explains).
+    fn drop(&mut self) {
+        #[cfg(unix)]
+        release_exclusive(self.fd);
+    }
 }
 
 impl std::fmt::Debug for SerialTransport {
@@ -58,6 +74,8 @@ impl SerialTransport {
             .open_native()
             .map_err(|e| open_err(crate::system::open_failure(path, &e)))?;
         non_blocking(&port).map_err(|e| open_err(format!("non-blocking reads: {e}")))?;
+        #[cfg(unix)]
+        let fd = std::os::fd::AsRawFd::as_raw_fd(&port);
         let mut t = Self {
             port: Box::new(port),
             path: path.to_string(),
@@ -66,6 +84,8 @@ impl SerialTransport {
             taken: 0,
             holders: (Vec::new(), None),
             usb_serial: Self::usb_serial_of(path),
+            #[cfg(unix)]
+            fd,
         };
         let others = t.holders_now();
         if !others.is_empty() {
@@ -359,5 +379,46 @@ impl Default for PortOpener {
 impl std::fmt::Debug for PortOpener {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str("PortOpener")
+    }
+}
+
+/// Gives up the exclusive use serialport took at open on `fd`: the terminal's exclusive mode
+/// (TIOCNXCL) and the exclusive `flock`, which belongs to the open file and so lives on in every
+/// copy of the descriptor. Errors (a port already gone) are of no consequence: the descriptor
+/// is closed next.
+#[cfg(unix)]
+#[allow(unsafe_code)]
+fn release_exclusive(fd: std::os::fd::RawFd) {
+    // SAFETY: `fd` is the open descriptor of the port this transport owns until after this
+    // call; TIOCNXCL takes no argument and changes only the terminal's exclusive flag, LOCK_UN
+    // only the advisory lock of its open file.
+    unsafe {
+        let _ = libc::ioctl(fd, libc::TIOCNXCL);
+        let _ = libc::flock(fd, libc::LOCK_UN);
+    }
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::SerialTransport;
+    use serialport::SerialPort;
+
+    /// A copy of the port's descriptor that outlives the transport (as a child forked at that
+    /// moment holds one until its exec) must not make the next open of the port "busy".
+    #[test]
+    #[allow(unsafe_code)]
+    fn a_port_closed_while_a_copy_of_its_descriptor_lives_can_be_opened_again() {
+        let (_master, slave) = serialport::TTYPort::pair().expect("a pty pair");
+        let path = slave.name().expect("the pty's path");
+        drop(slave);
+        let first = SerialTransport::open(&path, 115_200).expect("the first open");
+        // SAFETY: duplicates a descriptor the transport holds open; the copy is closed below.
+        let copy = unsafe { libc::dup(first.fd) };
+        assert!(copy >= 0, "dup: {}", std::io::Error::last_os_error());
+        drop(first);
+        let again = SerialTransport::open(&path, 115_200);
+        // SAFETY: closes the copy made above, once.
+        unsafe { libc::close(copy) };
+        assert!(again.is_ok(), "{:?}", again.err());
     }
 }
