@@ -48,10 +48,7 @@ fn bench_bundle(
     let path = dir.join("bench-station.ron");
     std::fs::write(&path, text).map_err(|e| e.to_string())?;
     let registry = crate::profile::Registry::builtin().map_err(|e| e.to_string())?;
-    let sims: Vec<(&str, &str)> = SimKind::ALL
-        .iter()
-        .map(|k| (k.name(), k.profile_id()))
-        .collect();
+    let sims = SimKind::names_with_profiles();
     let cx = LoadContext {
         registry: &registry,
         simulated: &sims,

@@ -94,18 +94,10 @@ pub(crate) fn run(args: StationArgs, opener: &crate::link::PortOpener) -> CliRes
     }
 }
 
-/// The simulated devices a bundle may name, each with its profile's id.
-pub(crate) fn simulated() -> Vec<(&'static str, &'static str)> {
-    SimKind::ALL
-        .iter()
-        .map(|k| (k.name(), k.profile_id()))
-        .collect()
-}
-
 /// Loads and checks `path` whole (exit 2 with the problem).
 pub(crate) fn load(path: &Path) -> Result<Bundle, CliError> {
     let registry = registry()?;
-    let sims = simulated();
+    let sims = SimKind::names_with_profiles();
     let cx = LoadContext {
         registry: &registry,
         simulated: &sims,

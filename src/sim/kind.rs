@@ -23,6 +23,16 @@ pub enum SimKind {
 }
 
 impl SimKind {
+    /// Every kind as a station bundle names it, with the id of the profile it speaks:
+    /// `("window-cleaner", "window-cleaner")`, `("servo-bus", "servo")`, … in [`SimKind::ALL`]'s
+    /// order (what `ops::station::LoadContext::simulated` takes).
+    pub fn names_with_profiles() -> Vec<(&'static str, &'static str)> {
+        SimKind::ALL
+            .iter()
+            .map(|k| (k.name(), k.profile_id()))
+            .collect()
+    }
+
     /// Every kind, in the order help lists them.
     pub const ALL: [SimKind; 4] = [
         SimKind::WindowCleaner,

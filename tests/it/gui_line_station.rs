@@ -33,10 +33,7 @@ fn window_of(
     once: bool,
 ) -> Harness<'static, LineStation> {
     let registry = botbench::profile::Registry::builtin().unwrap();
-    let sims: Vec<(&str, &str)> = SimKind::ALL
-        .iter()
-        .map(|k| (k.name(), k.profile_id()))
-        .collect();
+    let sims = SimKind::names_with_profiles();
     let cx = LoadContext {
         registry: &registry,
         simulated: &sims,
@@ -504,10 +501,7 @@ fn sounding_window(
 ) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/demo-station.ron");
     let registry = botbench::profile::Registry::builtin().unwrap();
-    let sims: Vec<(&str, &str)> = SimKind::ALL
-        .iter()
-        .map(|k| (k.name(), k.profile_id()))
-        .collect();
+    let sims = SimKind::names_with_profiles();
     let cx = LoadContext {
         registry: &registry,
         simulated: &sims,
@@ -592,10 +586,7 @@ fn a_bundle_may_start_silent_and_a_saved_choice_outranks_it() {
     let path = dir.path().join("demo-station.ron");
     std::fs::write(&path, text).unwrap();
     let registry = botbench::profile::Registry::builtin().unwrap();
-    let sims: Vec<(&str, &str)> = SimKind::ALL
-        .iter()
-        .map(|k| (k.name(), k.profile_id()))
-        .collect();
+    let sims = SimKind::names_with_profiles();
     let cx = LoadContext {
         registry: &registry,
         simulated: &sims,

@@ -23,10 +23,7 @@ pub const AWAY: &str = "postgres://botbench@127.0.0.1:1/line";
 /// The demo bundle (three simulated slots), loaded.
 pub fn demo_bundle() -> Bundle {
     let registry = botbench::profile::Registry::builtin().unwrap();
-    let sims: Vec<(&str, &str)> = SimKind::ALL
-        .iter()
-        .map(|k| (k.name(), k.profile_id()))
-        .collect();
+    let sims = SimKind::names_with_profiles();
     let cx = LoadContext {
         registry: &registry,
         simulated: &sims,
