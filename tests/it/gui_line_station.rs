@@ -55,14 +55,7 @@ fn window_of(
     st.sounder = Box::new(botbench::ui::line::sound::Silent);
     st.lang = lang;
     st.access = Some(context);
-    Harness::builder().with_size(size).build_ui_state(
-        |ui, st: &mut LineStation| {
-            botbench::i18n::install_cjk_font(ui.ctx());
-            st.logic(ui.ctx());
-            st.ui(ui);
-        },
-        st,
-    )
+    crate::support::gui::line_station_harness(st, size)
 }
 
 /// Steps `h` until `done` holds, failing after [`PATIENCE`].
@@ -511,16 +504,7 @@ fn sounding_window(
     let (tx, rx) = crossbeam_channel::unbounded();
     let mut st = LineStation::new(&bundle, Vec::new(), rx);
     st.sounder = Box::new(heard.clone());
-    let h = Harness::builder()
-        .with_size(egui::vec2(1280.0, 800.0))
-        .build_ui_state(
-            |ui, st: &mut LineStation| {
-                botbench::i18n::install_cjk_font(ui.ctx());
-                st.logic(ui.ctx());
-                st.ui(ui);
-            },
-            st,
-        );
+    let h = crate::support::gui::line_station_harness(st, egui::vec2(1280.0, 800.0));
     (h, tx)
 }
 

@@ -12,7 +12,6 @@ use botbench::sim::SimKind;
 use botbench::sim::fixture::{StartedStation, start_station};
 use botbench::ui::line::LineStation;
 use eframe::egui;
-use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use std::path::Path;
 use std::time::Instant;
@@ -128,16 +127,7 @@ fn the_station_window_shows_the_records_waiting_in_its_header_and_on_the_tiles()
     let spool = dir.path().join("spool.sqlite");
     let (bundle, started) = demo_station(AWAY, &spool);
     let st = LineStation::started(&bundle, started);
-    let mut h = Harness::builder()
-        .with_size(egui::vec2(1280.0, 800.0))
-        .build_ui_state(
-            |ui, st: &mut LineStation| {
-                botbench::i18n::install_cjk_font(ui.ctx());
-                st.logic(ui.ctx());
-                st.ui(ui);
-            },
-            st,
-        );
+    let mut h = crate::support::gui::line_station_harness(st, egui::vec2(1280.0, 800.0));
     let deadline = Instant::now() + PATIENCE;
     while !h.state().tiles.iter().all(|t| t.verdict.is_some()) {
         assert!(Instant::now() < deadline, "three verdicts never came");

@@ -196,3 +196,19 @@ pub fn read_all(h: &mut H) -> BTreeMap<u8, BTreeMap<String, Value>> {
     });
     tuning_values(app(h), Some(asked)).expect("every value read")
 }
+
+/// The station window (`botbench station BUNDLE`) in a kittest harness of `size` pixels, with the
+/// bundled CJK font, drawn as the window draws it (its logic, then its view).
+pub fn line_station_harness(
+    st: botbench::ui::line::LineStation,
+    size: egui::Vec2,
+) -> Harness<'static, botbench::ui::line::LineStation> {
+    Harness::builder().with_size(size).build_ui_state(
+        |ui, st: &mut botbench::ui::line::LineStation| {
+            botbench::i18n::install_cjk_font(ui.ctx());
+            st.logic(ui.ctx());
+            st.ui(ui);
+        },
+        st,
+    )
+}
