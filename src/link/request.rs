@@ -199,7 +199,8 @@ pub struct Reply {
     /// The answering frames (one, or a burst; none for a send-only or unanswered optional).
     pub packets: Vec<Packet>,
     /// From the request's first byte written to the answer's last frame read (a burst's last
-    /// frame, not the end of the wait).
+    /// frame, not the end of the wait); zero when nothing answered (a send-only request, an
+    /// unanswered optional one).
     pub rtt: Duration,
     /// Attempts used.
     pub attempts: u8,

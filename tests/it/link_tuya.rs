@@ -315,3 +315,22 @@ fn an_empty_image_is_refused() {
     .unwrap_err();
     assert!(matches!(err, OpError::EmptyImage), "{err}");
 }
+
+/// A request whose answer is optional and that nothing answers has no round trip: how long
+/// the link waited for none is no answer time (before: the wait, and a whole-process stall
+/// during it, counted as the MCU's slowest answer in `tuya conform`).
+#[test]
+fn an_optional_answer_that_never_came_has_no_round_trip() {
+    use botbench::link::{Match, ReplySpec, Request};
+    use botbench::protocol::tuya::cmd;
+    let bench = Bench::default();
+    bench.handshake();
+    // DP 6 (battery) is report-only: the MCU drops a command for it, and no report answers.
+    let request = Request::new(cmd::DP_COMMAND, vec![6, 2, 0, 4, 0, 0, 0, 50])
+        .reply(ReplySpec::Optional(Match::command(cmd::DP_REPORT)))
+        .margin(Duration::from_millis(200))
+        .attempts(1);
+    let reply = bench.link.client().request(request).expect("no error");
+    assert!(reply.packets.is_empty(), "{reply:?}");
+    assert_eq!(reply.rtt, Duration::ZERO);
+}

@@ -289,9 +289,11 @@ impl Worker {
             return Ok(Tried::Done(self.answered(packets, (first, last), x, &each)));
         }
         if matches!(x.req.reply, ReplySpec::Optional(_)) && x.frame_err.is_none() {
+            // No answer, so no round trip: how long this thread waited for none (a stopped or
+            // starved process included) is no device's answer time.
             return Ok(Tried::Done(Reply {
                 packets: Vec::new(),
-                rtt: t0.elapsed(),
+                rtt: Duration::ZERO,
                 attempts: attempt,
             }));
         }
