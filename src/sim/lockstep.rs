@@ -14,6 +14,15 @@
 //! drained), so that a loaded machine's late hand-over inside the pty never holds the device
 //! up, and a clear of the input is taken in step too ([`HostAction::Clear`]).
 //!
+//! The device's clock never runs ahead of the host's next stamp: between two calls of a host's
+//! port, the host's next action can still be stamped as early as the last call's return (a
+//! write is stamped so), so the simulator advances only to there ([`Lockstep::horizon`]); during
+//! a call (a read waiting for an answer) it runs free. Otherwise a simulator thread that runs
+//! while the host's thread is held up (a loaded machine; a whole process stopped for seconds)
+//! would let the device speak on its own at a time after a request it has not yet heard, and
+//! its answer would queue behind that (seen: a Tuya answer 6.2 s late under two CPU-bound
+//! loops, the same after a `kill -STOP` of the test process for 6 s).
+//!
 //! Used by the tests: [`PtyServer::start_lockstep`](super::PtyServer::start_lockstep) serves a
 //! device this way, and the server's own opener
 //! ([`PtyServer::opener`](super::PtyServer::opener), or the
@@ -25,7 +34,7 @@
 use crate::link::serial::SerialTransport;
 use crate::link::{LinkError, Opener, Transport};
 use std::collections::VecDeque;
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 /// What the host did to its port.
@@ -49,6 +58,9 @@ pub(crate) enum HostAction {
 #[derive(Debug)]
 pub struct Lockstep {
     state: Mutex<State>,
+    /// Signalled when the host does something the simulator waits for (an action, a call
+    /// begun, a port closed), with [`State::generation`] counting up.
+    changed: Condvar,
 }
 
 #[derive(Debug)]
@@ -79,6 +91,13 @@ pub(crate) struct State {
     clear_mark: u64,
     /// The host's bytes that crossed the pty, compared with what it wrote.
     pub(crate) crossing: super::crossing::Crossing,
+    /// Each open host port between two calls, and when its last call returned: its next action
+    /// is stamped no earlier (a port in a call, or none open, holds the simulator back nowhere).
+    between_calls: Vec<(u64, Instant)>,
+    /// The number the next host port opened gets.
+    next_port: u64,
+    /// Counts the changes [`Lockstep::changed`] signals.
+    generation: u64,
 }
 
 impl Lockstep {
@@ -97,7 +116,11 @@ impl Lockstep {
                 clears_done: 0,
                 clear_mark: 0,
                 crossing: super::crossing::Crossing::default(),
+                between_calls: Vec::new(),
+                next_port: 0,
+                generation: 0,
             }),
+            changed: Condvar::new(),
         })
     }
 
@@ -118,6 +141,45 @@ impl Lockstep {
         let at = at.unwrap_or_else(Instant::now);
         let at = s.actions.back().map_or(at, |(last, _)| at.max(*last));
         s.actions.push_back((at, action));
+        s.generation += 1;
+        drop(s);
+        self.changed.notify_all();
+    }
+
+    /// How far the device's clock may run at `now`: to `now`, or to the earliest instant an
+    /// open host port between two calls may still stamp its next action (see the module doc).
+    pub(crate) fn horizon(s: &State, now: Instant) -> Instant {
+        s.between_calls
+            .iter()
+            .map(|&(_, returned)| returned)
+            .fold(now, Instant::min)
+    }
+
+    /// Host port `port` begins a call (`Some(returned)`: ended one at `returned`; `None`: is
+    /// closed, or begins one). A call begun frees the simulator's clock, so it is signalled.
+    fn host_call(&self, port: u64, returned: Option<Instant>) {
+        let mut s = self.lock();
+        s.between_calls.retain(|&(p, _)| p != port);
+        if let Some(at) = returned {
+            s.between_calls.push((port, at));
+            return;
+        }
+        s.generation += 1;
+        drop(s);
+        self.changed.notify_all();
+    }
+
+    /// The simulator waits up to `timeout` for the host to change something after it saw
+    /// `generation` (returns at once if it has already).
+    pub(crate) fn wait_for_host(&self, generation: u64, timeout: Duration) {
+        let s = self.lock();
+        if s.generation != generation {
+            return;
+        }
+        let _unused = self
+            .changed
+            .wait_timeout(s, timeout)
+            .unwrap_or_else(|e| e.into_inner());
     }
 
     /// How many of the bytes after the first `taken` the host may read by `deadline`: those of
@@ -193,6 +255,11 @@ impl Lockstep {
 }
 
 impl State {
+    /// What the host has changed so far: see [`Lockstep::wait_for_host`].
+    pub(crate) fn generation(&self) -> u64 {
+        self.generation
+    }
+
     /// The simulator has written `n` bytes, the first of them due at `due`, the last seen by the
     /// host at `seen`.
     pub(crate) fn wrote(&mut self, n: usize, due: Instant, seen: Instant) {
@@ -232,6 +299,7 @@ impl Lockstep {
     /// The server is gone: its path is no longer reopened through it.
     pub(crate) fn close(&self) {
         self.lock().closed = true;
+        self.changed.notify_all();
     }
 }
 
@@ -251,10 +319,18 @@ pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener
         }
         let port = SerialTransport::open(&path, baud)?;
         lockstep.host(HostAction::Baud(baud), None);
+        let id = {
+            let mut s = lockstep.lock();
+            s.next_port += 1;
+            s.next_port
+        };
+        let last_return = Instant::now();
+        lockstep.host_call(id, Some(last_return));
         Ok(Box::new(LockstepPort {
             port,
+            id,
             lockstep: lockstep.clone(),
-            last_return: Instant::now(),
+            last_return,
             held: VecDeque::new(),
             arrived: None,
             clearing: None,
@@ -284,6 +360,8 @@ const CATCH_UP_LIMIT: Duration = Duration::from_secs(10);
 #[derive(Debug)]
 pub struct LockstepPort {
     port: SerialTransport,
+    /// This port among those opened on the same pty ([`State::between_calls`]).
+    id: u64,
     lockstep: Arc<Lockstep>,
     last_return: Instant,
     /// Bytes read from the pty that were due after the deadline of the read that found them.
@@ -304,13 +382,21 @@ impl Drop for LockstepPort {
         // another closed with a Tuya MCU's report held spun in every read).
         let mut s = self.lockstep.lock();
         s.read_total = (s.read_total + self.held.len() as u64).min(s.written_total);
+        drop(s);
+        self.lockstep.host_call(self.id, None);
     }
 }
 
 impl LockstepPort {
     fn returns<T>(&mut self, result: T) -> T {
         self.last_return = Instant::now();
+        self.lockstep.host_call(self.id, Some(self.last_return));
         result
+    }
+
+    /// A call that may wait for the simulator begins: its clock runs free until it returns.
+    fn begins(&self) {
+        self.lockstep.host_call(self.id, None);
     }
 
     fn read_in_step(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
@@ -420,6 +506,7 @@ impl Transport for LockstepPort {
             self.lockstep
                 .host(HostAction::Wrote(bytes.to_vec()), Some(self.last_return));
         }
+        self.begins();
         let result = self.port.write(bytes);
         if result.is_ok() {
             self.lockstep.lock().crossing.host_wrote(bytes);
@@ -428,12 +515,14 @@ impl Transport for LockstepPort {
     }
 
     fn read(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
+        self.begins();
         let result = self.read_in_step(buf, deadline);
         self.returns(result)
     }
 
     fn set_baud(&mut self, baud: u32) -> Result<(), LinkError> {
         self.lockstep.host(HostAction::Baud(baud), None);
+        self.begins();
         let result = self.port.set_baud(baud);
         self.returns(result)
     }
@@ -459,6 +548,8 @@ impl Transport for LockstepPort {
             }
             s.serving
         };
+        // The clear is an action the simulator takes: signalled.
+        self.begins();
         if serving {
             return self.returns(Ok(()));
         }
@@ -492,5 +583,53 @@ impl Transport for LockstepPort {
 
     fn arrived_at(&self) -> Option<Instant> {
         self.arrived
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::PtyServer;
+    use super::super::runner::Faults;
+    use super::super::tuya_mcu::{TuyaConfig, TuyaMcu, dpid};
+    use std::sync::{Arc, Mutex};
+    use std::time::{Duration, Instant};
+
+    /// A host held up between two calls of its port (a loaded machine; a stopped process) while
+    /// the simulator runs: a device that speaks on its own (a report every 20 ms) must not speak
+    /// during that hold-up before the request the host makes when it runs again, or its answer
+    /// queues behind reports the host could not have caused (before: the heartbeat's answer was
+    /// due after the hold-up, as if the device had thought for 400 ms).
+    #[test]
+    fn a_device_does_not_run_ahead_of_a_host_held_up_between_two_calls() {
+        let mcu = TuyaMcu::new(TuyaConfig {
+            baud: Some(115_200),
+            report_every: Some((dpid::BATTERY, Duration::from_millis(20))),
+            ..TuyaConfig::default()
+        });
+        let server =
+            PtyServer::start_lockstep(Arc::new(Mutex::new(mcu)), Faults::default()).expect("pty");
+        let mut port = (server.opener(115_200))().expect("opens");
+        let mut buf = [0u8; 4096];
+        port.read(&mut buf, Instant::now()).expect("reads");
+        let held_from = Instant::now();
+        std::thread::sleep(Duration::from_millis(400));
+        // The heartbeat, written once the host runs again: stamped at its last call's return.
+        port.write(&[0x55, 0xAA, 0x00, 0x00, 0x00, 0x00, 0xFF])
+            .expect("writes");
+        // What a punctual host would have had 100 ms after the hold-up began.
+        let by = held_from + Duration::from_millis(100);
+        let mut got = Vec::new();
+        loop {
+            let n = port.read(&mut buf, by).expect("reads");
+            if n == 0 {
+                break;
+            }
+            got.extend_from_slice(&buf[..n]);
+        }
+        let answer = [0x55, 0xAA, 0x03, 0x00, 0x00, 0x01];
+        assert!(
+            got.windows(answer.len()).any(|w| w == answer),
+            "no heartbeat answer due within 100 ms of the request's stamp: {got:02x?}"
+        );
     }
 }

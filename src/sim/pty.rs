@@ -280,9 +280,11 @@ fn serve_lockstep_loop(mut master: TTYPort, mut wire: Wire, flags: &Flags, locks
             return;
         }
         let mut due: Vec<u8> = Vec::new();
-        let now = {
+        let (now, held_back, generation) = {
             let mut s = lockstep.lock();
-            let now = Instant::now();
+            let real = Instant::now();
+            // Never past what the host may still stamp (see the lockstep module doc).
+            let now = Lockstep::horizon(&s, real);
             while let Some((at, action)) = s.actions.pop_front() {
                 match action {
                     HostAction::Wrote(bytes) => wire.host_wrote(&bytes, at),
@@ -307,7 +309,7 @@ fn serve_lockstep_loop(mut master: TTYPort, mut wire: Wire, flags: &Flags, locks
             }
             s.wrote(due.len(), first, wire.last_seen().unwrap_or(now));
             s.next_due = wire.next_due();
-            now
+            (now, now < real, s.generation())
         };
         if !due.is_empty() {
             let Some(written) = write_frame(&mut master, &due) else {
@@ -317,12 +319,30 @@ fn serve_lockstep_loop(mut master: TTYPort, mut wire: Wire, flags: &Flags, locks
                 lockstep.lock().dropped(due.len() - written);
             }
         }
-        let next = wire.next_event().min(now + POLL);
-        let wait = next.saturating_duration_since(Instant::now());
-        if master.set_timeout(wait).is_err() {
+        // Held back by the host, the device waits for it to act or begin a call; else until
+        // its next event. Either way the host's signal wakes it, and a stop is seen within POLL.
+        let wait = if held_back {
+            POLL
+        } else {
+            let next = wire.next_event().min(now + POLL);
+            next.saturating_duration_since(Instant::now())
+        };
+        lockstep.wait_for_host(generation, wait);
+        if !drain_host_bytes(&mut master, &mut drained, lockstep) {
             return;
         }
-        match master.read(&mut drained) {
+    }
+}
+
+/// Reads what the host's writes brought across the pty without waiting, for the comparison with
+/// what it wrote ([`super::crossing`]); `false` when the pty failed (the port vanished).
+fn drain_host_bytes(master: &mut TTYPort, drained: &mut [u8], lockstep: &Lockstep) -> bool {
+    if master.set_timeout(Duration::ZERO).is_err() {
+        return false;
+    }
+    loop {
+        match master.read(drained) {
+            Ok(0) => return true,
             Ok(n) => {
                 let mut s = lockstep.lock();
                 let before = s.crossing.changed().is_some();
@@ -335,8 +355,11 @@ fn serve_lockstep_loop(mut master: TTYPort, mut wire: Wire, flags: &Flags, locks
                 if matches!(
                     e.kind(),
                     ErrorKind::TimedOut | ErrorKind::Interrupted | ErrorKind::WouldBlock
-                ) => {}
-            Err(_) => return,
+                ) =>
+            {
+                return true;
+            }
+            Err(_) => return false,
         }
     }
 }
