@@ -167,3 +167,46 @@ fn a_request_that_meets_a_reply_on_a_half_duplex_line_garbles_both() {
     assert_eq!(heard.len(), second.len(), "{heard:?}");
     assert_ne!(heard[0], second[0], "{heard:?}");
 }
+
+/// Sends what it heard at its next tick, as a Tuya MCU sends a report it queued.
+struct AtNextTick(Vec<u8>);
+
+impl Device for AtNextTick {
+    fn receive(&mut self, bytes: &[u8], _baud: u32, _now: Instant) -> Vec<Outgoing> {
+        self.0.extend_from_slice(bytes);
+        Vec::new()
+    }
+
+    fn tick(&mut self, _now: Instant) -> Vec<Outgoing> {
+        if self.0.is_empty() {
+            return Vec::new();
+        }
+        vec![Outgoing::new(Duration::ZERO, std::mem::take(&mut self.0))]
+    }
+}
+
+/// A simulator's thread that runs 6 s late (a stopped or starved process) still has the device
+/// act at its own ticks: what it queued for its next tick goes out a tick after it heard the
+/// request, not when the thread got to run (before: 6 s late, and a Tuya conformance run
+/// failed its 5 s answer limit).
+#[test]
+fn a_device_acts_at_its_own_ticks_however_late_its_thread_runs() {
+    let start = Instant::now();
+    let mut wire = Wire::new(
+        Arc::new(Mutex::new(AtNextTick(Vec::new()))),
+        115_200,
+        Faults::default(),
+    );
+    wire.pump(start);
+    wire.host_wrote(&[1, 2, 3], start);
+    let late = start + Duration::from_secs(6);
+    wire.pump(late);
+    let mut buf = [0u8; 16];
+    assert_eq!(wire.take_due(late, &mut buf), 3);
+    let seen = wire.last_seen().expect("seen").duration_since(start);
+    // The request's 0.26 ms on the wire, the next tick (3 ms) and the answer's 0.26 ms.
+    assert!(
+        seen <= wire_time(6, 115_200) + 2 * TICK,
+        "seen after {seen:?}"
+    );
+}
