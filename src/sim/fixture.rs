@@ -240,18 +240,33 @@ pub fn start_station(
 /// identity polls).
 pub const SWAP_GAP: Duration = Duration::from_millis(1500);
 
+/// How many requests a lifted fixture leaves unanswered at least, however long its gap has
+/// lasted: two identity polls' worth (CMD_VERSION's two attempts each), so that a station sees
+/// the empty fixture whatever its PC's load. A person swapping a unit takes longer than any
+/// station's polls; a gap measured only in time is missed by a station whose thread ran late
+/// for longer than it (seen under two CPU-bound loops: the next window cleaner never tested).
+pub const SWAP_IGNORED: u32 = 4;
+
+/// A lifted fixture: silent until `until` and until it has left [`SWAP_IGNORED`] requests
+/// unanswered.
+#[derive(Debug, Clone, Copy)]
+struct Lifted {
+    until: std::time::Instant,
+    ignored: u32,
+}
+
 /// A fixture's device that can be lifted off: while lifted it hears nothing and says nothing
 /// (the wire stays, as the fixture's cable does). `botbench sim` serves its device through
 /// one, so that `next` on its stdin presents a fresh unit after a silence.
 pub struct Lift {
     device: SharedDevice,
-    lifted_until: Arc<Mutex<Option<std::time::Instant>>>,
+    lifted_until: Arc<Mutex<Option<Lifted>>>,
 }
 
 /// Lifts a [`Lift`]'s device off for a while.
 #[derive(Clone)]
 pub struct LiftHandle {
-    lifted_until: Arc<Mutex<Option<std::time::Instant>>>,
+    lifted_until: Arc<Mutex<Option<Lifted>>>,
 }
 
 impl Lift {
@@ -270,24 +285,29 @@ impl Lift {
         )
     }
 
-    fn lifted(&self, now: std::time::Instant) -> bool {
-        let mut until = self.lifted_until.lock().unwrap_or_else(|e| e.into_inner());
-        match *until {
-            Some(t) if now < t => true,
-            Some(_) => {
-                *until = None;
-                false
-            }
-            None => false,
+    /// Whether the unit is off the fixture at `now`; `heard`: a request came (left unanswered
+    /// while lifted, and counted).
+    fn lifted(&self, now: std::time::Instant, heard: bool) -> bool {
+        let mut lifted = self.lifted_until.lock().unwrap_or_else(|e| e.into_inner());
+        let Some(l) = lifted.as_mut() else {
+            return false;
+        };
+        if now < l.until || l.ignored < SWAP_IGNORED {
+            l.ignored += u32::from(heard);
+            return true;
         }
+        *lifted = None;
+        false
     }
 }
 
 impl LiftHandle {
-    /// Silent from now for `gap`.
+    /// Silent from now for `gap`, and until [`SWAP_IGNORED`] requests went unanswered.
     pub fn lift_for(&self, gap: Duration) {
-        *self.lifted_until.lock().unwrap_or_else(|e| e.into_inner()) =
-            Some(std::time::Instant::now() + gap);
+        *self.lifted_until.lock().unwrap_or_else(|e| e.into_inner()) = Some(Lifted {
+            until: std::time::Instant::now() + gap,
+            ignored: 0,
+        });
     }
 }
 
@@ -298,7 +318,7 @@ impl super::Device for Lift {
         baud: u32,
         now: std::time::Instant,
     ) -> Vec<super::Outgoing> {
-        if self.lifted(now) {
+        if self.lifted(now, true) {
             return Vec::new();
         }
         self.device
@@ -308,12 +328,46 @@ impl super::Device for Lift {
     }
 
     fn tick(&mut self, now: std::time::Instant) -> Vec<super::Outgoing> {
-        if self.lifted(now) {
+        if self.lifted(now, false) {
             return Vec::new();
         }
         self.device
             .lock()
             .unwrap_or_else(|e| e.into_inner())
             .tick(now)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{Device, Outgoing};
+    use std::time::Instant;
+
+    /// Answers every request with one byte.
+    struct Answers;
+
+    impl Device for Answers {
+        fn receive(&mut self, _bytes: &[u8], _baud: u32, _now: Instant) -> Vec<Outgoing> {
+            vec![Outgoing::new(Duration::ZERO, vec![1])]
+        }
+    }
+
+    /// A swap's gap that has passed before the station looked (its thread ran late) still
+    /// leaves the station's next polls unanswered: the empty fixture is seen whatever the load.
+    #[test]
+    fn a_lifted_fixture_stays_silent_until_the_station_could_see_it_empty() {
+        let (mut lift, handle) = Lift::new(Arc::new(Mutex::new(Answers)));
+        assert_eq!(lift.receive(&[0], 9600, Instant::now()).len(), 1);
+        handle.lift_for(Duration::ZERO);
+        let later = Instant::now() + Duration::from_secs(5);
+        for n in 1..=SWAP_IGNORED {
+            assert!(lift.tick(later).is_empty());
+            assert!(
+                lift.receive(&[0], 9600, later).is_empty(),
+                "request {n} answered, the gap long past"
+            );
+        }
+        assert_eq!(lift.receive(&[0], 9600, later).len(), 1, "placed again");
     }
 }
