@@ -78,59 +78,19 @@ impl Worker {
     /// has its answer); one that listens, not before the grace an exchange gives has passed
     /// since it began (the grace as its own answers leave it: they are measured too).
     pub(super) fn run_sweep(&mut self, sweep: &Sweep) -> Result<SweepReply, ExchangeError> {
-        let margin = self.timing.auto_margin();
-        let n = sweep.requests.len();
         let started = Instant::now();
-        let mut run = Run {
-            sent: Vec::with_capacity(n),
-            asked: Vec::with_capacity(n),
-            answers: vec![None; n],
-            order: Vec::new(),
-            strays: Vec::new(),
-            on_wire: Vec::with_capacity(n),
-            margin,
-            listen: sweep.listen || n == 0,
-        };
-        for frame in self.unclaimed.take() {
-            match frame {
-                Ok(p) => run.strays.push(p),
-                Err(error) => run.order.push(Seen::Damaged { error, sent: None }),
-            }
-        }
-        let baud = self.wire.baud();
-        let answer_time = sweep.device_latency + wire_time(sweep.answer_bytes, baud);
-        let mut next = Instant::now();
-        for (i, req) in sweep.requests.iter().enumerate() {
-            if !matches!(req.reply, ReplySpec::Required(_)) {
-                return Err(ExchangeError::Encode(format!(
-                    "a sweep's request {i} (command {}) waits for no answer",
-                    req.command
-                )));
-            }
-            let (bytes, packet) = self.session.encode(req)?;
-            // The bus is free once the last answer can have ended, or has been read whole.
-            self.sweep_read(sweep, &mut run, next, false)?;
-            self.commands_during_exchange()?;
-            let asked = Instant::now();
-            self.write(&bytes, packet)?;
-            let t = self.host_was_late_by(asked, Instant::now(), bytes.len());
-            let on_wire = wire_time(bytes.len(), baud);
-            run.sent.push(t);
-            run.asked.push(asked);
-            run.on_wire.push(on_wire);
-            // The request's last byte leaves when the bytes written before it have (`sent_until`);
-            // the device may then take its latency, and its answer the answer's wire time.
-            next = self.wire.sent_until().max(t + on_wire) + answer_time;
-        }
+        let mut run = self.sweep_run(sweep);
+        let answer_time = sweep.device_latency + wire_time(sweep.answer_bytes, self.wire.baud());
+        let next = self.send_sweep(sweep, &mut run, answer_time)?;
         let window = match run.sent.last() {
             Some(&last) => {
-                last + run.on_wire.last().copied().unwrap_or_default() + answer_time + margin
+                last + run.on_wire.last().copied().unwrap_or_default() + answer_time + run.margin
             }
             None => next,
         };
         let mut until = window.max(next);
         if run.listen {
-            until = until.max(started + self.timing.learned.grace(margin));
+            until = until.max(started + self.timing.learned.grace(run.margin));
         }
         self.sweep_read(sweep, &mut run, until, true)?;
         let unanswered = run.answers.iter().position(Option::is_none);
@@ -143,6 +103,64 @@ impl Worker {
             });
         }
         Ok(finish(run))
+    }
+
+    /// A sweep about to start: nothing sent yet, and what the last exchange left unclaimed
+    /// (frames that may answer a request of the last sweep) taken as strays or damage.
+    fn sweep_run(&mut self, sweep: &Sweep) -> Run {
+        let n = sweep.requests.len();
+        let mut run = Run {
+            sent: Vec::with_capacity(n),
+            asked: Vec::with_capacity(n),
+            answers: vec![None; n],
+            order: Vec::new(),
+            strays: Vec::new(),
+            on_wire: Vec::with_capacity(n),
+            margin: self.timing.auto_margin(),
+            listen: sweep.listen || n == 0,
+        };
+        for frame in self.unclaimed.take() {
+            match frame {
+                Ok(p) => run.strays.push(p),
+                Err(error) => run.order.push(Seen::Damaged { error, sent: None }),
+            }
+        }
+        run
+    }
+
+    /// Sends the sweep's requests one after another, each once the bus is free (the last
+    /// answer can have ended, or has been read whole); returns when the last answer can have
+    /// ended. A request that waits for no answer is refused before it is sent.
+    fn send_sweep(
+        &mut self,
+        sweep: &Sweep,
+        run: &mut Run,
+        answer_time: Duration,
+    ) -> Result<Instant, ExchangeError> {
+        let baud = self.wire.baud();
+        let mut next = Instant::now();
+        for (i, req) in sweep.requests.iter().enumerate() {
+            if !matches!(req.reply, ReplySpec::Required(_)) {
+                return Err(ExchangeError::Encode(format!(
+                    "a sweep's request {i} (command {}) waits for no answer",
+                    req.command
+                )));
+            }
+            let (bytes, packet) = self.session.encode(req)?;
+            self.sweep_read(sweep, run, next, false)?;
+            self.commands_during_exchange()?;
+            let asked = Instant::now();
+            self.write(&bytes, packet)?;
+            let t = self.host_was_late_by(asked, Instant::now(), bytes.len());
+            let on_wire = wire_time(bytes.len(), baud);
+            run.sent.push(t);
+            run.asked.push(asked);
+            run.on_wire.push(on_wire);
+            // The request's last byte leaves when the bytes written before it have (`sent_until`);
+            // the device may then take its latency, and its answer the answer's wire time.
+            next = self.wire.sent_until().max(t + on_wire) + answer_time;
+        }
+        Ok(next)
     }
 
     /// Reads and sorts what comes until `until`; when `settle`, also for as long as the line
