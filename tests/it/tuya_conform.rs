@@ -85,131 +85,149 @@ fn the_simulated_mcu_conforms_and_its_update_is_proven() {
     assert!(c.pass(), "{c:#?}");
 }
 
-#[test]
-fn each_field_misbehaviour_fails_its_own_check() {
-    let cases: Vec<(&str, TuyaConfig, &str, bool)> = vec![
-        (
-            "battery 150 %",
-            TuyaConfig {
-                report_out_of_range: BTreeMap::from([(6, RawValue::Int(150))]),
-                ..TuyaConfig::default()
-            },
-            "status_range",
-            true,
-        ),
-        (
-            "mode reported as a value",
-            TuyaConfig {
-                misreport: BTreeMap::from([parse_misreport("3:value:4").unwrap()]),
-                ..TuyaConfig::default()
-            },
-            "status_types",
-            true,
-        ),
-        (
-            "DP 101 the profile lacks",
-            TuyaConfig {
-                report_unknown_dp: vec![(101, DpValue::Value(50))],
-                ..TuyaConfig::default()
-            },
-            "status_unknown",
-            false,
-        ),
-        (
-            "reports 100-150 ms apart",
-            TuyaConfig {
-                report_gap: Some((Duration::from_millis(100), Duration::from_millis(150))),
-                ..TuyaConfig::default()
-            },
-            "status_burst",
-            false,
-        ),
-        (
-            "DP 19 never reported",
-            TuyaConfig {
-                never_report: vec![19],
-                ..TuyaConfig::default()
-            },
-            "status_all",
-            true,
-        ),
-        (
-            "a 2000-byte clean record (a frame over the cap)",
-            TuyaConfig {
-                report_out_of_range: BTreeMap::from([(15, RawValue::Len(2000))]),
-                ..TuyaConfig::default()
-            },
-            "frames_clean",
-            true,
-        ),
-        (
-            "writes of report-only DPs taken",
-            TuyaConfig {
-                accept_read_only: true,
-                ..TuyaConfig::default()
-            },
-            "read_only_refused",
-            true,
-        ),
-        (
-            "a bad checksum read all the same",
-            TuyaConfig {
-                ignore_checksum: true,
-                ..TuyaConfig::default()
-            },
-            "bad_checksum",
-            true,
-        ),
-        (
-            "an unknown command answered",
-            TuyaConfig {
-                answer_unknown: true,
-                ..TuyaConfig::default()
-            },
-            "unknown_command",
-            true,
-        ),
-        (
-            "frames of version 0x00",
-            TuyaConfig {
-                frame_version: 0,
-                ..TuyaConfig::default()
-            },
-            "frame_version",
-            false,
-        ),
-    ];
-    for (what, cfg, id, mandatory) in cases {
-        let c = grade(cfg, false);
-        let k = check(&c, id);
-        assert_eq!(k.grade, Grade::Fail, "{what}: {k:#?}");
-        assert_eq!(k.mandatory, mandatory, "{what}");
-        assert_eq!(c.pass(), !mandatory, "{what}: {:#?}", c.failed());
-    }
+/// Grades a simulated MCU with one field misbehaviour (`what`, configured by `cfg`): the check
+/// `id` fails, it is `mandatory` or not, and the whole passes only when it is not. One test per
+/// misbehaviour, so that the suite runs them side by side (each grades a whole MCU).
+fn fails_its_own_check(what: &str, cfg: TuyaConfig, id: &str, mandatory: bool) {
+    let c = grade(cfg, false);
+    let k = check(&c, id);
+    assert_eq!(k.grade, Grade::Fail, "{what}: {k:#?}");
+    assert_eq!(k.mandatory, mandatory, "{what}");
+    assert_eq!(c.pass(), !mandatory, "{what}: {:#?}", c.failed());
 }
 
 #[test]
-fn each_way_an_update_fails_fails_the_update_check() {
-    for (fault, said) in [
-        (OtaFault::OldVersion, "still running version 1.0.0"),
-        (OtaFault::NeverBack, "never came back"),
-        (
-            OtaFault::RefusePacket(1024),
-            "stopped acking at offset 1024",
-        ),
-    ] {
-        let c = grade(
-            TuyaConfig {
-                ota_fault: Some(fault),
-                ..TuyaConfig::default()
-            },
-            true,
-        );
-        let k = check(&c, "ota");
-        assert_eq!(k.grade, Grade::Fail, "{fault:?}: {k:#?}");
-        assert!(k.detail.contains(said), "{fault:?}: {}", k.detail);
-        assert!(!c.pass());
-    }
+fn a_battery_reported_at_150_percent_fails_status_range() {
+    let cfg = TuyaConfig {
+        report_out_of_range: BTreeMap::from([(6, RawValue::Int(150))]),
+        ..TuyaConfig::default()
+    };
+    fails_its_own_check("battery 150 %", cfg, "status_range", true);
+}
+
+#[test]
+fn the_mode_reported_as_a_value_fails_status_types() {
+    let cfg = TuyaConfig {
+        misreport: BTreeMap::from([parse_misreport("3:value:4").unwrap()]),
+        ..TuyaConfig::default()
+    };
+    fails_its_own_check("mode reported as a value", cfg, "status_types", true);
+}
+
+#[test]
+fn a_data_point_the_profile_lacks_fails_status_unknown_not_mandatory() {
+    let cfg = TuyaConfig {
+        report_unknown_dp: vec![(101, DpValue::Value(50))],
+        ..TuyaConfig::default()
+    };
+    fails_its_own_check("DP 101 the profile lacks", cfg, "status_unknown", false);
+}
+
+#[test]
+fn reports_100_to_150_ms_apart_fail_status_burst_not_mandatory() {
+    let cfg = TuyaConfig {
+        report_gap: Some((Duration::from_millis(100), Duration::from_millis(150))),
+        ..TuyaConfig::default()
+    };
+    fails_its_own_check("reports 100-150 ms apart", cfg, "status_burst", false);
+}
+
+#[test]
+fn a_data_point_never_reported_fails_status_all() {
+    let cfg = TuyaConfig {
+        never_report: vec![19],
+        ..TuyaConfig::default()
+    };
+    fails_its_own_check("DP 19 never reported", cfg, "status_all", true);
+}
+
+#[test]
+fn a_frame_over_the_cap_fails_frames_clean() {
+    let cfg = TuyaConfig {
+        report_out_of_range: BTreeMap::from([(15, RawValue::Len(2000))]),
+        ..TuyaConfig::default()
+    };
+    let what = "a 2000-byte clean record (a frame over the cap)";
+    fails_its_own_check(what, cfg, "frames_clean", true);
+}
+
+#[test]
+fn writes_of_report_only_data_points_taken_fail_read_only_refused() {
+    let cfg = TuyaConfig {
+        accept_read_only: true,
+        ..TuyaConfig::default()
+    };
+    let what = "writes of report-only DPs taken";
+    fails_its_own_check(what, cfg, "read_only_refused", true);
+}
+
+#[test]
+fn a_bad_checksum_read_all_the_same_fails_bad_checksum() {
+    let cfg = TuyaConfig {
+        ignore_checksum: true,
+        ..TuyaConfig::default()
+    };
+    fails_its_own_check(
+        "a bad checksum read all the same",
+        cfg,
+        "bad_checksum",
+        true,
+    );
+}
+
+#[test]
+fn an_unknown_command_answered_fails_unknown_command() {
+    let cfg = TuyaConfig {
+        answer_unknown: true,
+        ..TuyaConfig::default()
+    };
+    fails_its_own_check("an unknown command answered", cfg, "unknown_command", true);
+}
+
+#[test]
+fn frames_of_version_0x00_fail_frame_version_not_mandatory() {
+    let cfg = TuyaConfig {
+        frame_version: 0,
+        ..TuyaConfig::default()
+    };
+    fails_its_own_check("frames of version 0x00", cfg, "frame_version", false);
+}
+
+/// Grades a simulated MCU whose update goes wrong by `fault`: the update check fails, saying
+/// `said`, and so does the whole. One test per way, run side by side.
+fn an_update_that_fails_fails_the_update_check(fault: OtaFault, said: &str) {
+    let c = grade(
+        TuyaConfig {
+            ota_fault: Some(fault),
+            ..TuyaConfig::default()
+        },
+        true,
+    );
+    let k = check(&c, "ota");
+    assert_eq!(k.grade, Grade::Fail, "{fault:?}: {k:#?}");
+    assert!(k.detail.contains(said), "{fault:?}: {}", k.detail);
+    assert!(!c.pass());
+}
+
+#[test]
+fn an_update_to_a_firmware_still_on_the_old_version_fails_the_update_check() {
+    an_update_that_fails_fails_the_update_check(
+        OtaFault::OldVersion,
+        "still running version 1.0.0",
+    );
+}
+
+#[test]
+fn an_mcu_that_never_comes_back_from_its_update_fails_the_update_check() {
+    an_update_that_fails_fails_the_update_check(OtaFault::NeverBack, "never came back");
+}
+
+#[test]
+fn an_mcu_that_stops_acking_its_update_fails_the_update_check() {
+    an_update_that_fails_fails_the_update_check(
+        OtaFault::RefusePacket(1024),
+        "stopped acking at offset 1024",
+    );
 }
 
 #[test]
