@@ -454,7 +454,7 @@ fn the_port_line_and_the_history_are_as_tall_as_the_unit_line_and_fixtures_speak
         .unwrap()
         .rect();
     let history = h
-        .query_all_by_label_contains(" PASS")
+        .query_all_by_label_contains(" 合格")
         .last()
         .unwrap()
         .rect();

@@ -13,6 +13,7 @@
 mod engineer;
 pub mod lent;
 mod open;
+mod reason;
 pub mod shots;
 pub mod sound;
 mod tile;
@@ -48,8 +49,8 @@ pub struct TileState {
     pub step: Option<(usize, usize, Text)>,
     /// The question waiting: kind and text in both languages.
     pub asking: Option<(&'static str, String, String)>,
-    /// The last verdict: pass, failed step (both languages), reason.
-    pub verdict: Option<(bool, Option<Text>, Option<String>)>,
+    /// The last verdict: pass, failed step (both languages), why (typed: said in either).
+    pub verdict: Option<(bool, Option<Text>, Option<crate::ops::station::Reason>)>,
     /// Recent verdicts, newest first: (pass, the serial, or the verdict's local time
     /// `HH:MM:SS` for a unit without one).
     pub history: VecDeque<(bool, String)>,
@@ -288,7 +289,18 @@ impl LineStation {
                 kind,
                 text,
                 text_zh,
-            } => t.asking = Some((kind, text, text_zh)),
+                why,
+            } => {
+                // A retry question says why the step failed in 中文 from its typed reason.
+                let text_zh = match (why, &t.step) {
+                    (Some(why), Some((_, _, step))) => {
+                        use crate::ui::zh::Zh;
+                        format!("{} 失败:{}。重试一次?", step.zh, why.zh())
+                    }
+                    _ => text_zh,
+                };
+                t.asking = Some((kind, text, text_zh));
+            }
             What::StepDone { .. } => t.asking = None,
             What::Verdict {
                 pass,
