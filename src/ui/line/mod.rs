@@ -98,6 +98,9 @@ pub struct LineStation {
     pub sound_chosen: Option<bool>,
     /// What plays the verdict's sound ([`sound::SystemPlayer`]; a counter in tests).
     pub sounder: Box<dyn sound::VerdictSound>,
+    /// The ordinary window's saved settings ([`crate::ui::Settings::saved_by_window`], or the
+    /// window's own under File > Open station): the engineer view starts from them.
+    pub window_settings: crate::ui::Settings,
     slots: Vec<SlotHandle>,
     events: Receiver<Event>,
     forwarder: Option<crate::ops::station::Forwarder>,
@@ -156,6 +159,7 @@ impl LineStation {
             sound: bundle.sound,
             sound_chosen: None,
             sounder: Box::new(sound::SystemPlayer),
+            window_settings: crate::ui::Settings::default(),
             slots,
             events,
             forwarder: None,
@@ -186,7 +190,13 @@ impl LineStation {
             let opener = self.slots.iter().find(|s| s.name == lent.slot);
             let profile = self.tiles.iter().find(|t| t.slot == lent.slot);
             if let (Some(handle), Some(tile)) = (opener, profile) {
-                lent.logic(ctx, &handle.opener, &tile.profile, self.lang);
+                lent.logic(
+                    ctx,
+                    &handle.opener,
+                    &tile.profile,
+                    self.lang,
+                    &self.window_settings,
+                );
             }
         }
         ctx.request_repaint_after(std::time::Duration::from_millis(100));
@@ -583,6 +593,10 @@ pub fn run(
         station.sounder = Box::new(sound::Silent);
     }
     station.shots = screenshots.map(shots::StationShots::new);
+    // The engineer view is today's window with the settings it saved (a tour's are defaults).
+    if station.shots.is_none() {
+        station.window_settings = crate::ui::Settings::saved_by_window().unwrap_or_default();
+    }
     // `BOTBENCH_WINDOW_SIZE=1024x600`: the window's size where no window manager maximises it
     // (the screenshots under Xvfb).
     let size = std::env::var("BOTBENCH_WINDOW_SIZE")
