@@ -232,9 +232,9 @@ fn text_of(n: &egui_kittest::Node<'_>) -> Option<String> {
     node.label().or_else(|| node.value())
 }
 
-/// The FAIL banner's line: the failed step and why.
+/// The FAIL banner's lines: the failed step, then why.
 fn banner_line(h: &Harness<'static, LineStation>) -> String {
-    h.query_all_by_label_contains("自检: ")
+    h.query_all_by_label_contains("自检\n")
         .next()
         .and_then(|n| text_of(&n))
         .unwrap_or_else(|| {

@@ -222,11 +222,14 @@ fn banner(ui: &mut egui::Ui, t: &TileState, zh: bool) {
                         None => String::new(),
                     };
                     let step = if zh { &step.zh } else { &step.en };
-                    ui.label(
-                        RichText::new(format!("{step}: {why}"))
-                            .size(20.0)
-                            .color(Color32::WHITE),
-                    );
+                    // The step, then why on a line of its own: each read whole from two
+                    // metres, a question mark in the step's name not run into the reason.
+                    let text = if why.is_empty() {
+                        step.clone()
+                    } else {
+                        format!("{step}\n{why}")
+                    };
+                    ui.label(RichText::new(text).size(20.0).color(Color32::WHITE));
                 }
             });
         });
