@@ -47,7 +47,8 @@ echo "X display \$DISPLAY: \$(xdotool getdisplaygeometry 2>&1)"
 # one launch in ten under Xvfb here): three launches.
 for attempt in 1 2 3; do
     # Then the line station (the demo bundle, one unit per slot): a question waiting, then
-    # the verdicts, each at both sizes in both languages.
+    # the verdicts (the first yes/no answered no: one FAIL banner), each at both sizes in both
+    # languages.
     "$bin" gui --screenshots "$dir" > "$home/app.log" 2>&1 \
         && "$bin" station "$PWD/presets/demo-station.ron" --screenshots "$dir" \
             --records "$home/station-records.sqlite" >> "$home/app.log" 2>&1 && exit 0

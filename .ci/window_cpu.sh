@@ -7,25 +7,31 @@
 #                    telemetry polled at 50 Hz (the default rate)
 #   tuning-50hz      the Tuning panel on the same link (telemetry still polled in the background)
 #   disconnected     the window after its simulator went away (the port vanished)
+#   station-4-slots  the line station's window (`botbench station BUNDLE`) over four
+#                    `botbench sim window-cleaner` on ptys, four Auto slots (Identify, Write
+#                    result): after each slot's first unit, every slot reads its unit's identity
+#                    every 0.5 s while the window repaints every 100 ms (issue 27: at most 35 %)
 # For each it waits WARMUP seconds, then reads utime+stime from /proc/PID/stat over SECONDS
 # seconds, and prints one JSON document a line: {"case", "cpu_percent_of_core", "seconds"}.
 # The target (issue 14): telemetry-50hz at most 25 % of a core, disconnected about 0.
 #
 # Usage: .ci/window_cpu.sh [BINARY]   (default: target/release/botbench; build it first)
-# Environment: SECONDS_MEASURED (default 10), WARMUP (default 5).
+# Environment: SECONDS_MEASURED (default 10), WARMUP (default 5), ONLY=station-4-slots (that
+# case alone).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=$(realpath "${1:-target/release/botbench}")
 [ -x "$bin" ] || { echo "no binary at $bin (cargo build --release)" >&2; exit 2; }
 measure=${SECONDS_MEASURED:-10}
 warmup=${WARMUP:-5}
+only=${ONLY:-}
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cat > "$work/run.sh" <<SCRIPT
 #!/usr/bin/env bash
 set -u
-bin="$bin"; work="$work"; measure=$measure; warmup=$warmup
+bin="$bin"; work="$work"; measure=$measure; warmup=$warmup; only="$only"
 export LIBGL_ALWAYS_SOFTWARE=1
 for _ in \$(seq 1 60); do
     if xdotool getdisplaygeometry >/dev/null 2>&1; then break; fi
@@ -71,16 +77,54 @@ sample() {
         printf "{\"case\":\"%s\",\"cpu_percent_of_core\":%.1f,\"seconds\":%.1f}\n", c, 100 * (b - a) / hz / (t1 - t0), t1 - t0 }'
 }
 stop() { kill \$1 2>/dev/null; wait \$1 2>/dev/null || true; }
+# The station case: four simulators, a bundle of four Auto slots on their ptys, its window.
+station() {
+    local sims=() slots="" i pty
+    for i in 1 2 3 4; do
+        "\$bin" sim window-cleaner > "\$work/sim\$i.out" 2> "\$work/sim\$i.err" &
+        sims+=(\$!)
+        pty=""
+        for _ in \$(seq 1 100); do
+            pty=\$(head -n 1 "\$work/sim\$i.out" 2>/dev/null || true)
+            [ -n "\$pty" ] && break
+            sleep 0.1
+        done
+        [ -n "\$pty" ] || { echo "simulator \$i printed no pty" >&2; exit 1; }
+        slots="\$slots (name: \"\$i\", fixture: \"F\$i\", port: Path(\"\$pty\"), profile: \"window-cleaner\", plan: \"wc\"),"
+    done
+    cat > "\$work/station.ron" <<RON
+(version: 1, id: "cpu", sound: false,
+ plans: { "wc": (start: Auto, steps: [Identify(hardware: [3]), WriteResult]) },
+ slots: [\$slots])
+RON
+    rm -rf "\$work/home"; mkdir -p "\$work/home"
+    HOME="\$work/home" XDG_CONFIG_HOME="\$work/home/config" XDG_DATA_HOME="\$work/home/data" \
+        "\$bin" station "\$work/station.ron" --records "\$work/station.sqlite" > "\$work/station.log" 2>&1 &
+    app=\$!
+    for _ in \$(seq 1 120); do
+        if xdotool search --name "botbench station" >/dev/null 2>&1; then break; fi
+        kill -0 \$app 2>/dev/null || { echo "the station exited:" >&2; cat "\$work/station.log" >&2; exit 1; }
+        sleep 0.5
+    done
+    sample station-4-slots
+    stop \$app
+    # One run a unit (none tested twice while polled): the records, on stderr.
+    "\$bin" records list --records "\$work/station.sqlite" --station cpu >&2 || true
+    for i in "\${sims[@]}"; do stop \$i; done
+}
 
-start_sim
-start_window Telemetry
-sample telemetry-50hz
-stop \$app
-start_window Tuning
-sample tuning-50hz
-stop \$sim
-sample disconnected
-stop \$app
+if [ "\$only" != station-4-slots ]; then
+    start_sim
+    start_window Telemetry
+    sample telemetry-50hz
+    stop \$app
+    start_window Tuning
+    sample tuning-50hz
+    stop \$sim
+    sample disconnected
+    stop \$app
+fi
+station
 SCRIPT
 chmod +x "$work/run.sh"
 xvfb-run -a -s "-screen 0 1280x800x24" "$work/run.sh"

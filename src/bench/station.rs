@@ -124,7 +124,7 @@ fn run_slots(kind: SimKind, steps: &str, slots: usize) -> Result<(Vec<f64>, f64)
                     return Err(format!(
                         "slot {} failed: {}",
                         ev.slot,
-                        reason.unwrap_or_default()
+                        reason.map(|r| r.to_string()).unwrap_or_default()
                     ));
                 }
                 let t0 = unit_start.get(&ev.slot).copied().unwrap_or(started);
@@ -180,7 +180,7 @@ fn run_pulled(pull: bool) -> Result<(Vec<f64>, Option<f64>), String> {
             }
             What::Verdict { pass, reason, .. } => {
                 verdicts += 1;
-                let reason = reason.unwrap_or_default();
+                let reason = reason.map(|r| r.to_string()).unwrap_or_default();
                 let t0 = unit_start.get(&ev.slot).copied().unwrap_or(started);
                 if ev.slot == lost && pull {
                     if pass || !reason.starts_with("link lost during") {

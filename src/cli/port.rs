@@ -353,15 +353,9 @@ pub(crate) fn cancel_on_ctrl_c() -> crate::ops::Cancel {
 fn remembered_port() -> Option<&'static str> {
     static REMEMBERED: std::sync::OnceLock<Option<String>> = std::sync::OnceLock::new();
     REMEMBERED
-        .get_or_init(|| {
-            let file = eframe::storage_dir("botbench")?.join("app.ron");
-            let text = std::fs::read_to_string(file).ok()?;
-            let kv: std::collections::HashMap<String, String> = ron::from_str(&text).ok()?;
-            let settings: crate::ui::Settings = ron::from_str(kv.get(eframe::APP_KEY)?).ok()?;
-            match settings.target {
-                crate::ui::Target::Port(path) if std::path::Path::new(&path).exists() => Some(path),
-                _ => None,
-            }
+        .get_or_init(|| match crate::ui::Settings::saved_by_window()?.target {
+            crate::ui::Target::Port(path) if std::path::Path::new(&path).exists() => Some(path),
+            _ => None,
         })
         .as_deref()
 }

@@ -220,7 +220,9 @@ fn print_event(ev: &Event, json: bool) {
                 outln!(
                     "#### FAIL #### slot {s} {unit} at {}: {}",
                     failed_step.as_deref().unwrap_or("?"),
-                    reason.as_deref().unwrap_or("?")
+                    reason
+                        .as_ref()
+                        .map_or_else(|| "?".into(), ToString::to_string)
                 );
             }
             if let Some(n) = earlier_runs.filter(|n| *n > 0) {

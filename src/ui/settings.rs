@@ -90,6 +90,18 @@ impl Default for Settings {
 }
 
 impl Settings {
+    /// The settings the ordinary window (`botbench gui`) saved last: eframe's storage file of
+    /// the app `botbench` (on Linux `$XDG_DATA_HOME/botbench/app.ron`, else
+    /// `~/.local/share/botbench/app.ron`), the settings under eframe's app key. `None` for a
+    /// window never run, or a file that cannot be read or parsed. What the station window's
+    /// engineer view starts from, and the port the command line remembers.
+    pub fn saved_by_window() -> Option<Self> {
+        let file = eframe::storage_dir("botbench")?.join("app.ron");
+        let text = std::fs::read_to_string(file).ok()?;
+        let kv: std::collections::HashMap<String, String> = ron::from_str(&text).ok()?;
+        ron::from_str(kv.get(eframe::APP_KEY)?).ok()
+    }
+
     /// The port settings saved for `profile` (none saved: the profile's rate, auto margin).
     pub fn port_of(&self, profile: &str) -> PortSettings {
         self.ports.get(profile).cloned().unwrap_or_default()

@@ -13,7 +13,7 @@ use botbench::ui::line::LineStation;
 use botbench::ui::line::sound::{Tone, VerdictSound};
 use eframe::egui;
 use egui_kittest::Harness;
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{By, Queryable};
 use std::path::Path;
 use std::time::Instant;
 
@@ -296,6 +296,69 @@ fn the_engineer_view_is_today_s_window_on_a_lent_slot_and_every_unlock_is_record
     h.state().stop_all();
 }
 
+#[test]
+fn the_engineer_view_starts_from_the_ordinary_window_s_saved_settings() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = idle_station(dir.path());
+    // What the ordinary window saved: a 100 ms answer margin (and 115200 baud) for the Tuya
+    // vacuum, telemetry at 10 Hz over 30 s.
+    let mut saved = botbench::ui::Settings {
+        poll_hz: Some(10.0),
+        window_secs: 30.0,
+        ..botbench::ui::Settings::default()
+    };
+    saved.ports.insert(
+        "tuya-vacuum".into(),
+        botbench::ui::settings::PortSettings {
+            baud: Some(115_200),
+            margin_ms: Some(100),
+        },
+    );
+    h.state_mut().window_settings = saved;
+    step_until(&mut h, "every slot idle on its port", |st| {
+        st.tiles
+            .iter()
+            .all(|t| t.waiting.is_some() && matches!(t.port, Some((true, _))))
+    });
+    h.get_by_label("Engineer unlock").click();
+    h.step();
+    h.step();
+    h.state_mut().engineer.typed = "password".into();
+    h.get_by_label("Unlock").click();
+    h.step();
+    h.step();
+    h.query_all_by_label("Open in engineer view")
+        .nth(2)
+        .unwrap()
+        .click();
+    h.step();
+    step_until(&mut h, "the engineer view connected", |st| {
+        st.lent
+            .as_ref()
+            .and_then(|l| l.app.as_ref())
+            .is_some_and(|app| app.station().connected())
+    });
+    h.step();
+    h.step();
+    let app = h.state().lent.as_ref().unwrap().app.as_ref().unwrap();
+    let port = app.settings.port_of("tuya-vacuum");
+    assert_eq!(port.margin_ms, Some(100), "{:?}", app.settings);
+    assert_eq!(app.settings.poll_hz, Some(10.0));
+    assert_eq!(app.settings.window_secs, 30.0);
+    // The slot's own rate (the Tuya vacuum's usual 9600), not the ordinary window's last.
+    assert_eq!(port.baud.unwrap_or(9600), 9600, "{port:?}");
+    // On screen: the connection bar's margin box says the saved margin.
+    assert!(
+        h.query_all(By::new().predicate(|n| {
+            n.value().as_deref() == Some("100 ms") || n.label().as_deref() == Some("100 ms")
+        }))
+        .next()
+        .is_some(),
+        "the margin box does not say 100 ms"
+    );
+    h.state().stop_all();
+}
+
 /// Every unlock, refusal, lent slot and lock of the engineer test is in the records of `dir`
 /// (waited for: each is saved on a thread of its own), with the bundle's hash `sha`; the
 /// reports' filter leaves them out.
@@ -454,7 +517,7 @@ fn the_port_line_and_the_history_are_as_tall_as_the_unit_line_and_fixtures_speak
         .unwrap()
         .rect();
     let history = h
-        .query_all_by_label_contains(" PASS")
+        .query_all_by_label_contains(" 合格")
         .last()
         .unwrap()
         .rect();

@@ -32,6 +32,7 @@ mod gui_line_station;
 mod gui_msp;
 mod gui_servo;
 mod gui_servo_setup;
+mod gui_station_reasons;
 mod gui_tuya;
 mod gui_tuya_field;
 mod gui_tuya_module;

@@ -125,41 +125,10 @@ pub fn selftest_record(report: &Report, given: &Given) -> Record {
 }
 
 /// A failed self-test step's reason, the same words for the same cause on every unit (the
-/// values are in its measurements and detail): `out of limits: batteryVoltage`, `link lost`.
+/// values are in its measurements and detail): `out of limits: batteryVoltage`, `link lost`
+/// ([`crate::ops::station::Reason::of_selftest_step`], typed, says it).
 fn selftest_reason(s: &StepResult) -> String {
-    let failed: Vec<&str> = s
-        .measurements
-        .iter()
-        .filter(|m| !m.pass)
-        .map(|m| m.name.as_str())
-        .collect();
-    if !failed.is_empty() {
-        return format!("out of limits: {}", failed.join(", "));
-    }
-    let head = |d: &str| d.split([';', '(']).next().unwrap_or(d).trim().to_string();
-    match s.kind.as_str() {
-        "Reads" if s.detail.contains("WRONG") || s.detail.contains("missing") => {
-            let wrong: Vec<&str> = s
-                .detail
-                .split(", ")
-                .filter(|p| p.contains("WRONG") || p.contains("missing"))
-                .filter_map(|p| p.split(' ').next())
-                .collect();
-            format!("unexpected value: {}", wrong.join(", "))
-        }
-        "Operator" if s.detail.contains("never") => format!(
-            "not toggled: {}",
-            s.detail.split_whitespace().next().unwrap_or_default()
-        ),
-        _ => {
-            let d = s.detail.split(": ").next().unwrap_or(&s.detail);
-            if s.detail.starts_with("link lost") || s.detail.starts_with("cancel") {
-                head(d)
-            } else {
-                head(&s.detail)
-            }
-        }
-    }
+    crate::ops::station::Reason::of_selftest_step(s).to_string()
 }
 
 /// Provisions the next fresh servo ([`provision::provision_next`]), records it (the serial

@@ -1,6 +1,7 @@
 //! What a slot tells whoever shows the station (the window, the headless JSON lines), and what
 //! it is told: events out, commands in, over crossbeam channels.
 
+use super::reason::Reason;
 use serde::Serialize;
 
 /// One thing that happened at a slot.
@@ -58,6 +59,10 @@ pub enum What {
         text: String,
         /// The question in 中文.
         text_zh: String,
+        /// A retry question's cause: why the step failed (typed: the window says it in 中文).
+        /// Not in the JSON lines, whose `text` says it.
+        #[serde(skip)]
+        why: Option<Reason>,
     },
     /// A step ended.
     StepDone {
@@ -80,8 +85,8 @@ pub enum What {
         failed_step: Option<String>,
         /// Its name in 中文.
         failed_step_zh: Option<String>,
-        /// Why it failed.
-        reason: Option<String>,
+        /// Why it failed (as JSON: its English, [`Reason`]'s `Display`).
+        reason: Option<Reason>,
         /// How many earlier runs of this serial the records hold.
         earlier_runs: Option<i64>,
         /// The record's UUID.

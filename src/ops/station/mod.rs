@@ -8,6 +8,7 @@
 //! - [`load`]: read, hash, check; [`plan`]: a plan's steps with their files parsed.
 //! - [`forward`]: the records waiting in a spool, counted and forwarded while the station runs.
 //! - [`access`]: the engineer's unlocks, refused passwords, locks and lent slots, recorded.
+//! - [`reason`]: why a step failed, typed (English for the records, 中文 in the window).
 //! - [`port`]: finding a slot's port by what stays true when its adapter is replugged.
 
 pub mod doc;
@@ -22,10 +23,12 @@ pub use plan::{LinePlan, LineStep, Op};
 pub mod access;
 pub mod event;
 pub mod forward;
+pub mod reason;
 pub mod runner;
 pub mod steps;
 
 pub use access::Access;
 pub use event::{Answer, Command, Event, What};
 pub use forward::Forwarder;
+pub use reason::Reason;
 pub use runner::{Hands, OperatorHands, SlotHandle, StationContext, spawn};

@@ -12,6 +12,7 @@ use super::StartMode;
 use super::event::{Answer, Command, Event, What};
 use super::load::Slot;
 use super::plan::LinePlan;
+use super::reason::Reason;
 use super::steps::{Desk, UnitRun, run_step};
 use crate::i18n::Text;
 use crate::link::{Client, Link, LinkOptions, PortOpener};
@@ -413,6 +414,7 @@ impl SlotRunner {
             provision: Default::default(),
         };
         let failed = self.steps(plan, &mut u, &mut record);
+        let mut why = None;
         record.unit = u.unit.clone();
         record.finish(None);
         match failed {
@@ -424,10 +426,11 @@ impl SlotRunner {
             Some((step, reason)) => {
                 record.verdict = Verdict::Fail;
                 record.failed_step = Some(step);
-                record.reason = Some(reason);
+                record.reason = Some(reason.to_string());
+                why = Some(reason);
             }
         }
-        self.keep(&mut record);
+        self.keep(&mut record, why);
         record
     }
 
@@ -439,8 +442,8 @@ impl SlotRunner {
         plan: &LinePlan,
         u: &mut UnitRun<'_>,
         record: &mut Record,
-    ) -> Option<(String, String)> {
-        let mut failed: Option<(String, String)> = None;
+    ) -> Option<(String, Reason)> {
+        let mut failed: Option<(String, Reason)> = None;
         let of = plan.steps.len();
         for (i, step) in plan.steps.iter().enumerate() {
             if failed.is_some() && !matches!(step.op, super::Op::WriteResult) {
@@ -449,7 +452,7 @@ impl SlotRunner {
             let mut attempt = 1;
             loop {
                 if self.cancel.is_cancelled() {
-                    return failed.or(Some((step.name.clone(), "cancelled".into())));
+                    return failed.or(Some((step.name.clone(), Reason::Cancelled)));
                 }
                 self.tell(What::Step {
                     index: i + 1,
@@ -469,23 +472,28 @@ impl SlotRunner {
                     name_zh: step.name_zh.clone(),
                     pass: done.failure.is_none(),
                     detail: match &done.failure {
-                        Some(reason) if seen.is_empty() || &seen == reason => reason.clone(),
+                        Some(reason) if seen.is_empty() || seen == reason.to_string() => {
+                            reason.to_string()
+                        }
                         Some(reason) => format!("{reason}: {seen}"),
                         None => seen,
                     },
                 });
                 record.steps.extend(done.records);
                 let Some(reason) = done.failure else { break };
-                if reason.starts_with("link lost") {
+                if reason.link_lost() {
                     return failed.or(Some((
                         step.name.clone(),
-                        format!("link lost during {}", step.name),
+                        Reason::LinkLostDuring {
+                            step: step.name.clone(),
+                            step_zh: step.name_zh.clone(),
+                        },
                     )));
                 }
                 if plan.retry_once
                     && attempt == 1
                     && !self.cancel.is_cancelled()
-                    && self.retry(&step.name, &reason)
+                    && self.retry(step, &reason)
                 {
                     attempt = 2;
                     continue;
@@ -500,21 +508,23 @@ impl SlotRunner {
         failed
     }
 
-    /// Asks the operator whether to retry `step`.
-    fn retry(&mut self, step: &str, reason: &str) -> bool {
+    /// Asks the operator whether to retry `step`, which failed for `reason` (the window says
+    /// the question in 中文 from the typed reason).
+    fn retry(&mut self, step: &super::LineStep, reason: &Reason) -> bool {
         let q = Text::new(
-            format!("{step} failed: {reason}. Retry once?"),
-            format!("{step} 失败:{reason}。重试一次?"),
+            format!("{} failed: {reason}. Retry once?", step.name),
+            format!("{} 失败:{reason}。重试一次?", step.name_zh),
         );
+        let mut desk = SlotDesk { runner: self };
         matches!(
-            SlotDesk { runner: self }.ask("retry", &q, Duration::from_secs(120)),
+            desk.ask_why("retry", &q, Duration::from_secs(120), Some(reason.clone())),
             Some(Answer::Yes)
         )
     }
 
     /// Keeps `record` (before the verdict is said) and says the verdict with the unit's
     /// earlier runs.
-    fn keep(&mut self, record: &mut Record) {
+    fn keep(&mut self, record: &mut Record, why: Option<Reason>) {
         let (kept, earlier, waiting) = {
             let mut recorder = self
                 .station
@@ -548,7 +558,7 @@ impl SlotRunner {
                     .find(|s| &s.name == f)
                     .map(|s| s.name_zh.clone())
             }),
-            reason: record.reason.clone(),
+            reason: why,
             earlier_runs: earlier,
             record: record.uuid.clone(),
             kept: kept.line(),
@@ -563,13 +573,21 @@ struct SlotDesk<'r> {
     runner: &'r mut SlotRunner,
 }
 
-impl Desk for SlotDesk<'_> {
-    fn ask(&mut self, kind: &'static str, text: &Text, timeout: Duration) -> Option<Answer> {
+impl SlotDesk<'_> {
+    /// [`Desk::ask`], with the cause of a retry question.
+    fn ask_why(
+        &mut self,
+        kind: &'static str,
+        text: &Text,
+        timeout: Duration,
+        why: Option<Reason>,
+    ) -> Option<Answer> {
         let r = &self.runner;
         r.tell(What::Ask {
             kind,
             text: text.en.clone(),
             text_zh: text.zh.clone(),
+            why,
         });
         let end = Instant::now() + timeout;
         loop {
@@ -592,12 +610,19 @@ impl Desk for SlotDesk<'_> {
             }
         }
     }
+}
+
+impl Desk for SlotDesk<'_> {
+    fn ask(&mut self, kind: &'static str, text: &Text, timeout: Duration) -> Option<Answer> {
+        self.ask_why(kind, text, timeout, None)
+    }
 
     fn prompt(&mut self, text: &Text) -> bool {
         self.runner.tell(What::Ask {
             kind: "prompt",
             text: text.en.clone(),
             text_zh: text.zh.clone(),
+            why: None,
         });
         self.runner.hands.prompt(&text.en)
     }

@@ -4,6 +4,7 @@
 
 use super::event::{Answer, What};
 use super::plan::Op;
+use super::reason::Reason;
 use crate::i18n::Text;
 use crate::ops::records::record::{Record, RunKind, StepClock, StepRecord, Unit};
 use crate::ops::records::runs::{self, Given};
@@ -43,7 +44,7 @@ pub struct Done {
     /// The step's records (several for a self-test or a provisioning).
     pub records: Vec<StepRecord>,
     /// Why it failed; `None` on PASS.
-    pub failure: Option<String>,
+    pub failure: Option<Reason>,
 }
 
 impl Done {
@@ -51,20 +52,26 @@ impl Done {
         name: &str,
         kind: &str,
         clock: &StepClock,
-        failure: Option<String>,
+        failure: Option<Reason>,
         detail: String,
     ) -> Self {
         Self {
-            records: vec![clock.end(name, kind, failure.clone(), detail)],
+            records: vec![clock.end(name, kind, failure.as_ref().map(Reason::to_string), detail)],
             failure,
         }
     }
 
-    /// From the steps of a sub-run's record (a self-test, a conformance run): FAIL with its
-    /// reason when the sub-run failed.
-    fn of_record(r: Record) -> Self {
-        let failure = (r.verdict == crate::ops::records::Verdict::Fail)
-            .then(|| r.reason.clone().unwrap_or_else(|| "failed".into()));
+    /// From the steps of a sub-run's record (a self-test, a conformance run): FAIL, when the
+    /// sub-run failed, with its reason typed by `typed` from the record (the record's own
+    /// words as they are where `typed` knows them not).
+    fn of_record(r: Record, typed: impl FnOnce(&Record) -> Option<Reason>) -> Self {
+        let failure = (r.verdict == crate::ops::records::Verdict::Fail).then(|| {
+            let words = r.reason.clone().unwrap_or_else(|| "failed".into());
+            // Typed only where its English is the record's, word for word.
+            typed(&r)
+                .filter(|t| t.to_string() == words)
+                .unwrap_or(Reason::Other(words))
+        });
         Self {
             records: r.steps,
             failure,
@@ -115,8 +122,10 @@ pub fn run_step(u: &mut UnitRun<'_>, name: &str, op: &Op, desk: &mut dyn Desk) -
             let mut keep = Collect::default();
             let mut run = Run::quiet(u.cancel);
             let given = Given::default();
-            let _ = runs::preset_apply(u.dev, preset, &given, &mut run, &mut |_, _| {}, &mut keep);
-            collected(keep, name, kind, &clock)
+            let done =
+                runs::preset_apply(u.dev, preset, &given, &mut run, &mut |_, _| {}, &mut keep);
+            let error = done.outcome.err();
+            collected(keep, name, kind, &clock, |r| preset_failure(r, error))
         }
         Op::Provision { plan, count, .. } => provision(u, plan, *count, &clock, name),
         Op::TuyaHandshake => handshake(u, name, &clock),
@@ -129,8 +138,10 @@ pub fn run_step(u: &mut UnitRun<'_>, name: &str, op: &Op, desk: &mut dyn Desk) -
                 ota_max: u.dev.profile.ota_max_bytes(),
             };
             let given = Given::default();
-            let _ = runs::tuya_conform(u.dev, &options, &given, &mut run, &mut |_| {}, &mut keep);
-            collected(keep, name, kind, &clock)
+            let done =
+                runs::tuya_conform(u.dev, &options, &given, &mut run, &mut |_| {}, &mut keep);
+            let error = done.outcome.err();
+            collected(keep, name, kind, &clock, |r| conform_failure(r, error))
         }
         Op::FirmwareUpdate { image, version, .. } => firmware(u, name, image, version, &clock),
         Op::WriteResult => write_result(u, name, &clock),
@@ -140,8 +151,8 @@ pub fn run_step(u: &mut UnitRun<'_>, name: &str, op: &Op, desk: &mut dyn Desk) -
 fn confirm(u: &UnitRun<'_>, name: &str, answer: Option<Answer>, clock: &StepClock) -> Done {
     let (failure, detail) = match answer {
         Some(Answer::Yes) => (None, "yes".to_string()),
-        Some(Answer::No) => (Some("operator said no".to_string()), "no".to_string()),
-        Some(Answer::Text(t)) => (Some("not a yes/no answer".to_string()), t),
+        Some(Answer::No) => (Some(Reason::OperatorSaidNo), "no".to_string()),
+        Some(Answer::Text(t)) => (Some(Reason::NotYesNo), t),
         None => (Some(unanswered(u.cancel)), String::new()),
     };
     Done::one(name, "Confirm", clock, failure, detail)
@@ -159,7 +170,8 @@ fn selftest(u: &mut UnitRun<'_>, plan: &crate::ops::selftest::Plan, desk: &mut d
         u.unit.hardware = Some(format!("{:#04x}", info.hw));
         u.unit.firmware = Some(info.firmware.clone());
     }
-    Done::of_record(runs::selftest_record(&report, &Given::default()))
+    let typed = selftest_failure(&report);
+    Done::of_record(runs::selftest_record(&report, &Given::default()), |_| typed)
 }
 
 fn handshake(u: &mut UnitRun<'_>, name: &str, clock: &StepClock) -> Done {
@@ -170,11 +182,11 @@ fn handshake(u: &mut UnitRun<'_>, name: &str, clock: &StepClock) -> Done {
             (None, info.raw)
         }
         Some(info) => (
-            Some("product info unreadable".to_string()),
+            Some(Reason::ProductInfoUnreadable),
             info.error.unwrap_or_default(),
         ),
         None => (
-            Some("no answer".to_string()),
+            Some(Reason::NoAnswer),
             "the MCU did not answer product info (0x01)".to_string(),
         ),
     };
@@ -211,25 +223,74 @@ fn firmware(
             name,
             "FirmwareUpdate",
             clock,
-            Some(link_reason(&e)),
+            Some(Reason::of_error(&e)),
             e.to_string(),
         ),
     }
 }
 
 /// Why nothing was answered: the slot was stopped, or the time ran out.
-fn unanswered(cancel: &Cancel) -> String {
+fn unanswered(cancel: &Cancel) -> Reason {
     if cancel.is_cancelled() {
-        "cancelled".into()
+        Reason::Cancelled
     } else {
-        "no answer in time".into()
+        Reason::NotAnsweredInTime
     }
 }
 
-fn collected(keep: Collect, name: &str, kind: &str, clock: &StepClock) -> Done {
+fn collected(
+    keep: Collect,
+    name: &str,
+    kind: &str,
+    clock: &StepClock,
+    typed: impl FnOnce(&Record) -> Option<Reason>,
+) -> Done {
     match keep.0 {
-        Some(r) => Done::of_record(r),
-        None => Done::one(name, kind, clock, Some("not run".into()), String::new()),
+        Some(r) => Done::of_record(r, typed),
+        None => Done::one(name, kind, clock, Some(Reason::NotRun), String::new()),
+    }
+}
+
+/// Why a preset's apply failed: a write that did not read back, the error that stopped it, or
+/// STOP.
+fn preset_failure(r: &Record, error: Option<crate::ops::OpError>) -> Option<Reason> {
+    let failed = r
+        .steps
+        .iter()
+        .find(|s| s.verdict == crate::ops::records::Verdict::Fail);
+    let differs = failed.and_then(|s| s.reason.as_deref()?.strip_prefix("read back differs: "));
+    match (differs, error) {
+        (Some(fields), _) => Some(Reason::ReadBackDiffers {
+            fields: fields.split(", ").map(str::to_string).collect(),
+        }),
+        (None, Some(e)) => Some(Reason::Error(e)),
+        (None, None) => Some(Reason::Cancelled),
+    }
+}
+
+/// Why a Tuya conformance run failed: its first mandatory check that failed (the record's step
+/// is the check's id, its reason the check's name), or the error that stopped it.
+fn conform_failure(r: &Record, error: Option<crate::ops::OpError>) -> Option<Reason> {
+    let failed = r
+        .steps
+        .iter()
+        .find(|s| s.verdict == crate::ops::records::Verdict::Fail);
+    match (failed, error) {
+        (Some(s), _) => Some(Reason::Conformance {
+            id: s.name.clone(),
+            name: s.reason.clone()?,
+        }),
+        (None, Some(e)) => Some(Reason::Error(e)),
+        (None, None) => None,
+    }
+}
+
+/// Why a self-test failed: its first failed step's reason, else why it was aborted (as its
+/// record says it, [`runs::selftest_record`]).
+fn selftest_failure(report: &crate::ops::selftest::Report) -> Option<Reason> {
+    match report.results.iter().find(|s| !s.pass) {
+        Some(step) => Some(Reason::of_selftest_step(step)),
+        None => report.aborted.as_deref().map(Reason::of_aborted),
     }
 }
 
@@ -247,7 +308,7 @@ fn identify(
                 name,
                 "Identify",
                 clock,
-                Some(link_reason(&e)),
+                Some(Reason::of_error(&e)),
                 e.to_string(),
             );
         }
@@ -257,23 +318,15 @@ fn identify(
     u.unit.build = Some(info.build.to_string());
     let detail = crate::ops::device::short_description(&info);
     let failure = if !hardware.is_empty() && !hardware.contains(&info.hw) {
-        Some(format!("hardware {:#04x} not allowed", info.hw))
+        Some(Reason::HardwareNotAllowed { hw: info.hw })
     } else if !firmware.is_empty() && !firmware.contains(&info.firmware) {
-        Some(format!("firmware {} not allowed", info.firmware))
+        Some(Reason::FirmwareNotAllowed {
+            firmware: info.firmware.clone(),
+        })
     } else {
         None
     };
     Done::one(name, "Identify", clock, failure, detail)
-}
-
-/// `link lost` or `no answer` for an exchange that failed, else the error's words.
-fn link_reason(e: &crate::ops::OpError) -> String {
-    use crate::link::ExchangeError;
-    match e {
-        crate::ops::OpError::Exchange(ExchangeError::Timeout { .. }) => "no answer".into(),
-        other if other.lost_port().is_some() => "link lost".into(),
-        other => other.to_string(),
-    }
 }
 
 fn scan(
@@ -296,7 +349,7 @@ fn scan(
                         name,
                         "Scan",
                         clock,
-                        Some("no serial scanned".into()),
+                        Some(Reason::NoSerialScanned),
                         String::new(),
                     );
                 }
@@ -314,13 +367,7 @@ fn scan(
     };
     if pattern.is_some_and(|p| !p.is_match(&code)) || code.is_empty() {
         u.unit.serial = None;
-        return Done::one(
-            name,
-            "Scan",
-            clock,
-            Some("serial does not match the pattern".into()),
-            code,
-        );
+        return Done::one(name, "Scan", clock, Some(Reason::SerialMismatch), code);
     }
     u.unit.serial = Some(code.clone());
     u.unit.serial_source = Some(crate::ops::records::SerialSource::Scanned);
@@ -341,7 +388,7 @@ fn measure(
                 name,
                 "Measure",
                 clock,
-                Some("not a value".into()),
+                Some(Reason::NotAValue),
                 String::new(),
             );
         }
@@ -356,21 +403,22 @@ fn measure(
         }
     };
     let Ok(value) = text.trim().parse::<f64>() else {
-        return Done::one(name, "Measure", clock, Some("not a number".into()), text);
+        return Done::one(name, "Measure", clock, Some(Reason::NotANumber), text);
     };
     let pass = value.is_finite() && (min..=max).contains(&value);
-    let failure = (!pass).then(|| format!("out of limits: {what}"));
+    let measured = crate::ops::records::Measurement {
+        name: what.to_string(),
+        unit: unit.to_string(),
+        low: Some(min),
+        high: Some(max),
+        value,
+        pass,
+    };
+    let failure = (!pass).then(|| Reason::OutOfLimits {
+        values: vec![measured.clone()],
+    });
     let mut done = Done::one(name, "Measure", clock, failure, format!("{value} {unit}"));
-    done.records[0]
-        .measurements
-        .push(crate::ops::records::Measurement {
-            name: what.to_string(),
-            unit: unit.to_string(),
-            low: Some(min),
-            high: Some(max),
-            value,
-            pass,
-        });
+    done.records[0].measurements.push(measured);
     done
 }
 
@@ -396,7 +444,15 @@ fn provision(
             u.unit.firmware.clone_from(&r.unit.firmware);
             u.unit.hardware.clone_from(&r.unit.hardware);
         }
-        let done = Done::of_record(r);
+        let done = Done::of_record(r, |_| match &outcome.result {
+            crate::ops::servo::provision::Outcome::Fail { step, reason } => {
+                Some(Reason::Provision {
+                    step: step.clone(),
+                    why: reason.clone(),
+                })
+            }
+            crate::ops::servo::provision::Outcome::Pass => None,
+        });
         all.extend(done.records);
         if done.failure.is_some() {
             failure = done.failure;
@@ -408,7 +464,7 @@ fn provision(
             name,
             "Provision",
             clock,
-            Some("no servo".into()),
+            Some(Reason::NoServo),
             String::new(),
         );
     }
@@ -434,7 +490,7 @@ fn tuya_status(u: &UnitRun<'_>, name: &str, clock: &StepClock) -> Done {
                 name,
                 "TuyaStatus",
                 clock,
-                Some("data points missing or impossible".into()),
+                Some(Reason::DataPointsMissing),
                 format!(
                     "missing [{}], impossible [{}]",
                     missing.join(", "),
@@ -446,7 +502,7 @@ fn tuya_status(u: &UnitRun<'_>, name: &str, clock: &StepClock) -> Done {
             name,
             "TuyaStatus",
             clock,
-            Some(link_reason(&e)),
+            Some(Reason::of_error(&e)),
             e.to_string(),
         ),
     }
@@ -458,7 +514,7 @@ fn write_result(u: &UnitRun<'_>, name: &str, clock: &StepClock) -> Done {
             name,
             "WriteResult",
             clock,
-            Some("no MSP_SET_AUTO_TEST_RESULT".into()),
+            Some(Reason::NoResultCommand),
             String::new(),
         );
     };
@@ -479,14 +535,14 @@ fn write_result(u: &UnitRun<'_>, name: &str, clock: &StepClock) -> Done {
             name,
             "WriteResult",
             clock,
-            Some("read back differs".into()),
+            Some(Reason::ReadBackDiffers { fields: Vec::new() }),
             format!("{checks:?}"),
         ),
         Err(e) => Done::one(
             name,
             "WriteResult",
             clock,
-            Some(link_reason(&e)),
+            Some(Reason::of_error(&e)),
             e.to_string(),
         ),
     }

@@ -230,6 +230,8 @@ impl App {
             Ok(line) => {
                 let mut line = line.with_sound_chosen(self.settings.station_sound);
                 line.lang = self.settings.lang;
+                // Its engineer view starts from this window's settings.
+                line.window_settings = self.settings.clone();
                 self.line = Some(Box::new(line));
             }
             Err(e) => self.station_mut().notify(Notice::error(Text::new(

@@ -8,7 +8,9 @@
 //! profile, as an ordinary window's station would. Closing the view (Back to the station, or
 //! Lock) drops that window's link first, then gives the slot back
 //! ([`crate::ops::station::Command::Return`]): the runner opens its port again and waits for
-//! the next unit. The other slots run on meanwhile. A slot running a unit is not lent: the
+//! the next unit. The other slots run on meanwhile. The view starts from the ordinary
+//! window's saved settings (each profile's margin, the panel, the telemetry rate, the files
+//! last used), on the slot's port, profile and rate, in the station's language. A slot running a unit is not lent: the
 //! button shows only while the slot waits for a unit.
 
 use crate::ui::App;
@@ -37,22 +39,28 @@ impl Lent {
         }
     }
 
-    /// Once the port is given up: today's window on it (`opener` opens it, `profile` speaks to
-    /// it, shown in `lang`), then its frame's work.
+    /// Once the port is given up: today's window on it, then its frame's work. The window
+    /// starts from `saved`, the ordinary window's saved settings (each profile's answer margin,
+    /// the panel, the telemetry rate and window, the files last used), on the slot's port
+    /// (`opener` opens it) with the slot's `profile`, at that profile's usual rate (the one the
+    /// slot runs at, whatever rate the ordinary window last used), shown in `lang` (the
+    /// station's: one window, one language).
     pub fn logic(
         &mut self,
         ctx: &egui::Context,
         opener: &crate::link::PortOpener,
         profile: &str,
         lang: crate::i18n::Lang,
+        saved: &crate::ui::Settings,
     ) {
         if let (Some(port), None, None) = (&self.port, &self.app, &self.error) {
-            let settings = crate::ui::Settings {
+            let mut settings = crate::ui::Settings {
                 target: crate::ui::Target::Port(port.clone()),
                 profile: profile.to_string(),
                 lang,
-                ..crate::ui::Settings::default()
+                ..saved.clone()
             };
+            settings.port_mut().baud = None;
             match App::new(ctx, settings, opener.clone()) {
                 Ok(app) => self.app = Some(Box::new(app)),
                 Err(e) => self.error = Some(e.to_string()),

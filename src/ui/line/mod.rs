@@ -13,6 +13,7 @@
 mod engineer;
 pub mod lent;
 mod open;
+mod reason;
 pub mod shots;
 pub mod sound;
 mod tile;
@@ -48,8 +49,8 @@ pub struct TileState {
     pub step: Option<(usize, usize, Text)>,
     /// The question waiting: kind and text in both languages.
     pub asking: Option<(&'static str, String, String)>,
-    /// The last verdict: pass, failed step (both languages), reason.
-    pub verdict: Option<(bool, Option<Text>, Option<String>)>,
+    /// The last verdict: pass, failed step (both languages), why (typed: said in either).
+    pub verdict: Option<(bool, Option<Text>, Option<crate::ops::station::Reason>)>,
     /// Recent verdicts, newest first: (pass, the serial, or the verdict's local time
     /// `HH:MM:SS` for a unit without one).
     pub history: VecDeque<(bool, String)>,
@@ -97,6 +98,9 @@ pub struct LineStation {
     pub sound_chosen: Option<bool>,
     /// What plays the verdict's sound ([`sound::SystemPlayer`]; a counter in tests).
     pub sounder: Box<dyn sound::VerdictSound>,
+    /// The ordinary window's saved settings ([`crate::ui::Settings::saved_by_window`], or the
+    /// window's own under File > Open station): the engineer view starts from them.
+    pub window_settings: crate::ui::Settings,
     slots: Vec<SlotHandle>,
     events: Receiver<Event>,
     forwarder: Option<crate::ops::station::Forwarder>,
@@ -155,6 +159,7 @@ impl LineStation {
             sound: bundle.sound,
             sound_chosen: None,
             sounder: Box::new(sound::SystemPlayer),
+            window_settings: crate::ui::Settings::default(),
             slots,
             events,
             forwarder: None,
@@ -185,7 +190,13 @@ impl LineStation {
             let opener = self.slots.iter().find(|s| s.name == lent.slot);
             let profile = self.tiles.iter().find(|t| t.slot == lent.slot);
             if let (Some(handle), Some(tile)) = (opener, profile) {
-                lent.logic(ctx, &handle.opener, &tile.profile, self.lang);
+                lent.logic(
+                    ctx,
+                    &handle.opener,
+                    &tile.profile,
+                    self.lang,
+                    &self.window_settings,
+                );
             }
         }
         ctx.request_repaint_after(std::time::Duration::from_millis(100));
@@ -288,7 +299,18 @@ impl LineStation {
                 kind,
                 text,
                 text_zh,
-            } => t.asking = Some((kind, text, text_zh)),
+                why,
+            } => {
+                // A retry question says why the step failed in 中文 from its typed reason.
+                let text_zh = match (why, &t.step) {
+                    (Some(why), Some((_, _, step))) => {
+                        use crate::ui::zh::Zh;
+                        format!("{} 失败:{}。重试一次?", step.zh, why.zh())
+                    }
+                    _ => text_zh,
+                };
+                t.asking = Some((kind, text, text_zh));
+            }
             What::StepDone { .. } => t.asking = None,
             What::Verdict {
                 pass,
@@ -571,6 +593,10 @@ pub fn run(
         station.sounder = Box::new(sound::Silent);
     }
     station.shots = screenshots.map(shots::StationShots::new);
+    // The engineer view is today's window with the settings it saved (a tour's are defaults).
+    if station.shots.is_none() {
+        station.window_settings = crate::ui::Settings::saved_by_window().unwrap_or_default();
+    }
     // `BOTBENCH_WINDOW_SIZE=1024x600`: the window's size where no window manager maximises it
     // (the screenshots under Xvfb).
     let size = std::env::var("BOTBENCH_WINDOW_SIZE")

@@ -1,8 +1,10 @@
 //! The station window's screenshot tour (`botbench station BUNDLE --screenshots DIR`, used by
 //! `.ci/screenshot.sh` with the demo bundle): once every slot is busy (a question waiting or a
 //! verdict out), the window is shot at each size of [`crate::ui::tour::SIZES`] in English and
-//! 中文 (`station-question-<w>x<h>-<lang>.png`); then every question is answered yes, and once
-//! every slot has its verdict, shot again (`station-verdicts-...`); then the window closes.
+//! 中文 (`station-question-<w>x<h>-<lang>.png`); then the first yes/no question is answered no
+//! (a FAIL banner with its failed step and reason, as an operator sees one) and every other
+//! yes, and once every slot has its verdict, shot again (`station-verdicts-...`); then the
+//! window closes.
 
 use super::LineStation;
 use crate::i18n::Lang;
@@ -103,9 +105,17 @@ impl StationShots {
                     }
                 }
                 None if what == "question" => {
+                    let mut said_no = false;
                     for t in &st.tiles {
+                        let yes_no = matches!(&t.asking, Some(("confirm", _, _)));
+                        let answer = if yes_no && !said_no {
+                            said_no = true;
+                            Answer::No
+                        } else {
+                            Answer::Yes
+                        };
                         if t.asking.is_some() {
-                            st.send(&t.slot, Command::Answer(Answer::Yes));
+                            st.send(&t.slot, Command::Answer(answer));
                         }
                     }
                     Phase::Wait("verdicts", Instant::now())

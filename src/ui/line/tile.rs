@@ -169,16 +169,6 @@ fn port_missing_zh(why: &str) -> String {
     }
 }
 
-/// Why a step failed, in 中文, where the runner's words are known (`link lost during <step>`,
-/// with the step's 中文 name `step_zh`); anything else as it is.
-fn reason_zh(why: &str, step_zh: &str) -> String {
-    if why.starts_with("link lost during ") {
-        format!("{step_zh} 中连接中断")
-    } else {
-        why.to_string()
-    }
-}
-
 fn step_line(ui: &mut egui::Ui, t: &TileState, zh: bool) {
     match (&t.step, t.waiting) {
         (Some((i, of, name)), _) if t.verdict.is_none() => {
@@ -226,18 +216,20 @@ fn banner(ui: &mut egui::Ui, t: &TileState, zh: bool) {
                         .color(Color32::WHITE),
                 );
                 if let Some(step) = step {
-                    let why = reason.as_deref().unwrap_or_default();
-                    let why = if zh {
-                        reason_zh(why, &step.zh)
-                    } else {
-                        why.to_string()
+                    let why = match reason {
+                        Some(why) if zh => crate::ui::zh::Zh::zh(why),
+                        Some(why) => why.to_string(),
+                        None => String::new(),
                     };
                     let step = if zh { &step.zh } else { &step.en };
-                    ui.label(
-                        RichText::new(format!("{step}: {why}"))
-                            .size(20.0)
-                            .color(Color32::WHITE),
-                    );
+                    // The step, then why on a line of its own: each read whole from two
+                    // metres, a question mark in the step's name not run into the reason.
+                    let text = if why.is_empty() {
+                        step.clone()
+                    } else {
+                        format!("{step}\n{why}")
+                    };
+                    ui.label(RichText::new(text).size(20.0).color(Color32::WHITE));
                 }
             });
         });
@@ -300,10 +292,11 @@ fn history(ui: &mut egui::Ui, t: &TileState, zh: bool) {
     ui.horizontal_wrapped(|ui| {
         ui.label(RichText::new(if zh { "记录:" } else { "History:" }).size(READABLE));
         for (pass, unit) in &t.history {
-            let (word, color) = if *pass {
-                ("PASS", PASS_GREEN)
-            } else {
-                ("FAIL", FAIL_RED)
+            let (word, color) = match (*pass, zh) {
+                (true, false) => ("PASS", PASS_GREEN),
+                (true, true) => ("合格", PASS_GREEN),
+                (false, false) => ("FAIL", FAIL_RED),
+                (false, true) => ("不合格", FAIL_RED),
             };
             ui.label(
                 RichText::new(format!("{unit} {word}"))
@@ -328,15 +321,6 @@ mod tests {
         assert_eq!(
             port_missing_zh("no adapter with serial number A1: unplugged?"),
             "没有序列号为 A1 的适配器:已拔出?"
-        );
-        assert_eq!(
-            reason_zh("link lost during Write result", "写入结果"),
-            "写入结果 中连接中断"
-        );
-        // Words not known stay as they came.
-        assert_eq!(
-            reason_zh("spray current 0.1 A < 0.2 A", "喷水"),
-            "spray current 0.1 A < 0.2 A"
         );
     }
 }
