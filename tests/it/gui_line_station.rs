@@ -257,19 +257,7 @@ fn the_engineer_view_is_today_s_window_on_a_lent_slot_and_every_unlock_is_record
     assert_eq!(h.query_all_by_label("Open in engineer view").count(), 3);
     // Slot 3 (the Tuya vacuum) in today's window: its connection bar, connected to the port
     // the slot gave up.
-    h.query_all_by_label("Open in engineer view")
-        .nth(2)
-        .unwrap()
-        .click();
-    h.step();
-    step_until(&mut h, "the engineer view connected", |st| {
-        st.lent
-            .as_ref()
-            .and_then(|l| l.app.as_ref())
-            .is_some_and(|app| app.station().connected())
-    });
-    h.step();
-    h.step();
+    open_slot_3_in_engineer_view(&mut h);
     assert!(h.query_by_label("Margin").is_some());
     assert!(h.query_by_label("Disconnect").is_some());
     assert!(h.query_by_label_contains("Engineer view: slot 3").is_some());
@@ -327,19 +315,7 @@ fn the_engineer_view_starts_from_the_ordinary_window_s_saved_settings() {
     h.get_by_label("Unlock").click();
     h.step();
     h.step();
-    h.query_all_by_label("Open in engineer view")
-        .nth(2)
-        .unwrap()
-        .click();
-    h.step();
-    step_until(&mut h, "the engineer view connected", |st| {
-        st.lent
-            .as_ref()
-            .and_then(|l| l.app.as_ref())
-            .is_some_and(|app| app.station().connected())
-    });
-    h.step();
-    h.step();
+    open_slot_3_in_engineer_view(&mut h);
     let app = h.state().lent.as_ref().unwrap().app.as_ref().unwrap();
     let port = app.settings.port_of("tuya-vacuum");
     assert_eq!(port.margin_ms, Some(100), "{:?}", app.settings);
@@ -555,14 +531,7 @@ fn sounding_window(
     Harness<'static, LineStation>,
     crossbeam_channel::Sender<station::Event>,
 ) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/demo-station.ron");
-    let registry = botbench::profile::Registry::builtin().unwrap();
-    let sims = SimKind::names_with_profiles();
-    let cx = LoadContext {
-        registry: &registry,
-        simulated: &sims,
-    };
-    let bundle = station::load(&path, &cx).unwrap();
+    let bundle = crate::support::demo_bundle();
     assert!(bundle.sound, "the demo bundle sounds its verdicts");
     let (tx, rx) = crossbeam_channel::unbounded();
     let mut st = LineStation::new(&bundle, Vec::new(), rx);
@@ -646,4 +615,22 @@ fn a_bundle_may_start_silent_and_a_saved_choice_outranks_it() {
     let st = st.with_sound_chosen(Some(true));
     assert!(st.sound);
     assert_eq!(st.sound_chosen, Some(true));
+}
+
+/// Clicks slot 3's "Open in engineer view" (the Tuya vacuum) and waits until today's window on
+/// it is connected to the port the slot gave up.
+fn open_slot_3_in_engineer_view(h: &mut Harness<'static, LineStation>) {
+    h.query_all_by_label("Open in engineer view")
+        .nth(2)
+        .unwrap()
+        .click();
+    h.step();
+    step_until(h, "the engineer view connected", |st| {
+        st.lent
+            .as_ref()
+            .and_then(|l| l.app.as_ref())
+            .is_some_and(|app| app.station().connected())
+    });
+    h.step();
+    h.step();
 }

@@ -20,14 +20,7 @@ fn chinese_window() -> (
     Harness<'static, LineStation>,
     crossbeam_channel::Sender<station::Event>,
 ) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/demo-station.ron");
-    let registry = botbench::profile::Registry::builtin().unwrap();
-    let sims = SimKind::names_with_profiles();
-    let cx = LoadContext {
-        registry: &registry,
-        simulated: &sims,
-    };
-    let bundle = station::load(&path, &cx).unwrap();
+    let bundle = crate::support::demo_bundle();
     let (tx, rx) = crossbeam_channel::unbounded();
     let mut st = LineStation::new(&bundle, Vec::new(), rx);
     st.sounder = Box::new(botbench::ui::line::sound::Silent);

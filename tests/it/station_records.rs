@@ -4,6 +4,7 @@
 //! `records_pg.rs` shows the forwarder sending them on once the server is back.
 
 use crate::support::cli::WATCHDOG as PATIENCE;
+use crate::support::demo_bundle;
 use botbench::i18n::Lang;
 use botbench::link::PortOpener;
 use botbench::ops::records::{LineStore, Recorder, RunContext};
@@ -18,18 +19,6 @@ use std::time::Instant;
 
 /// A PostgreSQL URL nobody answers at: port 1 of this machine.
 pub const AWAY: &str = "postgres://botbench@127.0.0.1:1/line";
-
-/// The demo bundle (three simulated slots), loaded.
-pub fn demo_bundle() -> Bundle {
-    let registry = botbench::profile::Registry::builtin().unwrap();
-    let sims = SimKind::names_with_profiles();
-    let cx = LoadContext {
-        registry: &registry,
-        simulated: &sims,
-    };
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/demo-station.ron");
-    station::load(&path, &cx).unwrap()
-}
 
 /// The demo station, one unit per slot, recording to the line server at `url` behind the
 /// spool `spool`.

@@ -288,3 +288,15 @@ pub fn selftest_plan(corner_timeout_ms: u64) -> String {
         text.replace(from, to)
     })
 }
+
+/// The demo bundle (three simulated slots), loaded.
+pub fn demo_bundle() -> botbench::ops::station::Bundle {
+    let registry = botbench::profile::Registry::builtin().unwrap();
+    let sims = botbench::sim::SimKind::names_with_profiles();
+    let cx = botbench::ops::station::LoadContext {
+        registry: &registry,
+        simulated: &sims,
+    };
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("presets/demo-station.ron");
+    botbench::ops::station::load(&path, &cx).unwrap()
+}
