@@ -7,13 +7,11 @@ use botbench::i18n::Lang;
 use botbench::link::{CommandName, ExchangeError};
 use botbench::ops::OpError;
 use botbench::ops::records::Measurement;
-use botbench::ops::station::{self, LoadContext, Reason, What};
-use botbench::sim::SimKind;
+use botbench::ops::station::{self, Reason, What};
 use botbench::ui::line::LineStation;
 use eframe::egui;
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
-use std::path::Path;
 
 /// The demo bundle's window in 中文 with no slot running: its events come from the test.
 fn chinese_window() -> (
