@@ -273,26 +273,26 @@ struct Lifted {
 /// one, so that `next` on its stdin presents a fresh unit after a silence.
 pub struct Lift {
     device: SharedDevice,
-    off_fixture: Arc<Mutex<Option<Lifted>>>,
+    lifted_until: Arc<Mutex<Option<Lifted>>>,
 }
 
 /// Lifts a [`Lift`]'s device off for a while.
 #[derive(Clone)]
 pub struct LiftHandle {
-    off_fixture: Arc<Mutex<Option<Lifted>>>,
+    lifted_until: Arc<Mutex<Option<Lifted>>>,
 }
 
 impl Lift {
     /// `device` on a fixture, and the handle that lifts it.
     pub fn new(device: SharedDevice) -> (Lift, LiftHandle) {
-        let off_fixture = Arc::new(Mutex::new(None));
+        let lifted_until = Arc::new(Mutex::new(None));
         let handle = LiftHandle {
-            off_fixture: off_fixture.clone(),
+            lifted_until: lifted_until.clone(),
         };
         (
             Lift {
                 device,
-                off_fixture,
+                lifted_until,
             },
             handle,
         )
@@ -301,7 +301,7 @@ impl Lift {
     /// Whether the unit is off the fixture at `now`; `heard`: a request came (left unanswered
     /// while lifted, and counted).
     fn lifted(&self, now: std::time::Instant, heard: bool) -> bool {
-        let mut lifted = self.off_fixture.lock().unwrap_or_else(|e| e.into_inner());
+        let mut lifted = self.lifted_until.lock().unwrap_or_else(|e| e.into_inner());
         let Some(l) = lifted.as_mut() else {
             return false;
         };
@@ -327,7 +327,7 @@ impl LiftHandle {
     /// [`SWAP_MAX`]).
     pub fn lift_for(&self, gap: Duration) {
         let now = std::time::Instant::now();
-        *self.off_fixture.lock().unwrap_or_else(|e| e.into_inner()) = Some(Lifted {
+        *self.lifted_until.lock().unwrap_or_else(|e| e.into_inner()) = Some(Lifted {
             until: now + gap,
             latest: now + gap.max(SWAP_MAX),
             polls: 0,
