@@ -240,32 +240,19 @@ pub fn start_station(
 /// identity polls).
 pub const SWAP_GAP: Duration = Duration::from_millis(1500);
 
-/// How many of the host's polls a lifted fixture leaves wholly unanswered at least, however
-/// long its gap has lasted: a station takes its fixture for empty after
-/// [`crate::ops::station::runner::EMPTY_AFTER_POLLS`] polls in a row unanswered, and one more
-/// allows for a poll split in two by a host that ran late in its middle. A person swapping a
-/// unit takes longer than any station's polls; a gap measured only in time is missed by a
-/// station whose thread ran late for longer than it (seen under two CPU-bound loops: the next
-/// window cleaner never tested).
-pub const SWAP_POLLS: u32 = 3;
-/// A request that comes this long after the last one heard begins another poll: a station
-/// polls an idle fixture every 0.5 s ([`crate::ops::station::runner::IDLE_POLL`]), and the
-/// requests of one poll (attempts, a servo search's baud rates) follow each other closely.
-pub const POLL_GAP: Duration = Duration::from_millis(400);
-/// The longest a lifted fixture stays silent, polled or not (a window polling without pause
-/// is one long poll).
-pub const SWAP_MAX: Duration = Duration::from_secs(10);
+/// How many requests a lifted fixture leaves unanswered at least, however long its gap has
+/// lasted: two identity polls' worth (CMD_VERSION's two attempts each), so that a station sees
+/// the empty fixture whatever its PC's load. A person swapping a unit takes longer than any
+/// station's polls; a gap measured only in time is missed by a station whose thread ran late
+/// for longer than it (seen under two CPU-bound loops: the next window cleaner never tested).
+pub const SWAP_IGNORED: u32 = 4;
 
-/// A lifted fixture: silent until `until`, and until it has left [`SWAP_POLLS`] polls wholly
-/// unanswered (it ends only as a new poll begins, never in the middle of one), or `latest`.
+/// A lifted fixture: silent until `until` and until it has left [`SWAP_IGNORED`] requests
+/// unanswered.
 #[derive(Debug, Clone, Copy)]
 struct Lifted {
     until: std::time::Instant,
-    latest: std::time::Instant,
-    /// Polls heard so far.
-    polls: u32,
-    /// When the last request was heard.
-    last_heard: Option<std::time::Instant>,
+    ignored: u32,
 }
 
 /// A fixture's device that can be lifted off: while lifted it hears nothing and says nothing
@@ -305,33 +292,21 @@ impl Lift {
         let Some(l) = lifted.as_mut() else {
             return false;
         };
-        // A request after a pause begins a poll; a tick after one finds the host between polls.
-        let between_polls = l
-            .last_heard
-            .is_none_or(|t| now.saturating_duration_since(t) >= POLL_GAP);
-        let placed = now >= l.latest || (now >= l.until && l.polls >= SWAP_POLLS && between_polls);
-        if placed {
-            *lifted = None;
-            return false;
+        if now < l.until || l.ignored < SWAP_IGNORED {
+            l.ignored += u32::from(heard);
+            return true;
         }
-        if heard {
-            l.polls += u32::from(between_polls);
-            l.last_heard = Some(now);
-        }
-        true
+        *lifted = None;
+        false
     }
 }
 
 impl LiftHandle {
-    /// Silent from now for `gap`, and until [`SWAP_POLLS`] polls went unanswered (at most
-    /// [`SWAP_MAX`]).
+    /// Silent from now for `gap`, and until [`SWAP_IGNORED`] requests went unanswered.
     pub fn lift_for(&self, gap: Duration) {
-        let now = std::time::Instant::now();
         *self.lifted_until.lock().unwrap_or_else(|e| e.into_inner()) = Some(Lifted {
-            until: now + gap,
-            latest: now + gap.max(SWAP_MAX),
-            polls: 0,
-            last_heard: None,
+            until: std::time::Instant::now() + gap,
+            ignored: 0,
         });
     }
 }
@@ -379,45 +354,20 @@ mod tests {
     }
 
     /// A swap's gap that has passed before the station looked (its thread ran late) still
-    /// leaves the station's next polls wholly unanswered, however many requests each sends
-    /// (a servo search asks at every baud rate): the empty fixture is seen whatever the load.
+    /// leaves the station's next polls unanswered: the empty fixture is seen whatever the load.
     #[test]
-    fn a_lifted_fixture_stays_silent_for_whole_polls_until_the_station_could_see_it_empty() {
+    fn a_lifted_fixture_stays_silent_until_the_station_could_see_it_empty() {
         let (mut lift, handle) = Lift::new(Arc::new(Mutex::new(Answers)));
         assert_eq!(lift.receive(&[0], 9600, Instant::now()).len(), 1);
         handle.lift_for(Duration::ZERO);
-        let mut t = Instant::now() + Duration::from_secs(1);
-        for poll in 1..=SWAP_POLLS {
-            for request in 1..=7 {
-                assert!(
-                    lift.receive(&[0], 9600, t).is_empty(),
-                    "poll {poll}, request {request} answered, the gap long past"
-                );
-                t += Duration::from_millis(30);
-            }
-            assert!(lift.tick(t).is_empty(), "answered within a poll");
-            t += Duration::from_millis(500);
+        let later = Instant::now() + Duration::from_secs(5);
+        for n in 1..=SWAP_IGNORED {
+            assert!(lift.tick(later).is_empty());
+            assert!(
+                lift.receive(&[0], 9600, later).is_empty(),
+                "request {n} answered, the gap long past"
+            );
         }
-        assert_eq!(
-            lift.receive(&[0], 9600, t).len(),
-            1,
-            "placed as a poll begins"
-        );
-    }
-
-    /// A host that polls without a pause (a window's telemetry) finds the unit back after
-    /// [`SWAP_MAX`], not never.
-    #[test]
-    fn a_fixture_polled_without_a_pause_is_placed_again_at_the_latest() {
-        let (mut lift, handle) = Lift::new(Arc::new(Mutex::new(Answers)));
-        handle.lift_for(Duration::ZERO);
-        let start = Instant::now();
-        let mut t = start;
-        while t < start + SWAP_MAX - Duration::from_millis(100) {
-            assert!(lift.receive(&[0], 9600, t).is_empty(), "answered mid-poll");
-            t += Duration::from_millis(20);
-        }
-        let later = start + SWAP_MAX + Duration::from_millis(100);
-        assert_eq!(lift.receive(&[0], 9600, later).len(), 1);
+        assert_eq!(lift.receive(&[0], 9600, later).len(), 1, "placed again");
     }
 }

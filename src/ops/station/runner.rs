@@ -308,7 +308,7 @@ impl SlotRunner {
             StartMode::Auto => "auto",
         };
         self.tell(What::Waiting { how });
-        let mut watch = FixtureWatch::new(ready);
+        let mut absent_seen = ready;
         loop {
             if self.cancel.is_cancelled() {
                 return Start::Stopped;
@@ -326,18 +326,16 @@ impl SlotRunner {
             }
             if plan.start == StartMode::Auto {
                 match self.probe(client) {
-                    Probe::Present(id) => {
-                        // Another unit answering without a silence between (swapped quickly):
-                        // its identity differs from the one last tested here.
-                        let other =
-                            matches!((&id, &self.last_identity), (Some(id), Some(l)) if id != l);
-                        if watch.polled(true) || other {
-                            return Start::Go(None);
-                        }
+                    Probe::Present(_) if absent_seen => return Start::Go(None),
+                    // Another unit answering without a silence between (swapped quickly): its
+                    // identity differs from the one last tested here.
+                    Probe::Present(Some(id))
+                        if self.last_identity.as_ref().is_some_and(|l| *l != id) =>
+                    {
+                        return Start::Go(None);
                     }
-                    Probe::Absent => {
-                        watch.polled(false);
-                    }
+                    Probe::Present(_) => {}
+                    Probe::Absent => absent_seen = true,
                     Probe::Lost => return Start::Lost,
                 }
             }
@@ -374,45 +372,6 @@ impl SlotRunner {
             Err(e) if e.lost_port().is_some() => Probe::Lost,
             Err(_) => Probe::Absent,
         }
-    }
-}
-
-/// How many identity polls in a row must go unanswered before an idle fixture counts as empty:
-/// one poll whose answers were lost (a noisy line, a host that ran late) is not a unit lifted
-/// off, and a person's swap takes longer than two polls (1 s). Seen with one: a unit tested
-/// twice, its fixture taken for empty after one timed-out poll at load 14-19.
-pub const EMPTY_AFTER_POLLS: u32 = 2;
-
-/// What the idle fixture's polls have shown since its last unit.
-#[derive(Debug, Clone, Copy)]
-struct FixtureWatch {
-    /// Unanswered polls in a row, up to now.
-    absent_in_a_row: u32,
-    /// The fixture has been seen empty ([`EMPTY_AFTER_POLLS`] in a row), or its first unit is
-    /// awaited (`ready`): the next unit that answers is a new one.
-    empty_seen: bool,
-}
-
-impl FixtureWatch {
-    fn new(ready: bool) -> Self {
-        Self {
-            absent_in_a_row: 0,
-            empty_seen: ready,
-        }
-    }
-
-    /// A poll found a unit (`present`) or none; returns whether the unit present is a new one
-    /// by the silence before it.
-    fn polled(&mut self, present: bool) -> bool {
-        if present {
-            self.absent_in_a_row = 0;
-            return self.empty_seen;
-        }
-        self.absent_in_a_row += 1;
-        if self.absent_in_a_row >= EMPTY_AFTER_POLLS {
-            self.empty_seen = true;
-        }
-        false
     }
 }
 
@@ -670,26 +629,5 @@ impl Desk for SlotDesk<'_> {
 
     fn tell(&mut self, what: What) {
         self.runner.tell(what);
-    }
-}
-
-#[cfg(test)]
-mod fixture_watch_tests {
-    use super::{EMPTY_AFTER_POLLS, FixtureWatch};
-
-    #[test]
-    fn one_unanswered_poll_is_not_an_empty_fixture_two_in_a_row_are() {
-        let mut w = FixtureWatch::new(false);
-        assert!(!w.polled(true), "the unit just tested");
-        // One poll lost (a noisy line, a late host): the same unit answering again.
-        assert!(!w.polled(false));
-        assert!(!w.polled(true), "one lost poll took the fixture for empty");
-        // A swap: the fixture silent for two polls, then a unit.
-        for _ in 0..EMPTY_AFTER_POLLS {
-            assert!(!w.polled(false));
-        }
-        assert!(w.polled(true), "the next unit after a silence");
-        // The first unit of a fixture is awaited without a silence.
-        assert!(FixtureWatch::new(true).polled(true));
     }
 }
