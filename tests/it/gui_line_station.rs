@@ -141,16 +141,10 @@ fn the_operator_view_is_locked_until_the_engineer_s_password_unlocks_it() {
     h.get_by_label("Engineer unlock").click();
     h.step();
     h.step();
-    h.state_mut().engineer.typed = "not it".into();
-    h.get_by_label("Unlock").click();
-    h.step();
-    h.step();
+    try_password(&mut h, "not it");
     assert!(h.query_by_label("wrong password").is_some());
     assert!(!h.state().engineer.unlocked());
-    h.state_mut().engineer.typed = "password".into();
-    h.get_by_label("Unlock").click();
-    h.step();
-    h.step();
+    try_password(&mut h, "password");
     assert!(h.state().engineer.unlocked());
     assert!(h.query_by_label_contains("engineer view (since").is_some());
     assert!(
@@ -246,14 +240,8 @@ fn the_engineer_view_is_today_s_window_on_a_lent_slot_and_every_unlock_is_record
     h.get_by_label("Engineer unlock").click();
     h.step();
     h.step();
-    h.state_mut().engineer.typed = "not it".into();
-    h.get_by_label("Unlock").click();
-    h.step();
-    h.step();
-    h.state_mut().engineer.typed = "password".into();
-    h.get_by_label("Unlock").click();
-    h.step();
-    h.step();
+    try_password(&mut h, "not it");
+    try_password(&mut h, "password");
     assert_eq!(h.query_all_by_label("Open in engineer view").count(), 3);
     // Slot 3 (the Tuya vacuum) in today's window: its connection bar, connected to the port
     // the slot gave up.
@@ -311,10 +299,7 @@ fn the_engineer_view_starts_from_the_ordinary_window_s_saved_settings() {
     h.get_by_label("Engineer unlock").click();
     h.step();
     h.step();
-    h.state_mut().engineer.typed = "password".into();
-    h.get_by_label("Unlock").click();
-    h.step();
-    h.step();
+    try_password(&mut h, "password");
     open_slot_3_in_engineer_view(&mut h);
     let app = h.state().lent.as_ref().unwrap().app.as_ref().unwrap();
     let port = app.settings.port_of("tuya-vacuum");
@@ -631,6 +616,14 @@ fn open_slot_3_in_engineer_view(h: &mut Harness<'static, LineStation>) {
             .and_then(|l| l.app.as_ref())
             .is_some_and(|app| app.station().connected())
     });
+    h.step();
+    h.step();
+}
+
+/// Types `password` into the open unlock dialog and clicks Unlock.
+fn try_password(h: &mut Harness<'static, LineStation>, password: &str) {
+    h.state_mut().engineer.typed = password.into();
+    h.get_by_label("Unlock").click();
     h.step();
     h.step();
 }

@@ -51,14 +51,7 @@ fn fail(reason: Reason) -> station::Event {
 /// Each kind of reason, with the words of its values that may stay in ASCII (idents, units,
 /// wire names).
 fn every_reason() -> Vec<(Reason, &'static [&'static str])> {
-    let spray = Measurement {
-        name: "sprayCurrent".into(),
-        unit: "A".into(),
-        low: Some(0.2),
-        high: Some(1.5),
-        value: 0.1,
-        pass: false,
-    };
+    let spray = spray_current_too_low();
     let first: Vec<(Reason, &'static [&'static str])> = vec![
         (Reason::HardwareNotAllowed { hw: 4 }, &[]),
         (
@@ -259,14 +252,7 @@ fn every_kind_of_failure_reason_reads_in_chinese_on_the_tile() {
     );
     // A value out of its limits says what was measured and what is allowed.
     tx.send(fail(Reason::OutOfLimits {
-        values: vec![Measurement {
-            name: "sprayCurrent".into(),
-            unit: "A".into(),
-            low: Some(0.2),
-            high: Some(1.5),
-            value: 0.1,
-            pass: false,
-        }],
+        values: vec![spray_current_too_low()],
     }))
     .unwrap();
     h.step();
@@ -310,4 +296,16 @@ fn a_retry_question_says_why_the_step_failed_in_chinese() {
         "{:?}",
         h.state().tiles[0].asking
     );
+}
+
+/// The self-test's spray current measured at 0.1 A against its 0.2-1.5 A limits.
+fn spray_current_too_low() -> Measurement {
+    Measurement {
+        name: "sprayCurrent".into(),
+        unit: "A".into(),
+        low: Some(0.2),
+        high: Some(1.5),
+        value: 0.1,
+        pass: false,
+    }
 }
