@@ -341,6 +341,8 @@ pub struct Link {
     profile: Arc<Profile>,
     events: Receiver<LinkEvent>,
     thread: Option<JoinHandle<()>>,
+    /// Bytes the worker has read from the port, of any kind.
+    heard: Arc<std::sync::atomic::AtomicU64>,
 }
 
 impl std::fmt::Debug for Link {
@@ -370,6 +372,7 @@ impl Link {
             ev_tx,
             waker,
         );
+        let heard = worker.heard();
         let thread = std::thread::Builder::new()
             .name("botbench-link".into())
             .spawn(move || worker.run())
@@ -379,6 +382,7 @@ impl Link {
             profile,
             events: ev_rx,
             thread: Some(thread),
+            heard,
         })
     }
 
@@ -397,6 +401,7 @@ impl Link {
         Client {
             commands: self.commands.clone(),
             profile: self.profile.clone(),
+            heard: self.heard.clone(),
         }
     }
 }
@@ -416,9 +421,19 @@ pub struct Client {
     commands: Sender<LinkCommand>,
     /// The link's profile: the errors handed on name their commands by it.
     profile: Arc<Profile>,
+    /// Bytes the worker has read from the port, of any kind.
+    heard: Arc<std::sync::atomic::AtomicU64>,
 }
 
 impl Client {
+    /// Bytes read from the port since the link opened, of any kind: answers, answers that came
+    /// after their window, junk, frames the device sent on its own. Compared across a wait, it
+    /// tells a silent wire (nothing there) from a device whose answers were late or garbled (a
+    /// unit there, on a noisy line or behind a late host).
+    pub fn bytes_heard(&self) -> u64 {
+        self.heard.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
     /// Sends `request` and waits for its result.
     pub fn request(&self, request: Request) -> Result<Reply, ExchangeError> {
         let (tx, rx) = crossbeam_channel::bounded(1);

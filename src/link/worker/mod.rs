@@ -112,6 +112,11 @@ impl Worker {
         }
     }
 
+    /// The count of bytes the worker reads from the port, for the link's clients.
+    pub(super) fn heard(&self) -> std::sync::Arc<std::sync::atomic::AtomicU64> {
+        self.wire.heard()
+    }
+
     /// The loop, until [`LinkCommand::Shutdown`] or the link is dropped: a lost port is
     /// reopened; otherwise, in this order, the session's work that comes first (MSP learns the
     /// device before anything else is sent to it), callers' requests, the session's other work

@@ -8,6 +8,8 @@ use crate::link::{LinkError, LinkState, LinkStats, Opener, Transport, wire_time}
 use crate::packet::Packet;
 use crate::profile::Protocol;
 use crate::protocol::FrameError;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 /// How often an idle worker checks that the port is still there.
@@ -38,6 +40,9 @@ pub(super) struct Wire {
     /// When the bytes of the last read that brought any had arrived ([`Transport::arrived_at`],
     /// else when it returned).
     arrived: Instant,
+    /// Bytes read from the port since the link opened, of any kind (answers, late answers,
+    /// junk), shared with the link's clients ([`crate::link::Client::bytes_heard`]).
+    heard: Arc<AtomicU64>,
 }
 
 /// How long after the port last said bytes had been taken by another reader an unanswered
@@ -59,7 +64,13 @@ impl Wire {
             lost_because: None,
             taken: (0, None),
             arrived: now,
+            heard: Arc::default(),
         }
+    }
+
+    /// The count of bytes read from the port since the link opened, as its clients see it.
+    pub(super) fn heard(&self) -> Arc<AtomicU64> {
+        self.heard.clone()
     }
 
     /// Who is taking this port's bytes, when someone is: the other programs that have it open,
@@ -143,6 +154,7 @@ impl Wire {
         let n = t.read(&mut buf, deadline)?;
         if n > 0 {
             self.arrived = t.arrived_at().unwrap_or_else(Instant::now);
+            self.heard.fetch_add(n as u64, Ordering::Relaxed);
         }
         self.decoder.push(&buf[..n]);
         Ok(n)

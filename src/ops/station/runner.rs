@@ -308,7 +308,7 @@ impl SlotRunner {
             StartMode::Auto => "auto",
         };
         self.tell(What::Waiting { how });
-        let mut absent_seen = ready;
+        let mut watch = FixtureWatch::new(ready);
         loop {
             if self.cancel.is_cancelled() {
                 return Start::Stopped;
@@ -325,17 +325,22 @@ impl SlotRunner {
                 Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
             }
             if plan.start == StartMode::Auto {
+                let heard = client.bytes_heard();
+                if !watch.before_poll(heard, Instant::now()) {
+                    // An unanswered poll's silence is still being listened to.
+                    continue;
+                }
                 match self.probe(client) {
-                    Probe::Present(_) if absent_seen => return Start::Go(None),
-                    // Another unit answering without a silence between (swapped quickly): its
-                    // identity differs from the one last tested here.
-                    Probe::Present(Some(id))
-                        if self.last_identity.as_ref().is_some_and(|l| *l != id) =>
-                    {
-                        return Start::Go(None);
+                    Probe::Present(id) => {
+                        // Another unit answering without a silence between (swapped quickly):
+                        // its identity differs from the one last tested here.
+                        let other =
+                            matches!((&id, &self.last_identity), (Some(id), Some(l)) if id != l);
+                        if watch.empty_seen() || other {
+                            return Start::Go(None);
+                        }
                     }
-                    Probe::Present(_) => {}
-                    Probe::Absent => absent_seen = true,
+                    Probe::Absent => watch.unanswered(heard, Instant::now()),
                     Probe::Lost => return Start::Lost,
                 }
             }
@@ -372,6 +377,66 @@ impl SlotRunner {
             Err(e) if e.lost_port().is_some() => Probe::Lost,
             Err(_) => Probe::Absent,
         }
+    }
+}
+
+/// How long the wire must stay silent after an identity poll went unanswered, from the poll's
+/// start, for the fixture to count as empty: answers that come late (a device, a host or a line
+/// running late) come within it, and a person's swap takes longer.
+pub const EMPTY_SILENCE: Duration = Duration::from_secs(2);
+
+/// What the idle fixture's identity polls have shown since its last unit. The fixture is empty
+/// (a unit lifted off) after a poll left unanswered on a silent wire: nothing at all read for
+/// [`EMPTY_SILENCE`] from the poll's start, and no poll sent meanwhile. A poll whose answers
+/// came after its window or came garbled (a noisy line) is a unit still there: taking it for an
+/// empty fixture tested the same unit twice (seen at load 14-19: a simulated device's process,
+/// starved of CPU, answering one poll late).
+#[derive(Debug, Clone, Copy)]
+struct FixtureWatch {
+    /// The fixture was seen empty, or its first unit is awaited: the next unit that answers is
+    /// a new one.
+    empty_seen: bool,
+    /// The last poll went unanswered: the count of bytes heard ([`Client::bytes_heard`]) and
+    /// the instant when it began.
+    unanswered: Option<(u64, Instant)>,
+}
+
+impl FixtureWatch {
+    /// `ready`: the next unit to answer is new without a silence (the fixture's first unit).
+    fn new(ready: bool) -> Self {
+        Self {
+            empty_seen: ready,
+            unanswered: None,
+        }
+    }
+
+    /// Whether a poll may begin at `now`, `heard` bytes read so far: not while an unanswered
+    /// poll's silence is being listened to (a poll's own answers would end it). The silence
+    /// over, with nothing read since that poll began, the fixture was empty.
+    fn before_poll(&mut self, heard: u64, now: Instant) -> bool {
+        let Some((at_heard, began)) = self.unanswered else {
+            return true;
+        };
+        if heard != at_heard {
+            self.unanswered = None;
+            return true;
+        }
+        if now.saturating_duration_since(began) < EMPTY_SILENCE {
+            return false;
+        }
+        self.unanswered = None;
+        self.empty_seen = true;
+        true
+    }
+
+    /// The poll that began at `began`, `heard` bytes read by then, went unanswered.
+    fn unanswered(&mut self, heard: u64, began: Instant) {
+        self.unanswered = Some((heard, began));
+    }
+
+    /// Whether a unit answering now is a new one by the silence before it.
+    fn empty_seen(&self) -> bool {
+        self.empty_seen
     }
 }
 
@@ -629,5 +694,33 @@ impl Desk for SlotDesk<'_> {
 
     fn tell(&mut self, what: What) {
         self.runner.tell(what);
+    }
+}
+
+#[cfg(test)]
+mod fixture_watch_tests {
+    use super::{EMPTY_SILENCE, FixtureWatch};
+    use std::time::{Duration, Instant};
+
+    #[test]
+    fn an_unanswered_poll_shows_an_empty_fixture_only_after_a_silent_wire() {
+        let t0 = Instant::now();
+        let ms = |n| t0 + Duration::from_millis(n);
+        let mut w = FixtureWatch::new(false);
+        assert!(!w.empty_seen(), "the unit just tested");
+        // A poll whose answers came after its window, even after the next poll was due.
+        assert!(w.before_poll(100, ms(0)));
+        w.unanswered(100, ms(0));
+        assert!(!w.before_poll(100, ms(600)), "polled during the silence");
+        assert!(w.before_poll(112, ms(1200)), "bytes came: poll again");
+        assert!(!w.empty_seen(), "a late answer took the fixture for empty");
+        // A unit lifted off: a poll unanswered, nothing read for the whole silence.
+        w.unanswered(112, ms(1500));
+        assert!(!w.before_poll(112, ms(1500) + EMPTY_SILENCE - Duration::from_millis(1)));
+        assert!(!w.empty_seen());
+        assert!(w.before_poll(112, ms(1500) + EMPTY_SILENCE));
+        assert!(w.empty_seen(), "a silent wire is an empty fixture");
+        // The first unit of a fixture is awaited without a silence.
+        assert!(FixtureWatch::new(true).empty_seen());
     }
 }
