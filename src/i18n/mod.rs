@@ -22,6 +22,8 @@
 //! (`assets/fonts/`); `tests/i18n.rs` checks it, and `assets/fonts/make-subset.sh` regenerates
 //! the font when it fails.
 
+pub mod glyphs;
+
 use eframe::egui;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -354,6 +356,28 @@ pub fn cjk_font_definitions() -> egui::FontDefinitions {
             .entry(family)
             .or_default()
             .push(CJK_FONT_NAME.to_owned());
+    }
+    fonts
+}
+
+/// The name a system CJK font goes by in egui's font definitions.
+pub const SYSTEM_CJK_FONT_NAME: &str = "system-cjk";
+
+/// [`cjk_font_definitions`] with `system` appended after the bundled font: drawn only for the
+/// characters the bundled font lacks ([`glyphs::bundled_lacks`]).
+pub fn font_definitions_with(system: &glyphs::SystemFont) -> egui::FontDefinitions {
+    let mut fonts = cjk_font_definitions();
+    let mut data = egui::FontData::from_owned(system.bytes.clone());
+    data.index = system.index;
+    fonts
+        .font_data
+        .insert(SYSTEM_CJK_FONT_NAME.to_owned(), Arc::new(data));
+    for family in [egui::FontFamily::Proportional, egui::FontFamily::Monospace] {
+        fonts
+            .families
+            .entry(family)
+            .or_default()
+            .push(SYSTEM_CJK_FONT_NAME.to_owned());
     }
     fonts
 }

@@ -351,6 +351,20 @@ impl Registry {
         self.entries.iter().map(|(p, s)| (p, s))
     }
 
+    /// Each profile with characters in its texts (names, labels, units) that the bundled CJK
+    /// font has no glyph for ([`crate::i18n::glyphs::bundled_lacks`]): (profile id, the
+    /// characters). Empty when every text can be drawn with the bundled font.
+    pub fn lacking_glyphs(&self) -> Vec<(String, Vec<char>)> {
+        self.entries
+            .iter()
+            .filter_map(|(p, _)| {
+                let text = ron::to_string(p.as_ref()).ok()?;
+                let lacks = crate::i18n::glyphs::bundled_lacks(&text);
+                (!lacks.is_empty()).then(|| (p.id.clone(), lacks))
+            })
+            .collect()
+    }
+
     /// The profile ids.
     pub fn names(&self) -> Vec<String> {
         self.entries.iter().map(|(p, _)| p.id.clone()).collect()

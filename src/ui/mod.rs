@@ -10,6 +10,7 @@ mod confirm;
 mod connection;
 pub mod demo_hint;
 pub mod files;
+pub mod fonts;
 pub(crate) mod inputs;
 pub mod jobs;
 pub mod layout;

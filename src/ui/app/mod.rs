@@ -105,13 +105,17 @@ impl App {
         settings: Settings,
         ports: PortOpener,
     ) -> Result<Self, ProfileError> {
-        crate::i18n::install_cjk_font(ctx);
         // Scroll bars shown solid wherever a panel has more than its room (egui's floating
         // ones show only under the pointer: a technician does not see that more is below).
         ctx.all_styles_mut(|s| s.spacing.scroll = egui::style::ScrollStyle::solid());
         let registry = Arc::new(Registry::load()?);
+        let fonts =
+            crate::ui::fonts::install(ctx, &registry, crate::i18n::glyphs::SYSTEM_CJK_FONTS);
         let mut station = Station::new(ctx, registry.clone(), &settings.profile)?;
         station.link.port_opener = ports;
+        if let Err(warning) = fonts {
+            station.notify(warning);
+        }
         let state = AppState::new(registry, station);
         let (baud, margin_ms) = port_for(&settings, &state.registry, &settings.profile);
         let mut app = Self {
