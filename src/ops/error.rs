@@ -336,4 +336,11 @@ impl OpError {
                 | OpError::Document(_)
         )
     }
+
+    /// Whether nothing was sent to the device: refused for its input ([`Self::is_input`]), or
+    /// a Set's left-out field whose value could not be kept. What the device holds is then
+    /// what was last read.
+    pub fn nothing_sent(&self) -> bool {
+        self.is_input() || matches!(self, OpError::CannotKeep { .. })
+    }
 }

@@ -88,6 +88,84 @@ impl SeriesSet {
     }
 }
 
+/// A poll later than this many times the plot's usual interval is a gap.
+pub const SLOW_POLL_FACTOR: f64 = 3.0;
+/// ... and later than this, seconds (a fast poll's jitter is not a gap).
+pub const SLOW_POLL_MIN: f64 = 0.25;
+
+/// The pace of a polled plot: its usual interval between samples, learned as they come, so
+/// that a poll slower than expected (a busy device, a bad adapter, a host that ran late) is
+/// drawn as a gap, never as a straight line over a time nothing was measured.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Pace {
+    /// The last sample's time, seconds.
+    last: Option<f64>,
+    /// The usual interval, seconds (an exponential average: slow samples move it faster, so
+    /// that a new poll rate is learned within a sample or two).
+    usual: Option<f64>,
+}
+
+impl Pace {
+    /// A sample at `t`, seconds: where a gap goes before it (half-way from the last sample),
+    /// when it came more than [`SLOW_POLL_FACTOR`] times the usual interval (and more than
+    /// [`SLOW_POLL_MIN`]) after the last one.
+    pub fn sample(&mut self, t: f64) -> Option<f64> {
+        let last = self.last.replace(t)?;
+        let dt = t - last;
+        // Not later (or not a number): no interval to learn from.
+        if dt.is_nan() || dt <= 0.0 {
+            return None;
+        }
+        let slow = self
+            .usual
+            .is_some_and(|u| dt > (u * SLOW_POLL_FACTOR).max(SLOW_POLL_MIN));
+        let weight = if slow { 0.3 } else { 0.1 };
+        self.usual = Some(self.usual.map_or(dt, |u| u + (dt - u) * weight));
+        slow.then_some(last + dt / 2.0)
+    }
+
+    /// Forgets the pace (polling restarted at another rate, or paused).
+    pub fn reset(&mut self) {
+        *self = Self::default();
+    }
+}
+
+#[cfg(test)]
+mod pace_tests {
+    use super::Pace;
+
+    #[test]
+    fn a_poll_slower_than_usual_is_a_gap_and_a_new_rate_is_learned() {
+        let mut p = Pace::default();
+        let mut t = 0.0;
+        for _ in 0..50 {
+            assert_eq!(p.sample(t), None, "at 50 Hz, t {t}");
+            t += 0.02;
+        }
+        // One poll took 400 ms: a gap half-way.
+        let last = t - 0.02;
+        t = last + 0.4;
+        assert_eq!(p.sample(t), Some(last + 0.2));
+        // 50 Hz again: no gap.
+        for _ in 0..5 {
+            t += 0.02;
+            assert_eq!(p.sample(t), None);
+        }
+        // Jitter under SLOW_POLL_MIN is never a gap.
+        t += 0.2;
+        assert_eq!(p.sample(t), None);
+        // Down to 1 Hz: one gap at the change, then the new rate is the usual one.
+        let mut gaps = 0;
+        for _ in 0..10 {
+            t += 1.0;
+            gaps += usize::from(p.sample(t).is_some());
+        }
+        assert!(gaps <= 2, "{gaps} gaps at a steady 1 Hz");
+        t += 1.0;
+        assert_eq!(p.sample(t), None, "1 Hz is the usual rate now");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

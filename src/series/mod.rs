@@ -27,7 +27,8 @@ mod decimate;
 mod gaps;
 mod set;
 
-pub use set::SeriesSet;
+pub use gaps::{Pace, SLOW_POLL_FACTOR, SLOW_POLL_MIN};
+pub use set::{CsvFormat, SeriesSet};
 
 /// Default capacity: 10 minutes at 100 Hz.
 pub const DEFAULT_CAPACITY: usize = 60_000;
@@ -205,6 +206,17 @@ impl Series {
         })
     }
 
+    /// Samples a second over the newest `over` seconds held (counted between the first and the
+    /// last sample in that stretch): what a poll achieves, beside what it asked for. `None`
+    /// with fewer than two samples in it.
+    pub fn rate(&self, over: f64) -> Option<f64> {
+        let last = self.latest()?.t;
+        let from = self.partition_point(|x| x < last - over);
+        let first = self.get(from)?.t;
+        let n = self.len - from;
+        (n >= 2 && last > first).then(|| (n - 1) as f64 / (last - first))
+    }
+
     /// First and last time held.
     pub fn span(&self) -> Option<(f64, f64)> {
         Some((self.first()?.t, self.latest()?.t))
@@ -223,6 +235,29 @@ impl Series {
             (Some(b), Some(a)) => Some(if a.t - t < t - b.t { a } else { b }),
             (b, a) => b.or(a),
         }
+    }
+}
+
+#[cfg(test)]
+mod rate_tests {
+    use super::Series;
+
+    #[test]
+    fn the_rate_counts_the_newest_stretch_only() {
+        let mut s = Series::new(1000);
+        assert_eq!(s.rate(2.0), None);
+        // 10 Hz for 10 s, then 2 Hz for the last 3 s.
+        for i in 0..100 {
+            s.push(f64::from(i) * 0.1, 0.0).unwrap();
+        }
+        assert_eq!(s.rate(0.0), None, "one sample is no rate");
+        let r = s.rate(2.0).unwrap();
+        assert!((r - 10.0).abs() < 1e-6, "{r}");
+        for i in 1..=6 {
+            s.push(9.9 + f64::from(i) * 0.5, 0.0).unwrap();
+        }
+        let r = s.rate(2.0).unwrap();
+        assert!((r - 2.0).abs() < 1e-6, "{r}");
     }
 }
 

@@ -101,9 +101,18 @@ impl SeriesSet {
     ///
     /// Written with the `csv` crate, which quotes what needs quoting and buffers the rows.
     pub fn write_csv(&self, w: &mut impl Write) -> io::Result<()> {
+        self.write_csv_as(w, &CsvFormat::default())
+    }
+
+    /// [`Self::write_csv`] as `format` says: with a first column `time` of wall-clock times
+    /// (local, RFC 3339 with milliseconds) when it gives the recording's start, and each series'
+    /// values at its decimals where it gives them (a field's precision: `14.7`, never the
+    /// binary float's `14.700000000000001`).
+    pub fn write_csv_as(&self, w: &mut impl Write, format: &CsvFormat) -> io::Result<()> {
         use std::fmt::Write as _;
         let mut out = csv::Writer::from_writer(w);
-        out.write_record(std::iter::once("t").chain(self.series.iter().map(|(n, _)| n.as_str())))?;
+        let head = format.start.map(|_| "time").into_iter().chain(["t"]);
+        out.write_record(head.chain(self.series.iter().map(|(n, _)| n.as_str())))?;
         let mut iters: Vec<_> = self
             .series
             .iter()
@@ -115,15 +124,21 @@ impl SeriesSet {
             .filter_map(|it| it.peek().map(|s| ms(s.t)))
             .min()
         {
+            if let Some(start) = format.start {
+                out.write_field(wall_clock(start, key))?;
+            }
             cell.clear();
             push_ms(&mut cell, key);
             out.write_field(&cell)?;
-            for it in &mut iters {
+            for (i, it) in iters.iter_mut().enumerate() {
                 cell.clear();
                 if let Some(s) = it.next_if(|s| ms(s.t) == key)
                     && !s.v.is_nan()
                 {
-                    let _ = write!(cell, "{}", s.v);
+                    let _ = match format.decimals.get(i).copied().flatten() {
+                        Some(d) => write!(cell, "{:.*}", d, s.v),
+                        None => write!(cell, "{}", s.v),
+                    };
                 }
                 out.write_field(&cell)?;
             }
@@ -131,6 +146,31 @@ impl SeriesSet {
         }
         out.flush()
     }
+}
+
+/// How [`SeriesSet::write_csv_as`] writes a recording.
+#[derive(Debug, Clone, Default)]
+pub struct CsvFormat {
+    /// The wall-clock time of t = 0: a `time` column of absolute times when given.
+    pub start: Option<std::time::SystemTime>,
+    /// Each series' decimals, in the set's order (`None`: the shortest round-trip form).
+    pub decimals: Vec<Option<usize>>,
+}
+
+/// `start` plus `ms` milliseconds as local RFC 3339 time with milliseconds.
+fn wall_clock(start: std::time::SystemTime, ms: i64) -> String {
+    let offset = std::time::Duration::from_millis(ms.unsigned_abs());
+    let at = if ms < 0 {
+        start.checked_sub(offset)
+    } else {
+        start.checked_add(offset)
+    };
+    at.map(|t| {
+        chrono::DateTime::<chrono::Local>::from(t)
+            .format("%Y-%m-%dT%H:%M:%S%.3f%:z")
+            .to_string()
+    })
+    .unwrap_or_default()
 }
 
 /// A time in whole milliseconds (saturating far outside any recording).
@@ -149,6 +189,29 @@ fn push_ms(line: &mut String, ms: i64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 25, item 10: values at the field's precision and absolute time.
+    #[test]
+    fn csv_values_at_the_fields_precision_with_wall_clock_time() {
+        let mut set = SeriesSet::new(10);
+        set.push("voltage", 0.25, 147.0 * 0.1).unwrap();
+        set.push("count", 0.25, 3.0).unwrap();
+        let start = std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_700_000_000);
+        let format = CsvFormat {
+            start: Some(start),
+            decimals: vec![Some(1), None],
+        };
+        let mut out = Vec::new();
+        set.write_csv_as(&mut out, &format).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(lines.next(), Some("time,t,voltage,count"));
+        let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let at =
+            chrono::DateTime::<chrono::Local>::from(start + std::time::Duration::from_millis(250));
+        assert_eq!(row[0], at.format("%Y-%m-%dT%H:%M:%S%.3f%:z").to_string());
+        assert_eq!(&row[1..], ["0.250", "14.7", "3"]);
+    }
 
     #[test]
     fn set_groups_named_series() {

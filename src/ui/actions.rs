@@ -4,6 +4,7 @@
 
 use super::Action;
 use super::inputs::{command_inputs, value_box};
+use super::confirm::Decision;
 use super::jobs;
 use super::station::Station;
 use crate::i18n::Lang;
@@ -128,19 +129,28 @@ impl ActionsPanel {
                 "Make sure it is safe, then confirm.",
                 "请确认安全后再执行。",
             ));
-            decision =
-                super::confirm::buttons(ui, lang.tr("Confirm", "确认"), lang.tr("Cancel", "取消"));
+            ui.label(lang.tr("STOP stays available.", "停止按钮始终可用。"));
+            decision = super::confirm::buttons(
+                ui,
+                lang,
+                lang.tr("Confirm", "确认"),
+                lang.tr("Cancel", "取消"),
+                rt,
+            );
         });
-        match super::confirm::decided(&modal, decision) {
-            Some(true) => {
+        match super::confirm::decided(&modal, decision)? {
+            Decision::Yes => {
                 let (id, inputs) = self.confirm.take()?;
                 Some(Action::StartJob(jobs::send(profile, id, inputs)))
             }
-            Some(false) => {
+            Decision::No => {
                 self.confirm = None;
                 None
             }
-            None => None,
+            Decision::Stop => {
+                self.confirm = None;
+                Some(Action::Stop)
+            }
         }
     }
 }

@@ -282,12 +282,15 @@ pub fn write(profile: &Arc<Profile>, writes: Vec<ops::tuning::SetWrite>) -> Job 
     let profile = profile.clone();
     Job::new(Key::Write, move |client, cancel, sink| {
         let mut done = 0;
+        // Writes refused before anything was sent: not "not verified", nothing was written.
+        let mut refused = 0;
         let tally = ops::tuning::write_commands(
             Device::new(client, &profile),
             &writes,
             &mut Run::new(cancel, |p| sink.progress(p)),
             &mut |id, r| {
                 done += 1;
+                refused += usize::from(r.as_ref().is_err_and(OpError::nothing_sent));
                 sink.send(JobOutput::Wrote(id, r))
             },
         )
@@ -304,9 +307,15 @@ pub fn write(profile: &Arc<Profile>, writes: Vec<ops::tuning::SetWrite>) -> Job 
                 format!("{} command(s) written and verified", tally.done),
                 format!("{} 条命令已写入并校验", tally.done),
             ))
+        } else if tally.failed == refused {
+            Err(JobError::Incomplete {
+                failed: refused,
+                total: tally.total,
+                what: "command(s) refused, nothing sent".into(),
+            })
         } else {
             Err(JobError::Incomplete {
-                failed: tally.failed,
+                failed: tally.failed - refused,
                 total: tally.total,
                 what: "command(s) not verified".into(),
             })

@@ -199,8 +199,7 @@ impl MonitorPanel {
                 let name = profile
                     .command_by_id(p.command)
                     .map_or("", |c| c.ident.as_str());
-                p.command.to_string() == f
-                    || name.to_ascii_lowercase().contains(&f.to_ascii_lowercase())
+                command_matches(f, p.command, name)
             }
             Err(_) => false,
         }
@@ -292,7 +291,8 @@ impl MonitorPanel {
             );
             let save = ui.button(lang.tr("Save", "保存")).clicked();
             if event.go(save, &mut actions) {
-                actions.extend(self.save(&profile, &rows));
+                let port = rt.link.target().map(super::station::Target::label);
+                actions.extend(self.save(&profile, &rows, port.as_deref()));
             }
         });
         self.where_the_view_is(ui, lang);
@@ -396,7 +396,8 @@ impl MonitorPanel {
     }
 
     /// Writes the rows shown to the typed (or chosen) file.
-    fn save(&self, profile: &Profile, rows: &[Row<'_>]) -> Vec<Action> {
+    /// Saves `rows` as text under a header: when, from which port, decoded with which profile.
+    fn save(&self, profile: &Profile, rows: &[Row<'_>], port: Option<&str>) -> Vec<Action> {
         let path = self.save_path.trim();
         if path.is_empty() {
             return vec![Action::Notify(Notice::error(Text::new(
@@ -405,10 +406,12 @@ impl MonitorPanel {
             )))];
         }
         let lines: Vec<String> = rows.iter().map(|(_, p, e)| line(profile, p, e)).collect();
-        match crate::document::write_atomic(
-            std::path::Path::new(path),
-            (lines.join("\n") + "\n").as_bytes(),
-        ) {
+        let text = format!(
+            "{}{}\n",
+            save_header(profile, port, chrono::Local::now()),
+            lines.join("\n")
+        );
+        match crate::document::write_atomic(std::path::Path::new(path), text.as_bytes()) {
             Ok(()) => vec![
                 Action::RememberFile(FileKind::Packets, path.to_string()),
                 Action::Notify(Notice::info(Text::new(
@@ -419,6 +422,33 @@ impl MonitorPanel {
             Err(e) => vec![Action::Notify(Notice::error(e.said()))],
         }
     }
+}
+
+/// Whether a packet of command `id` named `name` passes the monitor's filter `f` (trimmed, not
+/// empty): its number in decimal (`28`) or hex (`0x1c`, `0X1C`), or a part of its name in any
+/// case.
+pub fn command_matches(f: &str, id: u8, name: &str) -> bool {
+    let number = match f.strip_prefix("0x").or_else(|| f.strip_prefix("0X")) {
+        Some(hex) => u8::from_str_radix(hex, 16).ok(),
+        None => f.parse::<u8>().ok(),
+    };
+    number == Some(id) || name.to_ascii_lowercase().contains(&f.to_ascii_lowercase())
+}
+
+/// The lines above a saved log: when it was saved, the port and the profile it was decoded
+/// with, each after `# `.
+fn save_header(
+    profile: &Profile,
+    port: Option<&str>,
+    at: chrono::DateTime<chrono::Local>,
+) -> String {
+    format!(
+        "# botbench packet log, saved {}\n# port: {}\n# profile: {} ({})\n",
+        at.format("%Y-%m-%d %H:%M:%S %:z"),
+        port.unwrap_or("not connected"),
+        profile.id,
+        profile.name.en
+    )
 }
 
 /// Where a capture is recorded to: the typed path, unless there is none or it names a file
@@ -470,5 +500,32 @@ impl crate::ui::Panel for MonitorPanel {
 
     fn live(&self, station: &Station) -> bool {
         station.connected() && !station.packets.paused
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 25, item 10: the filter takes a command's number as the protocol documents write
+    /// it (`0x1c`), in decimal, or a part of its name.
+    #[test]
+    fn the_filter_takes_hex_decimal_and_names() {
+        for f in ["0x1c", "0X1C", "28", "version", "CMD_VER"] {
+            assert!(command_matches(f, 0x1c, "CMD_VERSION"), "{f}");
+        }
+        for f in ["0x1d", "29", "0x", "0x1c1", "build"] {
+            assert!(!command_matches(f, 0x1c, "CMD_VERSION"), "{f}");
+        }
+    }
+
+    #[test]
+    fn a_saved_log_says_when_which_port_and_which_profile() {
+        let profile = crate::sim::msp_device::builtin_profile("window-cleaner").unwrap();
+        let at = chrono::Local::now();
+        let h = save_header(&profile, Some("/dev/ttyUSB0"), at);
+        assert!(h.contains(&at.format("%Y-%m-%d %H:%M:%S").to_string()), "{h}");
+        assert!(h.contains("# port: /dev/ttyUSB0"), "{h}");
+        assert!(h.contains("# profile: window-cleaner"), "{h}");
     }
 }

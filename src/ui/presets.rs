@@ -1,6 +1,7 @@
 //! Presets: save the device's parameters to a RON file, open one and compare it with the device
 //! in a diff table, apply it with read-back verification and a progress bar.
 
+use super::confirm::Decision;
 use super::jobs::{self, Job, JobError, JobOutput};
 use super::settings::FileKind;
 use super::station::{Reading, Station};
@@ -193,12 +194,16 @@ impl PresetsPanel {
             });
         if self.confirm_apply {
             let preset = p.clone();
-            match confirm(ui, lang, differing) {
-                Some(true) => {
+            match confirm(ui, lang, differing, rt) {
+                Some(Decision::Yes) => {
                     self.confirm_apply = false;
                     actions.push(Action::StartJob(apply_job(rt, preset, &self.path)));
                 }
-                Some(false) => self.confirm_apply = false,
+                Some(Decision::No) => self.confirm_apply = false,
+                Some(Decision::Stop) => {
+                    self.confirm_apply = false;
+                    actions.push(Action::Stop);
+                }
                 None => {}
             }
         }
@@ -287,8 +292,9 @@ impl PresetsPanel {
     }
 }
 
-/// Asks before applying, as Tuning's "Write changes" does: `Some(true)` to write.
-fn confirm(ui: &mut egui::Ui, lang: Lang, differing: usize) -> Option<bool> {
+/// Asks before applying, as Tuning's "Write changes" does: [`Decision::Yes`] to write, STOP
+/// beside the answers.
+fn confirm(ui: &mut egui::Ui, lang: Lang, differing: usize, rt: &Station) -> Option<Decision> {
     let mut decision = None;
     let modal = egui::Modal::new(egui::Id::unique("confirm-apply-preset")).show(ui.ctx(), |ui| {
         ui.heading(lang.tr("Apply this preset?", "写入此预设?"));
@@ -299,7 +305,13 @@ fn confirm(ui: &mut egui::Ui, lang: Lang, differing: usize) -> Option<bool> {
                 "项与设备不同;预设的命令将被写入并回读校验。",
             )
         ));
-        decision = super::confirm::buttons(ui, lang.tr("Write", "写入"), lang.tr("Cancel", "取消"));
+        decision = super::confirm::buttons(
+            ui,
+            lang,
+            lang.tr("Write", "写入"),
+            lang.tr("Cancel", "取消"),
+            rt,
+        );
     });
     super::confirm::decided(&modal, decision)
 }

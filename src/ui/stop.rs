@@ -54,7 +54,7 @@ pub enum StopState {
     Pending,
     /// Sent; some answers outstanding.
     Waiting,
-    /// Every command acknowledged, at this time.
+    /// Every command of this STOP acknowledged: when the last answer came.
     Acked(Instant),
     /// A command failed: which, and why.
     Failed(String),
@@ -73,6 +73,9 @@ pub struct StopControl {
     pub pending: bool,
     /// When a pending STOP was sent after the link came back.
     pub after_reconnect: Option<Instant>,
+    /// When the last STOP's last answer came (on the monotonic clock, and as the wall clock's
+    /// HH:MM:SS for the operator), once every command of it was acknowledged.
+    acked: Option<(Instant, String)>,
 }
 
 impl StopControl {
@@ -92,6 +95,7 @@ impl StopControl {
         };
         self.sent.clear();
         self.last.clear();
+        self.acked = None;
         self.sent_at = Some(Instant::now());
         requests
             .into_iter()
@@ -123,6 +127,15 @@ impl StopControl {
             };
             if let Some(slot) = self.last.iter_mut().find(|(i, _)| *i == ident) {
                 slot.1 = outcome;
+            }
+            if self.acked.is_none()
+                && self
+                    .last
+                    .iter()
+                    .all(|(_, o)| matches!(o, Outcome::Acked(_)))
+            {
+                let wall = chrono::Local::now().format("%H:%M:%S").to_string();
+                self.acked = Some((Instant::now(), wall));
             }
         }
         let mut actions = Vec::new();
@@ -157,7 +170,7 @@ impl StopControl {
             .iter()
             .all(|(_, o)| matches!(o, Outcome::Acked(_)))
         {
-            return StopState::Acked(self.sent_at.unwrap_or_else(Instant::now));
+            return StopState::Acked(self.acked.as_ref().map_or_else(Instant::now, |a| a.0));
         }
         StopState::Waiting
     }
@@ -179,14 +192,20 @@ impl StopControl {
                 ui.label(lang.tr("STOP sent, waiting for the answer…", "已发送停止,等待应答…"));
             }
             StopState::Acked(at) => {
-                ui.colored_label(
-                    GREEN,
-                    format!(
-                        "{} ({:.0} s)",
-                        lang.tr("STOP acknowledged", "停止已确认"),
-                        at.elapsed().as_secs_f64()
-                    ),
-                );
+                // When this STOP was acknowledged: the wall clock, and how long after it was
+                // sent (an earlier STOP's time would tell the operator the robot stopped before
+                // this press).
+                let wall = self.acked.as_ref().map_or("", |a| a.1.as_str());
+                let took = self.sent_at.map_or(0.0, |s| {
+                    at.saturating_duration_since(s).as_secs_f64() * 1000.0
+                });
+                let text = match lang {
+                    Lang::En => {
+                        format!("STOP acknowledged at {wall}, {took:.0} ms after it was sent")
+                    }
+                    Lang::Zh => format!("停止已于 {wall} 确认(发送后 {took:.0} ms)"),
+                };
+                ui.colored_label(GREEN, text);
             }
             StopState::Failed(e) => {
                 ui.colored_label(RED, format!("{}: {e}", lang.tr("STOP failed", "停止失败")));
@@ -205,8 +224,46 @@ impl StopControl {
     }
 }
 
-/// The STOP button: big, red, one click ([`Action::Stop`]); its hover says what it sends.
+/// Where the STOP buttons' last place is kept in the context's memory.
+fn drawn_id() -> egui::Id {
+    egui::Id::unique("botbench-stop-button-rect")
+}
+
+/// Where a STOP button was drawn this frame (the last drawn), if one was: a confirmation
+/// dialog's backdrop, which takes every click outside the dialog, passes a click there on as
+/// STOP ([`crate::ui::confirm::decided`]).
+pub fn drawn_at(ctx: &egui::Context) -> Option<egui::Rect> {
+    let frame = ctx.cumulative_pass_nr();
+    ctx.data(|d| d.get_temp::<(u64, egui::Rect)>(drawn_id()))
+        .and_then(|(at, rect)| (at == frame).then_some(rect))
+}
+
+/// The STOP button: big, red, one click ([`Action::Stop`]); its hover says what it sends. The
+/// STOP always on screen (the navigation's, the solar panel's); where it is drawn is kept, so
+/// that a click on it while a dialog is open is STOP ([`drawn_at`]).
 pub fn button(ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
+    let response = draw(ui, lang, rt);
+    let frame = ui.ctx().cumulative_pass_nr();
+    ui.ctx()
+        .data_mut(|d| d.insert_temp(drawn_id(), (frame, response.rect)));
+    clicked(&response)
+}
+
+/// A confirmation dialog's STOP: as [`button`], inside the dialog.
+pub fn dialog_button(ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
+    clicked(&draw(ui, lang, rt))
+}
+
+fn clicked(response: &egui::Response) -> Vec<Action> {
+    if response.clicked() {
+        vec![Action::Stop]
+    } else {
+        Vec::new()
+    }
+}
+
+/// Draws a STOP button; its hover says what it sends.
+fn draw(ui: &mut egui::Ui, lang: Lang, rt: &Station) -> egui::Response {
     let b = egui::Button::new(
         egui::RichText::new(lang.tr("STOP", "停止"))
             .strong()
@@ -231,14 +288,8 @@ pub fn button(ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         })
         .collect::<Vec<_>>()
         .join(", ");
-    if ui
-        .add(b)
+    ui.add(b)
         .on_hover_text(format!("{}: {what}", lang.tr("Now", "立即")))
-        .clicked()
-    {
-        return vec![Action::Stop];
-    }
-    Vec::new()
 }
 
 /// What the robot may be doing because this window told it to: "Running: Fan 60 %", one line

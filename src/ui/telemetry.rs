@@ -93,6 +93,42 @@ impl Default for TelemetryPanel {
     }
 }
 
+/// Over how many of the newest seconds the achieved poll rate is counted.
+const ACHIEVED_OVER: f64 = 2.0;
+
+/// The poll rate achieved: samples a second of the first plot's first field over the newest
+/// [`ACHIEVED_OVER`] seconds, while samples are coming (`None` when paused, lost, or too few).
+pub fn achieved_rate(rt: &Station) -> Option<f64> {
+    if rt.link.polling_paused {
+        return None;
+    }
+    let plot = rt.device.profile.plots.first()?;
+    let series = rt.device.plots.get(&plot.id)?.get(plot.fields.first()?)?;
+    let now = rt.device.t0.elapsed().as_secs_f64();
+    let fresh = series.latest()?.t > now - ACHIEVED_OVER;
+    fresh.then(|| series.rate(ACHIEVED_OVER)).flatten()
+}
+
+/// The poll rate achieved, beside the one asked for.
+fn achieved_label(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
+    let text = match achieved_rate(rt) {
+        Some(r) => format!("{} {r:.1} Hz", lang.tr("achieved", "实际")),
+        None => format!("{} —", lang.tr("achieved", "实际")),
+    };
+    // As wide as its widest reading in either language: a changing rate moves nothing after it.
+    let width = crate::ui::layout::text_width(
+        ui,
+        &crate::ui::layout::body_font(ui),
+        ["achieved 1000.0 Hz", "实际 1000.0 Hz"],
+    );
+    let height = ui.spacing().interact_size.y;
+    ui.add_sized([width, height], egui::Label::new(text))
+        .on_hover_text(lang.tr(
+            "Answers a second over the last 2 s: what the device, the adapter and the link achieve",
+            "最近 2 秒每秒收到的应答数:设备、适配器与链路实际达到的采样率",
+        ));
+}
+
 fn rate_label(rate: Option<f64>, lang: Lang) -> String {
     match rate {
         Some(r) => format!("{r} Hz"),
@@ -133,6 +169,7 @@ impl TelemetryPanel {
                 })
                 .response
                 .labelled_by(label.id);
+            achieved_label(ui, lang, rt);
             let paused = rt.link.polling_paused;
             let pause = if paused {
                 lang.tr("Resume", "继续")
@@ -446,21 +483,36 @@ pub fn write_csv(
     path: &std::path::Path,
 ) -> Result<usize, crate::document::DocumentError> {
     let mut all = crate::series::SeriesSet::new(crate::series::DEFAULT_CAPACITY);
+    let mut format = crate::series::CsvFormat {
+        start: Some(rt.device.t0_wall),
+        decimals: Vec::new(),
+    };
+    let mut decimals = std::collections::HashMap::new();
     let mut n = 0;
-    for plot in &rt.device.profile.plots {
+    let profile = &rt.device.profile;
+    for plot in &profile.plots {
         let Some(set) = rt.device.plots.get(&plot.id) else {
             continue;
         };
         n += 1;
+        let fields = profile.command(&plot.command).map(|c| &c.reply);
         for (name, series) in set.iter() {
             let column = format!("{}.{name}", plot.id);
             for s in series.iter() {
                 let _ = all.push(&column, s.t, s.v);
             }
+            // At the field's precision, as the window shows it.
+            let field = fields.and_then(|f| f.iter().find(|f| f.ident.eq_ignore_ascii_case(name)));
+            let d = field.map(|f| f.convert.map_or_else(|| f.decimals(), |c| c.decimals()));
+            decimals.insert(column, d);
         }
     }
+    format.decimals = all
+        .iter()
+        .map(|(column, _)| decimals.get(column).copied().flatten())
+        .collect();
     let mut buf = Vec::new();
-    all.write_csv(&mut buf)
+    all.write_csv_as(&mut buf, &format)
         .map_err(|e| crate::document::DocumentError::io(path, "write", &e))?;
     crate::document::write_atomic(path, &buf)?;
     Ok(n)

@@ -49,7 +49,7 @@ impl Zh for crate::ui::station::ReadingError {
 impl Zh for crate::ui::tuning::PendingError {
     fn zh(&self) -> String {
         match self {
-            Self::Value(e) => e.zh(),
+            Self::Value(e) | Self::Relation { error: e, .. } => e.zh(),
             Self::NotANumber { field } => format!("{field}:不是数字"),
             Self::BlockNotRead { field } => {
                 format!("{field} 尚未读取:请先全部读取,以便写入完整的参数区")
@@ -110,6 +110,7 @@ fn incomplete_zh(what: &str) -> &str {
     match what {
         "reads failed" => "读取失败",
         "command(s) not verified" => "命令未通过校验",
+        "command(s) refused, nothing sent" => "命令被拒绝,未发送",
         "field(s) not verified" => "字段未通过校验",
         "parameter(s) not verified" => "参数未通过校验",
         other => other,

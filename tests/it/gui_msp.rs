@@ -512,3 +512,25 @@ fn a_fan_left_on_is_shown_running_the_self_test_starts_safe_and_its_verdict_belo
         "no banner left"
     );
 }
+
+/// The truth in small places (issue 25, item 10): the round trip shown is the connection's,
+/// gone once its link is lost (the worker's last measurement came back with every report).
+#[test]
+fn the_round_trip_is_cleared_when_the_link_is_lost() {
+    let b = window_cleaner(Some(0x0F), &[]);
+    let mut h = harness(&b, "window-cleaner", PanelId::DEVICE, Lang::En);
+    step_until(&mut h, "a round trip measured", |a| {
+        identified(a) && a.station().link.stats.rtt.is_some()
+    });
+    b.server.vanish_handle().vanish();
+    step_until(&mut h, "the link lost", |a| !a.station().link.connected());
+    // Reports keep coming from the worker while it tries the port again.
+    for _ in 0..20 {
+        h.run_steps(2);
+        assert_eq!(
+            app(&h).station().link.stats.rtt,
+            None,
+            "a lost link's round trip"
+        );
+    }
+}

@@ -587,3 +587,212 @@ fn a_profiles_port_settings_are_its_own() {
     choose(&mut h, "window-cleaner");
     assert_eq!(app(&h).connection.port().1, Some(300));
 }
+
+/// The STOP commands' ids of the shown station's profile.
+fn stop_ids(h: &H) -> Vec<u8> {
+    let p = &app(h).station().device.profile;
+    p.stop
+        .iter()
+        .map(|s| p.command(&s.command).expect("a STOP command").id)
+        .collect()
+}
+
+/// How many of the STOP commands' requests the window has sent so far (each command counts).
+fn stops_sent(a: &App, ids: &[u8]) -> usize {
+    a.station()
+        .packets
+        .entries
+        .iter()
+        .filter(|l| {
+            l.entry.direction == botbench::protocol::Direction::HostToDevice
+                && l.entry
+                    .frame
+                    .as_ref()
+                    .is_ok_and(|p| ids.contains(&p.command))
+        })
+        .count()
+}
+
+/// Opens Tuning's "Write these changes?" with one edit (Fan PWM maximum 97 -> 90).
+fn open_write_dialog(h: &mut H) {
+    let input = h.get_by(|n| {
+        n.role() == egui::accesskit::Role::TextInput && n.value().as_deref() == Some("97")
+    });
+    input.focus();
+    h.step();
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.step();
+    h.get_by(|n| {
+        n.role() == egui::accesskit::Role::TextInput && n.value().as_deref() == Some("97")
+    })
+    .type_text("90");
+    h.run_steps(2);
+    h.get_by_label_contains("Write changes (1)").click();
+    h.run_steps(3);
+    assert!(h.query_by_label("Write these changes?").is_some());
+}
+
+/// STOP acts at once whatever is open (issue 25, item 5): a confirmation dialog shows STOP
+/// beside its answers; a click on the navigation's STOP while the dialog is open sends STOP
+/// and closes the dialog (the dialog's backdrop took that click as "close" alone); STOP's line
+/// says when this STOP was acknowledged, on the wall clock.
+#[test]
+fn stop_acts_at_once_while_a_confirmation_dialog_is_open() {
+    let b = bench();
+    b.sim.lock().unwrap().set_param("pwmvalueMax", 97).unwrap();
+    let mut h = harness(&b, PanelId::TUNING);
+    step_until(&mut h, "the device read", |a| {
+        (130..=136).all(|id| a.station().device.readings.contains_key(&id))
+            && a.station().job_progress().is_none()
+    });
+    h.run_steps(2);
+    let ids = stop_ids(&h);
+    assert!(!ids.is_empty());
+    open_write_dialog(&mut h);
+    let stops: Vec<egui::Rect> = h.get_all_by_label("STOP").map(|n| n.rect()).collect();
+    assert_eq!(stops.len(), 2, "the dialog shows STOP beside its answers");
+    // The navigation's STOP (the leftmost), clicked through the open dialog.
+    let nav = h
+        .get_all_by_label("STOP")
+        .min_by(|a, b| a.rect().left().total_cmp(&b.rect().left()))
+        .unwrap();
+    nav.click();
+    step_until(&mut h, "every STOP command sent", |a| {
+        stops_sent(a, &ids) >= ids.len()
+    });
+    h.run_steps(2);
+    assert!(
+        h.query_by_label("Write these changes?").is_none(),
+        "the dialog closed"
+    );
+    step_until(&mut h, "the acknowledgement", |a| {
+        matches!(
+            a.station().stop.state(),
+            botbench::ui::stop::StopState::Acked(_)
+        )
+    });
+    h.run_steps(2);
+    let line = text_of(&h.get_by_label_contains("STOP acknowledged at"));
+    let wall = chrono::Local::now().format("%H:").to_string();
+    assert!(line.contains(&wall), "{line}: the wall clock's time");
+    // The dialog's own STOP: another STOP, acknowledged after the first.
+    let first = match app(&h).station().stop.state() {
+        botbench::ui::stop::StopState::Acked(at) => at,
+        other => panic!("{other:?}"),
+    };
+    // The edit is still there (nothing was written): the dialog again.
+    h.get_by_label_contains("Write changes (1)").click();
+    h.run_steps(3);
+    assert!(h.query_by_label("Write these changes?").is_some());
+    let dialog_stop = h
+        .get_all_by_label("STOP")
+        .max_by(|a, b| a.rect().left().total_cmp(&b.rect().left()))
+        .unwrap();
+    dialog_stop.click();
+    step_until(&mut h, "the second STOP sent", |a| {
+        stops_sent(a, &ids) >= 2 * ids.len()
+    });
+    step_until(
+        &mut h,
+        "the second STOP acknowledged",
+        |a| matches!(a.station().stop.state(), botbench::ui::stop::StopState::Acked(at) if at > first),
+    );
+    h.run_steps(2);
+    assert!(h.query_by_label("Write these changes?").is_none());
+    assert_eq!(
+        b.sim.lock().unwrap().param("pwmvalueMax"),
+        Some(97),
+        "nothing was written"
+    );
+}
+
+/// The telemetry header shows the poll rate achieved beside the one asked for (issue 25,
+/// item 7), and no rate while polling is paused.
+#[test]
+fn the_telemetry_header_shows_the_rate_achieved_beside_the_one_asked() {
+    let b = bench();
+    let mut h = telemetry(&b, Lang::En);
+    step_until(&mut h, "samples over a second", |a| {
+        botbench::ui::telemetry::achieved_rate(a.station()).is_some()
+    });
+    h.run_steps(2);
+    let label = text_of(&h.get_by_label_contains("achieved "));
+    let hz: f64 = label
+        .trim_start_matches("achieved ")
+        .trim_end_matches(" Hz")
+        .parse()
+        .unwrap_or_else(|e| panic!("{label}: {e}"));
+    assert!(hz > 0.0, "{label}");
+    h.get_by_label("Pause").click();
+    h.run_steps(3);
+    assert!(h.query_by_label("achieved —").is_some(), "paused: no rate");
+}
+
+/// A node's text: a label's own, else its value.
+fn text_of(n: &egui_kittest::Node<'_>) -> String {
+    use egui_kittest::kittest::NodeT;
+    let node = n.accesskit_node();
+    node.label().or_else(|| node.value()).unwrap_or_default()
+}
+
+/// Types `to` into the tuning box that shows `from` (a value no other box shows).
+fn retype(h: &mut H, from: &str, to: &str) {
+    h.get_by(|n| {
+        n.role() == egui::accesskit::Role::TextInput && n.value().as_deref() == Some(from)
+    })
+    .focus();
+    h.step();
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.step();
+    h.get_by(|n| {
+        n.role() == egui::accesskit::Role::TextInput && n.value().as_deref() == Some(from)
+    })
+    .type_text(to);
+    h.run_steps(2);
+}
+
+/// Rules checked as typed (issue 25, item 9): edits that break a relation of the profile
+/// (Fan PWM minimum <= Fan PWM maximum) are said as typed, naming both fields, and disable
+/// Write; the edits and the device's readings stay.
+#[test]
+fn a_relation_broken_by_the_edits_is_said_as_typed_and_disables_write() {
+    let b = bench();
+    b.sim.lock().unwrap().set_param("pwmvalueMin", 23).unwrap();
+    b.sim.lock().unwrap().set_param("pwmvalueMax", 61).unwrap();
+    let mut h = harness(&b, PanelId::TUNING);
+    step_until(&mut h, "the device read", |a| {
+        (130..=136).all(|id| a.station().device.readings.contains_key(&id))
+            && a.station().job_progress().is_none()
+    });
+    h.run_steps(2);
+    retype(&mut h, "23", "70");
+    h.run_steps(2);
+    let said = text_of(&h.get_by_label_contains("must be ≤"));
+    assert!(
+        said.contains("Fan PWM minimum") && said.contains("Fan PWM maximum"),
+        "{said}"
+    );
+    let write = h.get_by_label_contains("Write changes");
+    assert!(
+        egui_kittest::kittest::NodeT::accesskit_node(&write).is_disabled(),
+        "Write is disabled while a relation is broken"
+    );
+    // Raising the maximum too mends it: Write takes both edits.
+    retype(&mut h, "61", "80");
+    h.run_steps(2);
+    assert!(h.query_by_label_contains("must be ≤").is_none());
+    assert!(h.query_by_label("Write changes (2)").is_some());
+    let a = app(&h);
+    let get = a
+        .station()
+        .device
+        .profile
+        .command("MSP_GET_USE_FAN_LEVEL_DYNAMIC_COMP")
+        .expect("the fan level group")
+        .id;
+    assert_eq!(
+        a.station().device.value(get, "pwmvalueMin"),
+        Some(&botbench::profile::Value::Int(23)),
+        "the reading stays"
+    );
+}

@@ -206,6 +206,8 @@ impl Wire {
         self.transport = None;
         self.decoder.clear();
         self.lost_because = Some(reason.to_string());
+        // The last round trip was the lost connection's: none is measured until an answer.
+        self.stats.rtt = None;
     }
 
     /// Why the port is lost, for a request made since it was: `port lost: ` and the reason it

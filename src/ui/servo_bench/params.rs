@@ -11,6 +11,7 @@ use crate::ops::OpError;
 use crate::ops::servo as ops;
 use crate::profile::{Access, Param, Profile, Value};
 use crate::ui::Action;
+use crate::ui::confirm::Decision;
 use crate::ui::layout::header_row;
 use crate::ui::station::Station;
 use crate::ui::tuning::PendingError;
@@ -392,14 +393,18 @@ impl ParamsState {
             ));
             decision = crate::ui::confirm::buttons(
                 ui,
+                lang,
                 lang.tr("Reset", "重置"),
                 lang.tr("Keep", "不重置"),
+                rt,
             );
         });
-        if let Some(go) = crate::ui::confirm::decided(&modal, decision) {
+        if let Some(decision) = crate::ui::confirm::decided(&modal, decision) {
             self.confirm_reset = false;
-            if go {
-                actions.push(reset_job(rt, servo));
+            match decision {
+                Decision::Yes => actions.push(reset_job(rt, servo)),
+                Decision::No => {}
+                Decision::Stop => actions.push(Action::Stop),
             }
         }
         actions

@@ -10,6 +10,7 @@ pub use control::{Control, Outcome, Trip};
 
 use super::inputs::{command_inputs, readout_text, value_box};
 use super::station::{Reading, Station};
+use super::confirm::Decision;
 use super::stop;
 use super::{Action, plot};
 use crate::i18n::Lang;
@@ -357,7 +358,6 @@ impl SolarPanel {
             .collect::<Vec<_>>()
             .join(", ");
         let mut decision = None;
-        let mut stopped = Vec::new();
         let modal = egui::Modal::new(egui::Id::unique("solar-confirm")).show(ui.ctx(), |ui| {
             ui.heading(lang.tr("The robot will move", "机器人将会动作"));
             ui.label(format!("{name}: {what}"));
@@ -365,27 +365,25 @@ impl SolarPanel {
                 "Make sure it is safe, then confirm. STOP stays available.",
                 "请确认安全后再执行。停止按钮始终可用。",
             ));
-            ui.horizontal(|ui| {
-                decision = super::confirm::answer(
-                    ui,
-                    lang.tr("Confirm", "确认"),
-                    lang.tr("Cancel", "取消"),
-                );
-                ui.separator();
-                stopped = stop::button(ui, lang, rt);
-            });
+            decision = super::confirm::buttons(
+                ui,
+                lang,
+                lang.tr("Confirm", "确认"),
+                lang.tr("Cancel", "取消"),
+                rt,
+            );
         });
-        if !stopped.is_empty() {
-            actions.extend(stopped);
-            decision = Some(false);
-        }
         match super::confirm::decided(&modal, decision) {
-            Some(true) => {
+            Some(Decision::Yes) => {
                 if let Some((id, inputs)) = self.confirm.take() {
                     actions.extend(self.control.send(rt, id, &inputs));
                 }
             }
-            Some(false) => self.confirm = None,
+            Some(Decision::No) => self.confirm = None,
+            Some(Decision::Stop) => {
+                self.confirm = None;
+                actions.push(Action::Stop);
+            }
             None => {}
         }
     }

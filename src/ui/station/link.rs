@@ -160,6 +160,8 @@ impl LinkStatus {
     pub fn forget_answers(&mut self) {
         self.answering = Answering::NotYet;
         self.device_back = false;
+        // The round trip shown was the ended connection's.
+        self.stats.rtt = None;
     }
 
     /// What the link talks to, while one is open.

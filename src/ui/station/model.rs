@@ -59,6 +59,11 @@ pub struct DeviceModel {
     pub marks: HashMap<(u8, String), Mark>,
     /// Plotted telemetry, by plot id.
     pub plots: HashMap<String, SeriesSet>,
+    /// The last write to each Get's Set refused before anything was sent (a value or a
+    /// relation the profile refuses), by Get command id, until the next write or read of it.
+    pub refused: HashMap<u8, OpError>,
+    /// Each plot's polling pace, by plot id: a poll slower than usual is a gap in it.
+    pace: HashMap<String, crate::series::Pace>,
     /// When plotting started (t = 0 of the series); also marks the connection.
     pub t0: Instant,
     /// The wall-clock time of `t0`: the plots' time axis reads as the packet monitor's clock.
@@ -105,6 +110,8 @@ impl DeviceModel {
             readings: HashMap::new(),
             marks: HashMap::new(),
             plots: HashMap::new(),
+            refused: HashMap::new(),
+            pace: HashMap::new(),
             t0: Instant::now(),
             t0_wall: std::time::SystemTime::now(),
             reports: VecDeque::new(),
@@ -120,6 +127,7 @@ impl DeviceModel {
         self.profile = profile;
         self.forget_unit();
         self.plots.clear();
+        self.pace.clear();
         self.running.clear();
         self.tuya = self.tuya.next();
         self.t0 = Instant::now();
@@ -131,6 +139,7 @@ impl DeviceModel {
     /// (with a break), and what was left running stays shown.
     pub fn forget_unit(&mut self) {
         self.readings.clear();
+        self.refused.clear();
         self.marks.clear();
         self.info = None;
         self.unit += 1;
@@ -144,6 +153,7 @@ impl DeviceModel {
         for set in self.plots.values_mut() {
             set.mark_break(t);
         }
+        self.pace.clear();
     }
 
     /// Marks a gap at `at` in the plots of telemetry command `command` (its poll failed).
@@ -184,6 +194,7 @@ impl DeviceModel {
             _ => None,
         };
         let after = result.as_ref().ok();
+        self.refused.remove(&command);
         self.marks.retain(|(get, field), _| {
             *get != command
                 || matches!(
@@ -234,6 +245,10 @@ impl DeviceModel {
                 continue;
             }
             let set = self.plots.entry(plot.id.clone()).or_default();
+            // A poll slower than usual: a gap before this sample, no line across it.
+            if let Some(gap) = self.pace.entry(plot.id.clone()).or_default().sample(t) {
+                set.mark_break(gap);
+            }
             for name in &plot.fields {
                 // As the readouts show it: scaled, or converted (a thermistor's °C); no point
                 // where a conversion is undefined.
@@ -255,6 +270,7 @@ impl DeviceModel {
         let Some(get) = self.profile.command_by_id(set).and_then(|s| s.pair) else {
             return;
         };
+        self.refused.remove(&get);
         match result {
             Ok(checks) => {
                 let values: FieldValues = checks
@@ -271,6 +287,11 @@ impl DeviceModel {
                 }
                 self.readings
                     .insert(get, Reading::Values(values, Instant::now()));
+            }
+            // Refused before anything was sent: the device holds what was last read, which
+            // stays shown (with the edits); the refusal is said beside it.
+            Err(e) if e.nothing_sent() => {
+                self.refused.insert(get, e);
             }
             Err(e) => {
                 // Nothing is known of what the device holds now: read it again before trusting it.
@@ -318,6 +339,33 @@ mod tests {
             read: Value::Int(v),
         };
         m.on_written(220, Ok(vec![check]));
+    }
+
+    /// A write refused before anything was sent keeps what was read (issue 25, item 9); one
+    /// that failed on the wire does not (the device may hold either).
+    #[test]
+    fn a_write_refused_before_sending_keeps_the_readings_and_a_failed_one_does_not() {
+        let profile = crate::sim::msp_device::builtin_profile("window-cleaner").unwrap();
+        let mut m = DeviceModel::new(profile);
+        m.on_read(130, Ok(pwm(60)));
+        let refused = OpError::OutOfRange {
+            what: "pwm",
+            value: 700,
+            min: 0,
+            max: 100,
+            note: String::new(),
+        };
+        m.on_written(220, Err(refused));
+        assert_eq!(m.value(130, "pwmValue"), Some(&Value::Int(60)));
+        assert!(m.refused.contains_key(&130), "the refusal is said");
+        m.on_read(130, Ok(pwm(60)));
+        assert!(m.refused.is_empty(), "a read ends it");
+        m.on_written(220, Err(OpError::Cancelled));
+        assert_eq!(
+            m.value(130, "pwmValue"),
+            None,
+            "after a failed write, read again"
+        );
     }
 
     #[test]

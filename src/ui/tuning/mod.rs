@@ -42,6 +42,15 @@ pub enum PendingError {
     /// An edit the field refuses.
     #[error(transparent)]
     Value(#[from] FieldError),
+    /// Edits of Get command `get` that break one of the profile's relations (minimum ≤
+    /// default ≤ maximum): `error` is a [`FieldError::Relation`] naming both fields.
+    #[error("{error}")]
+    Relation {
+        /// The Get command whose fields break it.
+        get: u8,
+        /// The relation broken, both sides named with their values.
+        error: FieldError,
+    },
     /// A typed value that is not a number where one is needed.
     #[error("{field}: not a number")]
     NotANumber {
@@ -76,6 +85,9 @@ pub struct TuningPanel {
     confirm: Option<(Vec<Change>, Writes)>,
     /// A group to bring to the top of the table on the next frame (by its id).
     pub scroll_to: Option<String>,
+    /// The relation the edits break now, if one: its Get command, its two fields' idents and
+    /// what it says (in the window's language), for the two fields' boxes.
+    broken: Option<(u8, [String; 2], String)>,
 }
 
 /// The ids of the profile's groups as the table shows them, in order ("" for the commands of
@@ -165,6 +177,12 @@ impl TuningPanel {
                 };
                 inputs.push((f.ident.clone(), crate::profile::Input::Raw(value)));
             }
+            // The profile's relations, checked as typed: the write would be refused whole.
+            if let Err(error @ FieldError::Relation(_)) =
+                profile.encode(set, crate::protocol::Direction::HostToDevice, &inputs)
+            {
+                return Err(PendingError::Relation { get: get.id, error });
+            }
             writes.push((set.id, inputs));
         }
         Ok((changes, writes))
@@ -175,6 +193,14 @@ impl TuningPanel {
         let mut actions = Vec::new();
         self.prune(rt);
         let pending = self.pending(rt);
+        self.broken = match &pending {
+            Err(e @ PendingError::Relation { get, error: FieldError::Relation(b) }) => Some((
+                *get,
+                [b.low.clone(), b.high.clone()],
+                pending_text(e, rt, lang),
+            )),
+            _ => None,
+        };
         let busy = rt.job_progress().is_some();
         ui.horizontal(|ui| {
             let gets: Vec<u8> = rt
@@ -279,18 +305,27 @@ impl TuningPanel {
                 ),
                 ""
             ));
-            decision = confirm::buttons(ui, lang.tr("Write", "写入"), lang.tr("Cancel", "取消"));
+            decision = confirm::buttons(
+                ui,
+                lang,
+                lang.tr("Write", "写入"),
+                lang.tr("Cancel", "取消"),
+                rt,
+            );
         });
-        match confirm::decided(&modal, decision) {
-            Some(true) => {
+        match confirm::decided(&modal, decision)? {
+            confirm::Decision::Yes => {
                 let (_, writes) = self.confirm.take()?;
                 Some(Action::StartJob(jobs::write(&rt.device.profile, writes)))
             }
-            Some(false) => {
+            confirm::Decision::No => {
                 self.confirm = None;
                 None
             }
-            None => None,
+            confirm::Decision::Stop => {
+                self.confirm = None;
+                Some(Action::Stop)
+            }
         }
     }
 }

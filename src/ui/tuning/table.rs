@@ -101,7 +101,19 @@ impl TuningPanel {
                         "{} {} / {} {}",
                         get.ident, get.id, set.ident, set.id
                     ));
+                    let refused = rt.device.refused.get(&get.id);
                     match rt.device.readings.get(&get.id) {
+                        _ if refused.is_some() => {
+                            let e = refused.map(|e| lang.tr(&e.to_string(), &e.zh()).to_string());
+                            let text = format!(
+                                "{}: {}",
+                                lang.tr("write refused, nothing sent", "写入被拒绝,未发送"),
+                                e.unwrap_or_default()
+                            );
+                            let label = egui::RichText::new(&text).color(egui::Color32::RED);
+                            ui.add(egui::Label::new(label).truncate())
+                                .on_hover_text(text);
+                        }
                         Some(Reading::Failed(e)) => {
                             let text = format!("{}: {e}", lang.tr("read failed", "读取失败"));
                             let label = egui::RichText::new(&text).color(egui::Color32::RED);
@@ -148,7 +160,13 @@ impl TuningPanel {
             .cloned()
             .unwrap_or_else(|| device.map(|v| f.format(v)).unwrap_or_default());
         let parsed = self.edits.get(&key).map(|t| f.parse(t));
-        let invalid = matches!(parsed, Some(Err(_)));
+        // A relation broken by the edits marks both its fields, as typed.
+        let broken = self
+            .broken
+            .as_ref()
+            .filter(|(g, sides, _)| *g == get && sides.contains(&f.ident))
+            .map(|(_, _, text)| text.clone());
+        let invalid = matches!(parsed, Some(Err(_))) || broken.is_some();
         let changed = matches!(&parsed, Some(Ok(v)) if device != Some(v));
         let resp = if f.labels.is_empty() {
             let mut edit = egui::TextEdit::singleline(&mut text).desired_width(90.0);
@@ -191,7 +209,10 @@ impl TuningPanel {
                 egui::Stroke::new(1.5, egui::Color32::RED),
                 egui::StrokeKind::Outside,
             );
-            resp
+            match broken {
+                Some(text) => resp.on_hover_text(text),
+                None => resp,
+            }
         } else {
             resp
         };

@@ -11,6 +11,7 @@ use crate::ops::OpError;
 pub use crate::ops::tuya::FirmwareFileError;
 use crate::ops::tuya::{self as ops, OtaTiming};
 use crate::ops::{Progress, Run};
+use crate::ui::confirm::Decision;
 use crate::ui::files;
 use crate::ui::jobs::{Job, JobError};
 use crate::ui::settings::FileKind;
@@ -391,12 +392,14 @@ impl OtaView {
             ));
             decision = crate::ui::confirm::buttons(
                 ui,
+                lang,
                 lang.tr("Update", "升级"),
                 lang.tr("Do not update", "不升级"),
+                rt,
             );
         });
         match crate::ui::confirm::decided(&modal, decision)? {
-            true => {
+            Decision::Yes => {
                 self.confirm = None;
                 self.running = true;
                 self.progress = None;
@@ -409,9 +412,13 @@ impl OtaView {
                 });
                 Some(Action::StartJob(work(path, max, typed)))
             }
-            false => {
+            Decision::No => {
                 self.confirm = None;
                 None
+            }
+            Decision::Stop => {
+                self.confirm = None;
+                Some(Action::Stop)
             }
         }
     }
