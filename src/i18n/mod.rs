@@ -346,18 +346,25 @@ pub const CJK_FONT_NAME: &str = "noto-sans-cjk-sc-subset";
 /// proportional and monospace families (so Latin text keeps egui's own fonts).
 pub fn cjk_font_definitions() -> egui::FontDefinitions {
     let mut fonts = egui::FontDefinitions::default();
-    fonts.font_data.insert(
-        CJK_FONT_NAME.to_owned(),
-        Arc::new(egui::FontData::from_static(CJK_FONT)),
+    append_fallback(
+        &mut fonts,
+        CJK_FONT_NAME,
+        egui::FontData::from_static(CJK_FONT),
     );
+    fonts
+}
+
+/// Adds `data` as `name` and appends it as the last fallback of the proportional and
+/// monospace families.
+fn append_fallback(fonts: &mut egui::FontDefinitions, name: &str, data: egui::FontData) {
+    fonts.font_data.insert(name.to_owned(), Arc::new(data));
     for family in [egui::FontFamily::Proportional, egui::FontFamily::Monospace] {
         fonts
             .families
             .entry(family)
             .or_default()
-            .push(CJK_FONT_NAME.to_owned());
+            .push(name.to_owned());
     }
-    fonts
 }
 
 /// The name a system CJK font goes by in egui's font definitions.
@@ -369,16 +376,7 @@ pub fn font_definitions_with(system: &glyphs::SystemFont) -> egui::FontDefinitio
     let mut fonts = cjk_font_definitions();
     let mut data = egui::FontData::from_owned(system.bytes.clone());
     data.index = system.index;
-    fonts
-        .font_data
-        .insert(SYSTEM_CJK_FONT_NAME.to_owned(), Arc::new(data));
-    for family in [egui::FontFamily::Proportional, egui::FontFamily::Monospace] {
-        fonts
-            .families
-            .entry(family)
-            .or_default()
-            .push(SYSTEM_CJK_FONT_NAME.to_owned());
-    }
+    append_fallback(&mut fonts, SYSTEM_CJK_FONT_NAME, data);
     fonts
 }
 

@@ -382,21 +382,7 @@ fn the_tuning_tables_line_up_across_the_width_and_say_only_what_the_profile_give
         );
     }
     // The write dialog names fields as the window does.
-    let input = h.get_by(|n| {
-        n.role() == egui::accesskit::Role::TextInput && n.value().as_deref() == Some("97")
-    });
-    input.focus();
-    h.step();
-    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
-    h.step();
-    h.get_by(|n| {
-        n.role() == egui::accesskit::Role::TextInput && n.value().as_deref() == Some("97")
-    })
-    .type_text("90");
-    h.run_steps(2);
-    h.get_by_label_contains("Write changes (1)").click();
-    h.run_steps(3);
-    assert!(h.query_by_label("Write these changes?").is_some());
+    open_write_dialog(&mut h);
     // The table indents its field names: the exact name is the dialog's.
     assert!(
         h.query_by_label("Fan PWM maximum").is_some(),
@@ -615,18 +601,7 @@ fn stops_sent(a: &App, ids: &[u8]) -> usize {
 
 /// Opens Tuning's "Write these changes?" with one edit (Fan PWM maximum 97 -> 90).
 fn open_write_dialog(h: &mut H) {
-    let input = h.get_by(|n| {
-        n.role() == egui::accesskit::Role::TextInput && n.value().as_deref() == Some("97")
-    });
-    input.focus();
-    h.step();
-    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
-    h.step();
-    h.get_by(|n| {
-        n.role() == egui::accesskit::Role::TextInput && n.value().as_deref() == Some("97")
-    })
-    .type_text("90");
-    h.run_steps(2);
+    retype(h, "97", "90");
     h.get_by_label_contains("Write changes (1)").click();
     h.run_steps(3);
     assert!(h.query_by_label("Write these changes?").is_some());
