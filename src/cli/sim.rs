@@ -502,8 +502,8 @@ impl SimControl {
         }
     }
 
-    /// `next`: lifts the unit off (silent for [`crate::sim::fixture::SWAP_GAP`]) and puts a
-    /// fresh one in its place. Errors: a fresh unit could not be made.
+    /// `next`: lifts the unit off (silent for [`crate::sim::fixture::SWAP_GAP`], and until a
+    /// station has seen the fixture empty) and puts a fresh one in its place. Errors: a fresh unit could not be made.
     fn next_unit(&self) -> Result<(), String> {
         use std::sync::atomic::Ordering;
         if let Some(lift) = &self.lift {

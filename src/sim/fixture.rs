@@ -9,6 +9,7 @@ use super::tuya_mcu::TuyaMcu;
 use super::window_cleaner::WindowCleaner;
 use super::{Faults, SharedDevice, SimKind, SimOptions, SimTransport, VanishHandle};
 use crate::link::Opener;
+use crate::ops::station::runner::EMPTY_SILENCE;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -240,19 +241,36 @@ pub fn start_station(
 /// identity polls).
 pub const SWAP_GAP: Duration = Duration::from_millis(1500);
 
-/// How many requests a lifted fixture leaves unanswered at least, however long its gap has
-/// lasted: two identity polls' worth (CMD_VERSION's two attempts each), so that a station sees
-/// the empty fixture whatever its PC's load. A person swapping a unit takes longer than any
-/// station's polls; a gap measured only in time is missed by a station whose thread ran late
-/// for longer than it (seen under two CPU-bound loops: the next window cleaner never tested).
-pub const SWAP_IGNORED: u32 = 4;
-
-/// A lifted fixture: silent until `until` and until it has left [`SWAP_IGNORED`] requests
-/// unanswered.
+/// A lifted fixture: silent until `until`, and until the station has listened to its silence:
+/// a request left unanswered, then another that came [`EMPTY_SILENCE`] or more after it (the
+/// station's rule for an empty fixture).
+///
+/// A gap measured only in the fixture's time is missed by a station whose thread ran late for
+/// longer than it (seen under two CPU-bound loops: the next window cleaner never tested), and a
+/// count of requests is used up by one look of a station that sends several (seen under load: a
+/// servo slot's search for a fresh servo pings the factory id at every baud rate, so the fresh
+/// servo answered within the look that found the fixture empty, and the slot never started).
 #[derive(Debug, Clone, Copy)]
 struct Lifted {
     until: std::time::Instant,
-    ignored: u32,
+    /// When the first request came while lifted.
+    first_ignored: Option<std::time::Instant>,
+}
+
+impl Lifted {
+    /// Whether the unit is still off the fixture at `now`; `heard`: a request came.
+    fn still(&mut self, now: std::time::Instant, heard: bool) -> bool {
+        let listened = self
+            .first_ignored
+            .is_some_and(|first| now.saturating_duration_since(first) >= EMPTY_SILENCE);
+        if now >= self.until && listened {
+            return false;
+        }
+        if heard && self.first_ignored.is_none() {
+            self.first_ignored = Some(now);
+        }
+        true
+    }
 }
 
 /// A fixture's device that can be lifted off: while lifted it hears nothing and says nothing
@@ -286,14 +304,13 @@ impl Lift {
     }
 
     /// Whether the unit is off the fixture at `now`; `heard`: a request came (left unanswered
-    /// while lifted, and counted).
+    /// while lifted).
     fn lifted(&self, now: std::time::Instant, heard: bool) -> bool {
         let mut lifted = self.lifted_until.lock().unwrap_or_else(|e| e.into_inner());
         let Some(l) = lifted.as_mut() else {
             return false;
         };
-        if now < l.until || l.ignored < SWAP_IGNORED {
-            l.ignored += u32::from(heard);
+        if l.still(now, heard) {
             return true;
         }
         *lifted = None;
@@ -302,11 +319,12 @@ impl Lift {
 }
 
 impl LiftHandle {
-    /// Silent from now for `gap`, and until [`SWAP_IGNORED`] requests went unanswered.
+    /// Silent from now for `gap`, and until the station has listened to the silence
+    /// ([`Lifted`]).
     pub fn lift_for(&self, gap: Duration) {
         *self.lifted_until.lock().unwrap_or_else(|e| e.into_inner()) = Some(Lifted {
             until: std::time::Instant::now() + gap,
-            ignored: 0,
+            first_ignored: None,
         });
     }
 }
@@ -354,20 +372,39 @@ mod tests {
     }
 
     /// A swap's gap that has passed before the station looked (its thread ran late) still
-    /// leaves the station's next polls unanswered: the empty fixture is seen whatever the load.
+    /// leaves the station's look unanswered, however many requests it sends (a servo slot's
+    /// search pings every baud rate), and the unit answers only once the station has listened to
+    /// the silence for [`EMPTY_SILENCE`]: the empty fixture is seen whatever the load.
     #[test]
     fn a_lifted_fixture_stays_silent_until_the_station_could_see_it_empty() {
         let (mut lift, handle) = Lift::new(Arc::new(Mutex::new(Answers)));
         assert_eq!(lift.receive(&[0], 9600, Instant::now()).len(), 1);
         handle.lift_for(Duration::ZERO);
         let later = Instant::now() + Duration::from_secs(5);
-        for n in 1..=SWAP_IGNORED {
+        for n in 1..=12 {
             assert!(lift.tick(later).is_empty());
             assert!(
                 lift.receive(&[0], 9600, later).is_empty(),
-                "request {n} answered, the gap long past"
+                "request {n} of the station's first look answered, the gap long past"
             );
         }
-        assert_eq!(lift.receive(&[0], 9600, later).len(), 1, "placed again");
+        let almost = later + EMPTY_SILENCE - Duration::from_millis(1);
+        assert!(
+            lift.receive(&[0], 9600, almost).is_empty(),
+            "answered before the silence was listened to"
+        );
+        let listened = later + EMPTY_SILENCE;
+        assert_eq!(lift.receive(&[0], 9600, listened).len(), 1, "placed again");
+        assert_eq!(lift.receive(&[0], 9600, listened).len(), 1, "stays placed");
+    }
+
+    /// Ticks alone (no request) never start the silence the station listens to.
+    #[test]
+    fn a_lifted_fixture_nobody_asked_is_not_seen_empty() {
+        let (mut lift, handle) = Lift::new(Arc::new(Mutex::new(Answers)));
+        handle.lift_for(Duration::ZERO);
+        let later = Instant::now() + Duration::from_secs(60);
+        assert!(lift.tick(later).is_empty());
+        assert!(lift.receive(&[0], 9600, later + EMPTY_SILENCE).is_empty());
     }
 }
