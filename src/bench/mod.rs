@@ -2,6 +2,7 @@
 //! reported against the wire limit (the time the bytes themselves take at the port's baud rate).
 //! Run it on a release build: `cargo run --release -- bench --json`.
 
+mod adapter;
 mod field;
 mod records;
 mod station;
@@ -402,8 +403,9 @@ impl StepTimes {
 }
 
 /// The cases [`run_all`] runs, by the names `bench --only` takes.
-pub const CASES: [&str; 9] = [
+pub const CASES: [&str; 10] = [
     "msp-polling",
+    "msp-bad-adapter",
     "servo-scan",
     "servo-field-scan",
     "servo-provision",
@@ -459,6 +461,13 @@ pub fn run_all(
     if wanted("msp-polling") {
         add("msp-polling", one(msp_polling(3.0, 2)), &mut out);
         add("msp-polling", one(msp_polling(3.0, 1)), &mut out);
+    }
+    if wanted("msp-bad-adapter") {
+        add(
+            "msp-bad-adapter",
+            adapter::bad_adapter_polling(5.0),
+            &mut out,
+        );
     }
     if wanted("servo-scan") {
         add("servo-scan", servo_scans(long), &mut out);

@@ -150,7 +150,8 @@ enum Cmd {
         /// One JSON document a line.
         #[arg(long)]
         json: bool,
-        /// Only the cases whose name contains this: msp-polling, servo-scan,
+        /// Only the cases whose name contains this: msp-polling, msp-bad-adapter (the
+        /// window's telemetry polls against msp watch's behind a bad adapter), servo-scan,
         /// servo-field-scan (with --field), servo-provision, tuya-ota, tuya-dp-report,
         /// tuya-handshake, station (4 slots at once against one alone), records-report
         /// (SQLite; and PostgreSQL when
