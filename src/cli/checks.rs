@@ -8,8 +8,13 @@ use std::str::FromStr;
 
 /// Baud rates a serial port is opened at (`--baud`): what USB adapters and UARTs offer.
 pub(crate) const BAUD: RangeInclusive<u32> = 300..=4_000_000;
-/// How long a device may take to answer beyond the wire time (`--margin-ms`), ms.
-pub(crate) const MARGIN_MS: RangeInclusive<u64> = 1..=5_000;
+/// How long a device may take to answer beyond the wire time (`--margin-ms`), ms: the link's
+/// range, which the window and a station take too.
+pub(crate) const MARGIN_MS: RangeInclusive<u64> = crate::link::MARGIN_MS;
+/// How long to send nothing after the port opens (`--boot-wait-ms`), ms: the link's range.
+pub(crate) const BOOT_WAIT_MS: RangeInclusive<u64> = crate::link::BOOT_WAIT_MS;
+/// How long a simulator boots after each open (`sim --boot-ms`), ms.
+pub(crate) const BOOT_MS: RangeInclusive<u64> = 0..=60_000;
 /// Polls per second of `msp watch --rate`.
 pub(crate) const RATE: RangeInclusive<f64> = 0.1..=1_000.0;
 /// Answers `msp watch --count` waits for.
@@ -49,6 +54,21 @@ pub(crate) fn baud(text: &str) -> Result<u32, String> {
 /// `--margin-ms`: within [`MARGIN_MS`].
 pub(crate) fn margin_ms(text: &str) -> Result<u64, String> {
     within(text, &MARGIN_MS, "milliseconds")
+}
+
+/// `--boot-wait-ms`: within [`BOOT_WAIT_MS`].
+pub(crate) fn boot_wait_ms(text: &str) -> Result<u64, String> {
+    within(text, &BOOT_WAIT_MS, "milliseconds")
+}
+
+/// `sim --boot-ms`: within [`BOOT_MS`].
+pub(crate) fn boot_ms(text: &str) -> Result<u64, String> {
+    within(text, &BOOT_MS, "milliseconds")
+}
+
+/// `--dtr`, `--rts`: on, off or keep.
+pub(crate) fn line_level(text: &str) -> Result<crate::link::LineLevel, String> {
+    text.parse()
 }
 
 /// `msp watch --count`: within [`COUNT`].

@@ -478,7 +478,7 @@ fn turn(dev: Device<'_>, angle: &Angle, json: bool) -> CliResult {
                     "servo {id} does not answer a ping, so the angle was not sent (the servo \
                      sends no answer to an angle: nothing else would tell that it is not there)\
                      {}; `--no-check` sends it anyway",
-                    super::port::SILENT_HINT
+                    super::port::silent_hint()
                 )));
             }
             Presence::PossibleDuplicate(e) => super::port::warn(&format!(

@@ -45,6 +45,7 @@ mod link_identify;
 mod link_msp;
 mod link_servo;
 mod link_tuya;
+mod port_boot;
 mod preset;
 mod profile_codec;
 mod profile_load;
