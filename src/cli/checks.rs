@@ -178,4 +178,22 @@ mod tests {
         assert_eq!(servo_id("254"), Ok(254));
         assert!(servo_id("256").is_err());
     }
+
+    /// The window and a station read margins and boot waits with the link's ranges: each takes
+    /// exactly what `--margin-ms` and `--boot-wait-ms` take.
+    #[test]
+    fn the_window_s_margin_and_boot_wait_accept_what_the_command_line_accepts() {
+        use crate::link::ms_within;
+        for ms in [
+            0u64, 1, 2, 20, 300, 4_999, 5_000, 5_001, 29_999, 30_000, 30_001,
+        ] {
+            let t = ms.to_string();
+            let (cli, window) = (margin_ms(&t), ms_within(&t, &crate::link::MARGIN_MS));
+            assert_eq!(cli, window, "margin {ms}");
+            let (cli, window) = (boot_wait_ms(&t), ms_within(&t, &crate::link::BOOT_WAIT_MS));
+            assert_eq!(cli, window, "boot wait {ms}");
+        }
+        assert_eq!(MARGIN_MS, 1..=5_000);
+        assert_eq!(BOOT_WAIT_MS, 0..=30_000);
+    }
 }

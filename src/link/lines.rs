@@ -13,6 +13,22 @@ pub const MARGIN_MS: RangeInclusive<u64> = 1..=5_000;
 /// The settle time after open a user may give (`--boot-wait-ms`, the window, a station), ms.
 pub const BOOT_WAIT_MS: RangeInclusive<u64> = 0..=30_000;
 
+/// Milliseconds typed by a person (`text`, spaces around allowed) within `range`; the error
+/// says what was given and what is allowed, as the command line's do.
+pub fn ms_within(text: &str, range: &RangeInclusive<u64>) -> Result<u64, String> {
+    let quoted = crate::document::quote(text);
+    let allowed = format!("milliseconds from {} to {}", range.start(), range.end());
+    let value: u64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{quoted}' is not a number; give {allowed}"))?;
+    if range.contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!("{quoted} is out of range; give {allowed}"))
+    }
+}
+
 /// What to do with a modem line (DTR or RTS) right after the port opens.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

@@ -13,7 +13,7 @@ pub mod watch;
 mod worker;
 pub use worker::default_margin;
 
-pub use lines::{BOOT_WAIT_MS, LineLevel, MARGIN_MS, PortSetup};
+pub use lines::{BOOT_WAIT_MS, LineLevel, MARGIN_MS, PortSetup, ms_within};
 pub use request::{CommandName, ExchangeError, Match, Reply, ReplySpec, Request};
 pub use serial::PortOpener;
 pub use session::tuya::{HandshakeStep, ProductInfo, StepResult, TuyaEvent, TuyaModuleOptions};
