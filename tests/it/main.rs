@@ -59,6 +59,7 @@ mod sdk_vectors;
 mod seed_vectors;
 mod selftest;
 mod series;
+mod servo_multi_turn;
 mod servo_sync;
 mod sim_devices;
 mod sim_msp;
