@@ -111,12 +111,12 @@ enum ServoCmd {
         /// --acc-ms + --dec-ms (the profile's rule), else it is refused with the least allowed.
         #[arg(long)]
         multi_turn: bool,
-        /// With --multi-turn: acceleration time, 20 to 65535 ms.
-        #[arg(long, default_value_t = 20, requires = "multi_turn")]
-        acc_ms: u16,
-        /// With --multi-turn: deceleration time, 20 to 65535 ms.
-        #[arg(long, default_value_t = 20, requires = "multi_turn")]
-        dec_ms: u16,
+        /// With --multi-turn: acceleration time, 20 to 65535 ms (default 20).
+        #[arg(long, value_parser = clap::value_parser!(u16).range(20..))]
+        acc_ms: Option<u16>,
+        /// With --multi-turn: deceleration time, 20 to 65535 ms (default 20).
+        #[arg(long, value_parser = clap::value_parser!(u16).range(20..))]
+        dec_ms: Option<u16>,
         /// Send the angle without first checking that the servo answers a ping (the servo
         /// sends no answer to the angle itself, so without the ping nothing says it is there).
         #[arg(long)]
@@ -337,6 +337,11 @@ fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<
             dec_ms,
             ..
         } => {
+            if !*multi_turn && (acc_ms.is_some() || dec_ms.is_some()) {
+                return Err(CliError::input(
+                    "--acc-ms and --dec-ms are for a multi-turn move: add --multi-turn",
+                ));
+            }
             let command = if *multi_turn {
                 "ROTATE_MTURN_BY_INTERVAL"
             } else {
@@ -352,7 +357,8 @@ fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<
                 raw("interval", *ms),
             ];
             if *multi_turn {
-                inputs.extend([raw("t_acc", *acc_ms), raw("t_dec", *dec_ms)]);
+                let (acc, dec) = (acc_ms.unwrap_or(20), dec_ms.unwrap_or(20));
+                inputs.extend([raw("t_acc", acc), raw("t_dec", dec)]);
             }
             inputs.push(raw("power", *power));
             // The profile's ranges and relations (a multi-turn interval below t_acc + t_dec):
