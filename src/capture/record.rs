@@ -376,6 +376,10 @@ impl Transport for RecordingTransport {
         self.inner.latency_timer()
     }
 
+    fn set_lines(&mut self, dtr: Option<bool>, rts: Option<bool>) -> Result<(), LinkError> {
+        self.inner.set_lines(dtr, rts)
+    }
+
     fn taken(&self) -> u64 {
         self.inner.taken()
     }

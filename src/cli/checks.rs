@@ -8,8 +8,13 @@ use std::str::FromStr;
 
 /// Baud rates a serial port is opened at (`--baud`): what USB adapters and UARTs offer.
 pub(crate) const BAUD: RangeInclusive<u32> = 300..=4_000_000;
-/// How long a device may take to answer beyond the wire time (`--margin-ms`), ms.
-pub(crate) const MARGIN_MS: RangeInclusive<u64> = 1..=5_000;
+/// How long a device may take to answer beyond the wire time (`--margin-ms`), ms: the link's
+/// range, which the window and a station take too.
+pub(crate) const MARGIN_MS: RangeInclusive<u64> = crate::link::MARGIN_MS;
+/// How long to send nothing after the port opens (`--boot-wait-ms`), ms: the link's range.
+pub(crate) const BOOT_WAIT_MS: RangeInclusive<u64> = crate::link::BOOT_WAIT_MS;
+/// How long a simulator boots after each open (`sim --boot-ms`), ms.
+pub(crate) const BOOT_MS: RangeInclusive<u64> = 0..=60_000;
 /// Polls per second of `msp watch --rate`.
 pub(crate) const RATE: RangeInclusive<f64> = 0.1..=1_000.0;
 /// Answers `msp watch --count` waits for.
@@ -49,6 +54,21 @@ pub(crate) fn baud(text: &str) -> Result<u32, String> {
 /// `--margin-ms`: within [`MARGIN_MS`].
 pub(crate) fn margin_ms(text: &str) -> Result<u64, String> {
     within(text, &MARGIN_MS, "milliseconds")
+}
+
+/// `--boot-wait-ms`: within [`BOOT_WAIT_MS`].
+pub(crate) fn boot_wait_ms(text: &str) -> Result<u64, String> {
+    within(text, &BOOT_WAIT_MS, "milliseconds")
+}
+
+/// `sim --boot-ms`: within [`BOOT_MS`].
+pub(crate) fn boot_ms(text: &str) -> Result<u64, String> {
+    within(text, &BOOT_MS, "milliseconds")
+}
+
+/// `--dtr`, `--rts`: on, off or keep.
+pub(crate) fn line_level(text: &str) -> Result<crate::link::LineLevel, String> {
+    text.parse()
 }
 
 /// `msp watch --count`: within [`COUNT`].
@@ -157,5 +177,23 @@ mod tests {
         assert!(servo_id("255").unwrap_err().contains("broadcast"));
         assert_eq!(servo_id("254"), Ok(254));
         assert!(servo_id("256").is_err());
+    }
+
+    /// The window and a station read margins and boot waits with the link's ranges: each takes
+    /// exactly what `--margin-ms` and `--boot-wait-ms` take.
+    #[test]
+    fn the_window_s_margin_and_boot_wait_accept_what_the_command_line_accepts() {
+        use crate::link::ms_within;
+        for ms in [
+            0u64, 1, 2, 20, 300, 4_999, 5_000, 5_001, 29_999, 30_000, 30_001,
+        ] {
+            let t = ms.to_string();
+            let (cli, window) = (margin_ms(&t), ms_within(&t, &crate::link::MARGIN_MS));
+            assert_eq!(cli, window, "margin {ms}");
+            let (cli, window) = (boot_wait_ms(&t), ms_within(&t, &crate::link::BOOT_WAIT_MS));
+            assert_eq!(cli, window, "boot wait {ms}");
+        }
+        assert_eq!(MARGIN_MS, 1..=5_000);
+        assert_eq!(BOOT_WAIT_MS, 0..=30_000);
     }
 }

@@ -21,6 +21,9 @@ pub(crate) struct Console {
     pub(crate) warnings: Vec<String>,
     /// The captures this run records, finished when it ends.
     pub(crate) captures: Vec<Capture>,
+    /// The boot wait this run opened its port with, ms (`None`: no port opened yet): the
+    /// checklist of a device that never answers names the boot wait when it was 0.
+    pub(crate) boot_wait_ms: Option<u64>,
 }
 
 #[derive(Clone)]
@@ -116,6 +119,7 @@ impl Console {
             sink: Sink::Process,
             warnings: Vec::new(),
             captures: Vec::new(),
+            boot_wait_ms: None,
         }
     }
 
@@ -144,6 +148,7 @@ pub(crate) fn handle() -> Console {
         sink: c.sink.clone(),
         warnings: Vec::new(),
         captures: Vec::new(),
+        boot_wait_ms: None,
     })
 }
 

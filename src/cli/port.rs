@@ -2,7 +2,7 @@
 
 use super::{CliError, checks, registry};
 use crate::capture::{Capture, CaptureInfo};
-use crate::link::{DeviceInfo, ExchangeError, Link, LinkOptions, PortOpener};
+use crate::link::{DeviceInfo, ExchangeError, LineLevel, Link, LinkOptions, PortOpener, PortSetup};
 use crate::ops::{Check, OpError};
 use crate::profile::{Field, Profile, Protocol};
 use clap::Args;
@@ -27,6 +27,17 @@ pub(crate) struct PortArgs {
     /// protocol's: MSP 20, servo 1.5, Tuya 300).
     #[arg(long, global = true, value_name = "MS", value_parser = checks::margin_ms)]
     pub margin_ms: Option<u64>,
+    /// The DTR line right after the port opens: on, off or keep (default keep: as the adapter
+    /// set it; many assert it on open, and a board wired to it reboots).
+    #[arg(long, global = true, value_name = "on|off|keep", value_parser = checks::line_level)]
+    pub dtr: Option<LineLevel>,
+    /// The RTS line right after the port opens: on, off or keep (default keep).
+    #[arg(long, global = true, value_name = "on|off|keep", value_parser = checks::line_level)]
+    pub rts: Option<LineLevel>,
+    /// Send nothing for this long after the port opens, 0 to 30000 ms (default 0): a board
+    /// that reboots when the port opens answers only once it has booted.
+    #[arg(long, global = true, value_name = "MS", value_parser = checks::boot_wait_ms)]
+    pub boot_wait_ms: Option<u64>,
     /// Requests in flight at once when polling at the wire's maximum: set by `msp
     /// --poll-pipeline` (MSP only); 2 elsewhere.
     #[arg(skip = 2)]
@@ -140,13 +151,21 @@ impl PortArgs {
         Ok(profile)
     }
 
-    /// The link's options: the margin given, no reconnect, the session started or not.
+    /// The link's options: the margin, lines and boot wait given, no reconnect, the session
+    /// started or not. Remembers for this run whether a boot wait was given ([`silent_hint`]).
     fn link_options(&self, start_session: bool) -> LinkOptions {
+        let boot_wait_ms = self.boot_wait_ms.unwrap_or(0);
+        super::console::with(|c| c.boot_wait_ms = Some(boot_wait_ms));
         LinkOptions {
             margin: self.margin_ms.map(std::time::Duration::from_millis),
             reconnect: false,
             start_session,
             poll_pipeline: usize::from(self.poll_pipeline),
+            setup: PortSetup {
+                dtr: self.dtr.unwrap_or_default(),
+                rts: self.rts.unwrap_or_default(),
+                boot_wait: std::time::Duration::from_millis(boot_wait_ms),
+            },
             ..LinkOptions::default()
         }
     }
@@ -213,7 +232,7 @@ pub(crate) fn op_error(e: OpError) -> CliError {
     } else if e.is_input() {
         CliError::input(e)
     } else if let OpError::Exchange(ExchangeError::Timeout { .. }) = e {
-        CliError::device(format!("{e}{SILENT_HINT}"))
+        CliError::device(format!("{e}{}", silent_hint()))
     } else {
         CliError::device(e)
     }
@@ -222,7 +241,7 @@ pub(crate) fn op_error(e: OpError) -> CliError {
 /// Maps a failed exchange to exit code 1 (with the checklist when nothing answered).
 pub(crate) fn exchange_error(e: ExchangeError) -> CliError {
     match e {
-        ExchangeError::Timeout { .. } => CliError::device(format!("{e}{SILENT_HINT}")),
+        ExchangeError::Timeout { .. } => CliError::device(format!("{e}{}", silent_hint())),
         e => CliError::device(e),
     }
 }
@@ -231,9 +250,24 @@ pub(crate) fn exchange_error(e: ExchangeError) -> CliError {
 pub(crate) const EXIT_CANCELLED: u8 = 130;
 
 /// What to check when a device never answers.
-pub(crate) const SILENT_HINT: &str = "; nothing answered: is the device powered, its TX wired to the \
+const SILENT_HINT: &str = "; nothing answered: is the device powered, its TX wired to the \
      adapter's RX (and RX to TX, GND to GND), at this baud rate (--baud) and with this profile \
      (--profile)?";
+
+/// What to check when a device never answers: [`SILENT_HINT`], and, when this run opened its
+/// port with no boot wait, a board that reboots on open.
+pub(crate) fn silent_hint() -> String {
+    let waited = super::console::with(|c| c.boot_wait_ms).is_some_and(|ms| ms > 0);
+    if waited {
+        SILENT_HINT.to_string()
+    } else {
+        format!(
+            "{SILENT_HINT} Or is it a board that reboots when the port opens (its USB adapter \
+             toggles DTR/RTS)? Give it time with --boot-wait-ms 2000, or set the lines \
+             right after the open: --dtr off --rts off (or on)."
+        )
+    }
+}
 
 /// Prints read-back checks; returns exit code 1 if any mismatched.
 pub(crate) fn print_checks(

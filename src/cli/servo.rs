@@ -107,6 +107,16 @@ enum ServoCmd {
         /// With id 255: turn every servo at this rate.
         #[arg(long)]
         broadcast: bool,
+        /// A multi-turn move (ROTATE_MTURN_BY_INTERVAL, ±368640°): --ms must be at least
+        /// --acc-ms + --dec-ms (the profile's rule), else it is refused with the least allowed.
+        #[arg(long)]
+        multi_turn: bool,
+        /// With --multi-turn: acceleration time, 20 to 65535 ms (default 20).
+        #[arg(long, value_parser = clap::value_parser!(u16).range(20..))]
+        acc_ms: Option<u16>,
+        /// With --multi-turn: deceleration time, 20 to 65535 ms (default 20).
+        #[arg(long, value_parser = clap::value_parser!(u16).range(20..))]
+        dec_ms: Option<u16>,
         /// Send the angle without first checking that the servo answers a ping (the servo
         /// sends no answer to the angle itself, so without the ping nothing says it is there).
         #[arg(long)]
@@ -258,7 +268,9 @@ enum Checked<'p> {
 struct Angle {
     /// The servo id (255: every servo, a broadcast).
     id: u8,
-    /// ROTATE's inputs.
+    /// The command: ROTATE, or ROTATE_MTURN_BY_INTERVAL (`--multi-turn`).
+    command: &'static str,
+    /// Its inputs.
     inputs: Vec<(String, Input)>,
     /// The target angle as given, in degrees.
     deg: String,
@@ -320,20 +332,47 @@ fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<
             ms,
             power,
             no_check,
+            multi_turn,
+            acc_ms,
+            dec_ms,
             ..
         } => {
-            let rotate = profile.command("ROTATE").ok_or_else(|| {
-                CliError::input(format!("profile '{}' has no ROTATE", profile.id))
+            if !*multi_turn && (acc_ms.is_some() || dec_ms.is_some()) {
+                return Err(CliError::input(
+                    "--acc-ms and --dec-ms are for a multi-turn move: add --multi-turn",
+                ));
+            }
+            let command = if *multi_turn {
+                "ROTATE_MTURN_BY_INTERVAL"
+            } else {
+                "ROTATE"
+            };
+            let rotate = profile.command(command).ok_or_else(|| {
+                CliError::input(format!("profile '{}' has no {command}", profile.id))
             })?;
-            let inputs = vec![
+            let raw = |name: &str, v: u16| (name.to_string(), Input::Raw(Value::Int(v.into())));
+            let mut inputs = vec![
                 ("servo_id".to_string(), Input::Raw(Value::Int((*id).into()))),
                 ("angle".to_string(), Input::Text(deg.clone())),
-                ("interval".to_string(), Input::Raw(Value::Int((*ms).into()))),
-                ("power".to_string(), Input::Raw(Value::Int((*power).into()))),
+                raw("interval", *ms),
             ];
-            crate::ops::exchange::request(profile, rotate, &inputs, 1).map_err(op_error)?;
+            if *multi_turn {
+                let (acc, dec) = (acc_ms.unwrap_or(20), dec_ms.unwrap_or(20));
+                inputs.extend([raw("t_acc", acc), raw("t_dec", dec)]);
+            }
+            inputs.push(raw("power", *power));
+            // The profile's ranges and relations (a multi-turn interval below t_acc + t_dec):
+            // refused here, before the port is opened.
+            crate::ops::exchange::request(profile, rotate, &inputs, 1).map_err(|e| {
+                let mut e = op_error(e);
+                if *multi_turn {
+                    e.message = format!("multi-turn move refused, nothing sent: {}", e.message);
+                }
+                e
+            })?;
             Checked::Angle(Angle {
                 id: *id,
+                command,
                 inputs,
                 deg: deg.trim().to_string(),
                 ms: *ms,
@@ -478,7 +517,7 @@ fn turn(dev: Device<'_>, angle: &Angle, json: bool) -> CliResult {
                     "servo {id} does not answer a ping, so the angle was not sent (the servo \
                      sends no answer to an angle: nothing else would tell that it is not there)\
                      {}; `--no-check` sends it anyway",
-                    super::port::SILENT_HINT
+                    super::port::silent_hint()
                 )));
             }
             Presence::PossibleDuplicate(e) => super::port::warn(&format!(
@@ -487,10 +526,12 @@ fn turn(dev: Device<'_>, angle: &Angle, json: bool) -> CliResult {
             )),
         }
     }
-    let rotate = dev
-        .profile
-        .command("ROTATE")
-        .ok_or_else(|| CliError::input(format!("profile '{}' has no ROTATE", dev.profile.id)))?;
+    let rotate = dev.profile.command(angle.command).ok_or_else(|| {
+        CliError::input(format!(
+            "profile '{}' has no {}",
+            dev.profile.id, angle.command
+        ))
+    })?;
     let reply = crate::ops::exchange::send(dev, rotate, &angle.inputs).map_err(op_error)?;
     // An answer comes only with the servo's response switch on.
     let acknowledged = match reply.payload() {
@@ -500,7 +541,8 @@ fn turn(dev: Device<'_>, angle: &Angle, json: bool) -> CliResult {
                 .map_err(op_error)?;
             if answer.int("result") == Some(0) {
                 return Err(CliError::device(format!(
-                    "servo {id} answered ROTATE with result 0 (failed): the angle was refused"
+                    "servo {id} answered {} with result 0 (failed): the angle was refused",
+                    angle.command
                 )));
             }
             true

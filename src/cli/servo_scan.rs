@@ -3,7 +3,7 @@
 //! Ctrl-C the servos found before it, exit 130.
 
 use super::CliResult;
-use super::port::{EXIT_CANCELLED, SILENT_HINT, op_error};
+use super::port::{EXIT_CANCELLED, op_error, silent_hint};
 use crate::ops::servo::{self as ops, Presence, ScanPlan, ScanReport, ScanRow};
 use crate::ops::{Cancel, Device, Progress, Run};
 use crate::profile::Profile;
@@ -101,9 +101,10 @@ pub(super) fn run(
     }
     if report.rows.is_empty() && !allow_empty {
         errln!(
-            "botbench: no servo answered on {port} (ids {}-{}){SILENT_HINT}",
+            "botbench: no servo answered on {port} (ids {}-{}){}",
             plan.ids.start(),
             plan.ids.end(),
+            silent_hint(),
         );
         return Ok(1);
     }

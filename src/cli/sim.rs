@@ -34,6 +34,12 @@ pub(crate) struct SimArgs {
     /// Extra delay before each reply, 0 to 10000 ms.
     #[arg(long, default_value_t = 0, value_parser = super::checks::latency_ms)]
     latency_ms: u64,
+    /// A board that reboots when its port opens: it hears and says nothing for this long,
+    /// 0 to 60000 ms. Served on a pseudo-terminal to another program, the simulator cannot see
+    /// an open: it is silent from its own start only (in the window's demo devices and in
+    /// tests, each open starts it again).
+    #[arg(long, value_name = "MS", default_value_t = 0, value_parser = super::checks::boot_ms)]
+    boot_ms: u64,
     /// Seed of the fault dice and of the sensor noise, any number 0 to 18446744073709551615.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -258,6 +264,7 @@ fn build_sim(args: &SimArgs) -> Result<(SimKind, Simulated), CliError> {
         corrupt: args.corrupt,
         extra_latency: Duration::from_millis(args.latency_ms),
         silent: false,
+        boot: Duration::from_millis(args.boot_ms),
         seed: args.seed,
         line: args.field.line(kind)?,
     };

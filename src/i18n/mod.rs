@@ -118,6 +118,24 @@ keys! {
     DemoDevice => "Demo device", "演示设备";
     /// The UI-language switch.
     Language => "Language", "语言";
+    /// The connection bar's menu of port options (DTR, RTS, boot wait, margin).
+    PortOptions => "Port options", "端口选项";
+    /// What the port options are for.
+    PortOptionsHint => "Kept for this profile; applied at the next Connect.", "按设备配置保存, 下次连接时生效。";
+    /// The DTR line set after the port opens.
+    Dtr => "DTR after open", "打开后 DTR";
+    /// The RTS line set after the port opens.
+    Rts => "RTS after open", "打开后 RTS";
+    /// A modem line left as the adapter set it.
+    LineKeep => "keep", "保持";
+    /// A modem line asserted.
+    LineOn => "on", "置位";
+    /// A modem line cleared.
+    LineOff => "off", "清零";
+    /// How long nothing is sent after the port opens (a board that reboots on open).
+    BootWait => "Boot wait", "开机等待";
+    /// The answer margin typed in ms (empty: auto).
+    MarginMs => "Margin (empty: auto)", "应答余量(空: 自动)";
 
     // ---- The status bar (LinkStats) ----
     /// Round trip of the last exchange.

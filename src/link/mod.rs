@@ -4,6 +4,7 @@
 //! command line, long jobs) use a [`Client`], whose requests carry their own reply channel.
 
 mod decoder;
+pub mod lines;
 pub mod request;
 pub mod serial;
 pub mod session;
@@ -12,6 +13,7 @@ pub mod watch;
 mod worker;
 pub use worker::default_margin;
 
+pub use lines::{BOOT_WAIT_MS, LineLevel, MARGIN_MS, PortSetup, ms_within};
 pub use request::{CommandName, ExchangeError, Match, Reply, ReplySpec, Request};
 pub use serial::PortOpener;
 pub use session::tuya::{HandshakeStep, ProductInfo, StepResult, TuyaEvent, TuyaModuleOptions};
@@ -319,6 +321,9 @@ pub struct LinkOptions {
     /// duplex), so the device never waits for the host; 1 sends each request after the last
     /// answer, for firmware that cannot take a request while it answers.
     pub poll_pipeline: usize,
+    /// What is done right after each open: DTR, RTS, and the settle time before anything is
+    /// sent (a board that reboots when the port opens).
+    pub setup: PortSetup,
 }
 
 impl Default for LinkOptions {
@@ -330,6 +335,7 @@ impl Default for LinkOptions {
             tuya: TuyaModuleOptions::default(),
             event_capacity: 65_536,
             poll_pipeline: 2,
+            setup: PortSetup::default(),
         }
     }
 }
@@ -352,14 +358,16 @@ impl std::fmt::Debug for Link {
 }
 
 impl Link {
-    /// Opens the transport now (so that a bad path is an immediate error), then starts the
-    /// worker thread `botbench-link`.
+    /// Opens the transport now (so that a bad path, or a modem line the port refuses, is an
+    /// immediate error), sets its lines ([`LinkOptions::setup`]), then starts the worker thread
+    /// `botbench-link`, which waits the setup's boot wait before it sends anything.
     pub fn open(
-        mut opener: Opener,
+        opener: Opener,
         profile: Arc<Profile>,
         options: LinkOptions,
         waker: Option<Waker>,
     ) -> Result<Self, LinkError> {
+        let mut opener = options.setup.wrap(opener);
         let transport = opener()?;
         let (cmd_tx, cmd_rx) = crossbeam_channel::unbounded();
         let (ev_tx, ev_rx) = crossbeam_channel::bounded(options.event_capacity.max(16));

@@ -247,6 +247,25 @@ impl Transport for SerialTransport {
         self.holders_now()
     }
 
+    /// DTR, then RTS. A pseudo-terminal has no modem lines: there the request is taken as done
+    /// (a simulator served on one plays the board).
+    fn set_lines(&mut self, dtr: Option<bool>, rts: Option<bool>) -> Result<(), LinkError> {
+        let pty = self.path.starts_with("/dev/pts/");
+        if let Some(on) = dtr
+            && let Err(e) = self.port.write_data_terminal_ready(on)
+            && !pty
+        {
+            return Err(super::lines::line_error("DTR", on, e));
+        }
+        if let Some(on) = rts
+            && let Err(e) = self.port.write_request_to_send(on)
+            && !pty
+        {
+            return Err(super::lines::line_error("RTS", on, e));
+        }
+        Ok(())
+    }
+
     fn check(&mut self) -> Result<(), LinkError> {
         if std::path::Path::new(&self.path).exists() {
             Ok(())

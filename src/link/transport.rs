@@ -65,6 +65,13 @@ pub trait Transport: Send {
     fn arrived_at(&self) -> Option<Instant> {
         None
     }
+    /// Sets the modem lines right after the port opened: DTR and RTS asserted (`Some(true)`),
+    /// cleared (`Some(false)`) or left as they are (`None`). Only a real port has them; a
+    /// simulator takes it as done. Errors: the port refused ([`LinkError::Setting`]).
+    fn set_lines(&mut self, dtr: Option<bool>, rts: Option<bool>) -> Result<(), LinkError> {
+        let _ = (dtr, rts);
+        Ok(())
+    }
 }
 
 /// How long `bytes` bytes take on the wire at `baud` (8N1: 10 bits a byte).

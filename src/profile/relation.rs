@@ -1,5 +1,7 @@
 //! Relations between fields (minimum ≤ default ≤ maximum): resolved and checked at load, and
-//! checked again before every write.
+//! checked again before every write. The smaller side may be a sum of fields of the same
+//! command (`CMD.t_acc + CMD.t_dec` ≤ `CMD.interval`: a servo's multi-turn move takes at least
+//! its acceleration and deceleration times).
 
 use super::model::{Command, Field, Param, Profile, RelOp};
 use super::validate::Issue;
@@ -54,6 +56,13 @@ impl Profile {
                     format!("no parameter '{name}' (name a command's field as COMMAND.field)")
                 }),
         }
+    }
+
+    /// Resolves a side that may be a sum: `A + B` (each as [`Self::relation_side`]).
+    pub fn relation_sides(&self, name: &str) -> Result<Vec<Side<'_>>, String> {
+        name.split('+')
+            .map(|term| self.relation_side(term.trim()))
+            .collect()
     }
 
     /// Checks the relations that apply to a frame of `cmd` with this payload: relations between
@@ -117,12 +126,16 @@ impl Profile {
 
     fn check_each(&self, value_of: &dyn Fn(Side<'_>) -> Option<i64>) -> Result<(), FieldError> {
         for r in &self.relations {
-            let (Ok(low), Ok(high)) = (self.relation_side(&r.low), self.relation_side(&r.high))
+            let (Ok(low), Ok(high)) = (self.relation_sides(&r.low), self.relation_side(&r.high))
             else {
                 continue;
             };
-            if let (Some(a), Some(b)) = (value_of(low), value_of(high)) {
-                check_pair(r.op, low.field(), a, high.field(), b)?;
+            let terms: Option<Vec<(&Field, i64)>> = low
+                .iter()
+                .map(|s| value_of(*s).map(|v| (s.field(), v)))
+                .collect();
+            if let (Some(terms), Some(b)) = (terms, value_of(high)) {
+                check_sum(r.op, &terms, high.field(), b)?;
             }
         }
         Ok(())
@@ -158,61 +171,114 @@ pub fn check_pair(
     })))
 }
 
+/// Whether the sum of `terms` (each field with its raw value) and `high_raw` keep `op`,
+/// compared as displayed; one term is [`check_pair`]. The error names each term and the sum
+/// (`Acceleration time + Deceleration time (t_acc + t_dec) 20 ms + 30 ms = 50 ms must be ≤
+/// Interval (interval) 40 ms`): the value given and the least allowed.
+pub fn check_sum(
+    op: RelOp,
+    terms: &[(&Field, i64)],
+    high: &Field,
+    high_raw: i64,
+) -> Result<(), FieldError> {
+    let [(low, low_raw)] = terms else {
+        return check_terms(op, terms, high, high_raw);
+    };
+    check_pair(op, low, *low_raw, high, high_raw)
+}
+
+fn check_terms(
+    op: RelOp,
+    terms: &[(&Field, i64)],
+    high: &Field,
+    high_raw: i64,
+) -> Result<(), FieldError> {
+    let numbers: Option<Vec<f64>> = terms.iter().map(|(f, v)| f.display_number(*v)).collect();
+    let (Some(numbers), Some(b)) = (numbers, high.display_number(high_raw)) else {
+        return Ok(());
+    };
+    let a: f64 = numbers.iter().sum();
+    let keeps = match op {
+        RelOp::Le => a <= b,
+        RelOp::Lt => a < b,
+    };
+    if keeps {
+        return Ok(());
+    }
+    let join =
+        |f: &dyn Fn(&(&Field, i64)) -> String| terms.iter().map(f).collect::<Vec<_>>().join(" + ");
+    let unit = high.unit_suffix();
+    Err(FieldError::Relation(Box::new(Broken {
+        low: join(&|(f, _)| f.ident.clone()),
+        low_name: join(&|(f, _)| f.name.en.clone()),
+        low_value: format!(
+            "{} = {:.*}{unit}",
+            join(&|(f, v)| f.display(&Value::Int(*v))),
+            high.decimals(),
+            a
+        ),
+        sign: op.sign(),
+        high: high.ident.clone(),
+        high_name: high.name.en.clone(),
+        high_value: high.display(&Value::Int(high_raw)),
+    })))
+}
+
 /// Checks every relation of a profile at load: both sides exist, are numbers, belong to one
 /// command (or are both parameters), and their defaults keep the relation.
 pub(super) fn validate_relations(p: &Profile) -> Result<(), Issue> {
     for (i, r) in p.relations.iter().enumerate() {
         let at = |k: &'static str| -> Vec<Step> { vec![Key("relations"), Index(i), Key(k)] };
-        let side = |k: &'static str, name: &str| {
-            p.relation_side(name).map_err(|m| Issue {
-                path: at(k),
-                message: format!("relation {}: {m}", i + 1),
-            })
+        let issue = |k: &'static str, m: String| Issue {
+            path: at(k),
+            message: format!("relation {}: {m}", i + 1),
         };
-        let low = side("low", &r.low)?;
-        let high = side("high", &r.high)?;
-        let describe = |s: Side<'_>| match s {
-            Side::Field(c, f) => format!("{}.{}", c.ident, f.ident),
-            Side::Param(x) => format!("parameter {}", x.field.ident),
-        };
-        let same = match (low, high) {
-            (Side::Field(a, _), Side::Field(b, _)) => a.id == b.id,
-            (Side::Param(_), Side::Param(_)) => true,
-            _ => false,
-        };
-        if !same {
-            return Err(Issue {
-                path: at("high"),
-                message: format!(
-                    "relation {}: {} and {} are not fields of one command (nor two parameters)",
-                    i + 1,
-                    describe(low),
-                    describe(high)
-                ),
-            });
+        let lows = p.relation_sides(&r.low).map_err(|m| issue("low", m))?;
+        let high = p.relation_side(&r.high).map_err(|m| issue("high", m))?;
+        for &low in &lows {
+            check_sides(low, high, lows.len() > 1).map_err(|(k, m)| issue(k, m))?;
         }
-        for (k, s) in [("low", low), ("high", high)] {
-            if s.field().ty.int_bounds().is_none() {
-                return Err(Issue {
-                    path: at(k),
-                    message: format!("relation {}: {} is not a number", i + 1, describe(s)),
-                });
-            }
-        }
-        if std::ptr::eq(low.field(), high.field()) {
-            return Err(Issue {
-                path: at("high"),
-                message: format!("relation {}: a field against itself", i + 1),
-            });
-        }
-        if let (Some(a), Some(b)) = (low.field().default, high.field().default)
-            && let Err(e) = check_pair(r.op, low.field(), a, high.field(), b)
+        let defaults: Option<Vec<(&Field, i64)>> = lows
+            .iter()
+            .map(|s| s.field().default.map(|d| (s.field(), d)))
+            .collect();
+        if let (Some(terms), Some(b)) = (defaults, high.field().default)
+            && let Err(e) = check_sum(r.op, &terms, high.field(), b)
         {
-            return Err(Issue {
-                path: at("low"),
-                message: format!("relation {}: the defaults break it: {e}", i + 1),
-            });
+            return Err(issue("low", format!("the defaults break it: {e}")));
         }
+    }
+    Ok(())
+}
+
+/// One term of a relation's smaller side against its larger side: fields of one command (or
+/// two parameters; a sum takes fields only), numbers, not the same field. The error: the key
+/// (`low`, `high`) and what is wrong.
+fn check_sides(low: Side<'_>, high: Side<'_>, sum: bool) -> Result<(), (&'static str, String)> {
+    let describe = |s: Side<'_>| match s {
+        Side::Field(c, f) => format!("{}.{}", c.ident, f.ident),
+        Side::Param(x) => format!("parameter {}", x.field.ident),
+    };
+    let same = match (low, high) {
+        (Side::Field(a, _), Side::Field(b, _)) => a.id == b.id,
+        (Side::Param(_), Side::Param(_)) => !sum,
+        _ => false,
+    };
+    if !same {
+        let m = format!(
+            "{} and {} are not fields of one command (nor two parameters)",
+            describe(low),
+            describe(high)
+        );
+        return Err(("high", m));
+    }
+    for (k, s) in [("low", low), ("high", high)] {
+        if s.field().ty.int_bounds().is_none() {
+            return Err((k, format!("{} is not a number", describe(s))));
+        }
+    }
+    if std::ptr::eq(low.field(), high.field()) {
+        return Err(("high", "a field against itself".to_string()));
     }
     Ok(())
 }

@@ -47,6 +47,8 @@ pub(crate) enum HostAction {
     Wrote(Vec<u8>),
     /// Switched to this baud rate.
     Baud(u32),
+    /// Opened the port: a device that boots on open ([`super::Faults::boot`]) starts again.
+    Opened,
     /// Dropped what had arrived ([`Transport::clear_input`]): the device side drops what had
     /// reached the host by the stamp, and says how many bytes it had written by then
     /// ([`State::cleared`]), so that the host drops exactly those, however late either thread
@@ -318,6 +320,7 @@ pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener
             });
         }
         let port = SerialTransport::open(&path, baud)?;
+        lockstep.host(HostAction::Opened, None);
         lockstep.host(HostAction::Baud(baud), None);
         let id = {
             let mut s = lockstep.lock();
@@ -529,6 +532,10 @@ impl Transport for LockstepPort {
 
     fn baud(&self) -> u32 {
         self.port.baud()
+    }
+
+    fn set_lines(&mut self, dtr: Option<bool>, rts: Option<bool>) -> Result<(), LinkError> {
+        self.port.set_lines(dtr, rts)
     }
 
     /// In step: what had reached the host by now is dropped, whether the simulator's thread

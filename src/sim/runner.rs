@@ -41,6 +41,11 @@ pub struct Faults {
     pub extra_latency: Duration,
     /// The device answers nothing (a dead device on a live port).
     pub silent: bool,
+    /// The device boots for this long after each open of its port (a board whose USB adapter
+    /// toggles DTR/RTS on open): it hears nothing and says nothing meanwhile. In process and
+    /// in lockstep each open starts it again; on a plain pty, which sees no open, it runs from
+    /// the simulator's start only.
+    pub boot: Duration,
     /// Seed of the fault dice, for repeatable runs.
     pub seed: u64,
     /// How the line itself misbehaves: a USB adapter's latency timer, a split reply, a slow
@@ -137,11 +142,14 @@ pub(crate) struct Wire {
     /// rather than with when the simulator read them (a plain pty): only then is a request known
     /// to overlap a reply on a half-duplex line (see [`Wire::host_times_uncertain`]).
     host_times_exact: bool,
+    /// Until when the device boots ([`Faults::boot`]): what it hears is lost, it says nothing.
+    booting_until: Instant,
 }
 
 impl Wire {
     pub(crate) fn new(device: SharedDevice, baud: u32, faults: Faults) -> Self {
         let now = Instant::now();
+        let booting_until = now + faults.boot;
         Self {
             device,
             rng: fastrand::Rng::with_seed(faults.seed),
@@ -159,7 +167,13 @@ impl Wire {
             vanished: false,
             last_seen: None,
             host_times_exact: true,
+            booting_until,
         }
+    }
+
+    /// The host opened the port at `at`: a device that boots on open starts again.
+    pub(crate) fn opened(&mut self, at: Instant) {
+        self.booting_until = at + self.faults.boot;
     }
 
     /// The host's writes are known only when the simulator reads them (a plain pty served to
@@ -307,6 +321,9 @@ impl Wire {
                 let Some(input) = self.inbound.pop_front() else {
                     break;
                 };
+                if input.at < self.booting_until {
+                    continue;
+                }
                 let out = lock(&self.device).receive(&input.bytes, input.baud, input.at);
                 self.schedule(out, input.at);
             } else {
@@ -320,7 +337,7 @@ impl Wire {
 
     fn schedule(&mut self, out: Vec<Outgoing>, cause: Instant) {
         for o in out {
-            if self.faults.silent || o.bytes.is_empty() {
+            if self.faults.silent || o.bytes.is_empty() || cause < self.booting_until {
                 continue;
             }
             if self.faults.drop > 0.0 && self.rng.f64() < self.faults.drop {

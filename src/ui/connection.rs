@@ -2,7 +2,7 @@
 //! language. Its content keeps its width, so that the panels below never move.
 
 use super::Action;
-use super::settings::Settings;
+use super::settings::{PortSettings, Settings};
 use super::station::{Answering, Station, Target};
 use crate::i18n::Lang;
 use crate::link::LinkState;
@@ -30,8 +30,11 @@ pub struct ConnectionBar {
     target: Target,
     baud: u32,
     profile: String,
-    /// How long the device may take to start answering, ms (`None`: the protocol's own).
-    margin_ms: Option<u64>,
+    /// The port's other settings for this profile: margin, DTR, RTS, boot wait (its `baud` is
+    /// `self.baud`, put in at Connect).
+    options: PortSettings,
+    /// The port options' number fields as typed, and why they are refused when they are.
+    typed_options: super::port_options::Typed,
     /// A path typed by hand (a pseudo-terminal is not listed by the OS).
     typed: String,
 }
@@ -47,7 +50,8 @@ impl ConnectionBar {
             target: saved.target.clone(),
             baud,
             profile: saved.profile.clone(),
-            margin_ms: saved.port_of(&saved.profile).margin_ms,
+            options: saved.port_of(&saved.profile),
+            typed_options: super::port_options::Typed::default(),
             typed: match &saved.target {
                 Target::Port(p) => p.clone(),
                 Target::Demo(_) => String::new(),
@@ -60,9 +64,12 @@ impl ConnectionBar {
         &self.profile
     }
 
-    /// The baud rate and margin the bar would connect with.
-    pub fn port(&self) -> (u32, Option<u64>) {
-        (self.baud, self.margin_ms)
+    /// The port settings the bar would connect with (baud, margin, DTR, RTS, boot wait).
+    pub fn port(&self) -> PortSettings {
+        PortSettings {
+            baud: Some(self.baud),
+            ..self.options.clone()
+        }
     }
 
     /// Another profile chosen: its own saved port settings (or its usual rate, auto margin).
@@ -74,7 +81,8 @@ impl ConnectionBar {
         let usual = rt.registry.get(profile).map_or(self.baud, |p| p.baud);
         self.profile = profile.to_string();
         self.baud = port.baud.unwrap_or(usual);
-        self.margin_ms = port.margin_ms;
+        self.options = port;
+        self.typed_options = super::port_options::Typed::default();
     }
 
     /// Draws the bar.
@@ -122,6 +130,7 @@ impl ConnectionBar {
         self.baud_choice(ui, lang);
         self.profile_choice(ui, saved, rt);
         self.margin_choice(ui, lang, rt);
+        super::port_options::menu(ui, lang, &mut self.options, &mut self.typed_options);
         actions.extend(self.connect_buttons(ui, saved, rt));
         actions
     }
@@ -251,10 +260,15 @@ impl ConnectionBar {
                 Some(ms) => format!("{ms} ms"),
             };
             egui::ComboBox::from_id_salt("margin")
-                .selected_text(shown(self.margin_ms))
+                .selected_text(shown(self.options.margin_ms))
                 .show_ui(ui, |ui| {
                     for m in MARGINS {
-                        ui.selectable_value(&mut self.margin_ms, m, shown(m));
+                        if ui
+                            .selectable_value(&mut self.options.margin_ms, m, shown(m))
+                            .clicked()
+                        {
+                            self.typed_options = super::port_options::Typed::default();
+                        }
                     }
                 })
                 .response
@@ -269,9 +283,8 @@ impl ConnectionBar {
         let mut actions = Vec::new();
         let connect = || Action::Connect {
             target: self.target.clone(),
-            baud: self.baud,
             profile: self.profile.clone(),
-            margin_ms: self.margin_ms,
+            port: self.port(),
         };
         let open = rt.link.connection.is_some();
         if open {
@@ -281,18 +294,16 @@ impl ConnectionBar {
         } else if ui.button(lang.tr("Connect", "连接")).clicked() {
             actions.push(connect());
         }
-        let port = saved.port_of(&saved.profile);
         let changed = self.target != saved.target
-            || Some(self.baud) != port.baud
             || self.profile != saved.profile
-            || self.margin_ms != port.margin_ms;
+            || self.port() != saved.port_of(&saved.profile);
         // There while connected (enabled once a setting differs), so that nothing moves.
         if open
             && ui
                 .add_enabled(changed, egui::Button::new(lang.tr("Reconnect", "重新连接")))
                 .on_disabled_hover_text(lang.tr(
-                    "change the port, baud, profile or margin first",
-                    "请先修改端口、波特率、设备配置或应答余量",
+                    "change the port, baud, profile, margin or port options first",
+                    "请先修改端口、波特率、设备配置、应答余量或端口选项",
                 ))
                 .clicked()
         {
@@ -305,7 +316,9 @@ impl ConnectionBar {
 impl ConnectionBar {
     /// A warning beside a margin far above the protocol's own.
     fn margin_warning(&self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
-        let Some(ms) = self.margin_ms else { return };
+        let Some(ms) = self.options.margin_ms else {
+            return;
+        };
         let Ok(profile) = rt.registry.get(&self.profile) else {
             return;
         };

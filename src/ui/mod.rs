@@ -17,6 +17,7 @@ pub mod layout;
 pub mod line;
 pub mod panel;
 mod plot;
+mod port_options;
 pub mod records;
 pub mod repaint;
 pub mod settings;
@@ -76,12 +77,11 @@ pub enum Action {
     Connect {
         /// To what.
         target: Target,
-        /// At what rate.
-        baud: u32,
         /// With which profile.
         profile: String,
-        /// How long the device may take to start answering, ms (`None`: the protocol's own).
-        margin_ms: Option<u64>,
+        /// The port's settings: baud (`None`: the profile's usual), margin, DTR, RTS and boot
+        /// wait; saved for this profile when the shown station connects.
+        port: settings::PortSettings,
     },
     /// Close the link.
     Disconnect,

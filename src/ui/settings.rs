@@ -5,18 +5,51 @@
 use super::panel::PanelId;
 use super::station::Target;
 use crate::i18n::Lang;
+use crate::link::{LineLevel, PortSetup};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use std::time::Duration;
 
 /// What a port needs for one kind of device, kept per profile: a 300 ms margin chosen for a
-/// slow window cleaner must not slow a servo scan, nor Tuya's 9600 baud the next servo bench.
+/// slow window cleaner must not slow a servo scan, nor Tuya's 9600 baud the next servo bench,
+/// nor a board that reboots on open make every other device wait. Settings saved before a
+/// field existed load with its default.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct PortSettings {
     /// The baud rate (`None`: the profile's usual rate).
     pub baud: Option<u32>,
-    /// How long the device may take to start answering, ms (`None`: the protocol's own).
+    /// How long the device may take to start answering, ms, within [`crate::link::MARGIN_MS`]
+    /// (`None`: the protocol's own).
     pub margin_ms: Option<u64>,
+    /// The DTR line right after the port opens.
+    pub dtr: LineLevel,
+    /// The RTS line right after the port opens.
+    pub rts: LineLevel,
+    /// How long to send nothing after the port opens, ms, within
+    /// [`crate::link::BOOT_WAIT_MS`] (0: not at all).
+    pub boot_wait_ms: u64,
+}
+
+impl PortSettings {
+    /// The margin to open the port with (`None`: the protocol's own), kept within
+    /// [`crate::link::MARGIN_MS`] (a hand-edited settings file may hold anything).
+    pub fn margin(&self) -> Option<Duration> {
+        let r = crate::link::MARGIN_MS;
+        self.margin_ms
+            .map(|ms| Duration::from_millis(ms.clamp(*r.start(), *r.end())))
+    }
+
+    /// What is done right after each open: the lines and the boot wait (kept within
+    /// [`crate::link::BOOT_WAIT_MS`]).
+    pub fn setup(&self) -> PortSetup {
+        let r = crate::link::BOOT_WAIT_MS;
+        PortSetup {
+            dtr: self.dtr,
+            rts: self.rts,
+            boot_wait: Duration::from_millis(self.boot_wait_ms.clamp(*r.start(), *r.end())),
+        }
+    }
 }
 
 /// The saved settings.

@@ -288,6 +288,7 @@ fn the_engineer_view_starts_from_the_ordinary_window_s_saved_settings() {
         botbench::ui::settings::PortSettings {
             baud: Some(115_200),
             margin_ms: Some(100),
+            ..Default::default()
         },
     );
     h.state_mut().window_settings = saved;

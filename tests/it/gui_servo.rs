@@ -401,9 +401,11 @@ fn a_new_connection_forgets_the_servos_found_on_the_last_one() {
     );
     app_mut(&mut h).apply(Action::Connect {
         target: botbench::ui::Target::Port(other.path().to_string()),
-        baud: 115_200,
         profile: "servo".into(),
-        margin_ms: None,
+        port: botbench::ui::settings::PortSettings {
+            baud: Some(115_200),
+            ..Default::default()
+        },
     });
     step_until(&mut h, "the new link", |a| a.station().connected());
     let a = app(&h);

@@ -192,3 +192,35 @@ fn wheel_mode_and_damping_reach_the_servo() {
         b.servo(97).motion_at(Instant::now()) == Motion::Damping { power: 1500 }
     });
 }
+
+#[test]
+fn a_multi_turn_move_shorter_than_its_acceleration_and_deceleration_is_refused_as_typed() {
+    let b = bench(vec![SimServo::fresh(71).with_id(4)]);
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "4", "4");
+    h.get_by_label("Motion").click();
+    h.step();
+    h.get_by_label("Multi-turn").click();
+    h.step();
+    let before = b.servo(71).motion_at(Instant::now());
+    type_into(&mut h, "Angle (°)", "720");
+    type_into(&mut h, "Interval (ms)", "50");
+    type_into(&mut h, "Acceleration (ms)", "30");
+    type_into(&mut h, "Deceleration (ms)", "40");
+    // The profile's rule, as the command line applies it: 50 ms given, 70 ms the least.
+    assert!(h.query_by_label_contains("= 70 ms must be ≤").is_some());
+    let go = h.get_by_label("Go to angle");
+    assert!(egui_kittest::kittest::NodeT::accesskit_node(&go).is_disabled());
+    assert_eq!(
+        b.servo(71).motion_at(Instant::now()),
+        before,
+        "nothing sent"
+    );
+
+    type_into(&mut h, "Interval (ms)", "70");
+    h.get_by_label("Go to angle").click();
+    step_until(&mut h, "the multi-turn move", |_| {
+        matches!(b.servo(71).motion_at(Instant::now()), Motion::Move { to, .. } if to == 7200.0)
+            || b.servo(71).angle_at(Instant::now()) == 7200.0
+    });
+}

@@ -241,3 +241,30 @@ fn a_malformed_relation_is_refused_at_load_with_its_line_and_column() {
         assert!(err.col > 1, "{err}");
     }
 }
+
+#[test]
+fn a_relation_summing_fields_is_checked_at_load_and_refused_across_commands() {
+    let src = builtin_src("servo");
+    let anchor = "(low: \"ROTATE_MTURN_BY_INTERVAL.t_acc + ROTATE_MTURN_BY_INTERVAL.t_dec\", high: \"ROTATE_MTURN_BY_INTERVAL.interval\")";
+    assert!(src.contains(anchor), "test setup");
+    assert!(parse("servo.ron", src, None).is_ok());
+    for (bad, says) in [
+        (
+            "(low: \"ROTATE_MTURN_BY_INTERVAL.t_acc + ROTATE_MTURN_BY_VELOCITY.t_dec\", high: \"ROTATE_MTURN_BY_INTERVAL.interval\")",
+            "not fields of one command",
+        ),
+        (
+            "(low: \"ROTATE_MTURN_BY_INTERVAL.t_acc + ROTATE_MTURN_BY_INTERVAL.t_decc\", high: \"ROTATE_MTURN_BY_INTERVAL.interval\")",
+            "has no field 't_decc'",
+        ),
+        (
+            "(low: \"angle_limit_low + over_volt_low\", high: \"angle_limit_high\")",
+            "not fields of one command",
+        ),
+    ] {
+        let edited = src.replacen(anchor, bad, 1);
+        let err = parse("servo.ron", &edited, None).unwrap_err();
+        assert!(err.message.contains(says), "{says}: {err}");
+        assert_eq!(err.line, line_of(&edited, bad, 0), "{err}");
+    }
+}

@@ -150,6 +150,16 @@ fn each_bad_bundle_is_refused_naming_its_place_or_slot() {
             "slot 2: no plan 'servos'",
         ),
         (
+            "a line level that is not one",
+            Box::new(|t| t.replace("dtr: \"keep\"", "dtr: \"high\"")),
+            "slot 1: dtr: 'high' is not a line level; give on, off or keep",
+        ),
+        (
+            "a boot wait out of range",
+            Box::new(|t| t.replace("boot_wait_ms: 0", "boot_wait_ms: 40000")),
+            "slot 1: boot_wait_ms: 40000 is out of range; give milliseconds from 0 to 30000",
+        ),
+        (
             "a bad scan pattern",
             Box::new(|t| {
                 t.replace(

@@ -74,9 +74,11 @@ fn frames_logged_before_a_device_change_keep_the_profile_they_came_under() {
     // To the servo bench: one ping goes out on it.
     app_mut(&mut h).apply(Action::Connect {
         target: Target::Demo("servo-bus".into()),
-        baud: 115_200,
         profile: "servo".into(),
-        margin_ms: None,
+        port: botbench::ui::settings::PortSettings {
+            baud: Some(115_200),
+            ..Default::default()
+        },
     });
     step_until(&mut h, "the servo link", |a| a.station().connected());
     app_mut(&mut h).apply(Action::StartJob(Job::new(

@@ -556,7 +556,7 @@ fn a_profiles_port_settings_are_its_own() {
     saved.port_mut().margin_ms = Some(300);
     let mut h = crate::support::gui::harness(saved, b.ports());
     h.run_steps(3);
-    assert_eq!(app(&h).connection.port().1, Some(300));
+    assert_eq!(app(&h).connection.port().margin_ms, Some(300));
     let choose = |h: &mut H, id: &str| {
         h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Profile")
             .click();
@@ -566,12 +566,12 @@ fn a_profiles_port_settings_are_its_own() {
     };
     choose(&mut h, "servo");
     assert_eq!(
-        app(&h).connection.port().1,
+        app(&h).connection.port().margin_ms,
         None,
         "the servo takes the automatic margin, not the window cleaner's 300 ms"
     );
     choose(&mut h, "window-cleaner");
-    assert_eq!(app(&h).connection.port().1, Some(300));
+    assert_eq!(app(&h).connection.port().margin_ms, Some(300));
 }
 
 /// The STOP commands' ids of the shown station's profile.

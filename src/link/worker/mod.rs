@@ -124,6 +124,7 @@ impl Worker {
     pub(super) fn run(mut self) {
         precise_timers();
         self.emit_connected();
+        self.settle_after_open();
         while !self.shutdown {
             if !self.wire.is_open() {
                 self.reconnect();

@@ -74,6 +74,7 @@ impl Worker {
                     self.timing.connected(self.wire.latency_timer());
                     self.liveness.forget();
                     self.emit_connected();
+                    self.settle_after_open();
                     self.session.connected(Instant::now());
                     return;
                 }
@@ -82,6 +83,24 @@ impl Worker {
                     backoff = (backoff * 2).min(BACKOFF_MAX);
                 }
             }
+        }
+    }
+
+    /// The port has just opened: sends nothing for the setup's boot wait (a board that reboots
+    /// when the port opens hears nothing then), taking commands meanwhile (requests queue; a
+    /// shutdown ends the wait at once), then drops what the booting board said (a boot banner,
+    /// at another rate).
+    pub(super) fn settle_after_open(&mut self) {
+        let wait = self.opts.setup.boot_wait;
+        if wait.is_zero() {
+            return;
+        }
+        debug!("boot wait of {wait:?} after open");
+        self.wait_answering_commands(wait);
+        if !self.shutdown
+            && let Err(e) = self.wire.clear_input()
+        {
+            self.lost(e.to_string());
         }
     }
 

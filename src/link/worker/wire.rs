@@ -201,6 +201,16 @@ impl Wire {
         Ok(())
     }
 
+    /// Drops what was received and not yet taken, and what was half decoded (a booting board's
+    /// banner). An error means the port is gone.
+    pub(super) fn clear_input(&mut self) -> Result<(), LinkError> {
+        if let Some(t) = self.transport.as_mut() {
+            t.clear_input()?;
+        }
+        self.decoder.clear();
+        Ok(())
+    }
+
     /// The port went away (`reason`): closed, and what was half decoded dropped.
     pub(super) fn lose(&mut self, reason: &str) {
         self.transport = None;

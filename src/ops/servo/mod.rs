@@ -11,8 +11,8 @@ mod search;
 mod setup;
 
 pub use motion::{
-    Wheel, damping_request, monitor_request, read_angle, read_angle_request, rotate_request,
-    spin_request, stop_all_requests,
+    MultiTurn, Wheel, damping_request, monitor_request, multi_turn_request, read_angle,
+    read_angle_request, rotate_request, spin_request, stop_all_requests,
 };
 pub use params::{
     read_all, read_block, read_param, write_block, write_param, write_param_broadcast, write_params,

@@ -29,6 +29,41 @@ pub fn rotate_request(
     )
 }
 
+/// A multi-turn move (ROTATE_MTURN_BY_INTERVAL): to this angle over an interval, accelerating
+/// and decelerating for the times given.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MultiTurn {
+    /// The target multi-turn angle, 0.1° (±1024 turns).
+    pub deci_degrees: i64,
+    /// The move's duration, ms.
+    pub interval_ms: i64,
+    /// Acceleration time, ms.
+    pub t_acc_ms: i64,
+    /// Deceleration time, ms.
+    pub t_dec_ms: i64,
+    /// Power, mW (0: the servo's limit).
+    pub power: i64,
+}
+
+/// The ROTATE_MTURN_BY_INTERVAL request: servo `id` by `turn`. Checked against the profile,
+/// its relations included: an interval shorter than the profile allows (the built-in servo's:
+/// `t_acc + t_dec`) is refused before anything is sent, with the interval given and the least
+/// allowed ([`OpError::Field`] of a [`crate::profile::FieldError::Relation`]).
+pub fn multi_turn_request(profile: &Profile, id: u8, turn: MultiTurn) -> Result<Request, OpError> {
+    motion_request(
+        profile,
+        cmd::ROTATE_MTURN_BY_INTERVAL,
+        id,
+        &[
+            ("angle", turn.deci_degrees),
+            ("interval", turn.interval_ms),
+            ("t_acc", turn.t_acc_ms),
+            ("t_dec", turn.t_dec_ms),
+            ("power", turn.power),
+        ],
+    )
+}
+
 /// Wheel-mode methods (SPIN, bits 1-0).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Wheel {

@@ -59,6 +59,16 @@ pub struct SlotDoc {
     pub profile: String,
     /// The line plan's name in `plans`.
     pub plan: String,
+    /// The DTR line right after the port opens: `"on"`, `"off"` or `"keep"` (the default).
+    #[serde(default)]
+    pub dtr: Option<String>,
+    /// The RTS line right after the port opens: `"on"`, `"off"` or `"keep"` (the default).
+    #[serde(default)]
+    pub rts: Option<String>,
+    /// How long to send nothing after the port opens, ms, 0 to 30000 (default 0): a board that
+    /// reboots when its port opens.
+    #[serde(default)]
+    pub boot_wait_ms: Option<u64>,
 }
 
 /// How a slot's port is found, by what stays true when its adapter is replugged.

@@ -48,6 +48,8 @@ pub struct Slot {
     pub plan_name: String,
     /// The plan, its files parsed and checked against `profile`.
     pub plan: Arc<LinePlan>,
+    /// What is done to its port right after each open: DTR, RTS, the boot wait.
+    pub setup: crate::link::PortSetup,
 }
 
 /// A station bundle checked whole: what [`load`] returns.
@@ -405,6 +407,7 @@ impl<'s> Reader<'s> {
             ));
         };
         let plan = self.plan(&s.name, &s.plan, plan_doc, &profile)?;
+        let setup = self.setup(s, &at)?;
         Ok(Slot {
             name: s.name.clone(),
             fixture: s.fixture.clone(),
@@ -413,6 +416,44 @@ impl<'s> Reader<'s> {
             profile,
             plan_name: s.plan.clone(),
             plan: Arc::new(plan),
+            setup,
+        })
+    }
+
+    /// The slot's port setup (`dtr`, `rts`, `boot_wait_ms`); a bad value is refused where it
+    /// is written, the slot named, with what is accepted.
+    fn setup(
+        &self,
+        s: &SlotDoc,
+        at: &dyn Fn(&'static str) -> [At; 3],
+    ) -> Result<crate::link::PortSetup, DocumentError> {
+        let bad = |key: &'static str, why: String| {
+            self.src.error(
+                ErrorKind::Value,
+                &at(key),
+                format!("slot {}: {key}: {why}", s.name),
+            )
+        };
+        let line = |key: &'static str, given: &Option<String>| match given {
+            None => Ok(crate::link::LineLevel::Keep),
+            Some(text) => text.parse().map_err(|why| bad(key, why)),
+        };
+        let range = crate::link::BOOT_WAIT_MS;
+        let boot_wait_ms = s.boot_wait_ms.unwrap_or(0);
+        if !range.contains(&boot_wait_ms) {
+            return Err(bad(
+                "boot_wait_ms",
+                format!(
+                    "{boot_wait_ms} is out of range; give milliseconds from {} to {}",
+                    range.start(),
+                    range.end()
+                ),
+            ));
+        }
+        Ok(crate::link::PortSetup {
+            dtr: line("dtr", &s.dtr)?,
+            rts: line("rts", &s.rts)?,
+            boot_wait: std::time::Duration::from_millis(boot_wait_ms),
         })
     }
 

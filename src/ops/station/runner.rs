@@ -248,6 +248,7 @@ impl SlotRunner {
                 let profile = self.slot.profile.clone();
                 let options = LinkOptions {
                     reconnect: false,
+                    setup: self.slot.setup,
                     ..LinkOptions::default()
                 };
                 Link::open(

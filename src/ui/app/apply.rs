@@ -38,10 +38,9 @@ impl App {
         match action {
             Action::Connect {
                 target,
-                baud,
                 profile,
-                margin_ms,
-            } => self.connect(i, target, baud, profile, margin_ms),
+                port,
+            } => self.connect(i, target, profile, port),
             Action::SetLatencyTimer { port, ms } => self.set_latency_timer(i, &port, ms),
             Action::SetPollRate(hz) => {
                 self.settings.poll_hz = hz;
@@ -107,28 +106,28 @@ impl App {
     pub fn connect_demo(&mut self, kind: crate::sim::SimKind) {
         self.apply(Action::Connect {
             target: Target::Demo(kind.name().to_string()),
-            baud: kind.default_baud(),
             profile: kind.profile_id().to_string(),
-            margin_ms: None,
+            port: PortSettings {
+                baud: Some(kind.default_baud()),
+                ..PortSettings::default()
+            },
         });
-        let (baud, _) = port_for(&self.settings, &self.state.registry, &self.settings.profile);
+        let port = port_for(&self.settings, &self.state.registry, &self.settings.profile);
+        let baud = port.baud.unwrap_or(kind.default_baud());
         self.connection = connection::ConnectionBar::new(&self.settings, baud);
     }
 
     /// Connects station `i`; the shown station's connection is saved (target, profile, its
     /// port settings) as the one to open next time.
-    fn connect(
-        &mut self,
-        i: usize,
-        target: Target,
-        baud: u32,
-        profile: String,
-        margin_ms: Option<u64>,
-    ) {
+    fn connect(&mut self, i: usize, target: Target, profile: String, port: PortSettings) {
+        let baud = port
+            .baud
+            .unwrap_or_else(|| super::usual_baud(&self.state.registry, &profile));
         let Some(station) = self.state.station_at_mut(i) else {
             return;
         };
-        station.link.options.margin = margin_ms.map(std::time::Duration::from_millis);
+        station.link.options.margin = port.margin();
+        station.link.options.setup = port.setup();
         let actions = match station.connect(target.clone(), baud, &profile) {
             Ok(actions) => actions,
             Err(e) => {
@@ -145,7 +144,7 @@ impl App {
             // Kept for this profile only: another device keeps its own.
             *self.settings.port_mut() = PortSettings {
                 baud: Some(baud),
-                margin_ms,
+                ..port
             };
         }
         let shown = self.panels();
@@ -170,8 +169,8 @@ impl App {
             .is_some_and(|s| s.link.target() == Some(&Target::Port(port.to_string())));
         if result.is_ok() && on_it {
             let profile = self.settings.profile.clone();
-            let (baud, margin_ms) = port_for(&self.settings, &self.state.registry, &profile);
-            self.connect(i, Target::Port(port.to_string()), baud, profile, margin_ms);
+            let saved = port_for(&self.settings, &self.state.registry, &profile);
+            self.connect(i, Target::Port(port.to_string()), profile, saved);
         }
         let Some(station) = self.state.station_at_mut(i) else {
             return;

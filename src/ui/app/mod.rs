@@ -8,7 +8,7 @@ mod frame;
 mod nav;
 
 use super::panel::Panel;
-use super::settings::{FileKind, Settings};
+use super::settings::{FileKind, PortSettings, Settings};
 use super::station::Station;
 use super::{Action, connection, files, tour};
 use crate::link::PortOpener;
@@ -117,9 +117,9 @@ impl App {
             station.notify(warning);
         }
         let state = AppState::new(registry, station);
-        let (baud, margin_ms) = port_for(&settings, &state.registry, &settings.profile);
+        let port = port_for(&settings, &state.registry, &settings.profile);
         let mut app = Self {
-            connection: connection::ConnectionBar::new(&settings, baud),
+            connection: connection::ConnectionBar::new(&settings, port.baud.unwrap_or(115_200)),
             settings,
             state,
             tour: None,
@@ -129,9 +129,8 @@ impl App {
         app.restore_files();
         app.apply(Action::Connect {
             target: app.settings.target.clone(),
-            baud,
             profile: app.settings.profile.clone(),
-            margin_ms,
+            port,
         });
         Ok(app)
     }
@@ -196,12 +195,17 @@ impl App {
     }
 }
 
-/// The baud rate and margin to open `profile` with: its saved ones, or its usual rate and the
-/// protocol's own margin.
-fn port_for(saved: &Settings, registry: &Registry, profile: &str) -> (u32, Option<u64>) {
-    let port = saved.port_of(profile);
-    let usual = registry.get(profile).map_or(115_200, |p| p.baud);
-    (port.baud.unwrap_or(usual), port.margin_ms)
+/// The port settings to open `profile` with: its saved ones, the baud rate always given (its
+/// saved one, else the profile's usual rate).
+fn port_for(saved: &Settings, registry: &Registry, profile: &str) -> PortSettings {
+    let mut port = saved.port_of(profile);
+    port.baud = Some(port.baud.unwrap_or_else(|| usual_baud(registry, profile)));
+    port
+}
+
+/// The usual baud rate of `profile` (115200 for a profile that does not load).
+fn usual_baud(registry: &Registry, profile: &str) -> u32 {
+    registry.get(profile).map_or(115_200, |p| p.baud)
 }
 
 /// A file last used for `kind`, else the shipped example `name` (found wherever the binary

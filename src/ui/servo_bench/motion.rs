@@ -1,4 +1,5 @@
-//! The motion tab: angle (slider or typed, with an interval: ROTATE), a live angle readout and
+//! The motion tab: angle (slider or typed, with an interval: ROTATE; or multi-turn, with
+//! acceleration and deceleration: ROTATE_MTURN_BY_INTERVAL), a live angle readout and
 //! plot (READ_ANGLE polled; MONITOR too where the servo answers it), wheel mode (stop,
 //! continuous, turns, timed; direction), damping with a holding power.
 //!
@@ -66,6 +67,12 @@ pub struct MotionState {
     pub interval: String,
     /// The power as typed, mW (0: the servo's limit).
     pub power: String,
+    /// A multi-turn move (ROTATE_MTURN_BY_INTERVAL), with its acceleration and deceleration.
+    pub multi_turn: bool,
+    /// Multi-turn: acceleration time as typed, ms.
+    pub t_acc: String,
+    /// Multi-turn: deceleration time as typed, ms.
+    pub t_dec: String,
     /// READ_ANGLE is polled.
     pub live: bool,
     /// MONITOR is polled too.
@@ -93,6 +100,9 @@ impl Default for MotionState {
             angle_text: "0.0".into(),
             interval: "500".into(),
             power: "0".into(),
+            multi_turn: false,
+            t_acc: "20".into(),
+            t_dec: "20".into(),
             live: false,
             monitor: false,
             series: Vec::new(),
@@ -213,7 +223,9 @@ impl MotionState {
         actions
     }
 
-    /// Go to an angle: typed or on the slider, with its interval and power.
+    /// Go to an angle: typed or on the slider, with its interval and power; a multi-turn move
+    /// with its acceleration and deceleration, refused as typed when its interval is shorter
+    /// than the profile allows (the same check as `servo angle --multi-turn`).
     fn angle_section(
         &mut self,
         ui: &mut egui::Ui,
@@ -224,69 +236,93 @@ impl MotionState {
     ) -> Vec<Action> {
         let mut actions = Vec::new();
         ui.heading(lang.tr("Angle", "角度"));
-        let angle = raw(rt, cmd::ROTATE, "angle", &self.angle_text);
-        let interval = raw(rt, cmd::ROTATE, "interval", &self.interval);
-        let power = raw(rt, cmd::ROTATE, "power", &self.power);
+        let command = self.angle_command();
+        let angle = raw(rt, command, "angle", &self.angle_text);
+        let interval = raw(rt, command, "interval", &self.interval);
+        let power = raw(rt, command, "power", &self.power);
+        let request = self.angle_request(rt, servo.id, [&angle, &interval, &power]);
         crate::ui::layout::toolbar(ui, |ui| {
-            let l = ui.label(lang.tr("Target angle", "目标角度"));
-            let slider = ui
-                .add(
-                    egui::Slider::new(&mut self.angle, -180.0..=180.0)
-                        .step_by(0.1)
-                        .suffix("°"),
-                )
-                .labelled_by(l.id);
-            if slider.changed() {
-                self.angle_text = format!("{:.1}", self.angle);
-            }
-            let typed = entry(
-                ui,
-                lang.tr("Angle (°)", "角度(°)"),
-                &mut self.angle_text,
-                angle.is_ok(),
-            );
-            if typed.changed()
-                && let Ok(v) = self.angle_text.trim().parse::<f64>()
-            {
-                self.angle = v.clamp(-180.0, 180.0);
-            }
-            entry(
-                ui,
-                lang.tr("Interval (ms)", "时间(ms)"),
-                &mut self.interval,
-                interval.is_ok(),
-            );
-            entry(
-                ui,
-                lang.tr("Power (mW, 0 = limit)", "功率(mW, 0为上限)"),
-                &mut self.power,
-                power.is_ok(),
-            );
-            let ok = angle.is_ok() && interval.is_ok() && power.is_ok();
+            self.angle_inputs(ui, lang, [&angle, &interval, &power]);
             if ui
                 .add_enabled(
-                    can && ok,
+                    can && request.is_ok(),
                     egui::Button::new(lang.tr("Go to angle", "转到角度")),
                 )
                 .clicked()
-                && let (Ok(a), Ok(i), Ok(p)) = (&angle, &interval, &power)
             {
-                send(
-                    &mut actions,
-                    rt,
-                    servo,
-                    ops::rotate_request(&rt.device.profile, servo.id, *a, *i, *p),
-                );
+                send(&mut actions, rt, servo, request.clone());
             }
         });
-        for e in [&angle, &interval, &power]
-            .into_iter()
-            .filter_map(|r| r.as_ref().err())
-        {
+        let typed = [&angle, &interval, &power];
+        let first = typed.into_iter().find_map(|r| r.as_ref().err());
+        if let Some(e) = first.or(request.as_ref().err()) {
             error_label(ui, e.in_lang(lang));
         }
-
         actions
+    }
+
+    /// ROTATE, or ROTATE_MTURN_BY_INTERVAL for a multi-turn move.
+    fn angle_command(&self) -> u8 {
+        if self.multi_turn {
+            cmd::ROTATE_MTURN_BY_INTERVAL
+        } else {
+            cmd::ROTATE
+        }
+    }
+
+    /// The request "Go to angle" sends, checked against the profile (its ranges and, for a
+    /// multi-turn move, the interval's relation to t_acc + t_dec), or why it cannot be sent.
+    fn angle_request(
+        &self,
+        rt: &Station,
+        id: u8,
+        [angle, interval, power]: [&Result<i64, OpError>; 3],
+    ) -> Result<crate::link::Request, OpError> {
+        let (a, i, p) = (angle.clone()?, interval.clone()?, power.clone()?);
+        let profile = &rt.device.profile;
+        if !self.multi_turn {
+            return ops::rotate_request(profile, id, a, i, p);
+        }
+        let t_acc_ms = raw(rt, cmd::ROTATE_MTURN_BY_INTERVAL, "t_acc", &self.t_acc)?;
+        let t_dec_ms = raw(rt, cmd::ROTATE_MTURN_BY_INTERVAL, "t_dec", &self.t_dec)?;
+        let turn = ops::MultiTurn {
+            deci_degrees: a,
+            interval_ms: i,
+            t_acc_ms,
+            t_dec_ms,
+            power: p,
+        };
+        ops::multi_turn_request(profile, id, turn)
+    }
+
+    /// The slider (single turn), the typed angle, interval and power, the multi-turn checkbox
+    /// and its acceleration and deceleration.
+    fn angle_inputs(&mut self, ui: &mut egui::Ui, lang: Lang, ok: [&Result<i64, OpError>; 3]) {
+        let [angle, interval, power] = ok.map(Result::is_ok);
+        ui.checkbox(&mut self.multi_turn, lang.tr("Multi-turn", "多圈"));
+        if !self.multi_turn {
+            let l = ui.label(lang.tr("Target angle", "目标角度"));
+            let slider = egui::Slider::new(&mut self.angle, -180.0..=180.0)
+                .step_by(0.1)
+                .suffix("°");
+            if ui.add(slider).labelled_by(l.id).changed() {
+                self.angle_text = format!("{:.1}", self.angle);
+            }
+        }
+        let typed = entry(ui, lang.tr("Angle (°)", "角度(°)"), &mut self.angle_text, angle);
+        if !self.multi_turn
+            && typed.changed()
+            && let Ok(v) = self.angle_text.trim().parse::<f64>()
+        {
+            self.angle = v.clamp(-180.0, 180.0);
+        }
+        entry(ui, lang.tr("Interval (ms)", "时间(ms)"), &mut self.interval, interval);
+        if self.multi_turn {
+            entry(ui, lang.tr("Acceleration (ms)", "加速时间(ms)"), &mut self.t_acc, true);
+            entry(ui, lang.tr("Deceleration (ms)", "减速时间(ms)"), &mut self.t_dec, true);
+        }
+        let power_label = lang.tr("Power (mW, 0 = limit)", "功率(mW, 0为上限)");
+        entry(ui, power_label, &mut self.power, power);
     }
 
     /// The live angle (and monitor) polled, its readout and plot.
