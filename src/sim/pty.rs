@@ -289,7 +289,11 @@ fn serve_lockstep_loop(mut master: TTYPort, mut wire: Wire, flags: &Flags, locks
                 match action {
                     HostAction::Wrote(bytes) => wire.host_wrote(&bytes, at),
                     HostAction::Baud(baud) => wire.set_baud(baud, at),
-                    HostAction::Opened => wire.opened(at),
+                    HostAction::Opened => {
+                        // What the host wrote before the open reached the device before it.
+                        wire.pump(at);
+                        wire.opened(at);
+                    }
                     HostAction::Clear => {
                         // What had reached the host by the clear is dropped, written or not.
                         wire.pump(at);

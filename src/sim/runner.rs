@@ -142,14 +142,18 @@ pub(crate) struct Wire {
     /// rather than with when the simulator read them (a plain pty): only then is a request known
     /// to overlap a reply on a half-duplex line (see [`Wire::host_times_uncertain`]).
     host_times_exact: bool,
-    /// Until when the device boots ([`Faults::boot`]): what it hears is lost, it says nothing.
-    booting_until: Instant,
+    /// When the device boots ([`Faults::boot`]), from the last open to the end of its boot:
+    /// what reaches it then is lost and it says nothing. Only that window: what the host wrote
+    /// before the open was heard before it, however late the simulator takes the two (seen
+    /// under two CPU-bound loops: a broadcast write taken together with the next run's open
+    /// was dropped as if heard while booting, though the boot took 0 ms).
+    booting: (Instant, Instant),
 }
 
 impl Wire {
     pub(crate) fn new(device: SharedDevice, baud: u32, faults: Faults) -> Self {
         let now = Instant::now();
-        let booting_until = now + faults.boot;
+        let booting = (now, now + faults.boot);
         Self {
             device,
             rng: fastrand::Rng::with_seed(faults.seed),
@@ -167,13 +171,19 @@ impl Wire {
             vanished: false,
             last_seen: None,
             host_times_exact: true,
-            booting_until,
+            booting,
         }
+    }
+
+    /// Whether the device is booting at `at` (see [`Self::booting`]).
+    fn is_booting(&self, at: Instant) -> bool {
+        let (from, until) = self.booting;
+        at >= from && at < until
     }
 
     /// The host opened the port at `at`: a device that boots on open starts again.
     pub(crate) fn opened(&mut self, at: Instant) {
-        self.booting_until = at + self.faults.boot;
+        self.booting = (at, at + self.faults.boot);
     }
 
     /// The host's writes are known only when the simulator reads them (a plain pty served to
@@ -321,7 +331,7 @@ impl Wire {
                 let Some(input) = self.inbound.pop_front() else {
                     break;
                 };
-                if input.at < self.booting_until {
+                if self.is_booting(input.at) {
                     continue;
                 }
                 let out = lock(&self.device).receive(&input.bytes, input.baud, input.at);
@@ -337,7 +347,7 @@ impl Wire {
 
     fn schedule(&mut self, out: Vec<Outgoing>, cause: Instant) {
         for o in out {
-            if self.faults.silent || o.bytes.is_empty() || cause < self.booting_until {
+            if self.faults.silent || o.bytes.is_empty() || self.is_booting(cause) {
                 continue;
             }
             if self.faults.drop > 0.0 && self.rng.f64() < self.faults.drop {

@@ -210,3 +210,46 @@ fn a_device_acts_at_its_own_ticks_however_late_its_thread_runs() {
         "seen after {seen:?}"
     );
 }
+
+/// Counts the bytes it hears.
+#[derive(Default)]
+struct Hears(usize);
+
+impl Device for Hears {
+    fn receive(&mut self, bytes: &[u8], _baud: u32, _now: Instant) -> Vec<Outgoing> {
+        self.0 += bytes.len();
+        Vec::new()
+    }
+}
+
+/// A write made before the port was opened again reaches the device, even when the simulator
+/// takes the write and the open together (a loaded machine) and pumps after both; what comes
+/// during a boot after the open is lost.
+#[test]
+fn a_write_before_an_open_is_heard_and_one_during_the_boot_is_not() {
+    for boot in [Duration::ZERO, Duration::from_millis(500)] {
+        let hears = Arc::new(Mutex::new(Hears::default()));
+        let faults = Faults {
+            boot,
+            ..Faults::default()
+        };
+        let t0 = Instant::now() + Duration::from_secs(1);
+        let mut wire = Wire::new(hears.clone(), 115_200, faults);
+        wire.host_wrote(&[1, 2, 3], t0);
+        wire.opened(t0 + Duration::from_millis(50));
+        wire.pump(t0 + Duration::from_millis(60));
+        assert_eq!(
+            hears.lock().unwrap().0,
+            3,
+            "boot {boot:?}: the write before the open"
+        );
+        wire.host_wrote(&[4, 5], t0 + Duration::from_millis(70));
+        wire.pump(t0 + Duration::from_secs(1));
+        let expected = if boot.is_zero() { 5 } else { 3 };
+        assert_eq!(
+            hears.lock().unwrap().0,
+            expected,
+            "boot {boot:?}: the write after the open"
+        );
+    }
+}
