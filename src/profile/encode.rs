@@ -301,7 +301,12 @@ impl Profile {
             let inputs = ins.take_record(i);
             let record = self
                 .encode(sub_cmd, Direction::HostToDevice, &inputs)
-                .map_err(|e| fault(format!("record {i} ({}): {e}", sub_cmd.ident)))?;
+                .map_err(|e| match e {
+                    // A record that breaks a relation (a multi-turn interval shorter than its
+                    // acceleration and deceleration) is refused as such, its values said.
+                    FieldError::Relation(_) => e,
+                    e => fault(format!("record {i} ({}): {e}", sub_cmd.ident)),
+                })?;
             if hi != Some(lo) || record.len() != lo {
                 return Err(fault(format!(
                     "{} has no fixed-size request to make records of",
