@@ -196,7 +196,11 @@ impl SlotRunner {
                 if self.slot.plan.start == StartMode::Auto {
                     self.last_identity = match self.probe(&client) {
                         Probe::Present(id) => id,
-                        _ => None,
+                        // A servo provisioned away from the factory id: the fresh servo that
+                        // answers there next is another unit by its serial number.
+                        _ => (self.slot.profile.protocol == crate::profile::Protocol::Servo)
+                            .then(|| record.unit.serial.as_deref().map(servo_identity))
+                            .flatten(),
                     };
                 }
                 let lost = record
@@ -350,7 +354,7 @@ impl SlotRunner {
 
     /// Whether a unit answers on the port now, read afresh (never a cached identity, which
     /// would hide a fixture left empty), and who it says it is: its identity (MSP: CMD_VERSION
-    /// and CMD_BUILD_INFO), a fresh servo (id 0; no identity: every fresh servo is a new unit),
+    /// and CMD_BUILD_INFO), a fresh servo (at the factory id, by its serial number),
     /// the MCU's product info (Tuya).
     fn probe(&self, client: &Client) -> Probe {
         use crate::profile::Protocol;
@@ -365,8 +369,8 @@ impl SlotRunner {
                 crate::ops::servo::provision::find_fresh(dev, &profile.servo_bauds()).map(|found| {
                     found
                         .iter()
-                        .any(|(_, p)| *p == crate::ops::servo::Presence::Present)
-                        .then_some(None)
+                        .find(|(_, p)| *p == crate::ops::servo::Presence::Present)
+                        .map(|&(baud, _)| fresh_servo_serial(dev, baud).map(|s| servo_identity(&s)))
                 })
             }
             Protocol::Tuya => Ok(crate::ops::tuya::product_info(client)
@@ -379,6 +383,22 @@ impl SlotRunner {
             Err(_) => Probe::Absent,
         }
     }
+}
+
+/// A servo's identity for telling units apart on an Auto slot: its serial number.
+fn servo_identity(serial: &str) -> String {
+    format!("servo serial {serial}")
+}
+
+/// The serial number of the fresh servo (at the factory id) answering at `baud`; `None` when
+/// it could not be read (the servo is still a unit that answers, of unknown identity).
+fn fresh_servo_serial(dev: Device<'_>, baud: u32) -> Option<String> {
+    let fresh = crate::ops::servo::factory_location(dev.profile).id;
+    let param = crate::ops::servo::serial_param(dev.profile).ok()?;
+    crate::ops::servo::switch(dev.client, baud).ok()?;
+    crate::ops::servo::read_param(dev, fresh, param)
+        .ok()
+        .map(|n| n.to_string())
 }
 
 /// How long the wire must stay silent after an identity poll went unanswered, from the poll's
