@@ -2,9 +2,8 @@
 //! states (a test reads every numeric option's help and tries its bounds), and a value outside
 //! is refused by the parser, before any file or port is opened.
 
-use std::fmt::Display;
+use crate::document::number_within as within;
 use std::ops::RangeInclusive;
-use std::str::FromStr;
 
 /// Baud rates a serial port is opened at (`--baud`): what USB adapters and UARTs offer.
 pub(crate) const BAUD: RangeInclusive<u32> = 300..=4_000_000;
@@ -27,24 +26,6 @@ pub(crate) const PROVISION_COUNT: RangeInclusive<u32> = 1..=10_000;
 pub(crate) const WAIT_MS: RangeInclusive<u64> = 1..=600_000;
 /// A simulator's extra reply delay (`sim --latency-ms`).
 pub(crate) const LATENCY_MS: RangeInclusive<u64> = 0..=10_000;
-
-/// `text` as a `T` within `range`; the error says what was given and what is allowed.
-fn within<T>(text: &str, range: &RangeInclusive<T>, what: &str) -> Result<T, String>
-where
-    T: FromStr + PartialOrd + Display,
-{
-    let quoted = crate::document::quote(text);
-    let allowed = format!("{what} from {} to {}", range.start(), range.end());
-    let value: T = text
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{quoted}' is not a number; give {allowed}"))?;
-    if range.contains(&value) {
-        Ok(value)
-    } else {
-        Err(format!("{quoted} is out of range; give {allowed}"))
-    }
-}
 
 /// `--baud`: a rate within [`BAUD`].
 pub(crate) fn baud(text: &str) -> Result<u32, String> {

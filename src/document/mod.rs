@@ -16,7 +16,7 @@ pub use file::{
     Limit, check_append, check_destination, read_bytes, read_text, write_atomic, write_atomic_with,
 };
 pub use locate::{Step, line_col, locate};
-pub use quote::{clip_message, quote};
+pub use quote::{clip_message, number_within, quote};
 
 use serde::de::DeserializeOwned;
 use std::fmt;

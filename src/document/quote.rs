@@ -68,6 +68,30 @@ pub fn clip_message(message: &str) -> String {
     out
 }
 
+/// A number typed by a person (`text`, spaces around allowed) as a `T` within `range`; the
+/// error quotes what was given and says what is allowed (`what`: "milliseconds", "a baud
+/// rate"), as the command line's, the window's and a station file's checks all say it.
+pub fn number_within<T>(
+    text: &str,
+    range: &std::ops::RangeInclusive<T>,
+    what: &str,
+) -> Result<T, String>
+where
+    T: std::str::FromStr + PartialOrd + std::fmt::Display,
+{
+    let quoted = quote(text);
+    let allowed = format!("{what} from {} to {}", range.start(), range.end());
+    let value: T = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{quoted}' is not a number; give {allowed}"))?;
+    if range.contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!("{quoted} is out of range; give {allowed}"))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

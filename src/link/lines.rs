@@ -16,17 +16,7 @@ pub const BOOT_WAIT_MS: RangeInclusive<u64> = 0..=30_000;
 /// Milliseconds typed by a person (`text`, spaces around allowed) within `range`; the error
 /// says what was given and what is allowed, as the command line's do.
 pub fn ms_within(text: &str, range: &RangeInclusive<u64>) -> Result<u64, String> {
-    let quoted = crate::document::quote(text);
-    let allowed = format!("milliseconds from {} to {}", range.start(), range.end());
-    let value: u64 = text
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{quoted}' is not a number; give {allowed}"))?;
-    if range.contains(&value) {
-        Ok(value)
-    } else {
-        Err(format!("{quoted} is out of range; give {allowed}"))
-    }
+    crate::document::number_within(text, range, "milliseconds")
 }
 
 /// What to do with a modem line (DTR or RTS) right after the port opens.
