@@ -20,19 +20,23 @@ fn a_multi_turn_interval_shorter_than_acceleration_and_deceleration_is_refused()
     let sim = Sim::start(&["servo-bus", "--servos", "1"]);
     let before = angle(&sim);
 
-    let args = [
-        "angle",
-        "1",
-        "720",
-        "--multi-turn",
-        "--ms",
-        "50",
-        "--acc-ms",
-        "30",
-        "--dec-ms",
-        "40",
-    ];
-    let ran = sim.cli("servo", &args);
+    // Servo 1 to 720° over `ms`, accelerating for 30 ms and decelerating for 40 ms.
+    let move_over = |ms: &str| {
+        let args = [
+            "angle",
+            "1",
+            "720",
+            "--multi-turn",
+            "--ms",
+            ms,
+            "--acc-ms",
+            "30",
+            "--dec-ms",
+            "40",
+        ];
+        sim.cli("servo", &args)
+    };
+    let ran = move_over("50");
     assert_eq!(ran.code, 2, "{ran:?}");
     assert!(ran.err.contains("nothing sent"), "{ran:?}");
     // The interval given and the least allowed (t_acc + t_dec).
@@ -40,19 +44,7 @@ fn a_multi_turn_interval_shorter_than_acceleration_and_deceleration_is_refused()
     assert!(ran.err.contains("Interval (interval) 50 ms"), "{ran:?}");
     assert_eq!(angle(&sim), before, "nothing moved");
 
-    let args = [
-        "angle",
-        "1",
-        "720",
-        "--multi-turn",
-        "--ms",
-        "70",
-        "--acc-ms",
-        "30",
-        "--dec-ms",
-        "40",
-    ];
-    let ran = sim.cli("servo", &args);
+    let ran = move_over("70");
     assert_eq!(ran.code, 0, "{ran:?}");
     let deadline = std::time::Instant::now() + crate::support::PATIENCE;
     while angle(&sim) != 720.0 {
