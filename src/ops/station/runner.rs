@@ -194,13 +194,13 @@ impl SlotRunner {
                 // Who is on the fixture now (a firmware update may have changed it): the next
                 // unit is one that answers after a silence, or with another identity.
                 if self.slot.plan.start == StartMode::Auto {
+                    let servo = self.slot.profile.protocol == crate::profile::Protocol::Servo;
                     self.last_identity = match self.probe(&client) {
                         Probe::Present(id) => id,
                         // A servo provisioned away from the factory id: the fresh servo that
                         // answers there next is another unit by its serial number.
-                        _ => (self.slot.profile.protocol == crate::profile::Protocol::Servo)
-                            .then(|| record.unit.serial.as_deref().map(servo_identity))
-                            .flatten(),
+                        _ if servo => record.unit.serial.as_deref().map(servo_identity),
+                        _ => None,
                     };
                 }
                 let lost = record
