@@ -101,6 +101,11 @@ impl Seen {
         }
     }
 
+    /// Not seen before `t` (a frame that went out on the wire before this one, seen later).
+    pub(crate) fn raise_not_before(&mut self, t: Instant) {
+        self.not_before = self.not_before.max(t);
+    }
+
     /// When byte `i` of the frame, which reached the adapter at `arrived`, is seen by the host.
     pub(crate) fn at(&self, i: usize, arrived: Instant) -> Instant {
         let mut t = arrived;

@@ -100,6 +100,12 @@ impl Delivery {
         self.seen.at(i, self.start + self.byte * (i as u32 + 1))
     }
 
+    /// When the host sees its last byte (`None` for an empty frame).
+    fn last_seen(&self) -> Option<Instant> {
+        let n = self.bytes.len();
+        (n > 0).then(|| self.seen_at(n - 1))
+    }
+
     /// How many of its bytes the host has seen by `now`.
     fn arrived(&self, now: Instant) -> usize {
         // Seen times rise with the byte index.
@@ -125,12 +131,13 @@ pub(crate) struct Wire {
     /// Bytes of the front delivery already handed to the host.
     taken: usize,
     rx_free: Instant,
-    tx_free: Instant,
+    /// The device's transmissions not yet over, as (start, end) in wire order: a frame goes out
+    /// in the first gap long enough for it, as a UART sends whenever its line is idle (see
+    /// [`Self::tx_slot`]).
+    tx_busy: VecDeque<(Instant, Instant)>,
     next_tick: Instant,
     /// The adapter's clock starts with the wire.
     epoch: Instant,
-    /// When the host saw the last frame: frames are never seen out of order.
-    seen_until: Instant,
     /// Bytes the host has sent.
     host_bytes: u64,
     /// The port has vanished ([`Line::vanish_after_bytes`]).
@@ -163,10 +170,9 @@ impl Wire {
             outbound: VecDeque::new(),
             taken: 0,
             rx_free: now,
-            tx_free: now,
+            tx_busy: VecDeque::new(),
             next_tick: now,
             epoch: now,
-            seen_until: now,
             host_bytes: 0,
             vanished: false,
             last_seen: None,
@@ -206,29 +212,40 @@ impl Wire {
         &self.faults.line
     }
 
-    /// When the host sees the bytes of the next frame.
-    fn next_seen(&mut self) -> Seen {
-        if self.faults.line.delays() {
-            self.faults
-                .line
-                .seen(self.epoch, self.seen_until, &mut self.rng)
-        } else {
-            Seen::at_once()
-        }
-    }
-
-    /// Queues a frame for the host, in order of its start on the wire.
-    fn deliver(&mut self, d: Delivery) {
-        if self.line().delays() && !d.bytes.is_empty() {
-            self.seen_until = self.seen_until.max(d.seen_at(d.bytes.len() - 1));
-        }
+    /// Queues a frame for the host in order of its start on the wire, and draws when the host
+    /// sees its bytes: never before the frame before it, nor after the frames behind it (frames
+    /// are never seen out of order, also when one goes out in a gap before frames scheduled
+    /// earlier, see [`Self::tx_slot`]).
+    fn deliver(&mut self, start: Instant, byte: Duration, bytes: Vec<u8>, echo: bool) {
         let at = self
             .outbound
             .iter()
-            .rposition(|o| o.start <= d.start)
+            .rposition(|o| o.start <= start)
             .map_or(0, |i| i + 1);
         // The front may be partly handed over already: nothing goes before it then.
         let at = if self.taken > 0 { at.max(1) } else { at };
+        let seen = if self.faults.line.delays() {
+            let before = match at.checked_sub(1) {
+                Some(i) => self.outbound[i].last_seen(),
+                None => self.last_seen,
+            };
+            let not_before = before.unwrap_or(self.epoch);
+            self.faults.line.seen(self.epoch, not_before, &mut self.rng)
+        } else {
+            Seen::at_once()
+        };
+        let d = Delivery {
+            start,
+            byte,
+            bytes,
+            seen,
+            echo,
+        };
+        if let Some(last) = d.last_seen() {
+            for behind in self.outbound.iter_mut().skip(at) {
+                behind.seen.raise_not_before(last);
+            }
+        }
         self.outbound.insert(at, d);
     }
 
@@ -291,14 +308,7 @@ impl Wire {
             }
         }
         if self.line().echo {
-            let seen = self.next_seen();
-            self.deliver(Delivery {
-                start,
-                byte: wire_time(1, self.baud),
-                bytes: bytes.clone(),
-                seen,
-                echo: true,
-            });
+            self.deliver(start, wire_time(1, self.baud), bytes.clone(), true);
         }
         self.inbound.push_back(Inbound {
             at,
@@ -368,8 +378,7 @@ impl Wire {
             {
                 *last ^= 1 << self.rng.u8(0..8);
             }
-            let start = (cause + o.after + self.faults.extra_latency).max(self.tx_free);
-            self.tx_free = start + duration;
+            let start = self.tx_slot(cause, cause + o.after + self.faults.extra_latency, duration);
             let byte = duration / bytes.len().max(1) as u32;
             if self.faults.line.half_duplex && self.host_times_exact {
                 // A request the host has already started on the wire collides with this reply.
@@ -382,15 +391,32 @@ impl Wire {
                     }
                 }
             }
-            let seen = self.next_seen();
-            self.deliver(Delivery {
-                start,
-                byte,
-                bytes,
-                seen,
-                echo: false,
-            });
+            self.deliver(start, byte, bytes, false);
         }
+    }
+
+    /// When a frame of `duration` that the device decided to send at `cause`, not before
+    /// `earliest`, starts on the wire: the first gap from `earliest` between the transmissions
+    /// already scheduled that holds it, not after the last of them. A frame the firmware sends
+    /// later (a slow MCU's next report, a servo's answer once its move is done) does not hold the
+    /// line before its time: an answer due now goes out in the gap before it (before, a
+    /// heartbeat's answer waited 6.6 s behind reports scheduled 100-150 ms apart).
+    fn tx_slot(&mut self, cause: Instant, earliest: Instant, duration: Duration) -> Instant {
+        // The device decides in time order: what ended before this decision is history.
+        while self.tx_busy.front().is_some_and(|&(_, end)| end <= cause) {
+            self.tx_busy.pop_front();
+        }
+        let mut start = earliest;
+        let mut at = self.tx_busy.len();
+        for (i, &(from, until)) in self.tx_busy.iter().enumerate() {
+            if start + duration <= from {
+                at = i;
+                break;
+            }
+            start = start.max(until);
+        }
+        self.tx_busy.insert(at, (start, start + duration));
+        start
     }
 
     /// Copies bytes that have reached the host by `now` into `buf`.
