@@ -65,6 +65,14 @@ pub trait Transport: Send {
     fn arrived_at(&self) -> Option<Instant> {
         None
     }
+    /// When the last write's bytes started on the wire, where the port knows it (a pty served in
+    /// lockstep stamps each write with the instant the device hears it from); `None`: when the
+    /// write returned, all a real port can say. The link counts the answer's deadline from this
+    /// instant, so that a host thread held up before or in its write does not stretch the
+    /// device's time to answer, where that can be known.
+    fn written_at(&self) -> Option<Instant> {
+        None
+    }
     /// Sets the modem lines right after the port opened: DTR and RTS asserted (`Some(true)`),
     /// cleared (`Some(false)`) or left as they are (`None`). Only a real port has them; a
     /// simulator takes it as done. Errors: the port refused ([`LinkError::Setting`]).

@@ -138,7 +138,8 @@ impl Lockstep {
     /// The host does `action` at `at` (now when `None`, taken under the lock so that the
     /// simulator, which takes its own time under the lock too, cannot have gone past it). Stamps
     /// never go back.
-    fn host(&self, action: HostAction, at: Option<Instant>) {
+    /// Returns the stamp given.
+    fn host(&self, action: HostAction, at: Option<Instant>) -> Instant {
         let mut s = self.lock();
         let at = at.unwrap_or_else(Instant::now);
         let at = s.actions.back().map_or(at, |(last, _)| at.max(*last));
@@ -146,6 +147,7 @@ impl Lockstep {
         s.generation += 1;
         drop(s);
         self.changed.notify_all();
+        at
     }
 
     /// How far the device's clock may run at `now`: to `now`, or to the earliest instant an
@@ -336,6 +338,7 @@ pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener
             last_return,
             held: VecDeque::new(),
             arrived: None,
+            written: None,
             clearing: None,
             discard: 0,
         }) as Box<dyn Transport>)
@@ -371,6 +374,8 @@ pub struct LockstepPort {
     held: VecDeque<u8>,
     /// When the last byte the last read handed over had arrived ([`Transport::arrived_at`]).
     arrived: Option<Instant>,
+    /// The stamp of the last write: when the device hears it from ([`Transport::written_at`]).
+    written: Option<Instant>,
     /// The clear asked for (its number) that the simulator has not taken yet: nothing is
     /// handed over until it has said which bytes the clear drops.
     clearing: Option<u64>,
@@ -506,8 +511,10 @@ impl LockstepPort {
 impl Transport for LockstepPort {
     fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
         if !bytes.is_empty() {
-            self.lockstep
+            let at = self
+                .lockstep
                 .host(HostAction::Wrote(bytes.to_vec()), Some(self.last_return));
+            self.written = Some(at);
         }
         self.begins();
         let result = self.port.write(bytes);
@@ -590,6 +597,10 @@ impl Transport for LockstepPort {
 
     fn arrived_at(&self) -> Option<Instant> {
         self.arrived
+    }
+
+    fn written_at(&self) -> Option<Instant> {
+        self.written
     }
 }
 

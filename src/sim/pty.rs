@@ -304,15 +304,19 @@ fn serve_lockstep_loop(mut master: TTYPort, mut wire: Wire, flags: &Flags, locks
             }
             let horizon = s.actions.front().map_or(now, |(at, _)| now.min(*at));
             wire.pump(horizon);
-            let first = wire.next_byte_due().unwrap_or(now);
+            // One batch a frame, due when its first byte is: a simulator catching up after a
+            // stall (its thread held up, or the host's) hands the host frames due apart as they
+            // were due, not all when the first of them was (seen: a slow MCU's 19 reports,
+            // 100-150 ms apart, all taken as a query's answer by a host held up 3 s).
             loop {
-                let n = wire.take_due(now, &mut out);
+                let first = wire.next_byte_due().unwrap_or(now);
+                let n = wire.take_frame_due(now, &mut out);
                 if n == 0 {
                     break;
                 }
+                s.wrote(n, first, wire.last_seen().unwrap_or(now));
                 due.extend_from_slice(&out[..n]);
             }
-            s.wrote(due.len(), first, wire.last_seen().unwrap_or(now));
             s.next_due = wire.next_due();
             (now, now < real, s.generation())
         };

@@ -421,8 +421,22 @@ impl Wire {
 
     /// Copies bytes that have reached the host by `now` into `buf`.
     pub(crate) fn take_due(&mut self, now: Instant, buf: &mut [u8]) -> usize {
+        self.take_due_upto(now, buf, usize::MAX)
+    }
+
+    /// [`Self::take_due`], from the front frame alone: a batch of bytes that were due together
+    /// (a simulator catching up after a stall must not hand over frames due seconds apart as
+    /// one batch, due when its first byte was).
+    pub(crate) fn take_frame_due(&mut self, now: Instant, buf: &mut [u8]) -> usize {
+        self.take_due_upto(now, buf, 1)
+    }
+
+    /// Copies bytes that have reached the host by `now` into `buf`, from at most `frames`
+    /// frames (the front one counts, however much of it was taken before).
+    fn take_due_upto(&mut self, now: Instant, buf: &mut [u8], frames: usize) -> usize {
         let mut n = 0;
-        while n < buf.len() {
+        let mut left = frames;
+        while n < buf.len() && left > 0 {
             let Some(front) = self.outbound.front() else {
                 break;
             };
@@ -438,6 +452,7 @@ impl Wire {
             if self.taken == front.bytes.len() {
                 self.outbound.pop_front();
                 self.taken = 0;
+                left -= 1;
             }
         }
         n

@@ -5,7 +5,7 @@
 //! link (and the command line in this process, handed the simulator's port).
 
 use botbench::link::session::tuya::{TuyaEvent, TuyaModuleOptions};
-use botbench::link::{Link, LinkEvent, LinkOptions};
+use botbench::link::{Link, LinkError, LinkEvent, LinkOptions, Opener, Transport};
 use botbench::ops::Device;
 use botbench::ops::tuya as ops;
 use botbench::profile::{Input, Profile, Value};
@@ -14,10 +14,10 @@ use botbench::protocol::tuya::dp::DpValue;
 use botbench::sim::tuya_mcu::{RawValue, TuyaConfig, TuyaMcu};
 use std::collections::BTreeMap;
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use crate::support::cli::{SimProcess, run, run_in_process};
-use crate::support::{Served, next_event, open_link, profile, serve, wait_until};
+use crate::support::{Port, Served, next_event, open_link, profile, serve, wait_until};
 
 const BAUD: u32 = 115_200;
 
@@ -240,6 +240,70 @@ fn reports_that_come_between_queries_are_kept_and_counted() {
     assert!(status.between > 0, "{status:?}");
     assert!(status.queries <= ops::QUERIES);
     assert_eq!(b.cli(&["--margin-ms", "30", "init"]), 0);
+}
+
+/// A port whose host thread is held up for 3 s before it writes a status query (a loaded
+/// computer: the thread preempted between two calls of its port), the port itself exact about
+/// when the device heard the write (a pty served in lockstep).
+struct HeldUpHost(Box<dyn Transport>);
+
+impl Transport for HeldUpHost {
+    fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        if bytes.get(3) == Some(&cmd::QUERY_STATUS) {
+            std::thread::sleep(Duration::from_secs(3));
+        }
+        self.0.write(bytes)
+    }
+    fn read(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
+        self.0.read(buf, deadline)
+    }
+    fn set_baud(&mut self, baud: u32) -> Result<(), LinkError> {
+        self.0.set_baud(baud)
+    }
+    fn baud(&self) -> u32 {
+        self.0.baud()
+    }
+    fn clear_input(&mut self) -> Result<(), LinkError> {
+        self.0.clear_input()
+    }
+    fn describe(&self) -> String {
+        self.0.describe()
+    }
+    fn arrived_at(&self) -> Option<Instant> {
+        self.0.arrived_at()
+    }
+    fn written_at(&self) -> Option<Instant> {
+        self.0.written_at()
+    }
+}
+
+/// A slow MCU's reports are timed from when it heard the query: a host held up before its write
+/// (seen with two CPU-bound loops beside the suite: all 19 reports, 100-150 ms apart, taken as
+/// the query's answer) still hears those after the answer's end as coming between queries: the
+/// link counts from when the port says its write went out, and the simulator, catching up after
+/// the hold, hands each report over when it was due, not all with the first.
+#[test]
+fn a_host_held_up_before_its_query_still_times_a_slow_mcus_reports_from_its_write() {
+    let options = LinkOptions {
+        margin: Some(Duration::from_millis(30)),
+        ..LinkOptions::default()
+    };
+    let mcu = serve(TuyaMcu::new(TuyaConfig {
+        baud: Some(BAUD),
+        report_gap: Some((Duration::from_millis(100), Duration::from_millis(150))),
+        ..TuyaConfig::default()
+    }));
+    let mut opener = mcu.opener(BAUD);
+    let late: Opener = Box::new(move || Ok(Box::new(HeldUpHost(opener()?)) as Box<dyn Transport>));
+    let vacuum = profile("tuya-vacuum");
+    let link = Link::open(late, vacuum.clone(), options, None).expect("opens the port");
+    next_event(&link, "the handshake", |e| {
+        matches!(e, LinkEvent::Tuya(TuyaEvent::HandshakeDone)).then_some(())
+    });
+    let client = link.client();
+    let status = ops::query_status(Device::new(&client, &vacuum)).expect("a status");
+    assert!(status.complete(), "{status:?}");
+    assert!(status.between > 0, "{status:?}");
 }
 
 #[test]

@@ -88,6 +88,14 @@ impl Worker {
         written
     }
 
+    /// When a request asked for at `asked`, whose `bytes` bytes were just written, counts as
+    /// sent: when the port says its write went out ([`crate::link::Transport::written_at`]),
+    /// else as [`Self::host_was_late_by`] reckons it.
+    pub(super) fn sent_at(&mut self, asked: Instant, bytes: usize) -> Instant {
+        let reckoned = self.host_was_late_by(asked, Instant::now(), bytes);
+        self.wire.written_at().unwrap_or(reckoned)
+    }
+
     /// The host ran `late` behind a deadline it had set: counted, the worst kept.
     pub(super) fn host_late(&mut self, late: Duration) {
         let stats = &mut self.wire.stats;
@@ -265,7 +273,7 @@ impl Worker {
         // The answer is due after the request has left: a host thread held up in the write (a
         // loaded computer) does not shorten the device's time to answer. The round trip still
         // counts from `t0`.
-        let due_from = self.host_was_late_by(t0, Instant::now(), x.bytes.len());
+        let due_from = self.sent_at(t0, x.bytes.len());
         x.sends.push(t0);
         let Some(each) = x.each.clone() else {
             return Ok(Tried::Done(Reply {

@@ -151,7 +151,7 @@ impl Worker {
             self.commands_during_exchange()?;
             let asked = Instant::now();
             self.write(&bytes, packet)?;
-            let t = self.host_was_late_by(asked, Instant::now(), bytes.len());
+            let t = self.sent_at(asked, bytes.len());
             let on_wire = wire_time(bytes.len(), baud);
             run.sent.push(t);
             run.asked.push(asked);

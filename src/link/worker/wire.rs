@@ -118,6 +118,12 @@ impl Wire {
         self.sent_until
     }
 
+    /// When the last write's bytes started on the wire, where the port knows it
+    /// ([`crate::link::Transport::written_at`]).
+    pub(super) fn written_at(&self) -> Option<Instant> {
+        self.transport.as_ref().and_then(|t| t.written_at())
+    }
+
     /// The USB adapter's latency timer, where the port knows it.
     pub(super) fn latency_timer(&self) -> Option<Duration> {
         self.transport.as_ref().and_then(|t| t.latency_timer())
