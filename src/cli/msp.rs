@@ -632,8 +632,18 @@ fn selftest_run(
     } else {
         let device = report.device.as_deref().unwrap_or("unknown device");
         let failed: Vec<&str> = report.failed().map(|r| r.name.as_str()).collect();
+        let lost = report
+            .interrupted()
+            .filter(|(_, why)| *why == crate::ops::selftest::Interruption::LinkLost);
         if report.pass {
             outln!("PASS: all {} steps passed ({device})", report.results.len());
+        } else if let (Some((step, _)), true) = (lost, failed.is_empty()) {
+            // The unit failed nothing: the run says nothing of it.
+            outln!(
+                "NO VERDICT: link lost during {}: {} ({device}); test the unit again",
+                step.name,
+                step.detail
+            );
         } else if let Some(why) = &report.aborted {
             outln!("FAIL: stopped at {why} ({device})");
         } else {

@@ -27,9 +27,9 @@ pub struct DevicePanel {
     pub version: Option<Result<DeviceInfo, OpError>>,
     /// When the last answer came.
     at: Option<Instant>,
-    /// The unit the values came from (the device model's `unit`): another connection, or a
-    /// device that answers again after silence, clears them.
-    unit: Option<u64>,
+    /// The spell the values were read in (the device model's `epoch`): another connection, a
+    /// lost link or a device that answers again after silence clears them.
+    epoch: Option<u64>,
     /// Version and power state have been asked on this connection.
     asked: bool,
 }
@@ -114,10 +114,10 @@ impl DevicePanel {
     /// Draws the panel.
     fn draw(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
         let mut actions = Vec::new();
-        if self.unit != Some(rt.device.unit) {
+        if self.epoch != Some(rt.device.epoch) {
             // Values of another connection (maybe another device) are never shown.
             *self = Self {
-                unit: Some(rt.device.unit),
+                epoch: Some(rt.device.epoch),
                 ..Self::default()
             };
         }

@@ -58,6 +58,17 @@ pub enum JobError {
         /// The image's size.
         size: usize,
     },
+    /// A firmware update whose port went away part of the way: nothing is known of the MCU's
+    /// image (the link, not the MCU, failed).
+    #[error("link lost during the update, after offset {offset} of {size} bytes: {why}")]
+    UpdateLinkLost {
+        /// Bytes acked before the port went.
+        offset: u64,
+        /// The image's size.
+        size: usize,
+        /// Why the port went.
+        why: String,
+    },
     /// The device failed a test: what failed.
     #[error("FAIL: {0}")]
     Failed(String),

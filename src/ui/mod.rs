@@ -96,6 +96,9 @@ pub enum Action {
     StartJob(Job),
     /// Cancel the running job.
     CancelJob,
+    /// The operator has read the verdicts on the unit on the fixture (self-test, provisioning):
+    /// they go from the screen before the next unit's run.
+    DismissVerdicts,
     /// Telemetry polls a second (`None`: as fast as the wire allows).
     SetPollRate(Option<f64>),
     /// Pause or resume telemetry polling.

@@ -11,7 +11,7 @@ use super::{Action, files};
 use crate::document::DocumentError;
 use crate::i18n::Lang;
 use crate::i18n::Text;
-use crate::ops::selftest::{Plan, Report, StepKind, StepResult};
+use crate::ops::selftest::{Interruption, Plan, Report, StepKind, StepResult};
 use crate::ops::{Device, Run};
 use crate::profile::Profile;
 use crate::ui::zh::Zh;
@@ -54,10 +54,10 @@ pub struct SelfTestPanel {
     pub running: bool,
     /// The prompt the job waits on.
     pub prompt: Option<Prompt>,
-    /// The unit the results shown are about (the device model's `unit` when the run ended):
-    /// they and the PASS/FAIL banner belong to it and go when another connection or unit
-    /// comes; `None` while none is shown.
-    pub report_unit: Option<u64>,
+    /// The results shown are a finished run's: they and its banner stay with the station's
+    /// verdict on the unit ([`crate::ui::station::Verdicts`]), until the next run starts, the
+    /// operator dismisses them or another unit identifies itself.
+    pub reported: bool,
 }
 
 impl Default for SelfTestPanel {
@@ -71,7 +71,7 @@ impl Default for SelfTestPanel {
             logged: None,
             running: false,
             prompt: None,
-            report_unit: None,
+            reported: false,
         }
     }
 }
@@ -195,6 +195,27 @@ fn what(kind: &StepKind, profile: &Profile, lang: Lang) -> String {
     }
 }
 
+/// The colour of a run that ended with no verdict (interrupted).
+const AMBER: egui::Color32 = egui::Color32::from_rgb(180, 90, 0);
+
+/// Why a run has no verdict, naming the step (`link lost during Fan current`), in `lang`.
+fn interruption_text(why: Interruption, step: &str, lang: Lang) -> String {
+    match why {
+        Interruption::LinkLost => match lang {
+            Lang::En => format!("link lost during {step}"),
+            Lang::Zh => format!("在“{step}”步骤中连接丢失"),
+        },
+        Interruption::Cancelled => match lang {
+            Lang::En => format!("cancelled during {step}"),
+            Lang::Zh => format!("在“{step}”步骤中被取消"),
+        },
+        Interruption::OperatorAborted => match lang {
+            Lang::En => format!("aborted by the operator during {step}"),
+            Lang::Zh => format!("操作员在“{step}”步骤中中止"),
+        },
+    }
+}
+
 impl SelfTestPanel {
     /// Opens the plan at `path`, checking it against the profile.
     pub fn open(&mut self, rt: &Station) {
@@ -209,7 +230,7 @@ impl SelfTestPanel {
             }
         }
         self.results.clear();
-        self.report_unit = None;
+        self.reported = false;
         self.logged = None;
     }
 
@@ -225,7 +246,7 @@ impl SelfTestPanel {
             ..Default::default()
         };
         self.results.clear();
-        self.report_unit = None;
+        self.reported = false;
         self.logged = None;
         self.running = true;
         Some(Action::StartJob(Job::new(
@@ -300,20 +321,19 @@ impl SelfTestPanel {
         )]
     }
 
-    /// Forgets the last run's results when they are about another unit than the one
-    /// answering now (a new connection, a lost link, a device answering again after silence).
-    fn forget_other_unit(&mut self, unit: u64) {
-        if !self.running && self.report_unit.is_some_and(|u| u != unit) {
+    /// Forgets the last run's results once the station's verdict on its unit is gone (dismissed,
+    /// or another unit identified itself).
+    fn forget_gone_verdict(&mut self, rt: &Station) {
+        if self.reported && !self.running && rt.verdicts.selftest.is_none() {
             self.results.clear();
             self.logged = None;
-            self.report_unit = None;
+            self.reported = false;
         }
     }
 
-    /// The report of the run shown: the station's verdict on its unit, once the run has ended
-    /// on this unit.
+    /// The report of the run shown: the station's verdict on its unit, once the run has ended.
     fn report<'a>(&self, rt: &'a Station) -> Option<&'a Report> {
-        let ours = !self.running && self.report_unit == Some(rt.device.unit);
+        let ours = !self.running && self.reported;
         rt.verdicts.selftest.as_deref().filter(|_| ours)
     }
 
@@ -413,58 +433,68 @@ impl SelfTestPanel {
                     .text(msg.get(lang)),
             );
         }
-        self.banner(ui, lang, rt);
+        actions.extend(self.banner(ui, lang, rt));
         ui.separator();
         self.table(ui, lang, rt);
         self.prompt_modal(ui, lang);
         actions
     }
 
-    fn banner(&self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
-        let Some(report) = self.report(rt) else {
-            return;
+    /// The verdict's banner: PASS, FAIL naming the steps the unit failed, or NO VERDICT when
+    /// the run was interrupted (`link lost during <step>`) before any step failed; with
+    /// Dismiss. Returns [`Action::DismissVerdicts`] when clicked.
+    fn banner(&self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Option<Action> {
+        let report = self.report(rt)?;
+        let said = |name: &str| match &self.plan {
+            Some(plan) => plan.said(name, lang).to_string(),
+            None => name.to_string(),
         };
-        let (text, color) = if report.pass {
+        let failed: Vec<String> = report.failed().map(|r| said(&r.name)).collect();
+        let interrupted = report
+            .interrupted()
+            .map(|(r, why)| interruption_text(why, &said(&r.name), lang));
+        let (head, color) = if report.pass {
             ("PASS", egui::Color32::from_rgb(0, 140, 60))
+        } else if failed.is_empty() && interrupted.is_some() {
+            (lang.tr("NO VERDICT", "无结论"), AMBER)
         } else {
             ("FAIL", egui::Color32::from_rgb(200, 30, 30))
         };
+        let white = |t: String| egui::RichText::new(t).color(egui::Color32::WHITE);
+        let mut dismissed = false;
         egui::Frame::new()
             .fill(color)
             .inner_margin(8.0)
             .show(ui, |ui| {
                 ui.set_width(ui.available_width());
-                ui.label(
-                    egui::RichText::new(text)
-                        .size(28.0)
-                        .strong()
-                        .color(egui::Color32::WHITE),
-                );
-                let failed: Vec<&str> = report
-                    .failed()
-                    .map(|r| match &self.plan {
-                        Some(plan) => plan.said(&r.name, lang),
-                        None => r.name.as_str(),
-                    })
-                    .collect();
+                ui.horizontal(|ui| {
+                    ui.label(white(head.into()).size(28.0).strong());
+                    ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                        dismissed = ui.button(lang.tr("Dismiss", "关闭结论")).clicked();
+                    });
+                });
                 if !failed.is_empty() {
-                    ui.label(
-                        egui::RichText::new(format!(
-                            "{} {}",
-                            lang.tr("Failed:", "未通过:"),
-                            failed.join(", ")
-                        ))
-                        .color(egui::Color32::WHITE),
-                    );
+                    let line = format!("{} {}", lang.tr("Failed:", "未通过:"), failed.join(", "));
+                    ui.label(white(line));
                 }
-                if let Some(a) = &report.aborted {
-                    ui.label(
-                        egui::RichText::new(format!(
-                            "{} {a}",
-                            lang.tr("Ended early:", "提前结束:")
-                        ))
-                        .color(egui::Color32::WHITE),
-                    );
+                match (&interrupted, &report.aborted) {
+                    (Some(text), _) => {
+                        ui.label(white(text.clone()).strong());
+                        if failed.is_empty() {
+                            ui.label(white(
+                                lang.tr(
+                                    "Nothing is known of the steps not run: test this unit again.",
+                                    "未运行的步骤没有结果:请重新测试本机。",
+                                )
+                                .into(),
+                            ));
+                        }
+                    }
+                    (None, Some(a)) => {
+                        let line = format!("{} {a}", lang.tr("Ended early:", "提前结束:"));
+                        ui.label(white(line));
+                    }
+                    (None, None) => {}
                 }
             });
         if let Some(d) = &report.device {
@@ -492,6 +522,7 @@ impl SelfTestPanel {
                 ui.weak(lang.tr("Not logged (no log file).", "未记录(未指定日志文件)。"));
             }
         }
+        dismissed.then_some(Action::DismissVerdicts)
     }
 
     fn table(&self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
@@ -539,6 +570,10 @@ impl SelfTestPanel {
                             t.monospace()
                         });
                         match self.results.iter().find(|r| r.name == step.name) {
+                            Some(r) if r.interrupted.is_some() => {
+                                cell(ui, r.detail.as_str().into());
+                                ui.colored_label(AMBER, lang.tr("interrupted", "中断"));
+                            }
                             Some(r) => {
                                 cell(ui, r.detail.as_str().into());
                                 if r.pass {
@@ -597,14 +632,20 @@ impl SelfTestPanel {
         }
     }
 
-    /// Takes what one of its jobs reported; an end is about `unit` (the device model's).
-    fn take_output(&mut self, out: Output, unit: u64) {
+    /// Shows `results` as a finished run's, beside the station's verdict on the unit (the
+    /// screenshot tour's run).
+    pub(crate) fn show_finished(&mut self, results: Vec<StepResult>) {
+        self.take_output(Output::Done(results, None));
+    }
+
+    /// Takes what one of its jobs reported.
+    fn take_output(&mut self, out: Output) {
         match out {
             Output::Step(r) => self.results.push(r),
             Output::Prompt(p) => self.prompt = Some(p),
             Output::Done(results, logged) => {
                 self.results = results;
-                self.report_unit = Some(unit);
+                self.reported = true;
                 self.logged = logged;
                 self.running = false;
                 self.prompt = None;
@@ -636,17 +677,17 @@ impl crate::ui::Panel for SelfTestPanel {
     }
 
     fn tick(&mut self, station: &Station) -> Vec<Action> {
-        self.forget_other_unit(station.device.unit);
+        self.forget_gone_verdict(station);
         Vec::new()
     }
 
     /// An operator prompt is answered on this panel: it asks to be shown.
-    fn on_output(&mut self, out: crate::ui::panel::PanelOutput, station: &Station) -> Vec<Action> {
+    fn on_output(&mut self, out: crate::ui::panel::PanelOutput, _station: &Station) -> Vec<Action> {
         let Some(out) = out.take::<Output>() else {
             return Vec::new();
         };
         let prompt = matches!(out, Output::Prompt(_));
-        self.take_output(out, station.device.unit);
+        self.take_output(out);
         if prompt {
             vec![Action::ShowPanel(crate::ui::PanelId::SELF_TEST)]
         } else {

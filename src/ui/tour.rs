@@ -368,6 +368,44 @@ fn shots(views: Vec<View>) -> Vec<Shot> {
     all
 }
 
+/// The self-test panel as a run whose port went in its first step leaves it (the NO VERDICT
+/// banner, `link lost during <step>`): a report of the plan open, about the unit identified,
+/// with nothing measured.
+fn link_lost_selftest(app: &mut App) {
+    let Some(plan) = app.panel::<SelfTestPanel>().plan.clone() else {
+        return;
+    };
+    let Some(first) = plan.steps.first() else {
+        return;
+    };
+    let info = app.station().device.info.clone().and_then(Result::ok);
+    let step = crate::ops::selftest::StepResult {
+        name: first.name.clone(),
+        kind: first.kind.name().into(),
+        pass: false,
+        detail: "link lost: port lost: the port disappeared (unplugged?)".into(),
+        measurements: Vec::new(),
+        started_ms: crate::ops::records::record::now_ms(),
+        duration_ms: 0,
+        interrupted: Some(crate::ops::selftest::Interruption::LinkLost),
+    };
+    let report = crate::ops::selftest::Report {
+        plan: plan.name.clone(),
+        profile: app.station().device.profile.id.clone(),
+        device: info.as_ref().map(crate::ops::device::description),
+        device_info: info,
+        started: chrono::Local::now().to_rfc3339_opts(chrono::SecondsFormat::Millis, false),
+        duration_ms: 0,
+        safe_state: Vec::new(),
+        results: vec![step.clone()],
+        aborted: Some(format!("step '{}': {}", step.name, step.detail)),
+        pass: false,
+    };
+    app.with_panel(|p: &mut SelfTestPanel, _| p.show_finished(vec![step]));
+    let verdict = super::station::Verdict::SelfTest(Box::new(report));
+    app.station_mut().verdicts.take(verdict);
+}
+
 /// What a technician would have on screen before the shots of a device of `kind`.
 fn preparation(kind: SimKind) -> Vec<Prep> {
     match kind {
@@ -388,6 +426,11 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
                     app.panel::<SelfTestPanel>().plan.is_some()
                         && app.panel::<PresetsPanel>().loaded.is_some()
                 },
+            },
+            Prep {
+                what: "a self-test with no verdict: the link lost in its first step",
+                start: link_lost_selftest,
+                done: |app| app.station().verdicts.selftest.is_some(),
             },
             Prep {
                 what: "the Yield view's report of the tour's generated records computed",

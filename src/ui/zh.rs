@@ -96,6 +96,9 @@ impl Zh for JobError {
             JobError::UpdateCancelled { offset, size } => {
                 format!("已取消:{size} 字节中只写到偏移 {offset},MCU 中的固件不完整")
             }
+            JobError::UpdateLinkLost { offset, size, why } => {
+                format!("升级过程中连接丢失(已确认 {offset} / {size} 字节):{why}")
+            }
             JobError::Failed(what) => format!("不合格:{what}"),
             JobError::StepFailed { step, reason } => format!("在 {step} 步失败:{reason}"),
             JobError::Log(e) => e.zh(),

@@ -432,8 +432,10 @@ fn the_msp_panels_render_in_english_and_chinese() {
     }
 }
 
+/// A port lost in a step is no verdict on the part it checks (issue 25, item 6): the banner says
+/// `link lost during <step>`, never FAIL, and the step's row says it was interrupted.
 #[test]
-fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step() {
+fn a_link_lost_at_the_operator_prompt_ends_the_self_test_with_no_verdict_naming_the_step() {
     let b = window_cleaner(Some(0x0F), &[]);
     let mut h = harness(&b, "window-cleaner", PanelId::SELF_TEST, Lang::En);
     let dir = temp_dir();
@@ -464,10 +466,17 @@ fn a_link_lost_at_the_operator_prompt_ends_the_self_test_as_fail_naming_the_step
     assert!(!report.pass);
     let aborted = report.aborted.as_deref().unwrap_or_default();
     assert!(aborted.starts_with("step 'Corner switches':"), "{aborted}");
+    assert_eq!(report.failed().count(), 0, "no part failed: {report:#?}");
+    assert!(h.query_by_label("NO VERDICT").is_some(), "the banner");
     assert!(
-        h.query_by_label_contains("Ended early: step 'Corner switches'")
+        h.query_by_label("link lost during Corner switches")
             .is_some()
     );
+    assert!(
+        h.query_all_by_label("FAIL").next().is_none(),
+        "no part failing"
+    );
+    assert!(h.query_by_label("interrupted").is_some(), "the step's row");
     assert!(h.query_all_by_label("PASS").count() < report.results.len() + 1);
 }
 
@@ -503,14 +512,76 @@ fn a_fan_left_on_is_shown_running_the_self_test_starts_safe_and_its_verdict_belo
     assert!(!report.safe_state.is_empty());
     assert!(h.query_by_label("Running:").is_none(), "nothing runs after");
     assert!(h.query_all_by_label("PASS").next().is_some(), "the banner");
-    // Another connection is maybe another unit: the verdict goes with the old one.
+    // A disconnect says nothing of which unit is on the fixture: the verdict stays, naming
+    // the unit it is about (issue 25, item 6).
     app_mut(&mut h).apply(Action::Disconnect);
+    h.run_steps(3);
+    assert!(app(&h).station().verdicts.selftest.is_some());
+    assert!(
+        h.query_all_by_label("PASS").next().is_some(),
+        "the banner stays"
+    );
+    assert!(h.query_by_label_contains("build 37").is_some(), "its unit");
+    // The same unit connected again keeps it.
+    connect_again(&mut h, &b, 37);
+    h.run_steps(3);
+    assert!(
+        h.query_all_by_label("PASS").next().is_some(),
+        "the same unit"
+    );
+    // Another unit identifies itself (another build): the verdict was not about it.
+    b.sim().core_mut().identity.build = 38;
+    connect_again(&mut h, &b, 38);
     h.run_steps(3);
     assert!(app(&h).station().verdicts.selftest.is_none());
     assert!(
         h.query_all_by_label("PASS").next().is_none(),
         "no banner left"
     );
+}
+
+/// Connects the window to `b` again and waits until the device identifies itself with `build`.
+fn connect_again(h: &mut H, b: &Bench<WindowCleaner>, build: u8) {
+    app_mut(h).apply(botbench::ui::Action::Connect {
+        target: botbench::ui::Target::Port(b.path().to_string()),
+        profile: "window-cleaner".into(),
+        port: Default::default(),
+    });
+    step_until(h, "the device identified again", |a| {
+        a.station().connected()
+            && matches!(&a.station().device.info, Some(Ok(i)) if i.build == build)
+            && a.station().job_progress().is_none()
+    });
+}
+
+/// A verdict stays until the operator dismisses it or the next run starts (issue 25, item 6).
+#[test]
+fn a_verdict_stays_until_dismissed_and_goes_as_the_next_run_starts() {
+    let b = window_cleaner(Some(0x0F), &[]);
+    let mut h = harness(&b, "window-cleaner", PanelId::SELF_TEST, Lang::En);
+    let dir = temp_dir();
+    run_selftest(&mut h, &b, &dir);
+    assert!(h.query_all_by_label("PASS").next().is_some(), "the banner");
+    h.get_by_label("Dismiss").click();
+    h.run_steps(3);
+    assert!(app(&h).station().verdicts.selftest.is_none());
+    assert!(h.query_all_by_label("PASS").next().is_none(), "dismissed");
+    // Another run's verdict; the next run clears it as it starts.
+    run_selftest(&mut h, &b, &dir);
+    assert!(
+        h.query_all_by_label("PASS").next().is_some(),
+        "the next verdict"
+    );
+    start_selftest(&mut h);
+    h.run_steps(2);
+    assert!(
+        h.query_all_by_label("PASS").next().is_none(),
+        "no banner while the next run runs"
+    );
+    app_mut(&mut h).apply(botbench::ui::Action::CancelJob);
+    step_until(&mut h, "the run cancelled", |a| {
+        !a.panel::<SelfTestPanel>().running
+    });
 }
 
 /// The truth in small places (issue 25, item 10): the round trip shown is the connection's,

@@ -519,6 +519,45 @@ fn an_update_can_be_cancelled_and_says_where_it_stopped() {
     assert!(!matches!(b.sim().ota_state(), OtaState::Complete { .. }));
 }
 
+/// A port lost part of the way through an update is no verdict on the MCU: said as a link
+/// lost during the update, with where it got to, until the operator dismisses it (issue 25,
+/// item 6).
+#[test]
+fn a_port_lost_during_an_update_is_said_as_a_lost_link_until_dismissed() {
+    let (_dir, b, mut h) = update_asked(&image(65_536));
+    h.get_by_label("Update").click();
+    step_until(&mut h, "some progress", |a| {
+        a.panel::<TuyaConsolePanel>()
+            .ota
+            .progress
+            .as_ref()
+            .is_some_and(|p| p.done >= 1024)
+    });
+    b.server.vanish_handle().vanish();
+    step_until(&mut h, "the update to end", |a| {
+        a.panel::<TuyaConsolePanel>().ota.result.is_some()
+    });
+    h.run_steps(2);
+    let err = app(&h)
+        .panel::<TuyaConsolePanel>()
+        .ota
+        .result
+        .clone()
+        .unwrap()
+        .unwrap_err();
+    assert!(
+        err.to_string()
+            .starts_with("link lost during the update, after offset"),
+        "{err}"
+    );
+    assert!(has_label(&h, "No verdict"), "not an update that failed");
+    assert!(!has_label(&h, "Update failed"));
+    h.get_by_label("Dismiss").click();
+    h.run_steps(2);
+    assert!(app(&h).panel::<TuyaConsolePanel>().ota.result.is_none());
+    assert!(!has_label(&h, "No verdict"), "dismissed");
+}
+
 #[test]
 fn every_section_renders_in_english_and_chinese() {
     // A glyph missing from the bundled fonts panics while drawing: draw every section with

@@ -321,7 +321,7 @@ fn a_cancelled_rises_step_still_stops_the_motor() {
 }
 
 #[test]
-fn a_link_lost_while_the_motor_runs_is_fail_naming_the_step() {
+fn a_link_lost_while_the_motor_runs_ends_the_run_naming_the_step_and_fails_no_part() {
     let b = bench(&[]);
     let plan = long_rise(&b.profile);
     let (sim, vanish) = (b.sim.clone(), b.robot.server.vanish_handle());
@@ -338,6 +338,13 @@ fn a_link_lost_while_the_motor_runs_is_fail_naming_the_step() {
     // The stop could not reach the robot, and the report says so.
     assert!(r.detail.contains("motor=stop FAILED"), "{}", r.detail);
     assert!(report.aborted.as_deref().unwrap().contains("'Wheels'"));
+    // The port went: the run was interrupted in Wheels, which the unit did not fail.
+    assert_eq!(
+        r.interrupted,
+        Some(selftest::Interruption::LinkLost),
+        "{r:#?}"
+    );
+    assert!(failed(&report).is_empty(), "{report:#?}");
 }
 
 #[test]

@@ -108,6 +108,7 @@ fn at_1024_px_the_self_tests_measured_and_result_columns_stay_in_the_window() {
             measurements: Vec::new(),
             started_ms: 0,
             duration_ms: 0,
+            interrupted: None,
         })
         .collect();
     h.run_steps(3);

@@ -452,6 +452,9 @@ impl Worker {
                 port,
                 by,
             }
+        } else if let Err(e) = self.wire.check_now(Instant::now()) {
+            // Nothing came because the port went (unplugged): a lost link, not a silent device.
+            self.lost_in(e)
         } else {
             self.wire.stats.timeouts += 1;
             if let Some(ev) = self.liveness.unanswered() {

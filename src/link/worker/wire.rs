@@ -253,6 +253,11 @@ impl Wire {
         if now.duration_since(self.checked_at) < PORT_CHECK {
             return Ok(());
         }
+        self.check_now(now)
+    }
+
+    /// [`Self::check`] at once, however recently the port was looked at.
+    pub(super) fn check_now(&mut self, now: Instant) -> Result<(), LinkError> {
         self.checked_at = now;
         match self.transport.as_mut() {
             Some(t) => t.check(),

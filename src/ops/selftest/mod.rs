@@ -43,5 +43,5 @@ mod run;
 mod steps;
 
 pub use plan::{Action, Plan, Step, StepKind, VERSION};
-pub use record::{Report, StepResult, append_log};
+pub use record::{Interruption, Report, StepResult, append_log};
 pub use run::{Operator, SAFE_STATE, run, run_each};

@@ -24,6 +24,24 @@ pub struct StepResult {
     pub started_ms: i64,
     /// How long it took, ms.
     pub duration_ms: i64,
+    /// Why the step ended the run without the unit failing it (the link was lost, the run
+    /// cancelled, the operator aborted); `None` for a step that ran to its verdict (`pass`),
+    /// and for one the device failed (no answer, an impossible value). An interrupted step
+    /// has `pass` false, as the run did not pass, but says nothing of the part it checks.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interrupted: Option<Interruption>,
+}
+
+/// Why a run stopped in a step without the unit failing it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Interruption {
+    /// The port went away (unplugged, the adapter reset): `link lost during <step>`.
+    LinkLost,
+    /// Cancelled (Ctrl-C, the window's Cancel).
+    Cancelled,
+    /// The operator aborted at a prompt.
+    OperatorAborted,
 }
 
 /// The result of a run.
@@ -55,9 +73,20 @@ pub struct Report {
 }
 
 impl Report {
-    /// The steps that failed.
+    /// The steps the unit failed (not those the run was interrupted in: see
+    /// [`Self::interrupted`]).
     pub fn failed(&self) -> impl Iterator<Item = &StepResult> {
-        self.results.iter().filter(|r| !r.pass)
+        self.results
+            .iter()
+            .filter(|r| !r.pass && r.interrupted.is_none())
+    }
+
+    /// The step the run was interrupted in, and why: the run has no verdict on the unit then
+    /// (`link lost during <step>`), unless a step before it failed.
+    pub fn interrupted(&self) -> Option<(&StepResult, Interruption)> {
+        self.results
+            .iter()
+            .find_map(|r| r.interrupted.map(|why| (r, why)))
     }
 }
 

@@ -3,7 +3,7 @@
 
 use super::measure::sleep;
 use super::plan::{Plan, StepKind};
-use super::record::{Report, StepResult};
+use super::record::{Interruption, Report, StepResult};
 use super::steps::run_step;
 use crate::ops::{Cancel, Device, OpError, Progress, Run};
 use std::time::Instant;
@@ -22,8 +22,10 @@ impl<F: FnMut(&str) -> bool> Operator for F {
 
 /// Why a step ends the run.
 pub(super) enum Halt {
-    /// The link or the device failed.
+    /// The device failed (no answer, an answer without the field asked for).
     Device(String),
+    /// The port went away (`link lost: ` and why).
+    LinkLost(String),
     /// Cancelled.
     Cancelled,
     /// The operator said no.
@@ -33,9 +35,21 @@ pub(super) enum Halt {
 impl Halt {
     pub(super) fn message(&self) -> String {
         match self {
-            Halt::Device(m) => m.clone(),
+            Halt::Device(m) | Halt::LinkLost(m) => m.clone(),
             Halt::Cancelled => "cancelled".into(),
             Halt::OperatorAborted => "the operator aborted".into(),
+        }
+    }
+}
+
+impl Halt {
+    /// The run was stopped from outside the unit: the unit did not fail the step.
+    pub(super) fn interruption(&self) -> Option<Interruption> {
+        match self {
+            Halt::Device(_) => None,
+            Halt::LinkLost(_) => Some(Interruption::LinkLost),
+            Halt::Cancelled => Some(Interruption::Cancelled),
+            Halt::OperatorAborted => Some(Interruption::OperatorAborted),
         }
     }
 }
@@ -45,7 +59,7 @@ impl From<OpError> for Halt {
         match e {
             OpError::Cancelled | OpError::CancelledAfter { .. } => Halt::Cancelled,
             other => match other.lost_port() {
-                Some(m) => Halt::Device(format!("link lost: {m}")),
+                Some(m) => Halt::LinkLost(format!("link lost: {m}")),
                 None => Halt::Device(other.to_string()),
             },
         }
@@ -131,6 +145,7 @@ fn identify(dev: Device<'_>, report: &mut Report, each: &mut dyn FnMut(&StepResu
                 measurements: Vec::new(),
                 started_ms: crate::ops::records::record::now_ms(),
                 duration_ms: 0,
+                interrupted: None,
             };
             each(&r);
             report.aborted = Some(format!("step 'Device identity': {}", r.detail));
@@ -158,13 +173,20 @@ fn run_steps(
         });
         let clock = crate::ops::records::StepClock::start();
         let mut measured = Vec::new();
-        let (pass, detail, halt) = if run.is_cancelled() {
-            (false, "cancelled before it started".into(), true)
+        // (passed, what was measured or went wrong, the run ends here, why not the unit's doing)
+        let (pass, detail, halt, interrupted) = if run.is_cancelled() {
+            let why = Some(Interruption::Cancelled);
+            (false, "cancelled before it started".into(), true, why)
         } else {
             match run_step(dev, step, operator, run.cancel_flag(), &mut measured) {
-                Ok((pass, detail)) => (pass, detail, false),
-                Err((halt, detail)) if detail.is_empty() => (false, halt.message(), true),
-                Err((halt, detail)) => (false, format!("{}; {detail}", halt.message()), true),
+                Ok((pass, detail)) => (pass, detail, false, None),
+                Err((halt, detail)) => {
+                    let said = match detail.is_empty() {
+                        true => halt.message(),
+                        false => format!("{}; {detail}", halt.message()),
+                    };
+                    (false, said, true, halt.interruption())
+                }
             }
         };
         let timed = clock.end(&step.name, step.kind.name(), None, String::new());
@@ -176,6 +198,7 @@ fn run_steps(
             measurements: measured,
             started_ms: timed.started_ms,
             duration_ms: timed.duration_ms,
+            interrupted,
         };
         each(&r);
         if halt {

@@ -207,12 +207,18 @@ fn rises_step(
             }
         }
         Err(e) => {
-            let message = Halt::from(e).message();
-            let detail = joined(format!("then {} FAILED: {message}", rise.then.text));
-            Err((
-                halted.unwrap_or(Halt::Device("could not stop".into())),
-                detail,
-            ))
+            let failed = Halt::from(e);
+            let detail = joined(format!(
+                "then {} FAILED: {}",
+                rise.then.text,
+                failed.message()
+            ));
+            // A port that went is a lost link, not a robot that would not stop.
+            let why = match failed {
+                Halt::LinkLost(_) => failed,
+                _ => Halt::Device("could not stop".into()),
+            };
+            Err((halted.unwrap_or(why), detail))
         }
     }
 }
@@ -259,8 +265,15 @@ fn rises(
     cancel: &Cancel,
 ) -> Result<(Vec<f64>, Vec<f64>), Halt> {
     let before = r.samples(samples, DEFAULT_INTERVAL, cancel)?;
-    send_action(dev, action)
-        .map_err(|e| Halt::Device(format!("{}: {}", action.text, Halt::from(e).message())))?;
+    send_action(dev, action).map_err(|e| {
+        let halt = Halt::from(e);
+        let said = format!("{}: {}", action.text, halt.message());
+        // A port that went is a lost link, whichever command met it.
+        match halt {
+            Halt::LinkLost(_) => Halt::LinkLost(said),
+            _ => Halt::Device(said),
+        }
+    })?;
     if !sleep(settle, cancel) {
         return Err(Halt::Cancelled);
     }

@@ -278,7 +278,10 @@ pub fn ota(
             .margin(timing.ack_wait)
             .attempts(attempts);
         let reply = client.request(req).map_err(|e| match e {
-            ExchangeError::Disconnected(r) => OpError::Verify(format!("link lost at offset {offset}: {r}")),
+            // The port went, not the MCU: said as a lost link (`OpError::lost_port`).
+            ExchangeError::Disconnected(r) => OpError::Exchange(ExchangeError::Disconnected(
+                format!("{r} (the update at offset {offset} of {size} bytes)"),
+            )),
             e => OpError::Verify(format!(
                 "the MCU stopped acking at offset {offset} (of {size} bytes) after {attempts} attempts: {e}"
             )),

@@ -33,6 +33,10 @@ pub struct ProvisionPanel {
     pub history: Vec<Record>,
     /// Why the last record could not be logged (or the log cannot be written).
     pub log_error: Option<LogError>,
+    /// A servo's provisioning runs: the last servo's banner is not shown meanwhile.
+    pub running: bool,
+    /// The operator dismissed the last servo's banner (until the next servo's record).
+    pub dismissed: bool,
 }
 
 impl ProvisionPanel {
@@ -61,6 +65,8 @@ impl ProvisionPanel {
         self.state = state;
         self.log_error = log_error;
         self.history.push(record);
+        self.running = false;
+        self.dismissed = false;
     }
 
     /// The plan loaded: its rate, ids, parameters and what it records, and the ids given out in
@@ -132,6 +138,8 @@ impl ProvisionPanel {
                 }
                 let plan_file = Some(PathBuf::from(self.plan_path.trim()));
                 actions.push(job(rt, plan, self.state.clone(), log, plan_file));
+                // The last servo's banner goes as the next servo's run starts.
+                self.running = true;
             }
         }
         actions
@@ -212,8 +220,19 @@ impl ProvisionPanel {
             error_label(ui, e.in_lang(lang));
         }
         ui.add_space(6.0);
-        if let Some(last) = self.history.last() {
-            banner(ui, lang, last);
+        if self.running && !busy {
+            // The job ended without a record (it could not start): the status line says why.
+            self.running = false;
+        }
+        match self.history.last() {
+            _ if self.running => {
+                ui.label(lang.tr("Provisioning this servo…", "正在烧录本舵机…"));
+            }
+            Some(last) if !self.dismissed && banner(ui, lang, last) => {
+                self.dismissed = true;
+                actions.push(Action::DismissVerdicts);
+            }
+            _ => {}
         }
         if !self.history.is_empty() {
             ui.add_space(6.0);
@@ -231,8 +250,8 @@ impl ProvisionPanel {
     }
 }
 
-/// The big PASS / FAIL banner of the last servo.
-fn banner(ui: &mut egui::Ui, lang: Lang, r: &Record) {
+/// The big PASS / FAIL banner of the last servo, with Dismiss; returns whether it was clicked.
+fn banner(ui: &mut egui::Ui, lang: Lang, r: &Record) -> bool {
     let (fill, head, detail) = match &r.result {
         Outcome::Pass => (
             egui::Color32::from_rgb(30, 140, 60),
@@ -253,18 +272,24 @@ fn banner(ui: &mut egui::Ui, lang: Lang, r: &Record) {
             reason.clone(),
         ),
     };
+    let mut dismissed = false;
     egui::Frame::new()
         .fill(fill)
         .inner_margin(12.0)
         .corner_radius(6.0)
         .show(ui, |ui| {
             ui.set_min_width(ui.available_width());
-            ui.label(
-                egui::RichText::new(head)
-                    .size(30.0)
-                    .strong()
-                    .color(egui::Color32::WHITE),
-            );
+            ui.horizontal(|ui| {
+                ui.label(
+                    egui::RichText::new(head)
+                        .size(30.0)
+                        .strong()
+                        .color(egui::Color32::WHITE),
+                );
+                ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                    dismissed = ui.button(lang.tr("Dismiss", "关闭结论")).clicked();
+                });
+            });
             ui.label(
                 egui::RichText::new(detail)
                     .size(15.0)
@@ -274,6 +299,7 @@ fn banner(ui: &mut egui::Ui, lang: Lang, r: &Record) {
                 ui.label(egui::RichText::new(m).color(egui::Color32::WHITE));
             }
         });
+    dismissed
 }
 
 fn history(ui: &mut egui::Ui, lang: Lang, records: &[Record]) {

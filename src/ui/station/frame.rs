@@ -29,21 +29,20 @@ impl Station {
     /// A device that answers again after silence may be another unit on the same port (a
     /// robot swapped on the fixture): what the last one showed is forgotten, and it is
     /// identified and read again. A link that came back starts a new unit too. The verdicts
-    /// go with their unit.
+    /// stay until the identification says another unit is there ([`super::Verdicts`]).
     fn new_unit(&mut self) -> Vec<Action> {
         let fresh = std::mem::take(&mut self.link.just_connected);
         let back = std::mem::take(&mut self.link.device_back);
         if back {
-            self.device.forget_unit();
+            self.device.forget_values();
             self.send(LinkCommand::Identify);
             self.notify(Notice::info(Text::new(
                 "the device answers again: identified and read again (it may be another unit)",
                 "设备重新应答:已重新识别并读取(可能是另一台设备)",
             )));
         } else if fresh {
-            self.device.unit += 1;
+            self.device.epoch += 1;
         }
-        self.verdicts.forget_other_unit(self.device.unit);
         if fresh || back {
             self.with_panels(|p, st| p.forget(st, Forget::Unit))
         } else {
@@ -116,6 +115,7 @@ impl Station {
             }
             Action::StartJob(job) => self.start_job(job),
             Action::CancelJob => self.cancel_job(),
+            Action::DismissVerdicts => self.verdicts.dismiss(),
             Action::PausePacketLog(paused) => self.packets.paused = paused,
             Action::ClearPacketLog => self.packets.clear(),
             Action::StartCapture(path) => self.start_capture(&path),

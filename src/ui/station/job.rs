@@ -75,7 +75,7 @@ impl Station {
                 JobOutput::Progress(_) => {}
                 JobOutput::Read(id, r) => self.device.on_read(id, r),
                 JobOutput::Wrote(set, r) => self.device.on_written(set, r),
-                JobOutput::Verdict(v) => self.verdicts.take(v, self.device.unit),
+                JobOutput::Verdict(v) => self.verdicts.take(v),
                 JobOutput::Done(r) => self.job_done(r),
                 JobOutput::Panel(out) => {
                     if let Some(to) = owner {

@@ -218,7 +218,7 @@ impl Station {
             job.cancel.cancel();
         }
         if self.link.connection.take().is_some() {
-            self.device.forget_unit();
+            self.device.forget_values();
             self.device.running.clear();
         }
         self.link.state = None;
@@ -259,7 +259,7 @@ impl Station {
                         if self.link.connected() =>
                     {
                         // The connection ended: what it showed is no longer known.
-                        self.device.forget_unit();
+                        self.device.forget_values();
                         self.device.running.on_link_lost();
                         self.link.forget_answers();
                     }
@@ -288,7 +288,12 @@ impl Station {
                 self.link.state = Some(s);
             }
             LinkEvent::Stats(s) => self.link.stats = s,
-            LinkEvent::Identified(r) => self.device.info = Some(r.map_err(Into::into)),
+            LinkEvent::Identified(r) => {
+                if let Ok(info) = &r {
+                    self.verdicts.identified(info);
+                }
+                self.device.info = Some(r.map_err(Into::into));
+            }
             LinkEvent::Frame(entry) => {
                 let profile = self.device.profile.clone();
                 self.device.running.on_frame(&profile, &entry);

@@ -78,10 +78,12 @@ pub struct DeviceModel {
     pub tuya: TuyaModel,
     /// What the robot may be doing because this window told it to (fan on, motor running).
     pub running: RunningSet,
-    /// Counts the units seen: changes whenever what is shown may belong to another unit (a new
-    /// connection, a lost link, a device that answers again after silence). Panels keep
-    /// results of a unit (a self-test's verdict, a ping) with the number they were made under.
-    pub unit: u64,
+    /// Counts the spells in which what is shown was read: changes whenever it may no longer
+    /// hold (a new connection, a lost link, a device that answers again after silence: maybe
+    /// another unit, or the same one changed). Panels keep what they read (a ping, a power
+    /// state) with the number it was read under. Verdicts on a unit outlive it: they go by
+    /// the unit's identity ([`super::Verdicts`]).
+    pub epoch: u64,
 }
 
 impl DeviceModel {
@@ -118,14 +120,14 @@ impl DeviceModel {
             replies: HashMap::new(),
             tuya: TuyaModel::default(),
             running: RunningSet::default(),
-            unit: 0,
+            epoch: 0,
         }
     }
 
     /// Forgets everything for a new connection with `profile`.
     pub fn reset(&mut self, profile: Arc<Profile>) {
         self.profile = profile;
-        self.forget_unit();
+        self.forget_values();
         self.plots.clear();
         self.pace.clear();
         self.running.clear();
@@ -137,12 +139,12 @@ impl DeviceModel {
     /// Forgets what the last unit showed (its values, the marks of writes to it, its version)
     /// when the connection ends or another unit may be answering; the plots keep their history
     /// (with a break), and what was left running stays shown.
-    pub fn forget_unit(&mut self) {
+    pub fn forget_values(&mut self) {
         self.readings.clear();
         self.refused.clear();
         self.marks.clear();
         self.info = None;
-        self.unit += 1;
+        self.epoch += 1;
         self.mark_gap();
     }
 

@@ -1,15 +1,18 @@
-//! The verdicts on the unit now on the fixture: the last self-test's report and the last
-//! provisioning's record, each kept with the unit it is about (the device model's `unit`), so
-//! that a verdict never outlives its unit: another connection, a lost link or a device answering
-//! again after silence (maybe another unit) takes it away.
+//! The verdicts on the unit on the fixture: the last self-test's report and the last
+//! provisioning's record. A verdict stays until the next run on this station replaces it, the
+//! operator dismisses it, or the device identifies itself as another unit (hardware code,
+//! firmware, API, build number, build date: CMD_VERSION and CMD_BUILD_INFO). A lost link, a
+//! silent spell or a new connection alone say nothing of which unit is there: the verdict shown
+//! then is still the last unit's, and says which unit that was.
 
+use crate::link::DeviceInfo;
 use crate::ops::selftest::Report;
 use crate::ops::servo::provision::Record;
 
 /// A verdict a job reports ([`crate::ui::jobs::JobOutput::Verdict`]).
 #[derive(Debug, Clone)]
 pub enum Verdict {
-    /// A self-test ended (passed, failed or aborted).
+    /// A self-test ended (passed, failed, aborted or interrupted).
     SelfTest(Box<Report>),
     /// A servo was provisioned, or failed a step.
     Provisioned(Box<Record>),
@@ -28,8 +31,9 @@ impl Verdict {
 /// The verdicts on one unit.
 #[derive(Debug, Clone, Default)]
 pub struct Verdicts {
-    /// The unit they are about (the device model's `unit` when they came).
-    unit: u64,
+    /// The identity of the unit they are about, as the device gave it during the run (`None`:
+    /// it did not identify itself, or a servo, which is known by its serial in its record).
+    identity: Option<DeviceInfo>,
     /// The last self-test's report.
     pub selftest: Option<Box<Report>>,
     /// The last provisioning's record.
@@ -37,24 +41,32 @@ pub struct Verdicts {
 }
 
 impl Verdicts {
-    /// Takes `verdict` on `unit`; verdicts on another unit go.
-    pub fn take(&mut self, verdict: Verdict, unit: u64) {
-        self.forget_other_unit(unit);
-        self.unit = unit;
+    /// Takes `verdict`, the newest on the unit on the fixture; a verdict on another unit (the
+    /// report names another identity) goes.
+    pub fn take(&mut self, verdict: Verdict) {
+        if let Verdict::SelfTest(r) = &verdict
+            && let Some(info) = &r.device_info
+        {
+            self.identified(info);
+            self.identity = Some(info.clone());
+        }
         match verdict {
             Verdict::SelfTest(r) => self.selftest = Some(r),
             Verdict::Provisioned(r) => self.provisioned = Some(r),
         }
     }
 
-    /// Forgets the verdicts when they are about another unit than `unit`.
-    pub fn forget_other_unit(&mut self, unit: u64) {
-        if self.unit != unit {
-            *self = Self {
-                unit,
-                ..Self::default()
-            };
+    /// The device identified itself as `info`: the verdicts go when they are about a unit
+    /// that identified itself otherwise.
+    pub fn identified(&mut self, info: &DeviceInfo) {
+        if self.identity.as_ref().is_some_and(|known| known != info) {
+            *self = Self::default();
         }
+    }
+
+    /// The operator dismissed the verdicts.
+    pub fn dismiss(&mut self) {
+        *self = Self::default();
     }
 
     /// Whether there is no verdict.
@@ -76,12 +88,24 @@ impl Verdicts {
 mod tests {
     use super::*;
 
-    fn report(pass: bool) -> Box<Report> {
+    fn info(build: u8) -> DeviceInfo {
+        DeviceInfo {
+            hw: 0x03,
+            firmware: "1.4.2".into(),
+            api: "1.2".into(),
+            build,
+            flags: Some(0x0F),
+            build_date: Some("2024-05-17 14:03:52".into()),
+            extra: None,
+        }
+    }
+
+    fn report(pass: bool, build: Option<u8>) -> Box<Report> {
         Box::new(Report {
             plan: "plan".into(),
             profile: "window-cleaner".into(),
             device: None,
-            device_info: None,
+            device_info: build.map(info),
             started: String::new(),
             duration_ms: 0,
             safe_state: Vec::new(),
@@ -92,16 +116,35 @@ mod tests {
     }
 
     #[test]
-    fn a_verdict_belongs_to_its_unit_and_goes_when_another_unit_comes() {
+    fn a_verdict_stays_with_its_unit_and_goes_when_another_identifies_itself() {
         let mut v = Verdicts::default();
         assert_eq!(v.pass(), None);
-        v.take(Verdict::SelfTest(report(true)), 3);
+        v.take(Verdict::SelfTest(report(true, Some(37))));
         assert_eq!(v.pass(), Some(true));
-        v.forget_other_unit(3);
-        assert_eq!(v.pass(), Some(true), "the same unit keeps it");
-        v.forget_other_unit(4);
-        assert!(v.is_empty(), "another unit has no verdict yet");
-        v.take(Verdict::SelfTest(report(false)), 4);
+        v.identified(&info(37));
+        assert_eq!(
+            v.pass(),
+            Some(true),
+            "the same unit, identified again, keeps it"
+        );
+        v.identified(&info(38));
+        assert!(
+            v.is_empty(),
+            "another build is another unit: no verdict yet"
+        );
+        v.take(Verdict::SelfTest(report(false, Some(38))));
         assert_eq!(v.pass(), Some(false));
+        v.dismiss();
+        assert!(v.is_empty(), "dismissed");
+    }
+
+    #[test]
+    fn a_verdict_on_a_unit_that_never_identified_stays_until_the_next_run() {
+        let mut v = Verdicts::default();
+        v.take(Verdict::SelfTest(report(false, None)));
+        v.identified(&info(37));
+        assert_eq!(v.pass(), Some(false), "nothing says it is another unit");
+        v.take(Verdict::SelfTest(report(true, Some(37))));
+        assert_eq!(v.pass(), Some(true), "the next run's verdict replaces it");
     }
 }

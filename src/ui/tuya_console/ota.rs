@@ -15,6 +15,7 @@ use crate::ui::confirm::Decision;
 use crate::ui::files;
 use crate::ui::jobs::{Job, JobError};
 use crate::ui::settings::FileKind;
+use crate::ui::zh::Zh;
 use eframe::egui;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -134,7 +135,14 @@ fn work(path: PathBuf, max: u32, typed: Option<String>) -> Job {
                     offset: acked,
                     size: image.len(),
                 },
-                e => e.into(),
+                e => match e.lost_port() {
+                    Some(why) => JobError::UpdateLinkLost {
+                        offset: acked,
+                        size: image.len(),
+                        why: why.to_string(),
+                    },
+                    None => e.into(),
+                },
             }))
         },
     )
@@ -342,13 +350,26 @@ impl OtaView {
                     ),
                 );
             }
+            Some(Err(e @ JobError::UpdateLinkLost { .. })) if !active => {
+                ui.colored_label(
+                    egui::Color32::from_rgb(180, 90, 0),
+                    format!("× {}: {}", lang.tr("No verdict", "无结论"), e.in_lang(lang)),
+                );
+            }
             Some(Err(e)) if !active => {
                 ui.colored_label(
                     egui::Color32::RED,
-                    format!("× {}: {e}", lang.tr("Update failed", "升级失败")),
+                    format!("× {}: {}", lang.tr("Update failed", "升级失败"), e.in_lang(lang)),
                 );
             }
             _ => {}
+        }
+        if self.result.is_some()
+            && !active
+            && ui.button(lang.tr("Dismiss", "关闭结论")).clicked()
+        {
+            self.result = None;
+            self.progress = None;
         }
         actions
     }
