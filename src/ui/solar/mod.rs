@@ -216,11 +216,11 @@ impl SolarPanel {
                 .allow_scroll(false)
                 .show(ui, |pui| {
                     pui.set_plot_bounds_x(now - WINDOW_SECS..=now);
-                    pui.set_auto_bounds([false, true]);
-                    if let Some(set) = set {
-                        let x = (now - WINDOW_SECS, now);
-                        plot::lines(pui, set, &p.fields, &legend, x, width_px, scratch);
-                    }
+                    let x = (now - WINDOW_SECS, now);
+                    let extent = set.and_then(|set| {
+                        plot::lines(pui, set, &p.fields, &legend, x, width_px, scratch)
+                    });
+                    plot::fit_y(pui, extent, legend.integer);
                 });
             self.plot_width = resp.response.rect.width();
         }
