@@ -39,8 +39,12 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
                 if let Some(Ok(info)) = &rt.device.info {
                     ui.separator();
                     ui.label(format!(
-                        "hw {:#04x} fw {} api {}",
-                        info.hw, info.firmware, info.api
+                        "{} {:#04x} {} {} API {}",
+                        lang.tr("hw", "硬件"),
+                        info.hw,
+                        lang.tr("fw", "固件"),
+                        info.firmware,
+                        info.api
                     ));
                 }
                 ui.separator();

@@ -388,8 +388,9 @@ impl TelemetryPanel {
                                                 Some(f) => {
                                                     let shown = match f.range_mark(v) {
                                                         Some(mark) => format!(
-                                                            "{} {mark}",
-                                                            super::inputs::short_text(f, v, lang)
+                                                            "{} {}",
+                                                            super::inputs::short_text(f, v, lang),
+                                                            crate::ui::zh::value_marks(&mark, lang)
                                                         ),
                                                         None => {
                                                             super::inputs::short_text(f, v, lang)
@@ -402,8 +403,9 @@ impl TelemetryPanel {
                                         })
                                         .collect();
                                     ui.monospace(text.join("  ")).on_hover_text(format!(
-                                        "{:.1} s ago",
-                                        at.elapsed().as_secs_f64()
+                                        "{:.1} {}",
+                                        at.elapsed().as_secs_f64(),
+                                        lang.tr("s ago", "秒前")
                                     ));
                                 }
                                 Some(Reading::Failed(e)) => {

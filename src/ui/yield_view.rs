@@ -108,7 +108,7 @@ impl YieldPanel {
                 ui.label(lang.tr("Reading the records…", "正在读取记录…"));
             }
             Some(Err(e)) => {
-                ui.colored_label(ui.visuals().warn_fg_color, e);
+                ui.colored_label(ui.visuals().warn_fg_color, e.get(lang));
             }
             Some(Ok(r)) => {
                 egui::ScrollArea::vertical()
