@@ -108,22 +108,15 @@ impl ActionsPanel {
     fn confirmation(&mut self, ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Option<Action> {
         let profile = &rt.device.profile;
         let (id, inputs) = self.confirm.as_ref()?;
-        let name = profile.command_by_id(*id).map_or(String::new(), |c| {
-            lang.tr(&c.name.en, &c.name.zh).to_string()
-        });
+        let cmd = profile.command_by_id(*id);
+        let name = cmd.map_or(String::new(), |c| c.name.get(lang).to_string());
         let mut decision = None;
         let modal = egui::Modal::new(egui::Id::unique("confirm-action")).show(ui.ctx(), |ui| {
             ui.heading(lang.tr("The robot will move", "机器人将会动作"));
             ui.label(format!(
-                "{name}: {}",
-                inputs
-                    .iter()
-                    .map(|(k, v)| match v {
-                        Input::Text(t) => format!("{k}={t}"),
-                        Input::Raw(r) => format!("{k}={r:?}"),
-                    })
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                "{name}{}{}",
+                lang.tr(" — ", "——"),
+                super::confirm::inputs_said(cmd, inputs, lang)
             ));
             ui.label(lang.tr(
                 "Make sure it is safe, then confirm.",

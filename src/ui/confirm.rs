@@ -5,6 +5,7 @@
 //! a dialog is open (which the dialog's backdrop would otherwise take as "close"), both send it.
 
 use crate::i18n::Lang;
+use crate::profile::{Command, Input};
 use crate::ui::station::Station;
 use eframe::egui;
 
@@ -70,4 +71,37 @@ pub fn decided<T>(modal: &egui::ModalResponse<T>, pressed: Option<Decision>) -> 
         return Some(Decision::Stop);
     }
     modal.should_close().then_some(Decision::No)
+}
+
+/// What a command about to be sent carries, as a dialog says it in `lang`: each field by its
+/// name, a named value by its name, a number with its unit (`Motor: Forward`, `电机: 前进`,
+/// `Fan PWM: 60 %`); a field `cmd` does not have by its ident, as given.
+pub fn inputs_said(cmd: Option<&Command>, inputs: &[(String, Input)], lang: Lang) -> String {
+    inputs
+        .iter()
+        .map(|(k, v)| {
+            let field = cmd.and_then(|c| c.request.iter().find(|f| &f.ident == k));
+            let Some(f) = field else {
+                return match v {
+                    Input::Text(t) => format!("{k}={t}"),
+                    Input::Raw(r) => format!("{k}={r:?}"),
+                };
+            };
+            let value = match v {
+                Input::Text(t) => {
+                    let t = t.trim();
+                    let label = f.labels.iter().find(|l| {
+                        l.ident.eq_ignore_ascii_case(t) || l.name.en.eq_ignore_ascii_case(t)
+                    });
+                    match label {
+                        Some(l) => l.name.get(lang).to_string(),
+                        None => format!("{t}{}", f.unit_suffix()),
+                    }
+                }
+                Input::Raw(r) => crate::ui::inputs::short_text(f, r, lang),
+            };
+            format!("{}{}{value}", f.name.get(lang), lang.tr(": ", ":"))
+        })
+        .collect::<Vec<_>>()
+        .join(lang.tr(", ", ","))
 }

@@ -222,8 +222,17 @@ impl ConnectionBar {
         let chosen = super::layout::group(ui, "profile", |ui| {
             let profile_label = ui.label(lang.tr("Profile", "设备配置"));
             let mut chosen = None;
+            // In 中文 by its Chinese name (the id is English words); in English by its id.
+            let shown = match lang {
+                Lang::Zh => rt
+                    .registry
+                    .iter()
+                    .find(|(p, _)| p.id == self.profile)
+                    .map_or(self.profile.clone(), |(p, _)| p.name.zh.clone()),
+                Lang::En => self.profile.clone(),
+            };
             egui::ComboBox::from_id_salt("profile")
-                .selected_text(&self.profile)
+                .selected_text(shown)
                 .show_ui(ui, |ui| {
                     for (p, _) in rt.registry.iter() {
                         let label = format!("{} — {}", p.id, lang.tr(&p.name.en, &p.name.zh));

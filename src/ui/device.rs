@@ -210,7 +210,7 @@ impl DevicePanel {
                     .striped(true)
                     .show(ui, |ui| {
                         for c in capabilities(profile, flags) {
-                            ui.monospace(format!("bit {}", c.bit));
+                            ui.monospace(format!("{} {}", lang.tr("bit", "位"), c.bit));
                             ui.label(lang.tr(&c.name.en, &c.name.zh));
                             if c.set {
                                 ui.colored_label(

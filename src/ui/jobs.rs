@@ -31,14 +31,14 @@ pub enum JobError {
     #[error(transparent)]
     Document(#[from] DocumentError),
     /// Some of a batch failed.
-    #[error("{failed} of {total} {what}")]
+    #[error("{failed} of {total} {}", what.en)]
     Incomplete {
         /// How many failed.
         failed: usize,
         /// How many there were.
         total: usize,
-        /// What failed, e.g. `reads failed`.
-        what: String,
+        /// What failed, e.g. `reads failed`, in both languages.
+        what: Text,
     },
     /// Cancelled part of the way through a batch.
     #[error("cancelled after {done} of {total} {what}")]
@@ -69,9 +69,9 @@ pub enum JobError {
         /// Why the port went.
         why: String,
     },
-    /// The device failed a test: what failed.
-    #[error("FAIL: {0}")]
-    Failed(String),
+    /// The device failed a test: what failed, in both languages.
+    #[error("FAIL: {}", .0.en)]
+    Failed(crate::i18n::Text),
     /// A device failed a step of its provisioning.
     #[error("FAIL at {step}: {reason}")]
     StepFailed {
@@ -281,7 +281,7 @@ pub fn read(profile: &Arc<Profile>, ids: Vec<u8>) -> Job {
             Err(JobError::Incomplete {
                 failed: tally.failed,
                 total: tally.total,
-                what: "reads failed".into(),
+                what: Text::new("reads failed", "读取失败"),
             })
         }
     })
@@ -322,13 +322,13 @@ pub fn write(profile: &Arc<Profile>, writes: Vec<ops::tuning::SetWrite>) -> Job 
             Err(JobError::Incomplete {
                 failed: refused,
                 total: tally.total,
-                what: "command(s) refused, nothing sent".into(),
+                what: Text::new("command(s) refused, nothing sent", "命令被拒绝,未发送"),
             })
         } else {
             Err(JobError::Incomplete {
                 failed: tally.failed - refused,
                 total: tally.total,
-                what: "command(s) not verified".into(),
+                what: Text::new("command(s) not verified", "命令未通过校验"),
             })
         }
     })

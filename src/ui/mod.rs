@@ -16,7 +16,7 @@ pub mod jobs;
 pub mod layout;
 pub mod line;
 pub mod panel;
-mod plot;
+pub mod plot;
 mod port_options;
 pub mod records;
 pub mod repaint;

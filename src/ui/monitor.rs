@@ -96,6 +96,43 @@ pub fn line(current: &Profile, profile: &Profile, e: &LogEntry) -> String {
     }
 }
 
+/// [`line`] as the window shows it in `lang`: in 中文 a frame's values, its misfit and its
+/// marks are said in Chinese (the wire names and numbers stay; a saved or copied log is
+/// [`line`], in English).
+pub fn line_in(current: &Profile, profile: &Profile, e: &LogEntry, lang: Lang) -> String {
+    let english = line(current, profile, e);
+    let (Lang::Zh, Ok(p)) = (lang, &e.frame) else {
+        return english;
+    };
+    let (Some(cmd), Some(d)) = (p.command_in(profile), p.decode_lenient(profile)) else {
+        return english;
+    };
+    let mut s = cmd.ident.clone();
+    if let crate::packet::Header::MspReply {
+        kind: crate::protocol::msp::ReplyKind::Async,
+    } = p.header
+    {
+        s.push_str("(主动上报,类型 0xFE:不应答任何请求)");
+    }
+    for v in &d.values {
+        s.push_str(&format!(" {}={}", v.ident, crate::ui::zh::value_marks(&v.display(), Lang::Zh)));
+    }
+    if let Some(m) = d.misfit() {
+        let mut misfit = crate::profile::FieldError::Misfit(Box::new(m)).zh();
+        // A data point by its name in the profile, not its code.
+        for dp in &profile.data_points {
+            let code = format!("数据点 {}:", dp.field.ident);
+            misfit = misfit.replace(&code, &format!("数据点 {}:", dp.field.name.zh));
+        }
+        s.push_str(&format!(" !{misfit} [{}]", hex::format(&p.payload)));
+    }
+    let summary = p.summary(profile);
+    match english.find(&summary) {
+        Some(at) => format!("{}{s}{}", &english[..at], &english[at + summary.len()..]),
+        None => english,
+    }
+}
+
 impl MonitorPanel {
     /// The capture file row: its path (typed, or chosen with Browse…: opened at once), Record /
     /// Stop recording with the file's size growing, Open capture / Back to live.
@@ -297,7 +334,7 @@ impl MonitorPanel {
         });
         self.where_the_view_is(ui, lang);
         ui.separator();
-        self.rows(ui, &profile, &rows);
+        self.rows(ui, lang, &profile, &rows);
         actions
     }
 
@@ -322,7 +359,7 @@ impl MonitorPanel {
     }
 
     /// The rows, in a scroll area with a solid scroll bar, placed where the view is held.
-    fn rows(&mut self, ui: &mut egui::Ui, profile: &Profile, rows: &[Row<'_>]) {
+    fn rows(&mut self, ui: &mut egui::Ui, lang: Lang, profile: &Profile, rows: &[Row<'_>]) {
         // show_rows adds the spacing between rows itself.
         let text_h = ui.text_style_height(&egui::TextStyle::Monospace);
         let row_h = text_h + ui.spacing().item_spacing.y;
@@ -350,7 +387,7 @@ impl MonitorPanel {
             .vertical_scroll_offset(offset)
             .show_rows(ui, text_h, rows.len(), |ui, range| {
                 for (_, p, e) in &rows[range] {
-                    let text = line(profile, p, e);
+                    let text = line_in(profile, p, e, lang);
                     let unsolicited = matches!(&e.frame, Ok(p) if matches!(p.header, crate::packet::Header::MspReply { kind: crate::protocol::msp::ReplyKind::Async }));
                     let color = match (&e.frame, e.direction) {
                         (Err(_), _) => egui::Color32::RED,

@@ -85,7 +85,6 @@ fn apply_job(rt: &Station, preset: Preset, file: &str) -> Job {
                 },
                 &mut records,
             );
-            let note = crate::ui::records::note_en(&recorded.kept);
             recorded.outcome?;
             if bad == 0 {
                 Ok(crate::ui::records::with_note(
@@ -99,7 +98,13 @@ fn apply_job(rt: &Station, preset: Preset, file: &str) -> Job {
                 Err(JobError::Incomplete {
                     failed: bad,
                     total,
-                    what: format!("field(s) do not hold the preset's value{note}"),
+                    what: crate::ui::records::with_note(
+                        Text::new(
+                            "field(s) do not hold the preset's value",
+                            "个字段未保持预设值",
+                        ),
+                        &recorded.kept,
+                    ),
                 })
             }
         },
@@ -153,10 +158,16 @@ impl PresetsPanel {
             return actions;
         };
         let p = &loaded.preset;
+        // The preset's profile by its name in the window's language, when it is the one in use.
+        let profile_name = if p.profile == profile.id {
+            profile.name.get(lang).to_string()
+        } else {
+            p.profile.clone()
+        };
         ui.label(format!(
             "{}: {}  {}: {}  {}: {}",
             lang.tr("profile", "配置"),
-            p.profile,
+            profile_name,
             lang.tr("created", "创建于"),
             p.created,
             lang.tr("device", "设备"),

@@ -3,6 +3,7 @@
 //! provisioning, preset apply), and the Yield view's report, computed on a thread of its own
 //! (`yield-report`) with its own connection so that the window never waits on the database.
 
+use crate::i18n::Text;
 use crate::ops::records::report::{self, Query, Report};
 use crate::ops::records::{self as records, Kept, Location, Recorder, RunContext};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -31,7 +32,7 @@ struct Shared {
     /// Records waiting in the spool, as of the last save.
     waiting: u64,
     /// The last report: the `saved` count it was computed at, and the report or why not.
-    report: Option<(u64, Result<Report, String>)>,
+    report: Option<(u64, Result<Report, Text>)>,
     /// A report is being computed.
     computing: bool,
 }
@@ -124,8 +125,9 @@ impl RecordsHandle {
         self.lock().error.clone()
     }
 
-    /// The last report and whether it is out of date (records saved since, or none yet).
-    pub fn report(&self) -> (Option<Result<Report, String>>, bool) {
+    /// The last report (or why there is none, in both languages) and whether it is out of
+    /// date (records saved since, or none yet).
+    pub fn report(&self) -> (Option<Result<Report, Text>>, bool) {
         let s = self.lock();
         let stale = s.report.as_ref().is_none_or(|(at, _)| *at != s.saved);
         (s.report.as_ref().map(|(_, r)| r.clone()), stale)
@@ -162,7 +164,13 @@ impl RecordsHandle {
         if let Err(e) = spawned {
             let mut s = self.lock();
             s.computing = false;
-            s.report = Some((saved, Err(format!("cannot start the report thread: {e}"))));
+            s.report = Some((
+                saved,
+                Err(Text::new(
+                    format!("cannot start the report thread: {e}"),
+                    format!("无法启动报表线程:{e}"),
+                )),
+            ));
         }
     }
 }
@@ -190,16 +198,20 @@ fn context() -> RunContext {
     }
 }
 
-/// The report over the records at `setting`, read with a connection of its own.
-fn compute(setting: Option<&str>, query: &Query) -> Result<Report, String> {
-    let location = location_of(setting)?;
+/// The report over the records at `setting`, read with a connection of its own; why not, in
+/// both languages (what the store said is quoted as it came).
+fn compute(setting: Option<&str>, query: &Query) -> Result<Report, Text> {
+    let location = location_of(setting).map_err(Text::same)?;
     if let Location::Sqlite(p) = &location
         && !p.exists()
     {
-        return Err(format!("no records yet in {}", p.display()));
+        return Err(Text::new(
+            format!("no records yet in {}", p.display()),
+            format!("{} 中尚无记录", p.display()),
+        ));
     }
-    let mut store = records::store::open(&location).map_err(|e| e.to_string())?;
-    report::of_store(store.as_mut(), query).map_err(|e| e.to_string())
+    let mut store = records::store::open(&location).map_err(|e| Text::same(e.to_string()))?;
+    report::of_store(store.as_mut(), query).map_err(|e| Text::same(e.to_string()))
 }
 
 /// A job's summary with what became of its record: unchanged when it was stored, else with

@@ -9,10 +9,11 @@ use eframe::egui;
 /// Draws the status line.
 pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
     let mut actions = Vec::new();
-    ui.horizontal(|ui| {
-        // One line: every part keeps its words whole; the message last, cut to the room left
-        // (whole on hover).
-        super::layout::keep_words_whole(ui);
+    super::layout::toolbar(ui, |ui| {
+        // Every part keeps its words whole, and a part the row has no room left for moves,
+        // whole, to a second row (a narrow window, or a scale factor of 2 on a small screen);
+        // the message last, on a row of its own when it would not fit the rest of this one,
+        // cut only when even that is too short (whole on hover).
         // A running job first, so that its Cancel is in reach however long the rest is.
         if let Some((title, fraction, msg)) = rt.job_progress() {
             ui.label(title.get(lang));
@@ -38,8 +39,12 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
                 if let Some(Ok(info)) = &rt.device.info {
                     ui.separator();
                     ui.label(format!(
-                        "hw {:#04x} fw {} api {}",
-                        info.hw, info.firmware, info.api
+                        "{} {:#04x} {} {} API {}",
+                        lang.tr("hw", "硬件"),
+                        info.hw,
+                        lang.tr("fw", "固件"),
+                        info.firmware,
+                        info.api
                     ));
                 }
                 ui.separator();
@@ -54,13 +59,19 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
             }
         }
         if let Some(s) = &rt.notice {
-            ui.separator();
+            let text = s.text_in(lang);
+            let width = super::layout::text_width(ui, &super::layout::body_font(ui), [text]);
+            if width + 2.0 * ui.spacing().item_spacing.x > ui.available_width() {
+                ui.end_row();
+            } else {
+                ui.separator();
+            }
             let color = if s.error {
                 egui::Color32::RED
             } else {
                 ui.visuals().text_color()
             };
-            super::layout::one_line(ui, egui::RichText::new(s.text_in(lang)).color(color));
+            super::layout::one_line(ui, egui::RichText::new(text).color(color));
         }
     });
     actions

@@ -19,6 +19,8 @@ const GREEN: egui::Color32 = egui::Color32::from_rgb(0, 140, 60);
 const AMBER: egui::Color32 = egui::Color32::from_rgb(200, 120, 0);
 /// The STOP button's least width, points.
 pub const BUTTON_WIDTH: f32 = 90.0;
+/// The STOP button's least height, points.
+pub const BUTTON_HEIGHT: f32 = 32.0;
 
 /// The last outcome of a command sent from a panel.
 #[derive(Debug, Clone, PartialEq)]
@@ -270,7 +272,7 @@ fn draw(ui: &mut egui::Ui, lang: Lang, rt: &Station) -> egui::Response {
             .color(egui::Color32::WHITE),
     )
     .fill(RED)
-    .min_size(egui::vec2(BUTTON_WIDTH, 32.0));
+    .min_size(egui::vec2(BUTTON_WIDTH, BUTTON_HEIGHT));
     let what = rt
         .device
         .profile

@@ -76,8 +76,11 @@ pub struct Shown {
     pub readout: Option<plot::Readout>,
     /// Its fields' names, y axis label and number format, in the window's language.
     pub legend: plot::Legend,
-    /// Where the plot was drawn.
+    /// Where the plot was drawn: its data area (time `x.0..x.1` left to right, values
+    /// `y.0..y.1` bottom to top), without its axes.
     pub rect: egui::Rect,
+    /// Its value range, in the fields' display units.
+    pub y: (f64, f64),
 }
 
 impl Default for TelemetryPanel {
@@ -276,18 +279,19 @@ impl TelemetryPanel {
                     let width_px = ui.available_width().max(100.0) as usize;
                     let scratch = &mut self.scratch;
                     let plot = Plot::new(("plot", &p.id)).height(height);
+                    let integer = legend.integer;
+                    // In time only: the y range fits what is drawn (plot::fit_y).
                     let resp = plot::axes(plot, lang, rt.device.t0_wall, &legend)
                         .link_axis(link, [true, false])
-                        .allow_drag(!follow)
-                        .allow_zoom(!follow)
-                        .allow_scroll(!follow)
+                        .allow_drag([!follow, false])
+                        .allow_zoom([!follow, false])
+                        .allow_scroll([!follow, false])
                         // The readout below says what is under the cursor, from samples only.
                         .show_x(false)
                         .show_y(false)
                         .show(ui, |pui| {
                             let x = if follow {
                                 pui.set_plot_bounds_x(end - window..=end);
-                                pui.set_auto_bounds([false, true]);
                                 (end - window, end)
                             } else {
                                 let b = pui.plot_bounds();
@@ -300,9 +304,10 @@ impl TelemetryPanel {
                                 }
                                 _ => None,
                             };
-                            if let Some(set) = set {
-                                plot::lines(pui, set, &p.fields, &legend, x, width_px, scratch);
-                            }
+                            let extent = set.and_then(|set| {
+                                plot::lines(pui, set, &p.fields, &legend, x, width_px, scratch)
+                            });
+                            plot::fit_y(pui, extent, integer);
                             if let Some(r) = &readout {
                                 let gray = egui::Color32::from_gray(140);
                                 pui.vline(VLine::new("", r.t).stroke(egui::Stroke::new(1.0, gray)));
@@ -322,6 +327,7 @@ impl TelemetryPanel {
                         readout,
                         legend,
                         rect: resp.response.rect,
+                        y: resp.transform.bounds().range_y().into_inner(),
                     });
                 }
             });
@@ -382,8 +388,9 @@ impl TelemetryPanel {
                                                 Some(f) => {
                                                     let shown = match f.range_mark(v) {
                                                         Some(mark) => format!(
-                                                            "{} {mark}",
-                                                            super::inputs::short_text(f, v, lang)
+                                                            "{} {}",
+                                                            super::inputs::short_text(f, v, lang),
+                                                            crate::ui::zh::value_marks(&mark, lang)
                                                         ),
                                                         None => {
                                                             super::inputs::short_text(f, v, lang)
@@ -396,8 +403,9 @@ impl TelemetryPanel {
                                         })
                                         .collect();
                                     ui.monospace(text.join("  ")).on_hover_text(format!(
-                                        "{:.1} s ago",
-                                        at.elapsed().as_secs_f64()
+                                        "{:.1} {}",
+                                        at.elapsed().as_secs_f64(),
+                                        lang.tr("s ago", "秒前")
                                     ));
                                 }
                                 Some(Reading::Failed(e)) => {

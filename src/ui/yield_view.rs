@@ -108,7 +108,7 @@ impl YieldPanel {
                 ui.label(lang.tr("Reading the records…", "正在读取记录…"));
             }
             Some(Err(e)) => {
-                ui.colored_label(ui.visuals().warn_fg_color, e);
+                ui.colored_label(ui.visuals().warn_fg_color, e.get(lang));
             }
             Some(Ok(r)) => {
                 egui::ScrollArea::vertical()
@@ -354,6 +354,7 @@ fn yield_plot(ui: &mut egui::Ui, lang: Lang, rows: &[Yield]) {
         .y_axis_label("%")
         .include_y(100.0)
         .include_y((lowest - (100.0 - lowest).max(2.0) * 0.6).max(0.0))
+        .y_grid_spacer(|input| super::plot::y_marks(input, false))
         .include_x(-0.5)
         .include_x(n as f64 - 0.5)
         .allow_drag(false)
@@ -530,8 +531,14 @@ fn histogram(ui: &mut egui::Ui, lang: Lang, m: &MeasurementStats) {
                 .fill(if inside { BARS } else { BAD })
         })
         .collect();
+    // Counts from 0, at least three of them labelled (about 100 points of data area).
+    let most = m.bins.iter().copied().max().unwrap_or(0) as f64;
+    let (low, high) = super::plot::y_range(0.0, most, 100.0, true).unwrap_or((0.0, 1.0));
     Plot::new(("histogram", &m.name, &m.unit))
         .height(140.0)
+        .include_y(low.max(-0.5))
+        .include_y(high)
+        .y_grid_spacer(|input| super::plot::y_marks(input, true))
         .allow_drag(false)
         .allow_zoom(false)
         .allow_scroll(false)

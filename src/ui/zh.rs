@@ -89,7 +89,7 @@ impl Zh for JobError {
                 failed,
                 total,
                 what,
-            } => format!("{total} 项中 {failed} 项{}", incomplete_zh(what)),
+            } => format!("{total} 项中 {failed} 项{}", what.zh),
             JobError::CancelledAfter { done, total, what } => {
                 format!("已取消:{total} {} 中已完成 {done}", unit_zh(what))
             }
@@ -99,24 +99,12 @@ impl Zh for JobError {
             JobError::UpdateLinkLost { offset, size, why } => {
                 format!("升级过程中连接丢失(已确认 {offset} / {size} 字节):{why}")
             }
-            JobError::Failed(what) => format!("不合格:{what}"),
+            JobError::Failed(what) => format!("不合格:{}", what.zh),
             JobError::StepFailed { step, reason } => format!("在 {step} 步失败:{reason}"),
             JobError::Log(e) => e.zh(),
             JobError::File { path, reason } => format!("{}:{reason}", path.display()),
             JobError::Thread(e) => format!("无法启动任务线程:{e}"),
         }
-    }
-}
-
-/// The Chinese of a batch's failure (`reads failed`), by its English.
-fn incomplete_zh(what: &str) -> &str {
-    match what {
-        "reads failed" => "读取失败",
-        "command(s) not verified" => "命令未通过校验",
-        "command(s) refused, nothing sent" => "命令被拒绝,未发送",
-        "field(s) not verified" => "字段未通过校验",
-        "parameter(s) not verified" => "参数未通过校验",
-        other => other,
     }
 }
 
@@ -363,6 +351,66 @@ impl Zh for DpLimit {
     }
 }
 
+/// A Tuya data point type as Tuya's Chinese documents name it (布尔型 for bool), in `lang`.
+pub fn dp_type(ty: crate::protocol::tuya::dp::DpType, lang: Lang) -> &'static str {
+    use crate::protocol::tuya::dp::DpType;
+    match lang {
+        Lang::En => ty.name(),
+        Lang::Zh => match ty {
+            DpType::Raw => "透传型",
+            DpType::Bool => "布尔型",
+            DpType::Value => "数值型",
+            DpType::String => "字符型",
+            DpType::Enum => "枚举型",
+            DpType::Bitmap => "故障型",
+        },
+    }
+}
+
+/// A data point type by its name ([`crate::protocol::tuya::dp::DpType::name`]) as
+/// [`dp_type`] in Chinese; the name as given when it is none of the six.
+fn dp_type_named(name: &str) -> String {
+    (0..=5u8)
+        .filter_map(crate::protocol::tuya::dp::DpType::from_byte)
+        .find(|t| t.name() == name)
+        .map_or_else(|| name.to_string(), |t| dp_type(t, Lang::Zh).to_string())
+}
+
+/// A type byte on the wire as [`dp_type`] in Chinese, or the byte when it is none of the six.
+fn wire_type_zh(byte: u8) -> String {
+    crate::protocol::tuya::dp::DpType::from_byte(byte).map_or_else(
+        || format!("{byte:#04x}"),
+        |t| dp_type(t, Lang::Zh).to_string(),
+    )
+}
+
+impl Zh for crate::ops::tuya::DpMisfit {
+    fn zh(&self) -> String {
+        use crate::ops::tuya::DpMisfit;
+        match self {
+            DpMisfit::Type { wire, expected } => format!(
+                "线上类型为{},设备配置为{}",
+                wire_type_zh(*wire),
+                dp_type(*expected, Lang::Zh)
+            ),
+            DpMisfit::UnknownType { wire } => {
+                format!("类型字节 {wire:#04x} 不是六种数据点类型之一")
+            }
+            DpMisfit::Length { ty, len, expected } => format!(
+                "线上为 {len} 字节的{};{}应为 {expected} 字节",
+                dp_type(*ty, Lang::Zh),
+                dp_type(*ty, Lang::Zh)
+            ),
+            DpMisfit::NotBool { byte } => {
+                format!("布尔字节为 {byte:#04x}:布尔型只能是 0x00 或 0x01")
+            }
+            DpMisfit::NotUtf8 => "字符串不是有效的 UTF-8".into(),
+            DpMisfit::Limit(l) => l.zh(),
+            DpMisfit::Truncated { reason } => format!("数据不完整:{reason}"),
+        }
+    }
+}
+
 impl Zh for FieldError {
     fn zh(&self) -> String {
         match self {
@@ -418,17 +466,27 @@ impl Zh for FieldError {
                 field,
                 expected,
                 actual,
-            } => format!("数据点 {field}:线上类型为 {actual},设备配置为 {expected}"),
+            } => format!(
+                "数据点 {field}:线上类型为{},设备配置为{}",
+                dp_type_named(actual),
+                dp_type_named(expected)
+            ),
             FieldError::Dp(e) => e.zh(),
             FieldError::LongPayload { extra } => {
                 format!("布局最后一个字段之后多出 {} 字节", extra.len())
             }
-            FieldError::Misfit(m) => format!(
-                "{} 字节的数据,布局需要 {}:{}",
-                m.payload.len(),
-                m.expected_text(),
-                m.fault.zh()
-            ),
+            FieldError::Misfit(m) => {
+                let expected = match m.expected {
+                    (lo, Some(hi)) if lo == hi => format!("{lo} 字节"),
+                    (lo, Some(hi)) => format!("{lo} 至 {hi} 字节"),
+                    (lo, None) => format!("至少 {lo} 字节"),
+                };
+                format!(
+                    "{} 字节的数据,布局需要 {expected}:{}",
+                    m.payload.len(),
+                    m.fault.zh()
+                )
+            }
             FieldError::Records { field, message } => format!("{field}:{message}"),
             FieldError::Relation(b) => format!(
                 "{}({}){} 必须 {} {}({}){}",
@@ -512,4 +570,18 @@ impl Zh for StepResult {
 /// Data point ids as a list: `3, 7, 12`.
 fn join_ids(ids: &[u8]) -> String {
     ids.iter().map(u8::to_string).collect::<Vec<_>>().join(", ")
+}
+
+/// A value as the profile shows it ([`crate::profile::Field::display`]), its marks said in
+/// `lang`: in 中文 `(raw 1779)` → `(原始值 1779)`, `!! out of range 0 to 100 %` →
+/// `!! 超出范围 0 至 100 %`.
+pub fn value_marks(shown: &str, lang: Lang) -> String {
+    if lang == Lang::En {
+        return shown.to_string();
+    }
+    let shown = shown.replace(" (raw ", " (原始值 ").replace("n/a ", "无 ");
+    match shown.split_once("!! out of range ") {
+        Some((value, range)) => format!("{value}!! 超出范围 {}", range.replacen(" to ", " 至 ", 1)),
+        None => shown,
+    }
 }

@@ -51,7 +51,7 @@ fn misfits_unknown_and_missing_data_points_and_unknown_commands_are_shown() {
     ));
     assert!(has_label(&h, "Data points not in the profile"));
     assert!(has_label(&h, "value 50"));
-    assert!(has_label(&h, "still missing: 19 map_params"));
+    assert!(has_label(&h, "still missing: 19 Map parameters"));
     // A command the module does not know: said with its bytes, not answered.
     b.sim().send_frame(0x99, vec![1, 2, 3]);
     step_until(&mut h, "the unknown command", |a| {

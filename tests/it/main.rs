@@ -74,6 +74,7 @@ mod tuya_module;
 mod tuya_schema;
 mod tuya_sdk_vectors;
 mod tuya_update;
+mod window_chinese;
 mod window_kinds;
 mod window_language;
 mod window_layout;

@@ -26,7 +26,7 @@ const SMALL: egui::Vec2 = egui::vec2(1024.0, 600.0);
 const LEAST: egui::Vec2 = egui::vec2(800.0, 500.0);
 
 /// Every text the last frame drew: its text, where, and how many rows it took.
-fn texts(h: &H) -> Vec<(String, egui::Rect, usize)> {
+pub(crate) fn texts(h: &H) -> Vec<(String, egui::Rect, usize)> {
     fn visit(shape: &egui::Shape, out: &mut Vec<(String, egui::Rect, usize)>) {
         match shape {
             egui::Shape::Text(t) => out.push((
@@ -111,7 +111,7 @@ fn the_check_finds_a_label_split_over_two_lines_and_a_one_line_label_passes() {
 
 /// The app on the built-in demo `kind` at `size` in `lang`, stepped until the device answers
 /// and is identified (so that the navigation lists its panels).
-fn demo(kind: SimKind, lang: Lang, size: egui::Vec2) -> H {
+pub(crate) fn demo(kind: SimKind, lang: Lang, size: egui::Vec2) -> H {
     let mut saved = Settings {
         target: Target::Demo(kind.name().to_string()),
         profile: kind.profile_id().to_string(),
@@ -136,7 +136,7 @@ fn ready(kind: SimKind, a: &App) -> bool {
 /// The app on `kind` as a technician has it before the views are walked: the window
 /// cleaner's self-test plan and a preset open; the servo bus scanned and a servo's parameters
 /// read (its ranges the profile's, named values by their names).
-fn prepare(h: &mut H, kind: SimKind) {
+pub(crate) fn prepare(h: &mut H, kind: SimKind) {
     if kind == SimKind::WindowCleaner {
         // The self-test's plan and a preset open, as a technician has them.
         let a = app_mut(h);

@@ -157,3 +157,128 @@ fn at_1024_px_a_bit_field_takes_its_rows_height_and_draws_over_no_other_row() {
         );
     }
 }
+
+/// A text drawn in the last frame: its text, where, its rows, the glyphs it shows (less than
+/// its text, ending in "…", where it was cut), and the rectangle it was clipped to.
+struct Drawn {
+    text: String,
+    rect: egui::Rect,
+    rows: usize,
+    shown: String,
+    clip: egui::Rect,
+}
+
+fn drawn_texts(h: &H) -> Vec<Drawn> {
+    fn visit(clip: egui::Rect, shape: &egui::Shape, out: &mut Vec<Drawn>) {
+        match shape {
+            egui::Shape::Text(t) => out.push(Drawn {
+                text: t.galley.text().to_string(),
+                rect: t.galley.rect.translate(t.pos.to_vec2()),
+                rows: t.galley.rows.len(),
+                shown: t
+                    .galley
+                    .rows
+                    .iter()
+                    .flat_map(|r| r.row.glyphs.iter().map(|g| g.chr))
+                    .collect(),
+                clip,
+            }),
+            egui::Shape::Vec(v) => v.iter().for_each(|s| visit(clip, s, out)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    for c in &h.output().shapes {
+        visit(c.clip_rect, &c.shape, &mut out);
+    }
+    out
+}
+
+/// What is wrong with `d` as a text that must be whole in a window of `size`: cut, clipped,
+/// past the window, or over two rows.
+fn not_whole(d: &Drawn, size: egui::Vec2) -> Option<String> {
+    let window = egui::Rect::from_min_size(egui::Pos2::ZERO, size).expand(0.5);
+    let shown: String = d.shown.chars().filter(|c| !c.is_whitespace()).collect();
+    let text: String = d.text.chars().filter(|c| !c.is_whitespace()).collect();
+    if d.rows != 1 {
+        Some(format!("{:?} on {} rows", d.text, d.rows))
+    } else if shown != text {
+        Some(format!("{:?} cut to {:?}", d.text, d.shown))
+    } else if !window.contains_rect(d.rect) {
+        Some(format!("{:?} at {:?}, past the window", d.text, d.rect))
+    } else if !d.clip.expand(0.5).contains_rect(d.rect) {
+        Some(format!(
+            "{:?} at {:?} clipped to {:?}",
+            d.text, d.rect, d.clip
+        ))
+    } else {
+        None
+    }
+}
+
+#[test]
+fn at_scale_2_on_a_1280x800_screen_stop_and_the_status_line_stay_whole() {
+    // 1280×800 pixels at 2 pixels a point: a window of 640×400 points (the harness takes the
+    // screen's size in pixels once its scale is set).
+    let size = egui::vec2(640.0, 400.0);
+    let screen = egui::vec2(1280.0, 800.0);
+    let b = bench();
+    for lang in Lang::ALL {
+        let mut saved = settings(b.path(), "window-cleaner", PanelId::TUNING, lang);
+        saved.port_mut().margin_ms = Some(100);
+        let mut h = crate::support::gui::harness_sized(saved, b.ports(), screen, |_| {});
+        h.set_pixels_per_point(2.0);
+        h.run_steps(2);
+        let area = h.ctx.content_rect().size();
+        assert_eq!(area, size, "the window in points");
+        step_until(&mut h, "the device identified", |a| {
+            a.station().link.answering() == botbench::ui::station::Answering::Yes
+                && matches!(a.station().device.info, Some(Ok(_)))
+                && a.station().notice.is_some()
+        });
+        h.run_steps(3);
+        let mut bad = Vec::new();
+        let texts = drawn_texts(&h);
+        // STOP: the button whole in the window, its word whole on it.
+        let stop_word = lang.tr("STOP", "停止");
+        let stop = h.get_by_label(stop_word).rect();
+        if !egui::Rect::from_min_size(egui::Pos2::ZERO, size)
+            .expand(0.5)
+            .contains_rect(stop)
+        {
+            bad.push(format!("STOP at {stop:?}, past the window"));
+        }
+        match texts.iter().find(|d| d.text == stop_word) {
+            Some(d) => bad.extend(not_whole(d, size)),
+            None => bad.push("STOP's word is not drawn".into()),
+        }
+        // The status line: each of its parts drawn, whole.
+        let a = app(&h);
+        let mut parts = vec![
+            a.station().link.target().unwrap().label_in(lang),
+            a.station()
+                .notice
+                .as_ref()
+                .unwrap()
+                .text_in(lang)
+                .to_string(),
+        ];
+        for counter in [
+            lang.tr("no answer", "无应答"),
+            lang.tr("frame errors", "帧错误"),
+        ] {
+            let found = texts.iter().find(|d| d.text.starts_with(counter));
+            parts.push(found.map_or(counter.to_string(), |d| d.text.clone()));
+        }
+        for part in parts {
+            match texts.iter().find(|d| d.text == part) {
+                Some(d) => bad.extend(not_whole(d, size)),
+                None => bad.push(format!("{part:?} is not drawn")),
+            }
+        }
+        assert!(
+            bad.is_empty(),
+            "{lang:?} at 640×400 points, scale 2: {bad:#?}"
+        );
+    }
+}

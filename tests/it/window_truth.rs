@@ -771,3 +771,159 @@ fn a_relation_broken_by_the_edits_is_said_as_typed_and_disables_write() {
         "the reading stays"
     );
 }
+
+/// Every shape the last frame drew, with the rectangle it was clipped to (a plot's shapes are
+/// clipped to its data area).
+fn drawn(h: &H) -> Vec<(egui::Rect, egui::Shape)> {
+    fn visit(clip: egui::Rect, shape: &egui::Shape, out: &mut Vec<(egui::Rect, egui::Shape)>) {
+        match shape {
+            egui::Shape::Vec(v) => v.iter().for_each(|s| visit(clip, s, out)),
+            s => out.push((clip, s.clone())),
+        }
+    }
+    let mut out = Vec::new();
+    for c in &h.output().shapes {
+        visit(c.clip_rect, &c.shape, &mut out);
+    }
+    out
+}
+
+/// The y tick labels drawn beside the data area `rect` of a plot: numbers, left of it, centred
+/// within its height.
+fn y_tick_labels(h: &H, rect: egui::Rect) -> Vec<String> {
+    drawn(h)
+        .into_iter()
+        .filter_map(|(_, s)| match s {
+            egui::Shape::Text(t) => {
+                let at = t.galley.rect.translate(t.pos.to_vec2());
+                let text = t.galley.text().to_string();
+                let beside = at.right() <= rect.left() + 8.0
+                    && at.right() >= rect.left() - 80.0
+                    && at.center().y >= rect.top() - 1.0
+                    && at.center().y <= rect.bottom() + 1.0;
+                (beside && text.parse::<f64>().is_ok()).then_some(text)
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn every_plot_labels_at_least_three_y_ticks_at_1024_and_1280_px() {
+    let b = bench();
+    // The battery flat at 12.6 V (it drains far slower than a tenth of a volt in a test).
+    b.sim().set_battery(12.6);
+    for size in [egui::vec2(1024.0, 600.0), egui::vec2(1280.0, 800.0)] {
+        let mut saved = gui::settings(b.path(), "window-cleaner", PanelId::TELEMETRY, Lang::En);
+        saved.port_mut().margin_ms = Some(100);
+        saved.window_secs = 10.0;
+        let mut h = gui::harness_sized(saved, b.ports(), size, |_| {});
+        step_until(&mut h, "samples in every plot", |a| {
+            samples(a) >= 5 && a.panel::<TelemetryPanel>().shown.len() == 2
+        });
+        h.run_steps(3);
+        for i in 0..2 {
+            // A plot below the view (at 600 points the second one is) is scrolled into it.
+            let inside = move |a: &App| {
+                let t = a.panel::<TelemetryPanel>();
+                t.plots_view.expand(1.0).contains_rect(t.shown[i].rect)
+            };
+            let over = app(&h).panel::<TelemetryPanel>().plots_view.center();
+            for _ in 0..8 {
+                if inside(app(&h)) {
+                    break;
+                }
+                h.hover_at(over);
+                h.event(egui::Event::MouseWheel {
+                    unit: egui::MouseWheelUnit::Point,
+                    delta: egui::vec2(0.0, -200.0),
+                    phase: egui::TouchPhase::Move,
+                    source: egui::MouseWheelSource::Unknown,
+                    modifiers: egui::Modifiers::NONE,
+                });
+                h.run_steps(3);
+            }
+            h.hover_at(egui::pos2(1.0, 1.0));
+            h.run_steps(2);
+            let s = app(&h).panel::<TelemetryPanel>().shown[i].clone();
+            assert!(inside(app(&h)), "{}: scrolled into view", s.id);
+            let ticks = y_tick_labels(&h, s.rect);
+            assert!(
+                ticks.len() >= 3,
+                "{}×{}: {} plot ({:?} over {:.0} points) labels {ticks:?}",
+                size.x,
+                size.y,
+                s.id,
+                s.y,
+                s.rect.height()
+            );
+        }
+    }
+}
+
+#[test]
+fn a_trace_resumed_after_a_gap_is_lines_that_never_cross_it_and_nothing_filled() {
+    let b = bench();
+    // 600 s across the plot: many samples a pixel, where egui_plot merged points into bands.
+    let mut h = telemetry(&b, Lang::En);
+    step_until(&mut h, "samples", |a| {
+        samples(a) >= 20 && !a.panel::<TelemetryPanel>().shown.is_empty()
+    });
+    h.get_by_label("Pause").click();
+    h.run_steps(2);
+    let paused = app(&h).station().device.t0.elapsed().as_secs_f64();
+    step_until(&mut h, "two seconds paused", |a| {
+        a.station().device.t0.elapsed().as_secs_f64() > paused + 2.0
+    });
+    let n = samples(app(&h));
+    h.get_by_label("Resume").click();
+    step_until(&mut h, "samples after the gap", |a| samples(a) >= n + 20);
+    h.run_steps(3);
+    let a = app(&h);
+    let shapes = drawn(&h);
+    let mut lines = 0;
+    for s in &a.panel::<TelemetryPanel>().shown {
+        let plot = a
+            .station()
+            .device
+            .profile
+            .plots
+            .iter()
+            .find(|p| p.id == s.id);
+        let set = a.station().device.plots.get(&s.id).unwrap();
+        let breaks: Vec<f64> = set.breaks().collect();
+        assert!(!breaks.is_empty(), "{}: the pause is a gap", s.id);
+        let time =
+            |x: f32| s.x.0 + f64::from((x - s.rect.left()) / s.rect.width()) * (s.x.1 - s.x.0);
+        let half_px = (s.x.1 - s.x.0) / f64::from(s.rect.width()) / 2.0;
+        let colours: Vec<egui::Color32> = (0..plot.unwrap().fields.len())
+            .map(botbench::ui::plot::color)
+            .collect();
+        let over_data = |clip: &egui::Rect| {
+            clip.min.distance(s.rect.min) < 1.0 && clip.max.distance(s.rect.max) < 1.0
+        };
+        for (clip, shape) in shapes.iter().filter(|(clip, _)| over_data(clip)) {
+            let trace = |p: &egui::epaint::PathShape| matches!(&p.stroke.color, egui::epaint::ColorMode::Solid(c) if colours.contains(c));
+            match shape {
+                egui::Shape::Band(_) | egui::Shape::Mesh(_) => {
+                    panic!("{}: a filled shape over the data at {clip:?}", s.id)
+                }
+                egui::Shape::Path(p) if trace(p) => {
+                    lines += 1;
+                    for w in p.points.windows(2) {
+                        let (ta, tb) = (time(w[0].x), time(w[1].x));
+                        for g in &breaks {
+                            assert!(
+                                !(ta + half_px < *g && *g < tb - half_px),
+                                "{}: a segment from {ta:.2} s to {tb:.2} s joins across the gap at {g:.2} s",
+                                s.id
+                            );
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    assert!(lines >= 4, "each trace drawn in stretches: {lines} lines");
+}

@@ -113,6 +113,19 @@ pub enum StepKind {
 }
 
 impl StepKind {
+    /// The command the step reads (its canonical ident).
+    pub fn command(&self) -> &str {
+        match self {
+            StepKind::Range { command, .. }
+            | StepKind::Stable { command, .. }
+            | StepKind::Rises { command, .. }
+            | StepKind::Operator { command, .. }
+            | StepKind::Reads { command, .. } => command,
+        }
+    }
+}
+
+impl StepKind {
     /// `Range`, `Stable`, `Rises`, `Operator` or `Reads`.
     pub fn name(&self) -> &'static str {
         match self {

@@ -169,7 +169,11 @@ fn run_steps(
         run.report(Progress {
             done: i as u64 + 1,
             total,
-            message: crate::i18n::Text::same(&step.name),
+            // The plan's own Chinese name for the step, where it gives one.
+            message: crate::i18n::Text::new(
+                &step.name,
+                plan.said(&step.name, crate::i18n::Lang::Zh),
+            ),
         });
         let clock = crate::ops::records::StepClock::start();
         let mut measured = Vec::new();

@@ -29,20 +29,31 @@ pub(super) fn show(ui: &mut egui::Ui, settings: &Settings, station: &Station) ->
         .exact_size(width(ui, panels))
         .show(ui, |ui| {
             ui.add_space(4.0);
-            ui.scope(|ui| {
-                layout::keep_words_whole(ui);
-                for id in panels.shown(station) {
-                    let Some(panel) = panels.find(id) else {
-                        continue;
-                    };
-                    if ui
-                        .selectable_label(settings.panel == id, panel.name(lang))
-                        .clicked()
-                    {
-                        actions.push(Action::ShowPanel(id));
+            // The list scrolls where the window is too low for it and STOP below it (a small
+            // screen, or a scale factor of 2): STOP stays whole in view.
+            let line = ui.text_style_height(&egui::TextStyle::Body) + ui.spacing().item_spacing.y;
+            let below = if station.device.profile.stop.is_empty() {
+                0.0
+            } else {
+                stop::BUTTON_HEIGHT + 2.0 * line + 4.0 * ui.spacing().item_spacing.y
+            };
+            egui::ScrollArea::vertical()
+                .id_salt("nav-list")
+                .max_height((ui.available_height() - below).max(line))
+                .show(ui, |ui| {
+                    layout::keep_words_whole(ui);
+                    for id in panels.shown(station) {
+                        let Some(panel) = panels.find(id) else {
+                            continue;
+                        };
+                        if ui
+                            .selectable_label(settings.panel == id, panel.name(lang))
+                            .clicked()
+                        {
+                            actions.push(Action::ShowPanel(id));
+                        }
                     }
-                }
-            });
+                });
             // STOP is on every panel of a robot whose profile names one (a panel that shows
             // its own, the solar one, at the top, leaves this one out), with what the robot
             // may be doing.

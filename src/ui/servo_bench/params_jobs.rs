@@ -28,7 +28,10 @@ pub(super) fn read_all_job(rt: &Station, servo: Servo) -> Action {
                 Err(JobError::Incomplete {
                     failed,
                     total,
-                    what: format!("parameter(s) of servo {} not read", servo.id),
+                    what: Text::new(
+                        format!("parameter(s) of servo {} not read", servo.id),
+                        format!("舵机 {} 的参数未能读取", servo.id),
+                    ),
                 })
             }
         },
@@ -93,7 +96,7 @@ pub(super) fn write_job(rt: &Station, servo: Servo, values: Vec<(u8, i64)>) -> A
                 Err(JobError::Incomplete {
                     failed: bad,
                     total: n,
-                    what: "parameter(s) not verified".into(),
+                    what: Text::new("parameter(s) not verified", "参数未通过校验"),
                 })
             }
         },
@@ -124,7 +127,7 @@ pub(super) fn block_job(rt: &Station, servo: Servo, values: Vec<(u8, i64)>) -> A
                         Err(JobError::Incomplete {
                             failed: bad,
                             total,
-                            what: "value(s) of the block not verified".into(),
+                            what: Text::new("value(s) of the block not verified", "参数块中的值未通过校验"),
                         })
                     }
                 }

@@ -216,11 +216,11 @@ impl SolarPanel {
                 .allow_scroll(false)
                 .show(ui, |pui| {
                     pui.set_plot_bounds_x(now - WINDOW_SECS..=now);
-                    pui.set_auto_bounds([false, true]);
-                    if let Some(set) = set {
-                        let x = (now - WINDOW_SECS, now);
-                        plot::lines(pui, set, &p.fields, &legend, x, width_px, scratch);
-                    }
+                    let x = (now - WINDOW_SECS, now);
+                    let extent = set.and_then(|set| {
+                        plot::lines(pui, set, &p.fields, &legend, x, width_px, scratch)
+                    });
+                    plot::fit_y(pui, extent, legend.integer);
                 });
             self.plot_width = resp.response.rect.width();
         }
@@ -342,25 +342,13 @@ impl SolarPanel {
         let Some((id, inputs)) = &self.confirm else {
             return;
         };
-        let name = rt
-            .device
-            .profile
-            .command_by_id(*id)
-            .map_or(String::new(), |c| {
-                lang.tr(&c.name.en, &c.name.zh).to_string()
-            });
-        let what = inputs
-            .iter()
-            .map(|(k, v)| match v {
-                Input::Text(t) => format!("{k}={t}"),
-                Input::Raw(r) => format!("{k}={r:?}"),
-            })
-            .collect::<Vec<_>>()
-            .join(", ");
+        let cmd = rt.device.profile.command_by_id(*id);
+        let name = cmd.map_or(String::new(), |c| c.name.get(lang).to_string());
+        let what = super::confirm::inputs_said(cmd, inputs, lang);
         let mut decision = None;
         let modal = egui::Modal::new(egui::Id::unique("solar-confirm")).show(ui.ctx(), |ui| {
             ui.heading(lang.tr("The robot will move", "机器人将会动作"));
-            ui.label(format!("{name}: {what}"));
+            ui.label(format!("{name}{}{what}", lang.tr(" — ", "——")));
             ui.label(lang.tr(
                 "Make sure it is safe, then confirm. STOP stays available.",
                 "请确认安全后再执行。停止按钮始终可用。",

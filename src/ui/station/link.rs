@@ -25,10 +25,16 @@ impl Target {
         }
     }
 
-    /// [`Self::label`] in `lang`.
+    /// [`Self::label`] in `lang`: a built-in demo device by its Chinese name in 中文
+    /// (`内置模拟擦窗机器人`), by its simulator's name when it is none botbench has.
     pub fn label_in(&self, lang: crate::i18n::Lang) -> String {
         match (self, lang) {
-            (Target::Demo(kind), crate::i18n::Lang::Zh) => format!("内置模拟设备 {kind}"),
+            (Target::Demo(kind), crate::i18n::Lang::Zh) => {
+                match kind.parse::<crate::sim::SimKind>() {
+                    Ok(k) => format!("内置{}", k.described().zh),
+                    Err(_) => format!("内置模拟设备 {kind}"),
+                }
+            }
             _ => self.label(),
         }
     }
@@ -221,7 +227,9 @@ mod tests {
             assert_eq!(said.en, kind.describe());
             assert!(said.zh.starts_with("模拟"), "{}", said.zh);
             assert!(!said.zh.contains("simulated"));
-            assert!(t.label_in(Lang::Zh).starts_with("内置模拟设备"));
+            let zh = t.label_in(Lang::Zh);
+            assert!(zh.starts_with("内置模拟"), "{zh}");
+            assert!(!zh.contains(kind.name()), "{zh}");
         }
         let port = Target::Port("/dev/ttyUSB0".into());
         assert_eq!(port.port_said("/dev/ttyUSB0").zh, "/dev/ttyUSB0");

@@ -9,6 +9,7 @@ use crate::ops::tuya::conform::{self, Check, Conformance, Grade};
 use crate::ops::{Device, Progress, Run};
 use crate::ui::files;
 use crate::ui::jobs::{Job, JobError};
+use crate::ui::zh::Zh;
 use eframe::egui;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -70,16 +71,23 @@ fn work(profile: Arc<crate::profile::Profile>, records: crate::ui::records::Reco
             let kept = recorded.kept;
             result
                 .map(|c| {
-                    let verdict = if c.pass() { "CONFORMS" } else { "DOES NOT CONFORM" };
+                    let (verdict, zh) = if c.pass() {
+                        ("CONFORMS", "符合协议")
+                    } else {
+                        ("DOES NOT CONFORM", "不符合协议")
+                    };
                     let summary = Text::new(
                         format!("{verdict} ({} checks, {:.1} s)", c.checks.len(), c.seconds),
-                        format!("{verdict}({} 项检查,{:.1} 秒)", c.checks.len(), c.seconds),
+                        format!("{zh}({} 项检查,{:.1} 秒)", c.checks.len(), c.seconds),
                     );
                     crate::ui::records::with_note(summary, &kept)
                 })
-                .map_err(|e| match crate::ui::records::note_en(&kept) {
-                    note if note.is_empty() => e,
-                    note => JobError::Failed(format!("{e}{note}")),
+                .map_err(|e| {
+                    if kept.stored() {
+                        e
+                    } else {
+                        JobError::Failed(crate::ui::records::with_note(e.said(), &kept))
+                    }
                 })
         },
     )
@@ -212,7 +220,12 @@ fn verdict(ui: &mut egui::Ui, lang: Lang, result: Option<&Result<Conformance, Jo
         Some(Err(e)) => {
             ui.colored_label(
                 egui::Color32::RED,
-                format!("× {}: {e}", lang.tr("The grade did not finish", "评定未完成")),
+                format!(
+                    "× {}{}{}",
+                    lang.tr("The grade did not finish", "评定未完成"),
+                    lang.tr(": ", ":"),
+                    e.in_lang(lang)
+                ),
             );
         }
         None => {}

@@ -11,6 +11,7 @@ use crate::ops::OpError;
 use crate::ops::tuya::{self as ops, ReportedDp};
 use crate::profile::{Access, DataPointDef, Value};
 use crate::protocol::tuya::dp::DpType;
+use crate::ui::zh::Zh;
 use eframe::egui;
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
@@ -250,7 +251,7 @@ impl DpView {
         let f = &def.field;
         let name = ui
             .label(format!("{} {}", def.id, lang.tr(&f.name.en, &f.name.zh)))
-            .on_hover_text(format!("{} ({})", f.ident, def.dp_type.name()));
+            .on_hover_text(format!("{} ({})", f.ident, crate::ui::zh::dp_type(def.dp_type, lang)));
         let reported = rt.device.tuya.dps.get(&def.id);
         let misfit = rt.device.tuya.misfits.get(&def.id);
         match (misfit, reported) {
@@ -478,12 +479,13 @@ impl DpView {
             .show(ui, |ui| {
                 for l in lines {
                     let item = &l.item;
-                    let ident = item.ident.as_deref().unwrap_or("?");
-                    let fits = rt
-                        .device
-                        .profile
-                        .data_point(item.id)
-                        .zip(item.value.as_ref());
+                    let def = rt.device.profile.data_point(item.id);
+                    // By the profile's name in the window's language; as reported without one.
+                    let ident = def.map_or_else(
+                        || item.ident.clone().unwrap_or_else(|| "?".into()),
+                        |d| d.field.name.get(lang).to_string(),
+                    );
+                    let fits = def.zip(item.value.as_ref());
                     match (fits, &item.misfit) {
                         (Some((def, v)), None) => {
                             ui.monospace(format!(
@@ -555,7 +557,7 @@ fn since_query(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     let missing: Vec<String> = ids
         .iter()
         .filter(|d| !came(d.id))
-        .map(|d| format!("{} {}", d.id, d.field.ident))
+        .map(|d| format!("{} {}", d.id, d.field.name.get(lang)))
         .collect();
     let heard = ids.len() - missing.len();
     let text = format!(
@@ -588,7 +590,7 @@ fn unknown(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     ));
     egui::Grid::new("tuya-unknown-dps").striped(true).show(ui, |ui| {
         for (d, t) in tuya.unknown_dps.values() {
-            let ty = DpType::from_byte(d.wire_type).map_or_else(|| format!("{:#04x}", d.wire_type), |t| t.name().to_string());
+            let ty = DpType::from_byte(d.wire_type).map_or_else(|| format!("{:#04x}", d.wire_type), |t| crate::ui::zh::dp_type(t, lang).to_string());
             ui.label(format!("dp {}", d.id));
             ui.monospace(format!("{ty}, {} B", d.raw.len()));
             ui.monospace(d.shown(&rt.device.profile));
@@ -600,10 +602,9 @@ fn unknown(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
 
 /// A report that does not fit the profile: its raw bytes and the mismatch.
 fn misfit_text(lang: Lang, m: &ReportedDp) -> String {
-    let why = m
-        .misfit
-        .as_ref()
-        .map_or_else(String::new, |e| format!(": {e}"));
+    let why = m.misfit.as_ref().map_or_else(String::new, |e| {
+        format!("{}{}", lang.tr(": ", ":"), e.in_lang(lang))
+    });
     format!(
         "{} {}{why}",
         lang.tr("raw", "原始字节"),

@@ -20,6 +20,8 @@ use eframe::egui;
 use std::path::PathBuf;
 use std::time::Duration;
 
+pub mod said;
+
 /// The plan offered first, relative to the working folder, until the app puts the shipped
 /// plan's own path there ([`files::shipped_in`]).
 pub const DEFAULT_PLAN: &str = "presets/window-cleaner-selftest.ron";
@@ -147,6 +149,21 @@ pub fn bounds(kind: &StepKind, profile: &Profile, lang: Lang) -> String {
             .collect::<Vec<_>>()
             .join(", "),
     }
+}
+
+/// Why a run of `plan` ended early (`step 'Fan current': ...`), in `lang`: its step by the
+/// plan's name for it, the detail by [`said::detail`] with that step's command.
+fn said_aborted(plan: &Plan, profile: &Profile, text: &str, lang: Lang) -> String {
+    let step = plan
+        .steps
+        .iter()
+        .find(|s| text.starts_with(&format!("step '{}'", s.name)));
+    let Some(step) = step else {
+        return said::detail(text, None, lang);
+    };
+    let quoted = format!("'{}'", step.name);
+    let named = text.replacen(&quoted, &format!("'{}'", plan.said(&step.name, lang)), 1);
+    said::detail(&named, profile.command(step.kind.command()), lang)
 }
 
 /// A command's name in `lang` (its wire name when the profile has no such command).
@@ -288,22 +305,27 @@ impl SelfTestPanel {
                     .export
                     .map(|r| r.map(|()| log.clone()).map_err(|e| LogError::new(&log, &e)));
                 let pass = report.pass;
-                let failed: Vec<String> = report.failed().map(|r| r.name.clone()).collect();
-                let aborted = report.aborted.clone();
+                let failed = |lang: Lang| -> String {
+                    let names: Vec<&str> = report.failed().map(|r| plan.said(&r.name, lang)).collect();
+                    names.join(", ")
+                };
+                let why = match &report.aborted {
+                    Some(a) => Text::new(
+                        a.clone(),
+                        said_aborted(&plan, &profile, a, Lang::Zh),
+                    ),
+                    None => Text::new(failed(Lang::En), failed(Lang::Zh)),
+                };
                 let results = report.results.clone();
                 sink.send(JobOutput::Verdict(Verdict::SelfTest(Box::new(report))));
                 sink.panel(Output::Done(results, logged.clone()));
                 if let Some(Err(e)) = logged {
                     return Err(e.into());
                 }
-                let note = crate::ui::records::note_en(&kept);
-                match (pass, aborted) {
-                    (true, _) => Ok(crate::ui::records::with_note(
-                        Text::new("PASS", "合格"),
-                        &kept,
-                    )),
-                    (false, Some(a)) => Err(JobError::Failed(a + &note)),
-                    (false, None) => Err(JobError::Failed(failed.join(", ") + &note)),
+                if pass {
+                    Ok(crate::ui::records::with_note(Text::new("PASS", "合格"), &kept))
+                } else {
+                    Err(JobError::Failed(crate::ui::records::with_note(why, &kept)))
                 }
             },
         )))
@@ -391,8 +413,9 @@ impl SelfTestPanel {
             ui.colored_label(
                 egui::Color32::RED,
                 format!(
-                    "{}\n{e}",
-                    lang.tr("The plan was refused:", "测试方案被拒绝:")
+                    "{}\n{}",
+                    lang.tr("The plan was refused:", "测试方案被拒绝:"),
+                    e.in_lang(lang)
                 ),
             );
         }
@@ -491,20 +514,33 @@ impl SelfTestPanel {
                         }
                     }
                     (None, Some(a)) => {
-                        let line = format!("{} {a}", lang.tr("Ended early:", "提前结束:"));
+                        let line = format!(
+                            "{} {}",
+                            lang.tr("Ended early:", "提前结束:"),
+                            self.aborted(a, rt, lang)
+                        );
                         ui.label(white(line));
                     }
                     (None, None) => {}
                 }
             });
         if let Some(d) = &report.device {
-            ui.monospace(format!("{} {d}", lang.tr("Device:", "设备:")));
+            ui.monospace(format!(
+                "{} {}",
+                lang.tr("Device:", "设备:"),
+                said::device(d, lang)
+            ));
         }
         if !report.safe_state.is_empty() {
+            let lines: Vec<String> = report
+                .safe_state
+                .iter()
+                .map(|l| said::detail(l, None, lang))
+                .collect();
             ui.weak(format!(
                 "{} {}",
                 lang.tr("Started from the safe state:", "从安全状态开始:"),
-                report.safe_state.join("; ")
+                lines.join("; ")
             ));
         }
         match &self.logged {
@@ -523,6 +559,14 @@ impl SelfTestPanel {
             }
         }
         dismissed.then_some(Action::DismissVerdicts)
+    }
+
+    /// Why the run shown ended early, in `lang` ([`said_aborted`]).
+    fn aborted(&self, text: &str, rt: &Station, lang: Lang) -> String {
+        match &self.plan {
+            Some(plan) => said_aborted(plan, &rt.device.profile, text, lang),
+            None => said::detail(text, None, lang),
+        }
     }
 
     fn table(&self, ui: &mut egui::Ui, lang: Lang, rt: &Station) {
@@ -555,10 +599,12 @@ impl SelfTestPanel {
                         ], |ui| {
                     // The identity step appears only when it failed.
                     for r in self.results.iter().filter(|r| r.kind == "Identify") {
-                        words(ui, w_check, &r.name, |t| t);
+                        let (en, zh) = said::IDENTITY_STEP;
+                        words(ui, w_check, lang.tr(en, zh), |t| t);
                         words(ui, w_reads, "CMD_VERSION", |t| t);
                         words(ui, w_bounds, "—", |t| t);
-                        cell(ui, r.detail.as_str().into());
+                        let cmd = profile.command("CMD_VERSION");
+                        cell(ui, said::detail(&r.detail, cmd, lang).into());
                         ui.colored_label(egui::Color32::RED, "FAIL");
                         ui.end_row();
                     }
@@ -571,11 +617,13 @@ impl SelfTestPanel {
                         });
                         match self.results.iter().find(|r| r.name == step.name) {
                             Some(r) if r.interrupted.is_some() => {
-                                cell(ui, r.detail.as_str().into());
+                                let cmd = profile.command(step.kind.command());
+                                cell(ui, said::detail(&r.detail, cmd, lang).into());
                                 ui.colored_label(AMBER, lang.tr("interrupted", "中断"));
                             }
                             Some(r) => {
-                                cell(ui, r.detail.as_str().into());
+                                let cmd = profile.command(step.kind.command());
+                                cell(ui, said::detail(&r.detail, cmd, lang).into());
                                 if r.pass {
                                     ui.colored_label(egui::Color32::from_rgb(0, 140, 60), "PASS");
                                 } else {
