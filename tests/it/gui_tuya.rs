@@ -489,9 +489,9 @@ fn an_empty_or_missing_firmware_file_is_refused_with_a_clear_message() {
     assert_eq!(*b.sim().ota_state(), OtaState::Idle);
 }
 
-#[test]
-fn an_update_can_be_cancelled_and_says_where_it_stopped() {
-    let (_dir, b, mut h) = update_asked(&image(65_536));
+/// A 64 KiB update asked for, confirmed, and under way (its first KiB acked).
+fn update_under_way() -> (tempfile::TempDir, Bench, H) {
+    let (dir, b, mut h) = update_asked(&image(65_536));
     h.get_by_label("Update").click();
     step_until(&mut h, "some progress", |a| {
         a.panel::<TuyaConsolePanel>()
@@ -500,21 +500,32 @@ fn an_update_can_be_cancelled_and_says_where_it_stopped() {
             .as_ref()
             .is_some_and(|p| p.done >= 1024)
     });
+    (dir, b, h)
+}
+
+/// Waits for the update to end, and returns why it failed.
+fn update_error(h: &mut H) -> botbench::ui::jobs::JobError {
+    step_until(h, "the update to end", |a| {
+        a.panel::<TuyaConsolePanel>().ota.result.is_some()
+    });
+    app(h)
+        .panel::<TuyaConsolePanel>()
+        .ota
+        .result
+        .clone()
+        .expect("ended")
+        .expect_err("failed")
+}
+
+#[test]
+fn an_update_can_be_cancelled_and_says_where_it_stopped() {
+    let (_dir, b, mut h) = update_under_way();
     h.run_steps(1);
     assert!(has_label(&h, "B/s"), "the rate is shown");
     assert!(has_label(&h, "left"), "the time left is shown");
     assert!(has_label(&h, "packets of 256 bytes (asked by the MCU)"));
     h.get_by_label("Cancel update").click();
-    step_until(&mut h, "the update to end", |a| {
-        a.panel::<TuyaConsolePanel>().ota.result.is_some()
-    });
-    let err = app(&h)
-        .panel::<TuyaConsolePanel>()
-        .ota
-        .result
-        .clone()
-        .unwrap()
-        .unwrap_err();
+    let err = update_error(&mut h);
     assert!(err.to_string().contains("cancelled after offset"), "{err}");
     assert!(!matches!(b.sim().ota_state(), OtaState::Complete { .. }));
 }
@@ -524,27 +535,10 @@ fn an_update_can_be_cancelled_and_says_where_it_stopped() {
 /// item 6).
 #[test]
 fn a_port_lost_during_an_update_is_said_as_a_lost_link_until_dismissed() {
-    let (_dir, b, mut h) = update_asked(&image(65_536));
-    h.get_by_label("Update").click();
-    step_until(&mut h, "some progress", |a| {
-        a.panel::<TuyaConsolePanel>()
-            .ota
-            .progress
-            .as_ref()
-            .is_some_and(|p| p.done >= 1024)
-    });
+    let (_dir, b, mut h) = update_under_way();
     b.server.vanish_handle().vanish();
-    step_until(&mut h, "the update to end", |a| {
-        a.panel::<TuyaConsolePanel>().ota.result.is_some()
-    });
+    let err = update_error(&mut h);
     h.run_steps(2);
-    let err = app(&h)
-        .panel::<TuyaConsolePanel>()
-        .ota
-        .result
-        .clone()
-        .unwrap()
-        .unwrap_err();
     assert!(
         err.to_string()
             .starts_with("link lost during the update, after offset"),

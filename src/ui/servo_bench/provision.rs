@@ -224,15 +224,13 @@ impl ProvisionPanel {
             // The job ended without a record (it could not start): the status line says why.
             self.running = false;
         }
-        match self.history.last() {
-            _ if self.running => {
-                ui.label(lang.tr("Provisioning this servo…", "正在烧录本舵机…"));
-            }
-            Some(last) if !self.dismissed && banner(ui, lang, last) => {
-                self.dismissed = true;
-                actions.push(Action::DismissVerdicts);
-            }
-            _ => {}
+        if self.running {
+            ui.label(lang.tr("Provisioning this servo…", "正在烧录本舵机…"));
+        } else if let Some(last) = self.history.last().filter(|_| !self.dismissed)
+            && banner(ui, lang, last)
+        {
+            self.dismissed = true;
+            actions.push(Action::DismissVerdicts);
         }
         if !self.history.is_empty() {
             ui.add_space(6.0);
