@@ -61,9 +61,13 @@ impl Events {
             LinkEvent::Tuya(TuyaEvent::Step {
                 step,
                 result: StepResult::Failed(e),
+                at,
+                took,
             }) => LinkEvent::Tuya(TuyaEvent::Step {
                 step,
                 result: StepResult::Failed(e.named(&self.profile)),
+                at,
+                took,
             }),
             ev => ev,
         }
