@@ -238,7 +238,7 @@ fn sent_dp_commands(a: &App) -> usize {
         .packets
         .entries
         .iter()
-        .map(|l| &l.entry)
+        .filter_map(|l| l.frame())
         .filter(|e| {
             e.direction == botbench::protocol::Direction::HostToDevice
                 && e.frame.as_ref().is_ok_and(|p| p.command == 0x06)

@@ -144,6 +144,7 @@ fn kind(ev: &LinkEvent) -> &'static str {
         LinkEvent::Telemetry { .. } => "telemetry",
         LinkEvent::Report(_) => "report",
         LinkEvent::Frame(_) => "frame",
+        LinkEvent::NoAnswer(_) => "no answer",
         LinkEvent::Identified(_) => "identified",
         LinkEvent::Tuya(_) => "tuya",
         LinkEvent::Device(_) => "device",
