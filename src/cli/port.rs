@@ -2,6 +2,8 @@
 
 use super::{CliError, checks, registry};
 use crate::capture::{Capture, CaptureInfo};
+use crate::i18n::Text;
+use crate::link::silent::{self, SettingNames};
 use crate::link::{DeviceInfo, ExchangeError, LineLevel, Link, LinkOptions, PortOpener, PortSetup};
 use crate::ops::{Check, OpError};
 use crate::profile::{Field, Profile, Protocol};
@@ -249,24 +251,23 @@ pub(crate) fn exchange_error(e: ExchangeError) -> CliError {
 /// The exit code of an operation the operator cancelled (Ctrl-C), as shells give SIGINT.
 pub(crate) const EXIT_CANCELLED: u8 = 130;
 
-/// What to check when a device never answers.
-const SILENT_HINT: &str = "; nothing answered: is the device powered, its TX wired to the \
-     adapter's RX (and RX to TX, GND to GND), at this baud rate (--baud) and with this profile \
-     (--profile)?";
+/// The settings the silent-device checklist names, as the command line names them: its options.
+fn option_names() -> SettingNames {
+    SettingNames {
+        baud: Text::same("--baud"),
+        profile: Text::same("--profile"),
+        boot_wait: Text::same("--boot-wait-ms 2000"),
+        lines: Text::same("--dtr off --rts off (or on)"),
+    }
+}
 
-/// What to check when a device never answers: [`SILENT_HINT`], and, when this run opened its
-/// port with no boot wait, a board that reboots on open.
+/// What to check when a device never answers (the link's [`silent::checklist`], naming the
+/// options), after `; `: a board that reboots on open too when this run opened its port with no
+/// boot wait.
 pub(crate) fn silent_hint() -> String {
     let waited = super::console::with(|c| c.boot_wait_ms).is_some_and(|ms| ms > 0);
-    if waited {
-        SILENT_HINT.to_string()
-    } else {
-        format!(
-            "{SILENT_HINT} Or is it a board that reboots when the port opens (its USB adapter \
-             toggles DTR/RTS)? Give it time with --boot-wait-ms 2000, or set the lines \
-             right after the open: --dtr off --rts off (or on)."
-        )
-    }
+    let checks = silent::SilentCheck::list(waited);
+    format!("; {}", silent::checklist(&checks, &option_names()).en)
 }
 
 /// Prints read-back checks; returns exit code 1 if any mismatched.
@@ -392,4 +393,31 @@ fn remembered_port() -> Option<&'static str> {
             _ => None,
         })
         .as_deref()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The checklist moved down to the link (issue 25, item 10); the command line says it word
+    /// for word as before, with and without a boot wait given.
+    #[test]
+    fn the_silent_checklist_reads_as_the_command_line_always_said_it() {
+        let said = |waited| {
+            let checks = silent::SilentCheck::list(waited);
+            format!("; {}", silent::checklist(&checks, &option_names()).en)
+        };
+        let hint = "; nothing answered: is the device powered, its TX wired to the adapter's RX \
+                    (and RX to TX, GND to GND), at this baud rate (--baud) and with this profile \
+                    (--profile)?";
+        assert_eq!(said(true), hint);
+        assert_eq!(
+            said(false),
+            format!(
+                "{hint} Or is it a board that reboots when the port opens (its USB adapter \
+                 toggles DTR/RTS)? Give it time with --boot-wait-ms 2000, or set the lines right \
+                 after the open: --dtr off --rts off (or on)."
+            )
+        );
+    }
 }

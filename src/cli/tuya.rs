@@ -82,7 +82,7 @@ impl HandshakeWatch {
     /// Takes an event; a step's result is printed when `show`.
     fn on_event(&mut self, ev: &TuyaEvent, show: bool, json: bool) {
         match ev {
-            TuyaEvent::Step { step, result } => {
+            TuyaEvent::Step { step, result, .. } => {
                 let ok = result.ok();
                 if json && show {
                     outln!(
@@ -358,7 +358,12 @@ mod tests {
                 waited_ms: 300,
             })
         };
-        TuyaEvent::Step { step, result }
+        TuyaEvent::Step {
+            step,
+            result,
+            at: std::time::SystemTime::now(),
+            took: None,
+        }
     }
 
     #[test]

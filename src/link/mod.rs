@@ -8,6 +8,7 @@ pub mod lines;
 pub mod request;
 pub mod serial;
 pub mod session;
+pub mod silent;
 pub mod transport;
 pub mod watch;
 mod worker;
@@ -199,6 +200,22 @@ pub struct LogEntry {
     pub note: Option<String>,
 }
 
+/// A request's attempt that went unanswered in its window (no frame came for it), for the
+/// packet monitor: typed here, put in words by whoever shows it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NoAnswer {
+    /// When its window ended, on the wall clock.
+    pub at: SystemTime,
+    /// The request's command.
+    pub command: u8,
+    /// Which attempt this was, from 1.
+    pub attempt: u8,
+    /// The attempts the request is given.
+    pub attempts: u8,
+    /// How long its answer was waited for, from when it was written.
+    pub waited: Duration,
+}
+
 /// Counters for the status bar.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LinkStats {
@@ -287,6 +304,9 @@ pub enum LinkEvent {
     Report(Packet),
     /// A frame for the packet monitor.
     Frame(LogEntry),
+    /// A request's attempt that no frame answered in its window (each attempt, polls too; a
+    /// sweep's requests, such as a scan's, are not said one by one), for the packet monitor.
+    NoAnswer(NoAnswer),
     /// MSP: the device identified itself (CMD_VERSION, then CMD_BUILD_INFO), once per
     /// connection and again on [`LinkCommand::Identify`], or why it could not.
     Identified(Result<DeviceInfo, ExchangeError>),

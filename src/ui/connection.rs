@@ -4,8 +4,9 @@
 use super::Action;
 use super::settings::{PortSettings, Settings};
 use super::station::{Answering, Station, Target};
-use crate::i18n::Lang;
+use crate::i18n::{Key, Lang, Text};
 use crate::link::LinkState;
+use crate::link::silent::{self, SettingNames, SilentCheck};
 use crate::sim::SimKind;
 use eframe::egui;
 
@@ -37,6 +38,10 @@ pub struct ConnectionBar {
     typed_options: super::port_options::Typed,
     /// A path typed by hand (a pseudo-terminal is not listed by the OS).
     typed: String,
+    /// The rate the open port was last seen at ([`Station`]'s link, while connected): when the
+    /// port moves to another rate (a servo's baud change, a search at several rates), the bar
+    /// follows it, unless the technician has picked another rate to reconnect with.
+    port_rate: Option<u32>,
 }
 
 /// A margin this many times the protocol's own is worth a warning: every request that goes
@@ -56,7 +61,28 @@ impl ConnectionBar {
                 Target::Port(p) => p.clone(),
                 Target::Demo(_) => String::new(),
             },
+            port_rate: None,
         }
+    }
+
+    /// Follows the port's rate: when the open port is at another rate than last seen, the bar
+    /// shows it, unless the bar's rate was already another one (the technician picked a rate
+    /// to reconnect with, which is kept). Forgotten when no link is open.
+    fn follow_port(&mut self, rt: &Station) {
+        if rt.link.connection.is_none() {
+            self.port_rate = None;
+            return;
+        }
+        let Some(now) = rt.link.baud() else {
+            return;
+        };
+        if self.port_rate == Some(now) {
+            return;
+        }
+        if self.port_rate.is_none_or(|was| was == self.baud) {
+            self.baud = now;
+        }
+        self.port_rate = Some(now);
     }
 
     /// The profile the bar would connect with.
@@ -89,6 +115,7 @@ impl ConnectionBar {
     pub fn show(&mut self, ui: &mut egui::Ui, saved: &Settings, rt: &Station) -> Vec<Action> {
         let lang = saved.lang;
         let mut actions = Vec::new();
+        self.follow_port(rt);
         // The language switch and the link's badge hold the right end at a fixed width, never
         // wrapped; the settings wrap in the room left, so that a Reconnect appearing, the
         // badge's text changing or the language switching moves nothing else.
@@ -303,9 +330,11 @@ impl ConnectionBar {
         } else if ui.button(lang.tr("Connect", "连接")).clicked() {
             actions.push(connect());
         }
-        let changed = self.target != saved.target
-            || self.profile != saved.profile
-            || self.port() != saved.port_of(&saved.profile);
+        // The rate to compare with is the port's own while it is open (it may have moved).
+        let mut now = saved.port_of(&saved.profile);
+        now.baud = self.port_rate.or(now.baud);
+        let changed =
+            self.target != saved.target || self.profile != saved.profile || self.port() != now;
         // There while connected (enabled once a setting differs), so that nothing moves.
         if open
             && ui
@@ -350,6 +379,39 @@ impl ConnectionBar {
             )
         ));
     }
+}
+
+/// What to check when the device does not answer: the command line's checklist
+/// ([`crate::link::silent`]), naming the window's fields; a board that reboots on open too when
+/// the port was opened with no boot wait.
+pub fn silent_checklist(rt: &Station) -> Text {
+    let options = Text::from(Key::PortOptions);
+    let (dtr, rts, off, on) = (
+        Text::from(Key::Dtr),
+        Text::from(Key::Rts),
+        Text::from(Key::LineOff),
+        Text::from(Key::LineOn),
+    );
+    let names = SettingNames {
+        baud: Text::new("the bar's Baud", "顶栏的“波特率”"),
+        profile: Text::new("the bar's Profile", "顶栏的“设备配置”"),
+        boot_wait: Text::new(
+            format!("{} › {} 2000 ms", options.en, Key::BootWait.en()),
+            format!("{} › {} 2000 ms", options.zh, Key::BootWait.zh()),
+        ),
+        lines: Text::new(
+            format!(
+                "{} › {} {}, {} {} (or {})",
+                options.en, dtr.en, off.en, rts.en, off.en, on.en
+            ),
+            format!(
+                "{} › {}{}、{}{}(或{})",
+                options.zh, dtr.zh, off.zh, rts.zh, off.zh, on.zh
+            ),
+        ),
+    };
+    let waited = !rt.link.options.setup.boot_wait.is_zero();
+    silent::checklist(&SilentCheck::list(waited), &names)
 }
 
 fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
@@ -403,13 +465,18 @@ fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
             egui::Color32::GRAY,
         ),
     };
+    // A silent device's badge tells on hover what to check.
+    let hover = match (rt.link.connected(), rt.link.answering()) {
+        (true, Answering::No(_)) => format!("{text}\n{}", silent_checklist(rt).get(lang)),
+        _ => text.clone(),
+    };
     // A fixed width, on one line: a longer text is cut (whole on hover), never wrapped.
     let size = egui::vec2(BADGE_WIDTH, ui.spacing().interact_size.y);
     let ltr = egui::Layout::left_to_right(egui::Align::Center);
     ui.allocate_ui_with_layout(size, ltr, |ui| {
         ui.set_min_size(size);
         let label = egui::Label::new(egui::RichText::new(&text).color(color)).truncate();
-        ui.add(label).on_hover_text(&text);
+        ui.add(label).on_hover_text(&hover);
     });
 }
 

@@ -3,7 +3,7 @@
 
 use super::Action;
 use super::jobs::Job;
-use super::station::Station;
+use super::station::{Answering, Station};
 use crate::i18n::Lang;
 use crate::i18n::Text;
 use crate::link::{DeviceInfo, LinkCommand, capabilities};
@@ -14,7 +14,7 @@ use crate::profile::Profile;
 use crate::protocol::hex;
 use crate::ui::zh::Zh;
 use eframe::egui;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// The panel's state: what the last replies said.
 #[derive(Default)]
@@ -25,8 +25,6 @@ pub struct DevicePanel {
     pub power: Option<Result<Vec<u8>, OpError>>,
     /// The last version read by this panel (the session's own is the device model's `info`).
     pub version: Option<Result<DeviceInfo, OpError>>,
-    /// When the last answer came.
-    at: Option<Instant>,
     /// The spell the values were read in (the device model's `epoch`): another connection, a
     /// lost link or a device that answers again after silence clears them.
     epoch: Option<u64>,
@@ -134,6 +132,7 @@ impl DevicePanel {
         egui::ScrollArea::vertical()
             .auto_shrink(false)
             .show(ui, |ui| {
+                silent(ui, lang, rt);
                 self.readings(ui, lang);
                 ui.separator();
                 ui.strong(lang.tr("Version", "版本信息"));
@@ -152,14 +151,7 @@ impl DevicePanel {
                         ));
                     }
                 }
-                if let Some(at) = self.at {
-                    ui.weak(format!(
-                        "{} {:.0} {}",
-                        lang.tr("last answer", "上次应答"),
-                        at.elapsed().as_secs_f64(),
-                        lang.tr("s ago", "秒前")
-                    ));
-                }
+                last_answer(ui, lang, rt);
             });
         actions
     }
@@ -248,12 +240,44 @@ impl DevicePanel {
 
     /// Takes what one of its jobs reported.
     fn take_output(&mut self, out: Output) {
-        self.at = Some(Instant::now());
         match out {
             Output::Ping(r) => self.ping = Some(r),
             Output::Version(r) => self.version = Some(r),
             Output::Power(r) => self.power = Some(r),
         }
+    }
+}
+
+/// When the device last answered on the link (any answer: polls, jobs, its own frames), on the
+/// wall clock and how long ago.
+fn last_answer(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
+    if let Some(last) = rt.link.last_answer() {
+        ui.weak(format!(
+            "{} {} ({:.0} {})",
+            lang.tr("last answer", "上次应答"),
+            last.clock.format("%H:%M:%S%.3f"),
+            last.at.elapsed().as_secs_f64(),
+            lang.tr("s ago", "秒前")
+        ));
+        // The seconds ago move on their own.
+        ui.ctx().request_repaint_after(Duration::from_secs(1));
+    }
+}
+
+/// A silent device: what to check (the command line's checklist, in the window's words).
+fn silent(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
+    if let (true, Answering::No(n)) = (rt.connected(), rt.link.answering()) {
+        ui.add_space(6.0);
+        ui.colored_label(
+            egui::Color32::RED,
+            format!(
+                "{} ({n} {})",
+                lang.tr("The device does not answer", "设备无应答"),
+                lang.tr("requests unanswered in a row", "个请求连续未应答")
+            ),
+        );
+        ui.add(egui::Label::new(super::connection::silent_checklist(rt).get(lang)).wrap());
+        ui.separator();
     }
 }
 

@@ -1,6 +1,6 @@
 //! The packet monitor: every frame sent and received, with time, direction, hex and decoded
-//! meaning (command name, fields, errors). Filter by command, pause, copy, save as text to a
-//! typed or chosen file.
+//! meaning (command name, fields, errors), and each request's attempt that went unanswered as a
+//! row of its own. Filter by command, pause, copy, save as text to a typed or chosen file.
 //!
 //! Each frame is decoded with the profile it came under: after a change of device, the earlier
 //! frames keep their commands' names, marked with their profile's id.
@@ -16,7 +16,7 @@ use super::settings::FileKind;
 use super::station::{Notice, Station};
 use crate::i18n::Lang;
 use crate::i18n::Text;
-use crate::link::LogEntry;
+use crate::link::{LogEntry, NoAnswer};
 use crate::profile::Profile;
 use crate::protocol::{Direction, hex};
 use crate::ui::zh::Zh;
@@ -65,18 +65,67 @@ impl Default for MonitorPanel {
     }
 }
 
-/// A frame to show: its sequence number, the profile it is decoded with, the frame.
-type Row<'a> = (u64, &'a Profile, &'a LogEntry);
+/// What a row shows: a frame (live or from a capture file), or an attempt unanswered.
+#[derive(Debug, Clone, Copy)]
+pub enum Shown<'a> {
+    /// A frame sent or received, or a damaged one.
+    Frame(&'a LogEntry),
+    /// A request's attempt that no frame answered.
+    NoAnswer(&'a NoAnswer),
+}
 
-/// One log line: `12:00:01.234 >> ff ff 03 82 00 81  MSP_GET_PWMVALUE`, decoded with `profile`;
-/// a frame of another profile than `current` (the device in use now) is marked with its
-/// profile's id: `[window-cleaner] 12:00:01.234 >> …`.
-pub fn line(current: &Profile, profile: &Profile, e: &LogEntry) -> String {
-    let time = chrono::DateTime::<chrono::Local>::from(e.at).format("%H:%M:%S%.3f");
+impl Shown<'_> {
+    /// When it happened.
+    fn at(&self) -> std::time::SystemTime {
+        match self {
+            Shown::Frame(e) => e.at,
+            Shown::NoAnswer(n) => n.at,
+        }
+    }
+}
+
+impl<'a> From<&'a super::station::LogRow> for Shown<'a> {
+    fn from(row: &'a super::station::LogRow) -> Self {
+        match row {
+            super::station::LogRow::Frame(e) => Shown::Frame(e),
+            super::station::LogRow::NoAnswer(n) => Shown::NoAnswer(n),
+        }
+    }
+}
+
+/// A row to show: its sequence number, the profile it is decoded with, what it shows.
+type Row<'a> = (u64, &'a Profile, Shown<'a>);
+
+/// An unanswered attempt in words: `no answer to MSP_GET_PWMVALUE (0x82) after 25 ms, attempt
+/// 1 of 3`, the command named by `profile`.
+pub fn no_answer_said(profile: &Profile, n: &NoAnswer) -> Text {
+    let name = profile
+        .command_by_id(n.command)
+        .map_or_else(|| format!("command {}", n.command), |c| c.ident.clone());
+    let ms = n.waited.as_millis();
+    let (k, m) = (n.attempt, n.attempts);
+    Text::new(
+        format!("no answer to {name} ({:#04x}) after {ms} ms, attempt {k} of {m}", n.command),
+        format!("{name} ({:#04x}) 无应答,已等待 {ms} ms,第 {k}/{m} 次尝试", n.command),
+    )
+}
+
+/// One log line, in `lang`: `12:00:01.234 >> ff ff 03 82 00 81  MSP_GET_PWMVALUE`, decoded
+/// with `profile`; an unanswered attempt `12:00:01.260 ?? … no answer to MSP_GET_PWMVALUE
+/// (0x82) after 25 ms, attempt 1 of 3`. A row of another profile than `current` (the device in
+/// use now) is marked with its profile's id: `[window-cleaner] 12:00:01.234 >> …`.
+pub fn line(lang: Lang, current: &Profile, profile: &Profile, row: Shown<'_>) -> String {
+    let time = chrono::DateTime::<chrono::Local>::from(row.at()).format("%H:%M:%S%.3f");
     let time = if profile.id == current.id {
         time.to_string()
     } else {
         format!("[{}] {time}", profile.id)
+    };
+    let e = match row {
+        Shown::Frame(e) => e,
+        Shown::NoAnswer(n) => {
+            return format!("{time} ?? {:<40} {}", "", no_answer_said(profile, n).get(lang));
+        }
     };
     match &e.frame {
         Ok(p) => format!(
@@ -99,9 +148,9 @@ pub fn line(current: &Profile, profile: &Profile, e: &LogEntry) -> String {
 /// [`line`] as the window shows it in `lang`: in 中文 a frame's values, its misfit and its
 /// marks are said in Chinese (the wire names and numbers stay; a saved or copied log is
 /// [`line`], in English).
-pub fn line_in(current: &Profile, profile: &Profile, e: &LogEntry, lang: Lang) -> String {
-    let english = line(current, profile, e);
-    let (Lang::Zh, Ok(p)) = (lang, &e.frame) else {
+pub fn line_in(current: &Profile, profile: &Profile, row: Shown<'_>, lang: Lang) -> String {
+    let english = line(lang, current, profile, row);
+    let (Lang::Zh, Shown::Frame(LogEntry { frame: Ok(p), .. })) = (lang, row) else {
         return english;
     };
     let (Some(cmd), Some(d)) = (p.command_in(profile), p.decode_lenient(profile)) else {
@@ -223,22 +272,24 @@ impl MonitorPanel {
         actions
     }
 
-    fn matches(&self, profile: &Profile, e: &LogEntry) -> bool {
-        if self.errors_only && e.frame.is_ok() {
-            return false;
-        }
+    /// Whether a row passes the filter and the errors-only switch (an unanswered attempt
+    /// counts as an error, and is filtered by its request's command).
+    fn matches(&self, profile: &Profile, row: Shown<'_>) -> bool {
+        let command = match row {
+            Shown::Frame(e) if self.errors_only && e.frame.is_ok() => return false,
+            Shown::Frame(e) => e.frame.as_ref().ok().map(|p| p.command),
+            Shown::NoAnswer(n) => Some(n.command),
+        };
         let f = self.filter.trim();
         if f.is_empty() {
             return true;
         }
-        match &e.frame {
-            Ok(p) => {
-                let name = profile
-                    .command_by_id(p.command)
-                    .map_or("", |c| c.ident.as_str());
-                command_matches(f, p.command, name)
+        match command {
+            Some(id) => {
+                let name = profile.command_by_id(id).map_or("", |c| c.ident.as_str());
+                command_matches(f, id, name)
             }
-            Err(_) => false,
+            None => false,
         }
     }
 
@@ -254,16 +305,16 @@ impl MonitorPanel {
                 o.entries.len(),
                 (0u64..)
                     .zip(o.entries.iter())
-                    .map(|(s, e)| (s, &*o.profile, e))
-                    .filter(|(_, p, e)| self.matches(p, e))
+                    .map(|(s, e)| (s, &*o.profile, Shown::Frame(e)))
+                    .filter(|(_, p, e)| self.matches(p, *e))
                     .collect(),
             ),
             None => (
                 rt.device.profile.clone(),
                 log.entries.len(),
                 log.numbered()
-                    .map(|(s, l)| (s, &*l.profile, &l.entry))
-                    .filter(|(_, p, e)| self.matches(p, e))
+                    .map(|(s, l)| (s, &*l.profile, Shown::from(&l.row)))
+                    .filter(|(_, p, e)| self.matches(p, *e))
                     .collect(),
             ),
         };
@@ -289,8 +340,10 @@ impl MonitorPanel {
                 actions.push(Action::ClearPacketLog);
             }
             if ui.button(lang.tr("Copy", "复制")).clicked() {
-                let shown: Vec<String> =
-                    rows.iter().map(|(_, p, e)| line(&profile, p, e)).collect();
+                let shown: Vec<String> = rows
+                    .iter()
+                    .map(|(_, p, e)| line(lang, &profile, p, *e))
+                    .collect();
                 ui.ctx().copy_text(shown.join("\n"));
                 actions.push(Action::Notify(Notice::info(Text::new(
                     format!("{} line(s) copied", shown.len()),
@@ -329,7 +382,7 @@ impl MonitorPanel {
             let save = ui.button(lang.tr("Save", "保存")).clicked();
             if event.go(save, &mut actions) {
                 let port = rt.link.target().map(super::station::Target::label);
-                actions.extend(self.save(&profile, &rows, port.as_deref()));
+                actions.extend(self.save(lang, &profile, &rows, port.as_deref()));
             }
         });
         self.where_the_view_is(ui, lang);
@@ -386,18 +439,9 @@ impl MonitorPanel {
             .scroll_bar_visibility(egui::scroll_area::ScrollBarVisibility::AlwaysVisible)
             .vertical_scroll_offset(offset)
             .show_rows(ui, text_h, rows.len(), |ui, range| {
-                for (_, p, e) in &rows[range] {
-                    let text = line_in(profile, p, e, lang);
-                    let unsolicited = matches!(&e.frame, Ok(p) if matches!(p.header, crate::packet::Header::MspReply { kind: crate::protocol::msp::ReplyKind::Async }));
-                    let color = match (&e.frame, e.direction) {
-                        (Err(_), _) => egui::Color32::RED,
-                        (Ok(_), Direction::HostToDevice) => ui.visuals().text_color(),
-                        // Frames that answer nothing they were sent for: unsolicited, late.
-                        (Ok(_), Direction::DeviceToHost) if unsolicited || e.note.is_some() => {
-                            egui::Color32::from_rgb(220, 150, 0)
-                        }
-                        (Ok(_), Direction::DeviceToHost) => egui::Color32::from_rgb(40, 140, 200),
-                    };
+                for (_, p, row) in &rows[range] {
+                    let text = line_in(profile, p, *row, lang);
+                    let color = row_color(ui, *row);
                     ui.add(
                         egui::Label::new(egui::RichText::new(text).monospace().color(color))
                             .wrap_mode(egui::TextWrapMode::Extend),
@@ -423,8 +467,8 @@ impl MonitorPanel {
         self.behind = match (rows.get(last_in_view.saturating_sub(1)), rows.last()) {
             (Some((_, _, seen)), Some((_, _, newest))) if !self.follow => {
                 let secs = newest
-                    .at
-                    .duration_since(seen.at)
+                    .at()
+                    .duration_since(seen.at())
                     .map_or(0.0, |d| d.as_secs_f64());
                 Some((rows.len() - last_in_view, secs))
             }
@@ -434,7 +478,13 @@ impl MonitorPanel {
 
     /// Writes the rows shown to the typed (or chosen) file.
     /// Saves `rows` as text under a header: when, from which port, decoded with which profile.
-    fn save(&self, profile: &Profile, rows: &[Row<'_>], port: Option<&str>) -> Vec<Action> {
+    fn save(
+        &self,
+        lang: Lang,
+        profile: &Profile,
+        rows: &[Row<'_>],
+        port: Option<&str>,
+    ) -> Vec<Action> {
         let path = self.save_path.trim();
         if path.is_empty() {
             return vec![Action::Notify(Notice::error(Text::new(
@@ -442,7 +492,10 @@ impl MonitorPanel {
                 "保存:请给出文件路径(输入,或点击浏览)",
             )))];
         }
-        let lines: Vec<String> = rows.iter().map(|(_, p, e)| line(profile, p, e)).collect();
+        let lines: Vec<String> = rows
+            .iter()
+            .map(|(_, p, e)| line(lang, profile, p, *e))
+            .collect();
         let text = format!(
             "{}{}\n",
             save_header(profile, port, chrono::Local::now()),
@@ -458,6 +511,24 @@ impl MonitorPanel {
             ],
             Err(e) => vec![Action::Notify(Notice::error(e.said()))],
         }
+    }
+}
+
+/// The colour of a row: sent frames plain, answers blue, frames that answer nothing they were
+/// sent for (unsolicited, late) orange, damaged frames red, unanswered attempts dark orange.
+fn row_color(ui: &egui::Ui, row: Shown<'_>) -> egui::Color32 {
+    let e = match row {
+        Shown::Frame(e) => e,
+        Shown::NoAnswer(_) => return egui::Color32::from_rgb(230, 100, 30),
+    };
+    let unsolicited = matches!(&e.frame, Ok(p) if matches!(p.header, crate::packet::Header::MspReply { kind: crate::protocol::msp::ReplyKind::Async }));
+    match (&e.frame, e.direction) {
+        (Err(_), _) => egui::Color32::RED,
+        (Ok(_), Direction::HostToDevice) => ui.visuals().text_color(),
+        (Ok(_), Direction::DeviceToHost) if unsolicited || e.note.is_some() => {
+            egui::Color32::from_rgb(220, 150, 0)
+        }
+        (Ok(_), Direction::DeviceToHost) => egui::Color32::from_rgb(40, 140, 200),
     }
 }
 

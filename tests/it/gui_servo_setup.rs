@@ -5,6 +5,7 @@
 use botbench::i18n::Lang;
 use botbench::sim::servo_bus::{Motion, SimServo};
 use botbench::ui::servo_bench::ServoBenchPanel;
+use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use std::time::Instant;
 
@@ -223,4 +224,55 @@ fn a_multi_turn_move_shorter_than_its_acceleration_and_deceleration_is_refused_a
         matches!(b.servo(71).motion_at(Instant::now()), Motion::Move { to, .. } if to == 7200.0)
             || b.servo(71).angle_at(Instant::now()) == 7200.0
     });
+}
+
+/// The connection bar's baud rate, as shown.
+fn bar_baud(h: &crate::support::gui::H) -> String {
+    h.get_by(|n| {
+        n.role() == egui::accesskit::Role::ComboBox && n.label().as_deref() == Some("Baud")
+    })
+    .value()
+    .unwrap_or_default()
+}
+
+/// Issue 25, item 10: the top bar's baud is the port's actual rate. A baud change from the ID &
+/// baud tab takes the port to the servo's new rate: the bar shows it (it showed the rate it had
+/// connected with). A rate the technician picked in the bar to reconnect with is theirs: the
+/// port moving again leaves it.
+#[test]
+fn the_top_bars_baud_follows_the_port_to_a_servos_new_rate() {
+    let b = bench(vec![SimServo::fresh(83).with_id(4)]);
+    let mut h = harness(&b, Lang::En);
+    h.run_steps(2);
+    assert_eq!(bar_baud(&h), "115200");
+    scan(&mut h, "4", "4");
+    set_baud(&mut h, "Servo 4", "4 (57600)");
+    step_until(&mut h, "the baud change", |a| {
+        idle(a) && a.panel::<ServoBenchPanel>().setup.message.is_some()
+    });
+    h.run_steps(2);
+    assert_eq!(app(&h).station().link.baud(), Some(57_600));
+    assert_eq!(bar_baud(&h), "57600", "the bar shows the port's rate");
+    let reconnect = h.get_by_label("Reconnect");
+    assert!(
+        egui_kittest::kittest::NodeT::accesskit_node(&reconnect).is_disabled(),
+        "the port is where the bar says: nothing to reconnect"
+    );
+
+    // The technician picks 230400 to reconnect with; the port then moves back to 115200.
+    h.get_by(|n| {
+        n.role() == egui::accesskit::Role::ComboBox && n.label().as_deref() == Some("Baud")
+    })
+    .click();
+    h.run_steps(2);
+    h.get_by_label("230400").click();
+    h.run_steps(2);
+    h.get_by_label("Bus scan").click();
+    h.step();
+    set_baud(&mut h, "Servo 4", "5 (115200)");
+    step_until(&mut h, "the port back at 115200", |a| {
+        idle(a) && a.station().link.baud() == Some(115_200)
+    });
+    h.run_steps(2);
+    assert_eq!(bar_baud(&h), "230400", "the rate picked is kept");
 }

@@ -238,7 +238,7 @@ fn sent_dp_commands(a: &App) -> usize {
         .packets
         .entries
         .iter()
-        .map(|l| &l.entry)
+        .filter_map(|l| l.frame())
         .filter(|e| {
             e.direction == botbench::protocol::Direction::HostToDevice
                 && e.frame.as_ref().is_ok_and(|p| p.command == 0x06)
@@ -603,4 +603,96 @@ fn every_section_renders_in_english_and_chinese() {
         }
     }
     assert!(has_label(&h, "firmware file is empty"));
+}
+
+/// A time as the console shows it.
+fn shown(t: &chrono::DateTime<chrono::Local>) -> String {
+    t.format("%H:%M:%S%.3f").to_string()
+}
+
+/// Issue 25, item 10: each handshake step has its own time (when it ended, as the link saw it)
+/// and how long it took from its request, however late the window takes the news. Here the
+/// window draws no frame until the MCU, answering each request 30 ms late, has been asked the
+/// Wi-Fi state: the first steps' news is read in one frame (before, they all showed that
+/// frame's time).
+#[test]
+fn each_handshake_step_shows_its_own_time_and_how_long_it_took() {
+    let latency = Duration::from_millis(30);
+    let b = bench_with(
+        TuyaMcu::new(TuyaConfig {
+            latency,
+            ..config()
+        }),
+        Faults::default(),
+    );
+    let mut h = harness(&b, "tuya-vacuum");
+    wait_until("the MCU to be told the Wi-Fi state", || {
+        b.sim().wifi_state().is_some()
+    });
+    handshake(&mut h);
+    let steps: Vec<_> = app(&h)
+        .station()
+        .device
+        .tuya
+        .steps
+        .iter()
+        .map(|s| s.clone().expect("every step done"))
+        .collect();
+    // Each step's answer comes at least the MCU's latency after the last one's.
+    for pair in steps.windows(2) {
+        let gap = (pair[1].at - pair[0].at).to_std().unwrap_or_default();
+        assert!(
+            gap >= latency,
+            "each step its own time: {} then {}",
+            shown(&pair[0].at),
+            shown(&pair[1].at)
+        );
+    }
+    for s in &steps {
+        let at = shown(&s.at);
+        assert!(h.query_all_by_label(&at).next().is_some(), "{at} shown");
+        let took = s.took.expect("each step sent its request");
+        assert!(
+            took >= latency,
+            "{took:?}: the MCU answers {latency:?} late"
+        );
+        let ms = format!("{:.0} ms", took.as_secs_f64() * 1e3);
+        assert!(h.query_all_by_label(&ms).next().is_some(), "{ms} shown");
+    }
+    assert!(h.query_by_label("Took").is_some());
+}
+
+/// Issue 25, item 10: each MCU request has its own time, when the module took it, however late
+/// the window takes the news (before, both showed the time of the frame that read them).
+#[test]
+fn each_mcu_request_shows_the_time_it_was_answered() {
+    let b = bench();
+    let mut h = harness(&b, "tuya-vacuum");
+    handshake(&mut h);
+    tab(&mut h, "MCU requests");
+    let answered = b.sim().answers().len();
+    b.sim().request_local_time();
+    wait_until("the MCU to have the time", || {
+        b.sim().answers().len() > answered
+    });
+    let between = chrono::Local::now();
+    b.sim().request_mac();
+    wait_until("the MCU to have the MAC", || {
+        b.sim().answers().len() > answered + 1
+    });
+    step_until(&mut h, "two requests answered", |a| {
+        a.station().device.tuya.requests.len() == 2
+    });
+    h.run_steps(2);
+    let requests = app(&h).station().device.tuya.requests.clone();
+    assert!(
+        requests[0].clock <= between && between <= requests[1].clock,
+        "the time asked {} before {} before the MAC asked {}",
+        shown(&requests[0].clock),
+        shown(&between),
+        shown(&requests[1].clock)
+    );
+    for r in &requests {
+        assert!(h.query_all_by_label(&shown(&r.clock)).next().is_some());
+    }
 }

@@ -67,7 +67,7 @@ fn steps(events: &[TuyaEvent]) -> Vec<(HandshakeStep, bool)> {
     events
         .iter()
         .filter_map(|e| match e {
-            TuyaEvent::Step { step, result } => Some((*step, result.ok())),
+            TuyaEvent::Step { step, result, .. } => Some((*step, result.ok())),
             _ => None,
         })
         .collect()

@@ -80,3 +80,4 @@ mod window_language;
 mod window_layout;
 mod window_sizes;
 mod window_truth;
+mod window_truth_small;

@@ -49,7 +49,7 @@ fn only(station: &Station, servo: bool) -> bool {
         .packets
         .entries
         .iter()
-        .filter_map(|l| l.entry.frame.as_ref().ok())
+        .filter_map(|l| l.frame().and_then(|e| e.frame.as_ref().ok()))
         .collect();
     let wrong: Vec<_> = frames
         .iter()
@@ -207,7 +207,7 @@ fn two_stations_in_one_window_never_mix_and_lose_their_ports_independently() {
         !station(app(&h), 1).verdicts.is_empty(),
         "its verdict stays with its unit"
     );
-    let newest = |a: &App| station(a, 0).packets.entries.back().map(|l| l.entry.at);
+    let newest = |a: &App| station(a, 0).packets.entries.back().map(|l| l.row.at());
     let before = newest(app(&h));
     step_until(
         &mut h,

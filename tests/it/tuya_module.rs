@@ -406,6 +406,7 @@ fn an_unknown_command_is_said_with_its_bytes_and_not_answered() {
             command,
             what,
             data,
+            ..
         }) = e
         {
             seen.push((command, what, data));

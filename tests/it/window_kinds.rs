@@ -64,10 +64,11 @@ fn frames_logged_before_a_device_change_keep_the_profile_they_came_under() {
     let mut h = harness(saved, b.ports());
     let attitude = |a: &App| {
         a.station().packets.entries.iter().any(|l| {
-            l.entry
-                .frame
-                .as_ref()
-                .is_ok_and(|p| p.command == 108 && l.profile.id == "window-cleaner")
+            l.frame().is_some_and(|e| {
+                e.frame
+                    .as_ref()
+                    .is_ok_and(|p| p.command == 108 && l.profile.id == "window-cleaner")
+            })
         })
     };
     step_until(&mut h, "an MSP_ATTITUDE frame", attitude);

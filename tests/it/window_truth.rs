@@ -327,8 +327,10 @@ fn stop_is_on_every_window_cleaner_panel_and_goes_straight_to_the_robot() {
     step_until(&mut h, "every STOP command answered", |a| {
         ids.iter().all(|id| {
             a.station().packets.entries.iter().any(|l| {
-                l.entry.direction == botbench::protocol::Direction::DeviceToHost
-                    && l.entry.frame.as_ref().is_ok_and(|p| p.command == *id)
+                l.frame().is_some_and(|e| {
+                    e.direction == botbench::protocol::Direction::DeviceToHost
+                        && e.frame.as_ref().is_ok_and(|p| p.command == *id)
+                })
             })
         })
     });
@@ -589,12 +591,10 @@ fn stops_sent(a: &App, ids: &[u8]) -> usize {
         .packets
         .entries
         .iter()
-        .filter(|l| {
-            l.entry.direction == botbench::protocol::Direction::HostToDevice
-                && l.entry
-                    .frame
-                    .as_ref()
-                    .is_ok_and(|p| ids.contains(&p.command))
+        .filter_map(|l| l.frame())
+        .filter(|e| {
+            e.direction == botbench::protocol::Direction::HostToDevice
+                && e.frame.as_ref().is_ok_and(|p| ids.contains(&p.command))
         })
         .count()
 }

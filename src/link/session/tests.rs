@@ -90,7 +90,7 @@ fn steps(events: &[LinkEvent]) -> Vec<(HandshakeStep, bool)> {
     events
         .iter()
         .filter_map(|e| match e {
-            LinkEvent::Tuya(TuyaEvent::Step { step, result }) => Some((*step, result.ok())),
+            LinkEvent::Tuya(TuyaEvent::Step { step, result, .. }) => Some((*step, result.ok())),
             _ => None,
         })
         .collect()

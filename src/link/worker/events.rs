@@ -61,9 +61,13 @@ impl Events {
             LinkEvent::Tuya(TuyaEvent::Step {
                 step,
                 result: StepResult::Failed(e),
+                at,
+                took,
             }) => LinkEvent::Tuya(TuyaEvent::Step {
                 step,
                 result: StepResult::Failed(e.named(&self.profile)),
+                at,
+                took,
             }),
             ev => ev,
         }
@@ -140,6 +144,7 @@ fn kind(ev: &LinkEvent) -> &'static str {
         LinkEvent::Telemetry { .. } => "telemetry",
         LinkEvent::Report(_) => "report",
         LinkEvent::Frame(_) => "frame",
+        LinkEvent::NoAnswer(_) => "no answer",
         LinkEvent::Identified(_) => "identified",
         LinkEvent::Tuya(_) => "tuya",
         LinkEvent::Device(_) => "device",

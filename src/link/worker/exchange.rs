@@ -8,12 +8,12 @@ use super::Worker;
 use super::wait::{BurstEnd, Outcome};
 use crate::link::request::{ExchangeError, Match, Reply, ReplySpec, Request};
 use crate::link::session::Unasked;
-use crate::link::{LinkError, LinkEvent, wire_time};
+use crate::link::{LinkError, LinkEvent, NoAnswer, wire_time};
 use crate::packet::{Header, Packet};
 use crate::profile::Protocol;
 use crate::protocol::{Direction, FrameError};
 use log::debug;
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime};
 
 /// How far behind a deadline it set the link's thread may run before it counts as a late host
 /// (a loaded computer): a scheduler's ordinary wake-up is well under a millisecond.
@@ -311,7 +311,7 @@ impl Worker {
             each.command,
             x.frame_err.clone(),
             x.mismatch,
-            attempts,
+            (attempt, attempts),
             t0,
         );
         Ok(Tried::Unanswered(e))
@@ -415,15 +415,16 @@ impl Worker {
         Ok(())
     }
 
-    /// Why a request sent at `sent` got no answer: a garbled frame, an answer to something
-    /// else, or nothing at all.
+    /// Why attempt `attempt.0` of `attempt.1` of a request sent at `sent` got no answer: a
+    /// garbled frame, an answer to something else, or nothing at all (then said to the packet
+    /// monitor as a row of its own, [`LinkEvent::NoAnswer`]).
     pub(super) fn unanswered(
         &mut self,
         command: u8,
         expected: u8,
         frame_err: Option<FrameError>,
         mismatch: Option<(u8, Option<u8>)>,
-        attempts: u8,
+        (attempt, attempts): (u8, u8),
         sent: Instant,
     ) -> ExchangeError {
         if let Some(error) = frame_err {
@@ -460,10 +461,18 @@ impl Worker {
             if let Some(ev) = self.liveness.unanswered() {
                 self.events.emit(LinkEvent::Device(ev));
             }
+            let waited = sent.elapsed();
+            self.events.emit(LinkEvent::NoAnswer(NoAnswer {
+                at: SystemTime::now(),
+                command,
+                attempt,
+                attempts,
+                waited,
+            }));
             ExchangeError::Timeout {
                 command: command.into(),
                 attempts,
-                waited_ms: sent.elapsed().as_millis() as u64,
+                waited_ms: waited.as_millis() as u64,
             }
         }
     }

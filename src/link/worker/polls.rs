@@ -226,7 +226,7 @@ impl Worker {
                     each.command,
                     waited.frame_err,
                     waited.mismatch,
-                    1,
+                    (1, 1),
                     f.sent,
                 ))
             }

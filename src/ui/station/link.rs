@@ -68,6 +68,24 @@ pub enum Answering {
 
 pub use crate::link::SILENT_AFTER;
 
+/// When the device last answered: for comparisons and for people.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LastAnswer {
+    /// When the window heard of it (monotonic).
+    pub at: Instant,
+    /// The wall-clock time.
+    pub clock: chrono::DateTime<chrono::Local>,
+}
+
+impl LastAnswer {
+    fn now() -> Self {
+        Self {
+            at: Instant::now(),
+            clock: chrono::Local::now(),
+        }
+    }
+}
+
 /// An open link and what it talks to.
 pub struct Connection {
     /// The worker.
@@ -103,6 +121,9 @@ pub struct LinkStatus {
     pub device_back: bool,
     /// Whether the device answers, as the link last reported it on this connection.
     answering: Answering,
+    /// When the device last answered anything on this link (a poll, a job's request, a frame
+    /// of its own), as far as the window has heard: `None` before its first answer.
+    last_answer: Option<LastAnswer>,
     /// Serial ports, refreshed every second.
     pub ports: Vec<PortInfo>,
     ports_at: Option<Instant>,
@@ -150,6 +171,25 @@ impl LinkStatus {
         self.answering
     }
 
+    /// When the device last answered on this link (see [`LastAnswer`]).
+    pub fn last_answer(&self) -> Option<LastAnswer> {
+        self.last_answer
+    }
+
+    /// The device answered something just now (a poll's answer, a reply, a frame of its own).
+    pub fn heard(&mut self) {
+        self.last_answer = Some(LastAnswer::now());
+    }
+
+    /// Takes the link's counters: valid frames received since the last ones mean the device
+    /// answered ([`Self::last_answer`]).
+    pub fn on_stats(&mut self, stats: LinkStats) {
+        if stats.received != self.stats.received && stats.received > 0 {
+            self.heard();
+        }
+        self.stats = stats;
+    }
+
     /// Takes what the link reports of the device: it answers (after silence: raises
     /// [`Self::device_back`]), or it has been silent for this many attempts.
     pub fn on_device(&mut self, event: DeviceEvent) {
@@ -157,6 +197,7 @@ impl LinkStatus {
             DeviceEvent::Answered { after_silence } => {
                 self.device_back |= after_silence;
                 self.answering = Answering::Yes;
+                self.heard();
             }
             DeviceEvent::Silent { unanswered } => self.answering = Answering::No(unanswered),
         }
@@ -166,6 +207,7 @@ impl LinkStatus {
     pub fn forget_answers(&mut self) {
         self.answering = Answering::NotYet;
         self.device_back = false;
+        self.last_answer = None;
         // The round trip shown was the ended connection's.
         self.stats.rtt = None;
     }

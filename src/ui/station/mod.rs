@@ -19,9 +19,9 @@ mod running;
 mod tuya;
 mod verdicts;
 
-pub use link::{Answering, Connection, LinkStatus, PortLister, SILENT_AFTER, Target};
+pub use link::{Answering, Connection, LastAnswer, LinkStatus, PortLister, SILENT_AFTER, Target};
 pub use model::{DeviceModel, Mark, Reading, ReadingError};
-pub use packets::{LOG_CAPACITY, Logged, OfflineCapture, PacketLog};
+pub use packets::{LOG_CAPACITY, LogRow, Logged, OfflineCapture, PacketLog};
 pub use running::{Running, RunningSet};
 pub use tuya::{
     DpState, LOG_CAPACITY as REPORT_LOG_CAPACITY, LogLine, RequestLine, StepResult, TuyaModel,
@@ -287,7 +287,7 @@ impl Station {
                 }
                 self.link.state = Some(s);
             }
-            LinkEvent::Stats(s) => self.link.stats = s,
+            LinkEvent::Stats(s) => self.link.on_stats(s),
             LinkEvent::Identified(r) => {
                 if let Ok(info) = &r {
                     self.verdicts.identified(info);
@@ -299,13 +299,27 @@ impl Station {
                 self.device.running.on_frame(&profile, &entry);
                 self.packets.push(entry, &profile)
             }
+            LinkEvent::NoAnswer(n) => {
+                let profile = self.device.profile.clone();
+                self.packets.push_no_answer(n, &profile)
+            }
             LinkEvent::Report(p) => self.device.on_report(p),
             LinkEvent::Telemetry {
                 command,
                 at,
                 result,
-            } => self.device.on_telemetry(command, at, result),
-            LinkEvent::Reply { id, result } => self.device.on_reply(id, result),
+            } => {
+                if result.is_ok() {
+                    self.link.heard();
+                }
+                self.device.on_telemetry(command, at, result)
+            }
+            LinkEvent::Reply { id, result } => {
+                if result.as_ref().is_ok_and(|r| !r.packets.is_empty()) {
+                    self.link.heard();
+                }
+                self.device.on_reply(id, result)
+            }
             LinkEvent::Tuya(ev) => self.device.tuya.on_event(ev),
             LinkEvent::Device(ev) => self.link.on_device(ev),
         }

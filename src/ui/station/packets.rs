@@ -1,11 +1,11 @@
-//! The packet log: every frame sent and received, bounded, for the packet monitor. Each frame
-//! kept has a sequence number that never changes (the first frame ever kept is 0), so that a
+//! The packet log: every frame sent and received, and each request's attempt that went
+//! unanswered, bounded, for the packet monitor. Each row kept has a sequence number that never changes (the first frame ever kept is 0), so that a
 //! view can hold on to a frame while older ones are dropped under it, and keeps the profile it
 //! came under: after a change of device the earlier frames still read as what they were (a
 //! window cleaner's MSP frames are not decoded with a servo's commands), for a report.
 
 use crate::capture::Tap;
-use crate::link::LogEntry;
+use crate::link::{LogEntry, NoAnswer};
 use crate::profile::Profile;
 use std::collections::VecDeque;
 use std::sync::Arc;
@@ -13,13 +13,47 @@ use std::sync::Arc;
 /// How many frames the packet monitor keeps.
 pub const LOG_CAPACITY: usize = 20_000;
 
-/// A frame kept, with the profile in use when it came (its commands name it).
+/// A row of the packet log: a frame, or an attempt no frame answered.
+#[derive(Debug, Clone)]
+pub enum LogRow {
+    /// A frame sent or received (or the bytes of a damaged one).
+    Frame(LogEntry),
+    /// A request's attempt that went unanswered (the link's typed account of it).
+    NoAnswer(NoAnswer),
+}
+
+impl LogRow {
+    /// When: the frame crossed the line, or the attempt's window ended.
+    pub fn at(&self) -> std::time::SystemTime {
+        match self {
+            LogRow::Frame(e) => e.at,
+            LogRow::NoAnswer(n) => n.at,
+        }
+    }
+
+    /// The frame, when the row is one.
+    pub fn frame(&self) -> Option<&LogEntry> {
+        match self {
+            LogRow::Frame(e) => Some(e),
+            LogRow::NoAnswer(_) => None,
+        }
+    }
+}
+
+/// A row kept, with the profile in use when it came (its commands name it).
 #[derive(Debug, Clone)]
 pub struct Logged {
-    /// The frame.
-    pub entry: LogEntry,
+    /// The frame, or the attempt unanswered.
+    pub row: LogRow,
     /// The profile of the connection it came on.
     pub profile: Arc<Profile>,
+}
+
+impl Logged {
+    /// The frame, when the row is one.
+    pub fn frame(&self) -> Option<&LogEntry> {
+        self.row.frame()
+    }
 }
 
 /// The frames, oldest first.
@@ -70,6 +104,15 @@ impl PacketLog {
     /// Keeps a frame that came under `profile` (dropping the oldest when full), or counts it
     /// while frozen.
     pub fn push(&mut self, entry: LogEntry, profile: &Arc<Profile>) {
+        self.push_row(LogRow::Frame(entry), profile);
+    }
+
+    /// Keeps an attempt that went unanswered under `profile`, as [`Self::push`] keeps a frame.
+    pub fn push_no_answer(&mut self, no_answer: NoAnswer, profile: &Arc<Profile>) {
+        self.push_row(LogRow::NoAnswer(no_answer), profile);
+    }
+
+    fn push_row(&mut self, row: LogRow, profile: &Arc<Profile>) {
         if self.paused {
             self.dropped += 1;
             return;
@@ -78,7 +121,7 @@ impl PacketLog {
             self.entries.pop_front();
         }
         self.entries.push_back(Logged {
-            entry,
+            row,
             profile: profile.clone(),
         });
         self.kept += 1;

@@ -27,8 +27,11 @@ pub struct StepResult {
     /// What came back, or why it failed, in both languages (the link's
     /// [`crate::link::StepResult`] said).
     pub detail: crate::i18n::Text,
-    /// When.
+    /// When it ended, as the link saw it (each step its own time, however late the window
+    /// took the news).
     pub at: DateTime<Local>,
+    /// From its request to its end (`None`: it sent nothing).
+    pub took: Option<std::time::Duration>,
 }
 
 /// A data point's last report that fits the profile.
@@ -60,7 +63,7 @@ pub struct LogLine {
 /// An MCU request the module answered.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RequestLine {
-    /// When.
+    /// When the module took it, as the link saw it (each request its own time).
     pub clock: DateTime<Local>,
     /// The command word.
     pub command: u8,
@@ -156,7 +159,12 @@ impl TuyaModel {
     pub fn on_event(&mut self, ev: TuyaEvent) {
         let now = Local::now();
         match ev {
-            TuyaEvent::Step { step, result } => {
+            TuyaEvent::Step {
+                step,
+                result,
+                at,
+                took,
+            } => {
                 let ok = result.ok();
                 if step == HandshakeStep::Heartbeat {
                     // Every attempt starts with a heartbeat: a new attempt.
@@ -169,7 +177,8 @@ impl TuyaModel {
                 let result = StepResult {
                     ok,
                     detail: result.said(),
-                    at: now,
+                    at: DateTime::from(at),
+                    took,
                 };
                 // A product info that is not JSON is shown raw and the handshake goes on.
                 if !ok && !self.shown_raw(step) {
@@ -184,7 +193,9 @@ impl TuyaModel {
             }
             TuyaEvent::WorkMode { gpio } => self.work_mode = Some(gpio),
             TuyaEvent::HandshakeDone => {
-                self.done_at = Some(now);
+                // When its last step ended, as the link saw it.
+                let last = self.steps[step_index(HandshakeStep::QueryStatus)].as_ref();
+                self.done_at = Some(last.map_or(now, |r| r.at));
                 self.stopped = None;
             }
             TuyaEvent::McuRestarted => {
@@ -200,6 +211,7 @@ impl TuyaModel {
                 self.queries += 1;
             }
             TuyaEvent::McuUnknown {
+                at,
                 command,
                 what,
                 data,
@@ -207,17 +219,19 @@ impl TuyaModel {
                 if self.unknown_commands.len() >= REQUESTS_CAPACITY {
                     self.unknown_commands.pop_front();
                 }
-                self.unknown_commands.push_back((now, command, what, data));
+                let at = DateTime::from(at);
+                self.unknown_commands.push_back((at, command, what, data));
             }
             TuyaEvent::HeartbeatStopped => self.heartbeat_stopped = Some(now),
             TuyaEvent::McuRequest {
+                at,
                 command,
                 name,
                 answer,
                 ..
             } => {
                 let line = RequestLine {
-                    clock: now,
+                    clock: DateTime::from(at),
                     command,
                     name,
                     answer,
@@ -297,7 +311,12 @@ mod tests {
         } else {
             link::StepResult::Failed(link::ExchangeError::Cancelled)
         };
-        TuyaEvent::Step { step, result }
+        TuyaEvent::Step {
+            step,
+            result,
+            at: std::time::SystemTime::now(),
+            took: None,
+        }
     }
 
     #[test]
@@ -346,6 +365,7 @@ mod tests {
         );
         for _ in 0..REQUESTS_CAPACITY + 5 {
             s.on_event(TuyaEvent::McuRequest {
+                at: std::time::SystemTime::now(),
                 command: cmd::RESET_WIFI,
                 name: "reset Wi-Fi".into(),
                 request: Vec::new(),

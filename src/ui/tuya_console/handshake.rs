@@ -129,8 +129,8 @@ pub fn show(
     actions
 }
 
-/// The handshake's steps in a table: each one's result, when, and what came back; the step the
-/// current attempt waits at.
+/// The handshake's steps in a table: each one's result, when it ended and how long it took
+/// from its request, and what came back; the step the current attempt waits at.
 fn steps_table(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     let s = &rt.device.tuya;
     // Where the current attempt is: the first step without a result, unless one failed.
@@ -146,6 +146,7 @@ fn steps_table(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
                     lang.tr("Step", "步骤"),
                     lang.tr("Result", "结果"),
                     lang.tr("Time", "时间"),
+                    lang.tr("Took", "用时"),
                     lang.tr("Detail", "详情"),
                 ], |ui| {
             for (i, step) in HandshakeStep::ALL.iter().enumerate() {
@@ -173,9 +174,14 @@ fn steps_table(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
                 match &s.steps[i] {
                     Some(r) => {
                         ui.monospace(clock(&r.at));
+                        match r.took {
+                            Some(d) => ui.monospace(format!("{:.0} ms", d.as_secs_f64() * 1e3)),
+                            None => ui.weak("—"),
+                        };
                         ui.label(r.detail.get(lang));
                     }
                     None => {
+                        ui.label("");
                         ui.label("");
                         ui.label("");
                     }

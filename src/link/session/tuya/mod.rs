@@ -24,7 +24,7 @@ use crate::profile::Profile;
 use crate::protocol::Direction;
 use crate::protocol::tuya::{self, VERSION_MCU, cmd};
 use serde::Serialize;
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime};
 
 /// How soon a handshake that failed at a step starts again.
 const HANDSHAKE_RETRY: Duration = Duration::from_secs(1);
@@ -182,6 +182,11 @@ pub enum TuyaEvent {
         step: HandshakeStep,
         /// What it found, or why it failed.
         result: StepResult,
+        /// When it finished (its answer came, or it gave up), on the wall clock.
+        at: SystemTime,
+        /// From its request's send to its end; `None` for a step that sent nothing (the Wi-Fi
+        /// state the MCU does not need).
+        took: Option<Duration>,
     },
     /// The version byte of the MCU's frames (its heartbeat answer's): 0x03 by the protocol
     /// document, 0x01 from MCU SDKs before v2.5, 0x00 from some firmware.
@@ -219,6 +224,8 @@ pub enum TuyaEvent {
     /// The MCU asked something and the module answered (or, for an acknowledgement of the
     /// module's own push, took it).
     McuRequest {
+        /// When the module took it, on the wall clock.
+        at: SystemTime,
         /// The MCU's command word.
         command: u8,
         /// What it asked.
@@ -234,6 +241,8 @@ pub enum TuyaEvent {
     /// The MCU sent a command (or an extended-service sub-command) the module does not know:
     /// logged with its bytes and ignored, as a real module does.
     McuUnknown {
+        /// When the module took it, on the wall clock.
+        at: SystemTime,
         /// The command word.
         command: u8,
         /// What the module made of it: `command 0x99`, `extended service sub-command 0x36`.
@@ -282,8 +291,8 @@ enum Phase {
 /// A request sent and awaited.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Ask {
-    /// A handshake step (for 0x03, with the Wi-Fi state reported).
-    Step(HandshakeStep, u8),
+    /// A handshake step (for 0x03, with the Wi-Fi state reported), sent at this time.
+    Step(HandshakeStep, u8, Instant),
     /// The heartbeat after the handshake.
     Heartbeat,
 }
@@ -411,7 +420,7 @@ impl TuyaSession {
         };
         self.phase = Phase::Handshake(step);
         let wifi_state = self.options.wifi_state;
-        self.asked = Some(Ask::Step(step, wifi_state));
+        self.asked = Some(Ask::Step(step, wifi_state, now));
         Some(match step {
             HandshakeStep::Heartbeat => Request::new(cmd::HEARTBEAT, Vec::new()).attempts(2),
             HandshakeStep::WifiState => Request::new(cmd::WIFI_STATE, vec![wifi_state]),
@@ -433,10 +442,14 @@ impl TuyaSession {
         events: &mut Vec<LinkEvent>,
     ) -> bool {
         match self.asked.take() {
-            Some(Ask::Step(step, wifi_state)) => match result {
-                Ok(reply) => self.step_done(step, wifi_state, &reply, now, events),
+            Some(Ask::Step(step, wifi_state, sent)) => match result {
+                Ok(reply) => {
+                    let took = now.saturating_duration_since(sent);
+                    self.step_done((step, took), wifi_state, &reply, now, events)
+                }
                 Err(e) => {
-                    events.push(step_event(step, StepResult::Failed(e)));
+                    let took = now.saturating_duration_since(sent);
+                    events.push(step_event(step, StepResult::Failed(e), Some(took)));
                     self.phase = Phase::HandshakeAt(now + HANDSHAKE_RETRY);
                     false
                 }
@@ -461,11 +474,11 @@ impl TuyaSession {
         }
     }
 
-    /// A handshake step answered: reports it and moves to the next step (returns `true`), or
-    /// ends the handshake.
+    /// A handshake step answered after `took` since its request: reports it and moves to the
+    /// next step (returns `true`), or ends the handshake.
     fn step_done(
         &mut self,
-        step: HandshakeStep,
+        (step, took): (HandshakeStep, Duration),
         wifi_state: u8,
         reply: &Reply,
         now: Instant,
@@ -473,21 +486,21 @@ impl TuyaSession {
     ) -> bool {
         let payload = reply.payload().unwrap_or_default();
         let next = match step {
-            HandshakeStep::Heartbeat => heartbeat_answered(reply, events),
+            HandshakeStep::Heartbeat => heartbeat_answered(reply, took, events),
             HandshakeStep::ProductInfo => {
                 let info = parse_product_info(payload);
                 events.push(LinkEvent::Tuya(TuyaEvent::ProductInfo(info.clone())));
-                events.push(step_event(step, StepResult::ProductInfo(info)));
+                events.push(step_event(step, StepResult::ProductInfo(info), Some(took)));
                 HandshakeStep::WorkMode
             }
-            HandshakeStep::WorkMode => work_mode_answered(payload, events),
+            HandshakeStep::WorkMode => work_mode_answered(payload, took, events),
             HandshakeStep::WifiState => {
                 let result = StepResult::WifiStateReported { state: wifi_state };
-                events.push(step_event(step, result));
+                events.push(step_event(step, result, Some(took)));
                 HandshakeStep::QueryStatus
             }
             HandshakeStep::QueryStatus => {
-                events.push(step_event(step, self.status_of(reply)));
+                events.push(step_event(step, self.status_of(reply), Some(took)));
                 events.push(LinkEvent::Tuya(TuyaEvent::HandshakeDone));
                 self.phase = Phase::Heartbeat(now + self.options.heartbeat);
                 return false;
@@ -527,6 +540,7 @@ impl TuyaSession {
                     .map(|(c, d)| tuya::Frame::from_module(*c, d.clone()));
                 let (reply_command, data) = answer.reply.unwrap_or((p.command, Vec::new()));
                 let mut events = vec![TuyaEvent::McuRequest {
+                    at: SystemTime::now(),
                     command: p.command,
                     name: answer.name.to_string(),
                     request: p.payload.clone(),
@@ -550,6 +564,7 @@ impl TuyaSession {
                     crate::protocol::hex::format(&p.wire)
                 );
                 Unasked::Ignored(TuyaEvent::McuUnknown {
+                    at: SystemTime::now(),
                     command: p.command,
                     what,
                     data: p.payload.clone(),
@@ -571,9 +586,9 @@ pub fn version_text(version: u8) -> String {
     }
 }
 
-/// The heartbeat step answered: its answer (0 first since the MCU started) and the version
-/// byte of the MCU's frames are reported; product info is next.
-fn heartbeat_answered(reply: &Reply, events: &mut Vec<LinkEvent>) -> HandshakeStep {
+/// The heartbeat step answered after `took`: its answer (0 first since the MCU started) and the
+/// version byte of the MCU's frames are reported; product info is next.
+fn heartbeat_answered(reply: &Reply, took: Duration, events: &mut Vec<LinkEvent>) -> HandshakeStep {
     let frame_version = match reply.packets.first().map(|p| &p.header) {
         Some(Header::Tuya { version }) => Some(*version),
         _ => None,
@@ -585,13 +600,18 @@ fn heartbeat_answered(reply: &Reply, events: &mut Vec<LinkEvent>) -> HandshakeSt
         first_since_start: reply.payload() == Some(&[0][..]),
         frame_version,
     };
-    events.push(step_event(HandshakeStep::Heartbeat, result));
+    events.push(step_event(HandshakeStep::Heartbeat, result, Some(took)));
     HandshakeStep::ProductInfo
 }
 
-/// The working mode answered: who drives the Wi-Fi LED. When the module does, the MCU needs no
-/// Wi-Fi state (that step is reported as not needed) and the status query is next.
-fn work_mode_answered(payload: &[u8], events: &mut Vec<LinkEvent>) -> HandshakeStep {
+/// The working mode answered after `took`: who drives the Wi-Fi LED. When the module does, the
+/// MCU needs no Wi-Fi state (that step is reported as not needed, having sent nothing) and the
+/// status query is next.
+fn work_mode_answered(
+    payload: &[u8],
+    took: Duration,
+    events: &mut Vec<LinkEvent>,
+) -> HandshakeStep {
     let gpio = match payload {
         [led, reset, ..] => Some((*led, *reset)),
         _ => None,
@@ -600,15 +620,22 @@ fn work_mode_answered(payload: &[u8], events: &mut Vec<LinkEvent>) -> HandshakeS
     events.push(step_event(
         HandshakeStep::WorkMode,
         StepResult::WorkMode { gpio },
+        Some(took),
     ));
     if gpio.is_none() {
         return HandshakeStep::WifiState;
     }
     let skipped = StepResult::WifiStateNotNeeded;
-    events.push(step_event(HandshakeStep::WifiState, skipped));
+    events.push(step_event(HandshakeStep::WifiState, skipped, None));
     HandshakeStep::QueryStatus
 }
 
-fn step_event(step: HandshakeStep, result: StepResult) -> LinkEvent {
-    LinkEvent::Tuya(TuyaEvent::Step { step, result })
+/// A step's end, now, `took` after its request.
+fn step_event(step: HandshakeStep, result: StepResult, took: Option<Duration>) -> LinkEvent {
+    LinkEvent::Tuya(TuyaEvent::Step {
+        step,
+        result,
+        at: SystemTime::now(),
+        took,
+    })
 }
