@@ -289,7 +289,7 @@ const HOLDERS_EVERY: Duration = Duration::from_secs(1);
 /// descriptor only as a raw one.
 #[cfg(unix)]
 #[allow(unsafe_code)]
-fn non_blocking(port: &serialport::TTYPort) -> std::io::Result<()> {
+pub(crate) fn non_blocking(port: &serialport::TTYPort) -> std::io::Result<()> {
     use std::os::fd::AsRawFd;
     let fd = port.as_raw_fd();
     // SAFETY: `fd` is the open descriptor `port` owns for as long as this call; F_GETFL and
@@ -327,7 +327,7 @@ pub fn close_on_exec(fd: std::os::fd::RawFd) -> std::io::Result<()> {
 }
 
 #[cfg(not(unix))]
-fn non_blocking(_port: &serialport::COMPort) -> std::io::Result<()> {
+pub(crate) fn non_blocking(_port: &serialport::COMPort) -> std::io::Result<()> {
     Ok(())
 }
 

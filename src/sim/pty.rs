@@ -21,6 +21,14 @@ struct Flags {
     stop: AtomicBool,
     vanish: VanishHandle,
     exited: AtomicBool,
+    /// Lockstep: the server loop has ended (its drain thread ends too).
+    served: AtomicBool,
+    /// Lockstep: the drain thread's read failed (the port vanished): the loop ends.
+    drain_failed: AtomicBool,
+    /// Tests: the drain thread takes this before each read, so that a test holding it stands
+    /// the drain still, as a kernel worker run late does ([`serve_lockstep`]).
+    #[cfg(test)]
+    drain_gate: std::sync::Mutex<()>,
 }
 
 /// A device on a pseudo-terminal, served by a named thread until stopped or dropped.
@@ -260,23 +268,68 @@ fn write_frame(master: &mut TTYPort, frame: &[u8]) -> Option<usize> {
 /// The server loop in lockstep with the host (see [`super::lockstep`]): the host's writes and
 /// baud switches are taken at the instants the host stamped them, in order; the device's time
 /// never passes the stamp of an action not yet taken.
-fn serve_lockstep(master: TTYPort, wire: Wire, flags: &Flags, lockstep: &Lockstep) {
+///
+/// The loop never polls or reads the pty's master side: on Linux both wait for the kernel's
+/// worker to hand over bytes in flight (`n_tty_poll` and `n_tty_read` call
+/// `tty_buffer_flush_work`), and on a machine loaded with CPU-bound work that worker was seen
+/// to run 2-20 s late, every simulator of the process standing still meanwhile (strace: a
+/// zero-timeout `ppoll` of the master returning after 9.1 s in four server threads at once;
+/// the hosts gave up after three attempts). The host's bytes that cross the pty are drained by
+/// a thread of their own ([`drain_host_bytes`]), and replies are written without a poll
+/// ([`write_unpolled`]).
+fn serve_lockstep(master: TTYPort, wire: Wire, flags: &Arc<Flags>, lockstep: &Arc<Lockstep>) {
     // However the loop ends (a panicking device too), the host stops waiting for it, and only
-    // once the pty's master side is closed (the loop owns it): a host told that nothing more
-    // comes while the port still looked open would take a vanished port for a silent device.
+    // once the pty's master side is closed (the loop and the drain own it): a host told that
+    // nothing more comes while the port still looked open would take a vanished port for a
+    // silent device.
     let stopped = lockstep.serving();
+    let drain = start_drain(&master, flags, lockstep);
     serve_lockstep_loop(master, wire, flags, lockstep);
+    flags.served.store(true, Ordering::SeqCst);
+    if let Some(drain) = drain {
+        let _ = drain.join();
+    }
     drop(stopped);
 }
 
-fn serve_lockstep_loop(mut master: TTYPort, mut wire: Wire, flags: &Flags, lockstep: &Lockstep) {
-    // What the host writes crosses the pty too (its writes fail as on a real port), and is
-    // drained here; the device hears it from the host's stamped actions.
-    let mut drained = [0u8; 4096];
+/// Starts the thread that drains what the host's writes brought across the pty (`None`, and the
+/// loop ends at once, when the master cannot be shared or made non-blocking).
+fn start_drain(
+    master: &TTYPort,
+    flags: &Arc<Flags>,
+    lockstep: &Arc<Lockstep>,
+) -> Option<JoinHandle<()>> {
+    let fail = || {
+        flags.drain_failed.store(true, Ordering::SeqCst);
+        None
+    };
+    let Ok(reader) = master.try_clone_native() else {
+        return fail();
+    };
+    // Shared by both descriptors: the loop's writes never block, the drain waits in its poll.
+    if crate::link::serial::non_blocking(master).is_err() {
+        return fail();
+    }
+    let (flags, lockstep) = (flags.clone(), lockstep.clone());
+    std::thread::Builder::new()
+        .name("sim-pty-drain".into())
+        .spawn(move || drain_host_bytes(reader, &flags, &lockstep))
+        .map_or_else(|_| fail(), Some)
+}
+
+#[allow(unsafe_code)]
+fn serve_lockstep_loop(master: TTYPort, mut wire: Wire, flags: &Flags, lockstep: &Lockstep) {
+    use std::os::fd::{AsRawFd, BorrowedFd};
+    // SAFETY: `master` owns this descriptor and outlives every use of `fd` (this function).
+    let fd = unsafe { BorrowedFd::borrow_raw(master.as_raw_fd()) };
     let mut out = [0u8; 4096];
     loop {
         // A port that vanishes after so many bytes from the host vanishes in lockstep too.
-        if flags.stop.load(Ordering::SeqCst) || flags.vanish.is_vanished() || wire.vanished() {
+        if flags.stop.load(Ordering::SeqCst)
+            || flags.vanish.is_vanished()
+            || wire.vanished()
+            || flags.drain_failed.load(Ordering::SeqCst)
+        {
             return;
         }
         let mut due: Vec<u8> = Vec::new();
@@ -321,7 +374,7 @@ fn serve_lockstep_loop(mut master: TTYPort, mut wire: Wire, flags: &Flags, locks
             (now, now < real, s.generation())
         };
         if !due.is_empty() {
-            let Some(written) = write_frame(&mut master, &due) else {
+            let Some(written) = write_unpolled(fd, &due) else {
                 return;
             };
             if written < due.len() {
@@ -337,21 +390,44 @@ fn serve_lockstep_loop(mut master: TTYPort, mut wire: Wire, flags: &Flags, locks
             next.saturating_duration_since(Instant::now())
         };
         lockstep.wait_for_host(generation, wait);
-        if !drain_host_bytes(&mut master, &mut drained, lockstep) {
-            return;
-        }
     }
 }
 
-/// Reads what the host's writes brought across the pty without waiting, for the comparison with
-/// what it wrote ([`super::crossing`]); `false` when the pty failed (the port vanished).
-fn drain_host_bytes(master: &mut TTYPort, drained: &mut [u8], lockstep: &Lockstep) -> bool {
-    if master.set_timeout(Duration::ZERO).is_err() {
-        return false;
+/// Writes `bytes` to the pty's master side (non-blocking) without polling it first (see
+/// [`serve_lockstep`]): what finds no room is retried for up to [`WRITE_TIMEOUT`]. Returns how
+/// many bytes were written, `None` when the pty failed (the port vanished).
+fn write_unpolled(master: std::os::fd::BorrowedFd<'_>, bytes: &[u8]) -> Option<usize> {
+    let deadline = Instant::now() + WRITE_TIMEOUT;
+    let mut rest = bytes;
+    while !rest.is_empty() {
+        match nix::unistd::write(master, rest) {
+            Ok(0) => break,
+            Ok(n) => rest = &rest[n..],
+            Err(nix::errno::Errno::EINTR) => {}
+            Err(nix::errno::Errno::EAGAIN) if Instant::now() < deadline => {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            Err(nix::errno::Errno::EAGAIN) => break,
+            Err(_) => return None,
+        }
     }
-    loop {
-        match master.read(drained) {
-            Ok(0) => return true,
+    Some(bytes.len() - rest.len())
+}
+
+/// The drain thread: reads what the host's writes brought across the pty, for the comparison
+/// with what it wrote ([`super::crossing`]), until the loop has ended; a failed read (the port
+/// vanished) ends the loop too.
+fn drain_host_bytes(mut reader: TTYPort, flags: &Flags, lockstep: &Lockstep) {
+    let mut drained = [0u8; 4096];
+    if reader.set_timeout(POLL).is_err() {
+        flags.drain_failed.store(true, Ordering::SeqCst);
+        return;
+    }
+    while !flags.served.load(Ordering::SeqCst) {
+        #[cfg(test)]
+        let _gate = flags.drain_gate.lock();
+        match reader.read(&mut drained) {
+            Ok(0) => {}
             Ok(n) => {
                 let mut s = lockstep.lock();
                 let before = s.crossing.changed().is_some();
@@ -364,11 +440,52 @@ fn drain_host_bytes(master: &mut TTYPort, drained: &mut [u8], lockstep: &Lockste
                 if matches!(
                     e.kind(),
                     ErrorKind::TimedOut | ErrorKind::Interrupted | ErrorKind::WouldBlock
-                ) =>
-            {
-                return true;
+                ) => {}
+            Err(_) => {
+                flags.drain_failed.store(true, Ordering::SeqCst);
+                return;
             }
-            Err(_) => return false,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::tuya_mcu::{TuyaConfig, TuyaMcu};
+    use std::sync::Mutex;
+
+    /// The device answers while what the host wrote is not drained from the pty: on a loaded
+    /// machine the kernel hands bytes in flight over late, and reading the master waits for it
+    /// (seen: 9 s). Here the drain is stood still; the server loop, which drained the pty
+    /// itself between two turns, stood still with it and the host had no answer (10 s past
+    /// its deadline, the lockstep's limit).
+    #[test]
+    fn the_device_answers_while_the_hosts_bytes_are_not_drained_from_the_pty() {
+        let mcu = TuyaMcu::new(TuyaConfig {
+            baud: Some(115_200),
+            ..TuyaConfig::default()
+        });
+        let server =
+            PtyServer::start_lockstep(Arc::new(Mutex::new(mcu)), Faults::default()).expect("pty");
+        let drain_held = server.flags.drain_gate.lock().expect("the gate");
+        let mut port = (server.opener(115_200))().expect("opens");
+        port.write(&[0x55, 0xAA, 0x00, 0x00, 0x00, 0x00, 0xFF])
+            .expect("writes the heartbeat");
+        let by = Instant::now() + Duration::from_secs(1);
+        let (mut got, mut buf) = (Vec::new(), [0u8; 256]);
+        loop {
+            let n = port.read(&mut buf, by).expect("reads");
+            if n == 0 {
+                break;
+            }
+            got.extend_from_slice(&buf[..n]);
+        }
+        drop(drain_held);
+        let answer = [0x55, 0xAA, 0x03, 0x00, 0x00, 0x01];
+        assert!(
+            got.windows(answer.len()).any(|w| w == answer),
+            "no heartbeat answer with the drain stood still: {got:02x?}"
+        );
     }
 }
