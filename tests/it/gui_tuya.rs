@@ -222,7 +222,7 @@ fn a_bool_and_an_enum_set_from_the_panel_reach_the_mcu_and_their_reports_update_
     h.run_steps(2);
     // The side effect the MCU reported (status: spot cleaning) is shown too, and logged.
     assert!(h.query_by_label("Spot cleaning").is_some());
-    assert!(has_label(&h, "3 mode = Spot clean"));
+    assert!(has_label(&h, "3 Work mode = Spot clean"));
     assert!(has_label(&h, "✓ reported back"));
     // Query status (0x08): every data point is reported again.
     let before = app(&h).station().device.tuya.log_seq;

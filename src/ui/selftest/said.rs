@@ -132,9 +132,10 @@ fn phrases(text: &str, table: &[(&str, &str)]) -> String {
         while let Some(at) = rest.find(en) {
             let before = rest[..at].chars().next_back().or(out.chars().next_back());
             let after = rest[at + en.len()..].chars().next();
-            let edge = !(starts && wordy(before)) && !(ends && wordy(after));
+            // A phrase inside a longer word ("volt" in "voltage") stays as it is.
+            let inside_a_word = (starts && wordy(before)) || (ends && wordy(after));
             out.push_str(&rest[..at]);
-            out.push_str(if edge { zh } else { en });
+            out.push_str(if inside_a_word { en } else { zh });
             rest = &rest[at + en.len()..];
         }
         out.push_str(rest);
