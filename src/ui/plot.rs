@@ -142,8 +142,12 @@ pub const Y_LABEL_SPACING: f32 = 20.0;
 /// The least distance between two grid lines, points (egui_plot's default, set here because
 /// [`y_marks`] reads the plot's scale from it).
 pub const GRID_SPACING: f32 = 8.0;
-/// The air above and below the data in a range from [`y_range`], in y ticks.
+/// The least air above and below the data in a range from [`y_range`], in y ticks.
 const Y_AIR: f64 = 0.1;
+/// Half a y tick label's height, points: the outermost labelled ticks of a range from
+/// [`y_range`] are at least this far inside the data area, so that the lowest label does not
+/// reach down into the time axis's labels (seen at 1024×600: "-200" drawn over "04:38:06").
+const Y_LABEL_HALF: f64 = 8.0;
 /// The most ticks apart a range from [`y_range`] is, however high its plot.
 const MOST_APART: f64 = 6.0;
 
@@ -262,7 +266,14 @@ pub fn y_range(lo: f64, hi: f64, height: f32, integer: bool) -> Option<(f64, f64
             a -= 1.0;
         }
     }
-    Some(((a - Y_AIR) * step, (b + Y_AIR) * step))
+    // Air for half a label: air * height / (b - a + 2 air) >= Y_LABEL_HALF.
+    let room = f64::from(height) - 2.0 * Y_LABEL_HALF;
+    let air = if room > 0.0 {
+        Y_AIR.max(Y_LABEL_HALF * (b - a) / room)
+    } else {
+        Y_AIR
+    };
+    Some(((a - air) * step, (b + air) * step))
 }
 
 /// Sets the y range of the plot being drawn to [`y_range`] of `extent` (the lowest and highest
@@ -450,6 +461,14 @@ mod tests {
     /// [`y_marks`] with a text ([`y_tick`]) whose step puts them at least
     /// [`Y_LABEL_SPACING`] apart (egui_plot's own rule, axis.rs `add_tick_labels`).
     fn labelled(range: (f64, f64), height: f32, integer: bool) -> Vec<String> {
+        labelled_marks(range, height, integer)
+            .into_iter()
+            .map(|m| y_tick(m, integer))
+            .collect()
+    }
+
+    /// The marks [`labelled`] writes.
+    fn labelled_marks(range: (f64, f64), height: f32, integer: bool) -> Vec<GridMark> {
         let per_point = (range.1 - range.0) / f64::from(height);
         let input = GridInput {
             bounds: range,
@@ -458,8 +477,7 @@ mod tests {
         y_marks(input, integer)
             .into_iter()
             .filter(|m| m.step_size / per_point > f64::from(Y_LABEL_SPACING))
-            .map(|m| y_tick(m, integer))
-            .filter(|t| !t.is_empty())
+            .filter(|m| !y_tick(*m, integer).is_empty())
             .collect()
     }
 
@@ -491,6 +509,15 @@ mod tests {
                     "{what} at {height} points over {range:?}: labelled ticks {ticks:?}"
                 );
                 assert!(ticks.len() <= 8, "{what} at {height}: {ticks:?}");
+                // The outermost ticks sit half a label inside the data area.
+                let per_point = (range.1 - range.0) / f64::from(height);
+                let marks = labelled_marks(range, height, integer);
+                let (low, high) = (marks[0].value, marks[marks.len() - 1].value);
+                assert!(
+                    (low - range.0) / per_point >= Y_LABEL_HALF - 1e-6
+                        && (range.1 - high) / per_point >= Y_LABEL_HALF - 1e-6,
+                    "{what} at {height}: ticks {low}..{high} in {range:?}"
+                );
             }
         }
         // The flat battery reads in tenths of a volt around its value.
