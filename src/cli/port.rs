@@ -233,8 +233,8 @@ pub(crate) fn op_error(e: OpError) -> CliError {
         }
     } else if e.is_input() {
         CliError::input(e)
-    } else if let OpError::Exchange(ExchangeError::Timeout { .. }) = e {
-        CliError::device(format!("{e}{}", silent_hint()))
+    } else if let OpError::Exchange(e @ ExchangeError::Timeout { .. }) = e {
+        unanswered(e)
     } else {
         CliError::device(e)
     }
@@ -243,9 +243,30 @@ pub(crate) fn op_error(e: OpError) -> CliError {
 /// Maps a failed exchange to exit code 1 (with the checklist when nothing answered).
 pub(crate) fn exchange_error(e: ExchangeError) -> CliError {
     match e {
-        ExchangeError::Timeout { .. } => CliError::device(format!("{e}{}", silent_hint())),
+        e @ ExchangeError::Timeout { .. } => unanswered(e),
         e => CliError::device(e),
     }
+}
+
+/// A timeout, exit code 1, with the checklist after it: led by the loaded computer when this
+/// computer was held up past the answer's deadline (said there, once, not in the timeout too).
+fn unanswered(e: ExchangeError) -> CliError {
+    let late = e.host_late();
+    let said = match e {
+        ExchangeError::Timeout {
+            command,
+            attempts,
+            waited_ms,
+            ..
+        } => ExchangeError::Timeout {
+            command,
+            attempts,
+            waited_ms,
+            host_late: None,
+        },
+        e => e,
+    };
+    CliError::device(format!("{said}{}", silent_hint_after(late)))
 }
 
 /// The exit code of an operation the operator cancelled (Ctrl-C), as shells give SIGINT.
@@ -265,8 +286,14 @@ fn option_names() -> SettingNames {
 /// options), after `; `: a board that reboots on open too when this run opened its port with no
 /// boot wait.
 pub(crate) fn silent_hint() -> String {
+    silent_hint_after(None)
+}
+
+/// [`silent_hint`] after a timeout during which this computer was held up `host_late` past the
+/// answer's deadline (`None`: on time): then the loaded computer leads, the wiring follows.
+pub(crate) fn silent_hint_after(host_late: Option<std::time::Duration>) -> String {
     let waited = super::console::with(|c| c.boot_wait_ms).is_some_and(|ms| ms > 0);
-    let checks = silent::SilentCheck::list(waited);
+    let checks = silent::SilentCheck::list_after(waited, host_late);
     format!("; {}", silent::checklist(&checks, &option_names()).en)
 }
 

@@ -3,7 +3,7 @@
 //! Ctrl-C the servos found before it, exit 130.
 
 use super::CliResult;
-use super::port::{EXIT_CANCELLED, op_error, silent_hint};
+use super::port::{EXIT_CANCELLED, op_error, silent_hint_after};
 use crate::ops::servo::{self as ops, Presence, ScanPlan, ScanReport, ScanRow};
 use crate::ops::{Cancel, Device, Progress, Run};
 use crate::profile::Profile;
@@ -104,9 +104,16 @@ pub(super) fn run(
             "botbench: no servo answered on {port} (ids {}-{}){}",
             plan.ids.start(),
             plan.ids.end(),
-            silent_hint(),
+            silent_hint_after(report.host_late()),
         );
         return Ok(1);
+    }
+    if let Some(ms) = report.host_late_ms.filter(|_| !report.rows.is_empty()) {
+        super::port::warn(&format!(
+            "this computer was held up {ms:.0} ms past an answer's deadline during the scan (a \
+             loaded computer, not the wiring): a servo may have been missed; close other \
+             programs and scan again"
+        ));
     }
     Ok(0)
 }

@@ -356,6 +356,7 @@ mod tests {
                 command: step.command().into(),
                 attempts: 1,
                 waited_ms: 300,
+                host_late: None,
             })
         };
         TuyaEvent::Step {

@@ -15,7 +15,7 @@ mod worker;
 pub use worker::default_margin;
 
 pub use lines::{BOOT_WAIT_MS, LineLevel, MARGIN_MS, PortSetup, ms_within};
-pub use request::{CommandName, ExchangeError, Match, Reply, ReplySpec, Request};
+pub use request::{CommandName, ExchangeError, HOST_LATE, Match, Reply, ReplySpec, Request};
 pub use serial::PortOpener;
 pub use session::tuya::{HandshakeStep, ProductInfo, StepResult, TuyaEvent, TuyaModuleOptions};
 pub use session::{Capability, DeviceInfo, capabilities};
@@ -161,6 +161,10 @@ pub struct SweepReply {
     pub strays: Vec<Packet>,
     /// The margin the sweep waited with.
     pub margin: Duration,
+    /// The most this computer ran behind a deadline the sweep had set, when more than
+    /// [`HOST_LATE`] (a loaded computer: an id without an answer may have answered with nobody
+    /// there in time); `None`: on time throughout.
+    pub host_late: Option<Duration>,
 }
 
 /// The state of the link.

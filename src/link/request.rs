@@ -257,8 +257,10 @@ impl std::fmt::Display for CommandName {
 /// Why an exchange failed. Nothing stale is ever returned in place of an answer.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum ExchangeError {
-    /// No answer within the deadline, after every attempt.
-    #[error("no answer to {command} after {attempts} attempt(s) of {waited_ms} ms")]
+    /// No answer within the deadline, after every attempt. When the link's thread woke later
+    /// than [`HOST_LATE`] past a deadline it had set during the exchange (a loaded computer),
+    /// the silence says that first: the answer may have come and the host not been there.
+    #[error("no answer to {command} after {attempts} attempt(s) of {waited_ms} ms{}", host_late.map_or(String::new(), held_up))]
     Timeout {
         /// The command.
         command: CommandName,
@@ -266,6 +268,10 @@ pub enum ExchangeError {
         attempts: u8,
         /// How long each attempt waited, in ms.
         waited_ms: u64,
+        /// The most this computer ran behind a deadline the link had set during the exchange,
+        /// when more than [`HOST_LATE`]: the host was held up (a loaded computer), not the
+        /// device silent. `None`: the host was on time.
+        host_late: Option<Duration>,
     },
     /// Answers came back damaged (bad checksum, junk, cut short) on every attempt. On a servo bus,
     /// the sign of two servos sharing an id.
@@ -347,7 +353,54 @@ pub enum ExchangeError {
     Cancelled,
 }
 
+/// How far behind a deadline it set the link's thread may run before it counts as a late host
+/// (a loaded computer): a scheduler's ordinary wake-up is well under a millisecond.
+pub const HOST_LATE: Duration = Duration::from_millis(2);
+
+/// What a timeout says after its figures when the host ran `late` behind the answer's deadline:
+/// ` — this computer was held up 12 ms past the answer's deadline (a loaded computer, not the
+/// wiring): close other programs and retry`.
+fn held_up(late: Duration) -> String {
+    format!(
+        " — this computer was held up {} ms past the answer's deadline (a loaded computer, \
+         not the wiring): close other programs and retry",
+        late.as_millis()
+    )
+}
+
 impl ExchangeError {
+    /// A timeout's lateness of the host ([`ExchangeError::Timeout::host_late`]); `None` for
+    /// any other error, or a host on time.
+    pub fn host_late(&self) -> Option<Duration> {
+        match self {
+            ExchangeError::Timeout { host_late, .. } => *host_late,
+            _ => None,
+        }
+    }
+
+    /// `self`, a timeout during which the host ran `late` behind a deadline it had set: said
+    /// as held up when `late` is more than [`HOST_LATE`] (the larger lateness kept). Any other
+    /// error is returned as it is.
+    pub fn late_host(self, late: Duration) -> Self {
+        match self {
+            ExchangeError::Timeout {
+                command,
+                attempts,
+                waited_ms,
+                host_late,
+            } => ExchangeError::Timeout {
+                command,
+                attempts,
+                waited_ms,
+                host_late: host_late
+                    .into_iter()
+                    .chain((late > HOST_LATE).then_some(late))
+                    .max(),
+            },
+            other => other,
+        }
+    }
+
     /// `self` with every command it speaks of named by `profile` (`no answer to CMD_VERSION
     /// (2)`, not `command 2`); the numbers stay as they were.
     pub fn named(self, profile: &crate::profile::Profile) -> Self {
@@ -357,10 +410,12 @@ impl ExchangeError {
                 command,
                 attempts,
                 waited_ms,
+                host_late,
             } => E::Timeout {
                 command: command.named(profile),
                 attempts,
                 waited_ms,
+                host_late,
             },
             E::Garbled { command, error } => E::Garbled {
                 command: command.named(profile),

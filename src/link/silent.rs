@@ -2,9 +2,12 @@
 //! baud rate, profile, and (when the port was opened with no boot wait) a board that reboots
 //! when the port opens. The checks are typed items, said in both languages; the settings they
 //! name (the baud rate, the profile, the boot wait, the lines) are named by whoever shows them
-//! ([`SettingNames`]): the command line by its options, the window by its fields.
+//! ([`SettingNames`]): the command line by its options, the window by its fields. When the
+//! computer itself was held up past the answer's deadline (a loaded computer), that is said
+//! first, and the wiring only if the device still does not answer with the computer idle.
 
 use crate::i18n::Text;
+use std::time::Duration;
 
 /// One thing to check when nothing answers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -20,6 +23,9 @@ pub enum SilentCheck {
     /// A board that reboots when the port opens (its USB adapter toggles DTR/RTS) needs a boot
     /// wait, or the lines set right after the open.
     Reboots,
+    /// This computer ran this long behind the answer's deadline (a loaded computer): the answer
+    /// may have come with nobody there to read it in time. Said first, as its own sentence.
+    HostLate(Duration),
 }
 
 /// How the settings a check points to are named where the checklist is shown: `--baud` on the
@@ -52,6 +58,15 @@ impl SilentCheck {
         checks
     }
 
+    /// The checks of [`SilentCheck::list`], led by [`SilentCheck::HostLate`] when the timeout
+    /// says this computer was held up `host_late` past the answer's deadline.
+    pub fn list_after(boot_wait_given: bool, host_late: Option<Duration>) -> Vec<SilentCheck> {
+        let mut checks: Vec<SilentCheck> =
+            host_late.map(SilentCheck::HostLate).into_iter().collect();
+        checks.extend(Self::list(boot_wait_given));
+        checks
+    }
+
     /// The check as a clause of the checklist's question (`is the device …`), naming its
     /// setting as `names` does; [`SilentCheck::Reboots`] is a question of its own.
     pub fn said(self, names: &SettingNames) -> Text {
@@ -81,16 +96,36 @@ impl SilentCheck {
                     names.boot_wait.zh, names.lines.zh
                 ),
             ),
+            SilentCheck::HostLate(late) => Text::new(
+                format!(
+                    "this computer was held up {} ms past the answer's deadline (a loaded \
+                     computer, not the wiring): close other programs and retry",
+                    late.as_millis()
+                ),
+                format!(
+                    "这台电脑在应答截止时间后被拖住了 {} ms(是电脑负载过高,不是接线问题):\
+                     请关闭其他程序后重试",
+                    late.as_millis()
+                ),
+            ),
         }
     }
 }
 
 /// The checklist as one paragraph: `nothing answered: is the device powered, …, and with this
-/// profile (…)?`, then the reboot question when it is one of `checks`.
+/// profile (…)?`, then the reboot question when it is one of `checks`. With a
+/// [`SilentCheck::HostLate`] among them, the loaded computer comes first and the rest only for a
+/// device that still does not answer: `this computer was held up 12 ms past the answer's
+/// deadline (…): close other programs and retry; if it still does not answer with the computer
+/// idle: is the device powered, …?`.
 pub fn checklist(checks: &[SilentCheck], names: &SettingNames) -> Text {
+    let host_late = checks.iter().find_map(|c| match c {
+        SilentCheck::HostLate(late) => Some(*late),
+        _ => None,
+    });
     let clauses: Vec<Text> = checks
         .iter()
-        .filter(|c| **c != SilentCheck::Reboots)
+        .filter(|c| !matches!(c, SilentCheck::Reboots | SilentCheck::HostLate(_)))
         .map(|c| c.said(names))
         .collect();
     let en: Vec<&str> = clauses.iter().map(|c| c.en.as_str()).collect();
@@ -100,10 +135,19 @@ pub fn checklist(checks: &[SilentCheck], names: &SettingNames) -> Text {
         Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
         None => String::new(),
     };
-    let mut said = Text::new(
-        format!("nothing answered: is the device {en}?"),
-        format!("无应答:{}?", zh.join("、")),
-    );
+    let mut said = match host_late {
+        None => Text::new(
+            format!("nothing answered: is the device {en}?"),
+            format!("无应答:{}?", zh.join("、")),
+        ),
+        Some(late) => SilentCheck::HostLate(late).said(names).then(
+            "; ",
+            &Text::new(
+                format!("if it still does not answer with the computer idle: is the device {en}?"),
+                format!("若电脑空闲时仍无应答:{}?", zh.join("、")),
+            ),
+        ),
+    };
     if checks.contains(&SilentCheck::Reboots) {
         said = said.then(" ", &SilentCheck::Reboots.said(names));
     }
@@ -147,5 +191,40 @@ mod tests {
         for c in SilentCheck::list(false) {
             assert!(!c.said(&names()).zh.is_empty());
         }
+    }
+
+    /// After a timeout on a held-up computer the loaded computer leads, and the wiring follows
+    /// only for a device that still does not answer (issue 25, item 4e).
+    #[test]
+    fn a_held_up_computer_leads_the_checklist() {
+        let late = Some(Duration::from_millis(31));
+        let checks = SilentCheck::list_after(true, late);
+        assert_eq!(
+            checks.first(),
+            Some(&SilentCheck::HostLate(Duration::from_millis(31)))
+        );
+        let said = checklist(&checks, &names());
+        assert_eq!(
+            said.en,
+            "this computer was held up 31 ms past the answer's deadline (a loaded computer, not \
+             the wiring): close other programs and retry; if it still does not answer with the \
+             computer idle: is the device powered, its TX wired to the adapter's RX (and RX to \
+             TX, GND to GND), at this baud rate (--baud) and with this profile (--profile)?"
+        );
+        assert!(
+            said.zh
+                .starts_with("这台电脑在应答截止时间后被拖住了 31 ms"),
+            "{}",
+            said.zh
+        );
+        assert!(
+            said.zh.contains("若电脑空闲时仍无应答:设备是否通电"),
+            "{}",
+            said.zh
+        );
+        assert_eq!(
+            SilentCheck::list_after(false, None),
+            SilentCheck::list(false)
+        );
     }
 }

@@ -428,6 +428,7 @@ mod tests {
                 command: drive.into(),
                 attempts: 3,
                 waited_ms: 50,
+                host_late: None,
             }),
         );
         assert!(c.tick(&rt).is_empty());

@@ -239,7 +239,18 @@ impl Zh for ExchangeError {
                 command,
                 attempts,
                 waited_ms,
-            } => format!("命令 {command} 无应答(尝试 {attempts} 次,每次等待 {waited_ms} ms)"),
+                host_late,
+            } => {
+                let held_up = host_late.map_or(String::new(), |late| {
+                    format!(
+                        "——这台电脑在应答截止时间后被拖住了 {} ms(是电脑负载过高,不是接线问题):请关闭其他程序后重试",
+                        late.as_millis()
+                    )
+                });
+                format!(
+                    "命令 {command} 无应答(尝试 {attempts} 次,每次等待 {waited_ms} ms){held_up}"
+                )
+            }
             ExchangeError::Garbled { command, error } => {
                 format!("命令 {command} 的应答已损坏:{}", error.zh())
             }
@@ -583,5 +594,35 @@ pub fn value_marks(shown: &str, lang: Lang) -> String {
     match shown.split_once("!! out of range ") {
         Some((value, range)) => format!("{value}!! 超出范围 {}", range.replacen(" to ", " 至 ", 1)),
         None => shown,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    /// A timeout on a held-up computer says so in 中文 too, with the figure, and no English.
+    #[test]
+    fn a_timeout_on_a_held_up_computer_says_so_in_chinese() {
+        let timeout = |host_late| ExchangeError::Timeout {
+            command: 3.into(),
+            attempts: 2,
+            waited_ms: 25,
+            host_late,
+        };
+        let late = timeout(Some(Duration::from_millis(31))).zh();
+        assert!(
+            late.contains("这台电脑在应答截止时间后被拖住了 31 ms")
+                && late.contains("不是接线问题")
+                && late.contains("请关闭其他程序后重试"),
+            "{late}"
+        );
+        assert!(
+            !late.contains("held up") && !late.contains("loaded"),
+            "{late}"
+        );
+        let on_time = timeout(None).zh();
+        assert!(!on_time.contains("拖住"), "{on_time}");
     }
 }

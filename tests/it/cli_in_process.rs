@@ -63,3 +63,100 @@ fn a_run_in_this_process_reads_the_profiles_of_the_folder_it_is_given_never_the_
     assert_eq!(ran.code, 0, "{}", ran.text());
     assert!(ran.out.contains("window-cleaner"), "{}", ran.text());
 }
+
+/// A port nothing ever answers on, on a computer so loaded that every read that finds nothing
+/// returns 30 ms after its deadline (the link's thread not scheduled in time).
+struct HeldUpSilent;
+
+impl botbench::link::Transport for HeldUpSilent {
+    fn write(&mut self, _bytes: &[u8]) -> Result<(), botbench::link::LinkError> {
+        Ok(())
+    }
+    fn read(
+        &mut self,
+        _buf: &mut [u8],
+        deadline: std::time::Instant,
+    ) -> Result<usize, botbench::link::LinkError> {
+        let wake = deadline + std::time::Duration::from_millis(30);
+        std::thread::sleep(wake.saturating_duration_since(std::time::Instant::now()));
+        Ok(0)
+    }
+    fn set_baud(&mut self, _baud: u32) -> Result<(), botbench::link::LinkError> {
+        Ok(())
+    }
+    fn baud(&self) -> u32 {
+        115_200
+    }
+    fn clear_input(&mut self) -> Result<(), botbench::link::LinkError> {
+        Ok(())
+    }
+    fn describe(&self) -> String {
+        "a silent port on a held-up computer".into()
+    }
+}
+
+/// The path the held-up silent port is served at.
+const HELD_UP: &str = "/botbench-test/held-up-silent";
+
+/// The system's ports, and [`HeldUpSilent`] at [`HELD_UP`].
+fn held_up_ports() -> PortOpener {
+    PortOpener::system().with_port(HELD_UP, |_baud| {
+        Box::new(|| Ok(Box::new(HeldUpSilent) as Box<dyn botbench::link::Transport>))
+    })
+}
+
+/// A servo read that went unanswered while this computer was held up past the answer's
+/// deadline says the loaded computer first, and the wiring checklist only after it, once
+/// (issue 25, item 4e: a loaded host is not a missing servo).
+#[test]
+fn an_unanswered_read_on_a_held_up_computer_leads_with_the_loaded_computer() {
+    let ran = run_in_process(
+        &["servo", "--port", HELD_UP, "read", "1", "voltage"],
+        &held_up_ports(),
+    );
+    assert_eq!(ran.code, 1, "{}", ran.text());
+    let said = ran.err.lines().last().unwrap_or_default();
+    assert!(
+        said.contains("no answer to READ_DATA (3) after"),
+        "{}",
+        ran.text()
+    );
+    let late = said.find("; this computer was held up ");
+    let wiring = said.find("TX wired");
+    assert!(
+        late.is_some() && wiring.is_some() && late < wiring,
+        "the loaded computer leads: {said}"
+    );
+    assert!(
+        said.contains(
+            " ms past the answer's deadline (a loaded computer, not the wiring): close other \
+             programs and retry; if it still does not answer with the computer idle: is the \
+             device powered"
+        ),
+        "{said}"
+    );
+    assert_eq!(said.matches("held up").count(), 1, "said once: {said}");
+}
+
+/// A scan that found nothing while this computer was held up past its sweeps' deadlines says
+/// the loaded computer first, before the wiring, and still exits 1.
+#[test]
+fn an_empty_scan_on_a_held_up_computer_leads_with_the_loaded_computer() {
+    let ran = run_in_process(
+        &["servo", "--port", HELD_UP, "scan", "--ids", "0-3"],
+        &held_up_ports(),
+    );
+    assert_eq!(ran.code, 1, "{}", ran.text());
+    let said = ran
+        .err
+        .lines()
+        .find(|l| l.contains("no servo answered on"))
+        .unwrap_or_default();
+    let late = said.find("; this computer was held up ");
+    let wiring = said.find("TX wired");
+    assert!(
+        late.is_some() && wiring.is_some() && late < wiring,
+        "the loaded computer leads: {}",
+        ran.text()
+    );
+}

@@ -130,6 +130,7 @@ fn more_reasons() -> Vec<(Reason, &'static [&'static str])> {
         },
         attempts: 3,
         waited_ms: 300,
+        host_late: None,
     };
     vec![
         (Reason::NoServo, &[]),

@@ -83,6 +83,7 @@ fn timeout(command: u8) -> Result<Reply, ExchangeError> {
         command: command.into(),
         attempts: 2,
         waited_ms: 20,
+        host_late: None,
     })
 }
 

@@ -6,7 +6,7 @@
 
 use super::Worker;
 use super::wait::{BurstEnd, Outcome};
-use crate::link::request::{ExchangeError, Match, Reply, ReplySpec, Request};
+use crate::link::request::{ExchangeError, HOST_LATE, Match, Reply, ReplySpec, Request};
 use crate::link::session::Unasked;
 use crate::link::{LinkError, LinkEvent, NoAnswer, wire_time};
 use crate::packet::{Header, Packet};
@@ -14,10 +14,6 @@ use crate::profile::Protocol;
 use crate::protocol::{Direction, FrameError};
 use log::debug;
 use std::time::{Duration, Instant, SystemTime};
-
-/// How far behind a deadline it set the link's thread may run before it counts as a late host
-/// (a loaded computer): a scheduler's ordinary wake-up is well under a millisecond.
-pub(super) const HOST_LATE: Duration = Duration::from_millis(2);
 
 /// The default answer margin of a protocol: how long the device may think before its first byte
 /// (the seeds' and the field's figures: MSP 20 ms, servo 1.5 ms, Tuya 300 ms).
@@ -96,8 +92,10 @@ impl Worker {
         self.wire.written_at().unwrap_or(reckoned)
     }
 
-    /// The host ran `late` behind a deadline it had set: counted, the worst kept.
+    /// The host ran `late` behind a deadline it had set: counted, the worst kept (for the
+    /// link, and for the exchange under way: [`Self::watching_late`]).
     pub(super) fn host_late(&mut self, late: Duration) {
+        self.late_seen = self.late_seen.max(late);
         let stats = &mut self.wire.stats;
         stats.host_late += 1;
         stats.host_late_max = stats.host_late_max.max(late);
@@ -105,6 +103,26 @@ impl Worker {
             "the host ran {:.1} ms behind a deadline (a loaded computer)",
             late.as_secs_f64() * 1e3
         );
+    }
+
+    /// A read until `deadline` found nothing, so it returned at its deadline: later than
+    /// [`HOST_LATE`] after it is a late host, counted ([`Self::host_late`]).
+    pub(super) fn woke_after(&mut self, deadline: Instant) {
+        let woke = Instant::now().saturating_duration_since(deadline);
+        if woke > HOST_LATE {
+            self.host_late(woke);
+        }
+    }
+
+    /// Runs `f` (an exchange, a poll's wait, a sweep) and returns what it gave with the most the
+    /// host ran behind a deadline during it (zero: on time throughout). Watches nest: an
+    /// exchange within one (a fence) counts for both.
+    pub(super) fn watching_late<T>(&mut self, f: impl FnOnce(&mut Self) -> T) -> (T, Duration) {
+        let outer = std::mem::take(&mut self.late_seen);
+        let result = f(self);
+        let late = self.late_seen;
+        self.late_seen = outer.max(late);
+        (result, late)
     }
 
     /// Reads what arrives before `deadline` into the decoder; a failed read loses the port.
@@ -213,11 +231,19 @@ impl Worker {
     /// answer; a frame that answers something else is never taken for it, nor is an answer owed
     /// to an earlier request. After the last attempt, an in-order device (MSP, servo) is given
     /// the grace period to answer late; attempts left unanswered are owed.
+    ///
+    /// A timeout during which the host ran behind one of the exchange's deadlines by more than
+    /// [`HOST_LATE`] says so ([`ExchangeError::Timeout::host_late`]).
     pub(super) fn exchange(&mut self, req: &Request) -> Result<Reply, ExchangeError> {
         self.exchange_with(req, true)
     }
 
     fn exchange_with(&mut self, req: &Request, fence: bool) -> Result<Reply, ExchangeError> {
+        let (result, late) = self.watching_late(|w| w.exchange_once(req, fence));
+        result.map_err(|e| e.late_host(late))
+    }
+
+    fn exchange_once(&mut self, req: &Request, fence: bool) -> Result<Reply, ExchangeError> {
         let (mut bytes, mut sent) = self.session.encode(req)?;
         if req.bad_checksum
             && let Some(last) = bytes.last_mut()
@@ -253,6 +279,7 @@ impl Worker {
             command: req.command.into(),
             attempts,
             waited_ms: 0,
+            host_late: None,
         };
         for attempt in 1..=attempts {
             match self.attempt(&mut x, attempt)? {
@@ -473,6 +500,7 @@ impl Worker {
                 command: command.into(),
                 attempts,
                 waited_ms: waited.as_millis() as u64,
+                host_late: None,
             }
         }
     }

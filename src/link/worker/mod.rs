@@ -19,6 +19,8 @@ mod polls;
 mod port;
 mod queue;
 mod sweep;
+#[cfg(test)]
+mod tests;
 mod timing;
 mod wait;
 mod wire;
@@ -68,6 +70,9 @@ pub(super) struct Worker {
     opts: LinkOptions,
     /// The counters last reported, and when.
     stats_reported: (LinkStats, Instant),
+    /// The most the host ran behind a deadline it had set since the watch under way began
+    /// ([`Worker::watching_late`]).
+    late_seen: Duration,
     shutdown: bool,
 }
 
@@ -108,6 +113,7 @@ impl Worker {
             cmds,
             opts,
             stats_reported: (LinkStats::default(), now),
+            late_seen: Duration::ZERO,
             shutdown: false,
         }
     }

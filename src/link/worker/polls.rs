@@ -170,7 +170,7 @@ impl Worker {
         };
         let margin = self.timing.margin(&f.request);
         let deadline = f.deadline.max(Instant::now() + margin);
-        let waited = self.wait_for(&each, None, deadline);
+        let (waited, late) = self.watching_late(|w| w.wait_for(&each, None, deadline));
         let answered_other = matches!(
             &waited,
             Ok(Waited {
@@ -181,7 +181,9 @@ impl Worker {
         );
         let result = match waited {
             Err(e) => Err(e),
-            Ok(w) => self.poll_answer(&f, &each, w, margin),
+            Ok(w) => self
+                .poll_answer(&f, &each, w, margin)
+                .map_err(|e| e.late_host(late)),
         };
         let at = Instant::now();
         self.polls.done(f.index, &f.request, at);
@@ -217,6 +219,7 @@ impl Worker {
                     command: f.request.command.into(),
                     attempts: 1,
                     waited_ms: 0,
+                    host_late: None,
                 })
             }
             Outcome::Nothing => {
@@ -247,6 +250,7 @@ impl Worker {
                     command: f.request.command.into(),
                     attempts: 1,
                     waited_ms,
+                    host_late: None,
                 }),
             });
         }
@@ -264,6 +268,7 @@ impl Worker {
                 command: poll.request.command.into(),
                 attempts: 1,
                 waited_ms: 0,
+                host_late: None,
             })
         });
         self.events.emit(LinkEvent::Telemetry {

@@ -6,7 +6,7 @@
 //! (the devices answer in order), and what answers none of the sweep's requests is handed back.
 
 use super::Worker;
-use crate::link::request::{ExchangeError, ReplySpec};
+use crate::link::request::{ExchangeError, HOST_LATE, ReplySpec};
 use crate::link::{Damaged, Sweep, SweepAnswer, SweepReply, wire_time};
 use crate::packet::Packet;
 use crate::protocol::{Direction, FrameError};
@@ -77,7 +77,16 @@ impl Worker {
     /// the line has been quiet for the margin after the last request's window (or every request
     /// has its answer); one that listens, not before the grace an exchange gives has passed
     /// since it began (the grace as its own answers leave it: they are measured too).
+    /// The reply says how late the host ran, when it did ([`SweepReply::host_late`]).
     pub(super) fn run_sweep(&mut self, sweep: &Sweep) -> Result<SweepReply, ExchangeError> {
+        let (result, late) = self.watching_late(|w| w.sweep_once(sweep));
+        result.map(|reply| SweepReply {
+            host_late: (late > HOST_LATE).then_some(late),
+            ..reply
+        })
+    }
+
+    fn sweep_once(&mut self, sweep: &Sweep) -> Result<SweepReply, ExchangeError> {
         let started = Instant::now();
         let mut run = self.sweep_run(sweep);
         let answer_time = sweep.device_latency + wire_time(sweep.answer_bytes, self.wire.baud());
@@ -211,7 +220,9 @@ impl Worker {
             } else {
                 now
             };
-            if self.read_some(slice)? > 0 && settle {
+            if self.read_some(slice)? == 0 {
+                self.woke_after(slice);
+            } else if settle {
                 flushed = false;
                 deadline = self.settle_deadline(deadline, gap, run.margin);
             }
@@ -333,5 +344,6 @@ fn finish(run: Run) -> SweepReply {
         garbled,
         strays: run.strays,
         margin: run.margin,
+        host_late: None,
     }
 }

@@ -168,11 +168,7 @@ impl Worker {
                 self.bytes_came(&mut w);
             } else {
                 w.looked_to = Some(slice);
-                // A read that found nothing returns at its deadline: later is a late host.
-                let woke = Instant::now().saturating_duration_since(slice);
-                if woke > super::exchange::HOST_LATE {
-                    self.host_late(woke);
-                }
+                self.woke_after(slice);
             }
         }
     }

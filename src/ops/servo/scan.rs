@@ -99,6 +99,31 @@ pub struct ScanReport {
     /// The margin the last sweep waited with: `--margin-ms`, or the automatic one (the servo's
     /// 1.5 ms, the adapter's latency timer, the answer latency measured), in ms.
     pub margin_ms: f64,
+    /// The most this computer ran behind a deadline of the scan's ping sweeps, in ms, when more
+    /// than [`crate::link::HOST_LATE`] (a loaded computer: a servo may have been missed);
+    /// `None`: on time throughout.
+    pub host_late_ms: Option<f64>,
+}
+
+impl ScanReport {
+    /// Keeps the larger of the lateness so far and `late` (a sweep's
+    /// [`SweepReply::host_late`]).
+    fn held_up(&mut self, late: Option<Duration>) {
+        self.held_up_ms(late.map(|l| l.as_secs_f64() * 1e3));
+    }
+
+    /// Keeps the larger of the lateness so far and `ms` (another report's).
+    fn held_up_ms(&mut self, ms: Option<f64>) {
+        if let Some(ms) = ms {
+            self.host_late_ms = Some(self.host_late_ms.map_or(ms, |m| m.max(ms)));
+        }
+    }
+
+    /// [`ScanReport::host_late_ms`] as a duration.
+    pub fn host_late(&self) -> Option<Duration> {
+        self.host_late_ms
+            .map(|ms| Duration::from_secs_f64(ms / 1e3))
+    }
 }
 
 /// How long a servo takes on the bus before it answers, at most (the vendor's: 0.2-1 ms).
@@ -169,6 +194,7 @@ impl<'a> Found<'a> {
                 asked_again: 0,
                 late_answers: 0,
                 margin_ms: 0.0,
+                host_late_ms: None,
             },
             cancelled: false,
         };
@@ -204,6 +230,7 @@ impl<'a> Found<'a> {
     /// that servo's, however late; ask it again to be sure. A damaged frame that can be a late
     /// answer to a ping makes every id pinged without a clean answer one to ask again.
     fn take_late(&mut self, reply: &SweepReply) {
+        self.report.held_up(reply.host_late);
         for id in pinged(&reply.strays) {
             if self.ids.contains(&id) {
                 self.report.late_answers += 1;
@@ -246,6 +273,7 @@ impl<'a> Found<'a> {
             let mut sweep = ping_sweep(&ask);
             sweep.listen = true;
             let reply = client.sweep(sweep)?;
+            self.report.held_up(reply.host_late);
             for (i, a) in reply.answers.iter().enumerate() {
                 if let Some(a) = a {
                     found.insert(ask[i], Presence::Present);
@@ -291,6 +319,7 @@ impl<'a> Found<'a> {
         }
         if silent.iter().any(|id| !found.contains_key(id)) {
             let tail = client.sweep(ping_sweep(&[]))?;
+            self.report.held_up(tail.host_late);
             self.found_late(&tail.strays, &mut found);
         }
         Ok((found.into_iter().collect(), self.report))
@@ -487,6 +516,7 @@ pub fn scan(
         asked_again: 0,
         late_answers: 0,
         margin_ms: 0.0,
+        host_late_ms: None,
     };
     let result = (|| {
         for (b, &baud) in bauds.iter().enumerate() {
@@ -507,6 +537,7 @@ pub fn scan(
             report.asked_again += at_baud.asked_again;
             report.late_answers += at_baud.late_answers;
             report.margin_ms = at_baud.margin_ms;
+            report.held_up_ms(at_baud.host_late_ms);
             report.rows.extend(at_baud.rows);
         }
         Ok(())
