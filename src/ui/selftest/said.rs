@@ -132,7 +132,7 @@ fn phrases(text: &str, table: &[(&str, &str)]) -> String {
         while let Some(at) = rest.find(en) {
             let before = rest[..at].chars().next_back().or(out.chars().next_back());
             let after = rest[at + en.len()..].chars().next();
-            let edge = !(starts && wordy(before)) && !(ends && wordy(after));
+            let edge = !((starts && wordy(before)) || (ends && wordy(after)));
             out.push_str(&rest[..at]);
             out.push_str(if edge { zh } else { en });
             rest = &rest[at + en.len()..];
