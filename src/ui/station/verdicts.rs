@@ -143,6 +143,33 @@ mod tests {
     }
 
     #[test]
+    fn a_provisioning_whose_link_was_lost_is_no_verdict_on_the_unit() {
+        use crate::ops::servo::provision::Outcome;
+        let record = |result| {
+            Box::new(Record {
+                time: String::new(),
+                serial: Some(1),
+                id: None,
+                baud: None,
+                result,
+                mismatches: Vec::new(),
+                recorded: Vec::new(),
+                timeline: Vec::new(),
+                writes: Vec::new(),
+            })
+        };
+        let mut v = Verdicts::default();
+        v.take(Verdict::Provisioned(record(Outcome::LinkLost {
+            step: "set baud".into(),
+            reason: "port lost".into(),
+        })));
+        assert!(!v.is_empty(), "shown until dismissed");
+        assert_eq!(v.pass(), None, "says nothing of the unit");
+        v.take(Verdict::Provisioned(record(Outcome::Pass)));
+        assert_eq!(v.pass(), Some(true));
+    }
+
+    #[test]
     fn a_verdict_on_a_unit_that_never_identified_stays_until_the_next_run() {
         let mut v = Verdicts::default();
         v.take(Verdict::SelfTest(report(false, None)));
