@@ -1,5 +1,6 @@
 //! `botbench servo provision PLAN`: production provisioning, one fresh servo after another, with
-//! a PASS or FAIL line for each and a CSV log.
+//! a PASS or FAIL line for each (NO VERDICT when the port went away during a step: the run ends
+//! there, exit 1 as a self-test's) and a CSV log.
 
 use super::port::PortArgs;
 use super::{CliError, CliResult};
@@ -32,7 +33,7 @@ pub(crate) fn run(
     let client = link.client();
     let cancel = super::port::cancel_on_ctrl_c();
     let mut state = ProvisionState::new();
-    let (mut passed, mut failed) = (0u32, 0u32);
+    let (mut passed, mut failed, mut lost) = (0u32, 0u32, 0u32);
     let mut last: Option<Record> = None;
     for n in 1..=count {
         if let Some(prev) = &last {
@@ -63,10 +64,10 @@ pub(crate) fn run(
             log,
         );
         let record = recorded.outcome;
-        if record.result.is_pass() {
-            passed += 1;
-        } else {
-            failed += 1;
+        match &record.result {
+            Outcome::Pass => passed += 1,
+            Outcome::Fail { .. } => failed += 1,
+            Outcome::LinkLost { .. } => lost += 1,
         }
         if let Some(serial) = &recorded.record.unit.serial {
             say_earlier(&mut recorder, &profile.id, serial, &recorded.record.uuid);
@@ -78,8 +79,9 @@ pub(crate) fn run(
                 "the servo was not logged: cannot append to {}: {e}",
                 log.map(|p| p.display().to_string()).unwrap_or_default()
             );
-            // The exit code names who failed: a failed servo first, else the log.
-            return Err(if failed > 0 {
+            // The exit code names who failed: a failed servo (or its lost link) first, else the
+            // log.
+            return Err(if failed > 0 || lost > 0 {
                 CliError::device(e)
             } else {
                 CliError::input(e)
@@ -90,12 +92,23 @@ pub(crate) fn run(
         if cancel.is_cancelled() && (!record.result.is_pass() || n < count) {
             return Err(cancelled_provisioning(&record, n, count));
         }
+        if record.result.link_lost().is_some() {
+            // The port is gone: no further servo can be provisioned on it.
+            if n < count {
+                errln!("botbench: servos {} to {count} not provisioned", n + 1);
+            }
+            break;
+        }
         last = Some(record);
     }
     if !port.json && count > 1 {
-        outln!("{passed} PASS, {failed} FAIL");
+        match lost {
+            0 => outln!("{passed} PASS, {failed} FAIL"),
+            _ => outln!("{passed} PASS, {failed} FAIL, {lost} NO VERDICT"),
+        }
     }
-    Ok(u8::from(failed > 0))
+    // As the self-test: a run with no verdict (the link lost) exits 1, as a failure does.
+    Ok(u8::from(failed > 0 || lost > 0))
 }
 
 /// Provisioning the operator cancelled (Ctrl-C) during servo `n` of `count`: `cancelled after
@@ -117,7 +130,7 @@ fn cancelled_provisioning(record: &Record, n: u32, count: u32) -> CliError {
     };
     let (done, this) = match &record.result {
         Outcome::Pass => (n, format!("servo {n} provisioned whole")),
-        Outcome::Fail { step, .. } => (
+        Outcome::Fail { step, .. } | Outcome::LinkLost { step, .. } => (
             n - 1,
             format!(
                 "servo {n} stopped at {step}, written to it: {written}; not done: the rest of its plan"
@@ -359,5 +372,10 @@ fn print_record(r: &Record, n: u32, count: u32, params: usize, json: bool) {
                 outln!("               mismatch: {m}");
             }
         }
+        Outcome::LinkLost { step, reason } => outln!(
+            "NO VERDICT: link lost during {step}: {reason} (servo {n}/{count}  serial {serial}  id {}  baud {}); nothing is known of its steps not done: provision this servo again",
+            opt(r.id.map(|i| i.to_string())),
+            opt(r.baud.map(|b| b.to_string())),
+        ),
     }
 }

@@ -80,6 +80,15 @@ pub enum JobError {
         /// Why.
         reason: String,
     },
+    /// The port went away during a step (of a servo's provisioning): no verdict on the
+    /// device, which did not fail the step.
+    #[error("NO VERDICT: link lost during {}: {why}", step.en)]
+    LinkLostDuring {
+        /// The step, in both languages.
+        step: crate::i18n::Text,
+        /// What the link said.
+        why: String,
+    },
     /// A log could not be appended to.
     #[error(transparent)]
     Log(#[from] LogError),

@@ -406,6 +406,33 @@ fn link_lost_selftest(app: &mut App) {
     app.station_mut().verdicts.take(verdict);
 }
 
+/// The Production tab as a servo whose port went while its rate was set leaves it (the NO
+/// VERDICT banner, `link lost during set baud`): the record of a fresh servo given id 1.
+fn link_lost_provisioning(app: &mut App) {
+    use crate::ops::servo::provision::{Outcome, Record, step};
+    let record = Record {
+        time: chrono::Local::now().to_rfc3339_opts(chrono::SecondsFormat::Secs, false),
+        serial: Some(1001),
+        id: Some(1),
+        baud: None,
+        result: Outcome::LinkLost {
+            step: step::SET_BAUD.into(),
+            reason: "port lost: the port disappeared (unplugged?)".into(),
+        },
+        mismatches: Vec::new(),
+        recorded: Vec::new(),
+        timeline: Vec::new(),
+        writes: Vec::new(),
+    };
+    let shown = record.clone();
+    app.with_panel(move |servo: &mut ServoBenchPanel, _| {
+        let state = servo.production.state.clone();
+        servo.production.on_record(shown, state, None);
+    });
+    let verdict = super::station::Verdict::Provisioned(Box::new(record));
+    app.station_mut().verdicts.take(verdict);
+}
+
 /// What a technician would have on screen before the shots of a device of `kind`.
 fn preparation(kind: SimKind) -> Vec<Prep> {
     match kind {
@@ -485,6 +512,11 @@ fn preparation(kind: SimKind) -> Vec<Prep> {
                     app.station().job_progress().is_none()
                         && !app.panel::<ServoBenchPanel>().params.values.is_empty()
                 },
+            },
+            Prep {
+                what: "a provisioning with no verdict: the link lost while the rate was set",
+                start: link_lost_provisioning,
+                done: |app| !app.panel::<ServoBenchPanel>().production.history.is_empty(),
             },
         ],
         SimKind::TuyaVacuum => vec![Prep {

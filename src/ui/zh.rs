@@ -101,6 +101,9 @@ impl Zh for JobError {
             }
             JobError::Failed(what) => format!("不合格:{}", what.zh),
             JobError::StepFailed { step, reason } => format!("在 {step} 步失败:{reason}"),
+            JobError::LinkLostDuring { step, why } => {
+                format!("无结论:在“{}”步骤中连接丢失:{why}", step.zh)
+            }
             JobError::Log(e) => e.zh(),
             JobError::File { path, reason } => format!("{}:{reason}", path.display()),
             JobError::Thread(e) => format!("无法启动任务线程:{e}"),

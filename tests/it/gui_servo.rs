@@ -205,6 +205,79 @@ fn provision_next_on_a_fresh_servo_shows_pass_and_the_servo_has_the_plans_id_and
     assert!(h.query_by_label_contains("FAIL · step detect").is_some());
 }
 
+/// A port lost while a servo is provisioned is no verdict on the servo (issue 25, item 6): the
+/// banner says NO VERDICT, `link lost during <step>` (in 中文 too), never FAIL, and the
+/// session counts it apart from the passed and the failed.
+#[test]
+fn a_port_lost_during_provisioning_shows_no_verdict_naming_the_step() {
+    use botbench::ops::servo::provision::Outcome;
+    use botbench::sim::{Faults, Line};
+    // The port vanishes (the adapter unplugged) part of the way through the servo's steps.
+    let faults = Faults {
+        line: Line {
+            vanish_after_bytes: Some(400),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let b = crate::support::serve_with(ServoBus::new(vec![SimServo::fresh(4101)]), faults);
+    let mut h = harness(&b, Lang::En);
+    h.get_by_label("Production").click();
+    h.step();
+    let plan = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/presets/servo-provision-plan.ron"
+    );
+    type_into(&mut h, "Plan", plan);
+    h.get_by_label("Load plan").click();
+    h.step();
+    h.get_by_label("Provision next").click();
+    h.step();
+    step_until(&mut h, "provisioning", |a| {
+        idle(a) && !a.panel::<ServoBenchPanel>().production.history.is_empty()
+    });
+    h.step();
+    let record = app(&h).panel::<ServoBenchPanel>().production.history[0].clone();
+    let Outcome::LinkLost { step, .. } = &record.result else {
+        panic!("{record:?}");
+    };
+    let zh = botbench::ops::servo::provision::step::said(step).zh;
+    assert!(
+        h.query_all_by_label_contains("NO VERDICT · link lost during ")
+            .next()
+            .is_some(),
+        "the banner: {record:?}"
+    );
+    assert!(
+        h.query_all_by_label_contains(&format!("NO VERDICT: link lost during {step}"))
+            .next()
+            .is_some(),
+        "the history's row"
+    );
+    assert!(
+        h.query_all_by_label_contains("FAIL").next().is_none(),
+        "no step failing"
+    );
+    assert!(
+        h.query_all_by_label_contains("0 passed, 0 failed, 1 no verdict")
+            .next()
+            .is_some(),
+        "the session's tally"
+    );
+    app_mut(&mut h).settings.lang = Lang::Zh;
+    h.run_steps(2);
+    assert!(
+        h.query_all_by_label_contains(&format!("无结论 · 在“{zh}”步骤中连接丢失"))
+            .next()
+            .is_some(),
+        "the banner in 中文"
+    );
+    assert!(
+        h.query_all_by_label_contains("1 无结论").next().is_some(),
+        "the tally in 中文"
+    );
+}
+
 #[test]
 fn stop_all_reaches_every_servo_and_is_there_while_a_job_runs() {
     let b = bench(vec![

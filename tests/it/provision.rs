@@ -228,7 +228,7 @@ fn two_fresh_servos_on_the_bus_fail_at_detect_with_nothing_written() {
                 assert_eq!(step, "detect", "{r:?}");
                 assert!(reason.contains("more than one servo"), "{reason}");
             }
-            Outcome::Pass => panic!("{r:?}"),
+            other => panic!("{other:?} in {r:?}"),
         }
         assert_eq!((r.serial, r.id), (None, None));
         assert!(state.assigned.is_empty());
@@ -277,7 +277,7 @@ fn a_servo_unplugged_after_its_id_is_set_fails_at_set_baud() {
                 "{reason}"
             );
         }
-        Outcome::Pass => panic!("{r:?}"),
+        other => panic!("{other:?} in {r:?}"),
     }
     assert_eq!((r.serial, r.id), (Some(5001), Some(1)));
     let dir = temp_dir();
@@ -301,9 +301,74 @@ fn a_servo_unplugged_while_its_params_are_written_fails_there() {
                 "{reason}"
             );
         }
-        Outcome::Pass => panic!("{r:?}"),
+        other => panic!("{other:?} in {r:?}"),
     }
     assert!(r.recorded.iter().all(|(_, v)| v.is_none()));
+}
+
+/// Provisions servo 5001, its port vanishing (the adapter unplugged) when progress first
+/// reports `when`.
+fn port_lost_at(when: &str) -> Record {
+    let bench = Bench::new(vec![SimServo::fresh(5001)]);
+    let plan = plan(&bench.profile);
+    let vanish = bench.served.server.vanish_handle();
+    let mut gone = false;
+    let r = bench.provision_with(&plan, &mut ProvisionState::new(), &mut |p| {
+        if !gone && p.message.en.starts_with(when) {
+            gone = true;
+            vanish.vanish();
+        }
+    });
+    assert!(gone, "progress never reported {when}");
+    r
+}
+
+/// A port lost during a step is no verdict on the servo (issue 25, item 6): `link lost during
+/// <step>`, in the record, its JSON, the CSV log and the production records, never that step
+/// failing.
+#[test]
+fn a_port_lost_during_a_step_is_no_verdict_naming_the_step_in_the_log_and_the_records() {
+    use botbench::ops::records::runs::{Given, provision_into};
+    use botbench::ops::records::{Record as RunRecord, RunKind, StepClock, Verdict};
+    for (when, step) in [
+        ("detect", "detect"),
+        ("set baud", "set baud"),
+        ("apply params: over_volt_high", "apply params"),
+        ("verify", "verify"),
+    ] {
+        let r = port_lost_at(when);
+        match &r.result {
+            Outcome::LinkLost { step: lost, reason } => {
+                assert_eq!(lost, step, "{r:?}");
+                assert!(reason.contains("port disconnected"), "{reason}");
+            }
+            other => panic!("lost at {when}: {other:?} in {r:?}"),
+        }
+        assert!(!r.result.is_pass() && !r.result.is_fail(), "{r:?}");
+        let json = serde_json::to_value(&r).unwrap();
+        assert_eq!(json["result"]["status"], "link_lost", "{json}");
+        assert_eq!(json["result"]["step"], step, "{json}");
+
+        let dir = temp_dir();
+        let log = dir.path().join("lost.csv");
+        prov::append_csv(&log, &r).unwrap();
+        let rows = parse_csv(&std::fs::read_to_string(&log).unwrap());
+        assert_eq!(rows[1][col(&rows[0], "result")], "NO VERDICT", "{rows:?}");
+        assert_eq!(rows[1][col(&rows[0], "step")], step);
+        assert!(
+            rows[1][col(&rows[0], "reason")].starts_with("link lost: "),
+            "{rows:?}"
+        );
+
+        // Recorded as a self-test's interrupted run is: FAIL at the step, reason `link lost`.
+        let mut run = RunRecord::start(RunKind::Provision, "plan.ron", None, "servo");
+        provision_into(&mut run, &r, &Given::default(), &StepClock::start());
+        assert_eq!(run.verdict, Verdict::Fail);
+        assert_eq!(run.failed_step.as_deref(), Some(step), "{run:?}");
+        assert_eq!(run.reason.as_deref(), Some("link lost"), "{run:?}");
+        let at = run.steps.iter().find(|s| s.name == step).unwrap();
+        assert!(at.detail.starts_with("link lost: "), "{at:?}");
+    }
 }
 
 #[test]
@@ -325,7 +390,7 @@ fn a_servo_swapped_before_verify_is_caught_by_its_serial_number() {
     });
     match &r.result {
         Outcome::Fail { step, .. } => assert_eq!(step, "verify"),
-        Outcome::Pass => panic!("{r:?}"),
+        other => panic!("{other:?} in {r:?}"),
     }
     assert!(
         r.mismatches

@@ -201,7 +201,14 @@ impl Wire {
             .transport
             .as_mut()
             .ok_or(LinkError::Disconnected(why))?;
-        t.set_baud(baud)?;
+        if let Err(refused) = t.set_baud(baud) {
+            // A port that went refuses its settings too (EIO): said as lost when flushing it
+            // says so, else as the setting refused.
+            return Err(match t.clear_input() {
+                Err(lost @ LinkError::Disconnected(_)) => lost,
+                _ => refused,
+            });
+        }
         let _ = t.clear_input();
         self.decoder.clear();
         Ok(())

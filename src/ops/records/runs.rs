@@ -169,7 +169,9 @@ pub fn plan_name(path: &Path) -> String {
 }
 
 /// Fills `r` from a provisioning outcome: the servo's serial (read from it), its recorded
-/// firmware version and type, each step with its time, and the writes.
+/// firmware version and type, each step with its time, and the writes. A step the link was
+/// lost in is recorded as a self-test's interrupted step is: FAIL with the reason `link lost`
+/// (the run FAIL at that step, the same words) and the link's words as its detail.
 pub fn provision_into(r: &mut Record, p: &provision::Record, given: &Given, started: &StepClock) {
     with_serial(r, given);
     if let Some(serial) = p.serial {
@@ -184,9 +186,15 @@ pub fn provision_into(r: &mut Record, p: &provision::Record, given: &Given, star
         }
     }
     let end = super::record::now_ms();
+    // The failed step: its name, its reason, its detail.
     let failed = match &p.result {
         Outcome::Pass => None,
-        Outcome::Fail { step, reason } => Some((step.clone(), reason.clone())),
+        Outcome::Fail { step, reason } => Some((step.clone(), reason.clone(), reason.clone())),
+        Outcome::LinkLost { step, reason } => Some((
+            step.clone(),
+            crate::ops::station::Reason::LinkLost.to_string(),
+            format!("link lost: {reason}"),
+        )),
     };
     let timeline: Vec<(String, i64)> = if p.timeline.is_empty() {
         // Refused before any step (the plan): one step, the plan.
@@ -207,11 +215,10 @@ pub fn provision_into(r: &mut Record, p: &provision::Record, given: &Given, star
     let mut out = Vec::new();
     for (i, (name, at)) in steps.iter().enumerate() {
         let next = steps.get(i + 1).map_or(end, |(_, t)| *t);
-        let reason = failed
-            .as_ref()
-            .filter(|(step, _)| step == name)
-            .map(|(_, reason)| reason.clone());
-        let detail = reason.clone().unwrap_or_default();
+        let (reason, detail) = match failed.as_ref().filter(|(step, ..)| step == name) {
+            Some((_, reason, detail)) => (Some(reason.clone()), detail.clone()),
+            None => (None, String::new()),
+        };
         out.push(StepRecord {
             name: name.clone(),
             kind: "Provision".into(),
@@ -229,7 +236,7 @@ pub fn provision_into(r: &mut Record, p: &provision::Record, given: &Given, star
                 .collect(),
         });
     }
-    if let Some((step, reason)) = &failed
+    if let Some((step, reason, detail)) = &failed
         && !out.iter().any(|s| &s.name == step)
     {
         out.push(StepRecord {
@@ -239,7 +246,7 @@ pub fn provision_into(r: &mut Record, p: &provision::Record, given: &Given, star
             duration_ms: 0,
             verdict: Verdict::Fail,
             reason: Some(reason.clone()),
-            detail: reason.clone(),
+            detail: detail.clone(),
             measurements: Vec::new(),
             writes: Vec::new(),
         });

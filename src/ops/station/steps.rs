@@ -451,6 +451,8 @@ fn provision(
                     why: reason.clone(),
                 })
             }
+            // The port went: the runner says `link lost during <step>`, not the unit failing.
+            crate::ops::servo::provision::Outcome::LinkLost { .. } => Some(Reason::LinkLost),
             crate::ops::servo::provision::Outcome::Pass => None,
         });
         all.extend(done.records);

@@ -212,8 +212,9 @@ fn what(kind: &StepKind, profile: &Profile, lang: Lang) -> String {
     }
 }
 
-/// The colour of a run that ended with no verdict (interrupted).
-const AMBER: egui::Color32 = egui::Color32::from_rgb(180, 90, 0);
+/// The colour of a run that ended with no verdict (interrupted): the self-test's, the
+/// provisioning's.
+pub(crate) const AMBER: egui::Color32 = egui::Color32::from_rgb(180, 90, 0);
 
 /// Why a run has no verdict, naming the step (`link lost during Fan current`), in `lang`.
 fn interruption_text(why: Interruption, step: &str, lang: Lang) -> String {

@@ -1,5 +1,6 @@
 //! The production tab: load a plan, choose the CSV log, "Provision next" for each fresh servo,
-//! a clear PASS/FAIL banner that names the failed step, and the records of this session.
+//! a clear PASS/FAIL banner that names the failed step (NO VERDICT, amber, when the link was
+//! lost during a step), and the records of this session.
 
 use super::{Output, error_label, send};
 use crate::document::DocumentError;
@@ -56,7 +57,9 @@ impl ProvisionPanel {
         }
     }
 
-    pub(super) fn on_record(
+    /// Takes the record of the servo just provisioned (the ids given out so far in `state`,
+    /// why it could not be logged): its banner is shown until dismissed or the next run.
+    pub(crate) fn on_record(
         &mut self,
         record: Record,
         state: ProvisionState,
@@ -234,21 +237,44 @@ impl ProvisionPanel {
         }
         if !self.history.is_empty() {
             ui.add_space(6.0);
-            ui.label(format!(
-                "{} ({} {}, {} {})",
-                lang.tr("This session", "本次记录"),
-                self.history.iter().filter(|r| r.result.is_pass()).count(),
-                lang.tr("passed", "通过"),
-                self.history.iter().filter(|r| !r.result.is_pass()).count(),
-                lang.tr("failed", "失败"),
-            ));
+            ui.label(self.tally(lang));
             history(ui, lang, &self.history);
         }
         actions
     }
+
+    /// `This session (2 passed, 1 failed)`, and `, 1 no verdict` when a link was lost: a servo
+    /// whose link was lost during a step is counted neither passed nor failed.
+    fn tally(&self, lang: Lang) -> String {
+        let count = |f: fn(&Outcome) -> bool| self.history.iter().filter(|r| f(&r.result)).count();
+        let lost = count(|o| o.link_lost().is_some());
+        let no_verdict = match lost {
+            0 => String::new(),
+            n => format!(", {n} {}", lang.tr("no verdict", "无结论")),
+        };
+        format!(
+            "{} ({} {}, {} {}{no_verdict})",
+            lang.tr("This session", "本次记录"),
+            count(Outcome::is_pass),
+            lang.tr("passed", "通过"),
+            count(Outcome::is_fail),
+            lang.tr("failed", "失败"),
+        )
+    }
 }
 
-/// The big PASS / FAIL banner of the last servo, with Dismiss; returns whether it was clicked.
+/// `link lost during <step>` in `lang`, the step as provisioning names it
+/// ([`prov::step::said`]), as the self-test says it.
+fn link_lost_during(step: &str, lang: Lang) -> String {
+    let said = prov::step::said(step);
+    match lang {
+        Lang::En => format!("link lost during {}", said.en),
+        Lang::Zh => format!("在“{}”步骤中连接丢失", said.zh),
+    }
+}
+
+/// The big PASS / FAIL / NO VERDICT banner of the last servo, with Dismiss; returns whether it
+/// was clicked.
 fn banner(ui: &mut egui::Ui, lang: Lang, r: &Record) -> bool {
     let (fill, head, detail) = match &r.result {
         Outcome::Pass => (
@@ -268,6 +294,21 @@ fn banner(ui: &mut egui::Ui, lang: Lang, r: &Record) -> bool {
             egui::Color32::from_rgb(190, 30, 30),
             format!("FAIL · {} {step}", lang.tr("step", "步骤")),
             reason.clone(),
+        ),
+        Outcome::LinkLost { step, reason } => (
+            crate::ui::selftest::AMBER,
+            format!(
+                "{} · {}",
+                lang.tr("NO VERDICT", "无结论"),
+                link_lost_during(step, lang)
+            ),
+            format!(
+                "{reason}\n{}",
+                lang.tr(
+                    "The servo did not fail: nothing is known of the steps not done. Provision it again.",
+                    "舵机并未失败:未完成的步骤没有结果。请重新烧录。",
+                )
+            ),
         ),
     };
     let mut dismissed = false;
@@ -325,18 +366,28 @@ fn history(ui: &mut egui::Ui, lang: Lang, records: &[Record]) {
                     Outcome::Pass => super::ok_label(ui, "PASS"),
                     Outcome::Fail { step, reason } => {
                         error_label(ui, format!("FAIL ({step})"));
-                        ui.end_row();
-                        ui.label("");
-                        ui.label("");
-                        ui.label("");
-                        ui.label("");
-                        ui.weak(reason);
+                        reason_row(ui, reason);
+                    }
+                    Outcome::LinkLost { step, reason } => {
+                        let head = lang.tr("NO VERDICT", "无结论");
+                        let during = link_lost_during(step, lang);
+                        ui.colored_label(crate::ui::selftest::AMBER, format!("{head}: {during}"));
+                        reason_row(ui, reason);
                     }
                 }
                 ui.label(r.mismatches.join("; "));
                 ui.end_row();
             }
         });
+}
+
+/// A history row's reason, on a row of its own under the result.
+fn reason_row(ui: &mut egui::Ui, reason: &str) {
+    ui.end_row();
+    for _ in 0..4 {
+        ui.label("");
+    }
+    ui.weak(reason);
 }
 
 fn job(
@@ -390,6 +441,10 @@ fn job(
                 Outcome::Fail { step, reason } => Err(JobError::StepFailed {
                     step: step.clone(),
                     reason: reason.clone() + &crate::ui::records::note_en(&kept),
+                }),
+                Outcome::LinkLost { step, reason } => Err(JobError::LinkLostDuring {
+                    step: prov::step::said(step),
+                    why: reason.clone() + &crate::ui::records::note_en(&kept),
                 }),
             };
             sink.send(crate::ui::jobs::JobOutput::Verdict(

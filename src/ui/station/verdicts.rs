@@ -14,12 +14,12 @@ use crate::ops::servo::provision::Record;
 pub enum Verdict {
     /// A self-test ended (passed, failed, aborted or interrupted).
     SelfTest(Box<Report>),
-    /// A servo was provisioned, or failed a step.
+    /// A servo was provisioned, failed a step, or its link was lost during one (no verdict).
     Provisioned(Box<Record>),
 }
 
 impl Verdict {
-    /// Whether the unit passed.
+    /// Whether the unit passed (false too for a run with no verdict: the link lost).
     pub fn pass(&self) -> bool {
         match self {
             Verdict::SelfTest(r) => r.pass,
@@ -75,10 +75,14 @@ impl Verdicts {
     }
 
     /// Whether the unit passed everything it was given a verdict on (`None`: no verdict yet).
+    /// A provisioning whose link was lost during a step gives none: it says nothing of the unit.
     pub fn pass(&self) -> Option<bool> {
         let all = [
             self.selftest.as_ref().map(|r| r.pass),
-            self.provisioned.as_ref().map(|r| r.result.is_pass()),
+            self.provisioned
+                .as_ref()
+                .filter(|r| r.result.link_lost().is_none())
+                .map(|r| r.result.is_pass()),
         ];
         all.into_iter().flatten().reduce(|a, b| a && b)
     }
@@ -136,6 +140,33 @@ mod tests {
         assert_eq!(v.pass(), Some(false));
         v.dismiss();
         assert!(v.is_empty(), "dismissed");
+    }
+
+    #[test]
+    fn a_provisioning_whose_link_was_lost_is_no_verdict_on_the_unit() {
+        use crate::ops::servo::provision::Outcome;
+        let record = |result| {
+            Box::new(Record {
+                time: String::new(),
+                serial: Some(1),
+                id: None,
+                baud: None,
+                result,
+                mismatches: Vec::new(),
+                recorded: Vec::new(),
+                timeline: Vec::new(),
+                writes: Vec::new(),
+            })
+        };
+        let mut v = Verdicts::default();
+        v.take(Verdict::Provisioned(record(Outcome::LinkLost {
+            step: "set baud".into(),
+            reason: "port lost".into(),
+        })));
+        assert!(!v.is_empty(), "shown until dismissed");
+        assert_eq!(v.pass(), None, "says nothing of the unit");
+        v.take(Verdict::Provisioned(record(Outcome::Pass)));
+        assert_eq!(v.pass(), Some(true));
     }
 
     #[test]

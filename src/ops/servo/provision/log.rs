@@ -24,12 +24,16 @@ pub fn log_columns(recorded: &[String]) -> Vec<String> {
 }
 
 /// One record as the log's cells, in [`log_columns`] order: unknown values as empty cells,
-/// mismatches joined with `; `.
+/// mismatches joined with `; `. The result is `PASS`, `FAIL`, or `NO VERDICT` when the link was
+/// lost during the step (its reason then `link lost: ` and what the link said).
 pub fn log_row(record: &Record) -> Vec<String> {
     let opt = |v: Option<String>| v.unwrap_or_default();
     let (result, step, reason) = match &record.result {
-        Outcome::Pass => ("PASS", "", ""),
-        Outcome::Fail { step, reason } => ("FAIL", step.as_str(), reason.as_str()),
+        Outcome::Pass => ("PASS", "", String::new()),
+        Outcome::Fail { step, reason } => ("FAIL", step.as_str(), reason.clone()),
+        Outcome::LinkLost { step, reason } => {
+            ("NO VERDICT", step.as_str(), format!("link lost: {reason}"))
+        }
     };
     let mut cells = vec![
         record.time.clone(),
@@ -38,7 +42,7 @@ pub fn log_row(record: &Record) -> Vec<String> {
         opt(record.baud.map(|s| s.to_string())),
         result.to_string(),
         step.to_string(),
-        reason.to_string(),
+        reason,
         record.mismatches.join("; "),
     ];
     cells.extend(

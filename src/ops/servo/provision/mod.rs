@@ -18,7 +18,8 @@
 //!
 //! [`provision_next`] never reports half-done work as done: its [`Record`] is
 //! [`Outcome::Pass`] only when every step was verified on the servo, and otherwise names the
-//! step that failed and why.
+//! step that failed and why; a port that went away during a step is [`Outcome::LinkLost`], no
+//! verdict on the servo (`link lost during <step>`), never that step failing.
 
 mod log;
 mod plan;
@@ -98,12 +99,34 @@ pub enum Outcome {
         /// Why.
         reason: String,
     },
+    /// The port went away (unplugged, the adapter reset) during a step: no verdict on the
+    /// servo, `link lost during <step>`; the steps after it were not done. Serialised with
+    /// `"status": "link_lost"`.
+    LinkLost {
+        /// The step under way, one of [`step`].
+        step: String,
+        /// What the link said (`port disconnected: ...`).
+        reason: String,
+    },
 }
 
 impl Outcome {
     /// Whether it passed.
     pub fn is_pass(&self) -> bool {
         *self == Outcome::Pass
+    }
+
+    /// Whether a step failed (not [`Outcome::LinkLost`], which says nothing of the servo).
+    pub fn is_fail(&self) -> bool {
+        matches!(self, Outcome::Fail { .. })
+    }
+
+    /// The step the link was lost in, when it was: `Some((step, what the link said))`.
+    pub fn link_lost(&self) -> Option<(&str, &str)> {
+        match self {
+            Outcome::LinkLost { step, reason } => Some((step, reason)),
+            _ => None,
+        }
     }
 }
 
@@ -118,7 +141,7 @@ pub struct Record {
     pub id: Option<u8>,
     /// The baud rate it was last verified at (`None` when a baud change left it unknown).
     pub baud: Option<u32>,
-    /// Pass, or the step that failed and why.
+    /// Pass, the step that failed and why, or the step the link was lost in.
     pub result: Outcome,
     /// Values the servo does not hold as written: `ident: wrote X, servo holds Y`.
     pub mismatches: Vec<String>,
@@ -150,6 +173,21 @@ fn fail(record: &mut Record, step: &str, reason: String) {
         step: step.to_string(),
         reason,
     };
+}
+
+/// `failure` into the record's result: [`Outcome::LinkLost`] when the port went, else
+/// [`Outcome::Fail`].
+fn ended(record: &mut Record, failure: steps::Failure) {
+    let steps::Failure { step, why, lost } = failure;
+    match lost {
+        Some(link) => {
+            record.result = Outcome::LinkLost {
+                step: step.to_string(),
+                reason: link,
+            }
+        }
+        None => fail(record, step, why),
+    }
 }
 
 /// Finds the fresh servos (at the factory id, [`servo::factory_location`]): searches `bauds`
@@ -224,8 +262,8 @@ fn steps(
     };
     let outcome = p.steps(state, record);
     record.timeline = std::mem::take(&mut p.timeline);
-    if let Err((step, why)) = outcome {
-        fail(record, step, why);
+    if let Err(failure) = outcome {
+        ended(record, failure);
     }
 }
 

@@ -1,7 +1,7 @@
 //! The steps of provisioning one fresh servo, in order: detect it, read its serial number, give
 //! it the next free id, switch it to the plan's rate, write the plan's parameters, verify
 //! everything at the new id and rate, and read what the plan records. Each step ends the run at
-//! its first failure, which names the step ([`Failure`]).
+//! its first failure, which names the step ([`Failure`]) and says whether the port went.
 
 use super::{ProvisionState, Record, Resolved, find_fresh, reason, search_order, step};
 use crate::ops::records::ParamWrite;
@@ -9,8 +9,37 @@ use crate::ops::servo::{self, Presence, switch};
 use crate::ops::{Cancel, Device, OpError, Progress, Run};
 use crate::profile::{Input, Param, Value};
 
-/// The step that failed, and why.
-pub(super) type Failure = (&'static str, String);
+/// The step that ended the run, and why: a failure of the servo's, or the port lost.
+#[derive(Debug)]
+pub(super) struct Failure {
+    /// The step, one of [`step`].
+    pub(super) step: &'static str,
+    /// Why, as the record says it.
+    pub(super) why: String,
+    /// What the link said when the port went away during the step (`None`: it did not).
+    pub(super) lost: Option<String>,
+}
+
+impl Failure {
+    /// `step` failed: `why`.
+    fn new(step: &'static str, why: String) -> Self {
+        Self {
+            step,
+            why,
+            lost: None,
+        }
+    }
+
+    /// `step` met the operation's error `e`, said `why`: the port lost when that is what `e`
+    /// is ([`OpError::lost_port`]), else a failure.
+    fn of(step: &'static str, e: &OpError, why: String) -> Self {
+        Self {
+            step,
+            why,
+            lost: e.lost_port().map(str::to_string),
+        }
+    }
+}
 
 /// A provisioning under way: the servo, the plan resolved against the profile, the run's
 /// cancel flag and progress.
@@ -53,7 +82,7 @@ impl Provisioning<'_, '_> {
     /// [`Failure`] at `step` once cancelled.
     fn go_on(&self, step: &'static str) -> Result<(), Failure> {
         if self.cancel.is_cancelled() {
-            Err((step, "cancelled by the operator".into()))
+            Err(Failure::new(step, "cancelled by the operator".into()))
         } else {
             Ok(())
         }
@@ -98,9 +127,10 @@ impl Provisioning<'_, '_> {
     /// there. Returns that rate.
     fn detect(&mut self, fresh: u8) -> Result<u32, Failure> {
         self.at(step::DETECT, String::new())?;
-        let fail = |why: String| (step::DETECT, why);
+        let fail = |why: String| Failure::new(step::DETECT, why);
+        let op = |e: OpError| Failure::of(step::DETECT, &e, e.to_string());
         let order = search_order(self.dev.profile, self.target);
-        let found = find_fresh(self.dev, &order).map_err(|e| fail(e.to_string()))?;
+        let found = find_fresh(self.dev, &order).map_err(op)?;
         let baud = match found.as_slice() {
             [] => {
                 return Err(fail(format!(
@@ -121,7 +151,7 @@ impl Provisioning<'_, '_> {
                 )));
             }
         };
-        switch(self.dev.client, baud).map_err(|e| fail(e.to_string()))?;
+        switch(self.dev.client, baud).map_err(op)?;
         Ok(baud)
     }
 
@@ -130,9 +160,9 @@ impl Provisioning<'_, '_> {
         self.at(step::SERIAL, String::new())?;
         let serial = servo::serial_param(self.dev.profile)
             .and_then(|p| super::read(self.dev, fresh, p.id))
-            .map_err(|e| (step::SERIAL, reason(&e, fresh, baud)))?;
+            .map_err(|e| Failure::of(step::SERIAL, &e, reason(&e, fresh, baud)))?;
         u32::try_from(serial).map_err(|_| {
-            (
+            Failure::new(
                 step::SERIAL,
                 format!("the servo reports serial number {serial}, which does not fit 32 bits"),
             )
@@ -150,13 +180,14 @@ impl Provisioning<'_, '_> {
     ) -> Result<u8, Failure> {
         self.at(step::ASSIGN_ID, String::new())?;
         let chosen = self.free_id(state)?;
-        let fail = |why: String| (step::ASSIGN_ID, why);
-        switch(self.dev.client, baud).map_err(|e| fail(e.to_string()))?;
+        let op = |e: &OpError, why: String| Failure::of(step::ASSIGN_ID, e, why);
+        switch(self.dev.client, baud).map_err(|e| op(&e, e.to_string()))?;
         let Some((index, id)) = chosen else {
-            return Err(fail("no free id left in the plan's ids".into()));
+            let why = "no free id left in the plan's ids".into();
+            return Err(Failure::new(step::ASSIGN_ID, why));
         };
         servo::set_id(self.dev, fresh, id, self.cancel)
-            .map_err(|e| fail(reason(&e, fresh, baud)))?;
+            .map_err(|e| op(&e, reason(&e, fresh, baud)))?;
         state.next = index + 1;
         state.assigned.push(id);
         Ok(id)
@@ -176,7 +207,7 @@ impl Provisioning<'_, '_> {
                 Ok(true) => return Ok(Some((i, id))),
                 // In use: never offered again.
                 Ok(false) => state.next = i + 1,
-                Err(e) => return Err((step::ASSIGN_ID, e.to_string())),
+                Err(e) => return Err(Failure::of(step::ASSIGN_ID, &e, e.to_string())),
             }
         }
         Ok(None)
@@ -190,7 +221,7 @@ impl Provisioning<'_, '_> {
         if baud == target {
             return Ok(());
         }
-        let fail = |why: String| (step::SET_BAUD, why);
+        let fail = |why: String| Failure::new(step::SET_BAUD, why);
         match servo::ping(self.dev.client, id, 3) {
             Ok(Presence::Present) => {}
             Ok(other) => {
@@ -198,11 +229,11 @@ impl Provisioning<'_, '_> {
                     "servo {id} did not answer at {baud} baud before the change ({other:?})"
                 )));
             }
-            Err(e) => return Err(fail(reason(&e, id, baud))),
+            Err(e) => return Err(Failure::of(step::SET_BAUD, &e, reason(&e, id, baud))),
         }
         record.baud = None;
         let now = servo::set_baud(self.dev, id, self.resolved.option)
-            .map_err(|e| fail(reason(&e, id, target)))?;
+            .map_err(|e| Failure::of(step::SET_BAUD, &e, reason(&e, id, target)))?;
         record.baud = Some(now);
         record.writes.push((
             step::SET_BAUD.into(),
@@ -247,7 +278,7 @@ impl Provisioning<'_, '_> {
                 }
                 Err(e) => {
                     let why = format!("{ident}: {}", reason(&e, id, self.target));
-                    return Err((step::APPLY, why));
+                    return Err(Failure::of(step::APPLY, &e, why));
                 }
             }
         }
@@ -266,7 +297,8 @@ impl Provisioning<'_, '_> {
     ) -> Result<(), Failure> {
         self.at(step::VERIFY, String::new())?;
         let target = self.target;
-        let fail = |why: String| (step::VERIFY, why);
+        let fail = |why: String| Failure::new(step::VERIFY, why);
+        let op = |e: &OpError, why: String| Failure::of(step::VERIFY, e, why);
         match servo::ping(self.dev.client, id, 3) {
             Ok(Presence::Present) => {}
             Ok(other) => {
@@ -274,9 +306,12 @@ impl Provisioning<'_, '_> {
                     "servo {id} did not answer cleanly at {target} baud ({other:?})"
                 )));
             }
-            Err(e) => return Err(fail(reason(&e, id, target))),
+            Err(e) => return Err(op(&e, reason(&e, id, target))),
         }
-        for (pid, want) in self.expected(id, serial).map_err(|e| fail(e.to_string()))? {
+        let expected = self
+            .expected(id, serial)
+            .map_err(|e| op(&e, e.to_string()))?;
+        for (pid, want) in expected {
             let got = self.read_back(id, pid)?;
             if got.1 != want {
                 let line = super::mismatch(got.0, &Value::Int(want), &Value::Int(got.1));
@@ -294,7 +329,10 @@ impl Provisioning<'_, '_> {
             step::VERIFY
         };
         let n = record.mismatches.len();
-        Err((step, format!("{n} value(s) do not read back as written")))
+        Err(Failure::new(
+            step,
+            format!("{n} value(s) do not read back as written"),
+        ))
     }
 
     /// What servo `id` must hold after provisioning: its serial number, its id, the plan's baud
@@ -315,18 +353,12 @@ impl Provisioning<'_, '_> {
 
     /// Parameter `pid` of servo `id`, as it reads now (at verify).
     fn read_back(&self, id: u8, pid: u8) -> Result<(&Param, i64), Failure> {
-        let fail = |why: String| (step::VERIFY, why);
-        let param = self
-            .dev
-            .profile
-            .param(pid)
-            .ok_or_else(|| fail(format!("the profile has no parameter {pid}")))?;
+        let param = self.dev.profile.param(pid).ok_or_else(|| {
+            Failure::new(step::VERIFY, format!("the profile has no parameter {pid}"))
+        })?;
         let got = super::read(self.dev, id, pid).map_err(|e| {
-            fail(format!(
-                "{}: {}",
-                param.field.ident,
-                reason(&e, id, self.target)
-            ))
+            let why = format!("{}: {}", param.field.ident, reason(&e, id, self.target));
+            Failure::of(step::VERIFY, &e, why)
         })?;
         Ok((param, got))
     }
@@ -337,7 +369,7 @@ impl Provisioning<'_, '_> {
         for (i, param) in self.resolved.record.iter().enumerate() {
             let v = servo::read_param(self.dev, id, param).map_err(|e| {
                 let why = format!("{}: {}", param.field.ident, reason(&e, id, self.target));
-                (step::RECORD, why)
+                Failure::of(step::RECORD, &e, why)
             })?;
             if let Some(slot) = record.recorded.get_mut(i) {
                 slot.1 = Some(param.field.format(&Value::Int(v)));
