@@ -111,7 +111,7 @@ pub(super) fn run(
     if let Some(ms) = report.host_late_ms.filter(|_| !report.rows.is_empty()) {
         super::port::warn(&format!(
             "this computer was held up {ms:.0} ms past an answer's deadline during the scan (a \
-             loaded computer, not the wiring): a servo may have been missed; close other \
+             loaded computer): a servo may have been missed; close other \
              programs and scan again"
         ));
     }

@@ -15,7 +15,9 @@ mod worker;
 pub use worker::default_margin;
 
 pub use lines::{BOOT_WAIT_MS, LineLevel, MARGIN_MS, PortSetup, ms_within};
-pub use request::{CommandName, ExchangeError, HOST_LATE, Match, Reply, ReplySpec, Request};
+pub use request::{
+    CommandName, ExchangeError, HELD_UP, HOST_LATE, Match, Reply, ReplySpec, Request,
+};
 pub use serial::PortOpener;
 pub use session::tuya::{HandshakeStep, ProductInfo, StepResult, TuyaEvent, TuyaModuleOptions};
 pub use session::{Capability, DeviceInfo, capabilities};

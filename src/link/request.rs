@@ -257,9 +257,9 @@ impl std::fmt::Display for CommandName {
 /// Why an exchange failed. Nothing stale is ever returned in place of an answer.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum ExchangeError {
-    /// No answer within the deadline, after every attempt. When the link's thread woke later
-    /// than [`HOST_LATE`] past a deadline it had set during the exchange (a loaded computer),
-    /// the silence says that first: the answer may have come and the host not been there.
+    /// No answer within the deadline, after every attempt. When the link's thread woke
+    /// [`HELD_UP`] or more past a deadline it had set during the exchange (a loaded computer),
+    /// the silence says so: the answer may have come and the host not been there.
     #[error("no answer to {command} after {attempts} attempt(s) of {waited_ms} ms{}", host_late.map_or(String::new(), held_up))]
     Timeout {
         /// The command.
@@ -269,8 +269,8 @@ pub enum ExchangeError {
         /// How long each attempt waited, in ms.
         waited_ms: u64,
         /// The most this computer ran behind a deadline the link had set during the exchange,
-        /// when more than [`HOST_LATE`]: the host was held up (a loaded computer), not the
-        /// device silent. `None`: the host was on time.
+        /// when [`HELD_UP`] or more: the host was held up (a loaded computer), and the answer
+        /// may have come while it was. `None`: the host was on time.
         host_late: Option<Duration>,
     },
     /// Answers came back damaged (bad checksum, junk, cut short) on every attempt. On a servo bus,
@@ -357,13 +357,19 @@ pub enum ExchangeError {
 /// (a loaded computer): a scheduler's ordinary wake-up is well under a millisecond.
 pub const HOST_LATE: Duration = Duration::from_millis(2);
 
+/// How far behind an answer's deadline the link's thread must have run for a timeout or a scan
+/// to say that this computer was held up: a few milliseconds late is common on a busy desktop
+/// and explains no silence (the link looks once more when it wakes late); 20 ms is most of the
+/// shortest answer window (25 ms).
+pub const HELD_UP: Duration = Duration::from_millis(20);
+
 /// What a timeout says after its figures when the host ran `late` behind the answer's deadline:
 /// ` — this computer was held up 12 ms past the answer's deadline (a loaded computer, not the
 /// wiring): close other programs and retry`.
 fn held_up(late: Duration) -> String {
     format!(
-        " — this computer was held up {} ms past the answer's deadline (a loaded computer, \
-         not the wiring): close other programs and retry",
+        " — this computer was held up {} ms past the answer's deadline (a loaded computer: \
+         the answer may have come while it was): close other programs and retry",
         late.as_millis()
     )
 }
@@ -379,7 +385,7 @@ impl ExchangeError {
     }
 
     /// `self`, a timeout during which the host ran `late` behind a deadline it had set: said
-    /// as held up when `late` is more than [`HOST_LATE`] (the larger lateness kept). Any other
+    /// as held up when `late` is [`HELD_UP`] or more (the larger lateness kept). Any other
     /// error is returned as it is.
     pub fn late_host(self, late: Duration) -> Self {
         match self {
@@ -394,7 +400,7 @@ impl ExchangeError {
                 waited_ms,
                 host_late: host_late
                     .into_iter()
-                    .chain((late > HOST_LATE).then_some(late))
+                    .chain((late >= HELD_UP).then_some(late))
                     .max(),
             },
             other => other,

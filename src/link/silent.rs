@@ -99,11 +99,12 @@ impl SilentCheck {
             SilentCheck::HostLate(late) => Text::new(
                 format!(
                     "this computer was held up {} ms past the answer's deadline (a loaded \
-                     computer, not the wiring): close other programs and retry",
+                     computer: the answer may have come while it was): close other programs and \
+                     retry",
                     late.as_millis()
                 ),
                 format!(
-                    "这台电脑在应答截止时间后被拖住了 {} ms(是电脑负载过高,不是接线问题):\
+                    "这台电脑在应答截止时间后被拖住了 {} ms(电脑负载过高:应答可能在此期间已到达):\
                      请关闭其他程序后重试",
                     late.as_millis()
                 ),
@@ -206,9 +207,9 @@ mod tests {
         let said = checklist(&checks, &names());
         assert_eq!(
             said.en,
-            "this computer was held up 31 ms past the answer's deadline (a loaded computer, not \
-             the wiring): close other programs and retry; if it still does not answer with the \
-             computer idle: is the device powered, its TX wired to the adapter's RX (and RX to \
+            "this computer was held up 31 ms past the answer's deadline (a loaded computer: the \
+             answer may have come while it was): close other programs and retry; if it still \
+             does not answer with the computer idle: is the device powered, its TX wired to the adapter's RX (and RX to \
              TX, GND to GND), at this baud rate (--baud) and with this profile (--profile)?"
         );
         assert!(

@@ -246,7 +246,7 @@ impl Zh for ExchangeError {
             } => {
                 let held_up = host_late.map_or(String::new(), |late| {
                     format!(
-                        "——这台电脑在应答截止时间后被拖住了 {} ms(是电脑负载过高,不是接线问题):请关闭其他程序后重试",
+                        "——这台电脑在应答截止时间后被拖住了 {} ms(电脑负载过高:应答可能在此期间已到达):请关闭其他程序后重试",
                         late.as_millis()
                     )
                 });
@@ -617,7 +617,7 @@ mod tests {
         let late = timeout(Some(Duration::from_millis(31))).zh();
         assert!(
             late.contains("这台电脑在应答截止时间后被拖住了 31 ms")
-                && late.contains("不是接线问题")
+                && late.contains("电脑负载过高")
                 && late.contains("请关闭其他程序后重试"),
             "{late}"
         );

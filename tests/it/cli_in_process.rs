@@ -129,9 +129,9 @@ fn an_unanswered_read_on_a_held_up_computer_leads_with_the_loaded_computer() {
     );
     assert!(
         said.contains(
-            " ms past the answer's deadline (a loaded computer, not the wiring): close other \
-             programs and retry; if it still does not answer with the computer idle: is the \
-             device powered"
+            " ms past the answer's deadline (a loaded computer: the answer may have come \
+             while it was): close other programs and retry; if it still does not answer with \
+             the computer idle: is the device powered"
         ),
         "{said}"
     );

@@ -1,13 +1,13 @@
 //! The worker against ports written here: a device that never answers, on a host that is held
 //! up (a loaded computer) or not.
 
-use crate::link::request::{ExchangeError, HOST_LATE, Request};
+use crate::link::request::{ExchangeError, Request};
 use crate::link::{Link, LinkError, LinkOptions, Opener, Transport};
 use crate::profile::Registry;
 use std::time::{Duration, Instant};
 
 /// How long past each read's deadline the held-up host wakes.
-const HELD_UP: Duration = Duration::from_millis(30);
+const LATE_BY: Duration = Duration::from_millis(30);
 
 /// A port nothing ever answers on; with `held_up`, every read that finds nothing returns that
 /// long after its deadline (the link's thread not scheduled in time: a loaded computer).
@@ -53,10 +53,10 @@ fn silent_link(held_up: Duration) -> Link {
 }
 
 /// A request that went unanswered while this computer was held up past its deadlines says so,
-/// with how long, and that it is not the wiring (issue 25, item 4e).
+/// with how long (issue 25, item 4e).
 #[test]
 fn a_timeout_while_the_host_was_held_up_says_the_computer_was_held_up() {
-    let link = silent_link(HELD_UP);
+    let link = silent_link(LATE_BY);
     let err = link
         .client()
         .request(Request::new(130, Vec::new()).attempts(2))
@@ -67,7 +67,7 @@ fn a_timeout_while_the_host_was_held_up_says_the_computer_was_held_up() {
         "{err:?}"
     );
     assert!(
-        late.is_some_and(|l| l >= HELD_UP && l > HOST_LATE),
+        late.is_some_and(|l| l >= LATE_BY),
         "the largest lateness of the exchange: {late:?}"
     );
     let said = err.to_string();
@@ -77,7 +77,20 @@ fn a_timeout_while_the_host_was_held_up_says_the_computer_was_held_up() {
     );
     assert!(
         said.contains(" — this computer was held up ")
-            && said.contains(" ms past the answer's deadline (a loaded computer, not the wiring): close other programs and retry"),
+            && said.contains(" ms past the answer's deadline (a loaded computer: the answer may have come while it was): close other programs and retry"),
         "{said}"
     );
+}
+
+/// A host a few milliseconds late (common on a busy desktop; the link looks once more when it
+/// wakes late) is not said as held up: the silence is the device's.
+#[test]
+fn a_timeout_a_few_milliseconds_late_does_not_blame_the_computer() {
+    let link = silent_link(Duration::from_millis(5));
+    let err = link
+        .client()
+        .request(Request::new(130, Vec::new()).attempts(2))
+        .expect_err("nothing answers");
+    assert_eq!(err.host_late(), None, "{err:?}");
+    assert!(!err.to_string().contains("held up"), "{err}");
 }

@@ -100,7 +100,7 @@ pub struct ScanReport {
     /// 1.5 ms, the adapter's latency timer, the answer latency measured), in ms.
     pub margin_ms: f64,
     /// The most this computer ran behind a deadline of the scan's ping sweeps, in ms, when more
-    /// than [`crate::link::HOST_LATE`] (a loaded computer: a servo may have been missed);
+    /// [`crate::link::HELD_UP`] or more (a loaded computer: a servo may have been missed);
     /// `None`: on time throughout.
     pub host_late_ms: Option<f64>,
 }
