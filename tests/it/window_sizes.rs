@@ -231,10 +231,14 @@ fn at_scale_2_on_a_1280x800_screen_stop_and_the_status_line_stay_whole() {
         h.run_steps(2);
         let area = h.ctx.content_rect().size();
         assert_eq!(area, size, "the window in points");
-        step_until(&mut h, "the device identified", |a| {
+        // The read made on connecting has ended too: its notice ("Read: 9 read") would change
+        // the status line after the frame drew it (seen on a loaded machine).
+        step_until(&mut h, "the device identified and its tuning read", |a| {
             a.station().link.answering() == botbench::ui::station::Answering::Yes
                 && matches!(a.station().device.info, Some(Ok(_)))
                 && a.station().notice.is_some()
+                && crate::support::gui::tuning_values(a, None).is_some()
+                && crate::support::gui::idle(a)
         });
         h.run_steps(3);
         let mut bad = Vec::new();
