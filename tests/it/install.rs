@@ -199,7 +199,10 @@ fn a_busy_port_says_so_and_names_what_holds_it() {
     // …and a program named brltty has it open too, as the braille daemon does to a CH340.
     let tmp = temp_dir();
     let brltty = tmp.path().join("brltty");
-    std::fs::copy("/bin/sleep", &brltty).unwrap();
+    // A link, not a copy: a copy's file is open for writing until closed, and a process another
+    // test forks meanwhile holds it open too, so exec'ing it failed now and then with "Text file
+    // busy" (ETXTBSY). The process's name is the link's (the kernel names it by the path given).
+    std::os::unix::fs::symlink("/bin/sleep", &brltty).unwrap();
     let port_file = std::fs::OpenOptions::new()
         .read(true)
         .write(true)
