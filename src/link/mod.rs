@@ -163,8 +163,8 @@ pub struct SweepReply {
     pub strays: Vec<Packet>,
     /// The margin the sweep waited with.
     pub margin: Duration,
-    /// The most this computer ran behind a deadline the sweep had set, when more than
-    /// [`HOST_LATE`] (a loaded computer: an id without an answer may have answered with nobody
+    /// The most this computer ran behind a deadline the sweep had set, when [`HELD_UP`] or
+    /// more (a loaded computer: an id without an answer may have answered with nobody
     /// there in time); `None`: on time throughout.
     pub host_late: Option<Duration>,
 }

@@ -363,15 +363,32 @@ pub const HOST_LATE: Duration = Duration::from_millis(2);
 /// shortest answer window (25 ms).
 pub const HELD_UP: Duration = Duration::from_millis(20);
 
-/// What a timeout says after its figures when the host ran `late` behind the answer's deadline:
-/// ` — this computer was held up 12 ms past the answer's deadline (a loaded computer, not the
-/// wiring): close other programs and retry`.
-fn held_up(late: Duration) -> String {
-    format!(
-        " — this computer was held up {} ms past the answer's deadline (a loaded computer: \
-         the answer may have come while it was): close other programs and retry",
-        late.as_millis()
+/// `late` when it is [`HELD_UP`] or more: how late a timeout or a scan says the host ran.
+pub fn held_up_by(late: Duration) -> Option<Duration> {
+    (late >= HELD_UP).then_some(late)
+}
+
+/// What is said of a host that ran `late` behind an answer's deadline, in both languages: `this
+/// computer was held up 31 ms past the answer's deadline (a loaded computer: the answer may have
+/// come while it was): close other programs and retry`. A timeout says it after its figures, the
+/// silent device's checklist first ([`crate::link::silent`]).
+pub fn held_up_said(late: Duration) -> crate::i18n::Text {
+    let ms = late.as_millis();
+    crate::i18n::Text::new(
+        format!(
+            "this computer was held up {ms} ms past the answer's deadline (a loaded computer: \
+             the answer may have come while it was): close other programs and retry"
+        ),
+        format!(
+            "这台电脑在应答截止时间后被拖住了 {ms} ms(电脑负载过高:应答可能在此期间已到达):\
+             请关闭其他程序后重试"
+        ),
     )
+}
+
+/// [`held_up_said`] in English after a timeout's figures (` — this computer was …`).
+fn held_up(late: Duration) -> String {
+    format!(" — {}", held_up_said(late).en)
 }
 
 impl ExchangeError {
@@ -398,10 +415,7 @@ impl ExchangeError {
                 command,
                 attempts,
                 waited_ms,
-                host_late: host_late
-                    .into_iter()
-                    .chain((late >= HELD_UP).then_some(late))
-                    .max(),
+                host_late: host_late.into_iter().chain(held_up_by(late)).max(),
             },
             other => other,
         }

@@ -96,19 +96,7 @@ impl SilentCheck {
                     names.boot_wait.zh, names.lines.zh
                 ),
             ),
-            SilentCheck::HostLate(late) => Text::new(
-                format!(
-                    "this computer was held up {} ms past the answer's deadline (a loaded \
-                     computer: the answer may have come while it was): close other programs and \
-                     retry",
-                    late.as_millis()
-                ),
-                format!(
-                    "这台电脑在应答截止时间后被拖住了 {} ms(电脑负载过高:应答可能在此期间已到达):\
-                     请关闭其他程序后重试",
-                    late.as_millis()
-                ),
-            ),
+            SilentCheck::HostLate(late) => crate::link::request::held_up_said(late),
         }
     }
 }

@@ -245,10 +245,7 @@ impl Zh for ExchangeError {
                 host_late,
             } => {
                 let held_up = host_late.map_or(String::new(), |late| {
-                    format!(
-                        "——这台电脑在应答截止时间后被拖住了 {} ms(电脑负载过高:应答可能在此期间已到达):请关闭其他程序后重试",
-                        late.as_millis()
-                    )
+                    format!("——{}", crate::link::request::held_up_said(late).zh)
                 });
                 format!(
                     "命令 {command} 无应答(尝试 {attempts} 次,每次等待 {waited_ms} ms){held_up}"

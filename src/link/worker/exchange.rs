@@ -232,8 +232,8 @@ impl Worker {
     /// to an earlier request. After the last attempt, an in-order device (MSP, servo) is given
     /// the grace period to answer late; attempts left unanswered are owed.
     ///
-    /// A timeout during which the host ran behind one of the exchange's deadlines by more than
-    /// [`HOST_LATE`] says so ([`ExchangeError::Timeout::host_late`]).
+    /// A timeout during which the host ran behind one of the exchange's deadlines by
+    /// [`crate::link::HELD_UP`] or more says so ([`ExchangeError::Timeout::host_late`]).
     pub(super) fn exchange(&mut self, req: &Request) -> Result<Reply, ExchangeError> {
         self.exchange_with(req, true)
     }

@@ -6,7 +6,7 @@
 //! (the devices answer in order), and what answers none of the sweep's requests is handed back.
 
 use super::Worker;
-use crate::link::request::{ExchangeError, HELD_UP, ReplySpec};
+use crate::link::request::{ExchangeError, ReplySpec, held_up_by};
 use crate::link::{Damaged, Sweep, SweepAnswer, SweepReply, wire_time};
 use crate::packet::Packet;
 use crate::protocol::{Direction, FrameError};
@@ -81,7 +81,7 @@ impl Worker {
     pub(super) fn run_sweep(&mut self, sweep: &Sweep) -> Result<SweepReply, ExchangeError> {
         let (result, late) = self.watching_late(|w| w.sweep_once(sweep));
         result.map(|reply| SweepReply {
-            host_late: (late >= HELD_UP).then_some(late),
+            host_late: held_up_by(late),
             ..reply
         })
     }
