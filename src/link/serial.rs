@@ -143,11 +143,23 @@ impl SerialTransport {
 
 impl Transport for SerialTransport {
     /// Writes every byte; a port that takes none for [`WRITE_STALL`] is lost (the port is
-    /// non-blocking: a full output buffer is waited on, never blocked in).
+    /// non-blocking: a full output buffer is waited on, never blocked in). What the port takes
+    /// at once is written without a poll ([`write_now`]); only a full buffer is polled for.
     fn write(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
         let mut rest = bytes;
         let mut stalled_since: Option<Instant> = None;
         while !rest.is_empty() {
+            #[cfg(unix)]
+            match write_now(self.fd, rest) {
+                Ok(n) if n > 0 => {
+                    rest = &rest[n..];
+                    stalled_since = None;
+                    continue;
+                }
+                Ok(_) => {}
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => {}
+                Err(e) => return Err(self.lost(&e)),
+            }
             if self.port.timeout() != WRITE_STALL {
                 self.port
                     .set_timeout(WRITE_STALL)
@@ -399,6 +411,25 @@ impl std::fmt::Debug for PortOpener {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str("PortOpener")
     }
+}
+
+/// Writes what the port takes of `bytes` at once (the descriptor is non-blocking: a full
+/// output buffer is `WouldBlock`); returns how many it took.
+///
+/// Not through serialport's write, which polls the port first: on Linux a poll of a terminal
+/// with no input waiting waits for the kernel's worker to hand over bytes in flight
+/// (`n_tty_poll` calls `tty_buffer_flush_work`), and on a machine loaded with CPU-bound work
+/// that worker was seen to run more than 10 s late (tests on pseudo-terminals, 6 at once beside
+/// two CPU-bound loops: a Tuya handshake step "not done within 10 s" in every one of them at
+/// the same moment, while a thread that only slept was never more than 24 ms late). A write
+/// needs to wait only when the buffer is full.
+#[cfg(unix)]
+#[allow(unsafe_code)]
+fn write_now(fd: std::os::fd::RawFd, bytes: &[u8]) -> std::io::Result<usize> {
+    // SAFETY: `fd` is the open descriptor of the port this transport owns for as long as this
+    // call; `bytes` is valid for reads of its length, and write(2) only reads it.
+    let n = unsafe { libc::write(fd, bytes.as_ptr().cast(), bytes.len()) };
+    usize::try_from(n).map_err(|_| std::io::Error::last_os_error())
 }
 
 /// Gives up the exclusive use serialport took at open on `fd`: the terminal's exclusive mode

@@ -9,10 +9,16 @@
 //! the instant it was made, in order, and the simulator takes them with those stamps, as the
 //! in-process [`SimTransport`](super::SimTransport) does; and a read whose deadline has passed
 //! waits until the simulator has caught up with that deadline and every byte due by then has
-//! crossed the pty. The bytes still travel through the real pty and serial port code; the
-//! device hears the host's bytes from its stamped writes (those that crossed the pty are
-//! drained), so that a loaded machine's late hand-over inside the pty never holds the device
-//! up, and a clear of the input is taken in step too ([`HostAction::Clear`]).
+//! been recorded. The bytes still travel through the real pty, both ways, but neither end
+//! waits on it: the device hears the host's bytes from its stamped writes, and the host reads
+//! the device's bytes from what the simulator recorded as written ([`State::to_host`]); the
+//! copies that crossed the pty are drained by a thread at each side and compared with what was
+//! sent ([`super::crossing`]). On Linux a read or poll of a pty waits for the kernel's worker
+//! to hand over bytes in flight (`n_tty_read` and `n_tty_poll` call `tty_buffer_flush_work`),
+//! and on a machine loaded with CPU-bound work that worker was seen to run up to 18 s late: a
+//! host reading its port that way had no answer from a device that had answered at once (seen:
+//! "read 631 of 10008 written", 18 s past the read's deadline, every test process at once). A
+//! clear of the input is taken in step too ([`HostAction::Clear`]).
 //!
 //! The device's clock never runs ahead of the host's next stamp: between two calls of a host's
 //! port, the host's next action can still be stamped as early as the last call's return (a
@@ -31,6 +37,7 @@
 //! process) sees a plain pty that never answers: the `sim` command and `botbench bench` use
 //! plain servers.
 
+use super::crossing::Way;
 use crate::link::serial::SerialTransport;
 use crate::link::{LinkError, Opener, Transport};
 use std::collections::VecDeque;
@@ -56,6 +63,11 @@ pub(crate) enum HostAction {
     Clear,
 }
 
+/// The most bytes the simulator's side holds for the host, sent and not yet read: what a pty
+/// holds (its buffers' limit, 64 KiB). What a device sends beyond it, with nobody reading, is
+/// lost, as it is on a real port whose buffer is full.
+const TO_HOST_LIMIT: usize = 64 * 1024;
+
 /// The state a host and the simulator serving it share.
 #[derive(Debug)]
 pub struct Lockstep {
@@ -63,6 +75,10 @@ pub struct Lockstep {
     /// Signalled when the host does something the simulator waits for (an action, a call
     /// begun, a port closed), with [`State::generation`] counting up.
     changed: Condvar,
+    /// Signalled when the device side does something a host's read waits for (bytes written,
+    /// a clear taken, a crossing found changed, serving ended), with
+    /// [`State::device_generation`] counting up.
+    device_changed: Condvar,
 }
 
 #[derive(Debug)]
@@ -76,8 +92,11 @@ pub(crate) struct State {
     /// timer, later than it crossed), in the same order.
     seen: VecDeque<Instant>,
     written_total: u64,
-    /// Bytes the host has read (or cleared) from the pty, in total.
+    /// Bytes the host has read (or cleared), in total.
     read_total: u64,
+    /// The bytes the simulator has written that the host has not read yet: byte `read_total`
+    /// first, at most [`TO_HOST_LIMIT`]. The host reads these, not the pty's copy.
+    to_host: VecDeque<u8>,
     /// The earliest instant at which the device side may still send a byte: a chunk of the
     /// host's still crossing to the device, or the next byte of a frame on its way back.
     pub(crate) next_due: Option<Instant>,
@@ -92,7 +111,9 @@ pub(crate) struct State {
     /// up to it.
     clear_mark: u64,
     /// The host's bytes that crossed the pty, compared with what it wrote.
-    pub(crate) crossing: super::crossing::Crossing,
+    pub(crate) to_device: super::crossing::Crossing,
+    /// The device's bytes that crossed the pty, compared with what the simulator wrote.
+    pub(crate) to_host_crossing: super::crossing::Crossing,
     /// Each open host port between two calls, and when its last call returned: its next action
     /// is stamped no earlier (a port in a call, or none open, holds the simulator back nowhere).
     between_calls: Vec<(u64, Instant)>,
@@ -100,6 +121,8 @@ pub(crate) struct State {
     next_port: u64,
     /// Counts the changes [`Lockstep::changed`] signals.
     generation: u64,
+    /// Counts the changes [`Lockstep::device_changed`] signals.
+    device_generation: u64,
 }
 
 impl Lockstep {
@@ -111,18 +134,22 @@ impl Lockstep {
                 seen: VecDeque::new(),
                 written_total: 0,
                 read_total: 0,
+                to_host: VecDeque::new(),
                 next_due: None,
                 serving: true,
                 closed: false,
                 clears_asked: 0,
                 clears_done: 0,
                 clear_mark: 0,
-                crossing: super::crossing::Crossing::default(),
+                to_device: super::crossing::Crossing::new(Way::ToDevice),
+                to_host_crossing: super::crossing::Crossing::new(Way::ToHost),
                 between_calls: Vec::new(),
                 next_port: 0,
                 generation: 0,
+                device_generation: 0,
             }),
             changed: Condvar::new(),
+            device_changed: Condvar::new(),
         })
     }
 
@@ -186,12 +213,31 @@ impl Lockstep {
             .unwrap_or_else(|e| e.into_inner());
     }
 
+    /// The device side changed something a host's read waits for: the reads waiting are woken.
+    pub(crate) fn signal_host(&self) {
+        self.lock().device_generation += 1;
+        self.device_changed.notify_all();
+    }
+
+    /// A host's read waits until `until` at most for the device side to change something after
+    /// it saw `generation` (returns at once if it has already).
+    fn wait_for_device(&self, generation: u64, until: Instant) {
+        let s = self.lock();
+        let wait = until.saturating_duration_since(Instant::now());
+        if s.device_generation != generation || wait.is_zero() {
+            return;
+        }
+        let _unused = self
+            .device_changed
+            .wait_timeout(s, wait)
+            .unwrap_or_else(|e| e.into_inner());
+    }
+
     /// How many of the bytes after the first `taken` the host may read by `deadline`: those of
     /// the simulator's batches due by then (a batch whose first byte was due later is not yet
     /// there for a host that reads by `deadline`, however late the host's thread runs); and when
     /// the host saw the last of them (`None`: none).
-    fn due_by(&self, taken: u64, deadline: Instant) -> (u64, Option<Instant>) {
-        let s = self.lock();
+    fn due_by(s: &State, taken: u64, deadline: Instant) -> (u64, Option<Instant>) {
         let (mut upto, mut last) = (taken, None);
         for (&(total, due), &seen) in s.written.iter().zip(&s.seen) {
             if total <= taken {
@@ -264,14 +310,35 @@ impl State {
         self.generation
     }
 
-    /// The simulator has written `n` bytes, the first of them due at `due`, the last seen by the
-    /// host at `seen`.
-    pub(crate) fn wrote(&mut self, n: usize, due: Instant, seen: Instant) {
+    /// The simulator writes `bytes` (one frame), the first of them due at `due`, the last seen
+    /// by the host at `seen`. Returns how many of them the host's side holds: those beyond
+    /// [`TO_HOST_LIMIT`] unread bytes are lost (nobody reads them), and only the ones held go
+    /// across the pty.
+    pub(crate) fn wrote(&mut self, bytes: &[u8], due: Instant, seen: Instant) -> usize {
+        let n = bytes
+            .len()
+            .min(TO_HOST_LIMIT.saturating_sub(self.to_host.len()));
         if n > 0 {
+            self.to_host.extend(&bytes[..n]);
             self.written_total += n as u64;
             self.written.push_back((self.written_total, due));
             self.seen.push_back(seen);
         }
+        n
+    }
+
+    /// The first change the pty made to bytes on their way, either way, in words.
+    pub(crate) fn crossing_changed(&self) -> Option<&str> {
+        self.to_device
+            .changed()
+            .or_else(|| self.to_host_crossing.changed())
+    }
+
+    /// The host reads (or drops) `n` of the bytes held for it, at most as many as there are.
+    fn take_to_host(&mut self, n: usize) -> std::collections::vec_deque::Drain<'_, u8> {
+        let n = n.min(self.to_host.len());
+        self.read_total += n as u64;
+        self.to_host.drain(..n)
     }
 
     /// The simulator has taken the host's clear: every byte it has written so far is the host's
@@ -279,14 +346,6 @@ impl State {
     pub(crate) fn cleared(&mut self) {
         self.clears_done += 1;
         self.clear_mark = self.written_total;
-    }
-
-    /// Of the bytes last recorded as written, `n` were dropped (nobody made room for them).
-    pub(crate) fn dropped(&mut self, n: usize) {
-        self.written_total = self.written_total.saturating_sub(n as u64);
-        if let Some(last) = self.written.back_mut() {
-            last.0 = self.written_total;
-        }
     }
 }
 
@@ -296,6 +355,7 @@ pub(crate) struct Serving<'a>(&'a Lockstep);
 impl Drop for Serving<'_> {
     fn drop(&mut self) {
         self.0.lock().serving = false;
+        self.0.signal_host();
     }
 }
 
@@ -336,7 +396,6 @@ pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener
             id,
             lockstep: lockstep.clone(),
             last_return,
-            held: VecDeque::new(),
             arrived: None,
             written: None,
             clearing: None,
@@ -345,7 +404,8 @@ pub(crate) fn opener(lockstep: Arc<Lockstep>, path: String, baud: u32) -> Opener
     })
 }
 
-/// How long a read that waits for the simulator blocks before it looks again.
+/// How long a read past its deadline that waits for the simulator blocks before it looks
+/// again.
 const CATCH_UP_POLL: Duration = Duration::from_millis(1);
 /// How long past its deadline a read waits at most for the simulator to catch up: far beyond a
 /// loaded machine's scheduling delays (the simulator's thread only has to run), so that a
@@ -353,11 +413,14 @@ const CATCH_UP_POLL: Duration = Duration::from_millis(1);
 const CATCH_UP_LIMIT: Duration = Duration::from_secs(10);
 
 /// The host's side of a pty served in lockstep: the real serial port, with each write and baud
-/// switch stamped for the simulator, and reads that time out only once nothing more is due, and
-/// that hand the host only what was due by their deadline. A host thread that runs late (a
-/// loaded machine) finds in the pty bytes that came after the deadline it reads by; they are
-/// held for its next read, so that it sees what a punctual host would: the timing a test is
-/// about is the simulator's, never the scheduler's.
+/// switch stamped for the simulator, and reads that take the device's bytes from what the
+/// simulator recorded ([`State::to_host`]; the pty's copy is drained and compared), that time
+/// out only once nothing more is due, and that hand the host only what was due by their
+/// deadline. A host thread that runs late (a loaded machine) finds bytes that came after the
+/// deadline it reads by; they are left for its next read, so that it sees what a punctual host
+/// would: the timing a test is about is the simulator's, never the scheduler's. Once the
+/// simulator has stopped (its side of the pty closed), reads go to the port itself, which
+/// says it is gone.
 ///
 /// A write is stamped with the instant the port's previous call returned: a host takes the time
 /// its answer deadline starts from after that call and before the write, so the device never
@@ -370,8 +433,6 @@ pub struct LockstepPort {
     id: u64,
     lockstep: Arc<Lockstep>,
     last_return: Instant,
-    /// Bytes read from the pty that were due after the deadline of the read that found them.
-    held: VecDeque<u8>,
     /// When the last byte the last read handed over had arrived ([`Transport::arrived_at`]).
     arrived: Option<Instant>,
     /// The stamp of the last write: when the device hears it from ([`Transport::written_at`]).
@@ -379,18 +440,13 @@ pub struct LockstepPort {
     /// The clear asked for (its number) that the simulator has not taken yet: nothing is
     /// handed over until it has said which bytes the clear drops.
     clearing: Option<u64>,
-    /// Bytes the last clear drops that have not been read from the pty yet.
+    /// Bytes the last clear drops that have not been dropped yet.
     discard: u64,
 }
 
 impl Drop for LockstepPort {
     fn drop(&mut self) {
-        // Bytes read from the pty and never handed over are gone with this port: counted as
-        // read, or the next port on this pty would wait for them (seen: a link opened after
-        // another closed with a Tuya MCU's report held spun in every read).
-        let mut s = self.lockstep.lock();
-        s.read_total = (s.read_total + self.held.len() as u64).min(s.written_total);
-        drop(s);
+        // Bytes not read stay for the next port opened, as they stay in the pty.
         self.lockstep.host_call(self.id, None);
     }
 }
@@ -408,11 +464,14 @@ impl LockstepPort {
     }
 
     fn read_in_step(&mut self, buf: &mut [u8], deadline: Instant) -> Result<usize, LinkError> {
-        let mut chunk = [0u8; 4096];
         loop {
-            if let Some(changed) = self.lockstep.lock().crossing.changed() {
-                return Err(LinkError::Disconnected(changed.to_string()));
-            }
+            let (generation, serving) = {
+                let s = self.lockstep.lock();
+                if let Some(changed) = s.crossing_changed() {
+                    return Err(LinkError::Disconnected(changed.to_string()));
+                }
+                (s.device_generation, s.serving)
+            };
             self.drop_cleared();
             let clearing = self.is_clearing();
             let n = if clearing {
@@ -423,15 +482,14 @@ impl LockstepPort {
             if n > 0 || buf.is_empty() {
                 return Ok(n);
             }
+            if !serving {
+                // The simulator's side of the pty is closed: the port says so (a vanished
+                // port's read fails), or has nothing more.
+                return self.port.read(buf, deadline);
+            }
             let now = Instant::now();
             let until = if now < deadline {
-                // While a clear waits for the simulator, look again soon: bytes held may be
-                // the host's as soon as it has said which it drops.
-                if clearing {
-                    deadline.min(now + CATCH_UP_POLL)
-                } else {
-                    deadline
-                }
+                deadline
             } else {
                 // Past CATCH_UP_LIMIT the host reads as from a real port: nothing came in
                 // time. A simulator that never catches up (or bytes the accounting lost) must
@@ -442,8 +500,7 @@ impl LockstepPort {
                     // A simulator that never caught up: what the accounting held, to find why.
                     eprintln!(
                         "lockstep: a read still owed bytes {CATCH_UP_LIMIT:?} past its deadline \
-                         (held {}, clearing {:?}, discard {}): {}",
-                        self.held.len(),
+                         (clearing {:?}, discard {}): {}",
                         self.clearing,
                         self.discard,
                         self.lockstep.explain(deadline)
@@ -454,8 +511,7 @@ impl LockstepPort {
                 }
                 now + CATCH_UP_POLL
             };
-            let got = self.port.read(&mut chunk, until)?;
-            self.held.extend(&chunk[..got]);
+            self.lockstep.wait_for_device(generation, until);
         }
     }
 
@@ -464,7 +520,7 @@ impl LockstepPort {
         self.clearing.is_some() || self.discard > 0
     }
 
-    /// Drops the held bytes the last clear drops, once the simulator has said which; when the
+    /// Drops the bytes the last clear drops, once the simulator has said which; when the
     /// simulator no longer serves, everything held (nothing more comes).
     fn drop_cleared(&mut self) {
         let mut s = self.lockstep.lock();
@@ -472,8 +528,8 @@ impl LockstepPort {
             if !s.serving {
                 self.clearing = None;
                 self.discard = 0;
-                self.held.clear();
-                s.read_total = s.written_total;
+                let all = s.to_host.len();
+                s.take_to_host(all);
                 return;
             }
             if s.clears_done < asked {
@@ -482,29 +538,29 @@ impl LockstepPort {
             self.clearing = None;
             self.discard = s.clear_mark.saturating_sub(s.read_total);
         }
-        let k = usize::try_from(self.discard)
-            .unwrap_or(usize::MAX)
-            .min(self.held.len());
-        self.held.drain(..k);
-        self.discard -= k as u64;
-        s.read_total += k as u64;
+        let k = usize::try_from(self.discard).unwrap_or(usize::MAX);
+        let dropped = s.take_to_host(k).len();
+        self.discard -= dropped as u64;
     }
 
-    /// Hands the host the held bytes that were due by `deadline` (as many as `buf` takes).
+    /// Hands the host the bytes held for it that were due by `deadline` (as many as `buf`
+    /// takes).
     fn hand_over(&mut self, buf: &mut [u8], deadline: Instant) -> usize {
-        if self.held.is_empty() {
+        let mut s = self.lockstep.lock();
+        if s.to_host.is_empty() {
             return 0;
         }
-        let taken = self.lockstep.lock().read_total;
-        let (due, last_seen) = self.lockstep.due_by(taken, deadline);
-        let due = usize::try_from(due).unwrap_or(usize::MAX);
-        let n = due.min(self.held.len()).min(buf.len());
-        self.arrived = last_seen;
-        for (slot, byte) in buf.iter_mut().zip(self.held.drain(..n)) {
+        let (due, last_seen) = Lockstep::due_by(&s, s.read_total, deadline);
+        let n = usize::try_from(due).unwrap_or(usize::MAX).min(buf.len());
+        let mut n_taken = 0;
+        for (slot, byte) in buf.iter_mut().zip(s.take_to_host(n)) {
             *slot = byte;
+            n_taken += 1;
         }
-        self.lockstep.lock().read_total += n as u64;
-        n
+        if n_taken > 0 {
+            self.arrived = last_seen;
+        }
+        n_taken
     }
 }
 
@@ -519,7 +575,7 @@ impl Transport for LockstepPort {
         self.begins();
         let result = self.port.write(bytes);
         if result.is_ok() {
-            self.lockstep.lock().crossing.host_wrote(bytes);
+            self.lockstep.lock().to_device.sent(bytes);
         }
         self.returns(result)
     }
@@ -567,13 +623,13 @@ impl Transport for LockstepPort {
         if serving {
             return self.returns(Ok(()));
         }
-        self.held.clear();
         self.clearing = None;
         self.discard = 0;
         let result = self.port.clear_input();
         {
             let mut s = self.lockstep.lock();
-            s.read_total = s.written_total;
+            let all = s.to_host.len();
+            s.take_to_host(all);
         }
         self.returns(result)
     }

@@ -252,7 +252,7 @@ pub fn holders(path: &str) -> Vec<Holder> {
 /// The other processes that may read `path`'s bytes: [`holders`], except, for a pseudo-terminal,
 /// the program that serves its other side (it holds the pty's master, whose
 /// `/proc/PID/fdinfo` names the pty by `tty-index`; a simulator also keeps the pty's own side
-/// open, and never reads it) and the children that inherited it from that program.
+/// open, and in lockstep reads it only to check the bytes that crossed) and the children that inherited it from that program.
 pub fn other_readers(path: &str) -> Vec<Holder> {
     let found = holders(path);
     if found.is_empty() {
