@@ -23,6 +23,7 @@
 //! the font when it fails.
 
 pub mod glyphs;
+pub mod phrases;
 
 use eframe::egui;
 use serde::{Deserialize, Serialize};

@@ -220,6 +220,9 @@ pub struct NoAnswer {
     pub attempts: u8,
     /// How long its answer was waited for, from when it was written.
     pub waited: Duration,
+    /// How far this computer ran behind a deadline during the exchange, when
+    /// [`HELD_UP`] or more ([`request::held_up_by`]): the answer may have come while it was.
+    pub host_late: Option<Duration>,
 }
 
 /// Counters for the status bar.

@@ -180,7 +180,7 @@ impl Transport for SerialTransport {
                     let since = *stalled_since.get_or_insert_with(Instant::now);
                     if since.elapsed() >= WRITE_STALL {
                         return Err(LinkError::Disconnected(format!(
-                            "{}: the port took no byte for {} ms",
+                            "{}: the port took no byte; waited {} ms",
                             self.path,
                             WRITE_STALL.as_millis()
                         )));

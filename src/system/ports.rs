@@ -165,6 +165,38 @@ fn vanish_cause(
     })
 }
 
+/// Every kind of cause [`vanished`] gives for a lost `path`, for the tests of the texts made of
+/// them (the window's Chinese): renamed, taken by brltty while there, taken by a running
+/// brltty, unplugged with other ports listed, unplugged with none.
+#[cfg(test)]
+pub(crate) fn every_vanish_cause(path: &str) -> Vec<String> {
+    let usb = |p: &str, sn: &str| PortInfo {
+        path: p.into(),
+        kind: "usb",
+        vid: None,
+        pid: None,
+        serial_number: Some(sn.into()),
+        manufacturer: None,
+        product: None,
+        adapter: super::adapter::Adapter::default(),
+    };
+    let now = [usb("/dev/ttyUSB1", "A1"), usb("/dev/ttyUSB2", "C3")];
+    let held = [Holder {
+        pid: 4,
+        name: "brltty".into(),
+    }];
+    [
+        vanish_cause(path, None, &now, Some("A1"), None),
+        vanish_cause(path, Some(&held), &[], None, None),
+        vanish_cause(path, None, &now, None, Some(9)),
+        vanish_cause(path, None, &now, Some("B2"), None),
+        vanish_cause(path, None, &[], None, None),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
 /// The id of a running process whose command name is `name` (`/proc/PID/comm`), if any.
 fn process_named(name: &str) -> Option<u32> {
     let procs = std::fs::read_dir("/proc").ok()?;

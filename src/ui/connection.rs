@@ -383,7 +383,8 @@ impl ConnectionBar {
 
 /// What to check when the device does not answer: the command line's checklist
 /// ([`crate::link::silent`]), naming the window's fields; a board that reboots on open too when
-/// the port was opened with no boot wait.
+/// the port was opened with no boot wait; led by the loaded computer when this computer was
+/// held up during the last unanswered attempt (`LinkStatus::silent_held_up`).
 pub fn silent_checklist(rt: &Station) -> Text {
     let options = Text::from(Key::PortOptions);
     let (dtr, rts, off, on) = (
@@ -411,7 +412,8 @@ pub fn silent_checklist(rt: &Station) -> Text {
         ),
     };
     let waited = !rt.link.options.setup.boot_wait.is_zero();
-    silent::checklist(&SilentCheck::list(waited), &names)
+    let checks = SilentCheck::list_after(waited, rt.link.silent_held_up());
+    silent::checklist(&checks, &names)
 }
 
 fn state_badge(ui: &mut egui::Ui, lang: Lang, rt: &Station) {

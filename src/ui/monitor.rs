@@ -104,10 +104,14 @@ pub fn no_answer_said(profile: &Profile, n: &NoAnswer) -> Text {
         .map_or_else(|| format!("command {}", n.command), |c| c.ident.clone());
     let ms = n.waited.as_millis();
     let (k, m) = (n.attempt, n.attempts);
-    Text::new(
+    let said = Text::new(
         format!("no answer to {name} ({:#04x}) after {ms} ms, attempt {k} of {m}", n.command),
         format!("{name} ({:#04x}) 无应答,已等待 {ms} ms,第 {k}/{m} 次尝试", n.command),
-    )
+    );
+    match n.host_late {
+        Some(late) => said.then("; ", &crate::link::request::held_up_said(late)),
+        None => said,
+    }
 }
 
 /// One log line, in `lang`: `12:00:01.234 >> ff ff 03 82 00 81  MSP_GET_PWMVALUE`, decoded
@@ -625,6 +629,32 @@ mod tests {
         for f in ["0x1d", "29", "0x", "0x1c1", "build"] {
             assert!(!command_matches(f, 0x1c, "CMD_VERSION"), "{f}");
         }
+    }
+
+    /// Issue 25, item 4e: an unanswered attempt during which this computer was held up says
+    /// so on its row, in both languages; one on time does not.
+    #[test]
+    fn an_unanswered_attempt_on_a_held_up_computer_says_so_on_its_row() {
+        let profile = crate::sim::msp_device::builtin_profile("window-cleaner").unwrap();
+        let n = |host_late| NoAnswer {
+            at: std::time::SystemTime::now(),
+            command: 0x82,
+            attempt: 1,
+            attempts: 3,
+            waited: std::time::Duration::from_millis(25),
+            host_late,
+        };
+        let on_time = no_answer_said(&profile, &n(None));
+        assert!(!on_time.en.contains("held up"), "{}", on_time.en);
+        let late = no_answer_said(&profile, &n(Some(std::time::Duration::from_millis(31))));
+        assert!(
+            late.en.starts_with(&on_time.en)
+                && late.en.contains("; this computer was held up 31 ms past the answer's deadline"),
+            "{}",
+            late.en
+        );
+        assert!(late.zh.starts_with(&on_time.zh) && late.zh.len() > on_time.zh.len());
+        assert!(!late.zh.contains("held up"), "{}", late.zh);
     }
 
     #[test]

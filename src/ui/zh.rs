@@ -18,6 +18,61 @@ use crate::protocol::tuya::dp::DpError;
 use crate::ui::jobs::{JobError, LogError};
 use crate::ui::station::ConnectError;
 
+/// The fixed phrases of why a port or a link was lost, as the link and the system's port
+/// lookup write them (`crate::link::serial`, `crate::system::vanished`, the link's worker),
+/// and their Chinese; a longer phrase before one it holds.
+const LOST_PORT: &[(&str, &str)] = &[
+    ("port disconnected: ", "串口已断开:"),
+    ("port lost: ", "串口丢失:"),
+    ("link lost: ", "连接丢失:"),
+    ("link closed", "连接已关闭"),
+    (
+        " is gone: unplugged (no USB serial port is listed now); plug it in again",
+        " 已不存在:已拔出(现在没有列出任何 USB 串口);请重新插上",
+    ),
+    (
+        " is gone: unplugged, or plugged in again under another name (listed now: ",
+        " 已不存在:已拔出,或以另一个名称重新插上(现在列出:",
+    ),
+    (
+        "renamed after a replug: the same adapter (USB serial ",
+        "重新插拔后改名:同一个适配器(USB 序列号 ",
+    ),
+    (") is now ", ")现在是 "),
+    ("; connect to that port", ";请连接该串口"),
+    ("taken by brltty (pid ", "被 brltty(pid "),
+    (
+        "), the braille display daemon, which claims CH340/CH341 adapters on Ubuntu; without a \
+         braille display, remove it: sudo apt remove brltty",
+        ")占用:它是盲文显示器守护程序,在 Ubuntu 上会占用 CH340/CH341 适配器;\
+         没有盲文显示器时请卸载它:sudo apt remove brltty",
+    ),
+    (
+        "the port took no byte; waited ",
+        "串口未接收任何字节;已等待 ",
+    ),
+    (": end of file", ":读到结尾(对端已关闭)"),
+    (": the port is gone", ":串口已不存在"),
+    (": write", ":写入失败"),
+    (" vanished", " 已消失"),
+    ("unplugged", "已拔出"),
+    (" — ", "——"),
+];
+
+/// Why a port or a link was lost (`why`, as the link wrote it: `/dev/ttyUSB0: I/O error —
+/// /dev/ttyUSB0 is gone: unplugged …`) in Chinese: its fixed phrases ([`LOST_PORT`]) said, the
+/// paths, numbers and what the operating system said left as they came. For reasons kept as
+/// English text (a record's, a verdict's) and shown in 中文.
+pub fn lost_port(why: &str) -> String {
+    let mut zh = crate::i18n::phrases::replace(why, LOST_PORT);
+    // The list of ports now listed closes the text: its parenthesis is the Chinese one.
+    if zh.contains("(现在列出:") && zh.ends_with(')') {
+        zh.pop();
+        zh.push(')');
+    }
+    zh
+}
+
 /// An error as the window says it in Chinese; its English is its `Display`.
 pub trait Zh: std::fmt::Display {
     /// The message in Chinese.
@@ -97,12 +152,15 @@ impl Zh for JobError {
                 format!("已取消:{size} 字节中只写到偏移 {offset},MCU 中的固件不完整")
             }
             JobError::UpdateLinkLost { offset, size, why } => {
-                format!("升级过程中连接丢失(已确认 {offset} / {size} 字节):{why}")
+                format!(
+                    "升级过程中连接丢失(已确认 {offset} / {size} 字节):{}",
+                    lost_port(why)
+                )
             }
             JobError::Failed(what) => format!("不合格:{}", what.zh),
             JobError::StepFailed { step, reason } => format!("在 {step} 步失败:{reason}"),
             JobError::LinkLostDuring { step, why } => {
-                format!("无结论:在“{}”步骤中连接丢失:{why}", step.zh)
+                format!("无结论:在“{}”步骤中连接丢失:{}", step.zh, lost_port(why))
             }
             JobError::Log(e) => e.zh(),
             JobError::File { path, reason } => format!("{}:{reason}", path.display()),
@@ -280,7 +338,7 @@ impl Zh for ExchangeError {
             } => format!(
                 "命令 {command} 未发送:设备报告的硬件为 {hw:#04x},而配置 {profile} 适用于硬件 {claimed:#04x};请选择此设备的配置"
             ),
-            ExchangeError::Disconnected(e) => format!("连接丢失:{e}"),
+            ExchangeError::Disconnected(e) => format!("连接丢失:{}", lost_port(e)),
             ExchangeError::Cancelled => "已取消".into(),
         }
     }
@@ -290,7 +348,7 @@ impl Zh for LinkError {
     fn zh(&self) -> String {
         match self {
             LinkError::Open { path, reason } => format!("无法打开 {path}:{reason}"),
-            LinkError::Disconnected(e) => format!("串口已断开:{e}"),
+            LinkError::Disconnected(e) => format!("串口已断开:{}", lost_port(e)),
             LinkError::Setting(e) => format!("串口拒绝此设置:{e}"),
         }
     }
@@ -601,6 +659,56 @@ pub fn value_marks(shown: &str, lang: Lang) -> String {
 mod tests {
     use super::*;
     use std::time::Duration;
+
+    /// The English words left in `zh`: words of three letters or more, except those that are
+    /// values (paths, the program named, the command to run, the OS's own words in `os`).
+    fn english_in(zh: &str, os: &str) -> Vec<String> {
+        const VALUES: &[&str] = &[
+            "dev", "ttyUSB", "USB", "brltty", "sudo", "apt", "remove", "Ubuntu", "pid", "pts",
+            // The simulated port's device, by its kind's name.
+            "window", "cleaner",
+        ];
+        zh.split(|c: char| !c.is_ascii_alphabetic())
+            .filter(|w| w.len() >= 3 && !VALUES.contains(w) && !os.contains(w))
+            .map(str::to_string)
+            .collect()
+    }
+
+    /// Every reason a port is lost for, as the link writes it, is said in 中文 but for its
+    /// values: a NO VERDICT banner, a station's reason or a record's row keeps the reason as
+    /// English text (before: the lost port's reason under a Chinese banner stayed English).
+    #[test]
+    fn every_reason_a_port_is_lost_for_is_said_in_chinese() {
+        let os = "Input/output error (os error 5)";
+        let mut reasons: Vec<String> = crate::system::every_vanish_cause("/dev/ttyUSB0")
+            .into_iter()
+            .map(|cause| format!("port disconnected: /dev/ttyUSB0: {os} — {cause}"))
+            .collect();
+        assert_eq!(reasons.len(), 5, "{reasons:#?}");
+        reasons.extend(
+            [
+                "port disconnected: /dev/ttyUSB0: end of file",
+                "port disconnected: /dev/ttyUSB0: write",
+                "port disconnected: /dev/ttyUSB0: the port is gone",
+                "port disconnected: /dev/ttyUSB0: the port took no byte; waited 500 ms",
+                "port lost: port disconnected: /dev/pts/3: end of file",
+                "link lost: link closed",
+                "port disconnected: window-cleaner vanished",
+                "unplugged",
+            ]
+            .map(String::from),
+        );
+        for en in &reasons {
+            let zh = lost_port(en);
+            let left = english_in(&zh, os);
+            assert!(left.is_empty(), "{en:?} → {zh:?}: {left:?}");
+        }
+        assert_eq!(
+            lost_port(&reasons[3]),
+            "串口已断开:/dev/ttyUSB0: Input/output error (os error 5)——/dev/ttyUSB0 已不存在:\
+             已拔出,或以另一个名称重新插上(现在列出:/dev/ttyUSB1, /dev/ttyUSB2)"
+        );
+    }
 
     /// A timeout on a held-up computer says so in 中文 too, with the figure, and no English.
     #[test]

@@ -160,3 +160,75 @@ fn an_empty_scan_on_a_held_up_computer_leads_with_the_loaded_computer() {
         ran.text()
     );
 }
+
+/// `sim`'s ports, its path behind a computer held up at its first `late_reads` reads that
+/// find nothing ([`crate::support::held_up`]).
+fn held_up_at_first(sim: &crate::support::cli::Sim, late_reads: usize) -> PortOpener {
+    crate::support::held_up::held_up(sim.ports().clone(), &sim.path, late_reads)
+}
+
+/// A scan that found servos while this computer was held up through every sweep, however often
+/// it asked the silent ids again, cannot say those ids are empty: it names them (issue 25, item
+/// 4e: before, "a servo may have been missed", naming none and asking none again).
+#[test]
+fn a_scan_held_up_through_every_sweep_names_the_ids_it_cannot_vouch_for() {
+    let sim = crate::support::cli::Sim::start(&["servo-bus", "--servos", "1,5"]);
+    let ports = held_up_at_first(&sim, usize::MAX);
+    let ran = run_in_process(
+        &["servo", "--port", &sim.path, "scan", "--ids", "0-6"],
+        &ports,
+    );
+    assert_eq!(ran.code, 0, "{}", ran.text());
+    for id in ["1", "5"] {
+        assert!(
+            ran.out
+                .lines()
+                .any(|l| l.split_whitespace().next() == Some(id)),
+            "servo {id} is listed: {}",
+            ran.text()
+        );
+    }
+    let said = ran
+        .err
+        .lines()
+        .find(|l| l.contains("stayed silent only while this computer was held up"))
+        .unwrap_or_else(|| panic!("the unsure ids said: {}", ran.text()));
+    assert!(
+        said.contains("5 id(s) stayed silent") && said.contains("(0, 2, 3, 4, 6 at "),
+        "{said}"
+    );
+}
+
+/// A scan held up in its first sweep asks the ids silent then again, and never counts a servo
+/// that answered among those it cannot vouch for.
+#[test]
+fn a_scan_held_up_only_at_first_asks_the_silent_ids_again_and_vouches_for_them() {
+    let sim = crate::support::cli::Sim::start(&["servo-bus", "--servos", "1,5"]);
+    let ports = held_up_at_first(&sim, 2);
+    let ran = run_in_process(
+        &[
+            "servo", "--port", &sim.path, "--json", "scan", "--ids", "0-6",
+        ],
+        &ports,
+    );
+    assert_eq!(ran.code, 0, "{}", ran.text());
+    let doc: serde_json::Value = serde_json::from_str(&ran.out).expect("a JSON document");
+    assert!(
+        doc["host_late_ms"].as_f64().is_some_and(|ms| ms >= 20.0),
+        "the hold-up is reported: {}",
+        ran.out
+    );
+    let unsure = doc["unsure"].as_array().expect("the unsure ids");
+    assert!(
+        unsure
+            .iter()
+            .all(|u| [0, 2, 3, 4, 6].contains(&u["id"].as_u64().unwrap_or(99))),
+        "only silent ids: {}",
+        ran.out
+    );
+    assert!(
+        doc["asked_again"].as_u64().is_some_and(|n| n >= 5),
+        "the silent ids were asked again: {}",
+        ran.out
+    );
+}

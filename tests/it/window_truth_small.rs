@@ -158,3 +158,28 @@ fn the_packet_monitor_lists_unanswered_attempts_as_rows_filtered_and_saved() {
         "the row in Chinese"
     );
 }
+
+/// A device silent while this computer is held up past every answer's deadline (issue 25, item
+/// 4e): the Device panel's checklist leads with the loaded computer and asks about the wiring
+/// only for a device that still does not answer with the computer idle, in both languages
+/// (before: the wiring checklist alone, as for a device unplugged).
+#[test]
+fn a_silent_device_on_a_held_up_computer_is_said_loaded_first() {
+    let silent = Faults {
+        silent: true,
+        ..Faults::default()
+    };
+    let b = serve_with(window_cleaner(), silent);
+    let mut h = harness(&crate::support::held_up::HeldUpPort(&b), PanelId::DEVICE);
+    let said = step_until_shown(&mut h, "if it still does not answer with the computer idle");
+    let late = said.find("this computer was held up ");
+    let wiring =
+        said.find("if it still does not answer with the computer idle: is the device powered");
+    assert!(
+        late.is_some() && wiring.is_some() && late < wiring,
+        "the loaded computer leads: {said}"
+    );
+    app_mut(&mut h).settings.lang = Lang::Zh;
+    let zh = step_until_shown(&mut h, "若电脑空闲时仍无应答");
+    assert!(!zh.contains("held up"), "{zh}");
+}

@@ -495,6 +495,7 @@ impl Worker {
                 attempt,
                 attempts,
                 waited,
+                host_late: crate::link::request::held_up_by(self.late_seen),
             }));
             ExchangeError::Timeout {
                 command: command.into(),

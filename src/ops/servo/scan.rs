@@ -103,9 +103,35 @@ pub struct ScanReport {
     /// [`crate::link::HELD_UP`] or more (a loaded computer: a servo may have been missed);
     /// `None`: on time throughout.
     pub host_late_ms: Option<f64>,
+    /// The ids that stayed silent only in sweeps during which this computer was held up
+    /// [`crate::link::HELD_UP`] or more past a deadline, however often asked again
+    /// ([`HELD_UP_RESWEEPS`]): their answers may have come while it was not there to read them,
+    /// so a servo may be there unseen. Empty when every silence was heard on time.
+    pub unsure: Vec<Unsure>,
+}
+
+/// An id a scan cannot say is empty ([`ScanReport::unsure`]), at the baud rate it was asked at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Unsure {
+    /// The baud rate the id was pinged at.
+    pub baud: u32,
+    /// The servo id.
+    pub id: u8,
 }
 
 impl ScanReport {
+    /// A report of nothing found yet.
+    fn empty() -> Self {
+        Self {
+            rows: Vec::new(),
+            asked_again: 0,
+            late_answers: 0,
+            margin_ms: 0.0,
+            host_late_ms: None,
+            unsure: Vec::new(),
+        }
+    }
+
     /// Keeps the larger of the lateness so far and `late` (a sweep's
     /// [`SweepReply::host_late`]).
     fn held_up(&mut self, late: Option<Duration>) {
@@ -137,6 +163,9 @@ const SWEEP_IDS: usize = 128;
 /// How many times the ids to ask again are swept again, at most, before those whose answer is
 /// still damaged are asked one by one.
 const RESWEEPS: usize = 3;
+/// How many times, at most, the ids silent while this computer was held up are swept again for
+/// a sweep that runs on time ([`ScanReport::unsure`]).
+const HELD_UP_RESWEEPS: usize = 3;
 
 /// The ids that answer a ping at the port's rate, found by sweeps ([`Sweep`]): pinged at the
 /// bus's pace, each answer counted for its id whenever it comes, then listened to for the grace
@@ -172,6 +201,9 @@ struct Found<'a> {
     /// The ids pinged so far, in order.
     swept: Vec<u8>,
     report: ScanReport,
+    /// The ids that were silent in a sweep during which this computer was held up: their
+    /// silence is not heard on time ([`Found::vouch`]).
+    held_silent: BTreeSet<u8>,
     /// Whether the sweeps stopped part way, cancelled: what they found so far is kept.
     cancelled: bool,
 }
@@ -189,13 +221,8 @@ impl<'a> Found<'a> {
             present: BTreeSet::new(),
             again: BTreeSet::new(),
             swept: Vec::with_capacity(ids.len()),
-            report: ScanReport {
-                rows: Vec::new(),
-                asked_again: 0,
-                late_answers: 0,
-                margin_ms: 0.0,
-                host_late_ms: None,
-            },
+            report: ScanReport::empty(),
+            held_silent: BTreeSet::new(),
             cancelled: false,
         };
         for (k, chunk) in ids.chunks(SWEEP_IDS).enumerate() {
@@ -221,6 +248,10 @@ impl<'a> Found<'a> {
         }
         for d in &reply.garbled {
             self.again.extend(d.candidates.iter().map(|&i| chunk[i]));
+        }
+        if reply.host_late.is_some() {
+            let silent = chunk.iter().filter(|id| !self.present.contains(id));
+            self.held_silent.extend(silent);
         }
         self.take_late(reply);
         self.swept.extend_from_slice(chunk);
@@ -322,7 +353,75 @@ impl<'a> Found<'a> {
             self.report.held_up(tail.host_late);
             self.found_late(&tail.strays, &mut found);
         }
+        self.vouch(client, cancel, &mut found)?;
         Ok((found.into_iter().collect(), self.report))
+    }
+
+    /// Pings again the ids that were silent only while this computer was held up (their answer
+    /// may have come while it was not there to read it), in sweeps that listen for late
+    /// answers, until one runs on time or [`HELD_UP_RESWEEPS`] have not: those still silent
+    /// then are [`ScanReport::unsure`] (their baud rate is the caller's to set). An id whose
+    /// answer came damaged is asked on its own ([`ask_again`]).
+    fn vouch(
+        &mut self,
+        client: &Client,
+        cancel: &Cancel,
+        found: &mut BTreeMap<u8, Presence>,
+    ) -> Result<(), OpError> {
+        let mut ask: Vec<u8> = self
+            .held_silent
+            .iter()
+            .copied()
+            .filter(|id| !found.contains_key(id))
+            .collect();
+        self.report.asked_again += ask.len();
+        let mut damaged: BTreeSet<u8> = BTreeSet::new();
+        for _ in 0..HELD_UP_RESWEEPS {
+            if ask.is_empty() {
+                break;
+            }
+            if cancel.is_cancelled() {
+                return Err(OpError::Cancelled);
+            }
+            let mut sweep = ping_sweep(&ask);
+            sweep.listen = true;
+            let reply = client.sweep(sweep)?;
+            self.report.held_up(reply.host_late);
+            for (i, a) in reply.answers.iter().enumerate() {
+                if a.is_some() {
+                    found.insert(ask[i], Presence::Present);
+                }
+            }
+            for id in pinged(&reply.strays) {
+                if ask.contains(&id) {
+                    found.insert(id, Presence::Present);
+                }
+            }
+            damaged.extend(
+                reply
+                    .garbled
+                    .iter()
+                    .flat_map(|d| d.candidates.iter().map(|&i| ask[i])),
+            );
+            ask.retain(|id| !found.contains_key(id) && !damaged.contains(id));
+            if reply.host_late.is_none() {
+                // Silent on time: nothing there.
+                ask.clear();
+            }
+        }
+        for id in damaged {
+            if found.contains_key(&id) {
+                continue;
+            }
+            match ask_again(client, id)? {
+                Presence::Absent => {}
+                p => {
+                    found.insert(id, p);
+                }
+            }
+        }
+        self.report.unsure = ask.into_iter().map(|id| Unsure { baud: 0, id }).collect();
+        Ok(())
     }
 
     /// Counts the ping answers among `strays` that answer ids asked again and not found yet:
@@ -348,7 +447,7 @@ pub(super) fn pinged(frames: &[Packet]) -> impl Iterator<Item = u8> + '_ {
 /// Pings `id` on its own, once at a time, up to three times: present at the first clean answer,
 /// absent at the first clean silence, a possible duplicate when it answers garbled twice (two
 /// servos on one id garble every answer; stray junk on the line rarely twice).
-fn ask_again(client: &Client, id: u8) -> Result<Presence, OpError> {
+pub(super) fn ask_again(client: &Client, id: u8) -> Result<Presence, OpError> {
     let mut garbled = None;
     for _ in 0..3 {
         match ping(client, id, 1)? {
@@ -479,6 +578,7 @@ fn scan_at(
     rows.extend(more);
     rows.sort_by_key(|r| r.id);
     report.rows = rows;
+    report.unsure.iter_mut().for_each(|u| u.baud = baud);
     Ok(report)
 }
 
@@ -511,13 +611,7 @@ pub fn scan(
         .filter(|&i| i != crate::protocol::servo::BROADCAST_ID)
         .collect();
     let total = (ids.len() * bauds.len()) as u64;
-    let mut report = ScanReport {
-        rows: Vec::new(),
-        asked_again: 0,
-        late_answers: 0,
-        margin_ms: 0.0,
-        host_late_ms: None,
-    };
+    let mut report = ScanReport::empty();
     let result = (|| {
         for (b, &baud) in bauds.iter().enumerate() {
             switch(client, baud)?;
@@ -539,6 +633,7 @@ pub fn scan(
             report.margin_ms = at_baud.margin_ms;
             report.held_up_ms(at_baud.host_late_ms);
             report.rows.extend(at_baud.rows);
+            report.unsure.extend(at_baud.unsure);
         }
         Ok(())
     })();

@@ -27,6 +27,11 @@ pub enum Reason {
     },
     /// The device did not answer (every attempt timed out): `no answer`.
     NoAnswer,
+    /// The device did not answer while this computer was held up [`crate::link::HELD_UP`] or
+    /// more past the answer's deadline (a loaded computer, not necessarily the unit): `no
+    /// answer, computer held up`. The figure is in the step's detail; the words stay the same
+    /// for every unit, so that a line's failure reasons group.
+    NoAnswerHeldUp,
     /// The device did not answer a command: `no answer to CMD_VERSION` (a self-test step).
     NoAnswerTo {
         /// The command as the profile names it.
@@ -125,6 +130,7 @@ impl fmt::Display for Reason {
             Self::HardwareNotAllowed { hw } => write!(f, "hardware {hw:#04x} not allowed"),
             Self::FirmwareNotAllowed { firmware } => write!(f, "firmware {firmware} not allowed"),
             Self::NoAnswer => f.write_str("no answer"),
+            Self::NoAnswerHeldUp => f.write_str("no answer, computer held up"),
             Self::NoAnswerTo { command } => write!(f, "no answer to {command}"),
             Self::LinkLost => f.write_str("link lost"),
             Self::LinkLostBecause { why } => write!(f, "link lost: {why}"),
@@ -192,6 +198,9 @@ impl Reason {
     pub fn of_error(e: &OpError) -> Self {
         use crate::link::ExchangeError;
         match e {
+            OpError::Exchange(ExchangeError::Timeout {
+                host_late: Some(_), ..
+            }) => Self::NoAnswerHeldUp,
             OpError::Exchange(ExchangeError::Timeout { .. }) => Self::NoAnswer,
             other if other.lost_port().is_some() => Self::LinkLost,
             other => Self::Error(other.clone()),
@@ -255,6 +264,7 @@ impl Reason {
             "link lost" => Self::LinkLost,
             "cancelled" => Self::Cancelled,
             "no answer" => Self::NoAnswer,
+            "no answer, computer held up" => Self::NoAnswerHeldUp,
             "the operator aborted" => Self::OperatorAborted,
             other => match other.strip_prefix("no answer to ") {
                 Some(command) if !command.contains(' ') => Self::NoAnswerTo {
@@ -263,5 +273,34 @@ impl Reason {
                 _ => Self::Other(other.to_string()),
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::ExchangeError;
+    use std::time::Duration;
+
+    fn timeout(host_late: Option<Duration>) -> OpError {
+        OpError::Exchange(ExchangeError::Timeout {
+            command: 3.into(),
+            attempts: 3,
+            waited_ms: 100,
+            host_late,
+        })
+    }
+
+    /// Issue 25, item 4e: a unit's silence while this computer was held up is said as such, in
+    /// words that read back as the same reason (the records keep the English), and one on time
+    /// stays `no answer`.
+    #[test]
+    fn no_answer_on_a_held_up_computer_is_a_reason_of_its_own_that_reads_back() {
+        let held = Reason::of_error(&timeout(Some(Duration::from_millis(31))));
+        assert_eq!(held, Reason::NoAnswerHeldUp);
+        assert_eq!(Reason::of_words(&held.to_string()), held);
+        let on_time = Reason::of_error(&timeout(None));
+        assert_eq!(on_time, Reason::NoAnswer);
+        assert_eq!(Reason::of_words(&on_time.to_string()), on_time);
     }
 }

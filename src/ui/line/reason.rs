@@ -12,9 +12,12 @@ impl Zh for Reason {
             Reason::HardwareNotAllowed { hw } => format!("硬件型号 {hw:#04x} 不在允许之列"),
             Reason::FirmwareNotAllowed { firmware } => format!("固件版本 {firmware} 不在允许之列"),
             Reason::NoAnswer => "设备无应答".into(),
+            Reason::NoAnswerHeldUp => "设备无应答,本机当时被拖慢(电脑负载过高)".into(),
             Reason::NoAnswerTo { command } => format!("{command} 无应答"),
             Reason::LinkLost => "连接中断".into(),
-            Reason::LinkLostBecause { why } => format!("连接中断:{why}"),
+            Reason::LinkLostBecause { why } => {
+                format!("连接中断:{}", crate::ui::zh::lost_port(why))
+            }
             Reason::LinkLostDuring { step_zh, .. } => format!("{step_zh} 中连接中断"),
             Reason::Cancelled => "已停止".into(),
             Reason::OperatorAborted => "操作员中止".into(),

@@ -37,7 +37,7 @@ const PHRASES: &[(&str, &str)] = &[
     (" within ", " "),
     (" to ", " 至 "),
     (" of ", "/"),
-    ("link lost: ", "链路丢失:"),
+    ("link lost: ", "连接丢失:"),
     ("the operator aborted", "操作员中止"),
     ("cancelled before it started", "开始前已取消"),
     ("cancelled while setting the safe state", "设置安全状态时已取消"),
@@ -68,7 +68,8 @@ pub const IDENTITY_STEP: (&str, &str) = ("Device identity", "设备识别");
 pub fn detail(text: &str, cmd: Option<&Command>, lang: Lang) -> String {
     match lang {
         Lang::En => text.to_string(),
-        Lang::Zh => phrases(&names(text, cmd), PHRASES),
+        // A lost port's reason first: its phrases hold words of the table's (" to ").
+        Lang::Zh => phrases(&crate::ui::zh::lost_port(&names(text, cmd)), PHRASES),
     }
 }
 
@@ -114,34 +115,9 @@ fn names(text: &str, cmd: Option<&Command>) -> String {
     out
 }
 
-/// Whether `c` continues a word.
-fn wordy(c: Option<char>) -> bool {
-    c.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_')
-}
-
-/// `text` with each phrase of `table` replaced, in order, where it stands at a word's edge.
+/// `text` with each phrase of `table` replaced ([`crate::i18n::phrases::replace`]).
 fn phrases(text: &str, table: &[(&str, &str)]) -> String {
-    let mut text = text.to_string();
-    for (en, zh) in table {
-        let (starts, ends) = (
-            en.starts_with(|c: char| c.is_ascii_alphanumeric()),
-            en.ends_with(|c: char| c.is_ascii_alphanumeric()),
-        );
-        let mut out = String::with_capacity(text.len());
-        let mut rest = text.as_str();
-        while let Some(at) = rest.find(en) {
-            let before = rest[..at].chars().next_back().or(out.chars().next_back());
-            let after = rest[at + en.len()..].chars().next();
-            // A phrase inside a longer word ("volt" in "voltage") stays as it is.
-            let inside_a_word = (starts && wordy(before)) || (ends && wordy(after));
-            out.push_str(&rest[..at]);
-            out.push_str(if inside_a_word { en } else { zh });
-            rest = &rest[at + en.len()..];
-        }
-        out.push_str(rest);
-        text = out;
-    }
-    text
+    crate::i18n::phrases::replace(text, table)
 }
 
 #[cfg(test)]

@@ -303,7 +303,8 @@ fn banner(ui: &mut egui::Ui, lang: Lang, r: &Record) -> bool {
                 link_lost_during(step, lang)
             ),
             format!(
-                "{reason}\n{}",
+                "{}\n{}",
+                lost_port_in(reason, lang),
                 lang.tr(
                     "The servo did not fail: nothing is known of the steps not done. Provision it again.",
                     "舵机并未失败:未完成的步骤没有结果。请重新烧录。",
@@ -372,13 +373,21 @@ fn history(ui: &mut egui::Ui, lang: Lang, records: &[Record]) {
                         let head = lang.tr("NO VERDICT", "无结论");
                         let during = link_lost_during(step, lang);
                         ui.colored_label(crate::ui::selftest::AMBER, format!("{head}: {during}"));
-                        reason_row(ui, reason);
+                        reason_row(ui, &lost_port_in(reason, lang));
                     }
                 }
                 ui.label(r.mismatches.join("; "));
                 ui.end_row();
             }
         });
+}
+
+/// Why the port was lost (`reason`, as the link wrote it) in `lang`.
+fn lost_port_in(reason: &str, lang: Lang) -> String {
+    match lang {
+        Lang::En => reason.to_string(),
+        Lang::Zh => crate::ui::zh::lost_port(reason),
+    }
 }
 
 /// A history row's reason, on a row of its own under the result.

@@ -12,6 +12,7 @@ use crate::ui::Action;
 use crate::ui::jobs::Job;
 use crate::ui::layout::header_row;
 use crate::ui::station::Station;
+use crate::ui::zh::Zh;
 use eframe::egui;
 use std::ops::RangeInclusive;
 
@@ -42,6 +43,11 @@ pub struct ScanTally {
     pub late_answers: usize,
     /// The margin, in ms.
     pub margin_ms: f64,
+    /// The ids the scan cannot say are empty: silent only while this computer was held up
+    /// ([`ScanReport::unsure`]).
+    pub unsure: Vec<ops::Unsure>,
+    /// How far this computer was held up past a deadline of the scan, in ms, when it was.
+    pub held_up_ms: Option<f64>,
 }
 
 impl ScanTally {
@@ -51,7 +57,37 @@ impl ScanTally {
             asked_again: report.asked_again,
             late_answers: report.late_answers,
             margin_ms: report.margin_ms,
+            unsure: report.unsure.clone(),
+            held_up_ms: report.host_late_ms,
         }
+    }
+
+    /// Why the scan cannot vouch for the ids in [`Self::unsure`], in `lang` (`None`: it can).
+    fn unsure_said(&self, lang: Lang) -> Option<String> {
+        if self.unsure.is_empty() {
+            return None;
+        }
+        let ids: Vec<String> = self
+            .unsure
+            .iter()
+            .map(|u| format!("{} @ {}", u.id, u.baud))
+            .collect();
+        let ms = self.held_up_ms.unwrap_or_default();
+        Some(match lang {
+            Lang::En => format!(
+                "{} id(s) not vouched for ({}): they stayed silent only while this computer was \
+                 held up {ms:.0} ms past their answers' deadline, however often asked again; a \
+                 servo there may have been missed. Close other programs and scan again.",
+                self.unsure.len(),
+                ids.join(", ")
+            ),
+            Lang::Zh => format!(
+                "{} 个ID无法确认({}):只在本机被拖慢 {ms:.0} ms(超过应答时限)时无应答,多次重新询问\
+                 均如此;那里可能有舵机被漏掉。请关闭其他程序后重新扫描。",
+                self.unsure.len(),
+                ids.join(", ")
+            ),
+        })
     }
 }
 
@@ -276,13 +312,17 @@ impl ScanState {
                     "Ids pinged again one by one (a damaged answer, an answer after its sweep), answers that came after their window, and the answer margin the scan waited with",
                     "逐个重新询问的ID(应答损坏或扫描结束后才到),超出等待窗口的应答,以及扫描使用的应答余量",
                 ));
+                if let Some(unsure) = t.unsure_said(lang) {
+                    error_label(ui, unsure);
+                }
             }
             Some(Err(e)) => {
                 error_label(
                     ui,
                     format!(
-                        "{}: {e} ({} {})",
+                        "{}: {} ({} {})",
                         lang.tr("scan stopped", "扫描中止"),
+                        e.in_lang(lang),
                         self.rows.len(),
                         lang.tr("found before it stopped", "个在中止前找到")
                     ),

@@ -121,6 +121,9 @@ pub struct LinkStatus {
     pub device_back: bool,
     /// Whether the device answers, as the link last reported it on this connection.
     answering: Answering,
+    /// How far this computer was held up during the last unanswered attempt, when it was
+    /// ([`crate::link::NoAnswer::host_late`]); cleared by an answer.
+    silent_held_up: Option<std::time::Duration>,
     /// When the device last answered anything on this link (a poll, a job's request, a frame
     /// of its own), as far as the window has heard: `None` before its first answer.
     last_answer: Option<LastAnswer>,
@@ -171,6 +174,18 @@ impl LinkStatus {
         self.answering
     }
 
+    /// How far this computer was held up during the last unanswered attempt, when it was
+    /// [`crate::link::HELD_UP`] or more: a silent device's checklist leads with the loaded
+    /// computer ([`crate::link::silent::SilentCheck::HostLate`]).
+    pub fn silent_held_up(&self) -> Option<std::time::Duration> {
+        self.silent_held_up
+    }
+
+    /// An attempt went unanswered ([`crate::link::LinkEvent::NoAnswer`]).
+    pub fn on_no_answer(&mut self, n: &crate::link::NoAnswer) {
+        self.silent_held_up = n.host_late;
+    }
+
     /// When the device last answered on this link (see [`LastAnswer`]).
     pub fn last_answer(&self) -> Option<LastAnswer> {
         self.last_answer
@@ -197,6 +212,7 @@ impl LinkStatus {
             DeviceEvent::Answered { after_silence } => {
                 self.device_back |= after_silence;
                 self.answering = Answering::Yes;
+                self.silent_held_up = None;
                 self.heard();
             }
             DeviceEvent::Silent { unanswered } => self.answering = Answering::No(unanswered),
@@ -206,6 +222,7 @@ impl LinkStatus {
     /// The port closed or was lost: nothing is known of the device until it answers.
     pub fn forget_answers(&mut self) {
         self.answering = Answering::NotYet;
+        self.silent_held_up = None;
         self.device_back = false;
         self.last_answer = None;
         // The round trip shown was the ended connection's.

@@ -268,7 +268,7 @@ impl Station {
                 match &s {
                     LinkState::Lost { reason } => self.notify(Notice::error(Text::new(
                         format!("link lost: {reason}"),
-                        format!("连接丢失:{reason}"),
+                        format!("连接丢失:{}", crate::ui::zh::lost_port(reason)),
                     ))),
                     LinkState::Connected { port, baud } => {
                         if !self.link.connected() {
@@ -300,6 +300,7 @@ impl Station {
                 self.packets.push(entry, &profile)
             }
             LinkEvent::NoAnswer(n) => {
+                self.link.on_no_answer(&n);
                 let profile = self.device.profile.clone();
                 self.packets.push_no_answer(n, &profile)
             }

@@ -8,6 +8,7 @@
 
 pub mod cli;
 pub mod gui;
+pub mod held_up;
 pub mod servo;
 pub mod servo_bench;
 
