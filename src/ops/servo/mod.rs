@@ -17,7 +17,7 @@ pub use motion::{
 pub use params::{
     read_all, read_block, read_param, write_block, write_param, write_param_broadcast, write_params,
 };
-pub use scan::{SCAN_ROLES, ScanPlan, ScanReport, ScanRow, ping_sweep, scan};
+pub use scan::{SCAN_ROLES, ScanPlan, ScanReport, ScanRow, Unsure, ping_sweep, scan};
 pub use setup::{Location, factory_location, locate, reset_user_data, set_baud, set_id};
 
 use super::OpError;
@@ -81,9 +81,10 @@ pub fn addressed(id: u8, what: &'static str) -> Result<(), OpError> {
     Ok(())
 }
 
-/// Pings `id` with `attempts` attempts: present, absent, or garbled on every attempt (possibly
-/// two servos on one id). A clean answer from another servo is its late answer, not a sign of
-/// trouble at this id.
+/// Pings `id` with `attempts` attempts: present, absent, or a possible duplicate (two servos
+/// on one id): garbled with one attempt, or, with several, garbled and then garbled again when
+/// asked one ping at a time ([`scan::ask_again`]). A clean answer from another servo is its
+/// late answer, not a sign of trouble at this id.
 pub fn ping(client: &Client, id: u8, attempts: u8) -> Result<Presence, OpError> {
     addressed(id, "ping a servo")?;
     let req = Request::new(cmd::PING, vec![id])
@@ -92,6 +93,12 @@ pub fn ping(client: &Client, id: u8, attempts: u8) -> Result<Presence, OpError> 
     match client.request(req) {
         Ok(_) => Ok(Presence::Present),
         Err(ExchangeError::Timeout { .. }) => Ok(Presence::Absent),
+        // Garbled in one exchange of several attempts is not two servos: a retry that meets
+        // the first attempt's late answer on the half-duplex line garbles both (a servo that
+        // answers 5 ms late: "more than one servo answers at id 0", 2 provisionings in 24).
+        // Asked one ping at a time, each listened to for the grace, it is a possible duplicate
+        // only when garbled again.
+        Err(ExchangeError::Garbled { .. }) if attempts > 1 => scan::ask_again(client, id),
         Err(ExchangeError::Garbled { error, .. }) => {
             Ok(Presence::PossibleDuplicate(error.to_string()))
         }
