@@ -80,11 +80,16 @@ pub fn show(ui: &mut egui::Ui, lang: Lang, rt: &Station) -> Vec<Action> {
 /// The link's round trip and counters.
 fn link_stats(ui: &mut egui::Ui, lang: Lang, rt: &Station) {
     if let Some(rtt) = rt.link.stats.rtt {
-        ui.label(format!(
-            "{} {:.1} ms",
-            lang.tr("round trip", "往返"),
-            rtt.as_secs_f64() * 1e3
-        ));
+        let said = |ms: f64| format!("{} {ms:.1} ms", lang.tr("round trip", "往返"));
+        // As wide as a round trip of 999.9 ms whatever the figure: the row does not move with
+        // each answer's (at a scale factor of 2 the message after it flipped between rows,
+        // and was not drawn in the frame between).
+        let font = super::layout::body_font(ui);
+        let widest = super::layout::text_width(ui, &font, [said(999.9).as_str()]);
+        ui.scope(|ui| {
+            ui.set_min_width(widest);
+            ui.label(said(rtt.as_secs_f64() * 1e3));
+        });
     }
     let warn = egui::Color32::from_rgb(220, 150, 0);
     let quiet = ui.visuals().weak_text_color();
