@@ -298,19 +298,7 @@ impl<'a> Found<'a> {
             if ask.is_empty() {
                 break;
             }
-            if cancel.is_cancelled() {
-                return Err(OpError::Cancelled);
-            }
-            let mut sweep = ping_sweep(&ask);
-            sweep.listen = true;
-            let reply = client.sweep(sweep)?;
-            self.report.held_up(reply.host_late);
-            for (i, a) in reply.answers.iter().enumerate() {
-                if let Some(a) = a {
-                    found.insert(ask[i], Presence::Present);
-                    self.report.late_answers += usize::from(a.late);
-                }
-            }
+            let reply = self.sweep_again(client, cancel, &ask, &mut found)?;
             self.found_late(&reply.strays, &mut found);
             let mut damaged: BTreeSet<u8> = BTreeSet::new();
             for d in &reply.garbled {
@@ -357,6 +345,32 @@ impl<'a> Found<'a> {
         Ok((found.into_iter().collect(), self.report))
     }
 
+    /// Pings `ask` again in one sweep that listens for the answers still on their way (the
+    /// hold-up it met kept for the report): each clean answer is its servo, present, however
+    /// late. Returns the sweep's reply, for what else it brought.
+    fn sweep_again(
+        &mut self,
+        client: &Client,
+        cancel: &Cancel,
+        ask: &[u8],
+        found: &mut BTreeMap<u8, Presence>,
+    ) -> Result<SweepReply, OpError> {
+        if cancel.is_cancelled() {
+            return Err(OpError::Cancelled);
+        }
+        let mut sweep = ping_sweep(ask);
+        sweep.listen = true;
+        let reply = client.sweep(sweep)?;
+        self.report.held_up(reply.host_late);
+        for (i, a) in reply.answers.iter().enumerate() {
+            if let Some(a) = a {
+                found.insert(ask[i], Presence::Present);
+                self.report.late_answers += usize::from(a.late);
+            }
+        }
+        Ok(reply)
+    }
+
     /// Pings again the ids that were silent only while this computer was held up (their answer
     /// may have come while it was not there to read it), in sweeps that listen for late
     /// answers, until one runs on time or [`HELD_UP_RESWEEPS`] have not: those still silent
@@ -380,18 +394,7 @@ impl<'a> Found<'a> {
             if ask.is_empty() {
                 break;
             }
-            if cancel.is_cancelled() {
-                return Err(OpError::Cancelled);
-            }
-            let mut sweep = ping_sweep(&ask);
-            sweep.listen = true;
-            let reply = client.sweep(sweep)?;
-            self.report.held_up(reply.host_late);
-            for (i, a) in reply.answers.iter().enumerate() {
-                if a.is_some() {
-                    found.insert(ask[i], Presence::Present);
-                }
-            }
+            let reply = self.sweep_again(client, cancel, &ask, found)?;
             for id in pinged(&reply.strays) {
                 if ask.contains(&id) {
                     found.insert(id, Presence::Present);
