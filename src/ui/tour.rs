@@ -383,7 +383,7 @@ fn link_lost_selftest(app: &mut App) {
         name: first.name.clone(),
         kind: first.kind.name().into(),
         pass: false,
-        detail: "link lost: port lost: the port disappeared (unplugged?)".into(),
+        detail: format!("link lost: {LOST_PORT}"),
         measurements: Vec::new(),
         started_ms: crate::ops::records::record::now_ms(),
         duration_ms: 0,
@@ -406,6 +406,12 @@ fn link_lost_selftest(app: &mut App) {
     app.station_mut().verdicts.take(verdict);
 }
 
+/// Why a port was lost, in the words the link uses for an adapter pulled out (a failed read,
+/// then the system's likely cause, `crate::system::vanished`): what the NO VERDICT banners show.
+const LOST_PORT: &str = "port lost: port disconnected: /dev/ttyUSB0: Input/output error (os \
+     error 5) — /dev/ttyUSB0 is gone: unplugged (no USB serial port is listed now); plug it in \
+     again";
+
 /// The Production tab as a servo whose port went while its rate was set leaves it (the NO
 /// VERDICT banner, `link lost during set baud`): the record of a fresh servo given id 1.
 fn link_lost_provisioning(app: &mut App) {
@@ -417,7 +423,7 @@ fn link_lost_provisioning(app: &mut App) {
         baud: None,
         result: Outcome::LinkLost {
             step: step::SET_BAUD.into(),
-            reason: "port lost: the port disappeared (unplugged?)".into(),
+            reason: LOST_PORT.into(),
         },
         mismatches: Vec::new(),
         recorded: Vec::new(),
