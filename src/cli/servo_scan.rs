@@ -177,6 +177,7 @@ fn print_json(profile: &Profile, rows: &[ScanRow], report: Option<&ScanReport>, 
             "margin_ms": report.margin_ms,
             "host_late_ms": report.host_late_ms,
             "unsure": report.unsure,
+            "asked_after_hold_up": report.asked_after_hold_up,
         }),
         None => serde_json::json!({
             "servos": servos,

@@ -227,7 +227,7 @@ fn a_scan_held_up_only_at_first_asks_the_silent_ids_again_and_vouches_for_them()
         ran.out
     );
     assert!(
-        doc["asked_again"].as_u64().is_some_and(|n| n >= 5),
+        doc["asked_after_hold_up"].as_u64().is_some_and(|n| n >= 5),
         "the silent ids were asked again: {}",
         ran.out
     );

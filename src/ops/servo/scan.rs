@@ -108,6 +108,9 @@ pub struct ScanReport {
     /// ([`HELD_UP_RESWEEPS`]): their answers may have come while it was not there to read them,
     /// so a servo may be there unseen. Empty when every silence was heard on time.
     pub unsure: Vec<Unsure>,
+    /// Ids pinged again because they were silent in a sweep during which this computer was
+    /// held up (not counted in [`Self::asked_again`], which is about the line).
+    pub asked_after_hold_up: usize,
 }
 
 /// An id a scan cannot say is empty ([`ScanReport::unsure`]), at the baud rate it was asked at.
@@ -129,6 +132,7 @@ impl ScanReport {
             margin_ms: 0.0,
             host_late_ms: None,
             unsure: Vec::new(),
+            asked_after_hold_up: 0,
         }
     }
 
@@ -388,7 +392,7 @@ impl<'a> Found<'a> {
             .copied()
             .filter(|id| !found.contains_key(id))
             .collect();
-        self.report.asked_again += ask.len();
+        self.report.asked_after_hold_up += ask.len();
         let mut damaged: BTreeSet<u8> = BTreeSet::new();
         for _ in 0..HELD_UP_RESWEEPS {
             if ask.is_empty() {
@@ -637,6 +641,7 @@ pub fn scan(
             report.held_up_ms(at_baud.host_late_ms);
             report.rows.extend(at_baud.rows);
             report.unsure.extend(at_baud.unsure);
+            report.asked_after_hold_up += at_baud.asked_after_hold_up;
         }
         Ok(())
     })();
