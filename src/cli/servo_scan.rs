@@ -108,35 +108,11 @@ pub(super) fn run(
         );
         return Ok(1);
     }
-    if !report.unsure.is_empty() {
-        super::port::warn(&unsure_said(&report));
+    // A scan that finds none exits 1 above, its checklist led by the loaded computer.
+    if let Some(unsure) = report.unsure_said() {
+        super::port::warn(&unsure.en);
     }
     Ok(0)
-}
-
-/// Which ids a scan that found servos cannot vouch for: those that stayed silent only while
-/// this computer was held up, however often asked again ([`ScanReport::unsure`]), by baud
-/// rate. (A scan that finds none exits 1 anyway, its checklist led by the loaded computer.)
-fn unsure_said(report: &ScanReport) -> String {
-    let mut by_baud: Vec<(u32, Vec<String>)> = Vec::new();
-    for u in &report.unsure {
-        match by_baud.iter_mut().find(|(b, _)| *b == u.baud) {
-            Some((_, ids)) => ids.push(u.id.to_string()),
-            None => by_baud.push((u.baud, vec![u.id.to_string()])),
-        }
-    }
-    let ids: Vec<String> = by_baud
-        .iter()
-        .map(|(baud, ids)| format!("{} at {baud} baud", ids.join(", ")))
-        .collect();
-    format!(
-        "{} id(s) stayed silent only while this computer was held up {:.0} ms past their \
-         answers' deadline, however often asked again ({}): a servo there may have been \
-         missed; close other programs and scan again",
-        report.unsure.len(),
-        report.host_late_ms.unwrap_or_default(),
-        ids.join("; ")
-    )
 }
 
 /// A bar on stderr when a person watches it (this process's own run, stderr a terminal, no

@@ -18,6 +18,12 @@ use crate::support::servo_bench::{bench, harness, scan};
 use crate::support::{serve, temp_dir};
 use eframe::egui;
 
+/// The shipped provisioning plan, typed as a path into the Production tab.
+const PROVISION_PLAN: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/presets/servo-provision-plan.ron"
+);
+
 #[test]
 fn a_scan_finds_the_configured_servos_and_shows_a_duplicate_as_such() {
     let b = bench(vec![
@@ -148,10 +154,7 @@ fn provision_next_on_a_fresh_servo_shows_pass_and_the_servo_has_the_plans_id_and
     let mut h = harness(&b, Lang::En);
     h.get_by_label("Production").click();
     h.step();
-    let plan = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/presets/servo-provision-plan.ron"
-    );
+    let plan = PROVISION_PLAN;
     // Without a file dialog, Browse says so; typed paths work.
     app_mut(&mut h).station_mut().dialogs = Dialogs::Missing("no file dialog here (test)".into());
     for i in 0..2 {
@@ -224,10 +227,7 @@ fn a_port_lost_during_provisioning_shows_no_verdict_naming_the_step() {
     let mut h = harness(&b, Lang::En);
     h.get_by_label("Production").click();
     h.step();
-    let plan = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/presets/servo-provision-plan.ron"
-    );
+    let plan = PROVISION_PLAN;
     type_into(&mut h, "Plan", plan);
     h.get_by_label("Load plan").click();
     h.step();

@@ -7,6 +7,7 @@ use super::record::{ParamWrite, Record, RunKind, SerialSource, StepClock, StepRe
 use super::recorder::{Keeper, Kept};
 use crate::ops::selftest::{self, Operator, Report, StepResult};
 use crate::ops::servo::provision::{self, Outcome, ProvisionState};
+use crate::ops::station::Reason;
 use crate::ops::{Check, Device, OpError, Run};
 use crate::preset::Preset;
 use std::path::Path;
@@ -128,7 +129,7 @@ pub fn selftest_record(report: &Report, given: &Given) -> Record {
 /// values are in its measurements and detail): `out of limits: batteryVoltage`, `link lost`
 /// ([`crate::ops::station::Reason::of_selftest_step`], typed, says it).
 fn selftest_reason(s: &StepResult) -> String {
-    crate::ops::station::Reason::of_selftest_step(s).to_string()
+    Reason::of_selftest_step(s).to_string()
 }
 
 /// Provisions the next fresh servo ([`provision::provision_next`]), records it (the serial
@@ -192,8 +193,11 @@ pub fn provision_into(r: &mut Record, p: &provision::Record, given: &Given, star
         Outcome::Fail { step, reason } => Some((step.clone(), reason.clone(), reason.clone())),
         Outcome::LinkLost { step, reason } => Some((
             step.clone(),
-            crate::ops::station::Reason::LinkLost.to_string(),
-            format!("link lost: {reason}"),
+            Reason::LinkLost.to_string(),
+            Reason::LinkLostBecause {
+                why: reason.clone(),
+            }
+            .to_string(),
         )),
     };
     let timeline: Vec<(String, i64)> = if p.timeline.is_empty() {

@@ -17,7 +17,7 @@ pub use motion::{
 pub use params::{
     read_all, read_block, read_param, write_block, write_param, write_param_broadcast, write_params,
 };
-pub use scan::{SCAN_ROLES, ScanPlan, ScanReport, ScanRow, Unsure, ping_sweep, scan};
+pub use scan::{SCAN_ROLES, ScanPlan, ScanReport, ScanRow, Unsure, ping_sweep, scan, unsure_said};
 pub use setup::{Location, factory_location, locate, reset_user_data, set_baud, set_id};
 
 use super::OpError;

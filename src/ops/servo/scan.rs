@@ -122,7 +122,50 @@ pub struct Unsure {
     pub id: u8,
 }
 
+/// Which ids a scan cannot vouch for ([`ScanReport::unsure`]), by baud rate, and the most this
+/// computer was held up (`held_up_ms`), in both languages: `2 id(s) stayed silent only while
+/// this computer was held up 31 ms past their answers' deadline, however often asked again (0,
+/// 2 at 115200 baud): …`. `None` when there are none.
+pub fn unsure_said(unsure: &[Unsure], held_up_ms: Option<f64>) -> Option<crate::i18n::Text> {
+    if unsure.is_empty() {
+        return None;
+    }
+    let mut by_baud: Vec<(u32, Vec<String>)> = Vec::new();
+    for u in unsure {
+        match by_baud.iter_mut().find(|(b, _)| *b == u.baud) {
+            Some((_, ids)) => ids.push(u.id.to_string()),
+            None => by_baud.push((u.baud, vec![u.id.to_string()])),
+        }
+    }
+    let ids = |at: &str| {
+        let each: Vec<String> = by_baud
+            .iter()
+            .map(|(baud, ids)| format!("{} {at} {baud} baud", ids.join(", ")))
+            .collect();
+        each.join("; ")
+    };
+    let (n, ms) = (unsure.len(), held_up_ms.unwrap_or_default());
+    Some(crate::i18n::Text::new(
+        format!(
+            "{n} id(s) stayed silent only while this computer was held up {ms:.0} ms past their \
+             answers' deadline, however often asked again ({}): a servo there may have been \
+             missed; close other programs and scan again",
+            ids("at")
+        ),
+        format!(
+            "{n} 个ID无法确认({}):只在本机被拖慢 {ms:.0} ms(超过应答时限)时无应答,多次重新询问\
+             均如此;那里可能有舵机被漏掉。请关闭其他程序后重新扫描。",
+            ids("@")
+        ),
+    ))
+}
+
 impl ScanReport {
+    /// [`unsure_said`] of this report.
+    pub fn unsure_said(&self) -> Option<crate::i18n::Text> {
+        unsure_said(&self.unsure, self.host_late_ms)
+    }
+
     /// A report of nothing found yet.
     fn empty() -> Self {
         Self {

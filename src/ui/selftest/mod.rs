@@ -217,7 +217,7 @@ fn what(kind: &StepKind, profile: &Profile, lang: Lang) -> String {
 pub(crate) const AMBER: egui::Color32 = egui::Color32::from_rgb(180, 90, 0);
 
 /// Why a run has no verdict, naming the step (`link lost during Fan current`), in `lang`.
-fn interruption_text(why: Interruption, step: &str, lang: Lang) -> String {
+pub(crate) fn interruption_text(why: Interruption, step: &str, lang: Lang) -> String {
     match why {
         Interruption::LinkLost => match lang {
             Lang::En => format!("link lost during {step}"),

@@ -267,10 +267,8 @@ impl ProvisionPanel {
 /// ([`prov::step::said`]), as the self-test says it.
 fn link_lost_during(step: &str, lang: Lang) -> String {
     let said = prov::step::said(step);
-    match lang {
-        Lang::En => format!("link lost during {}", said.en),
-        Lang::Zh => format!("在“{}”步骤中连接丢失", said.zh),
-    }
+    let link_lost = crate::ops::selftest::Interruption::LinkLost;
+    crate::ui::selftest::interruption_text(link_lost, said.get(lang), lang)
 }
 
 /// The big PASS / FAIL / NO VERDICT banner of the last servo, with Dismiss; returns whether it

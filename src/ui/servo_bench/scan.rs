@@ -64,30 +64,7 @@ impl ScanTally {
 
     /// Why the scan cannot vouch for the ids in [`Self::unsure`], in `lang` (`None`: it can).
     fn unsure_said(&self, lang: Lang) -> Option<String> {
-        if self.unsure.is_empty() {
-            return None;
-        }
-        let ids: Vec<String> = self
-            .unsure
-            .iter()
-            .map(|u| format!("{} @ {}", u.id, u.baud))
-            .collect();
-        let ms = self.held_up_ms.unwrap_or_default();
-        Some(match lang {
-            Lang::En => format!(
-                "{} id(s) not vouched for ({}): they stayed silent only while this computer was \
-                 held up {ms:.0} ms past their answers' deadline, however often asked again; a \
-                 servo there may have been missed. Close other programs and scan again.",
-                self.unsure.len(),
-                ids.join(", ")
-            ),
-            Lang::Zh => format!(
-                "{} 个ID无法确认({}):只在本机被拖慢 {ms:.0} ms(超过应答时限)时无应答,多次重新询问\
-                 均如此;那里可能有舵机被漏掉。请关闭其他程序后重新扫描。",
-                self.unsure.len(),
-                ids.join(", ")
-            ),
-        })
+        ops::unsure_said(&self.unsure, self.held_up_ms).map(|t| t.get(lang).to_string())
     }
 }
 

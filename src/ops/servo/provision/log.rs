@@ -32,7 +32,10 @@ pub fn log_row(record: &Record) -> Vec<String> {
         Outcome::Pass => ("PASS", "", String::new()),
         Outcome::Fail { step, reason } => ("FAIL", step.as_str(), reason.clone()),
         Outcome::LinkLost { step, reason } => {
-            ("NO VERDICT", step.as_str(), format!("link lost: {reason}"))
+            let why = crate::ops::station::Reason::LinkLostBecause {
+                why: reason.clone(),
+            };
+            ("NO VERDICT", step.as_str(), why.to_string())
         }
     };
     let mut cells = vec![
