@@ -6,6 +6,7 @@
 //! [`Job`] that runs an operation. The UI never touches the port.
 
 pub mod app;
+pub mod backdrop;
 mod confirm;
 mod connection;
 pub mod demo_hint;

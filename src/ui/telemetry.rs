@@ -232,6 +232,7 @@ impl TelemetryPanel {
         let most = (avail - one_plot).max(least);
         let default = wanted.clamp(avail * 0.25, avail * 0.45).clamp(least, most);
         egui::Panel::bottom("other-telemetry")
+            .frame(super::backdrop::bar(ui.style()))
             .resizable(true)
             .default_size(default)
             // Kept so when the window shrinks (the part keeps its size from a larger window).

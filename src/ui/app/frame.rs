@@ -5,7 +5,7 @@
 
 use super::{App, TITLE};
 use crate::ui::panel::Cx;
-use crate::ui::{demo_hint, repaint, status_bar};
+use crate::ui::{backdrop, demo_hint, repaint, status_bar};
 use eframe::egui;
 
 impl App {
@@ -86,30 +86,36 @@ impl App {
         let lang = self.settings.lang;
         let mut actions = Vec::new();
         let (settings, station) = (&self.settings, self.state.station());
-        egui::Panel::top("connection").show(ui, |ui| {
-            actions.extend(self.connection.show(ui, settings, station));
-            demo_hint::show(ui, lang, station);
-        });
-        egui::Panel::bottom("status").show(ui, |ui| {
-            actions.extend(status_bar::show(ui, lang, station));
-        });
+        egui::Panel::top("connection")
+            .frame(backdrop::bar(ui.style()))
+            .show(ui, |ui| {
+                actions.extend(self.connection.show(ui, settings, station));
+                demo_hint::show(ui, lang, station);
+            });
+        egui::Panel::bottom("status")
+            .frame(backdrop::bar(ui.style()))
+            .show(ui, |ui| {
+                actions.extend(status_bar::show(ui, lang, station));
+            });
         actions.extend(super::nav::show(ui, settings, station));
         // Each panel's widgets have ids of their own: a scroll area of one panel keeps its own
         // place, not the place of the panel shown before it.
         let panel = settings.panel;
         let station = self.state.station_mut();
-        egui::CentralPanel::default().show(ui, |ui| {
-            ui.push_id(panel.as_str(), |ui| {
-                actions.extend(station.with_panels(|panels, station| {
-                    let cx = Cx {
-                        lang,
-                        settings,
-                        station,
-                    };
-                    panels.show(panel, ui, &cx)
-                }));
-            })
-        });
+        egui::CentralPanel::default()
+            .frame(backdrop::central(ui.style()))
+            .show(ui, |ui| {
+                ui.push_id(panel.as_str(), |ui| {
+                    actions.extend(station.with_panels(|panels, station| {
+                        let cx = Cx {
+                            lang,
+                            settings,
+                            station,
+                        };
+                        panels.show(panel, ui, &cx)
+                    }));
+                })
+            });
         for a in actions {
             self.apply(a);
         }
@@ -128,20 +134,23 @@ impl App {
         };
         let zh = line.lang == crate::i18n::Lang::Zh;
         let mut close = false;
-        egui::Panel::top("station-close").show(ui, |ui| {
-            ui.horizontal(|ui| {
-                let idle = !line.running();
-                let button = egui::Button::new(if zh { "关闭工位" } else { "Close station" });
-                close = ui
-                    .add_enabled(idle, button)
-                    .on_disabled_hover_text(if zh {
-                        "有工位正在测试:先停止它们"
-                    } else {
-                        "a slot is running a unit: STOP it first"
-                    })
-                    .clicked();
+        egui::Panel::top("station-close")
+            .frame(backdrop::bar(ui.style()))
+            .show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    let idle = !line.running();
+                    let button =
+                        egui::Button::new(if zh { "关闭工位" } else { "Close station" });
+                    close = ui
+                        .add_enabled(idle, button)
+                        .on_disabled_hover_text(if zh {
+                            "有工位正在测试:先停止它们"
+                        } else {
+                            "a slot is running a unit: STOP it first"
+                        })
+                        .clicked();
+                });
             });
-        });
         line.ui(ui);
         if close {
             self.apply(crate::ui::Action::CloseStation);

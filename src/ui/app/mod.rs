@@ -219,6 +219,10 @@ pub(crate) fn file_or_shipped(settings: &Settings, kind: FileKind, name: &str) -
 }
 
 impl eframe::App for App {
+    fn clear_color(&self, visuals: &egui::Visuals) -> [f32; 4] {
+        crate::ui::backdrop::clear_color(visuals)
+    }
+
     fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
         App::logic(self, ctx);
     }

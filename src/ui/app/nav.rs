@@ -25,6 +25,7 @@ pub(super) fn show(ui: &mut egui::Ui, settings: &Settings, station: &Station) ->
     let mut actions = Vec::new();
     let panels = &station.panels;
     egui::Panel::left("nav")
+        .frame(crate::ui::backdrop::bar(ui.style()))
         .resizable(false)
         .exact_size(width(ui, panels))
         .show(ui, |ui| {

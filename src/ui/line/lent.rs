@@ -76,18 +76,22 @@ impl Lent {
         match (&mut self.app, &self.error) {
             (Some(app), _) => app.ui(ui),
             (None, Some(e)) => {
-                egui::CentralPanel::default().show(ui, |ui| {
-                    ui.colored_label(egui::Color32::from_rgb(200, 30, 30), e.as_str());
-                });
+                egui::CentralPanel::default()
+                    .frame(crate::ui::backdrop::central(ui.style()))
+                    .show(ui, |ui| {
+                        ui.colored_label(egui::Color32::from_rgb(200, 30, 30), e.as_str());
+                    });
             }
             (None, None) => {
-                egui::CentralPanel::default().show(ui, |ui| {
-                    ui.label(if zh {
-                        format!("等待工位 {} 释放端口…", self.slot)
-                    } else {
-                        format!("waiting for slot {} to give up its port…", self.slot)
+                egui::CentralPanel::default()
+                    .frame(crate::ui::backdrop::central(ui.style()))
+                    .show(ui, |ui| {
+                        ui.label(if zh {
+                            format!("等待工位 {} 释放端口…", self.slot)
+                        } else {
+                            format!("waiting for slot {} to give up its port…", self.slot)
+                        });
                     });
-                });
             }
         }
     }

@@ -509,73 +509,77 @@ impl LineStation {
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         self.keys(ui.ctx());
         let zh = self.lang == Lang::Zh;
-        egui::Panel::top("station-bar").show(ui, |ui| {
-            ui.horizontal(|ui| {
-                let stop_all = egui::Button::new(
-                    egui::RichText::new(if zh { "全部停止" } else { "STOP ALL" })
-                        .size(22.0)
-                        .strong()
-                        .color(egui::Color32::WHITE),
-                )
-                .fill(egui::Color32::from_rgb(200, 30, 30));
-                if ui.add(stop_all).clicked() {
-                    self.stop_all();
-                }
-                ui.heading(format!(
-                    "{} {}",
-                    if zh { "工位" } else { "Station" },
-                    self.id
-                ));
-                ui.label(format!(
-                    "{} {}",
-                    if zh { "配置包" } else { "bundle" },
-                    &self.bundle_sha256[..12.min(self.bundle_sha256.len())]
-                ));
-                let lang = if zh { "English" } else { "中文" };
-                if ui.button(lang).clicked() {
-                    self.lang = if zh { Lang::En } else { Lang::Zh };
-                }
-                self.sound_box(ui, zh);
-                if let Some(access) = self.engineer.show(ui, zh) {
-                    self.record(&access);
-                    if access == crate::ops::station::Access::Lock {
-                        // Locked: back to the operator view; the slot resumes.
-                        self.close_engineer_view();
+        egui::Panel::top("station-bar")
+            .frame(crate::ui::backdrop::bar(ui.style()))
+            .show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    let stop_all = egui::Button::new(
+                        egui::RichText::new(if zh { "全部停止" } else { "STOP ALL" })
+                            .size(22.0)
+                            .strong()
+                            .color(egui::Color32::WHITE),
+                    )
+                    .fill(egui::Color32::from_rgb(200, 30, 30));
+                    if ui.add(stop_all).clicked() {
+                        self.stop_all();
                     }
-                }
+                    ui.heading(format!(
+                        "{} {}",
+                        if zh { "工位" } else { "Station" },
+                        self.id
+                    ));
+                    ui.label(format!(
+                        "{} {}",
+                        if zh { "配置包" } else { "bundle" },
+                        &self.bundle_sha256[..12.min(self.bundle_sha256.len())]
+                    ));
+                    let lang = if zh { "English" } else { "中文" };
+                    if ui.button(lang).clicked() {
+                        self.lang = if zh { Lang::En } else { Lang::Zh };
+                    }
+                    self.sound_box(ui, zh);
+                    if let Some(access) = self.engineer.show(ui, zh) {
+                        self.record(&access);
+                        if access == crate::ops::station::Access::Lock {
+                            // Locked: back to the operator view; the slot resumes.
+                            self.close_engineer_view();
+                        }
+                    }
+                });
+                self.records_line(ui, zh);
+                self.lent_line(ui, zh);
             });
-            self.records_line(ui, zh);
-            self.lent_line(ui, zh);
-        });
         if let Some(lent) = &mut self.lent {
             lent.ui(ui, zh);
             return;
         }
-        egui::CentralPanel::default().show(ui, |ui| {
-            let n = self.tiles.len().max(1);
-            let columns = if ui.available_width() > 1100.0 {
-                n.min(3)
-            } else {
-                n.min(2)
-            };
-            let mut actions = Vec::new();
-            egui::ScrollArea::vertical().show(ui, |ui| {
-                ui.columns(columns, |cols| {
-                    for (i, t) in self.tiles.iter_mut().enumerate() {
-                        let col = &mut cols[i % columns];
-                        let engineer = self.engineer.unlocked();
-                        actions.extend(tile::show(col, t, self.lang, engineer));
-                    }
+        egui::CentralPanel::default()
+            .frame(crate::ui::backdrop::central(ui.style()))
+            .show(ui, |ui| {
+                let n = self.tiles.len().max(1);
+                let columns = if ui.available_width() > 1100.0 {
+                    n.min(3)
+                } else {
+                    n.min(2)
+                };
+                let mut actions = Vec::new();
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    ui.columns(columns, |cols| {
+                        for (i, t) in self.tiles.iter_mut().enumerate() {
+                            let col = &mut cols[i % columns];
+                            let engineer = self.engineer.unlocked();
+                            actions.extend(tile::show(col, t, self.lang, engineer));
+                        }
+                    });
                 });
-            });
-            for (slot, action) in actions {
-                match action {
-                    tile::Action::Stop => self.stop(&slot),
-                    tile::Action::Send(c) => self.send(&slot, c),
-                    tile::Action::Engineer => self.open_engineer_view(&slot),
+                for (slot, action) in actions {
+                    match action {
+                        tile::Action::Stop => self.stop(&slot),
+                        tile::Action::Send(c) => self.send(&slot, c),
+                        tile::Action::Engineer => self.open_engineer_view(&slot),
+                    }
                 }
-            }
-        });
+            });
     }
 }
 
@@ -640,6 +644,10 @@ struct Saved {
 }
 
 impl eframe::App for LineStation {
+    fn clear_color(&self, visuals: &egui::Visuals) -> [f32; 4] {
+        crate::ui::backdrop::clear_color(visuals)
+    }
+
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
         // A screenshot tour's choices are not the operator's.
         if self.shots.is_none() {
