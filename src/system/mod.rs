@@ -1,7 +1,8 @@
 //! What differs between operating systems, in one place, below the link: the serial ports the
 //! OS lists and why a port cannot be opened (`ports.rs`), the USB adapter behind a port and its
 //! latency timer ([`adapter`]: sysfs, read and set), and where the shipped example files
-//! (presets, plans, profiles) are (`data.rs`), and whether a window can be shown ([`display`]).
+//! (presets, plans, profiles) are (`data.rs`), whether a window can be shown ([`display`]), and
+//! how much freed memory the C heap keeps ([`heap`]).
 //!
 //! Verified on Linux (Debian 12) only. Elsewhere these files compile to the fallbacks under
 //! `cfg(not(target_os = "linux"))`: port listing through the serialport crate (which has its own
@@ -11,6 +12,7 @@
 pub mod adapter;
 mod data;
 pub mod display;
+pub mod heap;
 mod ports;
 
 #[cfg(unix)]

@@ -206,6 +206,7 @@ pub fn run(
     ports: crate::link::PortOpener,
 ) -> Result<(), UiError> {
     let touring = screenshots.is_some();
+    crate::system::heap::keep_freed_memory(crate::system::heap::WINDOW_KEPT_BYTES);
     let options = eframe::NativeOptions {
         viewport: eframe::egui::ViewportBuilder::default()
             .with_inner_size([1200.0, 780.0])

@@ -610,6 +610,7 @@ pub fn run(
             Some([w.trim().parse::<f32>().ok()?, h.trim().parse::<f32>().ok()?])
         })
         .unwrap_or([1280.0, 800.0]);
+    crate::system::heap::keep_freed_memory(crate::system::heap::WINDOW_KEPT_BYTES);
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_inner_size(size)
