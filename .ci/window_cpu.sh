@@ -14,6 +14,8 @@
 # For each it waits WARMUP seconds, then reads utime+stime from /proc/PID/stat over SECONDS
 # seconds, and prints one JSON document a line: {"case", "cpu_percent_of_core", "seconds"}.
 # The target (issue 14): telemetry-50hz at most 25 % of a core, disconnected about 0.
+# Figures and where a frame's time goes: docs/performance.md ("The window's CPU under software
+# rendering").
 #
 # Usage: .ci/window_cpu.sh [BINARY]   (default: target/release/botbench; build it first)
 # Environment: SECONDS_MEASURED (default 10), WARMUP (default 5), ONLY=station-4-slots (that
