@@ -304,3 +304,65 @@ fn not_whole_at_scale_2(h: &H, lang: Lang, size: egui::Vec2) -> Vec<String> {
     }
     bad
 }
+
+/// A long reason in the provisioning history (a pulled adapter's, as the link words it) once
+/// made its column as wide as itself: the reason ran out of the window, and the column after
+/// it, the values the servo does not hold, with it.
+#[test]
+fn at_1024_px_the_provisioning_history_keeps_its_columns_in_view_and_wraps_a_long_reason() {
+    use botbench::ops::servo::provision::{Outcome, Record};
+    use botbench::sim::servo_bus::SimServo;
+    use botbench::ui::servo_bench::ServoBenchPanel;
+    let b = crate::support::servo_bench::bench(vec![SimServo::fresh(4101)]);
+    let saved = settings(b.path(), "servo", PanelId::SERVO_BENCH, Lang::En);
+    let mut h =
+        crate::support::gui::harness_sized(saved, b.ports(), egui::vec2(1024.0, 600.0), |_| {});
+    step_until(&mut h, "the link", |a| a.station().connected());
+    h.get_by_label("Production").click();
+    h.step();
+    let lost = "port lost: port disconnected: /dev/ttyUSB0: Input/output error (os error 5) — \
+                /dev/ttyUSB0 is gone: unplugged (no USB serial port is listed now); plug it in again";
+    let record = |result: Outcome, mismatches: Vec<String>| Record {
+        time: "2026-12-07T09:21:47+00:00".into(),
+        serial: Some(1001),
+        id: Some(1),
+        baud: None,
+        result,
+        mismatches,
+        recorded: Vec::new(),
+        timeline: Vec::new(),
+        writes: Vec::new(),
+    };
+    let production = &mut app_mut(&mut h).panel_mut::<ServoBenchPanel>().production;
+    production.history = vec![
+        record(
+            Outcome::Fail {
+                step: "verify".into(),
+                reason: "2 value(s) not as written".into(),
+            },
+            vec![
+                "max_temperature: wrote 70, servo holds 80".into(),
+                "min_voltage: wrote 6000, servo holds 4500".into(),
+            ],
+        ),
+        record(
+            Outcome::LinkLost {
+                step: "set baud".into(),
+                reason: lost.into(),
+            },
+            Vec::new(),
+        ),
+    ];
+    production.dismissed = true;
+    h.run_steps(3);
+    for text in [
+        "Result",
+        "Details",
+        lost,
+        "2 value(s) not as written · not as written: max_temperature: wrote 70, servo holds 80; \
+         min_voltage: wrote 6000, servo holds 4500",
+    ] {
+        let r = h.get_by_label(text).rect();
+        assert!(r.right() <= 1024.0, "{text:?} at {r:?}");
+    }
+}

@@ -340,6 +340,9 @@ fn banner(ui: &mut egui::Ui, lang: Lang, r: &Record) -> bool {
     dismissed
 }
 
+/// The session's records, newest first: one row each, its last column the details (why it
+/// failed or had no verdict, and the values the servo does not hold), wrapped within the
+/// window's width so that nothing pushes a column out of view.
 fn history(ui: &mut egui::Ui, lang: Lang, records: &[Record]) {
     egui::Grid::new("servo-provision-history")
         .striped(true)
@@ -353,7 +356,7 @@ fn history(ui: &mut egui::Ui, lang: Lang, records: &[Record]) {
                     lang.tr("ID", "ID"),
                     lang.tr("Baud", "波特率"),
                     lang.tr("Result", "结果"),
-                    lang.tr("Mismatches", "不一致项"),
+                    lang.tr("Details", "详情"),
                 ],
             );
             for r in records.iter().rev() {
@@ -361,23 +364,36 @@ fn history(ui: &mut egui::Ui, lang: Lang, records: &[Record]) {
                 ui.label(r.serial.map_or("-".into(), |v| v.to_string()));
                 ui.label(r.id.map_or("-".into(), |v| v.to_string()));
                 ui.label(r.baud.map_or("-".into(), |v| v.to_string()));
-                match &r.result {
-                    Outcome::Pass => super::ok_label(ui, "PASS"),
+                let reason = match &r.result {
+                    Outcome::Pass => {
+                        super::ok_label(ui, "PASS");
+                        None
+                    }
                     Outcome::Fail { step, reason } => {
                         error_label(ui, format!("FAIL ({step})"));
-                        reason_row(ui, reason);
+                        Some(reason.clone())
                     }
                     Outcome::LinkLost { step, reason } => {
                         let head = lang.tr("NO VERDICT", "无结论");
                         let during = link_lost_during(step, lang);
                         ui.colored_label(crate::ui::selftest::AMBER, format!("{head}: {during}"));
-                        reason_row(ui, &lost_port_in(reason, lang));
+                        Some(lost_port_in(reason, lang))
                     }
-                }
-                ui.label(r.mismatches.join("; "));
+                };
+                ui.add(egui::Label::new(details(reason, &r.mismatches, lang)).wrap());
                 ui.end_row();
             }
         });
+}
+
+/// A history row's details: the reason, then the values the servo does not hold.
+fn details(reason: Option<String>, mismatches: &[String], lang: Lang) -> egui::RichText {
+    let mut parts: Vec<String> = reason.into_iter().collect();
+    if !mismatches.is_empty() {
+        let head = lang.tr("not as written", "与写入值不一致");
+        parts.push(format!("{head}: {}", mismatches.join("; ")));
+    }
+    egui::RichText::new(parts.join(" · ")).weak()
 }
 
 /// Why the port was lost (`reason`, as the link wrote it) in `lang`.
@@ -386,15 +402,6 @@ fn lost_port_in(reason: &str, lang: Lang) -> String {
         Lang::En => reason.to_string(),
         Lang::Zh => crate::ui::zh::lost_port(reason),
     }
-}
-
-/// A history row's reason, on a row of its own under the result.
-fn reason_row(ui: &mut egui::Ui, reason: &str) {
-    ui.end_row();
-    for _ in 0..4 {
-        ui.label("");
-    }
-    ui.weak(reason);
 }
 
 fn job(
