@@ -18,16 +18,6 @@ pub enum Verdict {
     Provisioned(Box<Record>),
 }
 
-impl Verdict {
-    /// Whether the unit passed (false too for a run with no verdict: the link lost).
-    pub fn pass(&self) -> bool {
-        match self {
-            Verdict::SelfTest(r) => r.pass,
-            Verdict::Provisioned(r) => r.result.is_pass(),
-        }
-    }
-}
-
 /// The verdicts on one unit.
 #[derive(Debug, Clone, Default)]
 pub struct Verdicts {
@@ -73,24 +63,16 @@ impl Verdicts {
     pub fn is_empty(&self) -> bool {
         self.selftest.is_none() && self.provisioned.is_none()
     }
-
-    /// Whether the unit passed everything it was given a verdict on (`None`: no verdict yet).
-    /// A provisioning whose link was lost during a step gives none: it says nothing of the unit.
-    pub fn pass(&self) -> Option<bool> {
-        let all = [
-            self.selftest.as_ref().map(|r| r.pass),
-            self.provisioned
-                .as_ref()
-                .filter(|r| r.result.link_lost().is_none())
-                .map(|r| r.result.is_pass()),
-        ];
-        all.into_iter().flatten().reduce(|a, b| a && b)
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The self-test verdict kept on the unit: passed or not (`None`: none kept).
+    fn pass(v: &Verdicts) -> Option<bool> {
+        v.selftest.as_ref().map(|r| r.pass)
+    }
 
     fn info(build: u8) -> DeviceInfo {
         DeviceInfo {
@@ -122,12 +104,12 @@ mod tests {
     #[test]
     fn a_verdict_stays_with_its_unit_and_goes_when_another_identifies_itself() {
         let mut v = Verdicts::default();
-        assert_eq!(v.pass(), None);
+        assert_eq!(pass(&v), None);
         v.take(Verdict::SelfTest(report(true, Some(37))));
-        assert_eq!(v.pass(), Some(true));
+        assert_eq!(pass(&v), Some(true));
         v.identified(&info(37));
         assert_eq!(
-            v.pass(),
+            pass(&v),
             Some(true),
             "the same unit, identified again, keeps it"
         );
@@ -137,13 +119,13 @@ mod tests {
             "another build is another unit: no verdict yet"
         );
         v.take(Verdict::SelfTest(report(false, Some(38))));
-        assert_eq!(v.pass(), Some(false));
+        assert_eq!(pass(&v), Some(false));
         v.dismiss();
         assert!(v.is_empty(), "dismissed");
     }
 
     #[test]
-    fn a_provisioning_whose_link_was_lost_is_no_verdict_on_the_unit() {
+    fn a_provisioning_whose_link_was_lost_is_kept_until_the_next_run_replaces_it() {
         use crate::ops::servo::provision::Outcome;
         let record = |result| {
             Box::new(Record {
@@ -163,10 +145,19 @@ mod tests {
             step: "set baud".into(),
             reason: "port lost".into(),
         })));
-        assert!(!v.is_empty(), "shown until dismissed");
-        assert_eq!(v.pass(), None, "says nothing of the unit");
+        assert!(
+            v.provisioned
+                .as_ref()
+                .is_some_and(|r| r.result.link_lost().is_some()),
+            "the no-verdict record is kept, shown until dismissed"
+        );
+        v.identified(&info(37));
+        assert!(!v.is_empty(), "a servo's record outlives an identification");
         v.take(Verdict::Provisioned(record(Outcome::Pass)));
-        assert_eq!(v.pass(), Some(true));
+        assert!(
+            v.provisioned.as_ref().is_some_and(|r| r.result.is_pass()),
+            "the next run's record replaces it"
+        );
     }
 
     #[test]
@@ -174,8 +165,8 @@ mod tests {
         let mut v = Verdicts::default();
         v.take(Verdict::SelfTest(report(false, None)));
         v.identified(&info(37));
-        assert_eq!(v.pass(), Some(false), "nothing says it is another unit");
+        assert_eq!(pass(&v), Some(false), "nothing says it is another unit");
         v.take(Verdict::SelfTest(report(true, Some(37))));
-        assert_eq!(v.pass(), Some(true), "the next run's verdict replaces it");
+        assert_eq!(pass(&v), Some(true), "the next run's verdict replaces it");
     }
 }
