@@ -448,58 +448,63 @@ pub fn run_all(
 ) -> Result<Vec<Figure>, String> {
     check_only(only, field)?;
     let wanted = |case: &str| only.is_none_or(|o| case.contains(o));
+    let one = |f: Result<Figure, String>| f.map(|f| vec![f]);
+    let mut cases: Vec<Case> = vec![
+        ("msp-polling", Box::new(|| one(msp_polling(3.0, 2)))),
+        ("msp-polling", Box::new(|| one(msp_polling(3.0, 1)))),
+        (
+            "msp-bad-adapter",
+            Box::new(|| adapter::bad_adapter_polling(5.0)),
+        ),
+        ("servo-scan", Box::new(move || servo_scans(long))),
+    ];
+    if field {
+        cases.push(("servo-field-scan", Box::new(|| field_scans(cancel))));
+    }
+    cases.extend::<[Case; 8]>([
+        ("servo-provision", Box::new(|| one(servo_provision()))),
+        ("tuya-ota", Box::new(|| one(tuya_ota(115_200, 2)))),
+        (
+            "tuya-dp-report",
+            Box::new(|| one(tuya_dp_report(115_200, 50))),
+        ),
+        ("tuya-dp-report", Box::new(|| one(tuya_dp_report(9600, 20)))),
+        (
+            "tuya-handshake",
+            Box::new(|| one(tuya_handshake(9600, None))),
+        ),
+        (
+            "tuya-handshake",
+            Box::new(|| one(tuya_handshake(9600, Some(Duration::from_millis(30))))),
+        ),
+        ("records-report", Box::new(records::records_report)),
+        ("station", Box::new(station::station_figures)),
+    ]);
+    if long {
+        cases.push(("tuya-ota", Box::new(|| one(tuya_ota(9600, 2)))));
+    }
+    cases.retain(|(name, _)| wanted(name));
+    Ok(run_each(cases, report))
+}
+
+/// What one run of a case gives: its figures, or why it could not be measured.
+type CaseResult = Result<Vec<Figure>, String>;
+/// A case to run: its name (one of [`CASES`]) and the run that measures it.
+type Case<'a> = (&'static str, Box<dyn FnOnce() -> CaseResult + 'a>);
+
+/// Runs `cases` in order, each figure given to `report` as its case ends. A case that fails
+/// is one [`Figure`] with `failed` set (named after the case, saying why), and the cases after
+/// it still run.
+fn run_each(cases: Vec<Case<'_>>, report: &mut dyn FnMut(&Figure)) -> Vec<Figure> {
     let mut out = Vec::new();
-    // A case that fails is reported as failed, and the others still run.
-    let mut add = |case: &str, f: Result<Vec<Figure>, String>, out: &mut Vec<Figure>| {
-        let figures = f.unwrap_or_else(|why| vec![Figure::failed(case, why)]);
+    for (name, run) in cases {
+        let figures = run().unwrap_or_else(|why| vec![Figure::failed(name, why)]);
         for f in figures {
             report(&f);
             out.push(f);
         }
-    };
-    let one = |f: Result<Figure, String>| f.map(|f| vec![f]);
-    if wanted("msp-polling") {
-        add("msp-polling", one(msp_polling(3.0, 2)), &mut out);
-        add("msp-polling", one(msp_polling(3.0, 1)), &mut out);
     }
-    if wanted("msp-bad-adapter") {
-        add(
-            "msp-bad-adapter",
-            adapter::bad_adapter_polling(5.0),
-            &mut out,
-        );
-    }
-    if wanted("servo-scan") {
-        add("servo-scan", servo_scans(long), &mut out);
-    }
-    if field && wanted("servo-field-scan") {
-        add("servo-field-scan", field_scans(cancel), &mut out);
-    }
-    if wanted("servo-provision") {
-        add("servo-provision", one(servo_provision()), &mut out);
-    }
-    if wanted("tuya-ota") {
-        add("tuya-ota", one(tuya_ota(115_200, 2)), &mut out);
-    }
-    if wanted("tuya-dp-report") {
-        add("tuya-dp-report", one(tuya_dp_report(115_200, 50)), &mut out);
-        add("tuya-dp-report", one(tuya_dp_report(9600, 20)), &mut out);
-    }
-    if wanted("tuya-handshake") {
-        add("tuya-handshake", one(tuya_handshake(9600, None)), &mut out);
-        let slow = tuya_handshake(9600, Some(Duration::from_millis(30)));
-        add("tuya-handshake", one(slow), &mut out);
-    }
-    if wanted("records-report") {
-        add("records-report", records::records_report(), &mut out);
-    }
-    if wanted("station") {
-        add("station", station::station_figures(), &mut out);
-    }
-    if long && wanted("tuya-ota") {
-        add("tuya-ota", one(tuya_ota(9600, 2)), &mut out);
-    }
-    Ok(out)
+    out
 }
 
 #[cfg(test)]
@@ -532,6 +537,37 @@ mod tests {
         assert_eq!(
             Figure::new("handshake", 0.4, 0.39, String::new()).target_met,
             None
+        );
+    }
+
+    #[test]
+    fn a_case_that_fails_is_reported_failed_and_the_cases_after_it_still_run() {
+        let measured = || Ok(vec![Figure::new("scan", 0.5, 0.4, String::new())]);
+        let cases: Vec<Case> = vec![
+            (
+                "tuya-ota",
+                Box::new(|| Err("the simulator did not start".into())),
+            ),
+            ("servo-scan", Box::new(measured)),
+            ("station", Box::new(|| Err("slot 2 failed".into()))),
+        ];
+        let mut reported = Vec::new();
+        let figures = run_each(cases, &mut |f| reported.push(f.name.clone()));
+        assert_eq!(reported, ["tuya-ota", "scan", "station"], "each as it ends");
+        let failed: Vec<Option<&str>> = figures.iter().map(|f| f.failed.as_deref()).collect();
+        assert_eq!(
+            failed,
+            [
+                Some("the simulator did not start"),
+                None,
+                Some("slot 2 failed")
+            ]
+        );
+        assert_eq!(figures[0].target_met, Some(false));
+        assert!(
+            figures[0].notes.starts_with("FAILED: "),
+            "{}",
+            figures[0].notes
         );
     }
 
