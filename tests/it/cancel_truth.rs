@@ -241,6 +241,33 @@ fn an_id_or_baud_written_as_a_parameter_goes_through_set_id_and_set_baud() {
     );
     assert_eq!(all.code, 2, "{}", all.text());
     assert!(all.err.contains("set-id"), "{}", all.text());
+
+    // The baud option as a parameter: the port follows servo 2 to 1 Mbaud and verifies it there,
+    // as set-baud does (a plain write would leave it answering at a rate the port is not at).
+    let fast = sim.cli("servo", &["write", "2", "baudrate", "8"]);
+    assert_eq!(fast.code, 0, "{}", fast.text());
+    assert!(
+        fast.out.contains("b1000000") && fast.out.contains("verified"),
+        "{}",
+        fast.text()
+    );
+    let there = sim.cli("servo", &["--baud", "1000000", "ping", "2"]);
+    assert_eq!(there.code, 0, "servo 2 at its new rate: {}", there.text());
+    let before = sim.cli("servo", &["ping", "2"]);
+    assert_ne!(before.code, 0, "servo 2 left 115200: {}", before.text());
+    // An option the table lacks is refused before anything is sent, naming the table.
+    let bad = sim.cli(
+        "servo",
+        &["--baud", "1000000", "write", "2", "baudrate", "9"],
+    );
+    assert_eq!(bad.code, 2, "{}", bad.text());
+    assert!(bad.err.contains("b1000000 (8)"), "{}", bad.text());
+    let still = sim.cli("servo", &["--baud", "1000000", "ping", "2"]);
+    assert_eq!(still.code, 0, "nothing was sent: {}", still.text());
+    // A baud option broadcast would scatter the bus: refused, naming the checked way.
+    let all = sim.cli("servo", &["write", "255", "baudrate", "8", "--broadcast"]);
+    assert_eq!(all.code, 2, "{}", all.text());
+    assert!(all.err.contains("set-baud"), "{}", all.text());
 }
 
 /// Issue 25, 4d: with the window cleaner's profile, a device that identifies as hardware 0x04

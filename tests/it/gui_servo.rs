@@ -551,4 +551,20 @@ fn an_invalid_keystroke_moves_no_row_keeps_focus_enums_are_chosen_and_reserved_i
             .is_none(),
         "a reserved parameter has no editor"
     );
+
+    // Issue 25, 4c: the id and the baud rate are changed by the checked way only (ID & baud
+    // rate): the table has no editor for them and says where they are set.
+    for name in ["Servo ID (assigned)", "Baud rate"] {
+        assert!(
+            h.query_all(By::new().predicate(|n| n.label().as_deref() == Some(name)))
+                .next()
+                .is_none(),
+            "{name} has an editor in the table"
+        );
+    }
+    assert_eq!(
+        h.query_all_by_label("set in ID & baud rate").count(),
+        2,
+        "the id's and the baud rate's rows"
+    );
 }
