@@ -404,3 +404,118 @@ fn a_port_that_vanishes_during_the_wait_between_servos_ends_it_saying_so() {
     );
     assert!(captured.err().contains(&path), "names the port: {text}");
 }
+
+/// Issue 25, 4a: the tuning panel's Write (ops::tuning::write_commands, as the window runs it)
+/// cancelled after its first command ends as "cancelled after 1 of 3 commands", naming what was
+/// written and what was not, and the device holds only the first.
+#[test]
+fn tuning_writes_cancelled_after_the_first_command_say_so_and_write_no_more() {
+    use botbench::ops::{Cancel, Device, OpError, Progress, Run, tuning};
+    use botbench::profile::Input;
+    let p = crate::support::profile("window-cleaner");
+    let wc = crate::support::serve(crate::support::window_cleaner());
+    let link = crate::support::connect(&wc, &p);
+    let text = |f: &str, v: &str| (f.to_string(), Input::Text(v.into()));
+    let writes: Vec<tuning::SetWrite> = vec![
+        (220, vec![text("pwmValue", "60")]),
+        (
+            221,
+            vec![text("pwmvalueMax", "95"), text("pwmvalueMin", "70")],
+        ),
+        (
+            223,
+            vec![text("minPwmValue", "50"), text("upMinPwmValue", "55")],
+        ),
+    ];
+    let cancel = Cancel::new();
+    let c2 = cancel.clone();
+    let mut run = Run::new(&cancel, |pr: Progress| {
+        if pr.done == 1 {
+            c2.cancel();
+        }
+    });
+    let mut seen = Vec::new();
+    let e = tuning::write_commands(
+        Device::new(&link.client(), &p),
+        &writes,
+        &mut run,
+        &mut |id, r| seen.push((id, r.is_ok())),
+    )
+    .unwrap_err();
+    let OpError::CancelledAfter {
+        done,
+        total,
+        done_items,
+        not_done,
+        ..
+    } = &e
+    else {
+        panic!("not a cancel after some: {e:?}");
+    };
+    assert_eq!((*done, *total), (1, 3), "{e}");
+    assert_eq!(done_items, &["MSP_SET_PWMVALUE"], "{e}");
+    assert_eq!(
+        not_done,
+        &["MSP_SET_USE_FAN_LEVEL_DYNAMIC_COMP", "MSP_SET_MOTOR_VALUE"],
+        "{e}"
+    );
+    assert!(
+        e.to_string().starts_with("cancelled after 1 of 3 commands"),
+        "{e}"
+    );
+    assert_eq!(
+        seen,
+        [(220, true)],
+        "the window saw the first verified only"
+    );
+    let sim = wc.sim();
+    assert_eq!(sim.param("pwmValue"), Some(60));
+    assert_eq!(sim.param("pwmvalueMax"), Some(100), "not written");
+    assert_eq!(sim.param("minPwmValue"), Some(75), "not written");
+}
+
+/// Issue 25, 4a: the servo parameter table's Write (ops::servo::write_params, as the window
+/// runs it) stops at a cancel between parameters: the ones after it are not written.
+#[test]
+fn a_servo_parameter_batch_cancelled_part_way_writes_no_more() {
+    use botbench::ops::{Cancel, Device, Progress, Run, servo};
+    use botbench::sim::servo_bus::SimServo;
+    let bench = crate::support::servo::Bench::new(vec![
+        SimServo::fresh(31)
+            .with_id(1)
+            .with_param(41, 80)
+            .with_param(42, 9000)
+            .with_param(43, 2000),
+    ]);
+    let cancel = Cancel::new();
+    let c2 = cancel.clone();
+    // Progress names each parameter as its write begins: cancel as the second begins.
+    let mut run = Run::new(&cancel, |pr: Progress| {
+        if pr.done == 1 {
+            c2.cancel();
+        }
+    });
+    let values = [(41, 70), (42, 12_000), (43, 3000)];
+    let checks = servo::write_params(
+        Device::new(&bench.client(), &bench.profile),
+        1,
+        &values,
+        &mut run,
+    );
+    let written: Vec<u8> = checks.iter().map(|(id, _)| *id).collect();
+    assert_eq!(
+        written,
+        [41, 42],
+        "the one under way when the cancel came ends, no more"
+    );
+    assert!(
+        checks.iter().all(|(_, c)| matches!(c, Ok(c) if c.ok())),
+        "{checks:?}"
+    );
+    let servo = bench.servo(31);
+    assert_eq!(
+        (servo.param(41), servo.param(42), servo.param(43)),
+        (Some(70), Some(12_000), Some(2000)),
+        "the third is as it was"
+    );
+}
