@@ -9,7 +9,7 @@ use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use std::time::Instant;
 
-use crate::support::gui::{app, idle, step_until, type_into};
+use crate::support::gui::{app, app_mut, idle, step_until, type_into};
 use crate::support::servo_bench::{bench, harness, scan, set_baud};
 
 #[test]
@@ -80,6 +80,42 @@ fn the_live_angle_follows_a_move() {
     });
     h.step();
     assert!(h.query_by_label("-45.5°").is_some());
+}
+
+/// Issue 25, item 3: a MONITOR answer in its "no data" form (angle -235929599, turns 0, which
+/// the vendor SDK skips) is said as no data in the Motion tab, in both languages, never as an
+/// angle of -23592959.9°.
+#[test]
+fn the_motion_tabs_monitor_shows_a_no_data_answer_as_no_data() {
+    let b = bench(vec![
+        SimServo::fresh(62).with_id(4).with_monitor_no_data(true),
+    ]);
+    let mut h = harness(&b, Lang::En);
+    scan(&mut h, "4", "4");
+    h.get_by_label("Motion").click();
+    h.step();
+    h.get_by_label("Also monitor (newer servos)").click();
+    h.step();
+    h.get_by_label("Live angle").click();
+    h.step();
+    step_until(&mut h, "a MONITOR answer", |a| {
+        a.station()
+            .device
+            .readings
+            .contains_key(&botbench::protocol::servo::cmd::MONITOR)
+    });
+    h.run_steps(2);
+    assert!(
+        h.query_by_label("monitor: no data (the servo has no reading to give)")
+            .is_some()
+    );
+    assert!(
+        h.query_all_by_label_contains("23592959").next().is_none(),
+        "no angle made of the no-data form"
+    );
+    app_mut(&mut h).settings.lang = Lang::Zh;
+    h.run_steps(2);
+    assert!(h.query_by_label("监控:无数据(舵机暂无读数)").is_some());
 }
 
 #[test]
