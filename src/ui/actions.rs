@@ -164,22 +164,8 @@ fn fields(
                 value_box(ui, text, f, lang, 70.0).labelled_by(name.id);
                 return;
             }
-            egui::ComboBox::from_id_salt(("act", cmd.id, &f.ident))
-                .selected_text(if text.is_empty() {
-                    "—".to_string()
-                } else {
-                    text.clone()
-                })
-                .show_ui(ui, |ui| {
-                    for l in &f.labels {
-                        let label = format!("{} ({})", lang.tr(&l.name.en, &l.name.zh), l.ident);
-                        if ui.selectable_label(*text == l.ident, label).clicked() {
-                            *text = l.ident.clone();
-                        }
-                    }
-                })
-                .response
-                .labelled_by(name.id);
+            // The value chosen by its name in the window's language, as everywhere.
+            crate::ui::inputs::label_choice(ui, lang, f, ("act", cmd.id, &f.ident), text, name.id);
         });
     }
 }

@@ -203,3 +203,62 @@ fn in_chinese_the_tuya_consoles_misfits_and_report_log_are_chinese() {
     }
     assert!(seen.is_empty(), "English in 中文:\n{}", report(&seen));
 }
+
+/// Issue 25, item 11: a command that moves the robot asks first, and in 中文 its dialog says
+/// what it sends by the fields' and values' Chinese names (电机:前进), not the wire's English
+/// ones (motor=forward): every such command of the window cleaner's Actions panel.
+#[test]
+fn in_chinese_each_confirmation_says_what_it_sends_in_chinese() {
+    let mut seen = BTreeMap::new();
+    let mut said = Vec::new();
+    let kind = SimKind::WindowCleaner;
+    let mut h = demo(kind, Lang::Zh, egui::vec2(1280.0, 800.0));
+    let view = app(&h)
+        .views()
+        .into_iter()
+        .find(|v| v.panel == PanelId::ACTIONS)
+        .expect("the Actions panel");
+    app_mut(&mut h).show_view(&view);
+    h.run_steps(3);
+    // The values to send: a fan PWM typed, the motor's direction chosen.
+    crate::support::gui::type_into(&mut h, "风机占比", "60");
+    h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "马达")
+        .click();
+    h.run_steps(2);
+    h.get_by_label_contains("前进").click();
+    h.run_steps(3);
+    let asking = h.query_all_by_label("⚠ 发送…").count();
+    assert!(asking >= 2, "commands that ask first: {asking}");
+    for i in 0..asking {
+        // A job under way (the demo's first reads) keeps Send off.
+        step_until(&mut h, "no job running", crate::support::gui::idle);
+        h.run_steps(2);
+        h.query_all_by_label("⚠ 发送…")
+            .nth(i)
+            .expect("the same buttons")
+            .click();
+        h.run_steps(3);
+        assert!(
+            texts(&h).iter().any(|(t, ..)| t == "机器人将会动作"),
+            "dialog {i}: {:?}",
+            texts(&h).iter().map(|t| t.0.clone()).collect::<Vec<_>>()
+        );
+        english_drawn(&h, &mut seen, &format!("confirmation {i}"));
+        said.extend(
+            texts(&h)
+                .into_iter()
+                .map(|t| t.0)
+                .filter(|t| t.starts_with("控制")),
+        );
+        h.get_by_label("取消").click();
+        h.run_steps(3);
+        assert!(
+            !texts(&h).iter().any(|(t, ..)| t == "机器人将会动作"),
+            "closed"
+        );
+    }
+    assert!(seen.is_empty(), "English in 中文:\n{}", report(&seen));
+    for what in ["控制风机——风机占比:60 %", "控制马达——马达:前进"] {
+        assert!(said.iter().any(|t| t == what), "{what} not in {said:?}");
+    }
+}

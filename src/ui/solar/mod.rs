@@ -312,22 +312,8 @@ impl SolarPanel {
                 };
                 value_box(ui, text, f, lang, width).labelled_by(name.id);
             } else {
-                egui::ComboBox::from_id_salt(("solar", cmd.id, &f.ident))
-                    .selected_text(match f.labels.iter().find(|l| l.ident == *text) {
-                        Some(l) => lang.tr(&l.name.en, &l.name.zh).to_string(),
-                        None => "—".to_string(),
-                    })
-                    .show_ui(ui, |ui| {
-                        for l in &f.labels {
-                            let label =
-                                format!("{} ({})", lang.tr(&l.name.en, &l.name.zh), l.value);
-                            if ui.selectable_label(*text == l.ident, label).clicked() {
-                                *text = l.ident.clone();
-                            }
-                        }
-                    })
-                    .response
-                    .labelled_by(name.id);
+                let salt = ("solar", cmd.id, &f.ident);
+                crate::ui::inputs::label_choice(ui, lang, f, salt, text, name.id);
             }
         });
     }
