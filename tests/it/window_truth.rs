@@ -879,8 +879,34 @@ fn a_trace_resumed_after_a_gap_is_lines_that_never_cross_it_and_nothing_filled()
     h.get_by_label("Resume").click();
     step_until(&mut h, "samples after the gap", |a| samples(a) >= n + 20);
     h.run_steps(3);
-    let a = app(&h);
-    let shapes = drawn(&h);
+    assert_no_line_across_a_gap(&h, "the pause");
+}
+
+/// Item 7: an outage (the device lifted off its fixture for two seconds, every poll
+/// unanswered, then answering again on the same link) is a gap in every trace, as a pause is:
+/// no line joins the samples before it to those after. (A new connection starts new plots.)
+#[test]
+fn a_trace_resumed_after_an_outage_is_lines_that_never_cross_it() {
+    let device: botbench::sim::SharedDevice =
+        std::sync::Arc::new(std::sync::Mutex::new(crate::support::window_cleaner()));
+    let (lift, hands) = botbench::sim::fixture::Lift::new(device);
+    let b = crate::support::serve(lift);
+    let mut h = telemetry(&b, Lang::En);
+    step_until(&mut h, "samples", |a| {
+        samples(a) >= 20 && !a.panel::<TelemetryPanel>().shown.is_empty()
+    });
+    hands.lift_for(std::time::Duration::from_secs(2));
+    let n = samples(app(&h));
+    step_until(&mut h, "samples after the outage", |a| samples(a) >= n + 20);
+    h.run_steps(3);
+    assert_no_line_across_a_gap(&h, "the outage");
+}
+
+/// Every trace of every plot shown is drawn as lines (no filled shape over the data), none of
+/// whose segments crosses a break of its series, of which there is at least one (`gap`).
+fn assert_no_line_across_a_gap(h: &H, gap: &str) {
+    let a = app(h);
+    let shapes = drawn(h);
     let mut lines = 0;
     for s in &a.panel::<TelemetryPanel>().shown {
         let plot = a
@@ -892,7 +918,7 @@ fn a_trace_resumed_after_a_gap_is_lines_that_never_cross_it_and_nothing_filled()
             .find(|p| p.id == s.id);
         let set = a.station().device.plots.get(&s.id).unwrap();
         let breaks: Vec<f64> = set.breaks().collect();
-        assert!(!breaks.is_empty(), "{}: the pause is a gap", s.id);
+        assert!(!breaks.is_empty(), "{}: {gap} is a gap", s.id);
         let time =
             |x: f32| s.x.0 + f64::from((x - s.rect.left()) / s.rect.width()) * (s.x.1 - s.x.0);
         let half_px = (s.x.1 - s.x.0) / f64::from(s.rect.width()) / 2.0;
