@@ -953,3 +953,63 @@ fn assert_no_line_across_a_gap(h: &H, gap: &str) {
     }
     assert!(lines >= 4, "each trace drawn in stretches: {lines} lines");
 }
+
+/// Item 9: a write refused before anything is sent (a value out of its range, as a write
+/// built outside the panel's checks would carry) leaves the group's readings and the
+/// technician's edits as they were, and the status says it was refused with nothing sent,
+/// never "not verified".
+#[test]
+fn a_write_refused_before_sending_keeps_readings_and_edits_and_says_nothing_was_sent() {
+    use botbench::profile::Input;
+    let b = bench();
+    b.sim.lock().unwrap().set_param("pwmvalueMax", 97).unwrap();
+    let mut h = harness(&b, PanelId::TUNING);
+    step_until(&mut h, "the device read", |a| {
+        (130..=136).all(|id| a.station().device.readings.contains_key(&id))
+            && a.station().job_progress().is_none()
+    });
+    h.run_steps(2);
+    retype(&mut h, "97", "90");
+    let profile = app(&h).station().device.profile.clone();
+    let refused = botbench::ui::jobs::write(
+        &profile,
+        vec![(
+            220,
+            vec![("pwmValue".to_string(), Input::Text("700".into()))],
+        )],
+    );
+    app_mut(&mut h).apply(botbench::ui::Action::StartJob(refused));
+    step_until(&mut h, "the write's end", |a| {
+        a.station().job_progress().is_none() && a.station().device.refused.contains_key(&130)
+    });
+    h.run_steps(3);
+    let a = app(&h);
+    assert!(
+        (130..=136).all(|id| a.station().device.readings.contains_key(&id)),
+        "the readings stay"
+    );
+    assert!(
+        h.query_by(|n| {
+            n.role() == egui::accesskit::Role::TextInput && n.value().as_deref() == Some("90")
+        })
+        .is_some(),
+        "the edit stays"
+    );
+    assert!(
+        h.query_all_by_label_contains("refused, nothing sent")
+            .next()
+            .is_some(),
+        "the status says what happened"
+    );
+    assert!(
+        h.query_all_by_label_contains("not verified")
+            .next()
+            .is_none(),
+        "nothing said unverified"
+    );
+    assert_eq!(
+        b.sim.lock().unwrap().param("pwmValue"),
+        Some(85),
+        "nothing sent"
+    );
+}
