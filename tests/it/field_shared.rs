@@ -65,6 +65,24 @@ fn a_watch_with_another_reader_on_the_port_ends_and_says_who_takes_the_bytes() {
 }
 
 #[test]
+fn a_version_with_another_reader_on_the_port_ends_and_answers_or_says_who_takes_the_bytes() {
+    let sim = SimProcess::start(&["window-cleaner"]);
+    let _thief = Thief::on(&sim.path);
+    let run = sim.cli("msp", &["version"]);
+    if run.code == 0 {
+        // Only an identification that got its answers may succeed.
+        assert!(run.out.contains("1.4.2"), "{}", run.text());
+    } else {
+        assert!(says_taken(&run), "{}", run.text());
+        assert!(
+            !run.err.contains("is the device powered"),
+            "the wiring is not blamed: {}",
+            run.text()
+        );
+    }
+}
+
+#[test]
 fn a_scan_with_another_reader_on_the_port_never_exits_0_having_missed_a_servo() {
     let sim = SimProcess::start(&["servo-bus", "--servos", "1,2,5"]);
     let _thief = Thief::on(&sim.path);
