@@ -1013,3 +1013,76 @@ fn a_write_refused_before_sending_keeps_readings_and_edits_and_says_nothing_was_
         "nothing sent"
     );
 }
+
+/// What opens a dialog.
+type Opens = dyn Fn(&mut H);
+
+/// Item 5, every dialog that asks before moving or writing: the Actions panel's "The robot will
+/// move" and the Presets panel's "Apply this preset?" show STOP beside their answers, and the
+/// navigation's STOP clicked through either sends STOP and closes it.
+#[test]
+fn the_navigations_stop_acts_through_the_actions_and_preset_dialogs_too() {
+    let b = bench();
+    let mut h = harness(&b, PanelId::ACTIONS);
+    step_until(&mut h, "the device identified", |a| {
+        a.station().device.info.is_some() && a.station().job_progress().is_none()
+    });
+    h.run_steps(2);
+    let ids = stop_ids(&h);
+    let mut sent = 0;
+    // The motor's direction chosen, then its Send…
+    h.get_by_role_and_label(egui::accesskit::Role::ComboBox, "Motor")
+        .click();
+    h.run_steps(2);
+    h.get_by_label_contains("Forward").click();
+    h.run_steps(2);
+    let dialogs: [(&str, &Opens); 2] = [
+        ("The robot will move", &|h: &mut H| {
+            // The Send… on the motor's row.
+            let row = h
+                .get_by_role_and_label(egui::accesskit::Role::ComboBox, "Motor")
+                .rect()
+                .center()
+                .y;
+            h.get_all_by_label("⚠ Send…")
+                .min_by(|a, b| {
+                    (a.rect().center().y - row)
+                        .abs()
+                        .total_cmp(&(b.rect().center().y - row).abs())
+                })
+                .expect("a Send…")
+                .click();
+            h.run_steps(3);
+        }),
+        ("Apply this preset?", &|h: &mut H| {
+            let a = app_mut(h);
+            a.apply(botbench::ui::Action::ShowPanel(PanelId::PRESETS));
+            let dir = botbench::ui::files::shipped_dir();
+            let preset = botbench::ui::files::shipped_in(&dir, "window-cleaner-factory.ron");
+            a.with_panel(|p: &mut PresetsPanel, st| {
+                p.path = preset.expect("the shipped preset").display().to_string();
+                p.open(st);
+            });
+            h.run_steps(3);
+            h.get_by_label_contains("Apply (").click();
+            h.run_steps(3);
+        }),
+    ];
+    for (title, open) in dialogs {
+        open(&mut h);
+        assert!(h.query_by_label(title).is_some(), "{title} is open");
+        assert_eq!(
+            h.get_all_by_label("STOP").count(),
+            2,
+            "{title}: STOP beside its answers"
+        );
+        h.get_all_by_label("STOP")
+            .min_by(|a, b| a.rect().left().total_cmp(&b.rect().left()))
+            .expect("the navigation's STOP")
+            .click();
+        sent += ids.len();
+        step_until(&mut h, "STOP sent", |a| stops_sent(a, &ids) >= sent);
+        h.run_steps(2);
+        assert!(h.query_by_label(title).is_none(), "{title} closed");
+    }
+}
