@@ -690,3 +690,51 @@ fn a_scanner_that_is_its_own_device_starts_a_slot_with_the_code_it_sends() {
         ran.text()
     );
 }
+
+/// Issue 25, item 2, the station's part: a board that reboots when its port opens (silent for
+/// 1.5 s after each open) is identified on a slot whose bundle gives it a boot wait; on a slot
+/// without one its first request goes to a board still booting, and the unit does not pass.
+#[test]
+fn a_slot_with_a_boot_wait_identifies_a_board_that_boots_when_its_port_opens() {
+    let verdict = |boot_ms: &str, boot_wait: &str| {
+        let sim = Sim::start(&["window-cleaner", "--boot-ms", boot_ms]);
+        let dir = tempfile::tempdir().unwrap();
+        let bundle = dir.path().join("boot.ron");
+        std::fs::write(
+            &bundle,
+            format!(
+                r#"(version: 1, id: "boot", plans: {{ "p": (start: Button, steps: [Identify(hardware: [3])]) }},
+                    slots: [(name: "1", fixture: "F", port: Path("{}"), profile: "window-cleaner",
+                             plan: "p"{boot_wait})])"#,
+                sim.path
+            ),
+        )
+        .unwrap();
+        let records = dir.path().join("records.sqlite");
+        let ran = sim.run_typing(
+            &[
+                "station",
+                &bundle.display().to_string(),
+                "--headless",
+                "--json",
+                "--once",
+                "--records",
+                &records.display().to_string(),
+            ],
+            "start\n",
+        );
+        let docs = ran.json_lines();
+        let v = docs
+            .iter()
+            .find(|d| d["event"] == "verdict")
+            .unwrap_or_else(|| panic!("no verdict: {}", ran.text()))
+            .clone();
+        (v["pass"].as_bool(), ran.text())
+    };
+    let (waited, text) = verdict("1500", ", boot_wait_ms: 2000");
+    assert_eq!(waited, Some(true), "{text}");
+    // Without the wait (a board booting for 10 s: however late this computer comes to it, the
+    // first request finds it booting).
+    let (hasty, text) = verdict("10000", "");
+    assert_eq!(hasty, Some(false), "{text}");
+}
