@@ -43,7 +43,13 @@ pub(crate) fn run(
                 passed,
                 failed,
             };
-            let go_on = next_servo(&client, &profile, prev, wait_ms, &cancel, &tally)?;
+            let waiting = Waiting {
+                client: &client,
+                profile: &profile,
+                port: port.path().ok(),
+                cancel: &cancel,
+            };
+            let go_on = next_servo(&waiting, prev, wait_ms, &tally)?;
             if !go_on {
                 errln!("botbench: stopped by the operator (q) before servo {n} of {count}");
                 break;
@@ -195,11 +201,9 @@ struct Tally {
 /// operator's Enter. False when the operator stops (q); an error when the wait is cancelled
 /// (exit 130), the link is lost (1) or nobody can answer (stdin closed: 2).
 fn next_servo(
-    client: &Client,
-    profile: &Profile,
+    waiting: &Waiting<'_>,
     prev: &Record,
     wait_ms: Option<u64>,
-    cancel: &crate::ops::Cancel,
     tally: &Tally,
 ) -> Result<bool, CliError> {
     let Tally {
@@ -220,19 +224,14 @@ fn next_servo(
         };
     };
     errln!("Swap the servo: waiting for a new fresh servo (id 0) for servo {n} of {count}…");
-    match wait_for_new(
-        client,
-        profile,
-        prev.serial,
-        Duration::from_millis(ms),
-        cancel,
-    ) {
+    match wait_for_new(waiting, prev.serial, Duration::from_millis(ms)) {
         Waited::New => Ok(true),
         Waited::Cancelled => Err(CliError {
             code: super::port::EXIT_CANCELLED,
             message: format!(
-                "cancelled while waiting for servo {n} of {count}: {passed} PASS, {failed} FAIL; \
-                 servos {n} to {count} not provisioned"
+                "cancelled after {} of {count} servos, while waiting for servo {n}: {passed} \
+                 PASS, {failed} FAIL; servos {n} to {count} not provisioned",
+                n - 1
             ),
         }),
         Waited::Lost(reason) => Err(CliError::device(format!(
@@ -275,40 +274,62 @@ enum Waited {
     Lost(String),
 }
 
-/// How often a wait between servos looks at the cancel flag.
-const CANCEL_SLICE: Duration = Duration::from_millis(20);
+/// What a wait between servos works with: the link, its profile, the port's path (to see it
+/// go while nothing is exchanged; `None` for a built-in simulator) and the operator's Ctrl-C.
+struct Waiting<'a> {
+    client: &'a Client,
+    profile: &'a Profile,
+    port: Option<&'a str>,
+    cancel: &'a crate::ops::Cancel,
+}
 
-/// Sleeps `every`, in slices that look at `cancel`; false when it was raised.
-fn nap(every: Duration, cancel: &crate::ops::Cancel) -> bool {
+impl Waiting<'_> {
+    /// Why the port is gone (unplugged, renamed after a replug, taken by brltty), when its
+    /// device node is: the link itself hears of it only at its next exchange.
+    fn port_gone(&self) -> Option<String> {
+        let path = self.port?;
+        if std::path::Path::new(path).exists() {
+            return None;
+        }
+        Some(crate::system::vanished(path, None).unwrap_or_else(|| format!("{path} is gone")))
+    }
+}
+
+/// How often a wait between servos looks at the cancel flag and for its port.
+const WAIT_SLICE: Duration = Duration::from_millis(20);
+
+/// Sleeps `every`, in slices that look at the cancel flag and for the port: `None` when the
+/// whole time passed, else how it ended.
+fn nap(every: Duration, waiting: &Waiting<'_>) -> Option<Waited> {
     let until = std::time::Instant::now() + every;
     loop {
-        if cancel.is_cancelled() {
-            return false;
+        if waiting.cancel.is_cancelled() {
+            return Some(Waited::Cancelled);
+        }
+        if let Some(why) = waiting.port_gone() {
+            return Some(Waited::Lost(why));
         }
         let left = until.saturating_duration_since(std::time::Instant::now());
         if left.is_zero() {
-            return true;
+            return None;
         }
-        std::thread::sleep(left.min(CANCEL_SLICE));
+        std::thread::sleep(left.min(WAIT_SLICE));
     }
 }
 
 /// Waits until one fresh servo answers whose serial number is not `previous` (when the previous
 /// servo's serial is unknown, until the bus has held no fresh servo once), polling every
-/// `every`; leaves at once on Ctrl-C (`cancel`) or when the port is gone.
-fn wait_for_new(
-    client: &Client,
-    profile: &Profile,
-    previous: Option<u32>,
-    every: Duration,
-    cancel: &crate::ops::Cancel,
-) -> Waited {
+/// `every`; leaves at once on Ctrl-C or when the port is gone.
+fn wait_for_new(waiting: &Waiting<'_>, previous: Option<u32>, every: Duration) -> Waited {
+    let Waiting {
+        client, profile, ..
+    } = *waiting;
     let serial = profile.serial_number_param();
     let bauds = profile.servo_bauds();
     let mut emptied = previous.is_some();
     loop {
-        if !nap(every, cancel) {
-            return Waited::Cancelled;
+        if let Some(ended) = nap(every, waiting) {
+            return ended;
         }
         let found = match ops::find_fresh(Device::new(client, profile), &bauds) {
             Ok(found) => found,

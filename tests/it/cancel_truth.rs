@@ -147,7 +147,8 @@ fn a_provisioning_cancelled_part_way_says_what_was_written_and_exits_130() {
 
 #[test]
 fn the_wait_between_servos_leaves_on_ctrl_c() {
-    // One fresh servo, never swapped: the wait for the second one would last for ever.
+    // One fresh servo, never swapped: the wait for the second one would last for ever. The
+    // bus is looked at every 10 minutes: only the cancel can end the wait in this test's time.
     let sim = Sim::start(&["servo-bus", "--servos", "0"]);
     let plan = preset("servo-provision-plan.ron");
     let args = [
@@ -159,7 +160,7 @@ fn the_wait_between_servos_leaves_on_ctrl_c() {
         "--count",
         "2",
         "--wait-ms",
-        "50",
+        "600000",
     ];
     let captured = botbench::cli::Captured::default();
     let run = start_in_process(&args, sim.ports(), &captured);
@@ -186,7 +187,7 @@ fn the_wait_between_servos_leaves_on_ctrl_c() {
     assert!(
         captured
             .err()
-            .contains("cancelled while waiting for servo 2 of 2: "),
+            .contains("cancelled after 1 of 2 servos, while waiting for servo 2: "),
         "{text}"
     );
 }
@@ -365,7 +366,8 @@ fn a_piped_servo_scan_prints_no_progress_bar() {
 #[test]
 fn a_port_that_vanishes_during_the_wait_between_servos_ends_it_saying_so() {
     // One fresh servo, never swapped: the wait for the second one would last for ever; the
-    // adapter is pulled during it.
+    // adapter is pulled during it. The bus is looked at every 10 minutes: the wait must see the
+    // port go between two looks (it once noticed only at the next look).
     let mut sim = Sim::start(&["servo-bus", "--servos", "0"]);
     let plan = preset("servo-provision-plan.ron");
     let path = sim.path.clone();
@@ -378,7 +380,7 @@ fn a_port_that_vanishes_during_the_wait_between_servos_ends_it_saying_so() {
         "--count",
         "2",
         "--wait-ms",
-        "50",
+        "600000",
     ];
     let captured = botbench::cli::Captured::default();
     let run = start_in_process(&args, sim.ports(), &captured);
