@@ -190,7 +190,7 @@ fn apply(file: &std::path::Path, port: &PortArgs, rec: &super::records::RecordAr
         .filter(|c| !c.ok())
         .count();
     if json {
-        let doc = serde_json::json!({
+        let mut doc = serde_json::json!({
             "verified": bad == 0 && outcome.is_ok(),
             "commands": results.iter().map(|(command, checks)| serde_json::json!({
                 "command": command,
@@ -199,7 +199,26 @@ fn apply(file: &std::path::Path, port: &PortArgs, rec: &super::records::RecordAr
                 })).collect::<Vec<_>>(),
             })).collect::<Vec<_>>(),
         });
+        // An apply that stopped (cancelled, the link lost) or whose record could not be kept
+        // is still one document: what was written and checked, and why it failed, as every
+        // --json failure says it.
+        let kept = super::records::say_kept(&recorded.kept, json);
+        let failed = match outcome {
+            Err(e) => Some(op_error(e)),
+            Ok(()) => kept.err(),
+        };
+        if let (Some(e), Some(fields)) = (&failed, doc.as_object_mut()) {
+            fields.insert("error".into(), e.message.clone().into());
+            fields.insert("exit".into(), e.code.into());
+        }
         outln!("{doc}");
+        return Ok(match failed {
+            Some(e) => {
+                errln!("botbench: {}", e.message);
+                e.code
+            }
+            None => u8::from(bad > 0),
+        });
     }
     let kept = super::records::say_kept(&recorded.kept, json);
     outcome.map_err(op_error)?;

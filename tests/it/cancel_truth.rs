@@ -60,6 +60,37 @@ fn a_preset_apply_cancelled_part_way_says_so_and_exits_130() {
     );
 }
 
+/// A cancelled `preset apply --json` prints one JSON document (what was written and checked,
+/// the error and the exit code), not its result and then an error document after it.
+#[test]
+fn a_preset_apply_cancelled_with_json_prints_one_document_saying_so() {
+    let (sim, heard) = Sim::start_heard(&["window-cleaner", "--latency-timer-ms", "20"]);
+    let factory = preset("window-cleaner-factory.ron");
+    let args = ["preset", "apply", &factory, "--port", &sim.path, "--json"];
+    // Ctrl-C once the device has heard more than the identification (CMD_VERSION and
+    // CMD_BUILD_INFO, 6 bytes each): while the values are read first, or during the writes.
+    let (code, out, err) = (0..5)
+        .find_map(|_| {
+            let from = heard.load(std::sync::atomic::Ordering::SeqCst);
+            interrupted_once(&sim, &args, |_| {
+                heard.load(std::sync::atomic::Ordering::SeqCst) > from + 12
+            })
+        })
+        .expect("a run still under way when Ctrl-C came, in 5 tries");
+    let text = format!("exit {code}\n--- stdout\n{out}--- stderr\n{err}");
+    assert_eq!(code, 130, "{text}");
+    let doc: serde_json::Value = serde_json::from_str(out.trim())
+        .unwrap_or_else(|e| panic!("stdout is one JSON document ({e}): {text}"));
+    assert_eq!(doc["verified"], false, "{text}");
+    assert_eq!(doc["exit"], 130, "{text}");
+    assert!(
+        doc["error"]
+            .as_str()
+            .is_some_and(|e| e.starts_with("cancelled after ")),
+        "{text}"
+    );
+}
+
 #[test]
 fn a_self_test_cancelled_part_way_says_which_steps_ran_and_exits_130() {
     let dir = crate::support::temp_dir();

@@ -300,6 +300,14 @@ pub fn preset_apply(
             b
         }
         Err(e) => {
+            // A cancel while the values are read first is a batch cancelled before its first
+            // command: "cancelled after 0 of N commands", every one of them not done.
+            let e = match preset.validate(profile) {
+                Ok(writes) if e.is_cancel() => {
+                    OpError::cancelled_after(&writes, 0, "commands", |w| w.command.clone())
+                }
+                _ => e,
+            };
             record
                 .steps
                 .push(clock.end("read before", "Read", Some(e.to_string()), e.to_string()));

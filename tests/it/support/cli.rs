@@ -14,6 +14,8 @@
 use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The answer margin the tests give a device across processes, as `--margin-ms`. The simulator
 /// runs in another process, which nothing keeps in lockstep with the command: on a loaded
@@ -323,6 +325,27 @@ impl Sim {
         }
     }
 
+    /// As [`Self::start`], with a count of the bytes the device has heard (to act once a run
+    /// has reached it, not after a while).
+    pub fn start_heard(args: &[&str]) -> (Self, Arc<AtomicUsize>) {
+        let sim = botbench::cli::simulated(args)
+            .unwrap_or_else(|e| panic!("sim {args:?}: {}", e.message));
+        let heard = Arc::new(AtomicUsize::new(0));
+        let device: botbench::sim::SharedDevice = Arc::new(std::sync::Mutex::new(Heard {
+            inner: sim.device,
+            heard: heard.clone(),
+        }));
+        let server =
+            botbench::sim::PtyServer::start_lockstep(device, sim.faults).expect("serves a pty");
+        let sim = Self {
+            path: server.path().to_string(),
+            ports: server.port_opener(),
+            control: sim.control,
+            server,
+        };
+        (sim, heard)
+    }
+
     /// Runs `botbench ARGS...` in this process, `--port` this simulator's path reaching it in
     /// lockstep (see [`run_in_process`]).
     pub fn run(&self, args: &[&str]) -> Ran {
@@ -464,5 +487,27 @@ pub fn finish_in_process(
     match run.join() {
         Ok(code) => code,
         Err(panic) => std::panic::resume_unwind(panic),
+    }
+}
+
+/// A device that counts the bytes it hears, then does what `inner` does.
+struct Heard {
+    inner: botbench::sim::SharedDevice,
+    heard: Arc<AtomicUsize>,
+}
+
+impl botbench::sim::Device for Heard {
+    fn receive(
+        &mut self,
+        bytes: &[u8],
+        baud: u32,
+        now: std::time::Instant,
+    ) -> Vec<botbench::sim::Outgoing> {
+        self.heard.fetch_add(bytes.len(), Ordering::SeqCst);
+        botbench::sim::runner::lock(&self.inner).receive(bytes, baud, now)
+    }
+
+    fn tick(&mut self, now: std::time::Instant) -> Vec<botbench::sim::Outgoing> {
+        botbench::sim::runner::lock(&self.inner).tick(now)
     }
 }
