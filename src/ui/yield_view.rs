@@ -299,7 +299,7 @@ fn yield_table(ui: &mut egui::Ui, lang: Lang, id: &str, rows: &[Yield]) {
                 ],
             );
             for y in rows.iter().take(12) {
-                ui.label(y.label());
+                ui.label(group_label(lang, y));
                 ui.label(y.units.to_string());
                 ui.label(pct(y.fpy()));
                 ui.label(pct(y.final_yield()));
@@ -319,13 +319,26 @@ fn integer_marks(n: usize, every: usize) -> Vec<GridMark> {
         .collect()
 }
 
+/// A group as `lang` shows it: `2026-12-01 C (so far)` / `2026-12-01 C(进行中)` for the shift
+/// under way.
+fn group_label(lang: Lang, y: &Yield) -> String {
+    if y.so_far {
+        format!("{}{}", y.group, lang.tr(" (so far)", "(进行中)"))
+    } else {
+        y.group.clone()
+    }
+}
+
 /// `11-28 C` for `2026-11-28 C`: a shift's label short enough for an axis.
 fn short_shift(label: &str) -> String {
     label.get(5..).unwrap_or(label).to_string()
 }
 
 fn yield_plot(ui: &mut egui::Ui, lang: Lang, rows: &[Yield]) {
-    let labels: Vec<String> = rows.iter().map(|y| short_shift(&y.label())).collect();
+    let labels: Vec<String> = rows
+        .iter()
+        .map(|y| short_shift(&group_label(lang, y)))
+        .collect();
     let n = rows.len();
     // About 70 points per label: every k-th shift is named when they are many.
     let every = ((n as f32 * 70.0) / ui.available_width().max(1.0)).ceil() as usize;
@@ -400,15 +413,31 @@ pub fn step_name(lang: Lang, recorded: &str) -> String {
 
 /// The 中文 name of a step the records keep in English, where botbench knows it: the line
 /// station's steps ([`crate::ops::station::plan::title_zh`]), the shipped self-test plan's
-/// steps (its `zh` map), the generated records' steps; `None` for another plan's step.
+/// steps (its `zh` map), provisioning's and a preset apply's own steps, the generated
+/// records' steps; `None` for another plan's step.
 pub fn step_zh(recorded: &str) -> Option<String> {
     static KNOWN: std::sync::OnceLock<std::collections::BTreeMap<String, String>> =
         std::sync::OnceLock::new();
     let known = KNOWN.get_or_init(|| {
+        use crate::ops::servo::provision::step;
+        let provisioning = [
+            step::DETECT,
+            step::SERIAL,
+            step::ASSIGN_ID,
+            step::SET_BAUD,
+            step::APPLY,
+            step::VERIFY,
+            step::RECORD,
+            step::PLAN,
+        ]
+        .map(|s| (s, step::said(s).zh));
         let mut known: std::collections::BTreeMap<String, String> =
             crate::ops::records::demo::STEP_NAMES_ZH
                 .iter()
-                .map(|(en, zh)| ((*en).to_string(), (*zh).to_string()))
+                .copied()
+                .chain(crate::ops::records::runs::PRESET_STEPS_ZH)
+                .map(|(en, zh)| (en.to_string(), zh.to_string()))
+                .chain(provisioning.map(|(en, zh)| (en.to_string(), zh)))
                 .collect();
         let profile = crate::profile::Registry::builtin().and_then(|r| r.get("window-cleaner"));
         for (file, text) in crate::ui::files::SHIPPED {
@@ -576,5 +605,26 @@ impl crate::ui::Panel for YieldPanel {
 
     fn show(&mut self, ui: &mut egui::Ui, cx: &crate::ui::panel::Cx<'_>) -> Vec<Action> {
         self.draw(ui, cx.lang, cx.station)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shift_under_way_is_said_so_in_the_windows_language() {
+        let mut y = Yield {
+            group: "2026-12-07 A".into(),
+            units: 3,
+            runs: 4,
+            first_pass: 2,
+            final_pass: 3,
+            so_far: true,
+        };
+        assert_eq!(group_label(Lang::En, &y), "2026-12-07 A (so far)");
+        assert_eq!(group_label(Lang::Zh, &y), "2026-12-07 A(进行中)");
+        y.so_far = false;
+        assert_eq!(group_label(Lang::Zh, &y), "2026-12-07 A");
     }
 }

@@ -264,6 +264,15 @@ pub fn provision_into(r: &mut Record, p: &provision::Record, given: &Given, star
     r.finish(None);
 }
 
+/// A preset apply's step that reads the device's values before anything is written (the
+/// record's "before" of each write), as the records name it.
+pub const READ_BEFORE: &str = "read before";
+/// The step a preset apply that stopped part way stopped in, as the records name it (each
+/// command written is a step of its own, by its wire name).
+pub const APPLY: &str = "apply";
+/// The 中文 names of a preset apply's own steps, for reports.
+pub const PRESET_STEPS_ZH: [(&str, &str); 2] = [(READ_BEFORE, "写入前读取"), (APPLY, "写入预设")];
+
 /// Applies `preset` with read-back ([`crate::ops::preset::apply_each`]) after reading what the
 /// device held, and records each command written as a step with its fields before and after.
 /// The run fails on an error (the record too) or a field that does not read back as written.
@@ -296,7 +305,7 @@ pub fn preset_apply(
         Ok(b) => {
             record
                 .steps
-                .push(clock.end("read before", "Read", None, String::new()));
+                .push(clock.end(READ_BEFORE, "Read", None, String::new()));
             b
         }
         Err(e) => {
@@ -310,7 +319,7 @@ pub fn preset_apply(
             };
             record
                 .steps
-                .push(clock.end("read before", "Read", Some(e.to_string()), e.to_string()));
+                .push(clock.end(READ_BEFORE, "Read", Some(e.to_string()), e.to_string()));
             record.finish(None);
             let kept = recorder.keep(&mut record);
             return Recorded {
@@ -354,9 +363,9 @@ pub fn preset_apply(
         clock = StepClock::start();
     });
     let aborted = match &outcome {
-        Ok(()) if run.is_cancelled() => Some(("apply".to_string(), "cancelled".to_string())),
+        Ok(()) if run.is_cancelled() => Some((APPLY.to_string(), "cancelled".to_string())),
         Ok(()) => None,
-        Err(e) => Some(("apply".to_string(), e.to_string())),
+        Err(e) => Some((APPLY.to_string(), e.to_string())),
     };
     record.finish(aborted);
     let kept = recorder.keep(&mut record);
