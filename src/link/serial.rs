@@ -57,7 +57,12 @@ impl SerialTransport {
             path: path.to_string(),
             reason,
         };
-        let meta = std::fs::metadata(path).map_err(|e| open_err(e.to_string()))?;
+        let meta = std::fs::metadata(path).map_err(|e| match e.kind() {
+            std::io::ErrorKind::NotFound => {
+                open_err(crate::system::missing_port(path, &e.to_string()))
+            }
+            _ => open_err(e.to_string()),
+        })?;
         #[cfg(unix)]
         {
             use std::os::unix::fs::FileTypeExt;

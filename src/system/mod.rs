@@ -20,4 +20,6 @@ pub use data::INSTALLED_DATA_DIR;
 pub use data::{DATA_DIR_ENV, data_dir, presets_dir, shipped_or_given};
 #[cfg(test)]
 pub(crate) use ports::every_vanish_cause;
-pub use ports::{Holder, PortInfo, holders, list_ports, open_failure, other_readers, vanished};
+pub use ports::{
+    Holder, PortInfo, holders, list_ports, missing_port, open_failure, other_readers, vanished,
+};

@@ -90,6 +90,9 @@ pub fn list_ports() -> Vec<PortInfo> {
 pub fn open_failure(path: &str, error: &serialport::Error) -> String {
     use serialport::ErrorKind as K;
     let text = error.to_string();
+    if !std::path::Path::new(path).exists() {
+        return missing_port(path, &text);
+    }
     match error.kind {
         K::Io(std::io::ErrorKind::PermissionDenied) => permission_denied(path),
         // serialport reports EBUSY (another opener set TIOCEXCL) and a held flock as NoDevice.
@@ -100,6 +103,31 @@ pub fn open_failure(path: &str, error: &serialport::Error) -> String {
         }
         _ => text,
     }
+}
+
+/// Why a port whose path does not exist cannot open (`text`: what the OS said): not plugged
+/// in or under another name, with the USB serial ports listed now.
+pub fn missing_port(path: &str, text: &str) -> String {
+    not_there(path, text, &list_ports())
+}
+
+/// [`missing_port`] with the USB serial ports listed now (`ports`), where the adapter may be
+/// under another name.
+fn not_there(path: &str, text: &str, ports: &[PortInfo]) -> String {
+    let usb: Vec<&str> = ports
+        .iter()
+        .filter(|p| p.kind == "usb" && p.path != path)
+        .map(|p| p.path.as_str())
+        .collect();
+    let listed = if usb.is_empty() {
+        "no USB serial port is listed now: plug the adapter in".to_string()
+    } else {
+        format!("the USB serial ports listed now: {}", usb.join(", "))
+    };
+    format!(
+        "{text}: no such port (not plugged in, or plugged in under another name); {listed} \
+         (`botbench ports` lists every port)"
+    )
 }
 
 /// The likely cause, in words that say what to do, of a port at `path` that went away while
@@ -163,6 +191,38 @@ fn vanish_cause(
             usb.join(", ")
         )
     })
+}
+
+#[cfg(test)]
+mod not_there_tests {
+    use super::*;
+
+    #[test]
+    fn a_port_that_is_not_there_says_so_and_lists_the_usb_ports_there_are() {
+        let os = "No such file or directory (os error 2)";
+        let none = not_there("/dev/ttyUSB0", os, &[]);
+        assert!(none.starts_with(os), "{none}");
+        assert!(
+            none.contains("no such port (not plugged in, or plugged in under another name)")
+                && none.contains("no USB serial port is listed now: plug the adapter in"),
+            "{none}"
+        );
+        let usb = PortInfo {
+            path: "/dev/ttyUSB1".into(),
+            kind: "usb",
+            vid: None,
+            pid: None,
+            serial_number: None,
+            manufacturer: None,
+            product: None,
+            adapter: Default::default(),
+        };
+        let other = not_there("/dev/ttyUSB0", os, &[usb]);
+        assert!(
+            other.contains("the USB serial ports listed now: /dev/ttyUSB1"),
+            "{other}"
+        );
+    }
 }
 
 /// Every kind of cause [`vanished`] gives for a lost `path`, for the tests of the texts made of

@@ -23,6 +23,19 @@ use crate::ui::station::ConnectError;
 /// and their Chinese; a longer phrase before one it holds.
 const LOST_PORT: &[(&str, &str)] = &[
     ("port disconnected: ", "串口已断开:"),
+    (
+        ": no such port (not plugged in, or plugged in under another name); ",
+        ":没有此串口(未插上,或以另一个名称插上);",
+    ),
+    (
+        "no USB serial port is listed now: plug the adapter in",
+        "现在没有列出任何 USB 串口:请插上适配器",
+    ),
+    ("the USB serial ports listed now: ", "现在列出的 USB 串口:"),
+    (
+        " (`botbench ports` lists every port)",
+        "(`botbench ports` 列出所有串口)",
+    ),
     ("port lost: ", "串口丢失:"),
     ("link lost: ", "连接丢失:"),
     ("link closed", "连接已关闭"),
@@ -347,7 +360,7 @@ impl Zh for ExchangeError {
 impl Zh for LinkError {
     fn zh(&self) -> String {
         match self {
-            LinkError::Open { path, reason } => format!("无法打开 {path}:{reason}"),
+            LinkError::Open { path, reason } => format!("无法打开 {path}:{}", lost_port(reason)),
             LinkError::Disconnected(e) => format!("串口已断开:{}", lost_port(e)),
             LinkError::Setting(e) => format!("串口拒绝此设置:{e}"),
         }
@@ -708,6 +721,21 @@ mod tests {
             "串口已断开:/dev/ttyUSB0: Input/output error (os error 5)——/dev/ttyUSB0 已不存在:\
              已拔出,或以另一个名称重新插上(现在列出:/dev/ttyUSB1, /dev/ttyUSB2)"
         );
+    }
+
+    /// A port that is not there at all says so in 中文 too (the OS's words quoted).
+    #[test]
+    fn a_port_that_is_not_there_is_said_in_chinese() {
+        let os = "No such file or directory (os error 2)";
+        let e = LinkError::Open {
+            path: "/dev/ttyUSB7".into(),
+            reason: crate::system::missing_port("/dev/ttyUSB7", os),
+        };
+        let zh = e.zh();
+        assert!(zh.contains("没有此串口(未插上,或以另一个名称插上)"), "{zh}");
+        // The command to type stays as typed.
+        let left = english_in(&zh.replace("`botbench ports`", ""), os);
+        assert!(left.is_empty(), "{zh:?}: {left:?}");
     }
 
     /// A timeout on a held-up computer says so in 中文 too, with the figure, and no English.

@@ -180,3 +180,20 @@ fn a_vanished_port_is_named_with_its_likely_cause() {
         "says the likely cause: {line}"
     );
 }
+
+/// Item 3: a port that is not there at all (a typo, an adapter not plugged in or under another
+/// name) is named with those causes and the ports listed now, not only the OS's "No such file".
+#[test]
+fn a_port_that_is_not_there_says_what_to_check() {
+    let ran = crate::support::cli::run(&["msp", "--port", "/dev/ttyBOTBENCHNOPE", "version"]);
+    assert_eq!(ran.code, 2, "{}", ran.text());
+    assert!(
+        ran.err.contains("cannot open /dev/ttyBOTBENCHNOPE: ")
+            && ran
+                .err
+                .contains("no such port (not plugged in, or plugged in under another name)")
+            && ran.err.contains("`botbench ports` lists every port"),
+        "{}",
+        ran.text()
+    );
+}
