@@ -537,6 +537,11 @@ fn watch(
             _ => {}
         }
     }
+    // A watch that lost some polls says how many at its end (each was said as it failed); it
+    // fails only when nothing answered, as a device that did not answer.
+    if failures > 0 {
+        errln!("botbench: {failures} of {seen} polls had no answer");
+    }
     Ok(u8::from(failures > 0 && failures == seen))
 }
 

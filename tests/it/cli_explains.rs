@@ -398,3 +398,30 @@ fn completions_manpage_and_a_default_port_from_botbench_port() {
     assert_eq!(ran.code, 2, "{ran:?}");
     assert!(ran.err.contains("no port given"), "{ran:?}");
 }
+
+/// A watch that lost some of its polls (a lossy line) says how many at its end, beside each
+/// failure said as it came; it fails only when nothing answered.
+#[test]
+fn a_watch_that_lost_some_polls_says_how_many_at_its_end() {
+    let sim = Sim::start(&["window-cleaner", "--drop", "0.3", "--seed", "7"]);
+    let ran = sim.cli(
+        "msp",
+        &[
+            "--margin-ms",
+            "5",
+            "watch",
+            "MSP_GET_PWMVALUE",
+            "--count",
+            "16",
+        ],
+    );
+    assert_eq!(ran.code, 0, "some polls answered: {ran:?}");
+    let failed = ran.out.lines().filter(|l| l.contains(" !")).count();
+    assert!(failed > 0 && failed < 16, "{ran:?}");
+    let last = ran.err.lines().last().unwrap_or_default();
+    assert_eq!(
+        last,
+        format!("botbench: {failed} of 16 polls had no answer"),
+        "{ran:?}"
+    );
+}
