@@ -281,6 +281,15 @@ struct Angle {
 }
 
 /// Checks every id, name and value of `cmd` against `profile`; `home` is the port's baud rate.
+/// The value `servo write` writes to `p`, from what was typed: a baud option may be given as
+/// its rate, as set-baud takes it; anything else as the field reads it.
+fn write_value(p: &crate::profile::Param, typed: &str) -> Result<Value, CliError> {
+    match ops::baud_as_option(p, Input::Text(typed.to_string())) {
+        Input::Raw(option) => Ok(option),
+        Input::Text(text) => p.field.parse(&text).map_err(CliError::input),
+    }
+}
+
 fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<'p>, CliError> {
     Ok(match cmd {
         ServoCmd::Scan {
@@ -316,7 +325,7 @@ fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<
                     param: p.field.ident.clone(),
                 }));
             }
-            let value = p.field.parse(value).map_err(CliError::input)?;
+            let value = write_value(p, value)?;
             Checked::Write(*id, p, value, *broadcast)
         }
         ServoCmd::SetId { old, new } => {

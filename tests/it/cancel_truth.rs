@@ -296,6 +296,15 @@ fn an_id_or_baud_written_as_a_parameter_goes_through_set_id_and_set_baud() {
     assert!(bad.err.contains("b1000000 (8)"), "{}", bad.text());
     let still = sim.cli("servo", &["--baud", "1000000", "ping", "2"]);
     assert_eq!(still.code, 0, "nothing was sent: {}", still.text());
+    // The rate itself, as set-baud takes it, is its option: back to 115200.
+    let back = sim.cli(
+        "servo",
+        &["--baud", "1000000", "write", "2", "baudrate", "115200"],
+    );
+    assert_eq!(back.code, 0, "{}", back.text());
+    assert!(back.out.contains("b115200"), "{}", back.text());
+    let home = sim.cli("servo", &["ping", "2"]);
+    assert_eq!(home.code, 0, "servo 2 back at 115200: {}", home.text());
     // A baud option broadcast would scatter the bus: refused, naming the checked way.
     let all = sim.cli("servo", &["write", "255", "baudrate", "8", "--broadcast"]);
     assert_eq!(all.code, 2, "{}", all.text());

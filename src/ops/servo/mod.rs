@@ -15,7 +15,8 @@ pub use motion::{
     read_angle_request, rotate_request, spin_request, stop_all_requests,
 };
 pub use params::{
-    read_all, read_block, read_param, write_block, write_param, write_param_broadcast, write_params,
+    baud_as_option, read_all, read_block, read_param, write_block, write_param,
+    write_param_broadcast, write_params,
 };
 pub use scan::{SCAN_ROLES, ScanPlan, ScanReport, ScanRow, Unsure, ping_sweep, scan, unsure_said};
 pub use setup::{Location, factory_location, locate, reset_user_data, set_baud, set_id};

@@ -59,6 +59,7 @@ pub(super) fn read_value(
 pub fn write_param(dev: Device<'_>, id: u8, param: &Param, input: Input) -> Result<Check, OpError> {
     let Device { client, profile } = dev;
     super::addressed(id, "write a parameter and read it back")?;
+    let input = baud_as_option(param, input);
     let (write, payload, written) = write_payload(profile, id, param, input)?;
     if let Some(role @ (ParamRole::ServoId | ParamRole::BaudOption { .. })) = &param.role {
         return write_followed(dev, id, param, role, written);
@@ -88,6 +89,21 @@ pub fn write_param(dev: Device<'_>, id: u8, param: &Param, input: Input) -> Resu
         written,
         read: Value::Int(read),
     })
+}
+
+/// A baud option given as the rate it stands for (`57600`, as `servo set-baud` takes it) is
+/// that option; any other input is as given.
+pub fn baud_as_option(param: &Param, input: Input) -> Input {
+    let (Some(ParamRole::BaudOption { rates }), Input::Text(text)) = (&param.role, &input) else {
+        return input;
+    };
+    let Ok(baud) = text.trim().parse::<u32>() else {
+        return input;
+    };
+    match rates.iter().find(|(_, b)| **b == baud) {
+        Some((option, _)) => Input::Raw(Value::Int(i64::from(*option))),
+        None => input,
+    }
 }
 
 /// Writes servo `id`'s id or baud option (`param`, whose role is `role`) as the one checked way
