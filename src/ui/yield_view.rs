@@ -420,17 +420,7 @@ pub fn step_zh(recorded: &str) -> Option<String> {
         std::sync::OnceLock::new();
     let known = KNOWN.get_or_init(|| {
         use crate::ops::servo::provision::step;
-        let provisioning = [
-            step::DETECT,
-            step::SERIAL,
-            step::ASSIGN_ID,
-            step::SET_BAUD,
-            step::APPLY,
-            step::VERIFY,
-            step::RECORD,
-            step::PLAN,
-        ]
-        .map(|s| (s, step::said(s).zh));
+        let provisioning = step::ALL.map(|s| (s, step::said(s).zh));
         let mut known: std::collections::BTreeMap<String, String> =
             crate::ops::records::demo::STEP_NAMES_ZH
                 .iter()

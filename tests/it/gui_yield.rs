@@ -76,19 +76,9 @@ fn the_pareto_in_chinese_names_the_steps_botbench_knows_in_chinese() {
     assert_eq!(zh("Measure Suction"), "测量 Suction");
     // The steps botbench records of its own runs: provisioning's, a preset apply's (a cancelled
     // or failed apply's Pareto showed "read before" in 中文).
+    use botbench::ops::records::runs::{APPLY, READ_BEFORE};
     use botbench::ops::servo::provision::step;
-    for s in [
-        step::DETECT,
-        step::SERIAL,
-        step::ASSIGN_ID,
-        step::SET_BAUD,
-        step::APPLY,
-        step::VERIFY,
-        step::RECORD,
-        step::PLAN,
-        botbench::ops::records::runs::READ_BEFORE,
-        botbench::ops::records::runs::APPLY,
-    ] {
+    for s in step::ALL.into_iter().chain([READ_BEFORE, APPLY]) {
         assert!(
             !zh(s).chars().any(|c| c.is_ascii_lowercase()),
             "{s}: {}",

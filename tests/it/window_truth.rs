@@ -23,6 +23,19 @@ fn harness(port: &impl Port, panel: PanelId) -> H {
     gui::on_window_cleaner(port, panel, Some(100))
 }
 
+/// The Tuning panel on `b`, its Fan PWM maximum set to 97 (a value no other field holds, to type
+/// over), once every tuning value is read and no job runs.
+fn tuning_read(b: &crate::support::Served<WindowCleaner>) -> H {
+    b.sim.lock().unwrap().set_param("pwmvalueMax", 97).unwrap();
+    let mut h = harness(b, PanelId::TUNING);
+    step_until(&mut h, "the device read", |a| {
+        (130..=136).all(|id| a.station().device.readings.contains_key(&id))
+            && a.station().job_progress().is_none()
+    });
+    h.run_steps(2);
+    h
+}
+
 fn show(h: &mut H, panel: PanelId) {
     app_mut(h).settings.panel = panel;
     h.run_steps(3);
@@ -358,13 +371,7 @@ fn input_lefts(h: &H) -> Vec<f32> {
 #[test]
 fn the_tuning_tables_line_up_across_the_width_and_say_only_what_the_profile_gives() {
     let b = bench();
-    b.sim.lock().unwrap().set_param("pwmvalueMax", 97).unwrap();
-    let mut h = harness(&b, PanelId::TUNING);
-    step_until(&mut h, "the device read", |a| {
-        (130..=136).all(|id| a.station().device.readings.contains_key(&id))
-            && a.station().job_progress().is_none()
-    });
-    h.run_steps(2);
+    let mut h = tuning_read(&b);
     let lefts = input_lefts(&h);
     assert!(lefts.len() > 10, "{lefts:?}");
     let min = lefts.iter().copied().fold(f32::MAX, f32::min);
@@ -614,13 +621,7 @@ fn open_write_dialog(h: &mut H) {
 #[test]
 fn stop_acts_at_once_while_a_confirmation_dialog_is_open() {
     let b = bench();
-    b.sim.lock().unwrap().set_param("pwmvalueMax", 97).unwrap();
-    let mut h = harness(&b, PanelId::TUNING);
-    step_until(&mut h, "the device read", |a| {
-        (130..=136).all(|id| a.station().device.readings.contains_key(&id))
-            && a.station().job_progress().is_none()
-    });
-    h.run_steps(2);
+    let mut h = tuning_read(&b);
     let ids = stop_ids(&h);
     assert!(!ids.is_empty());
     open_write_dialog(&mut h);
@@ -962,13 +963,7 @@ fn assert_no_line_across_a_gap(h: &H, gap: &str) {
 fn a_write_refused_before_sending_keeps_readings_and_edits_and_says_nothing_was_sent() {
     use botbench::profile::Input;
     let b = bench();
-    b.sim.lock().unwrap().set_param("pwmvalueMax", 97).unwrap();
-    let mut h = harness(&b, PanelId::TUNING);
-    step_until(&mut h, "the device read", |a| {
-        (130..=136).all(|id| a.station().device.readings.contains_key(&id))
-            && a.station().job_progress().is_none()
-    });
-    h.run_steps(2);
+    let mut h = tuning_read(&b);
     retype(&mut h, "97", "90");
     let profile = app(&h).station().device.profile.clone();
     let refused = botbench::ui::jobs::write(

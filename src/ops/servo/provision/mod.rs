@@ -53,6 +53,11 @@ pub mod step {
     /// The plan does not fit the profile.
     pub const PLAN: &str = "plan";
 
+    /// Every step, in the order a servo goes through them (the plan's check first).
+    pub const ALL: [&str; 8] = [
+        PLAN, DETECT, SERIAL, ASSIGN_ID, SET_BAUD, APPLY, VERIFY, RECORD,
+    ];
+
     /// A step's name in both languages, for the window's progress line.
     pub fn said(step: &str) -> crate::i18n::Text {
         let zh = match step {
