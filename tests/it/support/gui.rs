@@ -59,13 +59,20 @@ pub fn harness_with(saved: Settings, ports: PortOpener, prepare: impl Fn(&mut Ap
     harness_sized(saved, ports, egui::vec2(1400.0, 1000.0), prepare)
 }
 
-/// As [`harness_with`], in a window of `size` points.
+/// As [`harness_with`], in a window of `size` points; records go to [`records_file`] unless
+/// `saved` names another.
 pub fn harness_sized(
-    saved: Settings,
+    mut saved: Settings,
     ports: PortOpener,
     size: egui::Vec2,
     prepare: impl Fn(&mut App) + 'static,
 ) -> H {
+    // Runs are recorded, and the Yield view reads, in the tests' own file, never this PC's
+    // (where a technician's or another trial's records would change what a view shows).
+    saved
+        .files
+        .entry(botbench::ui::settings::FileKind::Records)
+        .or_insert_with(|| records_file().display().to_string());
     Harness::builder().with_size(size).build_ui_state(
         move |ui, app: &mut Option<App>| {
             let app = app.get_or_insert_with(|| {
