@@ -280,7 +280,6 @@ struct Angle {
     ping_first: bool,
 }
 
-/// Checks every id, name and value of `cmd` against `profile`; `home` is the port's baud rate.
 /// The value `servo write` writes to `p`, from what was typed: a baud option may be given as
 /// its rate, as set-baud takes it; anything else as the field reads it.
 fn write_value(p: &crate::profile::Param, typed: &str) -> Result<Value, CliError> {
@@ -290,6 +289,7 @@ fn write_value(p: &crate::profile::Param, typed: &str) -> Result<Value, CliError
     }
 }
 
+/// Checks every id, name and value of `cmd` against `profile`; `home` is the port's baud rate.
 fn check<'p>(cmd: &ServoCmd, profile: &'p Profile, home: u32) -> Result<Checked<'p>, CliError> {
     Ok(match cmd {
         ServoCmd::Scan {

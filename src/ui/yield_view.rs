@@ -322,10 +322,10 @@ fn integer_marks(n: usize, every: usize) -> Vec<GridMark> {
 /// A group as `lang` shows it: `2026-12-01 C (so far)` / `2026-12-01 C(进行中)` for the shift
 /// under way.
 fn group_label(lang: Lang, y: &Yield) -> String {
-    if y.so_far {
-        format!("{}{}", y.group, lang.tr(" (so far)", "(进行中)"))
-    } else {
-        y.group.clone()
+    match lang {
+        Lang::En => y.label(),
+        Lang::Zh if y.so_far => format!("{}(进行中)", y.group),
+        Lang::Zh => y.group.clone(),
     }
 }
 
